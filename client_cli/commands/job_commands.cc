@@ -1,0 +1,350 @@
+#include "commands/job_commands.h"
+
+#include <google/protobuf/util/json_util.h>
+#include <openssl/evp.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <random>
+
+#include "codec/summary_text.h"
+#include "codec/yaml_codec.h"
+#include "exit_codes.h"
+#include "output.h"
+
+namespace pba::cli {
+namespace fs = std::filesystem;
+namespace {
+
+std::string NewRequestId() {
+  std::random_device device;
+  std::mt19937_64 engine((static_cast<uint64_t>(device()) << 32) ^ device());
+  char buffer[40];
+  std::snprintf(buffer, sizeof buffer, "%016llx%016llx", static_cast<unsigned long long>(engine()),
+                static_cast<unsigned long long>(engine()));
+  return buffer;
+}
+
+int ExitForState(v1::Job::State state) {
+  switch (state) {
+    case v1::Job::SUCCEEDED:
+      return kExitOk;
+    case v1::Job::FAILED:
+      return kExitJobFailed;
+    case v1::Job::CANCELLED:
+      return kExitJobCancelled;
+    default:
+      return kExitNotReady;
+  }
+}
+
+void PrintJobDetails(const v1::Job& job) {
+  std::vector<std::vector<std::string>> rows = {
+      {"Job", job.id()},
+      {"Name", job.name()},
+      {"State", StateName(job.state())},
+      {"Progress", std::to_string(static_cast<int>(job.progress() * 100 + 0.5)) + " %" +
+                       (job.phase().empty() ? "" : " (" + job.phase() + ")")},
+      {"Created", FormatTime(job.create_time()) + " UTC"},
+      {"Started", FormatTime(job.start_time())},
+      {"Ended", FormatTime(job.end_time())},
+      {"Run time", FormatDuration(job.start_time(), job.end_time())},
+      {"Attempts", std::to_string(job.attempts())},
+  };
+  if (!job.error().empty()) rows.push_back({"Error", job.error()});
+  for (const auto& file : job.result_files()) {
+    rows.push_back({"Result file", file.name() + " (" + std::to_string(file.size_bytes()) + " bytes)"});
+  }
+  PrintTable(rows);
+  if (job.has_summary()) std::printf("\n%s", codec::FormatSummary(job.summary()).c_str());
+}
+
+bool GetJob(Connection& connection, const std::string& id, v1::Job* job, int* exit_code) {
+  v1::GetJobRequest request;
+  request.set_id(id);
+  auto context = connection.UnaryContext();
+  grpc::Status status = connection.jobs().GetJob(context.get(), request, job);
+  if (!status.ok()) {
+    *exit_code = connection.Fail("job " + id, status);
+    return false;
+  }
+  return true;
+}
+
+// Follows the job's events until it ends; returns the final job state.
+int Follow(Connection& connection, const std::string& id, v1::Job::State* final_state) {
+  const bool interactive = !connection.options().json && ::isatty(STDOUT_FILENO);
+  WatchDisplay display(interactive);
+  v1::WatchJobRequest request;
+  request.set_id(id);
+  auto context = connection.StreamContext();
+  auto reader = connection.jobs().WatchJob(context.get(), request);
+  v1::JobEvent event;
+  *final_state = v1::Job::STATE_UNSPECIFIED;
+  while (reader->Read(&event)) {
+    if (connection.options().json) {
+      google::protobuf::util::JsonPrintOptions options;
+      options.preserve_proto_field_names = true;
+      std::string line;
+      (void)google::protobuf::util::MessageToJsonString(event, &line, options);
+      std::puts(line.c_str());
+      std::fflush(stdout);
+    } else {
+      display.Show(event);
+    }
+    *final_state = event.state();
+  }
+  display.Finish();
+  grpc::Status status = reader->Finish();
+  if (!status.ok()) return connection.Fail("watching job " + id, status);
+  return kExitOk;
+}
+
+// Reports how a job ended (for watch and submit --wait), returns its exit code.
+int ReportEnd(Connection& connection, const std::string& id) {
+  v1::Job job;
+  int code = kExitOk;
+  if (!GetJob(connection, id, &job, &code)) return code;
+  if (connection.options().json) {
+    PrintJson(job);
+    return ExitForState(job.state());
+  }
+  switch (job.state()) {
+    case v1::Job::SUCCEEDED:
+      std::printf("Job %s succeeded in %s.\n", job.id().c_str(),
+                  FormatDuration(job.start_time(), job.end_time()).c_str());
+      if (job.has_summary()) std::printf("\n%s", codec::FormatSummary(job.summary()).c_str());
+      std::printf("\nFetch the result files with: pba job fetch %s -o DIR\n", job.id().c_str());
+      break;
+    case v1::Job::FAILED:
+      std::fprintf(stderr, "Job %s failed: %s\n", job.id().c_str(), job.error().c_str());
+      break;
+    case v1::Job::CANCELLED:
+      std::fprintf(stderr, "Job %s was cancelled.\n", job.id().c_str());
+      break;
+    default:
+      std::fprintf(stderr, "Job %s is %s.\n", job.id().c_str(), StateName(job.state()).c_str());
+  }
+  return ExitForState(job.state());
+}
+
+std::string Sha256File(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return "";
+  EVP_MD_CTX* ctx = EVP_MD_CTX_new();
+  EVP_DigestInit_ex(ctx, EVP_sha256(), nullptr);
+  std::vector<char> buffer(1 << 16);
+  while (in) {
+    in.read(buffer.data(), static_cast<std::streamsize>(buffer.size()));
+    if (in.gcount() > 0) EVP_DigestUpdate(ctx, buffer.data(), static_cast<size_t>(in.gcount()));
+  }
+  unsigned char digest[EVP_MAX_MD_SIZE];
+  unsigned int length = 0;
+  EVP_DigestFinal_ex(ctx, digest, &length);
+  EVP_MD_CTX_free(ctx);
+  std::string hex;
+  char byte[3];
+  for (unsigned int i = 0; i < length; ++i) {
+    std::snprintf(byte, sizeof byte, "%02x", digest[i]);
+    hex += byte;
+  }
+  return hex;
+}
+
+// Downloads one file into dir/name via dir/name.part, resuming a .part left
+// by an interrupted fetch; the final name appears only once the checksum matches.
+int DownloadFile(Connection& connection, const std::string& id, const v1::ResultFile& file,
+                 const fs::path& dir) {
+  const fs::path target = dir / file.name();
+  const fs::path part = dir / (file.name() + ".part");
+  std::error_code ec;
+  int64_t offset = fs::exists(part) ? static_cast<int64_t>(fs::file_size(part, ec)) : 0;
+  if (ec || offset > file.size_bytes()) offset = 0;
+
+  std::ofstream out(part, std::ios::binary | (offset > 0 ? std::ios::app : std::ios::trunc));
+  if (!out) {
+    std::fprintf(stderr, "pba: cannot write %s\n", part.c_str());
+    return kExitError;
+  }
+  v1::DownloadResultRequest request;
+  request.set_job_id(id);
+  request.set_file(file.name());
+  request.set_offset(offset);
+  auto context = connection.StreamContext();
+  auto reader = connection.jobs().DownloadResult(context.get(), request);
+  v1::DataChunk chunk;
+  while (reader->Read(&chunk)) {
+    if (chunk.offset() != offset) {
+      std::fprintf(stderr, "pba: %s: chunk at byte %lld, expected %lld\n", file.name().c_str(),
+                   static_cast<long long>(chunk.offset()), static_cast<long long>(offset));
+      return kExitError;
+    }
+    out.write(chunk.data().data(), static_cast<std::streamsize>(chunk.data().size()));
+    offset += static_cast<int64_t>(chunk.data().size());
+  }
+  out.close();
+  grpc::Status status = reader->Finish();
+  if (!status.ok()) return connection.Fail("downloading " + file.name() + " of job " + id, status);
+  if (!out) {
+    std::fprintf(stderr, "pba: writing %s failed (disk full?)\n", part.c_str());
+    return kExitError;
+  }
+  if (!file.sha256().empty() && Sha256File(part) != file.sha256()) {
+    fs::remove(part, ec);
+    std::fprintf(stderr, "pba: %s arrived damaged (checksum mismatch); run the fetch again\n",
+                 file.name().c_str());
+    return kExitError;
+  }
+  fs::rename(part, target, ec);
+  if (ec) {
+    std::fprintf(stderr, "pba: cannot move %s into place: %s\n", target.c_str(), ec.message().c_str());
+    return kExitError;
+  }
+  return kExitOk;
+}
+
+}  // namespace
+
+int SubmitJob(Connection& connection, const SubmitArgs& args) {
+  v1::SubmitJobRequest request;
+  codec::ParseError error;
+  if (!codec::ReadYamlFile(args.file, request.mutable_scene(), &error)) {
+    std::fprintf(stderr, "pba: invalid scene: %s\n", error.ToString().c_str());
+    return error.field.empty() && error.line == 0 ? kExitError : kExitInvalid;
+  }
+  request.set_request_id(args.request_id.empty() ? NewRequestId() : args.request_id);
+  v1::Job job;
+  auto context = connection.UnaryContext();
+  grpc::Status status = connection.jobs().SubmitJob(context.get(), request, &job);
+  if (!status.ok()) return connection.Fail("submitting " + args.file, status);
+  if (connection.options().json && !args.wait) {
+    PrintJson(job);
+  } else if (!connection.options().json) {
+    std::printf("Submitted job %s (%s)\n", job.id().c_str(), job.name().c_str());
+    std::fflush(stdout);
+  }
+  if (!args.wait) return kExitOk;
+  v1::Job::State state;
+  if (int code = Follow(connection, job.id(), &state); code != kExitOk) return code;
+  return ReportEnd(connection, job.id());
+}
+
+int ListJobs(Connection& connection, const ListArgs& args) {
+  v1::ListJobsRequest request;
+  request.set_page_size(args.page_size);
+  request.set_page_token(args.page_token);
+  v1::ListJobsResponse all;
+  std::string next;
+  do {
+    v1::ListJobsResponse page;
+    auto context = connection.UnaryContext();
+    grpc::Status status = connection.jobs().ListJobs(context.get(), request, &page);
+    if (!status.ok()) return connection.Fail("listing jobs", status);
+    for (auto& job : *page.mutable_jobs()) *all.add_jobs() = std::move(job);
+    next = page.next_page_token();
+    request.set_page_token(next);
+  } while (args.all && !next.empty());
+  all.set_next_page_token(next);
+
+  if (connection.options().json) {
+    PrintJson(all);
+    return kExitOk;
+  }
+  if (all.jobs().empty()) {
+    std::puts("No jobs.");
+    return kExitOk;
+  }
+  std::vector<std::vector<std::string>> rows = {
+      {"ID", "NAME", "STATE", "PROGRESS", "CREATED (UTC)", "RUN TIME"}};
+  for (const auto& job : all.jobs()) {
+    rows.push_back({job.id(), job.name(), StateName(job.state()),
+                    std::to_string(static_cast<int>(job.progress() * 100 + 0.5)) + " %",
+                    FormatTime(job.create_time()), FormatDuration(job.start_time(), job.end_time())});
+  }
+  PrintTable(rows);
+  if (!next.empty()) std::printf("More: pba job list --page-token %s\n", next.c_str());
+  return kExitOk;
+}
+
+int ShowJob(Connection& connection, const std::string& id) {
+  v1::Job job;
+  int code = kExitOk;
+  if (!GetJob(connection, id, &job, &code)) return code;
+  if (connection.options().json) {
+    PrintJson(job);
+  } else {
+    PrintJobDetails(job);
+  }
+  return kExitOk;
+}
+
+int WatchJob(Connection& connection, const std::string& id) {
+  v1::Job::State state;
+  if (int code = Follow(connection, id, &state); code != kExitOk) return code;
+  return ReportEnd(connection, id);
+}
+
+int CancelJob(Connection& connection, const std::string& id) {
+  v1::CancelJobRequest request;
+  request.set_id(id);
+  v1::Job job;
+  auto context = connection.UnaryContext();
+  grpc::Status status = connection.jobs().CancelJob(context.get(), request, &job);
+  if (!status.ok()) return connection.Fail("cancelling job " + id, status);
+  if (connection.options().json) {
+    PrintJson(job);
+  } else if (IsTerminal(job.state()) && job.state() != v1::Job::CANCELLED) {
+    std::printf("Job %s had already ended %s; nothing to cancel.\n", id.c_str(),
+                StateName(job.state()).c_str());
+  } else if (job.state() == v1::Job::CANCELLED) {
+    std::printf("Job %s is cancelled.\n", id.c_str());
+  } else {
+    std::printf("Cancelling job %s (%s); follow it with: pba job watch %s\n", id.c_str(),
+                StateName(job.state()).c_str(), id.c_str());
+  }
+  return kExitOk;
+}
+
+int FetchJob(Connection& connection, const FetchArgs& args) {
+  v1::Job job;
+  int code = kExitOk;
+  if (!GetJob(connection, args.id, &job, &code)) return code;
+  if (job.state() != v1::Job::SUCCEEDED) {
+    if (job.state() == v1::Job::FAILED) {
+      std::fprintf(stderr, "pba: job %s failed, so it has no result: %s\n", args.id.c_str(),
+                   job.error().c_str());
+    } else if (job.state() == v1::Job::CANCELLED) {
+      std::fprintf(stderr, "pba: job %s was cancelled, so it has no result\n", args.id.c_str());
+    } else {
+      std::fprintf(stderr, "pba: job %s is %s and has no result yet; wait with: pba job watch %s\n",
+                   args.id.c_str(), StateName(job.state()).c_str(), args.id.c_str());
+    }
+    return ExitForState(job.state());
+  }
+  const fs::path dir = args.out_dir;
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec) {
+    std::fprintf(stderr, "pba: cannot create %s: %s\n", dir.c_str(), ec.message().c_str());
+    return kExitError;
+  }
+  for (const auto& file : job.result_files()) {
+    if (int result = DownloadFile(connection, args.id, file, dir); result != kExitOk) return result;
+  }
+  if (connection.options().json) {
+    PrintJson(job);
+    return kExitOk;
+  }
+  std::printf("Downloaded %d file(s) of job %s into %s\n", job.result_files_size(), args.id.c_str(),
+              dir.c_str());
+  if (job.has_summary()) std::printf("\n%s", codec::FormatSummary(job.summary()).c_str());
+  std::printf(
+      "\nOpen %s in ParaView (File > Open, pick the XDMF reader) to see the displacement, stress "
+      "and von Mises fields.\n",
+      (dir / "result.xdmf").c_str());
+  return kExitOk;
+}
+
+}  // namespace pba::cli

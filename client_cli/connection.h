@@ -1,0 +1,42 @@
+// Connection: the client's channel to pba-server and the translation of RPC
+// failures into messages and exit codes.
+#pragma once
+
+#include <grpcpp/grpcpp.h>
+
+#include <chrono>
+#include <memory>
+#include <string>
+
+#include "pba/v1/job.grpc.pb.h"
+
+namespace pba::cli {
+
+struct GlobalOptions {
+  std::string server = "127.0.0.1:50051";  // --server, or PBA_SERVER
+  bool json = false;                       // --json: machine-readable output
+  double timeout_s = 30;                   // deadline of each unary call
+};
+
+class Connection {
+ public:
+  explicit Connection(const GlobalOptions& options);
+
+  v1::JobService::Stub& jobs() { return *jobs_; }
+  const GlobalOptions& options() const { return options_; }
+  // A context with the unary deadline set.
+  std::unique_ptr<grpc::ClientContext> UnaryContext() const;
+  // A context for a stream: no deadline, but fails fast if the server is absent.
+  std::unique_ptr<grpc::ClientContext> StreamContext() const;
+
+  // Prints "pba: <what>: <reason>" to stderr and returns the exit code for
+  // `status`; an unreachable server is named by its address.
+  int Fail(const std::string& what, const grpc::Status& status) const;
+
+ private:
+  GlobalOptions options_;
+  std::shared_ptr<grpc::Channel> channel_;
+  std::unique_ptr<v1::JobService::Stub> jobs_;
+};
+
+}  // namespace pba::cli

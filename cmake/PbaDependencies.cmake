@@ -1,0 +1,22 @@
+# Every dependency comes from a Debian package (scripts/deps.sh installs them).
+find_package(Threads REQUIRED)
+find_package(Eigen3 3.4 REQUIRED NO_MODULE)
+find_package(HDF5 REQUIRED COMPONENTS C)
+find_package(Protobuf REQUIRED)
+find_package(gRPC CONFIG REQUIRED)
+find_package(SQLite3 REQUIRED)
+find_package(yaml-cpp REQUIRED)
+find_package(CLI11 CONFIG REQUIRED)
+find_package(spdlog CONFIG REQUIRED)
+find_package(OpenMP REQUIRED COMPONENTS CXX)
+find_package(OpenSSL REQUIRED COMPONENTS Crypto)
+
+# SuiteSparse (CHOLMOD) ships no CMake package in Debian 12: find it by hand.
+find_path(CHOLMOD_INCLUDE_DIR cholmod.h PATH_SUFFIXES suitesparse REQUIRED)
+find_library(CHOLMOD_LIBRARY cholmod REQUIRED)
+find_library(SUITESPARSE_CONFIG_LIBRARY suitesparseconfig REQUIRED)
+add_library(pba_cholmod INTERFACE)
+target_include_directories(pba_cholmod INTERFACE ${CHOLMOD_INCLUDE_DIR})
+target_link_libraries(pba_cholmod INTERFACE ${CHOLMOD_LIBRARY} ${SUITESPARSE_CONFIG_LIBRARY})
+
+find_program(GRPC_CPP_PLUGIN grpc_cpp_plugin REQUIRED)

@@ -1,0 +1,18 @@
+# pba_test(NAME SOURCES ... [LABELS ...] [LIBS ...] [TIMEOUT seconds])
+# The one way tests are registered: a GoogleTest executable, discovered by ctest
+# test by test, labelled unit / verification / hard / integration / slow.
+include(GoogleTest)
+find_package(GTest REQUIRED)
+
+function(pba_test name)
+  cmake_parse_arguments(ARG "" "TIMEOUT" "SOURCES;LABELS;LIBS" ${ARGN})
+  if(NOT ARG_TIMEOUT)
+    set(ARG_TIMEOUT 120)
+  endif()
+  add_executable(${name} ${ARG_SOURCES})
+  target_link_libraries(${name} PRIVATE ${ARG_LIBS} GTest::gtest GTest::gtest_main GTest::gmock)
+  target_include_directories(${name} PRIVATE ${PROJECT_SOURCE_DIR}/tests)
+  gtest_discover_tests(${name}
+    PROPERTIES LABELS "${ARG_LABELS}" TIMEOUT ${ARG_TIMEOUT}
+    DISCOVERY_TIMEOUT 60)
+endfunction()

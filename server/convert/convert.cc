@@ -1,0 +1,210 @@
+#include "convert/convert.h"
+
+#include <string>
+
+namespace pba {
+namespace {
+
+std::string Shape(const std::string& path, int count) {
+  return path + " needs three numbers (x, y, z), got " + std::to_string(count);
+}
+
+}  // namespace
+
+Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec) {
+  *spec = SceneSpec();
+  spec->name = scene.name();
+  spec->description = scene.description();
+
+  const v1::Geometry& geometry = scene.geometry();
+  switch (geometry.shape_case()) {
+    case v1::Geometry::kBox: {
+      const auto& size = geometry.box().size_mm();
+      if (size.size() != 3) {
+        return Status::InvalidArgument("geometry.box.size_mm",
+                                       "expected three edge lengths (x, y, z) in mm, got " +
+                                           std::to_string(size.size()));
+      }
+      spec->geometry.kind = GeometrySpec::Kind::kBox;
+      for (int i = 0; i < 3; ++i) spec->geometry.box.size_mm[i] = size[i];
+      break;
+    }
+    case v1::Geometry::kCylinder:
+      spec->geometry.kind = GeometrySpec::Kind::kCylinder;
+      spec->geometry.cylinder.radius_mm = geometry.cylinder().radius_mm();
+      spec->geometry.cylinder.height_mm = geometry.cylinder().height_mm();
+      break;
+    case v1::Geometry::SHAPE_NOT_SET:
+      break;  // ValidateScene names it
+  }
+
+  switch (scene.mesh().element()) {
+    case v1::MeshOptions::ELEMENT_TYPE_UNSPECIFIED:
+    case v1::MeshOptions::TET4:
+      spec->mesh.element = ElementType::kTet4;
+      break;
+    default:
+      return Status::InvalidArgument("mesh.element", "unknown element type " +
+                                                         std::to_string(scene.mesh().element()));
+  }
+  spec->mesh.element_size_mm = scene.mesh().element_size_mm();
+
+  spec->material.name = scene.material().name();
+  if (scene.material().has_linear_elastic()) {
+    spec->material.kind = MaterialSpec::Kind::kLinearElastic;
+    spec->material.linear_elastic.youngs_modulus_pa =
+        scene.material().linear_elastic().youngs_modulus_pa();
+    spec->material.linear_elastic.poissons_ratio = scene.material().linear_elastic().poissons_ratio();
+  }
+
+  for (const v1::BoundaryCondition& bc : scene.boundary_conditions()) {
+    BoundaryConditionSpec out;
+    out.set = bc.set();
+    switch (bc.kind_case()) {
+      case v1::BoundaryCondition::kFixed:
+        out.kind = BoundaryConditionSpec::Kind::kFixed;
+        break;
+      case v1::BoundaryCondition::kDisplacement: {
+        out.kind = BoundaryConditionSpec::Kind::kDisplacement;
+        const auto& d = bc.displacement();
+        if (d.has_x_mm()) out.displacement_mm[0] = d.x_mm();
+        if (d.has_y_mm()) out.displacement_mm[1] = d.y_mm();
+        if (d.has_z_mm()) out.displacement_mm[2] = d.z_mm();
+        break;
+      }
+      case v1::BoundaryCondition::KIND_NOT_SET:
+        break;  // ValidateScene names it
+    }
+    spec->boundary_conditions.push_back(std::move(out));
+  }
+
+  switch (scene.analysis().type()) {
+    case v1::Analysis::TYPE_UNSPECIFIED:
+    case v1::Analysis::LINEAR_STATIC:
+      spec->analysis.type = AnalysisSpec::Type::kLinearStatic;
+      break;
+    default:
+      return Status::InvalidArgument("analysis.type", "unknown analysis type " +
+                                                          std::to_string(scene.analysis().type()));
+  }
+  switch (scene.analysis().linear_solver()) {
+    case v1::Analysis::LINEAR_SOLVER_UNSPECIFIED:
+    case v1::Analysis::CHOLMOD:
+      spec->analysis.linear_solver = AnalysisSpec::LinearSolver::kCholmod;
+      break;
+    case v1::Analysis::EIGEN_LDLT:
+      spec->analysis.linear_solver = AnalysisSpec::LinearSolver::kEigenLdlt;
+      break;
+    default:
+      return Status::InvalidArgument(
+          "analysis.linear_solver",
+          "unknown linear solver " + std::to_string(scene.analysis().linear_solver()));
+  }
+
+  const auto& fields = scene.outputs().fields();
+  if (!fields.empty()) {
+    spec->outputs.displacement = spec->outputs.stress = spec->outputs.von_mises =
+        spec->outputs.strain = false;
+    for (int i = 0; i < fields.size(); ++i) {
+      switch (fields[i]) {
+        case v1::Outputs::DISPLACEMENT:
+          spec->outputs.displacement = true;
+          break;
+        case v1::Outputs::STRESS:
+          spec->outputs.stress = true;
+          break;
+        case v1::Outputs::VON_MISES:
+          spec->outputs.von_mises = true;
+          break;
+        case v1::Outputs::STRAIN:
+          spec->outputs.strain = true;
+          break;
+        default:
+          return Status::InvalidArgument("outputs.fields[" + std::to_string(i) + "]",
+                                         "unknown output field " + std::to_string(fields[i]));
+      }
+    }
+  }
+  spec->outputs.reaction_sets.assign(scene.outputs().reaction_sets().begin(),
+                                     scene.outputs().reaction_sets().end());
+  return Status::Ok();
+}
+
+Status ValidateSceneProto(const v1::Scene& scene) {
+  SceneSpec spec;
+  PBA_RETURN_IF_ERROR(SceneFromProto(scene, &spec));
+  return ValidateScene(spec);
+}
+
+v1::Summary SummaryToProto(const Summary& summary) {
+  v1::Summary out;
+  out.set_scene_name(summary.scene_name);
+  out.set_solver_version(SolverVersion());
+
+  v1::Modelled* modelled = out.mutable_modelled();
+  modelled->set_geometry(summary.geometry);
+  modelled->set_element_type(summary.element_type);
+  modelled->set_nodes(summary.nodes);
+  modelled->set_elements(summary.elements);
+  modelled->set_dofs(summary.dofs);
+  modelled->set_constrained_dofs(summary.constrained_dofs);
+  modelled->set_material(summary.material);
+  modelled->set_analysis(summary.analysis);
+  modelled->set_linear_solver(summary.linear_solver);
+  for (const auto& note : summary.notes) modelled->add_notes(note);
+
+  v1::Results* results = out.mutable_results();
+  results->set_max_displacement_mm(summary.max_displacement_mm);
+  for (double x : summary.max_displacement_at_mm) results->add_max_displacement_at_mm(x);
+  results->set_max_von_mises_pa(summary.max_von_mises_pa);
+  results->set_strain_energy_j(summary.strain_energy_j);
+  for (const auto& reaction : summary.reactions) {
+    v1::Reaction* r = results->add_reactions();
+    r->set_set(reaction.set);
+    for (double f : reaction.force_n) r->add_force_n(f);
+  }
+  results->set_relative_residual(summary.relative_residual);
+
+  v1::Performance* performance = out.mutable_performance();
+  performance->set_wall_time_s(summary.wall_time_s);
+  performance->set_threads(summary.threads);
+  for (const auto& phase : summary.phases) {
+    v1::PhaseTime* p = performance->add_phases();
+    p->set_phase(phase.phase);
+    p->set_seconds(phase.seconds);
+  }
+
+  v1::ErrorEstimate* error = out.mutable_error_estimate();
+  error->set_estimated(summary.error.estimated);
+  error->set_method(summary.error.method);
+  error->set_relative_error(summary.error.relative_error);
+  error->set_note(summary.error.estimated ? summary.error.note
+                                          : (summary.error.note.empty() ? "not estimated"
+                                                                        : summary.error.note));
+
+  auto& units = *out.mutable_units();
+  units["length"] = "mm";
+  units["displacement"] = "mm";
+  units["stress"] = "Pa";
+  units["force"] = "N";
+  units["energy"] = "J";
+  units["time"] = "s";
+  return out;
+}
+
+grpc::Status ToGrpcStatus(const Status& status) {
+  switch (status.code()) {
+    case Status::Code::kOk:
+      return grpc::Status::OK;
+    case Status::Code::kInvalidArgument:
+      return grpc::Status(grpc::StatusCode::INVALID_ARGUMENT, status.ToString());
+    case Status::Code::kFailedPrecondition:
+      return grpc::Status(grpc::StatusCode::FAILED_PRECONDITION, status.ToString());
+    case Status::Code::kCancelled:
+      return grpc::Status(grpc::StatusCode::CANCELLED, status.ToString());
+    default:
+      return grpc::Status(grpc::StatusCode::INTERNAL, status.ToString());
+  }
+}
+
+}  // namespace pba

@@ -1,0 +1,32 @@
+// Conversions between the pba.v1 messages and the solver's own types.
+// The only place (with the server) where protobuf meets the solver.
+#pragma once
+
+#include <grpcpp/support/status.h>
+
+#include "pba/solve.h"
+#include "pba/status.h"
+#include "pba/v1/scene.pb.h"
+#include "pba/v1/summary.pb.h"
+
+namespace pba {
+
+// Translates a Scene message into a SceneSpec. Fails with kInvalidArgument
+// naming the field path when a required oneof is not set or an enum value is
+// unknown. Does not check ranges: call ValidateScene() (or
+// ValidateSceneProto()) for that.
+Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec);
+
+// SceneFromProto() followed by ValidateScene(): everything a server checks
+// before it accepts a scene.
+Status ValidateSceneProto(const v1::Scene& scene);
+
+// The summary message written to summary.json.
+v1::Summary SummaryToProto(const Summary& summary);
+
+// A Status as a gRPC status: kInvalidArgument -> INVALID_ARGUMENT with
+// "field: message", kFailedPrecondition -> FAILED_PRECONDITION, kCancelled ->
+// CANCELLED, everything else -> INTERNAL.
+grpc::Status ToGrpcStatus(const Status& status);
+
+}  // namespace pba

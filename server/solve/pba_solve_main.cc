@@ -1,0 +1,226 @@
+// pba-solve: runs one scene from a file and writes its result directory.
+// The server runs every job through it in a child process; scripted users
+// call it directly.
+//
+// Exit codes: 0 success; 2 invalid scene or command line; 3 the solve broke
+// down or the scene cannot be solved as posed; 4 I/O error; 5 cancelled
+// (SIGTERM/SIGINT); 1 internal error.
+
+#include <google/protobuf/util/json_util.h>
+#include <unistd.h>
+
+#include <CLI/CLI.hpp>
+#include <atomic>
+#include <csignal>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <string>
+
+#include "codec/summary_text.h"
+#include "codec/yaml_codec.h"
+#include "convert/convert.h"
+#include "pba/solve.h"
+#include "pba/v1/scene.pb.h"
+#include "pba/v1/solve_event.pb.h"
+#include "solve/staging_dir.h"
+
+namespace pba {
+namespace {
+
+enum ExitCode {
+  kExitOk = 0,
+  kExitInternal = 1,
+  kExitInvalid = 2,
+  kExitNumerical = 3,
+  kExitIo = 4,
+  kExitCancelled = 5,
+};
+
+std::atomic<bool> g_cancel{false};
+static_assert(std::atomic<bool>::is_always_lock_free, "the signal handler needs a lock-free flag");
+
+extern "C" void OnSignal(int) { g_cancel.store(true); }
+
+enum class ProgressMode { kJson, kText, kNone };
+
+class Reporter {
+ public:
+  explicit Reporter(ProgressMode mode) : mode_(mode) {}
+
+  void Progress(const ProgressEvent& event) {
+    if (mode_ == ProgressMode::kJson) {
+      v1::SolveEvent out;
+      out.set_kind(v1::SolveEvent::PROGRESS);
+      out.set_phase(event.phase);
+      out.set_progress(event.fraction);
+      out.set_message(event.message);
+      Emit(out);
+    } else if (mode_ == ProgressMode::kText) {
+      std::printf("[%3d%%] %-9s %s\n", static_cast<int>(event.fraction * 100 + 0.5),
+                  event.phase.c_str(), event.message.c_str());
+      std::fflush(stdout);
+    }
+  }
+
+  void Done(const std::string& out_dir, const v1::Summary& summary) {
+    if (mode_ == ProgressMode::kJson) {
+      v1::SolveEvent out;
+      out.set_kind(v1::SolveEvent::DONE);
+      out.set_progress(1.0);
+      out.set_message(out_dir);
+      Emit(out);
+    } else if (mode_ == ProgressMode::kText) {
+      std::printf("\n%s\nResult in %s (open result.xdmf in ParaView)\n",
+                  codec::FormatSummary(summary).c_str(), out_dir.c_str());
+    }
+  }
+
+  // Errors always reach stderr for people; in JSON mode also stdout for the server.
+  int Error(const Status& status) {
+    std::fprintf(stderr, "pba-solve: error: %s\n", status.ToString().c_str());
+    if (mode_ == ProgressMode::kJson) {
+      v1::SolveEvent out;
+      out.set_kind(v1::SolveEvent::ERROR);
+      out.set_code(CodeName(status.code()));
+      out.set_field(status.field());
+      out.set_message(status.ToString());
+      Emit(out);
+    }
+    return ExitFor(status.code());
+  }
+
+ private:
+  static const char* CodeName(Status::Code code) {
+    switch (code) {
+      case Status::Code::kInvalidArgument:
+        return "INVALID_ARGUMENT";
+      case Status::Code::kFailedPrecondition:
+        return "FAILED_PRECONDITION";
+      case Status::Code::kNumerical:
+        return "NUMERICAL";
+      case Status::Code::kIo:
+        return "IO";
+      case Status::Code::kCancelled:
+        return "CANCELLED";
+      default:
+        return "INTERNAL";
+    }
+  }
+
+  static int ExitFor(Status::Code code) {
+    switch (code) {
+      case Status::Code::kInvalidArgument:
+        return kExitInvalid;
+      case Status::Code::kFailedPrecondition:
+      case Status::Code::kNumerical:
+        return kExitNumerical;
+      case Status::Code::kIo:
+        return kExitIo;
+      case Status::Code::kCancelled:
+        return kExitCancelled;
+      default:
+        return kExitInternal;
+    }
+  }
+
+  static void Emit(const v1::SolveEvent& event) {
+    google::protobuf::util::JsonPrintOptions options;
+    options.preserve_proto_field_names = true;
+    std::string line;
+    (void)google::protobuf::util::MessageToJsonString(event, &line, options);
+    std::printf("%s\n", line.c_str());
+    std::fflush(stdout);
+  }
+
+  ProgressMode mode_;
+};
+
+Status WriteText(const std::filesystem::path& path, const std::string& text) {
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  out << text;
+  out.close();
+  if (!out) return Status::Io("cannot write " + path.string());
+  return Status::Ok();
+}
+
+int Run(const std::string& scene_path, const std::string& out_dir, ProgressMode mode, int threads) {
+  Reporter reporter(mode);
+
+  v1::Scene scene;
+  codec::ParseError parse_error;
+  if (!codec::ReadYamlFile(scene_path, &scene, &parse_error)) {
+    return reporter.Error(Status::InvalidArgument(parse_error.field, parse_error.ToString()));
+  }
+  SceneSpec spec;
+  Status status = SceneFromProto(scene, &spec);
+  if (status.ok()) status = ValidateScene(spec);
+  if (!status.ok()) return reporter.Error(status);
+
+  SolveOptions options;
+  options.threads = threads;
+  options.cancel = &g_cancel;
+  options.progress = [&reporter](const ProgressEvent& event) { reporter.Progress(event); };
+
+  Solution solution;
+  status = SolveScene(spec, options, &solution);
+  if (!status.ok()) return reporter.Error(status);
+
+  StagingDir staging;
+  status = StagingDir::Create(out_dir, &staging);
+  if (!status.ok()) return reporter.Error(status);
+  status = WriteResultFiles(spec, &solution, staging.path());
+  if (!status.ok()) return reporter.Error(status);
+  const v1::Summary summary = SummaryToProto(solution.summary);
+  status = WriteText(staging.path() / "summary.json", codec::ToJson(summary));
+  if (!status.ok()) return reporter.Error(status);
+  if (g_cancel.load()) return reporter.Error(Status::Cancelled("cancelled before the result was saved"));
+  status = staging.Commit();
+  if (!status.ok()) return reporter.Error(status);
+
+  reporter.Done(std::filesystem::absolute(out_dir).lexically_normal().string(), summary);
+  return kExitOk;
+}
+
+}  // namespace
+}  // namespace pba
+
+int main(int argc, char** argv) {
+  CLI::App app{"pba-solve: run one PBA scene and write result.h5, result.xdmf and summary.json"};
+  app.set_version_flag("--version", std::string("pba-solve ") + pba::SolverVersion());
+  std::string scene_path;
+  std::string out_dir;
+  std::string progress = "auto";
+  int threads = 0;
+  app.add_option("scene", scene_path, "Scene file (YAML or JSON, see docs/scene-reference.md)")
+      ->required();
+  app.add_option("-o,--out", out_dir, "Result directory (created; an older result there is replaced)")
+      ->required();
+  app.add_option("--progress", progress,
+                 "Progress on stdout: json (one pba.v1.SolveEvent per line), text, none, or auto "
+                 "(text on a terminal, json otherwise)")
+      ->check(CLI::IsMember({"auto", "json", "text", "none"}));
+  app.add_option("--threads", threads, "Worker threads; 0 uses every core")->check(CLI::NonNegativeNumber);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int code = app.exit(e);
+    return code == 0 ? 0 : pba::kExitInvalid;
+  }
+
+  std::signal(SIGTERM, pba::OnSignal);
+  std::signal(SIGINT, pba::OnSignal);
+
+  pba::ProgressMode mode = pba::ProgressMode::kJson;
+  if (progress == "text" || (progress == "auto" && ::isatty(STDOUT_FILENO))) {
+    mode = pba::ProgressMode::kText;
+  } else if (progress == "none") {
+    mode = pba::ProgressMode::kNone;
+  }
+  try {
+    return pba::Run(scene_path, out_dir, mode, threads);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "pba-solve: internal error: %s\n", e.what());
+    return pba::kExitInternal;
+  }
+}

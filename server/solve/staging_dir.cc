@@ -1,0 +1,98 @@
+#include "solve/staging_dir.h"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <string>
+#include <system_error>
+
+namespace pba {
+namespace fs = std::filesystem;
+namespace {
+
+bool FsyncPath(const fs::path& path, bool directory) {
+  const int fd = ::open(path.c_str(), (directory ? O_RDONLY | O_DIRECTORY : O_RDONLY) | O_CLOEXEC);
+  if (fd < 0) return false;
+  const bool ok = ::fsync(fd) == 0;
+  ::close(fd);
+  return ok;
+}
+
+std::string Hidden(const fs::path& destination, const char* what) {
+  return "." + destination.filename().string() + "." + what + "-" + std::to_string(::getpid());
+}
+
+}  // namespace
+
+Status StagingDir::Create(const fs::path& destination, StagingDir* out) {
+  fs::path dest = fs::absolute(destination).lexically_normal();
+  if (dest.filename().empty()) dest = dest.parent_path();
+  std::error_code ec;
+  fs::create_directories(dest.parent_path(), ec);
+  if (ec) return Status::Io("cannot create " + dest.parent_path().string() + ": " + ec.message());
+  StagingDir staging;
+  staging.destination_ = dest;
+  staging.staging_ = dest.parent_path() / Hidden(dest, "partial");
+  fs::remove_all(staging.staging_, ec);
+  if (!fs::create_directory(staging.staging_, ec) || ec) {
+    return Status::Io("cannot create " + staging.staging_.string() + ": " +
+                      (ec ? ec.message() : "already exists"));
+  }
+  *out = std::move(staging);
+  return Status::Ok();
+}
+
+StagingDir::StagingDir(StagingDir&& other) noexcept { *this = std::move(other); }
+
+StagingDir& StagingDir::operator=(StagingDir&& other) noexcept {
+  if (this != &other) {
+    Discard();
+    destination_ = std::move(other.destination_);
+    staging_ = std::move(other.staging_);
+    committed_ = other.committed_;
+    other.staging_.clear();
+  }
+  return *this;
+}
+
+StagingDir::~StagingDir() { Discard(); }
+
+void StagingDir::Discard() {
+  if (!committed_ && !staging_.empty()) {
+    std::error_code ec;
+    fs::remove_all(staging_, ec);
+  }
+  staging_.clear();
+}
+
+Status StagingDir::Commit() {
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(staging_, ec)) {
+    if (!FsyncPath(entry.path(), entry.is_directory())) {
+      return Status::Io("cannot flush " + entry.path().string() + " to disk");
+    }
+  }
+  if (ec) return Status::Io("cannot list " + staging_.string() + ": " + ec.message());
+  if (!FsyncPath(staging_, true)) return Status::Io("cannot flush " + staging_.string());
+
+  // An older result is moved aside first, so the destination never holds a mix.
+  fs::path old;
+  if (fs::exists(destination_)) {
+    old = destination_.parent_path() / Hidden(destination_, "old");
+    fs::remove_all(old, ec);
+    fs::rename(destination_, old, ec);
+    if (ec) return Status::Io("cannot replace " + destination_.string() + ": " + ec.message());
+  }
+  fs::rename(staging_, destination_, ec);
+  if (ec) {
+    if (!old.empty()) fs::rename(old, destination_, ec);
+    return Status::Io("cannot move the result into " + destination_.string() + ": " + ec.message());
+  }
+  committed_ = true;
+  FsyncPath(destination_.parent_path(), true);
+  if (!old.empty()) fs::remove_all(old, ec);
+  staging_ = destination_;
+  return Status::Ok();
+}
+
+}  // namespace pba

@@ -1,0 +1,110 @@
+// The solver's entry points: run one scene, write its result files.
+#pragma once
+
+#include <array>
+#include <atomic>
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "pba/scene.h"
+#include "pba/status.h"
+
+namespace pba {
+
+struct ProgressEvent {
+  std::string phase;      // mesh, assemble, factorize, solve, estimate, write
+  double fraction = 0;    // of the whole solve, 0..1, non-decreasing
+  std::string message;    // for people
+};
+
+struct SolveOptions {
+  // Worker threads for assembly and recovery; 0 = all cores.
+  int threads = 0;
+  // Called from the solving thread at each phase change and within long phases.
+  std::function<void(const ProgressEvent&)> progress;
+  // Polled between and within phases; when it becomes true the solve returns
+  // Status::Cancelled.
+  const std::atomic<bool>* cancel = nullptr;
+};
+
+struct PhaseTime {
+  std::string phase;
+  double seconds = 0;
+};
+
+struct Reaction {
+  std::string set;
+  std::array<double, 3> force_n{0, 0, 0};  // total reaction on the set [N]
+};
+
+struct ErrorEstimate {
+  bool estimated = false;
+  std::string method;          // e.g. "Zienkiewicz-Zhu stress recovery"
+  double relative_error = 0;   // energy-norm relative error, fraction
+  std::string note;            // how to read it, or why it is not estimated
+};
+
+// What a solve reports beside its fields. Mirrors pba.v1.Summary.
+struct Summary {
+  std::string scene_name;
+  // What was modelled.
+  std::string geometry;        // "box 10 x 10 x 20 mm"
+  std::string element_type;    // "TET4"
+  int64_t nodes = 0;
+  int64_t elements = 0;
+  int64_t dofs = 0;            // free unknowns
+  int64_t constrained_dofs = 0;
+  std::string material;        // "tissue: linear elastic, E = 3000 Pa, nu = 0.45"
+  std::string analysis;        // "linear static (small strain)"
+  std::string linear_solver;   // "CHOLMOD supernodal Cholesky"
+  std::vector<std::string> notes;
+  // Key results.
+  double max_displacement_mm = 0;
+  std::array<double, 3> max_displacement_at_mm{0, 0, 0};
+  double max_von_mises_pa = 0;
+  double strain_energy_j = 0;
+  std::vector<Reaction> reactions;
+  double relative_residual = 0;
+  ErrorEstimate error;
+  // Speed.
+  double wall_time_s = 0;
+  std::vector<PhaseTime> phases;
+  int threads = 1;
+};
+
+// The solved fields, in the units result.h5 uses.
+struct Solution {
+  // Mesh: node coordinates [mm], nodes x 3 row-major; tet4 connectivity,
+  // elements x 4 row-major, 0-based, positively oriented.
+  std::vector<double> nodes_mm;
+  std::vector<int64_t> tets;
+  // Nodal displacement [mm], nodes x 3.
+  std::vector<double> displacement_mm;
+  // Per element, Voigt order xx yy zz yz xz xy (engineering shear strain).
+  std::vector<double> stress_pa;   // elements x 6 [Pa]
+  std::vector<double> strain;      // elements x 6 [-]
+  std::vector<double> von_mises_pa;  // elements [Pa]
+  // Element-wise estimated error share (ZZ), elements; empty if not estimated.
+  std::vector<double> error_indicator;
+  Summary summary;
+};
+
+// Validates, meshes and solves `scene`. On success fills `solution` (fields
+// and summary except the write phase). Returns kInvalidArgument for bad
+// input, kNumerical when the solve breaks down, kCancelled when asked to stop.
+Status SolveScene(const SceneSpec& scene, const SolveOptions& options, Solution* solution);
+
+// Writes result.h5 (mesh, fields, unit attributes) and result.xdmf (the
+// ParaView view of result.h5) into the existing directory `dir`, and appends
+// the write phase to solution.summary. Fields not requested in
+// `scene.outputs` are left out.
+Status WriteResultFiles(const SceneSpec& scene, Solution* solution, const std::filesystem::path& dir);
+
+// Version string of the solver library, e.g. "0.1.0".
+const char* SolverVersion();
+
+}  // namespace pba

@@ -1,0 +1,311 @@
+// End to end: the real pba-server on an ephemeral loopback port with a fresh
+// data directory, driven by the real pba binary, running the real pba-solve.
+
+#include <gtest/gtest.h>
+#include <hdf5.h>
+#include <signal.h>
+
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <sstream>
+#include <string>
+#include <thread>
+
+#include "integration/subprocess.h"
+
+namespace pba::testing {
+namespace {
+namespace fs = std::filesystem;
+using std::chrono::seconds;
+
+// Exit codes of pba (client_cli/exit_codes.h, docs/cli.md).
+constexpr int kUnavailable = 3;
+constexpr int kNotFound = 4;
+constexpr int kInvalid = 5;
+constexpr int kJobFailed = 6;
+constexpr int kJobCancelled = 7;
+
+// A solve that runs for many seconds on two cores (about 400k unknowns), so
+// there is time to cancel it or kill its process.
+constexpr const char* kLongScene = R"(
+name: long-running
+geometry: {box: {size_mm: [50, 50, 50]}}
+mesh: {element_size_mm: 1}
+material: {linear_elastic: {youngs_modulus_pa: 3000, poissons_ratio: 0.45}}
+boundary_conditions:
+  - {set: bottom, fixed: {}}
+  - {set: top, displacement: {z_mm: -1}}
+)";
+
+std::string ReadFile(const fs::path& path) {
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+class CliServerTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    server_ = std::make_unique<ServerProcess>(PBA_SERVER_BIN, dir_.path() / "data");
+    std::string log;
+    ASSERT_TRUE(server_->Start(&log)) << "pba-server did not start:\n" << log;
+  }
+
+  void TearDown() override {
+    if (HasFailure()) std::cerr << "server log:\n" << ReadFile(server_->log_path());
+  }
+
+  RunResult Pba(std::vector<std::string> args, seconds timeout = seconds(120)) {
+    args.insert(args.begin(), {PBA_CLI_BIN, "--server", server_->address()});
+    return Run(args, timeout);
+  }
+
+  fs::path WriteScene(const std::string& name, const std::string& yaml) {
+    const fs::path path = dir_.path() / name;
+    std::ofstream(path) << yaml;
+    return path;
+  }
+
+  static std::string JobId(const RunResult& submitted) {
+    std::smatch match;
+    static const std::regex kPattern("Submitted job (\\S+)");
+    return std::regex_search(submitted.out, match, kPattern) ? match[1].str() : "";
+  }
+
+  // Polls `pba job status --json` until its "state" is `state`.
+  bool WaitForState(const std::string& id, const std::string& state, seconds timeout) {
+    const auto deadline = std::chrono::steady_clock::now() + timeout;
+    while (std::chrono::steady_clock::now() < deadline) {
+      const RunResult status = Pba({"--json", "job", "status", id});
+      if (status.out.find("\"state\": \"" + state + "\"") != std::string::npos) return true;
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    }
+    return false;
+  }
+
+  std::string SubmitLongJob() {
+    const RunResult submitted = Pba({"job", "submit", WriteScene("long.yaml", kLongScene).string()});
+    EXPECT_EQ(submitted.exit_code, 0) << submitted.err;
+    const std::string id = JobId(submitted);
+    EXPECT_TRUE(WaitForState(id, "RUNNING", seconds(30)));
+    return id;
+  }
+
+  TempDir dir_;
+  std::unique_ptr<ServerProcess> server_;
+};
+
+TEST_F(CliServerTest, SubmitWaitFetchRoundTrip) {
+  const RunResult submitted =
+      Pba({"job", "submit", std::string(PBA_EXAMPLES_DIR) + "/quickstart.yaml", "--wait"});
+  ASSERT_EQ(submitted.exit_code, 0) << submitted.out << submitted.err;
+  const std::string id = JobId(submitted);
+  ASSERT_FALSE(id.empty()) << submitted.out;
+  EXPECT_NE(submitted.out.find("SUCCEEDED"), std::string::npos) << submitted.out;
+  EXPECT_NE(submitted.out.find("max von Mises"), std::string::npos) << submitted.out;
+
+  const RunResult list = Pba({"job", "list"});
+  ASSERT_EQ(list.exit_code, 0) << list.err;
+  EXPECT_NE(list.out.find(id), std::string::npos);
+  EXPECT_NE(list.out.find("quickstart-block-compression"), std::string::npos);
+
+  const RunResult status = Pba({"job", "status", id});
+  ASSERT_EQ(status.exit_code, 0) << status.err;
+  EXPECT_NE(status.out.find("SUCCEEDED"), std::string::npos);
+  EXPECT_NE(status.out.find("Wall time"), std::string::npos);
+  EXPECT_NE(status.out.find("Error"), std::string::npos);
+
+  // The watch of a finished job replays its events as plain lines (no terminal).
+  const RunResult watch = Pba({"job", "watch", id});
+  EXPECT_EQ(watch.exit_code, 0) << watch.err;
+  EXPECT_NE(watch.out.find("RUNNING"), std::string::npos) << watch.out;
+  EXPECT_NE(watch.out.find("SUCCEEDED"), std::string::npos) << watch.out;
+  EXPECT_EQ(watch.out.find('\r'), std::string::npos) << "no bar redraws outside a terminal";
+
+  const fs::path out = dir_.path() / "fetched";
+  const RunResult fetch = Pba({"job", "fetch", id, "-o", out.string()});
+  ASSERT_EQ(fetch.exit_code, 0) << fetch.err;
+  EXPECT_NE(fetch.out.find("result.xdmf"), std::string::npos);
+  for (const char* name : {"result.h5", "result.xdmf", "summary.json"}) {
+    EXPECT_TRUE(fs::exists(out / name)) << name;
+    EXPECT_FALSE(fs::exists(out / (std::string(name) + ".part"))) << name;
+  }
+  // The downloaded result.h5 is a real HDF5 file with the displacement field.
+  const hid_t file = H5Fopen((out / "result.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  ASSERT_GE(file, 0);
+  const hid_t nodes = H5Dopen2(file, "/mesh/nodes", H5P_DEFAULT);
+  const hid_t displacement = H5Dopen2(file, "/fields/displacement", H5P_DEFAULT);
+  ASSERT_GE(nodes, 0);
+  ASSERT_GE(displacement, 0);
+  hsize_t node_dims[2] = {0, 0}, disp_dims[2] = {0, 0};
+  const hid_t node_space = H5Dget_space(nodes);
+  const hid_t disp_space = H5Dget_space(displacement);
+  H5Sget_simple_extent_dims(node_space, node_dims, nullptr);
+  H5Sget_simple_extent_dims(disp_space, disp_dims, nullptr);
+  EXPECT_GT(node_dims[0], 100u);
+  EXPECT_EQ(node_dims[0], disp_dims[0]);
+  EXPECT_EQ(disp_dims[1], 3u);
+  H5Sclose(node_space);
+  H5Sclose(disp_space);
+  H5Dclose(nodes);
+  H5Dclose(displacement);
+  H5Fclose(file);
+  const std::string summary = ReadFile(out / "summary.json");
+  EXPECT_NE(summary.find("\"wall_time_s\""), std::string::npos);
+  EXPECT_NE(summary.find("\"error_estimate\""), std::string::npos);
+
+  // A repeated fetch replaces the files and still succeeds.
+  EXPECT_EQ(Pba({"job", "fetch", id, "-o", out.string()}).exit_code, 0);
+}
+
+TEST_F(CliServerTest, JsonOutputIsParseableAndPaginates) {
+  const std::string scene = std::string(PBA_EXAMPLES_DIR) + "/quickstart.yaml";
+  for (int i = 0; i < 3; ++i) ASSERT_EQ(Pba({"job", "submit", scene}).exit_code, 0);
+  const RunResult page = Pba({"--json", "job", "list", "--page-size", "2"});
+  ASSERT_EQ(page.exit_code, 0) << page.err;
+  EXPECT_NE(page.out.find("\"next_page_token\""), std::string::npos) << page.out;
+  const RunResult all = Pba({"--json", "job", "list", "--page-size", "2", "--all"});
+  ASSERT_EQ(all.exit_code, 0) << all.err;
+  std::size_t count = 0;
+  for (std::size_t at = all.out.find("\"id\""); at != std::string::npos;
+       at = all.out.find("\"id\"", at + 1)) {
+    ++count;
+  }
+  EXPECT_EQ(count, 3u) << all.out;
+}
+
+TEST_F(CliServerTest, IdempotentSubmitWithRequestId) {
+  const std::string scene = std::string(PBA_EXAMPLES_DIR) + "/quickstart.yaml";
+  const RunResult first = Pba({"job", "submit", scene, "--request-id", "same-key"});
+  const RunResult second = Pba({"job", "submit", scene, "--request-id", "same-key"});
+  ASSERT_EQ(first.exit_code, 0) << first.err;
+  ASSERT_EQ(second.exit_code, 0) << second.err;
+  EXPECT_EQ(JobId(first), JobId(second));
+}
+
+TEST_F(CliServerTest, BadScenesAreRejectedAndNothingIsStored) {
+  struct Case {
+    const char* yaml;
+    const char* field;
+  };
+  const Case cases[] = {
+      {"name: a\ngeometry: {box: {size_mm: [1, 1, 1]}}\nmaterial: {linear_elastic: "
+       "{youngs_modulus_pa: 1, poissons_ratio: 0.3}}\ncolour: red\n",
+       "colour"},
+      {"material:\n  linear_elastic:\n    youngs_modulus_pa: soft\n",
+       "material.linear_elastic.youngs_modulus_pa"},
+      {"geometry: {box: {size_mm: [10, 10, 10]}}\nmaterial: {linear_elastic: {youngs_modulus_pa: "
+       "-5, poissons_ratio: 0.3}}\nboundary_conditions: [{set: bottom, fixed: {}}]\n",
+       "material.linear_elastic.youngs_modulus_pa"},
+      {"geometry: {box: {size_mm: [10, 10, 10]}}\nmaterial: {linear_elastic: {youngs_modulus_pa: "
+       "3000, poissons_ratio: 0.5}}\nboundary_conditions: [{set: bottom, fixed: {}}]\n",
+       "material.linear_elastic.poissons_ratio"},
+      {"geometry: {box: {size_mm: [10, 10, 10]}}\nmaterial: {linear_elastic: {youngs_modulus_pa: "
+       "3000, poissons_ratio: 0.3}}\nboundary_conditions: [{set: floor, fixed: {}}]\n",
+       "boundary_conditions[0].set"},
+  };
+  int i = 0;
+  for (const Case& c : cases) {
+    const fs::path file = WriteScene("bad" + std::to_string(i++) + ".yaml", c.yaml);
+    const RunResult result = Pba({"job", "submit", file.string()});
+    EXPECT_EQ(result.exit_code, kInvalid) << c.field << "\n" << result.err;
+    EXPECT_NE(result.err.find(c.field), std::string::npos) << result.err;
+  }
+  const RunResult list = Pba({"--json", "job", "list"});
+  ASSERT_EQ(list.exit_code, 0) << list.err;
+  EXPECT_EQ(list.out.find("\"id\""), std::string::npos) << "a rejected scene was stored:\n"
+                                                         << list.out;
+}
+
+TEST_F(CliServerTest, UnknownJobIsNotFound) {
+  const RunResult status = Pba({"job", "status", "jdoesnotexist"});
+  EXPECT_EQ(status.exit_code, kNotFound);
+  EXPECT_NE(status.err.find("jdoesnotexist"), std::string::npos) << status.err;
+  const RunResult fetch = Pba({"job", "fetch", "jdoesnotexist", "-o", (dir_.path() / "x").string()});
+  EXPECT_EQ(fetch.exit_code, kNotFound);
+  EXPECT_FALSE(fs::exists(dir_.path() / "x"));
+}
+
+TEST_F(CliServerTest, CancelLongJob) {
+  const std::string id = SubmitLongJob();
+  const RunResult cancel = Pba({"job", "cancel", id});
+  EXPECT_EQ(cancel.exit_code, 0) << cancel.err;
+  const RunResult watch = Pba({"job", "watch", id}, seconds(60));
+  EXPECT_EQ(watch.exit_code, kJobCancelled) << watch.out << watch.err;
+  EXPECT_TRUE(WaitForState(id, "CANCELLED", seconds(5)));
+  EXPECT_TRUE(ChildrenNamed(server_->pid(), "pba-solve").empty());
+  const RunResult fetch = Pba({"job", "fetch", id, "-o", (dir_.path() / "x").string()});
+  EXPECT_EQ(fetch.exit_code, kJobCancelled);
+  EXPECT_NE(fetch.err.find("cancelled"), std::string::npos) << fetch.err;
+}
+
+TEST_F(CliServerTest, KilledSolverFailsTheJobAndServerKeepsServing) {
+  const std::string id = SubmitLongJob();
+  std::vector<pid_t> solvers;
+  for (int i = 0; i < 100 && solvers.empty(); ++i) {
+    solvers = ChildrenNamed(server_->pid(), "pba-solve");
+    if (solvers.empty()) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  ASSERT_EQ(solvers.size(), 1u);
+  ::kill(solvers[0], SIGKILL);
+  ASSERT_TRUE(WaitForState(id, "FAILED", seconds(30)));
+  const RunResult status = Pba({"job", "status", id});
+  EXPECT_NE(status.out.find("signal 9"), std::string::npos) << status.out;
+
+  const RunResult fetch = Pba({"job", "fetch", id, "-o", (dir_.path() / "x").string()});
+  EXPECT_EQ(fetch.exit_code, kJobFailed);
+  EXPECT_NE(fetch.err.find("failed"), std::string::npos) << fetch.err;
+
+  const RunResult next =
+      Pba({"job", "submit", std::string(PBA_EXAMPLES_DIR) + "/quickstart.yaml", "--wait"});
+  EXPECT_EQ(next.exit_code, 0) << next.out << next.err;
+}
+
+TEST_F(CliServerTest, RunningJobIsRequeuedAfterServerCrash) {
+  const std::string id = SubmitLongJob();
+  server_->Kill();
+  // The solver dies with its server (it is the server's child).
+  std::string log;
+  ASSERT_TRUE(server_->Start(&log)) << log;
+  const RunResult status = Pba({"--json", "job", "status", id});
+  ASSERT_EQ(status.exit_code, 0) << status.err;
+  EXPECT_TRUE(status.out.find("\"state\": \"QUEUED\"") != std::string::npos ||
+              status.out.find("\"state\": \"RUNNING\"") != std::string::npos)
+      << status.out;
+  ASSERT_TRUE(WaitForState(id, "RUNNING", seconds(30)));
+  const RunResult watch = Pba({"job", "watch", id}, seconds(5));  // cut short: it is still running
+  EXPECT_NE(watch.out.find("re-queued"), std::string::npos) << watch.out;
+  EXPECT_EQ(Pba({"job", "cancel", id}).exit_code, 0);
+  EXPECT_TRUE(WaitForState(id, "CANCELLED", seconds(30)));
+}
+
+TEST_F(CliServerTest, GracefulStopWithRunningJob) {
+  const std::string id = SubmitLongJob();
+  EXPECT_EQ(server_->Stop(seconds(30)), 0);
+  EXPECT_FALSE(fs::exists(dir_.path() / "data" / "server.json"));
+  std::string log;
+  ASSERT_TRUE(server_->Start(&log)) << log;
+  const RunResult status = Pba({"--json", "job", "status", id});
+  ASSERT_EQ(status.exit_code, 0) << status.err;
+  EXPECT_EQ(status.out.find("\"state\": \"FAILED\""), std::string::npos) << status.out;
+  EXPECT_EQ(Pba({"job", "cancel", id}).exit_code, 0);
+  EXPECT_TRUE(WaitForState(id, "CANCELLED", seconds(30)));
+}
+
+TEST(CliWithoutServerTest, UnreachableServerIsNamed) {
+  // Port 1 on loopback: nothing listens there.
+  const RunResult result = Run({PBA_CLI_BIN, "--server", "127.0.0.1:1", "job", "list"});
+  EXPECT_EQ(result.exit_code, kUnavailable);
+  EXPECT_NE(result.err.find("127.0.0.1:1"), std::string::npos) << result.err;
+  EXPECT_EQ(result.err.find("terminate"), std::string::npos) << result.err;
+}
+
+TEST(CliWithoutServerTest, UsageErrorsExitTwo) {
+  EXPECT_EQ(Run({PBA_CLI_BIN, "job", "frobnicate"}).exit_code, 2);
+  EXPECT_EQ(Run({PBA_CLI_BIN, "job", "submit", "/nonexistent.yaml"}).exit_code, 2);
+}
+
+}  // namespace
+}  // namespace pba::testing

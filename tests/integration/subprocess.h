@@ -1,0 +1,65 @@
+// Test helpers that run the real executables: a child process with captured
+// output, and a pba-server started on an ephemeral loopback port.
+#pragma once
+
+#include <sys/types.h>
+
+#include <chrono>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace pba::testing {
+
+struct RunResult {
+  int exit_code = -1;  // -signal when killed
+  std::string out;
+  std::string err;
+};
+
+// Runs `argv` to completion (killed after `timeout`), capturing stdout and stderr.
+RunResult Run(const std::vector<std::string>& argv,
+              std::chrono::seconds timeout = std::chrono::seconds(120));
+
+// A pba-server child on 127.0.0.1 with its own data directory.
+class ServerProcess {
+ public:
+  ServerProcess(std::filesystem::path binary, std::filesystem::path data_dir);
+  ~ServerProcess();  // SIGKILL if still running
+  ServerProcess(const ServerProcess&) = delete;
+  ServerProcess& operator=(const ServerProcess&) = delete;
+
+  // Starts the server on a free port; false (with the log) if it did not
+  // report its address within 20 s.
+  bool Start(std::string* log);
+  // SIGTERM and wait; returns the exit code (-signal if killed).
+  int Stop(std::chrono::seconds timeout = std::chrono::seconds(30));
+  // SIGKILL and reap, like a crash.
+  void Kill();
+
+  const std::string& address() const { return address_; }
+  pid_t pid() const { return pid_; }
+  std::filesystem::path log_path() const { return data_dir_ / "server-test.log"; }
+
+ private:
+  std::filesystem::path binary_;
+  std::filesystem::path data_dir_;
+  pid_t pid_ = -1;
+  std::string address_;
+};
+
+// Children of `parent` whose command name is `name`.
+std::vector<pid_t> ChildrenNamed(pid_t parent, const std::string& name);
+
+// A fresh empty directory under the system temp dir, removed by the destructor.
+class TempDir {
+ public:
+  TempDir();
+  ~TempDir();
+  const std::filesystem::path& path() const { return path_; }
+
+ private:
+  std::filesystem::path path_;
+};
+
+}  // namespace pba::testing
