@@ -3,14 +3,6 @@
 #include <string>
 
 namespace pba {
-namespace {
-
-std::string Shape(const std::string& path, int count) {
-  return path + " needs three numbers (x, y, z), got " + std::to_string(count);
-}
-
-}  // namespace
-
 Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec) {
   *spec = SceneSpec();
   spec->name = scene.name();

@@ -1,0 +1,135 @@
+#include "assembly/assembler.h"
+
+#include <algorithm>
+#include <bitset>
+
+namespace pba {
+namespace {
+
+constexpr int kMaxColours = 256;
+
+Eigen::Matrix<double, 4, 3> Corners(const Mesh& mesh, int e) {
+  Eigen::Matrix<double, 4, 3> x;
+  for (int a = 0; a < 4; ++a) x.row(a) = mesh.nodes.row(mesh.tets[e][a]);
+  return x;
+}
+
+// Compressed-column pattern of K_ff: the free unknowns of every node pair that
+// shares an element.
+struct Pattern {
+  std::vector<int> outer;  // num_free + 1
+  std::vector<int> inner;  // row (free index) of each stored entry, sorted per column
+
+  int Find(int row, int col) const {
+    const auto begin = inner.begin() + outer[col], end = inner.begin() + outer[col + 1];
+    return static_cast<int>(std::lower_bound(begin, end, row) - inner.begin());
+  }
+};
+
+Pattern BuildPattern(const Mesh& mesh, const DofMap& dofs) {
+  const int n = mesh.num_nodes();
+  std::vector<std::vector<int>> neighbours(n);
+  for (const auto& t : mesh.tets) {
+    for (int a : t) neighbours[a].insert(neighbours[a].end(), t.begin(), t.end());
+  }
+  Pattern p;
+  p.outer.assign(dofs.num_free() + 1, 0);
+  for (int b = 0; b < n; ++b) {
+    auto& list = neighbours[b];
+    std::sort(list.begin(), list.end());
+    list.erase(std::unique(list.begin(), list.end()), list.end());
+    for (int j = 0; j < 3; ++j) {
+      const int col = dofs.free_index(3 * b + j);
+      if (col < 0) continue;
+      for (int a : list) {
+        for (int i = 0; i < 3; ++i) {
+          const int row = dofs.free_index(3 * a + i);
+          if (row >= 0) p.inner.push_back(row);
+        }
+      }
+      p.outer[col + 1] = static_cast<int>(p.inner.size());
+    }
+    std::vector<int>().swap(list);
+  }
+  return p;
+}
+
+}  // namespace
+
+std::vector<std::vector<int>> ColourElements(const Mesh& mesh) {
+  std::vector<std::bitset<kMaxColours>> used(mesh.num_nodes());
+  std::vector<std::vector<int>> colours;
+  for (int e = 0; e < mesh.num_elements(); ++e) {
+    std::bitset<kMaxColours> taken;
+    for (int a : mesh.tets[e]) taken |= used[a];
+    int c = 0;
+    while (c < kMaxColours && taken[c]) ++c;
+    // Structured tetrahedral meshes need a few dozen colours; running out
+    // would mean a node in hundreds of elements, a broken mesh.
+    if (c == kMaxColours) c = kMaxColours - 1;
+    if (c >= static_cast<int>(colours.size())) colours.resize(c + 1);
+    colours[c].push_back(e);
+    for (int a : mesh.tets[e]) used[a].set(c);
+  }
+  return colours;
+}
+
+Vector12d GatherElement(const Mesh& mesh, int e, const Eigen::VectorXd& u) {
+  Vector12d ue;
+  for (int a = 0; a < 4; ++a) ue.segment<3>(3 * a) = u.segment<3>(3 * mesh.tets[e][a]);
+  return ue;
+}
+
+Status AssembleLinearSystem(const Mesh& mesh, const Matrix6d& d, const DofMap& dofs,
+                            const std::vector<std::vector<int>>& colours,
+                            const std::function<bool(double)>& keep_going, LinearSystem* system) {
+  const Pattern pattern = BuildPattern(mesh, dofs);
+  std::vector<double> values(pattern.inner.size(), 0.0);
+  system->rhs = Eigen::VectorXd::Zero(dofs.num_free());
+  double* rhs = system->rhs.data();
+
+  std::size_t done = 0;
+  const std::size_t total = mesh.tets.size();
+  // Elements of the last colour may share nodes (see ColourElements), so it
+  // is assembled by one thread.
+  for (std::size_t c = 0; c < colours.size(); ++c) {
+    const std::vector<int>& elements = colours[c];
+    const bool serial = c + 1 == static_cast<std::size_t>(kMaxColours);
+#pragma omp parallel for schedule(static) if (!serial)
+    for (std::size_t k = 0; k < elements.size(); ++k) {
+      const int e = elements[k];
+      const Matrix12d ke = Tet4Stiffness(ComputeTet4Geometry(Corners(mesh, e)), d);
+      int free[12];
+      double up[12];
+      for (int a = 0; a < 4; ++a) {
+        for (int i = 0; i < 3; ++i) {
+          const int dof = 3 * mesh.tets[e][a] + i;
+          free[3 * a + i] = dofs.free_index(dof);
+          up[3 * a + i] = dofs.prescribed(dof) ? dofs.prescribed_value(dof) : 0.0;
+        }
+      }
+      for (int q = 0; q < 12; ++q) {
+        if (free[q] < 0) {
+          if (up[q] == 0.0) continue;
+          for (int p = 0; p < 12; ++p) {
+            if (free[p] >= 0) rhs[free[p]] -= ke(p, q) * up[q];
+          }
+          continue;
+        }
+        for (int p = 0; p < 12; ++p) {
+          if (free[p] >= 0) values[pattern.Find(free[p], free[q])] += ke(p, q);
+        }
+      }
+    }
+    done += elements.size();
+    if (!keep_going(static_cast<double>(done) / static_cast<double>(total))) {
+      return Status::Cancelled("cancelled during assembly");
+    }
+  }
+  const int n = dofs.num_free();
+  system->k = Eigen::Map<const SparseMatrix>(n, n, static_cast<int>(values.size()), pattern.outer.data(),
+                                             pattern.inner.data(), values.data());
+  return Status::Ok();
+}
+
+}  // namespace pba

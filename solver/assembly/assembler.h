@@ -1,0 +1,40 @@
+// Parallel assembly of the small-strain stiffness on the free unknowns.
+//
+// Elements are greedily coloured so that no two of one colour share a node;
+// the elements of a colour are then assembled by all threads at once straight
+// into a compressed matrix whose pattern was built beforehand — no global
+// lock, no triplet list.
+#pragma once
+
+#include <Eigen/SparseCore>
+#include <functional>
+#include <vector>
+
+#include "assembly/dof_map.h"
+#include "fem/tet4.h"
+#include "mesh/mesh.h"
+#include "pba/status.h"
+
+namespace pba {
+
+using SparseMatrix = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
+
+// Element indices by colour; elements of one colour share no node.
+std::vector<std::vector<int>> ColourElements(const Mesh& mesh);
+
+struct LinearSystem {
+  SparseMatrix k;       // K_ff, symmetric, both triangles stored
+  Eigen::VectorXd rhs;  // f_f - K_fp u_p
+};
+
+// Assembles K_ff and the right-hand side for elasticity matrix `d`.
+// `keep_going(fraction)` is called between colours; returning false stops
+// the assembly with Status::Cancelled.
+Status AssembleLinearSystem(const Mesh& mesh, const Matrix6d& d, const DofMap& dofs,
+                            const std::vector<std::vector<int>>& colours,
+                            const std::function<bool(double)>& keep_going, LinearSystem* system);
+
+// Gathers the 12 element unknowns of tet `e` from the full vector `u`.
+Vector12d GatherElement(const Mesh& mesh, int e, const Eigen::VectorXd& u);
+
+}  // namespace pba

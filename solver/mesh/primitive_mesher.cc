@@ -1,0 +1,256 @@
+#include "mesh/primitive_mesher.h"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <numbers>
+
+namespace pba {
+namespace {
+
+constexpr double kMm = 1e-3;  // metres per millimetre
+
+// A meshed cross-section in the xy plane [mm].
+struct Section {
+  std::vector<Eigen::Vector2d> points;
+  std::vector<std::array<int, 4>> quads;
+};
+
+int Divisions(double length, double h) { return std::max(1, static_cast<int>(std::ceil(length / h - 1e-9))); }
+
+Section RectangleSection(double lx, double ly, int nx, int ny) {
+  Section s;
+  for (int j = 0; j <= ny; ++j) {
+    for (int i = 0; i <= nx; ++i) s.points.emplace_back(lx * i / nx, ly * j / ny);
+  }
+  for (int j = 0; j < ny; ++j) {
+    for (int i = 0; i < nx; ++i) {
+      const int a = j * (nx + 1) + i;
+      s.quads.push_back({a, a + 1, a + nx + 2, a + nx + 1});
+    }
+  }
+  return s;
+}
+
+// O-grid of a disk: a central square of side R cut n x n, and a ring of m
+// layers between the square's boundary and the circle.
+struct DiskDivisions {
+  int n;  // central cells per side
+  int m;  // ring layers
+};
+
+DiskDivisions DiskCounts(double radius, double h) {
+  return {std::max(2, Divisions(radius, h)), Divisions(0.5 * radius, h)};
+}
+
+Section DiskSection(double radius, DiskDivisions d) {
+  Section s;
+  const int n = d.n;
+  const double a = 0.5 * radius;  // half width of the central square
+  for (int j = 0; j <= n; ++j) {
+    for (int i = 0; i <= n; ++i) s.points.emplace_back(-a + 2 * a * i / n, -a + 2 * a * j / n);
+  }
+  for (int j = 0; j < n; ++j) {
+    for (int i = 0; i < n; ++i) {
+      const int c = j * (n + 1) + i;
+      s.quads.push_back({c, c + 1, c + n + 2, c + n + 1});
+    }
+  }
+  // The square's boundary, counter-clockwise from the corner (-a, -a).
+  const int loop = 4 * n;
+  std::vector<int> ring(loop);
+  std::vector<double> angle(loop);
+  for (int k = 0; k < loop; ++k) {
+    const int edge = k / n;
+    const int t = k % n;
+    int i = 0, j = 0;
+    switch (edge) {
+      case 0: i = t, j = 0; break;
+      case 1: i = n, j = t; break;
+      case 2: i = n - t, j = n; break;
+      default: i = 0, j = n - t; break;
+    }
+    ring[k] = j * (n + 1) + i;
+    angle[k] = -0.75 * std::numbers::pi + edge * 0.5 * std::numbers::pi +
+               (static_cast<double>(t) / n) * 0.5 * std::numbers::pi;
+  }
+  std::vector<int> previous = ring;
+  for (int l = 1; l <= d.m; ++l) {
+    const double f = static_cast<double>(l) / d.m;
+    std::vector<int> layer(loop);
+    for (int k = 0; k < loop; ++k) {
+      const Eigen::Vector2d inner = s.points[ring[k]];
+      const Eigen::Vector2d outer(radius * std::cos(angle[k]), radius * std::sin(angle[k]));
+      layer[k] = static_cast<int>(s.points.size());
+      s.points.push_back((1 - f) * inner + f * outer);
+    }
+    for (int k = 0; k < loop; ++k) {
+      const int k1 = (k + 1) % loop;
+      s.quads.push_back({previous[k], previous[k1], layer[k1], layer[k]});
+    }
+    previous = std::move(layer);
+  }
+  return s;
+}
+
+double SignedVolume(const Mesh& mesh, const std::array<int, 4>& t) {
+  const Eigen::Vector3d a = mesh.nodes.row(t[0]).transpose();
+  const Eigen::Vector3d b = mesh.nodes.row(t[1]).transpose();
+  const Eigen::Vector3d c = mesh.nodes.row(t[2]).transpose();
+  const Eigen::Vector3d d = mesh.nodes.row(t[3]).transpose();
+  return (b - a).cross(c - a).dot(d - a) / 6.0;
+}
+
+// Cuts the prism with bottom (v[0], v[1], v[2]) and top (v[3], v[4], v[5]),
+// v[i + 3] above v[i], into three tetrahedra. Each quadrilateral face is
+// split through its smallest global index (Dompierre et al. 1999), so
+// neighbours agree on shared faces.
+void SplitPrism(const std::array<int, 6>& v, std::vector<std::array<int, 4>>* tets) {
+  const int m = static_cast<int>(std::min_element(v.begin(), v.end()) - v.begin());
+  int a, b, c, d, e, f;
+  if (m < 3) {
+    a = v[m], b = v[(m + 1) % 3], c = v[(m + 2) % 3];
+    d = v[m + 3], e = v[(m + 1) % 3 + 3], f = v[(m + 2) % 3 + 3];
+  } else {
+    const int k = m - 3;
+    a = v[m], b = v[(k + 1) % 3 + 3], c = v[(k + 2) % 3 + 3];
+    d = v[k], e = v[(k + 1) % 3], f = v[(k + 2) % 3];
+  }
+  if (std::min(b, f) < std::min(c, e)) {
+    tets->push_back({a, b, c, f});
+    tets->push_back({a, b, f, e});
+  } else {
+    tets->push_back({a, b, c, e});
+    tets->push_back({a, e, c, f});
+  }
+  tets->push_back({a, e, f, d});
+}
+
+Mesh Extrude(const Section& section, double height, int nz) {
+  Mesh mesh;
+  const int np = static_cast<int>(section.points.size());
+  mesh.nodes.resize(static_cast<Eigen::Index>(np) * (nz + 1), 3);
+  for (int k = 0; k <= nz; ++k) {
+    const double z = height * k / nz;
+    for (int p = 0; p < np; ++p) {
+      mesh.nodes.row(k * np + p) << section.points[p].x() * kMm, section.points[p].y() * kMm, z * kMm;
+    }
+  }
+  mesh.tets.reserve(section.quads.size() * 6 * nz);
+  for (int k = 0; k < nz; ++k) {
+    const int lo = k * np, hi = (k + 1) * np;
+    for (const auto& q : section.quads) {
+      for (const auto& tri : {std::array<int, 3>{q[0], q[1], q[2]}, std::array<int, 3>{q[0], q[2], q[3]}}) {
+        SplitPrism({lo + tri[0], lo + tri[1], lo + tri[2], hi + tri[0], hi + tri[1], hi + tri[2]},
+                   &mesh.tets);
+      }
+    }
+  }
+  for (auto& t : mesh.tets) {
+    if (SignedVolume(mesh, t) < 0) std::swap(t[2], t[3]);
+  }
+  return mesh;
+}
+
+// Fills mesh.face_sets: a tetrahedron face belongs to a set when its three
+// nodes lie on that set's surface (the bodies are convex, so such a face is
+// on the boundary).
+void ClassifyFaces(const std::vector<std::string>& names,
+                   const std::vector<std::function<bool(const Eigen::Vector3d&)>>& on_surface, Mesh* mesh) {
+  const int n = mesh->num_nodes();
+  std::vector<uint32_t> mask(n, 0);
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Vector3d x = mesh->nodes.row(i).transpose();
+    for (std::size_t s = 0; s < on_surface.size(); ++s) {
+      if (on_surface[s](x)) mask[i] |= 1u << s;
+    }
+  }
+  static constexpr int kFaces[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+  std::vector<FaceSet> sets(names.size());
+  for (const auto& t : mesh->tets) {
+    for (const auto& f : kFaces) {
+      const uint32_t common = mask[t[f[0]]] & mask[t[f[1]]] & mask[t[f[2]]];
+      if (common == 0) continue;
+      for (std::size_t s = 0; s < names.size(); ++s) {
+        if (common & (1u << s)) sets[s].triangles.push_back({t[f[0]], t[f[1]], t[f[2]]});
+      }
+    }
+  }
+  for (std::size_t s = 0; s < names.size(); ++s) {
+    auto& nodes = sets[s].nodes;
+    for (const auto& tri : sets[s].triangles) nodes.insert(nodes.end(), tri.begin(), tri.end());
+    std::sort(nodes.begin(), nodes.end());
+    nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
+    mesh->face_sets[names[s]] = std::move(sets[s]);
+  }
+}
+
+}  // namespace
+
+double EffectiveElementSize(const GeometrySpec& geometry, const MeshSpec& options) {
+  if (options.element_size_mm > 0) return options.element_size_mm;
+  double largest = 0;
+  if (geometry.kind == GeometrySpec::Kind::kBox) {
+    largest = *std::max_element(geometry.box.size_mm.begin(), geometry.box.size_mm.end());
+  } else if (geometry.kind == GeometrySpec::Kind::kCylinder) {
+    largest = std::max(2 * geometry.cylinder.radius_mm, geometry.cylinder.height_mm);
+  }
+  return largest / 20.0;
+}
+
+int64_t EstimateElementCount(const GeometrySpec& geometry, const MeshSpec& options) {
+  const double h = EffectiveElementSize(geometry, options);
+  if (!(h > 0)) return 0;
+  // Counted in doubles: an absurd size must not overflow the count.
+  double count = 0;
+  if (geometry.kind == GeometrySpec::Kind::kBox) {
+    const auto& s = geometry.box.size_mm;
+    count = 6.0 * std::ceil(s[0] / h) * std::ceil(s[1] / h) * std::ceil(s[2] / h);
+  } else if (geometry.kind == GeometrySpec::Kind::kCylinder) {
+    const double n = std::max(2.0, std::ceil(geometry.cylinder.radius_mm / h));
+    const double m = std::ceil(0.5 * geometry.cylinder.radius_mm / h);
+    count = 6.0 * (n * n + 4 * n * m) * std::ceil(geometry.cylinder.height_mm / h);
+  }
+  return count > 9e18 ? INT64_MAX : static_cast<int64_t>(count);
+}
+
+Mesh BuildPrimitiveMesh(const GeometrySpec& geometry, const MeshSpec& options, MeshStats* stats) {
+  const double h = EffectiveElementSize(geometry, options);
+  Mesh mesh;
+  if (geometry.kind == GeometrySpec::Kind::kBox) {
+    const auto& s = geometry.box.size_mm;
+    const int nx = Divisions(s[0], h), ny = Divisions(s[1], h), nz = Divisions(s[2], h);
+    mesh = Extrude(RectangleSection(s[0], s[1], nx, ny), s[2], nz);
+    const double eps = 1e-9 * std::max({s[0], s[1], s[2]}) * kMm;
+    const double lx = s[0] * kMm, ly = s[1] * kMm, lz = s[2] * kMm;
+    ClassifyFaces({"bottom", "top", "x_min", "x_max", "y_min", "y_max"},
+                  {[=](const Eigen::Vector3d& x) { return x.z() < eps; },
+                   [=](const Eigen::Vector3d& x) { return x.z() > lz - eps; },
+                   [=](const Eigen::Vector3d& x) { return x.x() < eps; },
+                   [=](const Eigen::Vector3d& x) { return x.x() > lx - eps; },
+                   [=](const Eigen::Vector3d& x) { return x.y() < eps; },
+                   [=](const Eigen::Vector3d& x) { return x.y() > ly - eps; }},
+                  &mesh);
+    stats->description = "structured grid of " + std::to_string(nx) + " x " + std::to_string(ny) + " x " +
+                         std::to_string(nz) + " cells, each cut into 6 tetrahedra";
+  } else {
+    const double r = geometry.cylinder.radius_mm, height = geometry.cylinder.height_mm;
+    const DiskDivisions d = DiskCounts(r, h);
+    const int nz = Divisions(height, h);
+    mesh = Extrude(DiskSection(r, d), height, nz);
+    const double eps = 1e-9 * std::max(r, height) * kMm;
+    const double rm = r * kMm, hm = height * kMm;
+    ClassifyFaces({"bottom", "top", "side"},
+                  {[=](const Eigen::Vector3d& x) { return x.z() < eps; },
+                   [=](const Eigen::Vector3d& x) { return x.z() > hm - eps; },
+                   [=](const Eigen::Vector3d& x) { return x.head<2>().norm() > rm - eps; }},
+                  &mesh);
+    stats->description = "O-grid cross-section (central square " + std::to_string(d.n) + " x " +
+                         std::to_string(d.n) + ", ring of " + std::to_string(d.m) + " layers) extruded in " +
+                         std::to_string(nz) + " layers, each prism cut into 3 tetrahedra";
+  }
+  return mesh;
+}
+
+}  // namespace pba

@@ -1,0 +1,170 @@
+// Scene checks that need no mesh; every failure names its field path.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <string>
+
+#include "mesh/primitive_mesher.h"
+#include "pba/scene.h"
+
+namespace pba {
+namespace {
+
+// A mesh beyond this would need more memory than the machines PBA targets.
+constexpr int64_t kMaxElements = 4'000'000;
+
+std::string Number(double value) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%g", value);
+  return buffer;
+}
+
+bool PositiveFinite(double value) { return std::isfinite(value) && value > 0; }
+
+Status ValidateGeometry(const GeometrySpec& geometry) {
+  switch (geometry.kind) {
+    case GeometrySpec::Kind::kNone:
+      return Status::InvalidArgument("geometry", "no shape given: set geometry.box or geometry.cylinder");
+    case GeometrySpec::Kind::kBox:
+      for (double size : geometry.box.size_mm) {
+        if (!PositiveFinite(size)) {
+          return Status::InvalidArgument("geometry.box.size_mm",
+                                         "every edge length must be a positive number of mm, got " +
+                                             Number(size));
+        }
+      }
+      return Status::Ok();
+    case GeometrySpec::Kind::kCylinder:
+      if (!PositiveFinite(geometry.cylinder.radius_mm)) {
+        return Status::InvalidArgument("geometry.cylinder.radius_mm",
+                                       "must be a positive number of mm, got " +
+                                           Number(geometry.cylinder.radius_mm));
+      }
+      if (!PositiveFinite(geometry.cylinder.height_mm)) {
+        return Status::InvalidArgument("geometry.cylinder.height_mm",
+                                       "must be a positive number of mm, got " +
+                                           Number(geometry.cylinder.height_mm));
+      }
+      return Status::Ok();
+  }
+  return Status::Internal("unhandled geometry kind");
+}
+
+std::string JoinNames(const std::vector<std::string>& names) {
+  std::string out;
+  for (const auto& name : names) out += (out.empty() ? "" : ", ") + name;
+  return out;
+}
+
+}  // namespace
+
+Status LinearElasticParams::Validate(const std::string& path) const {
+  if (!PositiveFinite(youngs_modulus_pa)) {
+    return Status::InvalidArgument(path + ".youngs_modulus_pa",
+                                   "Young's modulus must be a positive number of Pa, got " +
+                                       Number(youngs_modulus_pa));
+  }
+  if (!std::isfinite(poissons_ratio) || poissons_ratio <= -1.0 || poissons_ratio >= 0.5) {
+    std::string message = "Poisson's ratio must lie in (-1, 0.5), got " + Number(poissons_ratio);
+    if (poissons_ratio == 0.5) {
+      message += "; an incompressible material needs a hyperelastic model, not linear elasticity";
+    }
+    return Status::InvalidArgument(path + ".poissons_ratio", message);
+  }
+  return Status::Ok();
+}
+
+std::vector<std::string> FaceSetNames(const GeometrySpec& geometry) {
+  switch (geometry.kind) {
+    case GeometrySpec::Kind::kBox:
+      return {"bottom", "top", "x_min", "x_max", "y_min", "y_max"};
+    case GeometrySpec::Kind::kCylinder:
+      return {"bottom", "top", "side"};
+    default:
+      return {};
+  }
+}
+
+Status ValidateScene(const SceneSpec& scene) {
+  PBA_RETURN_IF_ERROR(ValidateGeometry(scene.geometry));
+
+  if (!std::isfinite(scene.mesh.element_size_mm) || scene.mesh.element_size_mm < 0) {
+    return Status::InvalidArgument("mesh.element_size_mm",
+                                   "must be a positive number of mm (or left out for the default), got " +
+                                       Number(scene.mesh.element_size_mm));
+  }
+  const int64_t elements = EstimateElementCount(scene.geometry, scene.mesh);
+  if (elements > kMaxElements) {
+    return Status::InvalidArgument(
+        "mesh.element_size_mm", "this element size would give about " + std::to_string(elements) +
+                                    " elements, more than the limit of " +
+                                    std::to_string(kMaxElements) + "; choose a larger size");
+  }
+
+  switch (scene.material.kind) {
+    case MaterialSpec::Kind::kNone:
+      return Status::InvalidArgument("material", "no material model given: set material.linear_elastic");
+    case MaterialSpec::Kind::kLinearElastic:
+      PBA_RETURN_IF_ERROR(scene.material.linear_elastic.Validate("material.linear_elastic"));
+      break;
+  }
+
+  if (scene.boundary_conditions.empty()) {
+    return Status::InvalidArgument("boundary_conditions",
+                                   "no boundary conditions: the body is free to move; hold at "
+                                   "least one face (for example {set: bottom, fixed: {}})");
+  }
+  const std::vector<std::string> sets = FaceSetNames(scene.geometry);
+  bool held[3] = {false, false, false};
+  for (std::size_t i = 0; i < scene.boundary_conditions.size(); ++i) {
+    const BoundaryConditionSpec& bc = scene.boundary_conditions[i];
+    const std::string path = "boundary_conditions[" + std::to_string(i) + "]";
+    if (std::find(sets.begin(), sets.end(), bc.set) == sets.end()) {
+      return Status::InvalidArgument(path + ".set", "unknown face set '" + bc.set +
+                                                        "'; this geometry has: " + JoinNames(sets));
+    }
+    switch (bc.kind) {
+      case BoundaryConditionSpec::Kind::kNone:
+        return Status::InvalidArgument(path, "no condition given: set fixed or displacement");
+      case BoundaryConditionSpec::Kind::kFixed:
+        held[0] = held[1] = held[2] = true;
+        break;
+      case BoundaryConditionSpec::Kind::kDisplacement: {
+        bool any = false;
+        static const char* kNames[3] = {"x_mm", "y_mm", "z_mm"};
+        for (int c = 0; c < 3; ++c) {
+          if (!bc.displacement_mm[c]) continue;
+          if (!std::isfinite(*bc.displacement_mm[c])) {
+            return Status::InvalidArgument(path + ".displacement." + kNames[c], "must be a finite number of mm");
+          }
+          any = held[c] = true;
+        }
+        if (!any) {
+          return Status::InvalidArgument(path + ".displacement",
+                                         "no component given: set at least one of x_mm, y_mm, z_mm");
+        }
+        break;
+      }
+    }
+  }
+  std::string free;
+  for (int c = 0; c < 3; ++c) {
+    if (!held[c]) free += std::string(free.empty() ? "" : ", ") + "xyz"[c];
+  }
+  if (!free.empty()) {
+    return Status::InvalidArgument("boundary_conditions",
+                                   "no condition holds the body in direction " + free +
+                                       ", so it could slide away; fix or prescribe that component "
+                                       "on some face");
+  }
+  for (std::size_t i = 0; i < scene.outputs.reaction_sets.size(); ++i) {
+    const std::string& name = scene.outputs.reaction_sets[i];
+    if (std::find(sets.begin(), sets.end(), name) == sets.end()) {
+      return Status::InvalidArgument("outputs.reaction_sets[" + std::to_string(i) + "]",
+                                     "unknown face set '" + name + "'; this geometry has: " + JoinNames(sets));
+    }
+  }
+  return Status::Ok();
+}
+
+}  // namespace pba

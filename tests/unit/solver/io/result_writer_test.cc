@@ -1,0 +1,132 @@
+#include <gtest/gtest.h>
+#include <hdf5.h>
+#include <stdlib.h>
+
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <sstream>
+
+#include "pba/solve.h"
+
+namespace pba {
+namespace {
+namespace fs = std::filesystem;
+
+SceneSpec Scene() {
+  SceneSpec s;
+  s.name = "writer-test";
+  s.geometry.kind = GeometrySpec::Kind::kBox;
+  s.geometry.box.size_mm = {4, 4, 8};
+  s.mesh.element_size_mm = 2;
+  s.material.kind = MaterialSpec::Kind::kLinearElastic;
+  s.material.linear_elastic = {3000, 0.45};
+  BoundaryConditionSpec bottom{"bottom", BoundaryConditionSpec::Kind::kFixed, {}};
+  BoundaryConditionSpec top{"top", BoundaryConditionSpec::Kind::kDisplacement, {}};
+  top.displacement_mm[2] = -0.4;
+  s.boundary_conditions = {bottom, top};
+  return s;
+}
+
+std::string ReadAttribute(hid_t object, const char* name) {
+  const hid_t attribute = H5Aopen(object, name, H5P_DEFAULT);
+  if (attribute < 0) return "<missing>";
+  const hid_t type = H5Aget_type(attribute);
+  std::string value(H5Tget_size(type), '\0');
+  H5Aread(attribute, type, value.data());
+  H5Tclose(type);
+  H5Aclose(attribute);
+  return value.c_str();
+}
+
+std::vector<hsize_t> Dims(hid_t file, const char* path) {
+  const hid_t dataset = H5Dopen2(file, path, H5P_DEFAULT);
+  if (dataset < 0) return {};
+  const hid_t space = H5Dget_space(dataset);
+  std::vector<hsize_t> dims(H5Sget_simple_extent_ndims(space));
+  H5Sget_simple_extent_dims(space, dims.data(), nullptr);
+  H5Sclose(space);
+  H5Dclose(dataset);
+  return dims;
+}
+
+class ResultWriterTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    std::string pattern = (fs::temp_directory_path() / "pba-writer.XXXXXX").string();
+    ASSERT_NE(mkdtemp(pattern.data()), nullptr);
+    dir_ = pattern;
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  fs::path dir_;
+};
+
+TEST_F(ResultWriterTest, WritesFieldsWithUnitsAndAnXdmfThatPointsAtThem) {
+  const SceneSpec scene = Scene();
+  Solution solution;
+  ASSERT_TRUE(SolveScene(scene, SolveOptions(), &solution).ok());
+  ASSERT_TRUE(WriteResultFiles(scene, &solution, dir_).ok());
+  EXPECT_EQ(solution.summary.phases.back().phase, "write");
+
+  const hid_t file = H5Fopen((dir_ / "result.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  ASSERT_GE(file, 0);
+  const hsize_t nodes = solution.nodes_mm.size() / 3, elements = solution.tets.size() / 4;
+  EXPECT_EQ(Dims(file, "/mesh/nodes"), (std::vector<hsize_t>{nodes, 3}));
+  EXPECT_EQ(Dims(file, "/mesh/tets"), (std::vector<hsize_t>{elements, 4}));
+  EXPECT_EQ(Dims(file, "/fields/displacement"), (std::vector<hsize_t>{nodes, 3}));
+  EXPECT_EQ(Dims(file, "/fields/stress"), (std::vector<hsize_t>{elements, 6}));
+  EXPECT_EQ(Dims(file, "/fields/von_mises"), (std::vector<hsize_t>{elements}));
+  EXPECT_EQ(ReadAttribute(file, "scene_name"), "writer-test");
+
+  const hid_t displacement = H5Dopen2(file, "/fields/displacement", H5P_DEFAULT);
+  EXPECT_EQ(ReadAttribute(displacement, "unit"), "mm");
+  std::vector<double> values(solution.displacement_mm.size());
+  H5Dread(displacement, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data());
+  EXPECT_EQ(values, solution.displacement_mm);
+  H5Dclose(displacement);
+  const hid_t stress = H5Dopen2(file, "/fields/stress", H5P_DEFAULT);
+  EXPECT_EQ(ReadAttribute(stress, "unit"), "Pa");
+  EXPECT_EQ(ReadAttribute(stress, "components"), "xx yy zz yz xz xy");
+  H5Dclose(stress);
+
+  // Every HDF5 path the XDMF names exists in result.h5.
+  std::ifstream in(dir_ / "result.xdmf");
+  std::stringstream xdmf;
+  xdmf << in.rdbuf();
+  const std::string text = xdmf.str();
+  const std::regex reference("result\\.h5:(/[a-z_/]+)");
+  int references = 0;
+  for (auto it = std::sregex_iterator(text.begin(), text.end(), reference); it != std::sregex_iterator(); ++it) {
+    EXPECT_FALSE(Dims(file, (*it)[1].str().c_str()).empty()) << (*it)[1].str();
+    ++references;
+  }
+  EXPECT_GE(references, 4 + 12);  // mesh, displacement, von Mises, indicator, 12 components
+  EXPECT_NE(text.find("Name=\"stress_zz\""), std::string::npos);
+  H5Fclose(file);
+}
+
+TEST_F(ResultWriterTest, LeavesOutFieldsNotAskedFor) {
+  SceneSpec scene = Scene();
+  scene.outputs.stress = scene.outputs.strain = false;
+  Solution solution;
+  ASSERT_TRUE(SolveScene(scene, SolveOptions(), &solution).ok());
+  ASSERT_TRUE(WriteResultFiles(scene, &solution, dir_).ok());
+  const hid_t file = H5Fopen((dir_ / "result.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // the missing dataset is expected
+  EXPECT_TRUE(Dims(file, "/fields/stress").empty());
+  EXPECT_FALSE(Dims(file, "/fields/displacement").empty());
+  H5Fclose(file);
+}
+
+TEST_F(ResultWriterTest, UnwritableDirectoryIsAnIoError) {
+  const SceneSpec scene = Scene();
+  Solution solution;
+  ASSERT_TRUE(SolveScene(scene, SolveOptions(), &solution).ok());
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  const Status status = WriteResultFiles(scene, &solution, dir_ / "missing" / "deeper");
+  EXPECT_EQ(status.code(), Status::Code::kIo);
+  EXPECT_NE(status.message().find("result.h5"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace pba
