@@ -1,0 +1,108 @@
+// pba-server: the PBA gRPC server.
+//
+//   pba-server --data DIR [--listen HOST:PORT] [--solver PATH] [--max-running N]
+//              [--log-level LEVEL]
+//
+// Prints "pba-server listening on HOST:PORT" once it accepts calls and writes
+// DIR/server.json ({"address": ..., "pid": ...}) for scripts; SIGTERM or
+// SIGINT shut it down cleanly (running jobs are re-queued) with exit code 0.
+#include <signal.h>
+#include <spdlog/sinks/stdout_color_sinks.h>
+#include <spdlog/spdlog.h>
+#include <unistd.h>
+
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <system_error>
+#include <thread>
+
+#include "app/pba_server.h"
+#include "jobs/solver_process.h"
+#include "store/atomic_file.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+
+fs::path DefaultSolver() {
+  std::error_code ec;
+  const fs::path self = fs::read_symlink("/proc/self/exe", ec);
+  return (ec ? fs::current_path() : self.parent_path()) / "pba-solve";
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"pba-server: runs PBA simulation jobs behind a gRPC API"};
+  std::string data_dir;
+  std::string listen = "127.0.0.1:50051";
+  std::string solver;
+  int max_running = 1;
+  std::string log_level = "info";
+  app.add_option("--data", data_dir, "Data directory (pba.db, jobs/); created if absent")
+      ->required();
+  app.add_option("--listen", listen, "HOST:PORT to listen on; port 0 picks a free port")
+      ->capture_default_str();
+  app.add_option("--solver", solver, "pba-solve executable (default: next to pba-server)");
+  app.add_option("--max-running", max_running, "Jobs run at the same time")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  app.add_option("--log-level", log_level, "trace, debug, info, warn, error, critical or off")
+      ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "critical", "off"}))
+      ->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
+
+  spdlog::set_default_logger(spdlog::stderr_color_mt("pba-server"));
+  spdlog::set_level(spdlog::level::from_str(log_level));
+
+  // Block the shutdown signals before any thread starts, so every thread
+  // inherits the mask and only sigwait() below sees them: no work happens in
+  // a signal handler. (Children unblock them again before exec.)
+  sigset_t shutdown_signals;
+  sigemptyset(&shutdown_signals);
+  sigaddset(&shutdown_signals, SIGTERM);
+  sigaddset(&shutdown_signals, SIGINT);
+  pthread_sigmask(SIG_BLOCK, &shutdown_signals, nullptr);
+  // A client vanishing mid-write must not kill the server.
+  signal(SIGPIPE, SIG_IGN);
+
+  pba::ServerOptions options;
+  options.data_dir = data_dir;
+  options.listen = listen;
+  options.solver = solver.empty() ? DefaultSolver() : fs::path(solver);
+  options.max_running = max_running;
+  // Parallel solves share the cores rather than each taking all of them.
+  if (max_running > 1) {
+    options.solver_threads =
+        std::max(1, static_cast<int>(std::thread::hardware_concurrency()) / max_running);
+  }
+
+  std::unique_ptr<pba::PbaServer> server;
+  const pba::Status started = pba::PbaServer::Start(options, &server);
+  if (!started.ok()) {
+    spdlog::error("cannot start: {}", started.ToString());
+    return 1;
+  }
+
+  const fs::path server_json = fs::absolute(data_dir) / "server.json";
+  const std::string info =
+      "{\"address\":\"" + server->address() + "\",\"pid\":" + std::to_string(::getpid()) + "}\n";
+  const pba::Status written = pba::WriteFileAtomically(server_json, info);
+  if (!written.ok()) spdlog::warn("cannot write server.json: {}", written.ToString());
+  std::cout << "pba-server listening on " << server->address() << std::endl;
+  spdlog::info("serving jobs from {} with solver {}", fs::absolute(data_dir).string(),
+               options.solver.string());
+
+  int signal_number = 0;
+  while (sigwait(&shutdown_signals, &signal_number) != 0) {
+  }
+  spdlog::info("{} received: shutting down", pba::SignalName(signal_number));
+  server->Shutdown();
+  std::error_code ec;
+  fs::remove(server_json, ec);
+  spdlog::info("stopped");
+  return 0;
+}

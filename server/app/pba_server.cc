@@ -1,0 +1,93 @@
+#include "app/pba_server.h"
+
+#include <grpcpp/ext/proto_server_reflection_plugin.h>
+#include <grpcpp/grpcpp.h>
+#include <grpcpp/health_check_service_interface.h>
+#include <spdlog/spdlog.h>
+#include <unistd.h>
+
+#include <system_error>
+#include <vector>
+
+namespace pba {
+namespace fs = std::filesystem;
+
+Status CheckSolver(const fs::path& solver) {
+  std::error_code ec;
+  if (!fs::is_regular_file(solver, ec)) {
+    return Status::FailedPrecondition("the solver " + solver.string() +
+                                      " does not exist (use --solver PATH)");
+  }
+  if (::access(solver.c_str(), X_OK) != 0) {
+    return Status::FailedPrecondition("the solver " + solver.string() + " is not executable");
+  }
+  return Status::Ok();
+}
+
+Status PbaServer::Start(const ServerOptions& options, std::unique_ptr<PbaServer>* out) {
+  std::unique_ptr<PbaServer> server(new PbaServer());
+  server->options_ = options;
+  std::error_code ec;
+  server->options_.data_dir = fs::absolute(options.data_dir, ec);
+  const fs::path& data_dir = server->options_.data_dir;
+  fs::create_directories(data_dir / "jobs", ec);
+  if (ec) return Status::Io("cannot create " + (data_dir / "jobs").string() + ": " + ec.message());
+  PBA_RETURN_IF_ERROR(CheckSolver(options.solver));
+
+  PBA_RETURN_IF_ERROR(JobStore::Open(data_dir / "pba.db", &server->store_));
+  std::vector<v1::JobEvent> requeued;
+  PBA_RETURN_IF_ERROR(server->store_->RequeueInterrupted(kRequeueAtStart, &requeued));
+  for (const v1::JobEvent& event : requeued) {
+    spdlog::info("job {} QUEUED: {}", event.job_id(), event.message());
+  }
+
+  ExecutorOptions executor_options;
+  executor_options.data_dir = data_dir;
+  executor_options.solver = fs::absolute(options.solver);
+  executor_options.max_running = options.max_running;
+  executor_options.solver_threads = options.solver_threads;
+  executor_options.kill_grace = options.kill_grace;
+  server->executor_ =
+      std::make_unique<JobExecutor>(*server->store_, server->hub_, std::move(executor_options));
+  server->service_ =
+      std::make_unique<JobServiceImpl>(*server->store_, *server->executor_, server->hub_, data_dir);
+
+  grpc::EnableDefaultHealthCheckService(true);
+  grpc::reflection::InitProtoReflectionServerBuilderPlugin();
+  grpc::ServerBuilder builder;
+  int port = 0;
+  builder.AddListeningPort(options.listen, grpc::InsecureServerCredentials(), &port);
+  builder.RegisterService(server->service_.get());
+  server->server_ = builder.BuildAndStart();
+  if (server->server_ == nullptr || port == 0) {
+    server->server_.reset();
+    return Status::Io("cannot listen on " + options.listen);
+  }
+  const size_t colon = options.listen.rfind(':');
+  server->address_ = options.listen.substr(0, colon) + ":" + std::to_string(port);
+  server->executor_->Start();
+  *out = std::move(server);
+  return Status::Ok();
+}
+
+PbaServer::~PbaServer() { Shutdown(); }
+
+void PbaServer::Shutdown() {
+  if (shut_down_) return;
+  shut_down_ = true;
+  // Watch streams end first (they would otherwise hold the drain to its
+  // deadline), then unary calls get their drain time.
+  hub_.Shutdown();
+  if (server_ != nullptr) {
+    if (auto* health = server_->GetHealthCheckService()) health->Shutdown();
+    server_->Shutdown(std::chrono::system_clock::now() + options_.drain);
+    server_->Wait();
+  }
+  if (executor_ != nullptr) executor_->Stop();
+  server_.reset();
+  service_.reset();
+  executor_.reset();
+  store_.reset();
+}
+
+}  // namespace pba

@@ -1,0 +1,72 @@
+// PbaServer: everything pba-server runs, wired together: the job store, the
+// executor, the gRPC services (jobs, health, reflection). main() adds the
+// command line, signals and server.json; tests start it in-process.
+#pragma once
+
+#include <grpcpp/server.h>
+
+#include <chrono>
+#include <filesystem>
+#include <memory>
+#include <string>
+
+#include "jobs/job_event_hub.h"
+#include "jobs/job_executor.h"
+#include "pba/status.h"
+#include "service/job_service.h"
+#include "store/job_store.h"
+
+namespace pba {
+
+struct ServerOptions {
+  // Holds pba.db and jobs/; created if absent.
+  std::filesystem::path data_dir;
+  // HOST:PORT; port 0 picks a free port (see PbaServer::address()).
+  std::string listen = "127.0.0.1:50051";
+  // The pba-solve executable; must exist and be executable.
+  std::filesystem::path solver;
+  int max_running = 1;
+  int solver_threads = 0;
+  // SIGTERM-to-SIGKILL grace for solves being cancelled or stopped.
+  std::chrono::milliseconds kill_grace{10000};
+  // How long in-flight RPCs may take to finish at shutdown.
+  std::chrono::milliseconds drain{5000};
+};
+
+class PbaServer {
+ public:
+  static constexpr char kRequeueAtStart[] =
+      "re-queued: the server stopped while this job was running";
+
+  // Opens the store, re-queues jobs a previous server left RUNNING, starts
+  // listening and then the executor.
+  static Status Start(const ServerOptions& options, std::unique_ptr<PbaServer>* out);
+
+  PbaServer(const PbaServer&) = delete;
+  PbaServer& operator=(const PbaServer&) = delete;
+  ~PbaServer();  // Shutdown()
+
+  // HOST:PORT actually listened on (the real port when 0 was asked for).
+  const std::string& address() const { return address_; }
+
+  // Ends watch streams, drains RPCs (up to options.drain), stops running
+  // solves (their jobs are re-queued) and closes the store. Idempotent.
+  void Shutdown();
+
+ private:
+  PbaServer() = default;
+
+  ServerOptions options_;
+  std::unique_ptr<JobStore> store_;
+  JobEventHub hub_;
+  std::unique_ptr<JobExecutor> executor_;
+  std::unique_ptr<JobServiceImpl> service_;
+  std::unique_ptr<grpc::Server> server_;
+  std::string address_;
+  bool shut_down_ = false;
+};
+
+// Checks that `solver` is an executable regular file.
+Status CheckSolver(const std::filesystem::path& solver);
+
+}  // namespace pba

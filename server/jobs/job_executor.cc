@@ -1,0 +1,388 @@
+#include "jobs/job_executor.h"
+
+#include <google/protobuf/util/json_util.h>
+#include <google/protobuf/util/time_util.h>
+#include <signal.h>
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <fstream>
+#include <sstream>
+#include <system_error>
+
+#include "jobs/file_digest.h"
+#include "jobs/solver_process.h"
+#include "pba/v1/solve_event.pb.h"
+#include "store/atomic_file.h"
+
+namespace pba {
+namespace fs = std::filesystem;
+namespace {
+
+using google::protobuf::util::TimeUtil;
+
+// How long a worker waits for output before it looks at cancel/kill deadlines.
+constexpr std::chrono::milliseconds kPollInterval{100};
+
+constexpr char kRequeueShutdown[] = "re-queued: server shut down";
+constexpr char kCancelledByRequest[] = "cancelled by request";
+
+void LogStateChange(const v1::JobEvent& event) {
+  spdlog::info("job {} {}: {}", event.job_id(), v1::Job::State_Name(event.state()),
+               event.message());
+}
+
+// Removes what an earlier attempt left: a complete result of a run whose end
+// was never recorded, and pba-solve's hidden staging siblings (.result.*).
+Status PrepareFolder(const v1::Job& job, const fs::path& dir) {
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec) return Status::Io("cannot create " + dir.string() + ": " + ec.message());
+  for (const fs::directory_entry& entry : fs::directory_iterator(dir, ec)) {
+    const std::string name = entry.path().filename().string();
+    if (name == "result" || name.rfind(".result.", 0) == 0) {
+      std::error_code remove_ec;
+      fs::remove_all(entry.path(), remove_ec);
+      if (remove_ec) {
+        return Status::Io("cannot remove " + entry.path().string() + ": " + remove_ec.message());
+      }
+    }
+  }
+  if (ec) return Status::Io("cannot list " + dir.string() + ": " + ec.message());
+
+  std::string json;
+  google::protobuf::util::JsonPrintOptions options;
+  options.preserve_proto_field_names = true;
+  options.add_whitespace = true;
+  if (!google::protobuf::util::MessageToJsonString(job.scene(), &json, options).ok()) {
+    return Status::Internal("cannot write the scene as JSON");
+  }
+  PBA_RETURN_IF_ERROR(WriteFileAtomically(dir / "scene.json", json));
+
+  std::ofstream log(dir / "solve.log", std::ios::app);
+  log << "=== attempt " << job.attempts() << ", " << TimeUtil::ToString(TimeUtil::GetCurrentTime())
+      << " ===\n";
+  return Status::Ok();
+}
+
+// summary.json and every file of a finished result folder.
+Status CollectResult(const fs::path& dir, v1::Summary* summary,
+                     std::vector<v1::ResultFile>* files) {
+  std::ifstream in(dir / "summary.json");
+  if (!in) return Status::Io("the result has no summary.json");
+  std::stringstream json;
+  json << in.rdbuf();
+  google::protobuf::util::JsonParseOptions options;
+  options.ignore_unknown_fields = true;  // a newer pba-solve may say more
+  const auto parsed = google::protobuf::util::JsonStringToMessage(json.str(), summary, options);
+  if (!parsed.ok()) {
+    return Status::Io("summary.json is not a pba.v1.Summary: " + std::string(parsed.message()));
+  }
+  std::error_code ec;
+  for (const fs::directory_entry& entry : fs::directory_iterator(dir, ec)) {
+    if (!entry.is_regular_file()) continue;
+    v1::ResultFile file;
+    file.set_name(entry.path().filename().string());
+    std::string sha256;
+    int64_t size = 0;
+    PBA_RETURN_IF_ERROR(Sha256File(entry.path(), &sha256, &size));
+    file.set_sha256(sha256);
+    file.set_size_bytes(size);
+    files->push_back(std::move(file));
+  }
+  if (ec) return Status::Io("cannot list " + dir.string() + ": " + ec.message());
+  std::sort(files->begin(), files->end(),
+            [](const v1::ResultFile& a, const v1::ResultFile& b) { return a.name() < b.name(); });
+  return Status::Ok();
+}
+
+std::string FailureReason(const v1::SolveEvent* error, const ProcessExit& exit) {
+  if (error != nullptr && !error->message().empty()) {
+    return error->field().empty() ? error->message() : error->field() + ": " + error->message();
+  }
+  if (exit.signaled) {
+    return "pba-solve was killed by signal " + std::to_string(exit.signal) + " (" +
+           SignalName(exit.signal) + ")";
+  }
+  return "pba-solve exited with code " + std::to_string(exit.code);
+}
+
+}  // namespace
+
+// Shared between the worker that runs a job and Cancel()/Stop(); every field
+// is guarded by JobExecutor::mutex_.
+struct JobExecutor::Run {
+  SolverProcess* process = nullptr;  // while the child runs
+  bool cancel_requested = false;
+  bool stop_requested = false;
+  bool term_sent = false;
+  bool kill_sent = false;
+  std::chrono::steady_clock::time_point kill_at;
+
+  // SIGTERM now (if the child runs), SIGKILL later from the worker's loop.
+  void Terminate(std::chrono::milliseconds grace) {
+    if (process == nullptr || term_sent) return;
+    process->Signal(SIGTERM);
+    term_sent = true;
+    kill_at = std::chrono::steady_clock::now() + grace;
+  }
+};
+
+JobExecutor::JobExecutor(JobStore& store, JobEventHub& hub, ExecutorOptions options)
+    : store_(store), hub_(hub), options_(std::move(options)) {}
+
+JobExecutor::~JobExecutor() { Stop(); }
+
+void JobExecutor::Start() {
+  std::lock_guard lock(mutex_);
+  if (started_ || stopping_) return;
+  started_ = true;
+  for (int i = 0; i < std::max(1, options_.max_running); ++i) {
+    workers_.emplace_back([this] { WorkerLoop(); });
+  }
+}
+
+void JobExecutor::Wake() {
+  // Under the lock so a worker between "nothing queued" and waiting cannot
+  // miss the notification.
+  std::lock_guard lock(mutex_);
+  wake_.notify_one();
+}
+
+Status JobExecutor::Cancel(const std::string& id, v1::Job* job, bool* found) {
+  std::unique_lock lock(mutex_);
+  // Workers claim jobs under mutex_, so a job is either in running_ or (if
+  // RUNNING in the store) finishing right now; QUEUED ones cannot be claimed
+  // while we cancel.
+  if (auto it = running_.find(id); it != running_.end()) {
+    Run& run = *it->second;
+    if (!run.cancel_requested) spdlog::info("job {} cancel requested: stopping pba-solve", id);
+    run.cancel_requested = true;
+    run.Terminate(options_.kill_grace);
+  } else {
+    v1::JobEvent event;
+    bool cancelled = false;
+    PBA_RETURN_IF_ERROR(store_.CancelQueued(id, "cancelled before it started", &event, &cancelled));
+    if (cancelled) {
+      hub_.Publish(event);
+      LogStateChange(event);
+    }
+  }
+  lock.unlock();
+  return store_.GetJob(id, JobView::kFull, job, found);
+}
+
+void JobExecutor::Stop() {
+  {
+    std::lock_guard lock(mutex_);
+    stopping_ = true;
+    for (auto& [id, run] : running_) {
+      run->stop_requested = true;
+      run->Terminate(options_.kill_grace);
+    }
+  }
+  wake_.notify_all();
+  for (std::thread& worker : workers_) {
+    if (worker.joinable()) worker.join();
+  }
+  workers_.clear();
+}
+
+void JobExecutor::WorkerLoop() {
+  while (true) {
+    v1::Job job;
+    v1::JobEvent started;
+    std::shared_ptr<Run> run;
+    {
+      std::unique_lock lock(mutex_);
+      if (stopping_) return;
+      bool claimed = false;
+      const Status status = store_.ClaimNextQueued(&job, &started, &claimed);
+      if (!status.ok()) spdlog::error("cannot take a job from the queue: {}", status.ToString());
+      if (!claimed) {
+        wake_.wait_for(lock, options_.idle_poll);
+        continue;
+      }
+      run = std::make_shared<Run>();
+      running_[job.id()] = run;
+    }
+    hub_.Publish(started);
+    LogStateChange(started);
+    Execute(job, started, *run);
+    std::lock_guard lock(mutex_);
+    running_.erase(job.id());
+  }
+}
+
+void JobExecutor::Execute(const v1::Job& job, const v1::JobEvent& started, Run& run) {
+  const std::string& id = job.id();
+  const fs::path dir = options_.data_dir / "jobs" / id;
+  const fs::path result_dir = dir / "result";
+  // This worker numbers the job's events while it runs (see job_event_hub.h).
+  int64_t sequence = started.sequence();
+
+  auto finish = [&](RunOutcome outcome) {
+    if (outcome.message.empty()) {
+      outcome.message = outcome.state == v1::Job::SUCCEEDED ? "succeeded" : outcome.error;
+    }
+    v1::JobEvent event;
+    const Status status = store_.FinishRun(id, sequence + 1, outcome, &event);
+    if (!status.ok()) {
+      spdlog::error("job {}: cannot record its end: {}", id, status.ToString());
+      return;
+    }
+    hub_.Publish(event);
+    LogStateChange(event);
+  };
+  auto fail = [&](const std::string& error) {
+    RunOutcome outcome;
+    outcome.state = v1::Job::FAILED;
+    outcome.error = error;
+    finish(std::move(outcome));
+  };
+  auto cancel = [&] {
+    std::error_code ec;
+    fs::remove_all(result_dir, ec);
+    RunOutcome outcome;
+    outcome.state = v1::Job::CANCELLED;
+    outcome.error = kCancelledByRequest;
+    finish(std::move(outcome));
+  };
+  auto requeue = [&] {
+    v1::JobEvent event;
+    const Status status = store_.RequeueRun(id, sequence + 1, kRequeueShutdown, &event);
+    if (!status.ok()) {
+      spdlog::error("job {}: cannot re-queue: {}", id, status.ToString());
+      return;
+    }
+    hub_.Publish(event);
+    LogStateChange(event);
+  };
+
+  const Status prepared = PrepareFolder(job, dir);
+  if (!prepared.ok()) return fail("cannot prepare the job folder: " + prepared.ToString());
+
+  SolverCommand command;
+  command.program = options_.solver;
+  command.args = {(dir / "scene.json").string(), "--out", result_dir.string(), "--progress=json"};
+  if (options_.solver_threads > 0) {
+    command.args.push_back("--threads");
+    command.args.push_back(std::to_string(options_.solver_threads));
+  }
+  command.stderr_log = dir / "solve.log";
+
+  SolverProcess process;
+  {
+    std::lock_guard lock(mutex_);
+    if (run.cancel_requested) return cancel();
+    if (run.stop_requested) return requeue();
+  }
+  const Status spawned = process.Start(command);
+  if (!spawned.ok()) return fail(spawned.ToString());
+  {
+    std::lock_guard lock(mutex_);
+    run.process = &process;
+    if (run.cancel_requested || run.stop_requested) run.Terminate(options_.kill_grace);
+  }
+
+  auto escalate = [&] {
+    std::lock_guard lock(mutex_);
+    if (run.term_sent && !run.kill_sent && std::chrono::steady_clock::now() >= run.kill_at) {
+      spdlog::warn("job {}: pba-solve ignored SIGTERM for {} ms; sending SIGKILL", id,
+                   options_.kill_grace.count());
+      process.Signal(SIGKILL);
+      run.kill_sent = true;
+    }
+  };
+
+  google::protobuf::util::JsonParseOptions parse_options;
+  parse_options.ignore_unknown_fields = true;
+  std::string stored_phase;
+  double stored_progress = 0;
+  bool have_error = false;
+  v1::SolveEvent error_event;
+  ProcessExit exit;
+  bool exited = false;
+
+  auto handle_line = [&](const std::string& line) {
+    if (line.empty()) return;
+    v1::SolveEvent solve_event;
+    if (!google::protobuf::util::JsonStringToMessage(line, &solve_event, parse_options).ok()) {
+      spdlog::debug("job {}: ignoring a stdout line that is not a SolveEvent: {}", id,
+                    line.substr(0, 200));
+      return;
+    }
+    if (solve_event.kind() == v1::SolveEvent::ERROR) {
+      have_error = true;
+      error_event = solve_event;
+      return;
+    }
+    if (solve_event.kind() != v1::SolveEvent::PROGRESS) return;
+    v1::JobEvent event;
+    event.set_job_id(id);
+    event.set_sequence(++sequence);
+    *event.mutable_time() = TimeUtil::GetCurrentTime();
+    event.set_state(v1::Job::RUNNING);
+    event.set_phase(solve_event.phase());
+    event.set_progress(std::clamp(solve_event.progress(), 0.0, 1.0));
+    event.set_message(solve_event.message());
+    if (event.phase() != stored_phase ||
+        event.progress() >= stored_progress + kStoredProgressStep) {
+      const Status status = store_.RecordProgress(&event);
+      if (status.ok()) {
+        sequence = event.sequence();
+        stored_phase = event.phase();
+        stored_progress = event.progress();
+      } else {
+        spdlog::warn("job {}: cannot store progress: {}", id, status.ToString());
+      }
+    }
+    hub_.Publish(event);
+  };
+
+  std::string line;
+  while (true) {
+    const SolverProcess::ReadResult read = process.ReadLine(&line, kPollInterval);
+    if (read == SolverProcess::ReadResult::kLine) {
+      handle_line(line);
+    } else if (read == SolverProcess::ReadResult::kEnd) {
+      break;
+    } else if (process.TryWait(&exit)) {
+      // Exited while something it started still holds stdout open: take what
+      // is already there and stop reading.
+      exited = true;
+      while (process.ReadLine(&line, std::chrono::milliseconds(0)) ==
+             SolverProcess::ReadResult::kLine) {
+        handle_line(line);
+      }
+      break;
+    }
+    escalate();
+  }
+  while (!exited && !process.TryWait(&exit)) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    escalate();
+  }
+
+  bool cancel_requested = false;
+  bool stop_requested = false;
+  {
+    std::lock_guard lock(mutex_);
+    run.process = nullptr;
+    cancel_requested = run.cancel_requested;
+    stop_requested = run.stop_requested;
+  }
+
+  if (cancel_requested) return cancel();
+  if (!exit.signaled && exit.code == 0) {
+    RunOutcome outcome;
+    const Status collected = CollectResult(result_dir, &outcome.summary, &outcome.files);
+    if (!collected.ok()) return fail("pba-solve succeeded but " + collected.ToString());
+    outcome.state = v1::Job::SUCCEEDED;
+    return finish(std::move(outcome));
+  }
+  if (stop_requested) return requeue();
+  fail(FailureReason(have_error ? &error_event : nullptr, exit));
+}
+
+}  // namespace pba

@@ -1,0 +1,268 @@
+#include "service/job_service.h"
+
+#include <spdlog/spdlog.h>
+
+#include <fstream>
+#include <map>
+#include <system_error>
+#include <vector>
+
+#include "convert/convert.h"
+#include "store/job_id.h"
+
+namespace pba {
+namespace fs = std::filesystem;
+namespace {
+
+// request_id is a client key (a UUID is 36 characters); bound it so the
+// UNIQUE index stays small.
+constexpr size_t kMaxRequestIdLength = 200;
+
+const char* CodeName(grpc::StatusCode code) {
+  switch (code) {
+    case grpc::StatusCode::OK:
+      return "OK";
+    case grpc::StatusCode::CANCELLED:
+      return "CANCELLED";
+    case grpc::StatusCode::INVALID_ARGUMENT:
+      return "INVALID_ARGUMENT";
+    case grpc::StatusCode::NOT_FOUND:
+      return "NOT_FOUND";
+    case grpc::StatusCode::FAILED_PRECONDITION:
+      return "FAILED_PRECONDITION";
+    case grpc::StatusCode::OUT_OF_RANGE:
+      return "OUT_OF_RANGE";
+    case grpc::StatusCode::UNAVAILABLE:
+      return "UNAVAILABLE";
+    case grpc::StatusCode::DATA_LOSS:
+      return "DATA_LOSS";
+    case grpc::StatusCode::INTERNAL:
+      return "INTERNAL";
+    default:
+      return "ERROR";
+  }
+}
+
+// Every RPC error goes through here: one log line each.
+grpc::Status Error(const char* rpc, grpc::Status status) {
+  spdlog::warn("{}: {} {}", rpc, CodeName(status.error_code()), status.error_message());
+  return status;
+}
+
+grpc::Status Error(const char* rpc, grpc::StatusCode code, const std::string& message) {
+  return Error(rpc, grpc::Status(code, message));
+}
+
+// A store failure is the server's problem unless it blames an argument.
+grpc::Status StoreError(const char* rpc, const Status& status) {
+  if (status.code() == Status::Code::kInvalidArgument) {
+    return Error(rpc, grpc::StatusCode::INVALID_ARGUMENT, status.ToString());
+  }
+  return Error(rpc, grpc::StatusCode::INTERNAL, status.ToString());
+}
+
+bool IsTerminal(v1::Job::State state) {
+  return state == v1::Job::SUCCEEDED || state == v1::Job::FAILED || state == v1::Job::CANCELLED;
+}
+
+grpc::Status JobNotFound(const char* rpc, const std::string& id) {
+  return Error(rpc, grpc::StatusCode::NOT_FOUND, "job " + id + " not found");
+}
+
+}  // namespace
+
+JobServiceImpl::JobServiceImpl(JobStore& store, JobExecutor& executor, JobEventHub& hub,
+                               fs::path data_dir)
+    : store_(store), executor_(executor), hub_(hub), data_dir_(std::move(data_dir)) {}
+
+void JobServiceImpl::OverlayLive(v1::Job* job) const {
+  if (job->state() != v1::Job::RUNNING) return;
+  std::string phase;
+  double progress = 0;
+  if (hub_.Live(job->id(), &phase, &progress)) {
+    job->set_phase(phase);
+    job->set_progress(progress);
+  }
+}
+
+grpc::Status JobServiceImpl::SubmitJob(grpc::ServerContext*, const v1::SubmitJobRequest* request,
+                                       v1::Job* response) {
+  constexpr char kRpc[] = "SubmitJob";
+  if (request->request_id().size() > kMaxRequestIdLength) {
+    return Error(kRpc, grpc::StatusCode::INVALID_ARGUMENT,
+                 "request_id: at most " + std::to_string(kMaxRequestIdLength) + " characters");
+  }
+  if (!request->has_scene()) {
+    return Error(kRpc, grpc::StatusCode::INVALID_ARGUMENT, "scene: required");
+  }
+  const Status valid = ValidateSceneProto(request->scene());
+  if (!valid.ok()) return Error(kRpc, ToGrpcStatus(valid));
+
+  bool created = false;
+  const Status stored =
+      store_.CreateJob(request->scene(), request->request_id(), response, &created);
+  if (!stored.ok()) return StoreError(kRpc, stored);
+  if (created) {
+    spdlog::info("job {} QUEUED: {} submitted", response->id(), response->name());
+    executor_.Wake();
+  }
+  OverlayLive(response);
+  return grpc::Status::OK;
+}
+
+grpc::Status JobServiceImpl::GetJob(grpc::ServerContext*, const v1::GetJobRequest* request,
+                                    v1::Job* response) {
+  constexpr char kRpc[] = "GetJob";
+  if (request->id().empty()) return Error(kRpc, grpc::StatusCode::INVALID_ARGUMENT, "id: required");
+  bool found = false;
+  const Status status = store_.GetJob(request->id(), JobView::kFull, response, &found);
+  if (!status.ok()) return StoreError(kRpc, status);
+  if (!found) return JobNotFound(kRpc, request->id());
+  OverlayLive(response);
+  return grpc::Status::OK;
+}
+
+grpc::Status JobServiceImpl::ListJobs(grpc::ServerContext*, const v1::ListJobsRequest* request,
+                                      v1::ListJobsResponse* response) {
+  std::vector<v1::Job> jobs;
+  std::string next_page_token;
+  const Status status =
+      store_.ListJobs(request->page_size(), request->page_token(), &jobs, &next_page_token);
+  if (!status.ok()) return StoreError("ListJobs", status);
+  for (v1::Job& job : jobs) {
+    OverlayLive(&job);
+    *response->add_jobs() = std::move(job);
+  }
+  response->set_next_page_token(next_page_token);
+  return grpc::Status::OK;
+}
+
+grpc::Status JobServiceImpl::CancelJob(grpc::ServerContext*, const v1::CancelJobRequest* request,
+                                       v1::Job* response) {
+  constexpr char kRpc[] = "CancelJob";
+  if (request->id().empty()) return Error(kRpc, grpc::StatusCode::INVALID_ARGUMENT, "id: required");
+  bool found = false;
+  const Status status = executor_.Cancel(request->id(), response, &found);
+  if (!status.ok()) return StoreError(kRpc, status);
+  if (!found) return JobNotFound(kRpc, request->id());
+  OverlayLive(response);
+  return grpc::Status::OK;
+}
+
+grpc::Status JobServiceImpl::WatchJob(grpc::ServerContext* context,
+                                      const v1::WatchJobRequest* request,
+                                      grpc::ServerWriter<v1::JobEvent>* writer) {
+  constexpr char kRpc[] = "WatchJob";
+  const std::string& id = request->id();
+  if (id.empty()) return Error(kRpc, grpc::StatusCode::INVALID_ARGUMENT, "id: required");
+  if (request->after_sequence() < 0) {
+    return Error(kRpc, grpc::StatusCode::INVALID_ARGUMENT, "after_sequence: must not be negative");
+  }
+  v1::Job job;
+  bool found = false;
+  Status status = store_.GetJob(id, JobView::kBasic, &job, &found);
+  if (!status.ok()) return StoreError(kRpc, status);
+  if (!found) return JobNotFound(kRpc, id);
+  // All events of a job that was already terminal are stored: once those are
+  // sent there is nothing left to wait for, even if the terminal one was
+  // before after_sequence.
+  const bool terminal_at_start = IsTerminal(job.state());
+
+  int64_t last = request->after_sequence();
+  while (true) {
+    if (context->IsCancelled()) return grpc::Status(grpc::StatusCode::CANCELLED, "watch cancelled");
+    if (hub_.shutting_down()) {
+      return grpc::Status(grpc::StatusCode::UNAVAILABLE, "the server is shutting down");
+    }
+    const uint64_t version = hub_.version();
+    std::vector<v1::JobEvent> stored;
+    status = store_.ListEvents(id, last, &stored);
+    if (!status.ok()) return StoreError(kRpc, status);
+    // Stored and live events overlap; the sequence number identifies an event.
+    std::map<int64_t, v1::JobEvent> pending;
+    for (v1::JobEvent& event : hub_.Recent(id, last)) pending[event.sequence()] = std::move(event);
+    for (v1::JobEvent& event : stored) pending[event.sequence()] = std::move(event);
+    for (const auto& [sequence, event] : pending) {
+      if (!writer->Write(event)) {
+        return grpc::Status(grpc::StatusCode::CANCELLED, "the client went away");
+      }
+      last = sequence;
+      if (IsTerminal(event.state())) return grpc::Status::OK;
+    }
+    if (terminal_at_start) return grpc::Status::OK;
+    hub_.WaitForChange(version, kWatchPoll);
+  }
+}
+
+grpc::Status JobServiceImpl::DownloadResult(grpc::ServerContext* context,
+                                            const v1::DownloadResultRequest* request,
+                                            grpc::ServerWriter<v1::DataChunk>* writer) {
+  constexpr char kRpc[] = "DownloadResult";
+  const std::string& id = request->job_id();
+  if (id.empty()) return Error(kRpc, grpc::StatusCode::INVALID_ARGUMENT, "job_id: required");
+  if (request->offset() < 0) {
+    return Error(kRpc, grpc::StatusCode::INVALID_ARGUMENT, "offset: must not be negative");
+  }
+  v1::Job job;
+  bool found = false;
+  // The id becomes part of a path below; only ids we could have made pass.
+  if (!IsWellFormedJobId(id)) return JobNotFound(kRpc, id);
+  Status status = store_.GetJob(id, JobView::kBasic, &job, &found);
+  if (!status.ok()) return StoreError(kRpc, status);
+  if (!found) return JobNotFound(kRpc, id);
+  if (job.state() != v1::Job::SUCCEEDED) {
+    std::string message =
+        "job " + id + " is " + v1::Job::State_Name(job.state()) + ", not SUCCEEDED";
+    if (!job.error().empty()) message += ": " + job.error();
+    return Error(kRpc, grpc::StatusCode::FAILED_PRECONDITION, message);
+  }
+  const std::string name = request->file().empty() ? kDefaultResultFile : request->file();
+  // Only names recorded in result_files are served; those come from a
+  // directory listing, so they are plain file names, never paths.
+  v1::ResultFile file;
+  status = store_.GetResultFile(id, name, &file, &found);
+  if (!status.ok()) return StoreError(kRpc, status);
+  if (!found || name.find('/') != std::string::npos || name == "." || name == "..") {
+    return Error(kRpc, grpc::StatusCode::NOT_FOUND, "job " + id + " has no result file " + name);
+  }
+  const int64_t size = file.size_bytes();
+  if (request->offset() > size) {
+    return Error(kRpc, grpc::StatusCode::OUT_OF_RANGE,
+                 "offset " + std::to_string(request->offset()) + " is past the end of " + name +
+                     " (" + std::to_string(size) + " bytes)");
+  }
+  const fs::path path = data_dir_ / "jobs" / id / "result" / name;
+  std::error_code ec;
+  const auto disk_size = fs::file_size(path, ec);
+  if (ec || static_cast<int64_t>(disk_size) != size) {
+    return Error(kRpc, grpc::StatusCode::DATA_LOSS,
+                 "result file " + path.string() + " is missing or changed since the job ended");
+  }
+  std::ifstream in(path, std::ios::binary);
+  if (!in || !in.seekg(request->offset())) {
+    return Error(kRpc, grpc::StatusCode::INTERNAL, "cannot read " + path.string());
+  }
+
+  int64_t offset = request->offset();
+  v1::DataChunk chunk;
+  chunk.set_total_size(size);
+  std::string buffer(kChunkBytes, '\0');
+  // One chunk even at the end of the file, so the client learns total_size.
+  do {
+    if (context->IsCancelled()) return grpc::Status(grpc::StatusCode::CANCELLED, "cancelled");
+    const int64_t want = std::min<int64_t>(kChunkBytes, size - offset);
+    in.read(buffer.data(), want);
+    if (in.gcount() != want) {
+      return Error(kRpc, grpc::StatusCode::INTERNAL, "cannot read " + path.string());
+    }
+    chunk.set_offset(offset);
+    chunk.set_data(buffer.data(), static_cast<size_t>(want));
+    if (!writer->Write(chunk)) {
+      return grpc::Status(grpc::StatusCode::CANCELLED, "the client went away");
+    }
+    offset += want;
+  } while (offset < size);
+  return grpc::Status::OK;
+}
+
+}  // namespace pba

@@ -1,0 +1,111 @@
+// JobStore: the jobs, their events and their result files in pba.db.
+//
+// Every logical change (a submit, a state transition with its event, a
+// finished run with its files) is one transaction, so a reader never sees a
+// state without the event that explains it. Thread-safe: one connection
+// behind a mutex, which is plenty for a job queue.
+//
+// Event sequences: events of a job are numbered 1, 2, ... in the order they
+// happen. Transitions made here (submit, start, cancel of a queued job,
+// re-queue at start-up) take the next number after the highest stored one.
+// While a job runs the executor owns its numbering (it also numbers live
+// progress events that are not stored) and passes the number in; the store
+// still never goes below "highest stored + 1".
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "pba/status.h"
+#include "pba/v1/job.pb.h"
+#include "store/database.h"
+
+namespace pba {
+
+// How much of a job to load: kFull adds the scene and the summary.
+enum class JobView { kBasic, kFull };
+
+// How a run ended, for FinishRun().
+struct RunOutcome {
+  v1::Job::State state = v1::Job::FAILED;  // SUCCEEDED, FAILED or CANCELLED
+  std::string error;                       // FAILED / CANCELLED: why
+  std::string message;                     // the event's message
+  v1::Summary summary;                     // SUCCEEDED only
+  std::vector<v1::ResultFile> files;       // SUCCEEDED only
+};
+
+class JobStore {
+ public:
+  static constexpr int kDefaultPageSize = 50;
+  static constexpr int kMaxPageSize = 500;
+
+  // Opens or creates the database at `path` and migrates it.
+  static Status Open(const std::filesystem::path& path, std::unique_ptr<JobStore>* out);
+
+  Status SchemaVersion(int* version);
+
+  // Stores a QUEUED job for `scene` with its first event. With a non-empty
+  // `request_id` that was seen before, returns the job created then and sets
+  // *created to false. The scene must already be validated.
+  Status CreateJob(const v1::Scene& scene, const std::string& request_id, v1::Job* job,
+                   bool* created);
+
+  Status GetJob(const std::string& id, JobView view, v1::Job* job, bool* found);
+
+  // Newest first. `page_size` 0 means kDefaultPageSize; larger than
+  // kMaxPageSize is capped. An unparsable token is kInvalidArgument.
+  Status ListJobs(int page_size, const std::string& page_token, std::vector<v1::Job>* jobs,
+                  std::string* next_page_token);
+
+  // Stored events with sequence > `after_sequence`, in order.
+  Status ListEvents(const std::string& id, int64_t after_sequence,
+                    std::vector<v1::JobEvent>* events);
+
+  Status GetResultFile(const std::string& id, const std::string& name, v1::ResultFile* file,
+                       bool* found);
+
+  // Moves the oldest QUEUED job to RUNNING (attempts + 1, start time, event).
+  // *claimed is false when nothing is queued. `job` is loaded with kFull.
+  Status ClaimNextQueued(v1::Job* job, v1::JobEvent* event, bool* claimed);
+
+  // QUEUED -> CANCELLED with an event; *cancelled is false (and nothing
+  // changes) when the job is not QUEUED.
+  Status CancelQueued(const std::string& id, const std::string& message, v1::JobEvent* event,
+                      bool* cancelled);
+
+  // Stores a progress event of a RUNNING job and its phase/progress.
+  // event->sequence may be raised to stay above the stored events.
+  Status RecordProgress(v1::JobEvent* event);
+
+  // RUNNING -> outcome.state, with end time, error, summary, result files and
+  // the terminal event, all at once.
+  Status FinishRun(const std::string& id, int64_t sequence, const RunOutcome& outcome,
+                   v1::JobEvent* event);
+
+  // RUNNING -> QUEUED (progress cleared) with an event saying why.
+  Status RequeueRun(const std::string& id, int64_t sequence, const std::string& message,
+                    v1::JobEvent* event);
+
+  // Every job left RUNNING by a server that stopped goes back to QUEUED with
+  // an event carrying `message`. Call once at start-up, before the executor.
+  Status RequeueInterrupted(const std::string& message, std::vector<v1::JobEvent>* events);
+
+ private:
+  explicit JobStore(std::unique_ptr<Database> db) : db_(std::move(db)) {}
+
+  Status LoadJob(const std::string& id, JobView view, v1::Job* job, bool* found);
+  Status LoadResultFiles(const std::string& id, v1::Job* job);
+  Status NextSequence(const std::string& id, int64_t at_least, int64_t* sequence);
+  Status InsertEvent(const v1::JobEvent& event);
+  // Moves a job from `from` to `to` state; *changed says whether it was in `from`.
+  Status Transition(const std::string& id, v1::Job::State from, v1::Job::State to, bool* changed);
+
+  std::mutex mutex_;
+  std::unique_ptr<Database> db_;
+};
+
+}  // namespace pba

@@ -1,0 +1,270 @@
+#include "jobs/job_executor.h"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+#include "unit/server/server_test_support.h"
+
+namespace pba {
+namespace {
+
+using testing::TempDir;
+using testing::ValidScene;
+using testing::WaitUntil;
+
+namespace fs = std::filesystem;
+
+// sha256("hello\n")
+constexpr char kHelloSha256[] = "5891b5b522d5df086d0ff0b110fbd9d21bb4fc7163af34d08286a2e846f6be03";
+
+class JobExecutorTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    ASSERT_TRUE(JobStore::Open(dir_.path() / "pba.db", &store_).ok());
+    options_.data_dir = dir_.path();
+    options_.solver = testing::WriteFakeSolver(dir_.path());
+    options_.kill_grace = std::chrono::milliseconds(500);
+    options_.idle_poll = std::chrono::milliseconds(100);
+  }
+
+  void StartExecutor() {
+    executor_ = std::make_unique<JobExecutor>(*store_, hub_, options_);
+    executor_->Start();
+  }
+
+  std::string Submit(const std::string& scene_name) {
+    v1::Job job;
+    bool created = false;
+    EXPECT_TRUE(store_->CreateJob(ValidScene(scene_name), "", &job, &created).ok());
+    if (executor_) executor_->Wake();
+    return job.id();
+  }
+
+  v1::Job Get(const std::string& id) {
+    v1::Job job;
+    bool found = false;
+    EXPECT_TRUE(store_->GetJob(id, JobView::kFull, &job, &found).ok());
+    return job;
+  }
+
+  v1::Job WaitForState(const std::string& id, v1::Job::State state) {
+    EXPECT_TRUE(WaitUntil([&] { return Get(id).state() == state; }))
+        << "job " << id << " is " << v1::Job::State_Name(Get(id).state()) << ", not "
+        << v1::Job::State_Name(state) << "; error: " << Get(id).error();
+    return Get(id);
+  }
+
+  v1::Job RunToEnd(const std::string& scene_name) {
+    if (!executor_) StartExecutor();
+    const std::string id = Submit(scene_name);
+    EXPECT_TRUE(WaitUntil([&] {
+      const v1::Job::State state = Get(id).state();
+      return state != v1::Job::QUEUED && state != v1::Job::RUNNING;
+    }));
+    return Get(id);
+  }
+
+  std::vector<v1::JobEvent> Events(const std::string& id) {
+    std::vector<v1::JobEvent> events;
+    EXPECT_TRUE(store_->ListEvents(id, 0, &events).ok());
+    return events;
+  }
+
+  TempDir dir_;
+  std::unique_ptr<JobStore> store_;
+  JobEventHub hub_;
+  ExecutorOptions options_;
+  std::unique_ptr<JobExecutor> executor_;
+};
+
+TEST_F(JobExecutorTest, SuccessRecordsSummaryFilesAndEvents) {
+  const v1::Job job = RunToEnd("ok");
+  ASSERT_EQ(job.state(), v1::Job::SUCCEEDED) << job.error();
+  EXPECT_EQ(job.attempts(), 1);
+  EXPECT_EQ(job.summary().scene_name(), "ok");
+  EXPECT_EQ(job.summary().modelled().nodes(), 27);
+  EXPECT_DOUBLE_EQ(job.progress(), 1.0);
+  EXPECT_TRUE(job.error().empty());
+  ASSERT_EQ(job.result_files_size(), 3);
+  EXPECT_EQ(job.result_files(0).name(), "result.h5");
+  EXPECT_EQ(job.result_files(0).size_bytes(), 6);
+  EXPECT_EQ(job.result_files(0).sha256(), kHelloSha256);
+  EXPECT_EQ(job.result_files(1).name(), "result.xdmf");
+  EXPECT_EQ(job.result_files(2).name(), "summary.json");
+
+  const fs::path job_dir = dir_.path() / "jobs" / job.id();
+  EXPECT_TRUE(fs::exists(job_dir / "scene.json"));
+  EXPECT_TRUE(fs::exists(job_dir / "result" / "result.h5"));
+  std::ifstream log(job_dir / "solve.log");
+  std::string log_text((std::istreambuf_iterator<char>(log)), std::istreambuf_iterator<char>());
+  EXPECT_NE(log_text.find("fake pba-solve: scene ok"), std::string::npos) << log_text;
+
+  const std::vector<v1::JobEvent> events = Events(job.id());
+  ASSERT_GE(events.size(), 5u);
+  EXPECT_EQ(events.front().state(), v1::Job::QUEUED);
+  EXPECT_EQ(events[1].state(), v1::Job::RUNNING);
+  EXPECT_EQ(events.back().state(), v1::Job::SUCCEEDED);
+  for (size_t i = 1; i < events.size(); ++i) {
+    EXPECT_GT(events[i].sequence(), events[i - 1].sequence());
+  }
+  // Each phase change is stored: mesh, solve, write.
+  std::vector<std::string> phases;
+  for (const v1::JobEvent& event : events) {
+    if (event.state() == v1::Job::RUNNING && !event.phase().empty())
+      phases.push_back(event.phase());
+  }
+  EXPECT_EQ(phases, (std::vector<std::string>{"mesh", "solve", "write"}));
+}
+
+TEST_F(JobExecutorTest, ProgressIsStoredThrottled) {
+  const v1::Job job = RunToEnd("throttle");
+  ASSERT_EQ(job.state(), v1::Job::SUCCEEDED) << job.error();
+  std::vector<double> stored;
+  for (const v1::JobEvent& event : Events(job.id())) {
+    if (event.phase() == "solve" && event.state() == v1::Job::RUNNING) {
+      stored.push_back(event.progress());
+    }
+  }
+  // 0.11 and 0.12 are live only: less than 5 % above the last stored 0.10.
+  EXPECT_EQ(stored, (std::vector<double>{0.10, 0.20}));
+  // Live events used sequence numbers: the stored history has gaps.
+  const std::vector<v1::JobEvent> events = Events(job.id());
+  EXPECT_GT(events.back().sequence(), static_cast<int64_t>(events.size()));
+}
+
+TEST_F(JobExecutorTest, ErrorLineBecomesTheFailure) {
+  const v1::Job job = RunToEnd("error");
+  EXPECT_EQ(job.state(), v1::Job::FAILED);
+  EXPECT_EQ(job.error(), "material.linear_elastic: stiffness matrix is singular");
+  EXPECT_EQ(job.phase(), "assemble");
+  EXPECT_EQ(job.result_files_size(), 0);
+  EXPECT_EQ(Events(job.id()).back().message(), job.error());
+}
+
+TEST_F(JobExecutorTest, ExitCodeWithoutErrorLine) {
+  const v1::Job job = RunToEnd("exit4");
+  EXPECT_EQ(job.state(), v1::Job::FAILED);
+  EXPECT_EQ(job.error(), "pba-solve exited with code 4");
+}
+
+TEST_F(JobExecutorTest, KilledFromOutside) {
+  const v1::Job job = RunToEnd("killed");
+  EXPECT_EQ(job.state(), v1::Job::FAILED);
+  EXPECT_EQ(job.error(), "pba-solve was killed by signal 9 (SIGKILL)");
+  // The executor keeps working.
+  EXPECT_EQ(RunToEnd("ok").state(), v1::Job::SUCCEEDED);
+}
+
+TEST_F(JobExecutorTest, MissingSolverFailsTheJob) {
+  options_.solver = dir_.path() / "no-such-solver";
+  const v1::Job job = RunToEnd("ok");
+  EXPECT_EQ(job.state(), v1::Job::FAILED);
+  EXPECT_NE(job.error().find("no-such-solver"), std::string::npos) << job.error();
+}
+
+TEST_F(JobExecutorTest, CancelQueuedJobAtOnce) {
+  // No executor running: the job stays queued.
+  executor_ = std::make_unique<JobExecutor>(*store_, hub_, options_);
+  const std::string id = Submit("ok");
+  v1::Job job;
+  bool found = false;
+  ASSERT_TRUE(executor_->Cancel(id, &job, &found).ok());
+  EXPECT_TRUE(found);
+  EXPECT_EQ(job.state(), v1::Job::CANCELLED);
+  EXPECT_EQ(job.error(), "cancelled before it started");
+  // Cancelling again changes nothing.
+  ASSERT_TRUE(executor_->Cancel(id, &job, &found).ok());
+  EXPECT_EQ(job.state(), v1::Job::CANCELLED);
+  EXPECT_EQ(Events(id).size(), 2u);
+  ASSERT_TRUE(executor_->Cancel("j0000000000", &job, &found).ok());
+  EXPECT_FALSE(found);
+}
+
+TEST_F(JobExecutorTest, CancelRunningJob) {
+  StartExecutor();
+  const std::string id = Submit("slow");
+  ASSERT_TRUE(WaitUntil([&] { return Get(id).phase() == "mesh"; }));
+  v1::Job job;
+  bool found = false;
+  ASSERT_TRUE(executor_->Cancel(id, &job, &found).ok());
+  EXPECT_EQ(job.state(), v1::Job::RUNNING);
+  job = WaitForState(id, v1::Job::CANCELLED);
+  EXPECT_EQ(job.error(), "cancelled by request");
+  EXPECT_FALSE(fs::exists(dir_.path() / "jobs" / id / "result"));
+}
+
+TEST_F(JobExecutorTest, CancelEscalatesToSigkill) {
+  StartExecutor();
+  const std::string id = Submit("stubborn");
+  ASSERT_TRUE(WaitUntil([&] { return Get(id).phase() == "mesh"; }));
+  const auto start = std::chrono::steady_clock::now();
+  v1::Job job;
+  bool found = false;
+  ASSERT_TRUE(executor_->Cancel(id, &job, &found).ok());
+  WaitForState(id, v1::Job::CANCELLED);
+  EXPECT_GE(std::chrono::steady_clock::now() - start, options_.kill_grace);
+}
+
+TEST_F(JobExecutorTest, StopRequeuesRunningJobs) {
+  StartExecutor();
+  const std::string id = Submit("slow");
+  ASSERT_TRUE(WaitUntil([&] { return Get(id).phase() == "mesh"; }));
+  executor_->Stop();
+  const v1::Job job = Get(id);
+  EXPECT_EQ(job.state(), v1::Job::QUEUED);
+  EXPECT_EQ(job.attempts(), 1);
+  EXPECT_EQ(Events(id).back().message(), "re-queued: server shut down");
+  EXPECT_EQ(Events(id).back().state(), v1::Job::QUEUED);
+}
+
+TEST_F(JobExecutorTest, RunsJobsConcurrentlyUpToMaxRunning) {
+  options_.max_running = 2;
+  StartExecutor();
+  const std::string a = Submit("slow");
+  const std::string b = Submit("slow");
+  const std::string c = Submit("slow");
+  ASSERT_TRUE(WaitUntil(
+      [&] { return Get(a).state() == v1::Job::RUNNING && Get(b).state() == v1::Job::RUNNING; }));
+  EXPECT_EQ(Get(c).state(), v1::Job::QUEUED);
+  v1::Job job;
+  bool found = false;
+  ASSERT_TRUE(executor_->Cancel(a, &job, &found).ok());
+  WaitForState(c, v1::Job::RUNNING);
+}
+
+TEST_F(JobExecutorTest, RemovesLeftoversOfAnEarlierAttempt) {
+  const std::string id = Submit("ok");
+  const fs::path job_dir = dir_.path() / "jobs" / id;
+  fs::create_directories(job_dir / ".result.partial-12345");
+  fs::create_directories(job_dir / "result");
+  std::ofstream(job_dir / "result" / "stale.txt") << "old";
+  StartExecutor();
+  const v1::Job job = WaitForState(id, v1::Job::SUCCEEDED);
+  EXPECT_FALSE(fs::exists(job_dir / ".result.partial-12345"));
+  EXPECT_FALSE(fs::exists(job_dir / "result" / "stale.txt"));
+  EXPECT_EQ(job.result_files_size(), 3);
+}
+
+TEST_F(JobExecutorTest, PublishesLiveEventsToTheHub) {
+  StartExecutor();
+  const std::string id = Submit("slow");
+  ASSERT_TRUE(WaitUntil([&] {
+    std::string phase;
+    double progress = 0;
+    return hub_.Live(id, &phase, &progress) && phase == "mesh";
+  }));
+  const std::vector<v1::JobEvent> recent = hub_.Recent(id, 0);
+  ASSERT_FALSE(recent.empty());
+  EXPECT_EQ(recent.back().phase(), "mesh");
+  v1::Job job;
+  bool found = false;
+  ASSERT_TRUE(executor_->Cancel(id, &job, &found).ok());
+  WaitForState(id, v1::Job::CANCELLED);
+  std::string phase;
+  double progress = 0;
+  EXPECT_FALSE(hub_.Live(id, &phase, &progress));
+}
+
+}  // namespace
+}  // namespace pba
