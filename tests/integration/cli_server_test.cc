@@ -59,7 +59,7 @@ class CliServerTest : public ::testing::Test {
 
   RunResult Pba(std::vector<std::string> args, seconds timeout = seconds(120)) {
     args.insert(args.begin(), {PBA_CLI_BIN, "--server", server_->address()});
-    return Run(args, timeout);
+    return RunProcess(args, timeout);
   }
 
   fs::path WriteScene(const std::string& name, const std::string& yaml) {
@@ -296,15 +296,15 @@ TEST_F(CliServerTest, GracefulStopWithRunningJob) {
 
 TEST(CliWithoutServerTest, UnreachableServerIsNamed) {
   // Port 1 on loopback: nothing listens there.
-  const RunResult result = Run({PBA_CLI_BIN, "--server", "127.0.0.1:1", "job", "list"});
+  const RunResult result = RunProcess({PBA_CLI_BIN, "--server", "127.0.0.1:1", "job", "list"});
   EXPECT_EQ(result.exit_code, kUnavailable);
   EXPECT_NE(result.err.find("127.0.0.1:1"), std::string::npos) << result.err;
   EXPECT_EQ(result.err.find("terminate"), std::string::npos) << result.err;
 }
 
 TEST(CliWithoutServerTest, UsageErrorsExitTwo) {
-  EXPECT_EQ(Run({PBA_CLI_BIN, "job", "frobnicate"}).exit_code, 2);
-  EXPECT_EQ(Run({PBA_CLI_BIN, "job", "submit", "/nonexistent.yaml"}).exit_code, 2);
+  EXPECT_EQ(RunProcess({PBA_CLI_BIN, "job", "frobnicate"}).exit_code, 2);
+  EXPECT_EQ(RunProcess({PBA_CLI_BIN, "job", "submit", "/nonexistent.yaml"}).exit_code, 2);
 }
 
 }  // namespace

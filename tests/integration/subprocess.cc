@@ -46,7 +46,7 @@ int WaitFor(pid_t pid, std::chrono::milliseconds timeout) {
 
 }  // namespace
 
-RunResult Run(const std::vector<std::string>& argv, std::chrono::seconds timeout) {
+RunResult RunProcess(const std::vector<std::string>& argv, std::chrono::seconds timeout) {
   int out_pipe[2], err_pipe[2];
   if (::pipe2(out_pipe, O_CLOEXEC) != 0 || ::pipe2(err_pipe, O_CLOEXEC) != 0) std::abort();
   const pid_t pid = ::fork();
@@ -101,7 +101,9 @@ bool ServerProcess::Start(std::string* log) {
     const int err = ::open(log_path().c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
     ::dup2(out, STDOUT_FILENO);
     ::dup2(err, STDERR_FILENO);
-    auto args = CArgs({binary_.string(), "--data", data_dir_.string(), "--listen", "127.0.0.1:0"});
+    const std::vector<std::string> argv = {binary_.string(), "--data", data_dir_.string(), "--listen",
+                                           "127.0.0.1:0"};
+    auto args = CArgs(argv);
     ::execv(args[0], args.data());
     std::_Exit(127);
   }
