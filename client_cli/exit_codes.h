@@ -5,14 +5,14 @@ namespace pba::cli {
 
 enum ExitCode : int {
   kExitOk = 0,
-  kExitError = 1,          // any other error (the message says what)
-  kExitUsage = 2,          // bad command line
-  kExitUnavailable = 3,    // the server could not be reached
-  kExitNotFound = 4,       // no such job or file
-  kExitInvalid = 5,        // the server or the client rejected the input (bad scene)
-  kExitJobFailed = 6,      // the job ended FAILED
-  kExitJobCancelled = 7,   // the job ended CANCELLED
-  kExitNotReady = 8,       // the job has no result yet (still queued or running)
+  kExitError = 1,         // any other error (the message says what)
+  kExitUsage = 2,         // bad command line
+  kExitUnavailable = 3,   // the server could not be reached
+  kExitNotFound = 4,      // no such job or file
+  kExitInvalid = 5,       // the server or the client rejected the input (bad scene)
+  kExitJobFailed = 6,     // the job ended FAILED
+  kExitJobCancelled = 7,  // the job ended CANCELLED
+  kExitNotReady = 8,      // the job has no result yet (still queued or running)
 };
 
 }  // namespace pba::cli

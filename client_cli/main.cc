@@ -16,7 +16,8 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
 
   GlobalOptions global;
-  if (const char* env = std::getenv("PBA_SERVER"); env != nullptr && *env != '\0') global.server = env;
+  if (const char* env = std::getenv("PBA_SERVER"); env != nullptr && *env != '\0')
+    global.server = env;
   app.add_option("--server", global.server, "pba-server address HOST:PORT (env PBA_SERVER)")
       ->capture_default_str();
   app.add_flag("--json", global.json, "Print machine-readable JSON instead of tables");
@@ -30,9 +31,11 @@ int main(int argc, char** argv) {
   SubmitArgs submit;
   CLI::App* submit_cmd = job->add_subcommand("submit", "Submit a scene file (YAML or JSON)");
   submit_cmd->add_option("file", submit.file, "Scene file")->required()->check(CLI::ExistingFile);
-  submit_cmd->add_flag("--wait", submit.wait, "Follow the job until it ends; exit with its outcome");
-  submit_cmd->add_option("--request-id", submit.request_id,
-                         "Idempotency key: a repeated submit with the same key returns the same job");
+  submit_cmd->add_flag("--wait", submit.wait,
+                       "Follow the job until it ends; exit with its outcome");
+  submit_cmd->add_option(
+      "--request-id", submit.request_id,
+      "Idempotency key: a repeated submit with the same key returns the same job");
 
   ListArgs list;
   CLI::App* list_cmd = job->add_subcommand("list", "List jobs, newest first");

@@ -73,8 +73,8 @@ void WatchDisplay::Show(const v1::JobEvent& event) {
   if (!interactive_) {
     char buffer[64];
     std::snprintf(buffer, sizeof buffer, "%-9s %3d%%  ", StateName(event.state()).c_str(), percent);
-    std::string line = std::string(buffer) + (event.phase().empty() ? "" : event.phase() + ": ") +
-                       event.message();
+    std::string line =
+        std::string(buffer) + (event.phase().empty() ? "" : event.phase() + ": ") + event.message();
     if (line != last_line_) std::puts(line.c_str());
     last_line_ = line;
     std::fflush(stdout);
@@ -83,7 +83,8 @@ void WatchDisplay::Show(const v1::JobEvent& event) {
   constexpr int kWidth = 30;
   const int filled = percent * kWidth / 100;
   std::string bar = "[" + std::string(filled, '#') + std::string(kWidth - filled, '-') + "]";
-  std::string text = event.phase().empty() ? event.message() : event.phase() + ": " + event.message();
+  std::string text =
+      event.phase().empty() ? event.message() : event.phase() + ": " + event.message();
   if (text.size() > 60) text = text.substr(0, 57) + "...";
   std::printf("\r\033[K%s %3d%% %-9s %s", bar.c_str(), percent, StateName(event.state()).c_str(),
               text.c_str());

@@ -55,7 +55,8 @@ void PrintJobDetails(const v1::Job& job) {
   };
   if (!job.error().empty()) rows.push_back({"Error", job.error()});
   for (const auto& file : job.result_files()) {
-    rows.push_back({"Result file", file.name() + " (" + std::to_string(file.size_bytes()) + " bytes)"});
+    rows.push_back(
+        {"Result file", file.name() + " (" + std::to_string(file.size_bytes()) + " bytes)"});
   }
   PrintTable(rows);
   if (job.has_summary()) std::printf("\n%s", codec::FormatSummary(job.summary()).c_str());
@@ -199,7 +200,8 @@ int DownloadFile(Connection& connection, const std::string& id, const v1::Result
   }
   fs::rename(part, target, ec);
   if (ec) {
-    std::fprintf(stderr, "pba: cannot move %s into place: %s\n", target.c_str(), ec.message().c_str());
+    std::fprintf(stderr, "pba: cannot move %s into place: %s\n", target.c_str(),
+                 ec.message().c_str());
     return kExitError;
   }
   return kExitOk;
@@ -261,7 +263,8 @@ int ListJobs(Connection& connection, const ListArgs& args) {
   for (const auto& job : all.jobs()) {
     rows.push_back({job.id(), job.name(), StateName(job.state()),
                     std::to_string(static_cast<int>(job.progress() * 100 + 0.5)) + " %",
-                    FormatTime(job.create_time()), FormatDuration(job.start_time(), job.end_time())});
+                    FormatTime(job.create_time()),
+                    FormatDuration(job.start_time(), job.end_time())});
   }
   PrintTable(rows);
   if (!next.empty()) std::printf("More: pba job list --page-token %s\n", next.c_str());

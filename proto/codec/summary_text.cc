@@ -21,9 +21,9 @@ std::string FormatSummary(const v1::Summary& summary) {
   const v1::ErrorEstimate& e = summary.error_estimate();
   std::string out;
   out += "Scene        " + summary.scene_name() + "\n";
-  out += "Modelled     " + m.geometry() + ", " + m.element_type() + " mesh: " +
-         std::to_string(m.nodes()) + " nodes, " + std::to_string(m.elements()) + " elements, " +
-         std::to_string(m.dofs()) + " unknowns\n";
+  out += "Modelled     " + m.geometry() + ", " + m.element_type() +
+         " mesh: " + std::to_string(m.nodes()) + " nodes, " + std::to_string(m.elements()) +
+         " elements, " + std::to_string(m.dofs()) + " unknowns\n";
   out += "Material     " + m.material() + "\n";
   out += "Analysis     " + m.analysis() + ", " + m.linear_solver() + "\n";
   for (const auto& note : m.notes()) out += "Note         " + note + "\n";
@@ -49,10 +49,11 @@ std::string FormatSummary(const v1::Summary& summary) {
   if (!p.phases().empty()) out.pop_back();
   out += "\n";
   if (e.estimated()) {
-    out += Format("Error        about %.2g %% in the energy norm (%s)\n", 100.0 * e.relative_error(),
-                  e.method().c_str());
+    out += Format("Error        about %.2g %% in the energy norm (%s)\n",
+                  100.0 * e.relative_error(), e.method().c_str());
   } else {
-    out += "Error        not estimated" + (e.note().empty() ? std::string() : ": " + e.note()) + "\n";
+    out +=
+        "Error        not estimated" + (e.note().empty() ? std::string() : ": " + e.note()) + "\n";
   }
   return out;
 }

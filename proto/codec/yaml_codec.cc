@@ -57,7 +57,8 @@ class Parser {
 
   bool ParseMessage(const YAML::Node& node, Message* message, const std::string& path) {
     if (node.IsNull()) return true;  // "key:" with nothing after it: an empty message
-    if (!node.IsMap()) return Fail(node, path, "expected a mapping of fields, got " + KindName(node));
+    if (!node.IsMap())
+      return Fail(node, path, "expected a mapping of fields, got " + KindName(node));
     const Descriptor* descriptor = message->GetDescriptor();
     const Reflection* reflection = message->GetReflection();
     std::vector<const OneofDescriptor*> seen_oneofs;
@@ -71,16 +72,18 @@ class Parser {
       const std::string field_path = path.empty() ? name : path + "." + name;
       if (field == nullptr) {
         std::vector<std::string> names;
-        for (int i = 0; i < descriptor->field_count(); ++i) names.push_back(descriptor->field(i)->name());
-        return Fail(key, field_path, "unknown field '" + name + "' (expected one of: " + Join(names) + ")");
+        for (int i = 0; i < descriptor->field_count(); ++i)
+          names.push_back(descriptor->field(i)->name());
+        return Fail(key, field_path,
+                    "unknown field '" + name + "' (expected one of: " + Join(names) + ")");
       }
       if (const OneofDescriptor* oneof = field->real_containing_oneof()) {
         auto it = std::find(seen_oneofs.begin(), seen_oneofs.end(), oneof);
         if (it != seen_oneofs.end()) {
           const std::string& other = seen_oneof_fields[it - seen_oneofs.begin()];
           return Fail(key, field_path,
-                      "only one of the " + oneof->name() + " choices may be given, but both '" + other +
-                          "' and '" + name + "' are");
+                      "only one of the " + oneof->name() + " choices may be given, but both '" +
+                          other + "' and '" + name + "' are");
         }
         seen_oneofs.push_back(oneof);
         seen_oneof_fields.push_back(name);
@@ -149,11 +152,13 @@ class Parser {
         } else {
           return WrongType(node, path, field);
         }
-        repeated ? reflection->AddBool(message, field, value) : reflection->SetBool(message, field, value);
+        repeated ? reflection->AddBool(message, field, value)
+                 : reflection->SetBool(message, field, value);
         return true;
       }
       case FieldDescriptor::CPPTYPE_STRING:
-        repeated ? reflection->AddString(message, field, text) : reflection->SetString(message, field, text);
+        repeated ? reflection->AddString(message, field, text)
+                 : reflection->SetString(message, field, text);
         return true;
       case FieldDescriptor::CPPTYPE_ENUM:
         return ParseEnum(node, text, message, reflection, field, path);
@@ -170,16 +175,20 @@ class Parser {
     auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
     if (ec != std::errc() || end != text.data() + text.size()) return WrongType(node, path, field);
     const bool repeated = field->is_repeated();
-    auto out_of_range = [&] { return Fail(node, path, "the integer " + text + " is out of range"); };
+    auto out_of_range = [&] {
+      return Fail(node, path, "the integer " + text + " is out of range");
+    };
     switch (field->cpp_type()) {
       case FieldDescriptor::CPPTYPE_INT32:
-        if (value < std::numeric_limits<int32_t>::min() || value > std::numeric_limits<int32_t>::max())
+        if (value < std::numeric_limits<int32_t>::min() ||
+            value > std::numeric_limits<int32_t>::max())
           return out_of_range();
         repeated ? reflection->AddInt32(message, field, static_cast<int32_t>(value))
                  : reflection->SetInt32(message, field, static_cast<int32_t>(value));
         return true;
       case FieldDescriptor::CPPTYPE_INT64:
-        repeated ? reflection->AddInt64(message, field, value) : reflection->SetInt64(message, field, value);
+        repeated ? reflection->AddInt64(message, field, value)
+                 : reflection->SetInt64(message, field, value);
         return true;
       case FieldDescriptor::CPPTYPE_UINT32:
         if (value < 0 || value > std::numeric_limits<uint32_t>::max()) return out_of_range();
@@ -195,7 +204,8 @@ class Parser {
   }
 
   bool ParseEnum(const YAML::Node& node, const std::string& text, Message* message,
-                 const Reflection* reflection, const FieldDescriptor* field, const std::string& path) {
+                 const Reflection* reflection, const FieldDescriptor* field,
+                 const std::string& path) {
     const EnumDescriptor* type = field->enum_type();
     std::vector<std::string> names;
     for (int i = 0; i < type->value_count(); ++i) {

@@ -13,9 +13,9 @@ Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec) {
     case v1::Geometry::kBox: {
       const auto& size = geometry.box().size_mm();
       if (size.size() != 3) {
-        return Status::InvalidArgument("geometry.box.size_mm",
-                                       "expected three edge lengths (x, y, z) in mm, got " +
-                                           std::to_string(size.size()));
+        return Status::InvalidArgument(
+            "geometry.box.size_mm",
+            "expected three edge lengths (x, y, z) in mm, got " + std::to_string(size.size()));
       }
       spec->geometry.kind = GeometrySpec::Kind::kBox;
       for (int i = 0; i < 3; ++i) spec->geometry.box.size_mm[i] = size[i];
@@ -36,8 +36,8 @@ Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec) {
       spec->mesh.element = ElementType::kTet4;
       break;
     default:
-      return Status::InvalidArgument("mesh.element", "unknown element type " +
-                                                         std::to_string(scene.mesh().element()));
+      return Status::InvalidArgument(
+          "mesh.element", "unknown element type " + std::to_string(scene.mesh().element()));
   }
   spec->mesh.element_size_mm = scene.mesh().element_size_mm();
 
@@ -46,7 +46,8 @@ Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec) {
     spec->material.kind = MaterialSpec::Kind::kLinearElastic;
     spec->material.linear_elastic.youngs_modulus_pa =
         scene.material().linear_elastic().youngs_modulus_pa();
-    spec->material.linear_elastic.poissons_ratio = scene.material().linear_elastic().poissons_ratio();
+    spec->material.linear_elastic.poissons_ratio =
+        scene.material().linear_elastic().poissons_ratio();
   }
 
   for (const v1::BoundaryCondition& bc : scene.boundary_conditions()) {
@@ -76,8 +77,8 @@ Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec) {
       spec->analysis.type = AnalysisSpec::Type::kLinearStatic;
       break;
     default:
-      return Status::InvalidArgument("analysis.type", "unknown analysis type " +
-                                                          std::to_string(scene.analysis().type()));
+      return Status::InvalidArgument(
+          "analysis.type", "unknown analysis type " + std::to_string(scene.analysis().type()));
   }
   switch (scene.analysis().linear_solver()) {
     case v1::Analysis::LINEAR_SOLVER_UNSPECIFIED:
@@ -170,9 +171,9 @@ v1::Summary SummaryToProto(const Summary& summary) {
   error->set_estimated(summary.error.estimated);
   error->set_method(summary.error.method);
   error->set_relative_error(summary.error.relative_error);
-  error->set_note(summary.error.estimated ? summary.error.note
-                                          : (summary.error.note.empty() ? "not estimated"
-                                                                        : summary.error.note));
+  error->set_note(summary.error.estimated
+                      ? summary.error.note
+                      : (summary.error.note.empty() ? "not estimated" : summary.error.note));
 
   auto& units = *out.mutable_units();
   units["length"] = "mm";

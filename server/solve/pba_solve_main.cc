@@ -174,7 +174,8 @@ int Run(const std::string& scene_path, const std::string& out_dir, ProgressMode 
   const v1::Summary summary = SummaryToProto(solution.summary);
   status = WriteText(staging.path() / "summary.json", codec::ToJson(summary));
   if (!status.ok()) return reporter.Error(status);
-  if (g_cancel.load()) return reporter.Error(Status::Cancelled("cancelled before the result was saved"));
+  if (g_cancel.load())
+    return reporter.Error(Status::Cancelled("cancelled before the result was saved"));
   status = staging.Commit();
   if (!status.ok()) return reporter.Error(status);
 
@@ -194,13 +195,15 @@ int main(int argc, char** argv) {
   int threads = 0;
   app.add_option("scene", scene_path, "Scene file (YAML or JSON, see docs/scene-reference.md)")
       ->required();
-  app.add_option("-o,--out", out_dir, "Result directory (created; an older result there is replaced)")
+  app.add_option("-o,--out", out_dir,
+                 "Result directory (created; an older result there is replaced)")
       ->required();
   app.add_option("--progress", progress,
                  "Progress on stdout: json (one pba.v1.SolveEvent per line), text, none, or auto "
                  "(text on a terminal, json otherwise)")
       ->check(CLI::IsMember({"auto", "json", "text", "none"}));
-  app.add_option("--threads", threads, "Worker threads; 0 uses every core")->check(CLI::NonNegativeNumber);
+  app.add_option("--threads", threads, "Worker threads; 0 uses every core")
+      ->check(CLI::NonNegativeNumber);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

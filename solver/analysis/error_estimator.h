@@ -18,8 +18,8 @@
 namespace pba {
 
 struct ErrorEstimateResult {
-  double relative_error = 0;            // eta, a fraction
-  std::vector<double> element_share;    // eta_e^2 / sum eta_e^2, per element
+  double relative_error = 0;          // eta, a fraction
+  std::vector<double> element_share;  // eta_e^2 / sum eta_e^2, per element
 };
 
 // `stress` is elements x 6 (Voigt), `volume` per element [m^3].

@@ -78,7 +78,9 @@ Status SolveScene(const SceneSpec& scene, const SolveOptions& options, Solution*
   *solution = Solution();
   Summary& summary = solution->summary;
   PhaseClock clock(options, &summary.phases);
-  auto cancelled = [&] { return Status::Cancelled("cancelled during " + summary.phases.back().phase); };
+  auto cancelled = [&] {
+    return Status::Cancelled("cancelled during " + summary.phases.back().phase);
+  };
 
   clock.Begin("mesh", 0.0, 0.05, "meshing the " + DescribeGeometry(scene.geometry));
   MeshStats stats;
@@ -86,8 +88,8 @@ Status SolveScene(const SceneSpec& scene, const SolveOptions& options, Solution*
   const DofMap dofs = ApplyBoundaryConditions(scene, mesh);
   const std::string free_modes = DescribeFreeRigidModes(mesh, dofs);
   if (!free_modes.empty()) {
-    return Status::FailedPrecondition("the boundary conditions leave the body free to move: " + free_modes +
-                                      "; hold it with further conditions");
+    return Status::FailedPrecondition("the boundary conditions leave the body free to move: " +
+                                      free_modes + "; hold it with further conditions");
   }
   clock.End();
   if (clock.cancelled()) return cancelled();
@@ -98,12 +100,13 @@ Status SolveScene(const SceneSpec& scene, const SolveOptions& options, Solution*
               Format("assembling %d elements, %d unknowns", mesh.num_elements(), dofs.num_free()));
   const auto colours = ColourElements(mesh);
   LinearSystem system;
-  PBA_RETURN_IF_ERROR(AssembleLinearSystem(mesh, d, dofs, colours,
-                                           [&](double f) {
-                                             clock.Update(f);
-                                             return !clock.cancelled();
-                                           },
-                                           &system));
+  PBA_RETURN_IF_ERROR(AssembleLinearSystem(
+      mesh, d, dofs, colours,
+      [&](double f) {
+        clock.Update(f);
+        return !clock.cancelled();
+      },
+      &system));
   clock.End();
 
   const auto solver = CreateLinearSolver(scene.analysis.linear_solver);
@@ -111,8 +114,8 @@ Status SolveScene(const SceneSpec& scene, const SolveOptions& options, Solution*
   double residual = 0;
   if (dofs.num_free() > 0) {
     clock.Begin("factorize", 0.25, 0.75,
-                Format("%s of %d unknowns, %lld stored entries", solver->Name().c_str(), dofs.num_free(),
-                       static_cast<long long>(system.k.nonZeros())));
+                Format("%s of %d unknowns, %lld stored entries", solver->Name().c_str(),
+                       dofs.num_free(), static_cast<long long>(system.k.nonZeros())));
     PBA_RETURN_IF_ERROR(solver->Factorize(system.k));
     clock.End();
     if (clock.cancelled()) return cancelled();
@@ -151,7 +154,8 @@ Status SolveScene(const SceneSpec& scene, const SolveOptions& options, Solution*
       energy += 0.5 * g.volume * stress.dot(strain);
       max_strain = std::max(max_strain, strain.cwiseAbs().maxCoeff());
       const Vector12d force = g.volume * b.transpose() * stress;
-      for (int a = 0; a < 4; ++a) internal.segment<3>(3 * mesh.tets[e][a]) += force.segment<3>(3 * a);
+      for (int a = 0; a < 4; ++a)
+        internal.segment<3>(3 * mesh.tets[e][a]) += force.segment<3>(3 * a);
     }
   }
   for (const std::string& name : ReactionSets(scene)) {
@@ -165,7 +169,8 @@ Status SolveScene(const SceneSpec& scene, const SolveOptions& options, Solution*
 
   clock.Begin("estimate", 0.9, 0.95, "Zienkiewicz-Zhu error estimate");
   const ErrorEstimateResult estimate =
-      EstimateZzError(mesh, solution->stress_pa, volume, IsotropicCompliance(p.youngs_modulus_pa, p.poissons_ratio));
+      EstimateZzError(mesh, solution->stress_pa, volume,
+                      IsotropicCompliance(p.youngs_modulus_pa, p.poissons_ratio));
   solution->error_indicator = estimate.element_share;
   summary.error.estimated = true;
   summary.error.method = "Zienkiewicz-Zhu stress recovery (nodal averaging)";
@@ -202,22 +207,27 @@ Status SolveScene(const SceneSpec& scene, const SolveOptions& options, Solution*
   summary.elements = ne;
   summary.dofs = dofs.num_free();
   summary.constrained_dofs = dofs.num_dofs() - dofs.num_free();
-  summary.material = (scene.material.name.empty() ? std::string("material") : scene.material.name) +
-                     Format(": linear elastic, E = %g Pa, nu = %g", p.youngs_modulus_pa, p.poissons_ratio);
+  summary.material =
+      (scene.material.name.empty() ? std::string("material") : scene.material.name) +
+      Format(": linear elastic, E = %g Pa, nu = %g", p.youngs_modulus_pa, p.poissons_ratio);
   summary.analysis = "linear static (small strain)";
   summary.linear_solver = solver->Name();
-  summary.notes.push_back("mesh: " + stats.description + Format(" (element size %g mm)",
-                                                                   EffectiveElementSize(scene.geometry, scene.mesh)));
+  summary.notes.push_back(
+      "mesh: " + stats.description +
+      Format(" (element size %g mm)", EffectiveElementSize(scene.geometry, scene.mesh)));
   if (max_strain > kSmallStrainLimit) {
-    summary.notes.push_back(Format(
-        "the largest strain component is %.1f %%: beyond a few percent small-strain linear elasticity "
-        "misjudges soft tissue, which is nonlinear and nearly incompressible",
-        100 * max_strain));
+    summary.notes.push_back(
+        Format("the largest strain component is %.1f %%: beyond a few percent small-strain linear "
+               "elasticity "
+               "misjudges soft tissue, which is nonlinear and nearly incompressible",
+               100 * max_strain));
   }
   summary.max_displacement_mm = max_u / kMm;
   for (int c = 0; c < 3; ++c) summary.max_displacement_at_mm[c] = mesh.nodes(max_node, c) / kMm;
   summary.max_von_mises_pa =
-      solution->von_mises_pa.empty() ? 0 : *std::max_element(solution->von_mises_pa.begin(), solution->von_mises_pa.end());
+      solution->von_mises_pa.empty()
+          ? 0
+          : *std::max_element(solution->von_mises_pa.begin(), solution->von_mises_pa.end());
   summary.strain_energy_j = energy;
   summary.relative_residual = residual;
   summary.threads = omp_get_max_threads();

@@ -29,8 +29,9 @@ std::string DescribeFreeRigidModes(const Mesh& mesh, const DofMap& dofs) {
   }
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> eigen(gram);
   const double scale = std::max(gram.trace(), 1.0);
-  static const char* kNames[6] = {"translation along x", "translation along y", "translation along z",
-                                  "rotation about x",    "rotation about y",    "rotation about z"};
+  static const char* kNames[6] = {"translation along x", "translation along y",
+                                  "translation along z", "rotation about x",
+                                  "rotation about y",    "rotation about z"};
   std::string out;
   for (int i = 0; i < 6; ++i) {
     if (eigen.eigenvalues()(i) > 1e-9 * scale) continue;
@@ -44,8 +45,8 @@ std::string DescribeFreeRigidModes(const Mesh& mesh, const DofMap& dofs) {
   }
   if (!out.empty()) {
     char where[96];
-    std::snprintf(where, sizeof where, " (rotations through (%.4g, %.4g, %.4g) mm)", centroid(0) * 1e3,
-                  centroid(1) * 1e3, centroid(2) * 1e3);
+    std::snprintf(where, sizeof where, " (rotations through (%.4g, %.4g, %.4g) mm)",
+                  centroid(0) * 1e3, centroid(1) * 1e3, centroid(2) * 1e3);
     if (out.find("rotation") != std::string::npos) out += where;
   }
   return out;

@@ -127,8 +127,9 @@ Status AssembleLinearSystem(const Mesh& mesh, const Matrix6d& d, const DofMap& d
     }
   }
   const int n = dofs.num_free();
-  system->k = Eigen::Map<const SparseMatrix>(n, n, static_cast<int>(values.size()), pattern.outer.data(),
-                                             pattern.inner.data(), values.data());
+  system->k =
+      Eigen::Map<const SparseMatrix>(n, n, static_cast<int>(values.size()), pattern.outer.data(),
+                                     pattern.inner.data(), values.data());
   return Status::Ok();
 }
 

@@ -4,7 +4,8 @@
 
 namespace pba {
 
-void PhaseClock::Begin(const std::string& phase, double begin, double end, const std::string& message) {
+void PhaseClock::Begin(const std::string& phase, double begin, double end,
+                       const std::string& message) {
   End();
   phase_ = phase;
   message_ = message;

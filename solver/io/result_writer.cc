@@ -31,14 +31,16 @@ bool WriteStringAttribute(hid_t object, const char* name, const std::string& val
   Handle type(H5Tcopy(H5T_C_S1), H5Tclose);
   if (!type.ok() || H5Tset_size(type.get(), value.empty() ? 1 : value.size()) < 0) return false;
   Handle space(H5Screate(H5S_SCALAR), H5Sclose);
-  Handle attribute(H5Acreate2(object, name, type.get(), space.get(), H5P_DEFAULT, H5P_DEFAULT), H5Aclose);
+  Handle attribute(H5Acreate2(object, name, type.get(), space.get(), H5P_DEFAULT, H5P_DEFAULT),
+                   H5Aclose);
   return attribute.ok() && H5Awrite(attribute.get(), type.get(), value.c_str()) >= 0;
 }
 
 class H5Writer {
  public:
   explicit H5Writer(const std::filesystem::path& path)
-      : path_(path), file_(H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), H5Fclose) {}
+      : path_(path),
+        file_(H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), H5Fclose) {}
 
   bool ok() const { return file_.ok() && ok_; }
   hid_t file() const { return file_.get(); }
@@ -50,18 +52,19 @@ class H5Writer {
 
   // Writes rows x cols (cols = 0: a 1-D dataset of `rows`) from `data`.
   template <typename T>
-  void Dataset(const std::string& name, const std::vector<T>& data, hsize_t cols, const std::string& unit,
-               const std::string& components = "") {
+  void Dataset(const std::string& name, const std::vector<T>& data, hsize_t cols,
+               const std::string& unit, const std::string& components = "") {
     if (!ok()) return;
     const hsize_t rows = cols == 0 ? data.size() : data.size() / cols;
     const hsize_t dims[2] = {rows, cols};
     Handle space(H5Screate_simple(cols == 0 ? 1 : 2, dims, nullptr), H5Sclose);
     const hid_t type = std::is_same_v<T, double> ? H5T_NATIVE_DOUBLE : H5T_NATIVE_INT64;
     const hid_t file_type = std::is_same_v<T, double> ? H5T_IEEE_F64LE : H5T_STD_I64LE;
-    Handle dataset(H5Dcreate2(file_.get(), name.c_str(), file_type, space.get(), H5P_DEFAULT, H5P_DEFAULT,
-                              H5P_DEFAULT),
+    Handle dataset(H5Dcreate2(file_.get(), name.c_str(), file_type, space.get(), H5P_DEFAULT,
+                              H5P_DEFAULT, H5P_DEFAULT),
                    H5Dclose);
-    ok_ = dataset.ok() && H5Dwrite(dataset.get(), type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data.data()) >= 0 &&
+    ok_ = dataset.ok() &&
+          H5Dwrite(dataset.get(), type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data.data()) >= 0 &&
           WriteStringAttribute(dataset.get(), "unit", unit) &&
           (components.empty() || WriteStringAttribute(dataset.get(), "components", components));
   }
@@ -72,33 +75,43 @@ class H5Writer {
   bool ok_ = true;
 };
 
-std::string Item(const std::string& dims, const std::string& path, const char* number_type = "Float",
-                 int precision = 8) {
+std::string Item(const std::string& dims, const std::string& path,
+                 const char* number_type = "Float", int precision = 8) {
   return "<DataItem Dimensions=\"" + dims + "\" NumberType=\"" + number_type + "\" Precision=\"" +
          std::to_string(precision) + "\" Format=\"HDF\">result.h5:" + path + "</DataItem>";
 }
 
 // One column of an elements x 6 dataset as a scalar cell attribute.
-std::string ComponentAttribute(const std::string& name, const std::string& path, int column, size_t rows) {
+std::string ComponentAttribute(const std::string& name, const std::string& path, int column,
+                               size_t rows) {
   const std::string n = std::to_string(rows);
-  return "      <Attribute Name=\"" + name + "\" AttributeType=\"Scalar\" Center=\"Cell\">\n"
-         "        <DataItem ItemType=\"HyperSlab\" Dimensions=\"" + n + " 1\">\n"
-         "          <DataItem Dimensions=\"3 2\" Format=\"XML\">0 " + std::to_string(column) + " 1 1 " + n +
-         " 1</DataItem>\n          " + Item(n + " 6", path) + "\n        </DataItem>\n      </Attribute>\n";
+  return "      <Attribute Name=\"" + name +
+         "\" AttributeType=\"Scalar\" Center=\"Cell\">\n"
+         "        <DataItem ItemType=\"HyperSlab\" Dimensions=\"" +
+         n +
+         " 1\">\n"
+         "          <DataItem Dimensions=\"3 2\" Format=\"XML\">0 " +
+         std::to_string(column) + " 1 1 " + n + " 1</DataItem>\n          " + Item(n + " 6", path) +
+         "\n        </DataItem>\n      </Attribute>\n";
 }
 
 std::string XdmfText(const SceneSpec& scene, const Solution& s) {
   const size_t nodes = s.nodes_mm.size() / 3, elements = s.tets.size() / 4;
   const std::string nn = std::to_string(nodes), ne = std::to_string(elements);
   std::string x =
-      "<?xml version=\"1.0\" ?>\n<!-- PBA result: lengths in mm, stresses in Pa. Open in ParaView. -->\n"
-      "<Xdmf Version=\"3.0\">\n  <Domain>\n    <Grid Name=\"" + (scene.name.empty() ? "result" : scene.name) +
+      "<?xml version=\"1.0\" ?>\n<!-- PBA result: lengths in mm, stresses in Pa. Open in ParaView. "
+      "-->\n"
+      "<Xdmf Version=\"3.0\">\n  <Domain>\n    <Grid Name=\"" +
+      (scene.name.empty() ? "result" : scene.name) +
       "\" GridType=\"Uniform\">\n"
-      "      <Topology TopologyType=\"Tetrahedron\" NumberOfElements=\"" + ne + "\">\n        " +
-      Item(ne + " 4", "/mesh/tets", "Int", 8) + "\n      </Topology>\n"
-      "      <Geometry GeometryType=\"XYZ\">\n        " + Item(nn + " 3", "/mesh/nodes") + "\n      </Geometry>\n";
+      "      <Topology TopologyType=\"Tetrahedron\" NumberOfElements=\"" +
+      ne + "\">\n        " + Item(ne + " 4", "/mesh/tets", "Int", 8) +
+      "\n      </Topology>\n"
+      "      <Geometry GeometryType=\"XYZ\">\n        " +
+      Item(nn + " 3", "/mesh/nodes") + "\n      </Geometry>\n";
   if (scene.outputs.displacement) {
-    x += "      <Attribute Name=\"displacement\" AttributeType=\"Vector\" Center=\"Node\">\n        " +
+    x += "      <Attribute Name=\"displacement\" AttributeType=\"Vector\" Center=\"Node\">\n       "
+         " " +
          Item(nn + " 3", "/fields/displacement") + "\n      </Attribute>\n";
   }
   if (scene.outputs.von_mises) {
@@ -106,7 +119,8 @@ std::string XdmfText(const SceneSpec& scene, const Solution& s) {
          Item(ne, "/fields/von_mises") + "\n      </Attribute>\n";
   }
   if (!s.error_indicator.empty()) {
-    x += "      <Attribute Name=\"error_indicator\" AttributeType=\"Scalar\" Center=\"Cell\">\n        " +
+    x += "      <Attribute Name=\"error_indicator\" AttributeType=\"Scalar\" Center=\"Cell\">\n    "
+         "    " +
          Item(ne, "/fields/error_indicator") + "\n      </Attribute>\n";
   }
   static const char* kComponents[6] = {"xx", "yy", "zz", "yz", "xz", "xy"};
@@ -122,7 +136,8 @@ std::string XdmfText(const SceneSpec& scene, const Solution& s) {
 
 }  // namespace
 
-Status WriteResultFiles(const SceneSpec& scene, Solution* solution, const std::filesystem::path& dir) {
+Status WriteResultFiles(const SceneSpec& scene, Solution* solution,
+                        const std::filesystem::path& dir) {
   const auto start = std::chrono::steady_clock::now();
   const std::filesystem::path h5 = dir / "result.h5";
   {
@@ -135,7 +150,8 @@ Status WriteResultFiles(const SceneSpec& scene, Solution* solution, const std::f
     w.Dataset("/mesh/nodes", solution->nodes_mm, 3, "mm", "x y z");
     w.Dataset("/mesh/tets", solution->tets, 4, "1", "node indices, 0-based");
     const std::string voigt = "xx yy zz yz xz xy";
-    if (scene.outputs.displacement) w.Dataset("/fields/displacement", solution->displacement_mm, 3, "mm", "x y z");
+    if (scene.outputs.displacement)
+      w.Dataset("/fields/displacement", solution->displacement_mm, 3, "mm", "x y z");
     if (scene.outputs.stress) w.Dataset("/fields/stress", solution->stress_pa, 6, "Pa", voigt);
     if (scene.outputs.strain) {
       w.Dataset("/fields/strain", solution->strain, 6, "1", voigt + " (engineering shear)");
@@ -152,7 +168,8 @@ Status WriteResultFiles(const SceneSpec& scene, Solution* solution, const std::f
   out.close();
   if (!out) return Status::Io("cannot write " + xdmf.string());
 
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   solution->summary.phases.push_back({"write", seconds});
   solution->summary.wall_time_s += seconds;
   return Status::Ok();

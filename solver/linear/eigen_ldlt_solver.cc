@@ -39,6 +39,8 @@ class EigenLdltSolver final : public LinearSolver {
 
 }  // namespace
 
-std::unique_ptr<LinearSolver> CreateEigenLdltSolver() { return std::make_unique<EigenLdltSolver>(); }
+std::unique_ptr<LinearSolver> CreateEigenLdltSolver() {
+  return std::make_unique<EigenLdltSolver>();
+}
 
 }  // namespace pba

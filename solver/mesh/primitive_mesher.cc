@@ -17,7 +17,9 @@ struct Section {
   std::vector<std::array<int, 4>> quads;
 };
 
-int Divisions(double length, double h) { return std::max(1, static_cast<int>(std::ceil(length / h - 1e-9))); }
+int Divisions(double length, double h) {
+  return std::max(1, static_cast<int>(std::ceil(length / h - 1e-9)));
+}
 
 Section RectangleSection(double lx, double ly, int nx, int ny) {
   Section s;
@@ -66,10 +68,18 @@ Section DiskSection(double radius, DiskDivisions d) {
     const int t = k % n;
     int i = 0, j = 0;
     switch (edge) {
-      case 0: i = t, j = 0; break;
-      case 1: i = n, j = t; break;
-      case 2: i = n - t, j = n; break;
-      default: i = 0, j = n - t; break;
+      case 0:
+        i = t, j = 0;
+        break;
+      case 1:
+        i = n, j = t;
+        break;
+      case 2:
+        i = n - t, j = n;
+        break;
+      default:
+        i = 0, j = n - t;
+        break;
     }
     ring[k] = j * (n + 1) + i;
     angle[k] = -0.75 * std::numbers::pi + edge * 0.5 * std::numbers::pi +
@@ -134,14 +144,16 @@ Mesh Extrude(const Section& section, double height, int nz) {
   for (int k = 0; k <= nz; ++k) {
     const double z = height * k / nz;
     for (int p = 0; p < np; ++p) {
-      mesh.nodes.row(k * np + p) << section.points[p].x() * kMm, section.points[p].y() * kMm, z * kMm;
+      mesh.nodes.row(k * np + p) << section.points[p].x() * kMm, section.points[p].y() * kMm,
+          z * kMm;
     }
   }
   mesh.tets.reserve(section.quads.size() * 6 * nz);
   for (int k = 0; k < nz; ++k) {
     const int lo = k * np, hi = (k + 1) * np;
     for (const auto& q : section.quads) {
-      for (const auto& tri : {std::array<int, 3>{q[0], q[1], q[2]}, std::array<int, 3>{q[0], q[2], q[3]}}) {
+      for (const auto& tri :
+           {std::array<int, 3>{q[0], q[1], q[2]}, std::array<int, 3>{q[0], q[2], q[3]}}) {
         SplitPrism({lo + tri[0], lo + tri[1], lo + tri[2], hi + tri[0], hi + tri[1], hi + tri[2]},
                    &mesh.tets);
       }
@@ -157,7 +169,8 @@ Mesh Extrude(const Section& section, double height, int nz) {
 // nodes lie on that set's surface (the bodies are convex, so such a face is
 // on the boundary).
 void ClassifyFaces(const std::vector<std::string>& names,
-                   const std::vector<std::function<bool(const Eigen::Vector3d&)>>& on_surface, Mesh* mesh) {
+                   const std::vector<std::function<bool(const Eigen::Vector3d&)>>& on_surface,
+                   Mesh* mesh) {
   const int n = mesh->num_nodes();
   std::vector<uint32_t> mask(n, 0);
   for (int i = 0; i < n; ++i) {
@@ -232,8 +245,8 @@ Mesh BuildPrimitiveMesh(const GeometrySpec& geometry, const MeshSpec& options, M
                    [=](const Eigen::Vector3d& x) { return x.y() < eps; },
                    [=](const Eigen::Vector3d& x) { return x.y() > ly - eps; }},
                   &mesh);
-    stats->description = "structured grid of " + std::to_string(nx) + " x " + std::to_string(ny) + " x " +
-                         std::to_string(nz) + " cells, each cut into 6 tetrahedra";
+    stats->description = "structured grid of " + std::to_string(nx) + " x " + std::to_string(ny) +
+                         " x " + std::to_string(nz) + " cells, each cut into 6 tetrahedra";
   } else {
     const double r = geometry.cylinder.radius_mm, height = geometry.cylinder.height_mm;
     const DiskDivisions d = DiskCounts(r, h);
@@ -247,8 +260,9 @@ Mesh BuildPrimitiveMesh(const GeometrySpec& geometry, const MeshSpec& options, M
                    [=](const Eigen::Vector3d& x) { return x.head<2>().norm() > rm - eps; }},
                   &mesh);
     stats->description = "O-grid cross-section (central square " + std::to_string(d.n) + " x " +
-                         std::to_string(d.n) + ", ring of " + std::to_string(d.m) + " layers) extruded in " +
-                         std::to_string(nz) + " layers, each prism cut into 3 tetrahedra";
+                         std::to_string(d.n) + ", ring of " + std::to_string(d.m) +
+                         " layers) extruded in " + std::to_string(nz) +
+                         " layers, each prism cut into 3 tetrahedra";
   }
   return mesh;
 }

@@ -24,26 +24,27 @@ bool PositiveFinite(double value) { return std::isfinite(value) && value > 0; }
 Status ValidateGeometry(const GeometrySpec& geometry) {
   switch (geometry.kind) {
     case GeometrySpec::Kind::kNone:
-      return Status::InvalidArgument("geometry", "no shape given: set geometry.box or geometry.cylinder");
+      return Status::InvalidArgument("geometry",
+                                     "no shape given: set geometry.box or geometry.cylinder");
     case GeometrySpec::Kind::kBox:
       for (double size : geometry.box.size_mm) {
         if (!PositiveFinite(size)) {
-          return Status::InvalidArgument("geometry.box.size_mm",
-                                         "every edge length must be a positive number of mm, got " +
-                                             Number(size));
+          return Status::InvalidArgument(
+              "geometry.box.size_mm",
+              "every edge length must be a positive number of mm, got " + Number(size));
         }
       }
       return Status::Ok();
     case GeometrySpec::Kind::kCylinder:
       if (!PositiveFinite(geometry.cylinder.radius_mm)) {
-        return Status::InvalidArgument("geometry.cylinder.radius_mm",
-                                       "must be a positive number of mm, got " +
-                                           Number(geometry.cylinder.radius_mm));
+        return Status::InvalidArgument(
+            "geometry.cylinder.radius_mm",
+            "must be a positive number of mm, got " + Number(geometry.cylinder.radius_mm));
       }
       if (!PositiveFinite(geometry.cylinder.height_mm)) {
-        return Status::InvalidArgument("geometry.cylinder.height_mm",
-                                       "must be a positive number of mm, got " +
-                                           Number(geometry.cylinder.height_mm));
+        return Status::InvalidArgument(
+            "geometry.cylinder.height_mm",
+            "must be a positive number of mm, got " + Number(geometry.cylinder.height_mm));
       }
       return Status::Ok();
   }
@@ -60,9 +61,9 @@ std::string JoinNames(const std::vector<std::string>& names) {
 
 Status LinearElasticParams::Validate(const std::string& path) const {
   if (!PositiveFinite(youngs_modulus_pa)) {
-    return Status::InvalidArgument(path + ".youngs_modulus_pa",
-                                   "Young's modulus must be a positive number of Pa, got " +
-                                       Number(youngs_modulus_pa));
+    return Status::InvalidArgument(
+        path + ".youngs_modulus_pa",
+        "Young's modulus must be a positive number of Pa, got " + Number(youngs_modulus_pa));
   }
   if (!std::isfinite(poissons_ratio) || poissons_ratio <= -1.0 || poissons_ratio >= 0.5) {
     std::string message = "Poisson's ratio must lie in (-1, 0.5), got " + Number(poissons_ratio);
@@ -89,9 +90,10 @@ Status ValidateScene(const SceneSpec& scene) {
   PBA_RETURN_IF_ERROR(ValidateGeometry(scene.geometry));
 
   if (!std::isfinite(scene.mesh.element_size_mm) || scene.mesh.element_size_mm < 0) {
-    return Status::InvalidArgument("mesh.element_size_mm",
-                                   "must be a positive number of mm (or left out for the default), got " +
-                                       Number(scene.mesh.element_size_mm));
+    return Status::InvalidArgument(
+        "mesh.element_size_mm",
+        "must be a positive number of mm (or left out for the default), got " +
+            Number(scene.mesh.element_size_mm));
   }
   const int64_t elements = EstimateElementCount(scene.geometry, scene.mesh);
   if (elements > kMaxElements) {
@@ -103,7 +105,8 @@ Status ValidateScene(const SceneSpec& scene) {
 
   switch (scene.material.kind) {
     case MaterialSpec::Kind::kNone:
-      return Status::InvalidArgument("material", "no material model given: set material.linear_elastic");
+      return Status::InvalidArgument("material",
+                                     "no material model given: set material.linear_elastic");
     case MaterialSpec::Kind::kLinearElastic:
       PBA_RETURN_IF_ERROR(scene.material.linear_elastic.Validate("material.linear_elastic"));
       break;
@@ -135,13 +138,14 @@ Status ValidateScene(const SceneSpec& scene) {
         for (int c = 0; c < 3; ++c) {
           if (!bc.displacement_mm[c]) continue;
           if (!std::isfinite(*bc.displacement_mm[c])) {
-            return Status::InvalidArgument(path + ".displacement." + kNames[c], "must be a finite number of mm");
+            return Status::InvalidArgument(path + ".displacement." + kNames[c],
+                                           "must be a finite number of mm");
           }
           any = held[c] = true;
         }
         if (!any) {
-          return Status::InvalidArgument(path + ".displacement",
-                                         "no component given: set at least one of x_mm, y_mm, z_mm");
+          return Status::InvalidArgument(
+              path + ".displacement", "no component given: set at least one of x_mm, y_mm, z_mm");
         }
         break;
       }
@@ -160,8 +164,9 @@ Status ValidateScene(const SceneSpec& scene) {
   for (std::size_t i = 0; i < scene.outputs.reaction_sets.size(); ++i) {
     const std::string& name = scene.outputs.reaction_sets[i];
     if (std::find(sets.begin(), sets.end(), name) == sets.end()) {
-      return Status::InvalidArgument("outputs.reaction_sets[" + std::to_string(i) + "]",
-                                     "unknown face set '" + name + "'; this geometry has: " + JoinNames(sets));
+      return Status::InvalidArgument(
+          "outputs.reaction_sets[" + std::to_string(i) + "]",
+          "unknown face set '" + name + "'; this geometry has: " + JoinNames(sets));
     }
   }
   return Status::Ok();

@@ -86,7 +86,8 @@ class CliServerTest : public ::testing::Test {
   }
 
   std::string SubmitLongJob() {
-    const RunResult submitted = Pba({"job", "submit", WriteScene("long.yaml", kLongScene).string()});
+    const RunResult submitted =
+        Pba({"job", "submit", WriteScene("long.yaml", kLongScene).string()});
     EXPECT_EQ(submitted.exit_code, 0) << submitted.err;
     const std::string id = JobId(submitted);
     EXPECT_TRUE(WaitForState(id, "RUNNING", seconds(30)));
@@ -216,14 +217,15 @@ TEST_F(CliServerTest, BadScenesAreRejectedAndNothingIsStored) {
   const RunResult list = Pba({"--json", "job", "list"});
   ASSERT_EQ(list.exit_code, 0) << list.err;
   EXPECT_EQ(list.out.find("\"id\""), std::string::npos) << "a rejected scene was stored:\n"
-                                                         << list.out;
+                                                        << list.out;
 }
 
 TEST_F(CliServerTest, UnknownJobIsNotFound) {
   const RunResult status = Pba({"job", "status", "jdoesnotexist"});
   EXPECT_EQ(status.exit_code, kNotFound);
   EXPECT_NE(status.err.find("jdoesnotexist"), std::string::npos) << status.err;
-  const RunResult fetch = Pba({"job", "fetch", "jdoesnotexist", "-o", (dir_.path() / "x").string()});
+  const RunResult fetch =
+      Pba({"job", "fetch", "jdoesnotexist", "-o", (dir_.path() / "x").string()});
   EXPECT_EQ(fetch.exit_code, kNotFound);
   EXPECT_FALSE(fs::exists(dir_.path() / "x"));
 }

@@ -31,7 +31,8 @@ class ExampleTest : public ::testing::TestWithParam<fs::path> {};
 TEST_P(ExampleTest, Solves) {
   TempDir dir;
   const fs::path out = dir.path() / "result";
-  const RunResult run = RunProcess({PBA_SOLVE_BIN, GetParam().string(), "--out", out.string(), "--progress", "json"});
+  const RunResult run =
+      RunProcess({PBA_SOLVE_BIN, GetParam().string(), "--out", out.string(), "--progress", "json"});
   ASSERT_EQ(run.exit_code, 0) << run.out << run.err;
   for (const char* name : {"result.h5", "result.xdmf", "summary.json"}) {
     EXPECT_TRUE(fs::exists(out / name)) << name;
@@ -62,11 +63,13 @@ INSTANTIATE_TEST_SUITE_P(Examples, ExampleTest, ::testing::ValuesIn(Examples()),
 TEST(PbaSolveTest, InvalidSceneExitsTwoAndWritesNothing) {
   TempDir dir;
   const fs::path scene = dir.path() / "bad.yaml";
-  std::ofstream(scene) << "geometry: {box: {size_mm: [10, 10, 10]}}\n"
-                          "material: {linear_elastic: {youngs_modulus_pa: 3000, poissons_ratio: 0.7}}\n"
-                          "boundary_conditions: [{set: bottom, fixed: {}}]\n";
+  std::ofstream(scene)
+      << "geometry: {box: {size_mm: [10, 10, 10]}}\n"
+         "material: {linear_elastic: {youngs_modulus_pa: 3000, poissons_ratio: 0.7}}\n"
+         "boundary_conditions: [{set: bottom, fixed: {}}]\n";
   const fs::path out = dir.path() / "result";
-  const RunResult run = RunProcess({PBA_SOLVE_BIN, scene.string(), "--out", out.string(), "--progress", "json"});
+  const RunResult run =
+      RunProcess({PBA_SOLVE_BIN, scene.string(), "--out", out.string(), "--progress", "json"});
   EXPECT_EQ(run.exit_code, 2);
   EXPECT_NE(run.err.find("material.linear_elastic.poissons_ratio"), std::string::npos) << run.err;
   EXPECT_NE(run.out.find("\"ERROR\""), std::string::npos) << run.out;
@@ -79,7 +82,8 @@ TEST(PbaSolveTest, UnknownFieldNamesPathAndLine) {
   TempDir dir;
   const fs::path scene = dir.path() / "typo.yaml";
   std::ofstream(scene) << "name: x\nmaterial:\n  linear_elastic:\n    young: 3000\n";
-  const RunResult run = RunProcess({PBA_SOLVE_BIN, scene.string(), "--out", (dir.path() / "r").string()});
+  const RunResult run =
+      RunProcess({PBA_SOLVE_BIN, scene.string(), "--out", (dir.path() / "r").string()});
   EXPECT_EQ(run.exit_code, 2);
   EXPECT_NE(run.err.find("typo.yaml:4"), std::string::npos) << run.err;
   EXPECT_NE(run.err.find("material.linear_elastic.young"), std::string::npos) << run.err;
@@ -88,9 +92,10 @@ TEST(PbaSolveTest, UnknownFieldNamesPathAndLine) {
 TEST(PbaSolveTest, SigtermStopsCleanlyAndWritesNothing) {
   TempDir dir;
   const fs::path scene = dir.path() / "long.yaml";
-  std::ofstream(scene) << "geometry: {box: {size_mm: [50, 50, 50]}}\nmesh: {element_size_mm: 1}\n"
-                          "material: {linear_elastic: {youngs_modulus_pa: 3000, poissons_ratio: 0.45}}\n"
-                          "boundary_conditions: [{set: bottom, fixed: {}}, {set: top, displacement: {z_mm: -1}}]\n";
+  std::ofstream(scene)
+      << "geometry: {box: {size_mm: [50, 50, 50]}}\nmesh: {element_size_mm: 1}\n"
+         "material: {linear_elastic: {youngs_modulus_pa: 3000, poissons_ratio: 0.45}}\n"
+         "boundary_conditions: [{set: bottom, fixed: {}}, {set: top, displacement: {z_mm: -1}}]\n";
   const fs::path out = dir.path() / "result";
   const pid_t pid = ::fork();
   if (pid == 0) {

@@ -101,8 +101,8 @@ bool ServerProcess::Start(std::string* log) {
     const int err = ::open(log_path().c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
     ::dup2(out, STDOUT_FILENO);
     ::dup2(err, STDERR_FILENO);
-    const std::vector<std::string> argv = {binary_.string(), "--data", data_dir_.string(), "--listen",
-                                           "127.0.0.1:0"};
+    const std::vector<std::string> argv = {binary_.string(), "--data", data_dir_.string(),
+                                           "--listen", "127.0.0.1:0"};
     auto args = CArgs(argv);
     ::execv(args[0], args.data());
     std::_Exit(127);

@@ -19,7 +19,7 @@ struct RunResult {
 
 // Runs `argv` to completion (killed after `timeout`), capturing stdout and stderr.
 RunResult RunProcess(const std::vector<std::string>& argv,
-              std::chrono::seconds timeout = std::chrono::seconds(120));
+                     std::chrono::seconds timeout = std::chrono::seconds(120));
 
 // A pba-server child on 127.0.0.1 with its own data directory.
 class ServerProcess {

@@ -12,7 +12,7 @@
 namespace pba {
 namespace {
 
-constexpr double kE = 3000.0;    // Pa
+constexpr double kE = 3000.0;  // Pa
 constexpr double kNu = 0.45;
 constexpr double kDisplacement = -0.2;  // mm, on a 20 mm bar: eps = -1 %
 // Exact in exact arithmetic; the bound allows for the rounding of a sparse
@@ -52,7 +52,8 @@ void ExpectUniaxial(const Solution& solution, double length_mm, double area_mm2)
     const double* s = &solution.stress_pa[6 * e];
     const double* strain = &solution.strain[6 * e];
     ASSERT_NEAR(s[2], sigma, kRelTol * std::abs(sigma)) << "element " << e;
-    for (int c : {0, 1, 3, 4, 5}) ASSERT_NEAR(s[c], 0.0, kRelTol * std::abs(sigma)) << "element " << e;
+    for (int c : {0, 1, 3, 4, 5})
+      ASSERT_NEAR(s[c], 0.0, kRelTol * std::abs(sigma)) << "element " << e;
     ASSERT_NEAR(strain[0], -kNu * eps, kRelTol * std::abs(eps));
     ASSERT_NEAR(strain[1], -kNu * eps, kRelTol * std::abs(eps));
     ASSERT_NEAR(solution.von_mises_pa[e], std::abs(sigma), kRelTol * std::abs(sigma));
@@ -64,7 +65,8 @@ void ExpectUniaxial(const Solution& solution, double length_mm, double area_mm2)
   EXPECT_NEAR(solution.summary.reactions[1].force_n[2], -force, kRelTol * std::abs(force));
   // Strain energy of a uniform field: sigma eps V / 2.
   const double volume = area_mm2 * length_mm * 1e-9;
-  EXPECT_NEAR(solution.summary.strain_energy_j, 0.5 * sigma * eps * volume, 1e-6 * std::abs(sigma * eps * volume));
+  EXPECT_NEAR(solution.summary.strain_energy_j, 0.5 * sigma * eps * volume,
+              1e-6 * std::abs(sigma * eps * volume));
   // A uniform stress is recovered exactly, so the estimated error vanishes.
   EXPECT_TRUE(solution.summary.error.estimated);
   EXPECT_LT(solution.summary.error.relative_error, 1e-6);
@@ -73,7 +75,8 @@ void ExpectUniaxial(const Solution& solution, double length_mm, double area_mm2)
 
 TEST(UniaxialBarTest, BoxWithCholmodIsExact) {
   Solution solution;
-  const Status status = SolveScene(BoxBar(AnalysisSpec::LinearSolver::kCholmod), SolveOptions(), &solution);
+  const Status status =
+      SolveScene(BoxBar(AnalysisSpec::LinearSolver::kCholmod), SolveOptions(), &solution);
   ASSERT_TRUE(status.ok()) << status.ToString();
   ExpectUniaxial(solution, 20, 100);
   EXPECT_EQ(solution.summary.linear_solver, "CHOLMOD supernodal Cholesky");
@@ -81,8 +84,10 @@ TEST(UniaxialBarTest, BoxWithCholmodIsExact) {
 
 TEST(UniaxialBarTest, EigenFallbackAgreesWithCholmod) {
   Solution cholmod, ldlt;
-  ASSERT_TRUE(SolveScene(BoxBar(AnalysisSpec::LinearSolver::kCholmod), SolveOptions(), &cholmod).ok());
-  ASSERT_TRUE(SolveScene(BoxBar(AnalysisSpec::LinearSolver::kEigenLdlt), SolveOptions(), &ldlt).ok());
+  ASSERT_TRUE(
+      SolveScene(BoxBar(AnalysisSpec::LinearSolver::kCholmod), SolveOptions(), &cholmod).ok());
+  ASSERT_TRUE(
+      SolveScene(BoxBar(AnalysisSpec::LinearSolver::kEigenLdlt), SolveOptions(), &ldlt).ok());
   ExpectUniaxial(ldlt, 20, 100);
   ASSERT_EQ(cholmod.displacement_mm.size(), ldlt.displacement_mm.size());
   for (std::size_t i = 0; i < ldlt.displacement_mm.size(); ++i) {
@@ -130,13 +135,15 @@ TEST(SolveSceneTest, ProgressIsMonotoneAndEndsNearOne) {
   Solution solution;
   ASSERT_TRUE(SolveScene(BoxBar(AnalysisSpec::LinearSolver::kCholmod), options, &solution).ok());
   ASSERT_GE(events.size(), 5u);
-  for (std::size_t i = 1; i < events.size(); ++i) EXPECT_GE(events[i].fraction, events[i - 1].fraction);
+  for (std::size_t i = 1; i < events.size(); ++i)
+    EXPECT_GE(events[i].fraction, events[i - 1].fraction);
   EXPECT_GE(events.back().fraction, 0.9);
   EXPECT_EQ(events.front().phase, "mesh");
   // Every phase is timed.
   std::vector<std::string> phases;
   for (const auto& p : solution.summary.phases) phases.push_back(p.phase);
-  EXPECT_EQ(phases, (std::vector<std::string>{"mesh", "assemble", "factorize", "solve", "recover", "estimate"}));
+  EXPECT_EQ(phases, (std::vector<std::string>{"mesh", "assemble", "factorize", "solve", "recover",
+                                              "estimate"}));
 }
 
 TEST(SolveSceneTest, CancelFlagStopsTheSolve) {

@@ -16,9 +16,9 @@
 namespace pba {
 
 struct ProgressEvent {
-  std::string phase;      // mesh, assemble, factorize, solve, estimate, write
-  double fraction = 0;    // of the whole solve, 0..1, non-decreasing
-  std::string message;    // for people
+  std::string phase;    // mesh, assemble, factorize, solve, estimate, write
+  double fraction = 0;  // of the whole solve, 0..1, non-decreasing
+  std::string message;  // for people
 };
 
 struct SolveOptions {
@@ -43,24 +43,24 @@ struct Reaction {
 
 struct ErrorEstimate {
   bool estimated = false;
-  std::string method;          // e.g. "Zienkiewicz-Zhu stress recovery"
-  double relative_error = 0;   // energy-norm relative error, fraction
-  std::string note;            // how to read it, or why it is not estimated
+  std::string method;         // e.g. "Zienkiewicz-Zhu stress recovery"
+  double relative_error = 0;  // energy-norm relative error, fraction
+  std::string note;           // how to read it, or why it is not estimated
 };
 
 // What a solve reports beside its fields. Mirrors pba.v1.Summary.
 struct Summary {
   std::string scene_name;
   // What was modelled.
-  std::string geometry;        // "box 10 x 10 x 20 mm"
-  std::string element_type;    // "TET4"
+  std::string geometry;      // "box 10 x 10 x 20 mm"
+  std::string element_type;  // "TET4"
   int64_t nodes = 0;
   int64_t elements = 0;
-  int64_t dofs = 0;            // free unknowns
+  int64_t dofs = 0;  // free unknowns
   int64_t constrained_dofs = 0;
-  std::string material;        // "tissue: linear elastic, E = 3000 Pa, nu = 0.45"
-  std::string analysis;        // "linear static (small strain)"
-  std::string linear_solver;   // "CHOLMOD supernodal Cholesky"
+  std::string material;       // "tissue: linear elastic, E = 3000 Pa, nu = 0.45"
+  std::string analysis;       // "linear static (small strain)"
+  std::string linear_solver;  // "CHOLMOD supernodal Cholesky"
   std::vector<std::string> notes;
   // Key results.
   double max_displacement_mm = 0;
@@ -85,8 +85,8 @@ struct Solution {
   // Nodal displacement [mm], nodes x 3.
   std::vector<double> displacement_mm;
   // Per element, Voigt order xx yy zz yz xz xy (engineering shear strain).
-  std::vector<double> stress_pa;   // elements x 6 [Pa]
-  std::vector<double> strain;      // elements x 6 [-]
+  std::vector<double> stress_pa;     // elements x 6 [Pa]
+  std::vector<double> strain;        // elements x 6 [-]
   std::vector<double> von_mises_pa;  // elements [Pa]
   // Element-wise estimated error share (ZZ), elements; empty if not estimated.
   std::vector<double> error_indicator;
@@ -102,7 +102,8 @@ Status SolveScene(const SceneSpec& scene, const SolveOptions& options, Solution*
 // ParaView view of result.h5) into the existing directory `dir`, and appends
 // the write phase to solution.summary. Fields not requested in
 // `scene.outputs` are left out.
-Status WriteResultFiles(const SceneSpec& scene, Solution* solution, const std::filesystem::path& dir);
+Status WriteResultFiles(const SceneSpec& scene, Solution* solution,
+                        const std::filesystem::path& dir);
 
 // Version string of the solver library, e.g. "0.1.0".
 const char* SolverVersion();

@@ -27,10 +27,16 @@ class Status {
   static Status FailedPrecondition(std::string message) {
     return Status(Code::kFailedPrecondition, std::move(message));
   }
-  static Status Numerical(std::string message) { return Status(Code::kNumerical, std::move(message)); }
+  static Status Numerical(std::string message) {
+    return Status(Code::kNumerical, std::move(message));
+  }
   static Status Io(std::string message) { return Status(Code::kIo, std::move(message)); }
-  static Status Cancelled(std::string message) { return Status(Code::kCancelled, std::move(message)); }
-  static Status Internal(std::string message) { return Status(Code::kInternal, std::move(message)); }
+  static Status Cancelled(std::string message) {
+    return Status(Code::kCancelled, std::move(message));
+  }
+  static Status Internal(std::string message) {
+    return Status(Code::kInternal, std::move(message));
+  }
 
   bool ok() const { return code_ == Code::kOk; }
   Code code() const { return code_; }
@@ -50,9 +56,9 @@ class Status {
 };
 
 // Returns early from the enclosing function when `expr` is not ok.
-#define PBA_RETURN_IF_ERROR(expr)        \
-  do {                                   \
-    ::pba::Status pba_status_ = (expr);  \
+#define PBA_RETURN_IF_ERROR(expr)              \
+  do {                                         \
+    ::pba::Status pba_status_ = (expr);        \
     if (!pba_status_.ok()) return pba_status_; \
   } while (false)
 

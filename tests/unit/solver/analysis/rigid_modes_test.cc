@@ -17,7 +17,8 @@ Mesh Box() {
   return BuildPrimitiveMesh(g, options, &stats);
 }
 
-void HoldSet(const Mesh& mesh, const std::string& set, std::initializer_list<int> components, DofMap* dofs) {
+void HoldSet(const Mesh& mesh, const std::string& set, std::initializer_list<int> components,
+             DofMap* dofs) {
   for (int node : mesh.face_sets.at(set).nodes) {
     for (int c : components) dofs->Prescribe(node, c, 0.0);
   }

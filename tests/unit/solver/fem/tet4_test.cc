@@ -77,8 +77,8 @@ TEST(Tet4Test, LinearFieldGivesExactStrain) {
   for (int a = 0; a < 4; ++a) u.segment<3>(3 * a) = grad_u * x.row(a).transpose();
   const Vector6d strain = StrainDisplacement(ComputeTet4Geometry(x)) * u;
   Vector6d expected;
-  expected << grad_u(0, 0), grad_u(1, 1), grad_u(2, 2), grad_u(1, 2) + grad_u(2, 1), grad_u(0, 2) + grad_u(2, 0),
-      grad_u(0, 1) + grad_u(1, 0);
+  expected << grad_u(0, 0), grad_u(1, 1), grad_u(2, 2), grad_u(1, 2) + grad_u(2, 1),
+      grad_u(0, 2) + grad_u(2, 0), grad_u(0, 1) + grad_u(1, 0);
   EXPECT_LT((strain - expected).norm(), 1e-14);
 }
 

@@ -96,7 +96,8 @@ TEST_F(ResultWriterTest, WritesFieldsWithUnitsAndAnXdmfThatPointsAtThem) {
   const std::string text = xdmf.str();
   const std::regex reference("result\\.h5:(/[a-z_/]+)");
   int references = 0;
-  for (auto it = std::sregex_iterator(text.begin(), text.end(), reference); it != std::sregex_iterator(); ++it) {
+  for (auto it = std::sregex_iterator(text.begin(), text.end(), reference);
+       it != std::sregex_iterator(); ++it) {
     EXPECT_FALSE(Dims(file, (*it)[1].str().c_str()).empty()) << (*it)[1].str();
     ++references;
   }

@@ -49,12 +49,12 @@ TEST_P(ValidateSceneTest, NamesTheField) {
 INSTANTIATE_TEST_SUITE_P(
     Cases, ValidateSceneTest,
     ::testing::Values(
-        Case{"no_geometry", [](SceneSpec* s) { s->geometry.kind = GeometrySpec::Kind::kNone; }, "geometry",
-             "no shape"},
-        Case{"zero_box_edge", [](SceneSpec* s) { s->geometry.box.size_mm[1] = 0; }, "geometry.box.size_mm",
-             "positive"},
-        Case{"nan_box_edge", [](SceneSpec* s) { s->geometry.box.size_mm[0] = NAN; }, "geometry.box.size_mm",
-             "positive"},
+        Case{"no_geometry", [](SceneSpec* s) { s->geometry.kind = GeometrySpec::Kind::kNone; },
+             "geometry", "no shape"},
+        Case{"zero_box_edge", [](SceneSpec* s) { s->geometry.box.size_mm[1] = 0; },
+             "geometry.box.size_mm", "positive"},
+        Case{"nan_box_edge", [](SceneSpec* s) { s->geometry.box.size_mm[0] = NAN; },
+             "geometry.box.size_mm", "positive"},
         Case{"negative_radius",
              [](SceneSpec* s) {
                s->geometry.kind = GeometrySpec::Kind::kCylinder;
@@ -67,30 +67,34 @@ INSTANTIATE_TEST_SUITE_P(
                s->geometry.cylinder = {5, 0};
              },
              "geometry.cylinder.height_mm", "positive"},
-        Case{"negative_size", [](SceneSpec* s) { s->mesh.element_size_mm = -1; }, "mesh.element_size_mm",
-             "positive"},
-        Case{"too_many_elements", [](SceneSpec* s) { s->mesh.element_size_mm = 0.01; }, "mesh.element_size_mm",
-             "more than the limit"},
-        Case{"no_material", [](SceneSpec* s) { s->material.kind = MaterialSpec::Kind::kNone; }, "material",
-             "no material"},
+        Case{"negative_size", [](SceneSpec* s) { s->mesh.element_size_mm = -1; },
+             "mesh.element_size_mm", "positive"},
+        Case{"too_many_elements", [](SceneSpec* s) { s->mesh.element_size_mm = 0.01; },
+             "mesh.element_size_mm", "more than the limit"},
+        Case{"no_material", [](SceneSpec* s) { s->material.kind = MaterialSpec::Kind::kNone; },
+             "material", "no material"},
         Case{"negative_e", [](SceneSpec* s) { s->material.linear_elastic.youngs_modulus_pa = -5; },
              "material.linear_elastic.youngs_modulus_pa", "positive"},
         Case{"nu_half", [](SceneSpec* s) { s->material.linear_elastic.poissons_ratio = 0.5; },
              "material.linear_elastic.poissons_ratio", "hyperelastic"},
         Case{"nu_too_low", [](SceneSpec* s) { s->material.linear_elastic.poissons_ratio = -1; },
              "material.linear_elastic.poissons_ratio", "(-1, 0.5)"},
-        Case{"no_conditions", [](SceneSpec* s) { s->boundary_conditions.clear(); }, "boundary_conditions",
-             "free to move"},
+        Case{"no_conditions", [](SceneSpec* s) { s->boundary_conditions.clear(); },
+             "boundary_conditions", "free to move"},
         Case{"unknown_set", [](SceneSpec* s) { s->boundary_conditions[1].set = "lid"; },
              "boundary_conditions[1].set", "x_min"},
         Case{"cylinder_set_on_box", [](SceneSpec* s) { s->boundary_conditions[0].set = "side"; },
              "boundary_conditions[0].set", "unknown face set"},
         Case{"no_kind",
-             [](SceneSpec* s) { s->boundary_conditions[1].kind = BoundaryConditionSpec::Kind::kNone; },
+             [](SceneSpec* s) {
+               s->boundary_conditions[1].kind = BoundaryConditionSpec::Kind::kNone;
+             },
              "boundary_conditions[1]", "no condition"},
-        Case{"no_component", [](SceneSpec* s) { s->boundary_conditions[1].displacement_mm[2].reset(); },
+        Case{"no_component",
+             [](SceneSpec* s) { s->boundary_conditions[1].displacement_mm[2].reset(); },
              "boundary_conditions[1].displacement", "no component"},
-        Case{"infinite_component", [](SceneSpec* s) { s->boundary_conditions[1].displacement_mm[2] = INFINITY; },
+        Case{"infinite_component",
+             [](SceneSpec* s) { s->boundary_conditions[1].displacement_mm[2] = INFINITY; },
              "boundary_conditions[1].displacement.z_mm", "finite"},
         Case{"direction_free",
              [](SceneSpec* s) {
@@ -98,7 +102,10 @@ INSTANTIATE_TEST_SUITE_P(
                s->boundary_conditions[0].displacement_mm = {0.0, std::nullopt, 0.0};
              },
              "boundary_conditions", "direction y"},
-        Case{"bad_reaction_set", [](SceneSpec* s) { s->outputs.reaction_sets = {"top", "roof"}; },
+        Case{"bad_reaction_set",
+             [](SceneSpec* s) {
+               s->outputs.reaction_sets = {"top", "roof"};
+             },
              "outputs.reaction_sets[1]", "roof"}),
     [](const ::testing::TestParamInfo<Case>& info) { return std::string(info.param.label); });
 
