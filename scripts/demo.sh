@@ -8,6 +8,9 @@ set -euo pipefail
 
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 build=${PBA_BUILD_DIR:-$root/build/release}
+# ccache keys on paths relative to the checkout, so a fresh clone reuses
+# what an earlier one compiled.
+export CCACHE_BASEDIR=$root
 scene=${1:-$root/examples/quickstart.yaml}
 result_dir=$root/out/$(basename "${scene%.*}")
 
