@@ -1,6 +1,5 @@
 #include "commands/job_commands.h"
 
-#include <google/protobuf/util/json_util.h>
 #include <openssl/evp.h>
 #include <unistd.h>
 
@@ -86,11 +85,7 @@ int Follow(Connection& connection, const std::string& id, v1::Job::State* final_
   *final_state = v1::Job::STATE_UNSPECIFIED;
   while (reader->Read(&event)) {
     if (connection.options().json) {
-      google::protobuf::util::JsonPrintOptions options;
-      options.preserve_proto_field_names = true;
-      std::string line;
-      (void)google::protobuf::util::MessageToJsonString(event, &line, options);
-      std::puts(line.c_str());
+      std::puts(codec::ToJsonLine(event).c_str());
       std::fflush(stdout);
     } else {
       display.Show(event);

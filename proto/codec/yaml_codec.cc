@@ -320,13 +320,22 @@ bool ReadYamlFile(const std::filesystem::path& path, Message* message, ParseErro
   return true;
 }
 
-std::string ToJson(const Message& message) {
+namespace {
+
+std::string PrintJson(const Message& message, bool indented) {
   google::protobuf::util::JsonPrintOptions options;
-  options.add_whitespace = true;
+  options.add_whitespace = indented;
   options.preserve_proto_field_names = true;
   std::string out;
+  // Printing a well-formed message cannot fail.
   (void)google::protobuf::util::MessageToJsonString(message, &out, options);
   return out;
 }
+
+}  // namespace
+
+std::string ToJson(const Message& message) { return PrintJson(message, true); }
+
+std::string ToJsonLine(const Message& message) { return PrintJson(message, false); }
 
 }  // namespace pba::codec

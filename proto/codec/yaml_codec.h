@@ -33,7 +33,9 @@ bool ParseYaml(std::string_view text, google::protobuf::Message* message, ParseE
 bool ReadYamlFile(const std::filesystem::path& path, google::protobuf::Message* message,
                   ParseError* error);
 
-// Proto3 JSON with proto field names and two-space indentation.
+// Proto3 JSON with proto field names: indented for files and people, or on
+// one line (for line protocols such as pba-solve's progress events).
 std::string ToJson(const google::protobuf::Message& message);
+std::string ToJsonLine(const google::protobuf::Message& message);
 
 }  // namespace pba::codec

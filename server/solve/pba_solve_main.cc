@@ -6,7 +6,6 @@
 // down or the scene cannot be solved as posed; 4 I/O error; 5 cancelled
 // (SIGTERM/SIGINT); 1 internal error.
 
-#include <google/protobuf/util/json_util.h>
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
@@ -125,11 +124,7 @@ class Reporter {
   }
 
   static void Emit(const v1::SolveEvent& event) {
-    google::protobuf::util::JsonPrintOptions options;
-    options.preserve_proto_field_names = true;
-    std::string line;
-    (void)google::protobuf::util::MessageToJsonString(event, &line, options);
-    std::printf("%s\n", line.c_str());
+    std::printf("%s\n", codec::ToJsonLine(event).c_str());
     std::fflush(stdout);
   }
 

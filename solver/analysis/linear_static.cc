@@ -62,12 +62,6 @@ std::vector<std::string> ReactionSets(const SceneSpec& scene) {
   return out;
 }
 
-Eigen::Matrix<double, 4, 3> Corners(const Mesh& mesh, int e) {
-  Eigen::Matrix<double, 4, 3> x;
-  for (int a = 0; a < 4; ++a) x.row(a) = mesh.nodes.row(mesh.tets[e][a]);
-  return x;
-}
-
 }  // namespace
 
 const char* SolverVersion() { return PBA_VERSION; }
@@ -143,7 +137,7 @@ Status SolveScene(const SceneSpec& scene, const SolveOptions& options, Solution*
 #pragma omp parallel for reduction(+ : energy) reduction(max : max_strain) schedule(static)
     for (std::size_t k = 0; k < colour.size(); ++k) {
       const int e = colour[k];
-      const Tet4Geometry g = ComputeTet4Geometry(Corners(mesh, e));
+      const Tet4Geometry g = ComputeTet4Geometry(TetCorners(mesh, e));
       const BMatrix b = StrainDisplacement(g);
       const Vector6d strain = b * GatherElement(mesh, e, u);
       const Vector6d stress = d * strain;

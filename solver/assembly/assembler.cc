@@ -8,12 +8,6 @@ namespace {
 
 constexpr int kMaxColours = 256;
 
-Eigen::Matrix<double, 4, 3> Corners(const Mesh& mesh, int e) {
-  Eigen::Matrix<double, 4, 3> x;
-  for (int a = 0; a < 4; ++a) x.row(a) = mesh.nodes.row(mesh.tets[e][a]);
-  return x;
-}
-
 // Compressed-column pattern of K_ff: the free unknowns of every node pair that
 // shares an element.
 struct Pattern {
@@ -98,7 +92,7 @@ Status AssembleLinearSystem(const Mesh& mesh, const Matrix6d& d, const DofMap& d
 #pragma omp parallel for schedule(static) if (!serial)
     for (std::size_t k = 0; k < elements.size(); ++k) {
       const int e = elements[k];
-      const Matrix12d ke = Tet4Stiffness(ComputeTet4Geometry(Corners(mesh, e)), d);
+      const Matrix12d ke = Tet4Stiffness(ComputeTet4Geometry(TetCorners(mesh, e)), d);
       int free[12];
       double up[12];
       for (int a = 0; a < 4; ++a) {

@@ -4,6 +4,12 @@
 
 namespace pba {
 
+Eigen::Matrix<double, 4, 3> TetCorners(const Mesh& mesh, int e) {
+  Eigen::Matrix<double, 4, 3> x;
+  for (int a = 0; a < 4; ++a) x.row(a) = mesh.nodes.row(mesh.tets[e][a]);
+  return x;
+}
+
 double FaceSetArea(const Mesh& mesh, const FaceSet& set) {
   double area = 0;
   for (const auto& t : set.triangles) {

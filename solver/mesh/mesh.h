@@ -28,6 +28,9 @@ struct Mesh {
   int num_elements() const { return static_cast<int>(tets.size()); }
 };
 
+// Corner coordinates of tetrahedron `e`, one row per node [m].
+Eigen::Matrix<double, 4, 3> TetCorners(const Mesh& mesh, int e);
+
 // Total area of a face set [m^2].
 double FaceSetArea(const Mesh& mesh, const FaceSet& set);
 

@@ -16,9 +16,7 @@ double TotalVolume(const Mesh& mesh, double* min_volume) {
   double total = 0;
   *min_volume = INFINITY;
   for (int e = 0; e < mesh.num_elements(); ++e) {
-    Eigen::Matrix<double, 4, 3> x;
-    for (int a = 0; a < 4; ++a) x.row(a) = mesh.nodes.row(mesh.tets[e][a]);
-    const double v = ComputeTet4Geometry(x).volume;
+    const double v = ComputeTet4Geometry(TetCorners(mesh, e)).volume;
     total += v;
     *min_volume = std::min(*min_volume, v);
   }
