@@ -335,9 +335,10 @@ int FetchJob(Connection& connection, const FetchArgs& args) {
     PrintJson(job);
     return kExitOk;
   }
-  std::printf("Downloaded %d file(s) of job %s into %s\n", job.result_files_size(), args.id.c_str(),
+  std::printf("Downloaded %d file(s) of job %s into %s:", job.result_files_size(), args.id.c_str(),
               dir.c_str());
-  if (job.has_summary()) std::printf("\n%s", codec::FormatSummary(job.summary()).c_str());
+  for (const auto& file : job.result_files()) std::printf(" %s", file.name().c_str());
+  std::printf("\n(the summary is in summary.json, and in `pba job status %s`)\n", args.id.c_str());
   std::printf(
       "\nOpen %s in ParaView (File > Open, pick the XDMF reader) to see the displacement, stress "
       "and von Mises fields.\n",
