@@ -63,6 +63,7 @@ class Parser {
     const Reflection* reflection = message->GetReflection();
     std::vector<const OneofDescriptor*> seen_oneofs;
     std::vector<std::string> seen_oneof_fields;
+    std::vector<const FieldDescriptor*> seen_fields;
     for (const auto& entry : node) {
       const YAML::Node& key = entry.first;
       if (!key.IsScalar()) return Fail(key, path, "a field name must be a plain word");
@@ -77,6 +78,10 @@ class Parser {
         return Fail(key, field_path,
                     "unknown field '" + name + "' (expected one of: " + Join(names) + ")");
       }
+      if (std::find(seen_fields.begin(), seen_fields.end(), field) != seen_fields.end()) {
+        return Fail(key, field_path, "'" + name + "' is given twice");
+      }
+      seen_fields.push_back(field);
       if (const OneofDescriptor* oneof = field->real_containing_oneof()) {
         auto it = std::find(seen_oneofs.begin(), seen_oneofs.end(), oneof);
         if (it != seen_oneofs.end()) {

@@ -277,7 +277,7 @@ TEST_F(CliServerTest, RunningJobIsRequeuedAfterServerCrash) {
               status.out.find("\"state\": \"RUNNING\"") != std::string::npos)
       << status.out;
   ASSERT_TRUE(WaitForState(id, "RUNNING", seconds(30)));
-  const RunResult watch = Pba({"job", "watch", id}, seconds(5));  // cut short: it is still running
+  const RunResult watch = Pba({"job", "watch", id}, seconds(2));  // cut short: it is still running
   EXPECT_NE(watch.out.find("re-queued"), std::string::npos) << watch.out;
   EXPECT_EQ(Pba({"job", "cancel", id}).exit_code, 0);
   EXPECT_TRUE(WaitForState(id, "CANCELLED", seconds(30)));

@@ -99,7 +99,8 @@ INSTANTIATE_TEST_SUITE_P(
                 "expected one of: LINEAR_STATIC", 2},
         BadCase{"two_oneof", "geometry:\n  box: {size_mm: [1, 1, 1]}\n  cylinder: {radius_mm: 1}\n",
                 "geometry.cylinder", "only one of the shape choices", 3},
-        BadCase{"scalar_for_message", "mesh: 3\n", "mesh", "expected a mapping", 1}),
+        BadCase{"scalar_for_message", "mesh: 3\n", "mesh", "expected a mapping", 1},
+        BadCase{"duplicate_key", "name: a\nmesh: {}\nname: b\n", "name", "given twice", 3}),
     [](const ::testing::TestParamInfo<BadCase>& info) { return std::string(info.param.label); });
 
 TEST(YamlCodecTest, SyntaxErrorGivesLine) {
