@@ -11,6 +11,7 @@ packages=(
   libsqlite3-dev
   libyaml-cpp-dev libcli11-dev libspdlog-dev libfmt-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  calculix-ccx
   libssl-dev
 )
 

@@ -139,7 +139,8 @@ Status WriteText(const std::filesystem::path& path, const std::string& text) {
   return Status::Ok();
 }
 
-int Run(const std::string& scene_path, const std::string& out_dir, ProgressMode mode, int threads) {
+int Run(const std::string& scene_path, const std::string& out_dir, const std::string& inp_path,
+        ProgressMode mode, int threads) {
   Reporter reporter(mode);
 
   v1::Scene scene;
@@ -151,6 +152,13 @@ int Run(const std::string& scene_path, const std::string& out_dir, ProgressMode 
   Status status = SceneFromProto(scene, &spec);
   if (status.ok()) status = ValidateScene(spec);
   if (!status.ok()) return reporter.Error(status);
+  if (!inp_path.empty()) {
+    status = ExportAbaqusInput(spec, inp_path);
+    if (!status.ok()) return reporter.Error(status);
+    std::fprintf(stderr, "pba-solve: wrote %s (run it in CalculiX with: ccx -i %s)\n",
+                 inp_path.c_str(), std::filesystem::path(inp_path).replace_extension().c_str());
+    if (out_dir.empty()) return kExitOk;
+  }
 
   SolveOptions options;
   options.threads = threads;
@@ -190,9 +198,12 @@ int main(int argc, char** argv) {
   int threads = 0;
   app.add_option("scene", scene_path, "Scene file (YAML or JSON, see docs/scene-reference.md)")
       ->required();
+  std::string inp_path;
   app.add_option("-o,--out", out_dir,
-                 "Result directory (created; an older result there is replaced)")
-      ->required();
+                 "Result directory (created; an older result there is replaced)");
+  app.add_option("--export-inp", inp_path,
+                 "Write the model as an Abaqus input deck that CalculiX runs (SI units); "
+                 "without --out, export only");
   app.add_option("--progress", progress,
                  "Progress on stdout: json (one pba.v1.SolveEvent per line), text, none, or auto "
                  "(text on a terminal, json otherwise)")
@@ -216,7 +227,12 @@ int main(int argc, char** argv) {
     mode = pba::ProgressMode::kNone;
   }
   try {
-    return pba::Run(scene_path, out_dir, mode, threads);
+    if (out_dir.empty() && inp_path.empty()) {
+      std::fprintf(stderr,
+                   "pba-solve: --out DIR is required (or --export-inp FILE to export only)\n");
+      return pba::kExitInvalid;
+    }
+    return pba::Run(scene_path, out_dir, inp_path, mode, threads);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "pba-solve: internal error: %s\n", e.what());
     return pba::kExitInternal;

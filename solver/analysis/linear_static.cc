@@ -14,6 +14,7 @@
 #include "material/linear_elastic.h"
 #include "mesh/primitive_mesher.h"
 #include "pba/solve.h"
+#include "scene/model_builder.h"
 
 namespace pba {
 namespace {
@@ -36,32 +37,6 @@ std::string DescribeGeometry(const GeometrySpec& g) {
   return Format("cylinder r = %g mm, h = %g mm", g.cylinder.radius_mm, g.cylinder.height_mm);
 }
 
-DofMap ApplyBoundaryConditions(const SceneSpec& scene, const Mesh& mesh) {
-  DofMap dofs(mesh.num_nodes());
-  for (const BoundaryConditionSpec& bc : scene.boundary_conditions) {
-    for (int node : mesh.face_sets.at(bc.set).nodes) {
-      for (int c = 0; c < 3; ++c) {
-        if (bc.kind == BoundaryConditionSpec::Kind::kFixed) {
-          dofs.Prescribe(node, c, 0.0);
-        } else if (bc.displacement_mm[c]) {
-          dofs.Prescribe(node, c, *bc.displacement_mm[c] * kMm);
-        }
-      }
-    }
-  }
-  dofs.Finalize();
-  return dofs;
-}
-
-std::vector<std::string> ReactionSets(const SceneSpec& scene) {
-  if (!scene.outputs.reaction_sets.empty()) return scene.outputs.reaction_sets;
-  std::vector<std::string> out;
-  for (const auto& bc : scene.boundary_conditions) {
-    if (std::find(out.begin(), out.end(), bc.set) == out.end()) out.push_back(bc.set);
-  }
-  return out;
-}
-
 }  // namespace
 
 const char* SolverVersion() { return PBA_VERSION; }
@@ -77,9 +52,9 @@ Status SolveScene(const SceneSpec& scene, const SolveOptions& options, Solution*
   };
 
   clock.Begin("mesh", 0.0, 0.05, "meshing the " + DescribeGeometry(scene.geometry));
-  MeshStats stats;
-  const Mesh mesh = BuildPrimitiveMesh(scene.geometry, scene.mesh, &stats);
-  const DofMap dofs = ApplyBoundaryConditions(scene, mesh);
+  const Model model = BuildModel(scene);
+  const Mesh& mesh = model.mesh;
+  const DofMap& dofs = model.dofs;
   const std::string free_modes = DescribeFreeRigidModes(mesh, dofs);
   if (!free_modes.empty()) {
     return Status::FailedPrecondition("the boundary conditions leave the body free to move: " +
@@ -152,7 +127,7 @@ Status SolveScene(const SceneSpec& scene, const SolveOptions& options, Solution*
         internal.segment<3>(3 * mesh.tets[e][a]) += force.segment<3>(3 * a);
     }
   }
-  for (const std::string& name : ReactionSets(scene)) {
+  for (const std::string& name : ReactionSetNames(scene)) {
     Reaction reaction{name, {0, 0, 0}};
     for (int node : mesh.face_sets.at(name).nodes) {
       for (int c = 0; c < 3; ++c) reaction.force_n[c] += internal(3 * node + c);
@@ -207,7 +182,7 @@ Status SolveScene(const SceneSpec& scene, const SolveOptions& options, Solution*
   summary.analysis = "linear static (small strain)";
   summary.linear_solver = solver->Name();
   summary.notes.push_back(
-      "mesh: " + stats.description +
+      "mesh: " + model.mesh_description +
       Format(" (element size %g mm)", EffectiveElementSize(scene.geometry, scene.mesh)));
   if (max_strain > kSmallStrainLimit) {
     summary.notes.push_back(

@@ -115,5 +115,30 @@ TEST(PbaSolveTest, SigtermStopsCleanlyAndWritesNothing) {
       << "a partial result was left behind";
 }
 
+TEST(PbaSolveTest, ExportOnlyWritesAnAbaqusDeck) {
+  TempDir dir;
+  const fs::path inp = dir.path() / "model.inp";
+  const RunResult run =
+      RunProcess({PBA_SOLVE_BIN, std::string(PBA_EXAMPLES_DIR) + "/quickstart.yaml", "--export-inp",
+                  inp.string()});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  std::ifstream in(inp);
+  std::stringstream text;
+  text << in.rdbuf();
+  for (const char* keyword : {"*NODE, NSET=NALL", "*ELEMENT, TYPE=C3D4", "*NSET, NSET=TOP",
+                              "*ELASTIC", "*BOUNDARY", "*END STEP"}) {
+    EXPECT_NE(text.str().find(keyword), std::string::npos) << keyword;
+  }
+  // Nothing but the deck was written.
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir.path()), fs::directory_iterator()), 1);
+}
+
+TEST(PbaSolveTest, NeitherOutNorExportIsAUsageError) {
+  const RunResult run =
+      RunProcess({PBA_SOLVE_BIN, std::string(PBA_EXAMPLES_DIR) + "/quickstart.yaml"});
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_NE(run.err.find("--out"), std::string::npos) << run.err;
+}
+
 }  // namespace
 }  // namespace pba::testing

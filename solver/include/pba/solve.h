@@ -105,6 +105,12 @@ Status SolveScene(const SceneSpec& scene, const SolveOptions& options, Solution*
 Status WriteResultFiles(const SceneSpec& scene, Solution* solution,
                         const std::filesystem::path& dir);
 
+// Writes the scene's model (mesh, node sets named as the face sets, material,
+// resolved constraints, one static step printing reactions and
+// displacements) as an Abaqus input deck that CalculiX runs (`ccx -i NAME`).
+// SI units. Returns kInvalidArgument for a bad scene, kIo if it cannot write.
+Status ExportAbaqusInput(const SceneSpec& scene, const std::filesystem::path& file);
+
 // Version string of the solver library, e.g. "0.1.0".
 const char* SolverVersion();
 

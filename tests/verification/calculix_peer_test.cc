@@ -1,0 +1,187 @@
+// Peer check: the same meshed model, exported as an Abaqus deck, solved by
+// CalculiX (Debian package calculix-ccx, installed by scripts/deps.sh). Same
+// mesh, same element (C3D4), same constraints: the answers must agree to the
+// precision CalculiX prints (7 significant digits). Each case prints a row of
+// the speed-beside-error table in docs/validation.md.
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include "integration/subprocess.h"
+#include "pba/solve.h"
+
+namespace pba {
+namespace {
+namespace fs = std::filesystem;
+using testing::RunProcess;
+using testing::TempDir;
+
+// CalculiX prints 7 significant digits.
+constexpr double kPrintPrecision = 5e-6;
+
+std::string FindCcx() {
+  const char* path = std::getenv("PATH");
+  std::stringstream dirs(path ? path : "/usr/bin");
+  std::string dir;
+  while (std::getline(dirs, dir, ':')) {
+    if (fs::exists(fs::path(dir) / "ccx")) return (fs::path(dir) / "ccx").string();
+  }
+  return "";
+}
+
+struct CcxResult {
+  std::map<std::string, std::array<double, 3>> totals;  // set name (upper case) -> force [N]
+  std::map<int, std::array<double, 3>> displacement;    // node number -> u [m]
+};
+
+// Reads the "total force" and "displacements" blocks of a CalculiX .dat file.
+CcxResult ParseDat(const fs::path& dat) {
+  CcxResult result;
+  std::ifstream in(dat);
+  std::string line;
+  enum { kNone, kTotal, kDisplacement } block = kNone;
+  std::string set;
+  while (std::getline(in, line)) {
+    if (line.find("total force (fx,fy,fz) for set") != std::string::npos) {
+      std::istringstream words(line.substr(line.find("set") + 4));
+      words >> set;
+      block = kTotal;
+      continue;
+    }
+    if (line.find("displacements (vx,vy,vz) for set") != std::string::npos) {
+      block = kDisplacement;
+      continue;
+    }
+    std::istringstream values(line);
+    if (block == kTotal) {
+      std::array<double, 3> f;
+      if (values >> f[0] >> f[1] >> f[2]) {
+        result.totals[set] = f;
+        block = kNone;
+      }
+    } else if (block == kDisplacement) {
+      int node;
+      std::array<double, 3> u;
+      if (values >> node >> u[0] >> u[1] >> u[2]) result.displacement[node] = u;
+    }
+  }
+  return result;
+}
+
+std::string Upper(std::string s) {
+  for (char& c : s) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  return s;
+}
+
+BoundaryConditionSpec Condition(const std::string& set, BoundaryConditionSpec::Kind kind,
+                                std::array<std::optional<double>, 3> value = {}) {
+  BoundaryConditionSpec bc;
+  bc.set = set;
+  bc.kind = kind;
+  bc.displacement_mm = value;
+  return bc;
+}
+
+SceneSpec Scene(const std::string& name, GeometrySpec geometry, double h,
+                std::vector<BoundaryConditionSpec> conditions) {
+  SceneSpec s;
+  s.name = name;
+  s.geometry = geometry;
+  s.mesh.element_size_mm = h;
+  s.material.kind = MaterialSpec::Kind::kLinearElastic;
+  s.material.linear_elastic = {3000, 0.45};
+  s.boundary_conditions = std::move(conditions);
+  return s;
+}
+
+std::vector<SceneSpec> Cases() {
+  using K = BoundaryConditionSpec::Kind;
+  GeometrySpec box;
+  box.kind = GeometrySpec::Kind::kBox;
+  box.box.size_mm = {20, 20, 30};
+  GeometrySpec cylinder;
+  cylinder.kind = GeometrySpec::Kind::kCylinder;
+  cylinder.cylinder = {10, 20};
+  return {
+      Scene("block, bottom fixed, top pressed 1.5 mm", box, 2,
+            {Condition("bottom", K::kFixed), Condition("top", K::kDisplacement, {0.0, 0.0, -1.5})}),
+      Scene("block, rollers, top pulled 0.3 mm", box, 2.5,
+            {Condition("bottom", K::kDisplacement, {std::nullopt, std::nullopt, 0.0}),
+             Condition("x_min", K::kDisplacement, {0.0, std::nullopt, std::nullopt}),
+             Condition("y_min", K::kDisplacement, {std::nullopt, 0.0, std::nullopt}),
+             Condition("top", K::kDisplacement, {std::nullopt, std::nullopt, 0.3})}),
+      Scene("cylinder, bottom fixed, top pressed 1 mm", cylinder, 1.5,
+            {Condition("bottom", K::kFixed),
+             Condition("top", K::kDisplacement, {std::nullopt, std::nullopt, -1.0})}),
+  };
+}
+
+class CalculixPeerTest : public ::testing::TestWithParam<SceneSpec> {};
+
+TEST_P(CalculixPeerTest, SameModelSameAnswer) {
+  const std::string ccx = FindCcx();
+  ASSERT_FALSE(ccx.empty()) << "CalculiX (ccx) not found; scripts/deps.sh installs calculix-ccx";
+  const SceneSpec& scene = GetParam();
+  Solution ours;
+  const Status solved = SolveScene(scene, SolveOptions(), &ours);
+  ASSERT_TRUE(solved.ok()) << solved.ToString();
+
+  TempDir dir;
+  ASSERT_TRUE(ExportAbaqusInput(scene, dir.path() / "model.inp").ok());
+  const auto start = std::chrono::steady_clock::now();
+  // ccx writes next to its input; run it from a shell in that folder.
+  const auto run = RunProcess(
+      {"/bin/sh", "-c",
+       "cd '" + dir.path().string() + "' && OMP_NUM_THREADS=2 exec '" + ccx + "' -i model"},
+      std::chrono::seconds(300));
+  const double ccx_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  ASSERT_EQ(run.exit_code, 0) << run.out << run.err;
+  const CcxResult peer = ParseDat(dir.path() / "model.dat");
+
+  // Compared against the largest reaction: a set that only rolls carries
+  // rounding noise, not a force.
+  double scale = 0;
+  for (const Reaction& r : ours.summary.reactions) {
+    for (double f : r.force_n) scale = std::max(scale, std::abs(f));
+  }
+  double worst_force = 0;
+  for (const Reaction& r : ours.summary.reactions) {
+    const auto it = peer.totals.find(Upper(r.set));
+    ASSERT_NE(it, peer.totals.end()) << r.set;
+    for (int c = 0; c < 3; ++c) {
+      EXPECT_NEAR(r.force_n[c], it->second[c], kPrintPrecision * scale)
+          << r.set << " component " << c;
+      worst_force = std::max(worst_force, std::abs(r.force_n[c] - it->second[c]) / scale);
+    }
+  }
+  const std::size_t nodes = ours.displacement_mm.size() / 3;
+  ASSERT_EQ(peer.displacement.size(), nodes);
+  double u_max = 0, u_diff = 0;
+  for (std::size_t i = 0; i < nodes; ++i) {
+    const auto& u = peer.displacement.at(static_cast<int>(i) + 1);
+    for (int c = 0; c < 3; ++c) {
+      u_max = std::max(u_max, std::abs(u[c]));
+      u_diff = std::max(u_diff, std::abs(ours.displacement_mm[3 * i + c] * 1e-3 - u[c]));
+    }
+  }
+  EXPECT_LT(u_diff, kPrintPrecision * u_max);
+  std::printf("| %s | %lld | %.3e | %.3e | %.3f s | %.3f s | %.2g %% (ZZ) |\n", scene.name.c_str(),
+              static_cast<long long>(ours.summary.dofs), worst_force, u_diff / u_max,
+              ours.summary.wall_time_s, ccx_seconds, 100 * ours.summary.error.relative_error);
+}
+
+INSTANTIATE_TEST_SUITE_P(Cases, CalculixPeerTest, ::testing::ValuesIn(Cases()),
+                         [](const ::testing::TestParamInfo<SceneSpec>& info) {
+                           return "case" + std::to_string(info.index);
+                         });
+
+}  // namespace
+}  // namespace pba
