@@ -1,6 +1,7 @@
 #include "assembly/assembler.h"
 
 #include <algorithm>
+#include <atomic>
 #include <bitset>
 
 namespace pba {
@@ -74,33 +75,45 @@ Vector12d GatherElement(const Mesh& mesh, int e, const Eigen::VectorXd& u) {
   return ue;
 }
 
-Status AssembleLinearSystem(const Mesh& mesh, const Matrix6d& d, const DofMap& dofs,
-                            const std::vector<std::vector<int>>& colours,
-                            const std::function<bool(double)>& keep_going, LinearSystem* system) {
+Status AssembleSystem(const Mesh& mesh, const DofMap& dofs,
+                      const std::vector<std::vector<int>>& colours, const ElementKernel& kernel,
+                      const AssemblyOptions& options, const std::function<bool(double)>& keep_going,
+                      LinearSystem* system) {
   const Pattern pattern = BuildPattern(mesh, dofs);
   std::vector<double> values(pattern.inner.size(), 0.0);
   system->rhs = Eigen::VectorXd::Zero(dofs.num_free());
   double* rhs = system->rhs.data();
+  std::atomic<int> failed{-1};
 
   std::size_t done = 0;
   const std::size_t total = mesh.tets.size();
   // Elements of the last colour may share nodes (see ColourElements), so it
   // is assembled by one thread.
-  for (std::size_t c = 0; c < colours.size(); ++c) {
+  for (std::size_t c = 0; c < colours.size() && failed.load() < 0; ++c) {
     const std::vector<int>& elements = colours[c];
     const bool serial = c + 1 == static_cast<std::size_t>(kMaxColours);
 #pragma omp parallel for schedule(static) if (!serial)
     for (std::size_t k = 0; k < elements.size(); ++k) {
+      if (failed.load(std::memory_order_relaxed) >= 0) continue;
       const int e = elements[k];
-      const Matrix12d ke = Tet4Stiffness(ComputeTet4Geometry(TetCorners(mesh, e)), d);
+      Matrix12d ke;
+      Vector12d fe;
+      if (!kernel(e, &ke, &fe)) {
+        failed.store(e);
+        continue;
+      }
       int free[12];
       double up[12];
       for (int a = 0; a < 4; ++a) {
         for (int i = 0; i < 3; ++i) {
           const int dof = 3 * mesh.tets[e][a] + i;
           free[3 * a + i] = dofs.free_index(dof);
-          up[3 * a + i] = dofs.prescribed(dof) ? dofs.prescribed_value(dof) : 0.0;
+          up[3 * a + i] =
+              options.lift_prescribed && dofs.prescribed(dof) ? dofs.prescribed_value(dof) : 0.0;
         }
+      }
+      for (int p = 0; p < 12; ++p) {
+        if (free[p] >= 0) rhs[free[p]] += fe(p);
       }
       for (int q = 0; q < 12; ++q) {
         if (free[q] < 0) {
@@ -116,15 +129,32 @@ Status AssembleLinearSystem(const Mesh& mesh, const Matrix6d& d, const DofMap& d
       }
     }
     done += elements.size();
-    if (!keep_going(static_cast<double>(done) / static_cast<double>(total))) {
+    if (failed.load() < 0 && !keep_going(static_cast<double>(done) / static_cast<double>(total))) {
       return Status::Cancelled("cancelled during assembly");
     }
   }
+  if (failed.load() >= 0) {
+    return Status::Numerical("element " + std::to_string(failed.load()) +
+                             " could not be evaluated (inverted: det F <= 0)");
+  }
   const int n = dofs.num_free();
-  system->k =
-      Eigen::Map<const SparseMatrix>(n, n, static_cast<int>(values.size()), pattern.outer.data(),
-                                     pattern.inner.data(), values.data());
+  system->k = Eigen::Map<const SparseMatrix>(n, n, static_cast<int>(values.size()),
+                                             pattern.outer.data(), pattern.inner.data(),
+                                             values.data());
   return Status::Ok();
+}
+
+Status AssembleLinearSystem(const Mesh& mesh, const Matrix6d& d, const DofMap& dofs,
+                            const std::vector<std::vector<int>>& colours,
+                            const std::function<bool(double)>& keep_going, LinearSystem* system) {
+  const ElementKernel kernel = [&](int e, Matrix12d* k, Vector12d* f) {
+    *k = Tet4Stiffness(ComputeTet4Geometry(TetCorners(mesh, e)), d);
+    f->setZero();
+    return true;
+  };
+  AssemblyOptions options;
+  options.lift_prescribed = true;
+  return AssembleSystem(mesh, dofs, colours, kernel, options, keep_going, system);
 }
 
 }  // namespace pba

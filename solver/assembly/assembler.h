@@ -27,6 +27,28 @@ struct LinearSystem {
   Eigen::VectorXd rhs;  // f_f - K_fp u_p
 };
 
+// Computes one element's stiffness `k` and force `f` (both in the element's
+// 12 unknowns); returns false to stop the assembly (for example an inverted
+// element). Called concurrently for elements of one colour.
+using ElementKernel = std::function<bool(int element, Matrix12d* k, Vector12d* f)>;
+
+struct AssemblyOptions {
+  // Subtract K_fp u_p (the prescribed values' pull on the free unknowns) from
+  // the right-hand side: for a linear solve, where u_p is not yet in the
+  // element's state. A Newton iteration, whose state already holds u_p,
+  // leaves it off.
+  bool lift_prescribed = false;
+};
+
+// Assembles K_ff = sum k and rhs_f = sum f (minus K_fp u_p when lifting).
+// `keep_going(fraction)` is called between colours; returning false stops
+// with Status::Cancelled. A kernel returning false stops with
+// Status::Numerical naming the element.
+Status AssembleSystem(const Mesh& mesh, const DofMap& dofs,
+                      const std::vector<std::vector<int>>& colours, const ElementKernel& kernel,
+                      const AssemblyOptions& options, const std::function<bool(double)>& keep_going,
+                      LinearSystem* system);
+
 // Assembles K_ff and the right-hand side for elasticity matrix `d`.
 // `keep_going(fraction)` is called between colours; returning false stops
 // the assembly with Status::Cancelled.
