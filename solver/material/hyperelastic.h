@@ -20,6 +20,13 @@
 
 namespace pba {
 
+// U and its first and second derivatives with respect to J.
+struct ScalarDerivatives {
+  double value = 0;
+  double first = 0;
+  double second = 0;
+};
+
 class HyperelasticMaterial {
  public:
   virtual ~HyperelasticMaterial() = default;
@@ -30,6 +37,13 @@ class HyperelasticMaterial {
   virtual Vector6d Stress(const Eigen::Matrix3d& f) const = 0;
   // Material tangent C = dS/dE (6x6, Voigt, engineering shear in E) [Pa].
   virtual Matrix6d Tangent(const Eigen::Matrix3d& f) const = 0;
+  // The isochoric part alone: W_iso, S_iso = dW_iso/dE and C_iso = dS_iso/dE
+  // (any output may be null). Elements that treat the volume change
+  // separately (average nodal pressure) combine it with Volumetric().
+  virtual void Isochoric(const Eigen::Matrix3d& f, double* energy, Vector6d* stress,
+                         Matrix6d* tangent) const = 0;
+  // The volumetric energy U(J) with its first two derivatives.
+  virtual ScalarDerivatives Volumetric(double j) const = 0;
   // Initial shear and bulk moduli (for time steps, penalties, reports) [Pa].
   virtual double ShearModulus() const = 0;
   virtual double BulkModulus() const = 0;
@@ -55,12 +69,6 @@ struct VolumetricParams {
   double BulkModulus() const { return 2 / d[0]; }
 };
 
-// U and its first and second derivatives with respect to J.
-struct ScalarDerivatives {
-  double value = 0;
-  double first = 0;
-  double second = 0;
-};
 ScalarDerivatives VolumetricEnergy(const VolumetricParams& params, double j);
 
 // Isochoric energy as a function of I1b = J^-2/3 I1 and I2b = J^-4/3 I2, with

@@ -32,14 +32,12 @@ double OgdenCoefficients::ShearModulus() const {
 
 OgdenMaterial::OgdenMaterial(const OgdenCoefficients& coefficients) : p_(coefficients) {}
 
-double OgdenMaterial::Energy(const Eigen::Matrix3d& f) const {
-  if (!IsAdmissible(f)) return INFINITY;
+double OgdenMaterial::IsochoricEnergy(const Eigen::Matrix3d& f) const {
   const Eigen::Matrix3d c = f.transpose() * f;
   const Eigen::Vector3d eig =
       Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(c, Eigen::EigenvaluesOnly).eigenvalues();
-  const double j = f.determinant();
-  const double scale = std::pow(j, -1.0 / 3.0);
-  double w = VolumetricEnergy(p_.volumetric, j).value;
+  const double scale = std::pow(f.determinant(), -1.0 / 3.0);
+  double w = 0;
   for (const OgdenTerm& t : p_.terms) {
     double sum = -3;
     for (int a = 0; a < 3; ++a) sum += std::pow(scale * std::sqrt(eig(a)), t.alpha);
@@ -48,7 +46,20 @@ double OgdenMaterial::Energy(const Eigen::Matrix3d& f) const {
   return w;
 }
 
-void OgdenMaterial::Response(const Eigen::Matrix3d& f, Vector6d* stress, Matrix6d* tangent) const {
+double OgdenMaterial::Energy(const Eigen::Matrix3d& f) const {
+  if (!IsAdmissible(f)) return INFINITY;
+  return IsochoricEnergy(f) + VolumetricEnergy(p_.volumetric, f.determinant()).value;
+}
+
+void OgdenMaterial::Isochoric(const Eigen::Matrix3d& f, double* energy, Vector6d* stress,
+                              Matrix6d* tangent) const {
+  CheckAdmissible(f, "OgdenMaterial::Isochoric");
+  if (energy) *energy = IsochoricEnergy(f);
+  if (stress || tangent) Response(f, false, stress, tangent);
+}
+
+void OgdenMaterial::Response(const Eigen::Matrix3d& f, bool volumetric, Vector6d* stress,
+                             Matrix6d* tangent) const {
   const Eigen::Matrix3d c = f.transpose() * f;
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(c);
   const Eigen::Matrix3d n = eigen.eigenvectors();  // column a = N_a
@@ -75,7 +86,8 @@ void OgdenMaterial::Response(const Eigen::Matrix3d& f, Vector6d* stress, Matrix6
     }
   }
   // Volumetric part: tau_a = J U'(J), gamma_ab = J U' + J^2 U''.
-  const ScalarDerivatives u = VolumetricEnergy(p_.volumetric, j);
+  const ScalarDerivatives u =
+      volumetric ? VolumetricEnergy(p_.volumetric, j) : ScalarDerivatives();
   tau.array() += j * u.first;
   gamma.array() += j * u.first + j * j * u.second;
 
@@ -125,14 +137,14 @@ void OgdenMaterial::Response(const Eigen::Matrix3d& f, Vector6d* stress, Matrix6
 Vector6d OgdenMaterial::Stress(const Eigen::Matrix3d& f) const {
   CheckAdmissible(f, "OgdenMaterial::Stress");
   Vector6d stress;
-  Response(f, &stress, nullptr);
+  Response(f, true, &stress, nullptr);
   return stress;
 }
 
 Matrix6d OgdenMaterial::Tangent(const Eigen::Matrix3d& f) const {
   CheckAdmissible(f, "OgdenMaterial::Tangent");
   Matrix6d tangent;
-  Response(f, nullptr, &tangent);
+  Response(f, true, nullptr, &tangent);
   return tangent;
 }
 

@@ -37,12 +37,19 @@ class OgdenMaterial final : public HyperelasticMaterial {
   double Energy(const Eigen::Matrix3d& f) const override;
   Vector6d Stress(const Eigen::Matrix3d& f) const override;
   Matrix6d Tangent(const Eigen::Matrix3d& f) const override;
+  void Isochoric(const Eigen::Matrix3d& f, double* energy, Vector6d* stress,
+                 Matrix6d* tangent) const override;
+  ScalarDerivatives Volumetric(double j) const override {
+    return VolumetricEnergy(p_.volumetric, j);
+  }
   double ShearModulus() const override { return p_.ShearModulus(); }
   double BulkModulus() const override { return p_.volumetric.BulkModulus(); }
   std::string Describe() const override;
 
  private:
-  void Response(const Eigen::Matrix3d& f, Vector6d* stress, Matrix6d* tangent) const;
+  void Response(const Eigen::Matrix3d& f, bool volumetric, Vector6d* stress,
+                Matrix6d* tangent) const;
+  double IsochoricEnergy(const Eigen::Matrix3d& f) const;
   OgdenCoefficients p_;
 };
 

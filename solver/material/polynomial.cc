@@ -102,6 +102,15 @@ Matrix6d PolynomialMaterial::Tangent(const Eigen::Matrix3d& f) const {
   return tangent;
 }
 
+void PolynomialMaterial::Isochoric(const Eigen::Matrix3d& f, double* energy, Vector6d* stress,
+                                   Matrix6d* tangent) const {
+  CheckAdmissible(f, "PolynomialMaterial::Isochoric");
+  const InvariantState s = ComputeInvariants(f);
+  const IsochoricInvariantEnergy w = Isochoric(s.i1b, s.i2b);
+  if (energy) *energy = w.w;
+  if (stress || tangent) InvariantResponse(s, w, ScalarDerivatives(), stress, tangent);
+}
+
 std::string PolynomialMaterial::Describe() const {
   const std::string bulk = ", K = " + FormatNumber(BulkModulus()) + " Pa";
   if (p_.order == 1 && p_.c[0][1] == 0 && p_.volumetric.d[1] == 0) {

@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <string>
 
+#include "material/factory.h"
 #include "mesh/primitive_mesher.h"
 #include "pba/scene.h"
 
@@ -49,6 +50,37 @@ Status ValidateGeometry(const GeometrySpec& geometry) {
       return Status::Ok();
   }
   return Status::Internal("unhandled geometry kind");
+}
+
+Status ValidateAnalysis(const AnalysisSpec& analysis, const MaterialSpec& material) {
+  if (analysis.type != AnalysisSpec::Type::kNonlinearStatic) return Status::Ok();
+  if (!material.hyperelastic()) {
+    return Status::InvalidArgument(
+        "material", "a nonlinear static analysis needs a hyperelastic material (neo_hookean, "
+                    "mooney_rivlin, polynomial or ogden); linear_elastic is for LINEAR_STATIC");
+  }
+  const NonlinearOptionsSpec& n = analysis.nonlinear;
+  if (n.increments < 0 || n.increments > 10000) {
+    return Status::InvalidArgument("analysis.nonlinear.increments",
+                                   "must lie in 1..10000 (0 for the default 5), got " +
+                                       std::to_string(n.increments));
+  }
+  if (n.max_iterations < 0 || n.max_iterations > 1000) {
+    return Status::InvalidArgument("analysis.nonlinear.max_iterations",
+                                   "must lie in 1..1000 (0 for the default 20), got " +
+                                       std::to_string(n.max_iterations));
+  }
+  const std::pair<const char*, double> fractions[] = {
+      {"residual_tolerance", n.residual_tolerance},
+      {"displacement_tolerance", n.displacement_tolerance},
+      {"min_increment", n.min_increment}};
+  for (const auto& [name, value] : fractions) {
+    if (!std::isfinite(value) || value < 0 || value >= 1) {
+      return Status::InvalidArgument(std::string("analysis.nonlinear.") + name,
+                                     "must lie in [0, 1) (0 for the default), got " + Number(value));
+    }
+  }
+  return Status::Ok();
 }
 
 std::string JoinNames(const std::vector<std::string>& names) {
@@ -103,14 +135,8 @@ Status ValidateScene(const SceneSpec& scene) {
                                     std::to_string(kMaxElements) + "; choose a larger size");
   }
 
-  switch (scene.material.kind) {
-    case MaterialSpec::Kind::kNone:
-      return Status::InvalidArgument("material",
-                                     "no material model given: set material.linear_elastic");
-    case MaterialSpec::Kind::kLinearElastic:
-      PBA_RETURN_IF_ERROR(scene.material.linear_elastic.Validate("material.linear_elastic"));
-      break;
-  }
+  PBA_RETURN_IF_ERROR(ValidateMaterialSpec(scene.material, "material"));
+  PBA_RETURN_IF_ERROR(ValidateAnalysis(scene.analysis, scene.material));
 
   if (scene.boundary_conditions.empty()) {
     return Status::InvalidArgument("boundary_conditions",

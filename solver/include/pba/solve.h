@@ -48,6 +48,13 @@ struct ErrorEstimate {
   std::string note;           // how to read it, or why it is not estimated
 };
 
+// One converged load increment of a nonlinear analysis.
+struct IncrementSummary {
+  double load_factor = 0;        // at the end of the increment, 0..1
+  int iterations = 0;            // Newton iterations it took
+  double relative_residual = 0;  // final ||R|| / ||f_int||
+};
+
 // What a solve reports beside its fields. Mirrors pba.v1.Summary.
 struct Summary {
   std::string scene_name;
@@ -69,6 +76,11 @@ struct Summary {
   double strain_energy_j = 0;
   std::vector<Reaction> reactions;
   double relative_residual = 0;
+  // Nonlinear analyses: converged increments, total Newton iterations and
+  // the number of increments cut back and retried. Empty / 0 for linear ones.
+  std::vector<IncrementSummary> increments;
+  int newton_iterations = 0;
+  int increment_cuts = 0;
   ErrorEstimate error;
   // Speed.
   double wall_time_s = 0;
@@ -85,9 +97,15 @@ struct Solution {
   // Nodal displacement [mm], nodes x 3.
   std::vector<double> displacement_mm;
   // Per element, Voigt order xx yy zz yz xz xy (engineering shear strain).
-  std::vector<double> stress_pa;     // elements x 6 [Pa]
-  std::vector<double> strain;        // elements x 6 [-]
-  std::vector<double> von_mises_pa;  // elements [Pa]
+  std::vector<double> stress_pa;     // elements x 6, Cauchy stress [Pa]
+  std::vector<double> strain;        // elements x 6, small or Green-Lagrange strain [-]
+  std::vector<double> von_mises_pa;  // elements, of the Cauchy stress [Pa]
+  // Nonlinear analyses only (else empty): second Piola-Kirchhoff stress
+  // (elements x 6 [Pa]), Euler-Almansi strain (elements x 6) and J = det F
+  // (elements).
+  std::vector<double> pk2_stress_pa;
+  std::vector<double> almansi_strain;
+  std::vector<double> jacobian;
   // Element-wise estimated error share (ZZ), elements; empty if not estimated.
   std::vector<double> error_indicator;
   Summary summary;

@@ -1,0 +1,74 @@
+#include "analysis/finite_strain_model.h"
+
+#include "fem/tet4_finite_strain.h"
+#include "material/hyperelastic.h"
+
+namespace pba {
+namespace {
+
+class Tet4Model final : public FiniteStrainModel {
+ public:
+  Tet4Model(const Mesh& mesh, const HyperelasticMaterial& material)
+      : mesh_(mesh), material_(material), colours_(ColourElements(mesh)) {
+    geometry_.reserve(mesh.num_elements());
+    for (int e = 0; e < mesh.num_elements(); ++e) {
+      geometry_.push_back(ComputeTet4Geometry(TetCorners(mesh, e)));
+    }
+  }
+
+  bool InternalForce(const Eigen::VectorXd& u, Eigen::VectorXd* force,
+                     double* energy) const override {
+    *force = Eigen::VectorXd::Zero(u.size());
+    bool ok = true;
+    double total = 0;
+    for (const auto& colour : colours_) {
+#pragma omp parallel for schedule(static) reduction(&& : ok) reduction(+ : total)
+      for (std::size_t k = 0; k < colour.size(); ++k) {
+        const int e = colour[k];
+        Tet4FiniteStrainResult r;
+        if (!Tet4FiniteStrain(geometry_[e], GatherElement(mesh_, e, u), material_, false, &r)) {
+          ok = false;
+          continue;
+        }
+        total += r.energy;
+        for (int a = 0; a < 4; ++a) {
+          force->segment<3>(3 * mesh_.tets[e][a]) += r.force.segment<3>(3 * a);
+        }
+      }
+    }
+    if (energy) *energy = total;
+    return ok && force->allFinite() && std::isfinite(total);
+  }
+
+  Status Assemble(const Eigen::VectorXd& u, const DofMap& dofs, const AssemblyOptions& options,
+                  LinearSystem* system) const override {
+    const ElementKernel kernel = [&](int e, Matrix12d* k, Vector12d* f) {
+      Tet4FiniteStrainResult r;
+      if (!Tet4FiniteStrain(geometry_[e], GatherElement(mesh_, e, u), material_, true, &r)) {
+        return false;
+      }
+      *k = r.tangent;
+      *f = -r.force;
+      return true;
+    };
+    return AssembleSystem(mesh_, dofs, colours_, kernel, options, [](double) { return true; },
+                          system);
+  }
+
+  std::string Describe() const override { return "TET4, total Lagrangian"; }
+
+ private:
+  const Mesh& mesh_;
+  const HyperelasticMaterial& material_;
+  std::vector<std::vector<int>> colours_;
+  std::vector<Tet4Geometry> geometry_;
+};
+
+}  // namespace
+
+std::unique_ptr<FiniteStrainModel> MakeTet4Model(const Mesh& mesh,
+                                                 const HyperelasticMaterial& material) {
+  return std::make_unique<Tet4Model>(mesh, material);
+}
+
+}  // namespace pba

@@ -1,0 +1,48 @@
+// A discretised finite-strain body as Newton's method sees it: internal
+// force, stored energy and tangent stiffness at a displacement state. The
+// element formulation (plain tet4, average nodal pressure tet4, ...) lives
+// behind this interface, so the load stepping does not depend on it.
+#pragma once
+
+#include <Eigen/Core>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "assembly/assembler.h"
+#include "assembly/dof_map.h"
+#include "mesh/mesh.h"
+#include "pba/status.h"
+
+namespace pba {
+
+class HyperelasticMaterial;
+
+class FiniteStrainModel {
+ public:
+  virtual ~FiniteStrainModel() = default;
+
+  // Internal force of every unknown (full vector, 3 per node) [N] and the
+  // stored energy [J] at displacement `u` [m]. Returns false when an element
+  // inverts (J <= 0) or a value is not finite.
+  virtual bool InternalForce(const Eigen::VectorXd& u, Eigen::VectorXd* force,
+                             double* energy) const = 0;
+
+  // Tangent stiffness on the free unknowns of `dofs` and rhs = -f_int on
+  // them at `u` (with options.lift_prescribed, also minus K_fp times the
+  // prescribed values of `dofs`). Returns kNumerical when an element is
+  // inverted at `u`.
+  virtual Status Assemble(const Eigen::VectorXd& u, const DofMap& dofs,
+                          const AssemblyOptions& options, LinearSystem* system) const = 0;
+
+  // For the summary, e.g. "TET4, total Lagrangian".
+  virtual std::string Describe() const = 0;
+};
+
+// Plain 4-node tetrahedra, each with its own F (locks when nearly
+// incompressible; kept to show the difference). `mesh` and `material` must
+// outlive the model.
+std::unique_ptr<FiniteStrainModel> MakeTet4Model(const Mesh& mesh,
+                                                 const HyperelasticMaterial& material);
+
+}  // namespace pba

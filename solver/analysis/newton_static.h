@@ -1,0 +1,63 @@
+// Quasi-static large-deformation equilibrium by Newton-Raphson:
+// f_int(u) = 0 on the free unknowns, the prescribed displacements ramped
+// linearly from zero to their values in increments of the load factor.
+//
+// Each increment starts from a linearised predictor (the tangent at the last
+// converged state carries the prescribed increment into the free unknowns),
+// then iterates with the consistent tangent and a backtracking line search.
+// An increment that inverts an element, stalls or diverges is cut in half and
+// retried; one that converges quickly lets the next one grow.
+#pragma once
+
+#include <Eigen/Core>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "analysis/finite_strain_model.h"
+#include "assembly/dof_map.h"
+#include "linear/linear_solver.h"
+#include "pba/status.h"
+
+namespace pba {
+
+struct NewtonOptions {
+  int initial_increments = 5;
+  int max_iterations = 20;  // per increment
+  // An iteration has converged when all three hold:
+  //   ||R_f|| <= residual_tolerance * ||f_int|| (all unknowns, reactions included),
+  //   ||du|| <= displacement_tolerance * ||u||,
+  //   |du . R| <= energy_tolerance * |du_p . K du_p| (du_p: the increment's predictor).
+  double residual_tolerance = 1e-8;
+  double displacement_tolerance = 1e-8;
+  double energy_tolerance = 1e-12;
+  double min_increment = 1e-4;  // smallest load-factor increment before giving up
+  double max_increment = 0.5;   // largest load-factor increment when growing
+  int quick_iterations = 4;     // an increment this quick lets the next grow 1.5x
+  bool line_search = true;
+};
+
+struct IncrementRecord {
+  double load_factor = 0;  // at the end of the increment
+  int iterations = 0;
+  double relative_residual = 0;
+};
+
+struct NewtonReport {
+  std::vector<IncrementRecord> increments;  // converged ones
+  int total_iterations = 0;
+  int cuts = 0;  // increments cut back and retried
+  std::vector<std::string> cut_reasons;  // why each cut happened
+};
+
+// Solves for the full displacement vector `u` (3 per node, metres). The
+// targets of the prescribed unknowns are taken from `dofs`.
+// `keep_going(load_factor)` is polled between iterations; returning false
+// stops with kCancelled. Returns kNumerical naming the load factor reached
+// and the last failure when the increments cannot be cut any further.
+Status SolveNewtonStatic(const FiniteStrainModel& model, const DofMap& dofs,
+                         const NewtonOptions& options, LinearSolver* solver,
+                         const std::function<bool(double load_factor)>& keep_going,
+                         Eigen::VectorXd* u, NewtonReport* report);
+
+}  // namespace pba

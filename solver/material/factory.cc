@@ -1,0 +1,163 @@
+#include "material/factory.h"
+
+#include <cmath>
+#include <set>
+#include <utility>
+
+#include "material/ogden.h"
+#include "material/polynomial.h"
+
+namespace pba {
+namespace {
+
+Status ValidateBulk(double bulk, double shear, const std::string& field) {
+  PBA_RETURN_IF_ERROR(RequirePositive(bulk, field));
+  if (bulk < shear) {
+    return Status::InvalidArgument(
+        field, "the bulk modulus (" + FormatNumber(bulk) + " Pa) is below the shear modulus (" +
+                   FormatNumber(shear) +
+                   " Pa), which makes Poisson's ratio negative; soft tissue is nearly "
+                   "incompressible, with K / mu of 1e5 to 1e6");
+  }
+  return Status::Ok();
+}
+
+PolynomialCoefficients PolynomialOf(const PolynomialParams& p) {
+  PolynomialCoefficients c;
+  c.order = 0;
+  for (const PolynomialTermSpec& t : p.terms) {
+    c.c[t.i][t.j] = t.c_pa;
+    c.order = std::max(c.order, t.i + t.j);
+  }
+  for (std::size_t k = 0; k < p.d_per_pa.size() && k < 3; ++k) c.volumetric.d[k] = p.d_per_pa[k];
+  return c;
+}
+
+OgdenCoefficients OgdenOf(const OgdenParams& p) {
+  OgdenCoefficients c;
+  for (const OgdenTermSpec& t : p.terms) c.terms.push_back({t.mu_pa, t.alpha});
+  c.volumetric.d = {2 / p.bulk_modulus_pa, 0, 0};
+  return c;
+}
+
+Status ValidatePolynomial(const PolynomialParams& p, const std::string& path) {
+  if (p.terms.empty()) {
+    return Status::InvalidArgument(path + ".terms",
+                                   "no terms given: list C_ij as {i: 1, j: 0, c_pa: 500}");
+  }
+  std::set<std::pair<int, int>> seen;
+  int order = 0;
+  for (std::size_t k = 0; k < p.terms.size(); ++k) {
+    const PolynomialTermSpec& t = p.terms[k];
+    const std::string term = path + ".terms[" + std::to_string(k) + "]";
+    if (t.i < 0 || t.j < 0 || t.i + t.j < 1 || t.i + t.j > 3) {
+      return Status::InvalidArgument(term, "powers i = " + std::to_string(t.i) + ", j = " +
+                                               std::to_string(t.j) +
+                                               " are out of range: need i, j >= 0 and 1 <= i + j <= 3");
+    }
+    if (!seen.insert({t.i, t.j}).second) {
+      return Status::InvalidArgument(term, "C" + std::to_string(t.i) + std::to_string(t.j) +
+                                               " is given twice");
+    }
+    PBA_RETURN_IF_ERROR(RequireFinite(t.c_pa, term + ".c_pa"));
+    order = std::max(order, t.i + t.j);
+  }
+  const PolynomialCoefficients c = PolynomialOf(p);
+  if (!(c.ShearModulus() > 0)) {
+    return Status::InvalidArgument(path + ".terms",
+                                   "the initial shear modulus 2 (C10 + C01) must be > 0, got " +
+                                       FormatNumber(c.ShearModulus()) + " Pa");
+  }
+  if (p.d_per_pa.empty() || p.d_per_pa.size() > static_cast<std::size_t>(order)) {
+    return Status::InvalidArgument(
+        path + ".d_per_pa", "a polynomial of order " + std::to_string(order) + " takes 1 to " +
+                                std::to_string(order) + " values D_1..D_N, got " +
+                                std::to_string(p.d_per_pa.size()));
+  }
+  for (std::size_t k = 0; k < p.d_per_pa.size(); ++k) {
+    const std::string field = path + ".d_per_pa[" + std::to_string(k) + "]";
+    PBA_RETURN_IF_ERROR(k == 0 ? RequirePositive(p.d_per_pa[k], field)
+                               : RequireFinite(p.d_per_pa[k], field));
+    if (p.d_per_pa[k] < 0) return Status::InvalidArgument(field, "must be >= 0");
+  }
+  PBA_RETURN_IF_ERROR(ValidateBulk(2 / p.d_per_pa[0], c.ShearModulus(), path + ".d_per_pa[0]"));
+  return c.Validate(path);  // backstop: the same checks on the internal form
+}
+
+}  // namespace
+
+Status ValidateMaterialSpec(const MaterialSpec& m, const std::string& path) {
+  switch (m.kind) {
+    case MaterialSpec::Kind::kNone:
+      return Status::InvalidArgument(path,
+                                     "no material model given: set one of linear_elastic, "
+                                     "neo_hookean, mooney_rivlin, polynomial, ogden");
+    case MaterialSpec::Kind::kLinearElastic:
+      return m.linear_elastic.Validate(path + ".linear_elastic");
+    case MaterialSpec::Kind::kNeoHookean: {
+      const std::string p = path + ".neo_hookean";
+      PBA_RETURN_IF_ERROR(RequirePositive(m.neo_hookean.shear_modulus_pa, p + ".shear_modulus_pa"));
+      return ValidateBulk(m.neo_hookean.bulk_modulus_pa, m.neo_hookean.shear_modulus_pa,
+                          p + ".bulk_modulus_pa");
+    }
+    case MaterialSpec::Kind::kMooneyRivlin: {
+      const std::string p = path + ".mooney_rivlin";
+      const MooneyRivlinParams& mr = m.mooney_rivlin;
+      PBA_RETURN_IF_ERROR(RequireFinite(mr.c10_pa, p + ".c10_pa"));
+      PBA_RETURN_IF_ERROR(RequireFinite(mr.c01_pa, p + ".c01_pa"));
+      if (!(mr.c10_pa + mr.c01_pa > 0)) {
+        return Status::InvalidArgument(p + ".c10_pa",
+                                       "the initial shear modulus 2 (C10 + C01) must be > 0, got " +
+                                           FormatNumber(2 * (mr.c10_pa + mr.c01_pa)) + " Pa");
+      }
+      return ValidateBulk(mr.bulk_modulus_pa, 2 * (mr.c10_pa + mr.c01_pa), p + ".bulk_modulus_pa");
+    }
+    case MaterialSpec::Kind::kPolynomial:
+      return ValidatePolynomial(m.polynomial, path + ".polynomial");
+    case MaterialSpec::Kind::kOgden: {
+      const std::string p = path + ".ogden";
+      OgdenCoefficients c;
+      for (const OgdenTermSpec& t : m.ogden.terms) c.terms.push_back({t.mu_pa, t.alpha});
+      c.volumetric.d = {1, 0, 0};  // checked below, with the field's own name
+      PBA_RETURN_IF_ERROR(c.Validate(p));
+      return ValidateBulk(m.ogden.bulk_modulus_pa, c.ShearModulus(), p + ".bulk_modulus_pa");
+    }
+  }
+  return Status::Internal("unhandled material kind");
+}
+
+std::unique_ptr<HyperelasticMaterial> MakeHyperelasticMaterial(const MaterialSpec& m) {
+  switch (m.kind) {
+    case MaterialSpec::Kind::kNeoHookean:
+      return std::make_unique<PolynomialMaterial>(
+          NeoHookeanCoefficients(m.neo_hookean.shear_modulus_pa, m.neo_hookean.bulk_modulus_pa));
+    case MaterialSpec::Kind::kMooneyRivlin:
+      return std::make_unique<PolynomialMaterial>(MooneyRivlinCoefficients(
+          m.mooney_rivlin.c10_pa, m.mooney_rivlin.c01_pa, m.mooney_rivlin.bulk_modulus_pa));
+    case MaterialSpec::Kind::kPolynomial:
+      return std::make_unique<PolynomialMaterial>(PolynomialOf(m.polynomial));
+    case MaterialSpec::Kind::kOgden:
+      return std::make_unique<OgdenMaterial>(OgdenOf(m.ogden));
+    default:
+      return nullptr;
+  }
+}
+
+InitialModuli InitialElasticModuli(const MaterialSpec& m) {
+  if (m.kind == MaterialSpec::Kind::kLinearElastic) {
+    return {m.linear_elastic.youngs_modulus_pa, m.linear_elastic.poissons_ratio};
+  }
+  const auto material = MakeHyperelasticMaterial(m);
+  const double mu = material->ShearModulus(), k = material->BulkModulus();
+  return {9 * k * mu / (3 * k + mu), (3 * k - 2 * mu) / (2 * (3 * k + mu))};
+}
+
+std::string DescribeMaterial(const MaterialSpec& m) {
+  if (m.kind == MaterialSpec::Kind::kLinearElastic) {
+    return "linear elastic, E = " + FormatNumber(m.linear_elastic.youngs_modulus_pa) +
+           " Pa, nu = " + FormatNumber(m.linear_elastic.poissons_ratio);
+  }
+  return MakeHyperelasticMaterial(m)->Describe();
+}
+
+}  // namespace pba
