@@ -51,8 +51,8 @@ class Tet4Model final : public FiniteStrainModel {
       *f = -r.force;
       return true;
     };
-    return AssembleSystem(mesh_, dofs, colours_, kernel, options, [](double) { return true; },
-                          system);
+    return AssembleSystem(
+        mesh_, dofs, colours_, kernel, options, [](double) { return true; }, system);
   }
 
   std::string Describe() const override { return "TET4, total Lagrangian"; }

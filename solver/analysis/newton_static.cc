@@ -7,6 +7,10 @@
 namespace pba {
 namespace {
 
+// Energy ratio |du . R| / |du_p . K du_p| at which a Newton correction is
+// rounding noise.
+constexpr double kRoundingEnergy = 1e-20;
+
 std::string Format(const char* format, auto... args) {
   char buffer[256];
   std::snprintf(buffer, sizeof buffer, format, args...);
@@ -52,8 +56,8 @@ Residual Evaluate(const FiniteStrainModel& model, const DofMap& dofs, const Eige
 
 Status SolveNewtonStatic(const FiniteStrainModel& model, const DofMap& dofs,
                          const NewtonOptions& options, LinearSolver* solver,
-                         const std::function<bool(double)>& keep_going, Eigen::VectorXd* u,
-                         NewtonReport* report) {
+                         const std::function<bool(const NewtonProgress&)>& keep_going,
+                         Eigen::VectorXd* u, NewtonReport* report) {
   *u = Eigen::VectorXd::Zero(dofs.num_dofs());
   *report = NewtonReport();
   double load = 0;
@@ -62,7 +66,7 @@ Status SolveNewtonStatic(const FiniteStrainModel& model, const DofMap& dofs,
   auto cancelled = [&] { return Status::Cancelled(Format("cancelled at load factor %.4g", load)); };
 
   while (load < 1.0) {
-    if (!keep_going(load)) return cancelled();
+    if (!keep_going({load, 0, INFINITY})) return cancelled();
     const double target = std::min(1.0, load + step);
 
     // Predictor: the tangent at the converged state carries the prescribed
@@ -102,11 +106,17 @@ Status SolveNewtonStatic(const FiniteStrainModel& model, const DofMap& dofs,
       }
       for (iteration = 1; status.ok() && !converged && iteration <= options.max_iterations;
            ++iteration) {
-        if (!keep_going(load)) return cancelled();
+        if (!keep_going({load, iteration, residual})) return cancelled();
         status = model.Assemble(trial, dofs, AssemblyOptions(), &system);
         if (!status.ok()) break;
         status = solver->Factorize(system.k);
-        if (!status.ok()) break;
+        if (!status.ok()) {
+          status = Status::Numerical(
+              Format("the tangent stiffness is not positive definite at iteration %d "
+                     "(relative residual %.3g)",
+                     iteration, residual));
+          break;
+        }
         status = solver->Solve(system.rhs, &du);
         if (!status.ok()) break;
         const double energy = std::abs(du.dot(current.free));
@@ -132,7 +142,13 @@ Status SolveNewtonStatic(const FiniteStrainModel& model, const DofMap& dofs,
         residual = current.relative;
         ++report->total_iterations;
         const double change = alpha * du.norm() / std::max(FreeNorm(dofs, trial), 1e-300);
-        if (residual <= options.residual_tolerance && change <= options.displacement_tolerance &&
+        // The residual of a nearly incompressible body has a rounding
+        // floor (K / mu up to 1e6 amplifies the error of J - 1); once the
+        // correction's energy is down at rounding level too, no further
+        // iteration can improve the state.
+        const bool rounding_floor = energy <= kRoundingEnergy * first_energy;
+        if ((residual <= options.residual_tolerance || rounding_floor) &&
+            change <= options.displacement_tolerance &&
             energy <= options.energy_tolerance * std::max(first_energy, 1e-300)) {
           converged = true;
           break;
@@ -156,8 +172,7 @@ Status SolveNewtonStatic(const FiniteStrainModel& model, const DofMap& dofs,
     last_failure = status.ok() ? Format("no convergence in %d iterations (relative residual %.3g)",
                                         options.max_iterations, residual)
                                : status.message();
-    report->cut_reasons.push_back(
-        Format("increment %.4g -> %.4g: ", load, target) + last_failure);
+    report->cut_reasons.push_back(Format("increment %.4g -> %.4g: ", load, target) + last_failure);
     step *= 0.5;
     ++report->cuts;
     if (step < options.min_increment) {

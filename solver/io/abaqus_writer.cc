@@ -1,5 +1,6 @@
 // Abaqus/CalculiX input deck of a scene's model, so the same problem can be
 // run in a peer code (CalculiX: `ccx -i model`). SI units: m, N, Pa.
+#include <algorithm>
 #include <cstdio>
 #include <fstream>
 #include <string>
@@ -20,6 +21,66 @@ void WriteIdList(std::ofstream& out, const std::vector<int>& nodes) {
   for (std::size_t i = 0; i < nodes.size(); ++i) {
     out << nodes[i] + 1 << ((i % 16 == 15 || i + 1 == nodes.size()) ? "\n" : ", ");
   }
+}
+
+// Data lines of at most 8 values.
+std::string DataLines(const std::vector<double>& values) {
+  std::string text;
+  char number[32];
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    std::snprintf(number, sizeof number, "%.17g", values[i]);
+    text += number;
+    text += (i % 8 == 7 || i + 1 == values.size()) ? "\n" : ", ";
+  }
+  return text;
+}
+
+// *ELASTIC or *HYPERELASTIC cards in the Abaqus conventions, which PBA's
+// models follow (C_ij, D_i = 2 / K, Ogden 2 mu / alpha^2).
+std::string MaterialCards(const MaterialSpec& m) {
+  switch (m.kind) {
+    case MaterialSpec::Kind::kLinearElastic:
+      return "*ELASTIC\n" +
+             DataLines({m.linear_elastic.youngs_modulus_pa, m.linear_elastic.poissons_ratio});
+    case MaterialSpec::Kind::kNeoHookean:
+      return "*HYPERELASTIC, NEO HOOKE\n" +
+             DataLines({m.neo_hookean.shear_modulus_pa / 2, 2 / m.neo_hookean.bulk_modulus_pa});
+    case MaterialSpec::Kind::kMooneyRivlin:
+      return "*HYPERELASTIC, MOONEY-RIVLIN\n" +
+             DataLines({m.mooney_rivlin.c10_pa, m.mooney_rivlin.c01_pa,
+                        2 / m.mooney_rivlin.bulk_modulus_pa});
+    case MaterialSpec::Kind::kPolynomial: {
+      int order = 1;
+      double c[4][4] = {};
+      for (const PolynomialTermSpec& t : m.polynomial.terms) {
+        c[t.i][t.j] = t.c_pa;
+        order = std::max(order, t.i + t.j);
+      }
+      std::vector<double> values;
+      for (int n = 1; n <= order; ++n) {
+        for (int j = 0; j <= n; ++j) values.push_back(c[n - j][j]);  // C_n0, C_(n-1)1, ...
+      }
+      for (int k = 0; k < order; ++k) {
+        values.push_back(
+            k < static_cast<int>(m.polynomial.d_per_pa.size()) ? m.polynomial.d_per_pa[k] : 0.0);
+      }
+      return "*HYPERELASTIC, POLYNOMIAL, N=" + std::to_string(order) + "\n" + DataLines(values);
+    }
+    case MaterialSpec::Kind::kOgden: {
+      std::vector<double> values;
+      for (const OgdenTermSpec& t : m.ogden.terms) {
+        values.push_back(t.mu_pa);
+        values.push_back(t.alpha);
+      }
+      values.push_back(2 / m.ogden.bulk_modulus_pa);
+      for (std::size_t k = 1; k < m.ogden.terms.size(); ++k) values.push_back(0);  // D2, D3
+      return "*HYPERELASTIC, OGDEN, N=" + std::to_string(m.ogden.terms.size()) + "\n" +
+             DataLines(values);
+    }
+    case MaterialSpec::Kind::kNone:
+      break;
+  }
+  return "";
 }
 
 }  // namespace
@@ -50,10 +111,19 @@ Status ExportAbaqusInput(const SceneSpec& scene, const std::filesystem::path& fi
     out << "*NSET, NSET=" << Upper(name) << "\n";
     WriteIdList(out, set.nodes);
   }
-  const LinearElasticParams& p = scene.material.linear_elastic;
-  std::snprintf(line, sizeof line, "%.17g, %.17g\n", p.youngs_modulus_pa, p.poissons_ratio);
-  out << "*MATERIAL, NAME=TISSUE\n*ELASTIC\n"
-      << line << "*SOLID SECTION, ELSET=EALL, MATERIAL=TISSUE\n*STEP\n*STATIC\n*BOUNDARY\n";
+  out << "*MATERIAL, NAME=TISSUE\n"
+      << MaterialCards(scene.material) << "*SOLID SECTION, ELSET=EALL, MATERIAL=TISSUE\n";
+  if (scene.analysis.type == AnalysisSpec::Type::kNonlinearStatic) {
+    // Geometric nonlinearity, automatic incrementation from the same first
+    // increment PBA takes.
+    const int increments =
+        scene.analysis.nonlinear.increments > 0 ? scene.analysis.nonlinear.increments : 5;
+    std::snprintf(line, sizeof line, "%.17g, 1.0, 1e-5, %.17g\n", 1.0 / increments,
+                  std::max(0.5, 1.0 / increments));
+    out << "*STEP, NLGEOM, INC=10000\n*STATIC\n" << line << "*BOUNDARY\n";
+  } else {
+    out << "*STEP\n*STATIC\n*BOUNDARY\n";
+  }
   // The resolved constraints, one per unknown: the deck needs no rule for
   // conditions that overlap on shared edges.
   for (int dof = 0; dof < model.dofs.num_dofs(); ++dof) {

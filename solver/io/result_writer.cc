@@ -130,6 +130,19 @@ std::string XdmfText(const SceneSpec& scene, const Solution& s) {
   for (int c = 0; c < 6 && scene.outputs.strain; ++c) {
     x += ComponentAttribute(std::string("strain_") + kComponents[c], "/fields/strain", c, elements);
   }
+  // Finite-strain fields (nonlinear analyses only).
+  for (int c = 0; c < 6 && scene.outputs.pk2_stress && !s.pk2_stress_pa.empty(); ++c) {
+    x += ComponentAttribute(std::string("pk2_stress_") + kComponents[c], "/fields/pk2_stress", c,
+                            elements);
+  }
+  for (int c = 0; c < 6 && scene.outputs.almansi_strain && !s.almansi_strain.empty(); ++c) {
+    x += ComponentAttribute(std::string("almansi_strain_") + kComponents[c],
+                            "/fields/almansi_strain", c, elements);
+  }
+  if (scene.outputs.jacobian && !s.jacobian.empty()) {
+    x += "      <Attribute Name=\"jacobian\" AttributeType=\"Scalar\" Center=\"Cell\">\n        " +
+         Item(ne, "/fields/jacobian") + "\n      </Attribute>\n";
+  }
   x += "    </Grid>\n  </Domain>\n</Xdmf>\n";
   return x;
 }
@@ -157,6 +170,18 @@ Status WriteResultFiles(const SceneSpec& scene, Solution* solution,
       w.Dataset("/fields/strain", solution->strain, 6, "1", voigt + " (engineering shear)");
     }
     if (scene.outputs.von_mises) w.Dataset("/fields/von_mises", solution->von_mises_pa, 0, "Pa");
+    const bool finite_strain = !solution->jacobian.empty();
+    if (finite_strain && scene.outputs.pk2_stress) {
+      w.Dataset("/fields/pk2_stress", solution->pk2_stress_pa, 6, "Pa",
+                voigt + ", second Piola-Kirchhoff, reference configuration");
+    }
+    if (finite_strain && scene.outputs.almansi_strain) {
+      w.Dataset("/fields/almansi_strain", solution->almansi_strain, 6, "1",
+                voigt + " (engineering shear), Euler-Almansi, current configuration");
+    }
+    if (finite_strain && scene.outputs.jacobian) {
+      w.Dataset("/fields/jacobian", solution->jacobian, 0, "1", "J = det F, volume ratio");
+    }
     if (!solution->error_indicator.empty()) {
       w.Dataset("/fields/error_indicator", solution->error_indicator, 0, "1");
     }

@@ -1,6 +1,8 @@
 // Sparse direct solve by CHOLMOD's supernodal Cholesky (SuiteSparse), through
 // Eigen's wrapper; fill-reducing ordering chosen by CHOLMOD (AMD/METIS).
 #include <Eigen/CholmodSupport>
+#include <algorithm>
+#include <vector>
 
 #include "linear/linear_solver.h"
 
@@ -9,8 +11,20 @@ namespace {
 
 class CholmodSolver final : public LinearSolver {
  public:
+  // A matrix that is not positive definite is reported through Status (a
+  // Newton iterate far from equilibrium may have one, and the load step is
+  // then cut), so CHOLMOD's own warning print is turned off.
+  CholmodSolver() { solver_.cholmod().print = 0; }
+
   Status Factorize(const Eigen::SparseMatrix<double>& a) override {
-    solver_.compute(a);
+    // Newton iterations refactorise the same pattern: the fill-reducing
+    // ordering and symbolic analysis are done once per pattern.
+    if (!SamePattern(a)) {
+      solver_.analyzePattern(a);
+      outer_.assign(a.outerIndexPtr(), a.outerIndexPtr() + a.outerSize() + 1);
+      inner_.assign(a.innerIndexPtr(), a.innerIndexPtr() + a.nonZeros());
+    }
+    solver_.factorize(a);
     if (solver_.info() != Eigen::Success) {
       return Status::Numerical(
           "CHOLMOD could not factorise the stiffness matrix: it is not positive definite "
@@ -30,6 +44,14 @@ class CholmodSolver final : public LinearSolver {
   std::string Name() const override { return "CHOLMOD supernodal Cholesky"; }
 
  private:
+  bool SamePattern(const Eigen::SparseMatrix<double>& a) const {
+    return a.isCompressed() && outer_.size() == static_cast<std::size_t>(a.outerSize()) + 1 &&
+           inner_.size() == static_cast<std::size_t>(a.nonZeros()) &&
+           std::equal(outer_.begin(), outer_.end(), a.outerIndexPtr()) &&
+           std::equal(inner_.begin(), inner_.end(), a.innerIndexPtr());
+  }
+
+  std::vector<int> outer_, inner_;
   Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> solver_;
 };
 

@@ -144,6 +144,41 @@ TEST_P(MaterialTest, TangentIsTheStressDerivative) {
   }
 }
 
+// W = W_iso + U(J): the parts add up, S_vol = J U' C^-1, and the isochoric
+// stress is the derivative of the isochoric energy and is deviatoric
+// (S_iso : C = 0).
+TEST_P(MaterialTest, IsochoricAndVolumetricPartsAddUp) {
+  const auto material = GetParam().make();
+  for (const Eigen::Matrix3d& f : Deformations()) {
+    const Eigen::Matrix3d c = f.transpose() * f;
+    const double j = f.determinant();
+    double w_iso = 0;
+    Vector6d s_iso;
+    Matrix6d c_iso;
+    material->Isochoric(f, &w_iso, &s_iso, &c_iso);
+    const ScalarDerivatives u = material->Volumetric(j);
+    const double scale = material->ShearModulus() + material->Stress(f).norm();
+    EXPECT_NEAR(w_iso + u.value, material->Energy(f), 1e-12 * scale);
+    const Vector6d s_vol = j * u.first * SymmetricToVoigt(c.inverse());
+    EXPECT_LT((s_iso + s_vol - material->Stress(f)).norm(), 1e-9 * scale);
+    EXPECT_NEAR((VoigtToSymmetric(s_iso).array() * c.array()).sum(), 0, 1e-9 * scale);
+    for (int r = 0; r < 6; ++r) {
+      const double h = 1e-6;
+      double plus = 0, minus = 0;
+      material->Isochoric(StretchOf(Perturb(c, r, h)), &plus, nullptr, nullptr);
+      material->Isochoric(StretchOf(Perturb(c, r, -h)), &minus, nullptr, nullptr);
+      EXPECT_NEAR(s_iso(r), (plus - minus) / (2 * h), 1e-6 * scale) << "component " << r;
+    }
+    for (int col = 0; col < 6; ++col) {
+      const double h = 1e-6;
+      Vector6d plus, minus;
+      material->Isochoric(StretchOf(Perturb(c, col, h)), nullptr, &plus, nullptr);
+      material->Isochoric(StretchOf(Perturb(c, col, -h)), nullptr, &minus, nullptr);
+      EXPECT_LT((c_iso.col(col) - (plus - minus) / (2 * h)).norm(), 1e-6 * c_iso.norm());
+    }
+  }
+}
+
 TEST_P(MaterialTest, StressIsObjective) {
   const auto material = GetParam().make();
   const Eigen::Matrix3d rotation =

@@ -1,0 +1,156 @@
+// NONLINEAR_STATIC: finite strain, total Lagrangian, Newton-Raphson with load
+// stepping (analysis/newton_static.h), then the finite-strain fields per
+// element: Green-Lagrange and Euler-Almansi strain, second Piola-Kirchhoff
+// and Cauchy stress, J, von Mises of the Cauchy stress.
+#include <Eigen/LU>
+#include <cmath>
+#include <cstdio>
+
+#include "analysis/error_estimator.h"
+#include "analysis/finite_strain_model.h"
+#include "analysis/newton_static.h"
+#include "analysis/static_analysis.h"
+#include "fem/tet4_finite_strain.h"
+#include "linear/linear_solver.h"
+#include "material/factory.h"
+#include "material/hyperelastic.h"
+#include "material/linear_elastic.h"
+
+namespace pba {
+namespace {
+
+std::string Format(const char* format, auto... args) {
+  char buffer[512];
+  std::snprintf(buffer, sizeof buffer, format, args...);
+  return buffer;
+}
+
+NewtonOptions OptionsOf(const NonlinearOptionsSpec& spec) {
+  NewtonOptions options;
+  if (spec.increments > 0) options.initial_increments = spec.increments;
+  if (spec.max_iterations > 0) options.max_iterations = spec.max_iterations;
+  if (spec.residual_tolerance > 0) options.residual_tolerance = spec.residual_tolerance;
+  if (spec.displacement_tolerance > 0) options.displacement_tolerance = spec.displacement_tolerance;
+  if (spec.min_increment > 0) options.min_increment = spec.min_increment;
+  options.max_increment = std::max(options.max_increment, 1.0 / options.initial_increments);
+  options.line_search = spec.line_search;
+  return options;
+}
+
+}  // namespace
+
+Status SolveNonlinearStatic(const SceneSpec& scene, const Model& model, PhaseClock* clock_ptr,
+                            Solution* solution, StaticResult* result) {
+  PhaseClock& clock = *clock_ptr;
+  Summary& summary = solution->summary;
+  const Mesh& mesh = model.mesh;
+  const DofMap& dofs = model.dofs;
+  const auto material = MakeHyperelasticMaterial(scene.material);
+  const auto body = MakeTet4Model(mesh, *material);
+  const auto solver = CreateLinearSolver(scene.analysis.linear_solver);
+  const NewtonOptions options = OptionsOf(scene.analysis.nonlinear);
+
+  clock.Begin("newton", 0.05, 0.85,
+              Format("Newton-Raphson on %d unknowns, %d initial increments", dofs.num_free(),
+                     options.initial_increments));
+  NewtonReport report;
+  Eigen::VectorXd u;
+  const Status status = SolveNewtonStatic(
+      *body, dofs, options, solver.get(),
+      [&](const NewtonProgress& p) {
+        clock.Update(p.load_factor,
+                     p.iteration == 0
+                         ? Format("load factor %.3g reached", p.load_factor)
+                         : Format("load factor %.3g, iteration %d, relative residual %.2g",
+                                  p.load_factor, p.iteration, p.relative_residual));
+        return !clock.cancelled();
+      },
+      &u, &report);
+  summary.newton_iterations = report.total_iterations;
+  summary.increment_cuts = report.cuts;
+  for (const IncrementRecord& r : report.increments) {
+    summary.increments.push_back({r.load_factor, r.iterations, r.relative_residual});
+  }
+  if (status.code() == Status::Code::kNumerical) {
+    return Status::Numerical(status.message() +
+                             "; the prescribed deformation may be too large for this mesh "
+                             "(elements invert) - try a finer mesh, more increments "
+                             "(analysis.nonlinear.increments) or a smaller displacement");
+  }
+  PBA_RETURN_IF_ERROR(status);
+  clock.End();
+
+  clock.Begin("recover", 0.85, 0.95, "finite-strain fields, reactions");
+  const int ne = mesh.num_elements();
+  solution->strain.resize(6 * static_cast<std::size_t>(ne));
+  solution->almansi_strain.resize(6 * static_cast<std::size_t>(ne));
+  solution->stress_pa.resize(6 * static_cast<std::size_t>(ne));
+  solution->pk2_stress_pa.resize(6 * static_cast<std::size_t>(ne));
+  solution->von_mises_pa.resize(ne);
+  solution->jacobian.resize(ne);
+  std::vector<double> volume(ne);
+  double max_strain = 0;
+#pragma omp parallel for reduction(max : max_strain) schedule(static)
+  for (int e = 0; e < ne; ++e) {
+    const Tet4Geometry g = ComputeTet4Geometry(TetCorners(mesh, e));
+    const Eigen::Matrix3d f = DeformationGradient(g, GatherElement(mesh, e, u));
+    const double j = f.determinant();
+    const Eigen::Matrix3d identity = Eigen::Matrix3d::Identity();
+    const Eigen::Matrix3d green = 0.5 * (f.transpose() * f - identity);
+    const Eigen::Matrix3d almansi = 0.5 * (identity - (f * f.transpose()).inverse());
+    const Vector6d pk2 = material->Stress(f);
+    const Eigen::Matrix3d cauchy = f * VoigtToSymmetric(pk2) * f.transpose() / j;
+    // Engineering shear in the Voigt strain vectors, as for small strain.
+    Vector6d e_voigt = SymmetricToVoigt(green), a_voigt = SymmetricToVoigt(almansi);
+    e_voigt.tail<3>() *= 2;
+    a_voigt.tail<3>() *= 2;
+    Eigen::Map<Vector6d>(&solution->strain[6 * e]) = e_voigt;
+    Eigen::Map<Vector6d>(&solution->almansi_strain[6 * e]) = a_voigt;
+    Eigen::Map<Vector6d>(&solution->pk2_stress_pa[6 * e]) = pk2;
+    const Vector6d sigma = SymmetricToVoigt(cauchy);
+    Eigen::Map<Vector6d>(&solution->stress_pa[6 * e]) = sigma;
+    solution->von_mises_pa[e] = VonMises(sigma);
+    solution->jacobian[e] = j;
+    volume[e] = g.volume;
+    max_strain = std::max(max_strain, e_voigt.cwiseAbs().maxCoeff());
+  }
+  double energy = 0;
+  if (!body->InternalForce(u, &result->internal_force, &energy)) {
+    return Status::Internal("an element inverted after a converged solve");
+  }
+  clock.End();
+
+  clock.Begin("estimate", 0.95, 0.99, "Zienkiewicz-Zhu error estimate");
+  const InitialModuli moduli = InitialElasticModuli(scene.material);
+  const ErrorEstimateResult estimate =
+      EstimateZzError(mesh, solution->pk2_stress_pa, volume,
+                      IsotropicCompliance(moduli.youngs_modulus_pa, moduli.poissons_ratio));
+  solution->error_indicator = estimate.element_share;
+  summary.error.estimated = true;
+  summary.error.method =
+      "Zienkiewicz-Zhu recovery of the second Piola-Kirchhoff stress (nodal averaging), "
+      "measured with the initial compliance";
+  summary.error.relative_error = estimate.relative_error;
+  summary.error.note =
+      "estimated discretisation error in the energy norm, relative to the solution's; at large "
+      "strain the initial-compliance norm makes it an indicator rather than a bound; refine the "
+      "mesh (mesh.element_size_mm) to reduce it";
+  clock.Update(1.0);
+  clock.End();
+
+  summary.analysis = "nonlinear static (finite strain, total Lagrangian, Newton-Raphson)";
+  summary.linear_solver = solver->Name();
+  summary.notes.push_back("elements: " + body->Describe());
+  if (report.cuts > 0) {
+    summary.notes.push_back(Format("%d load increment(s) were cut back and retried; first: %s",
+                                   report.cuts, report.cut_reasons.front().c_str()));
+  }
+  summary.relative_residual =
+      report.increments.empty() ? 0 : report.increments.back().relative_residual;
+  result->u = std::move(u);
+  result->strain_energy_j = energy;
+  result->max_strain = max_strain;
+  return Status::Ok();
+}
+
+}  // namespace pba

@@ -1,0 +1,115 @@
+// SolveScene: validate, mesh, hold, dispatch to the analysis, then the
+// results every analysis shares (nodal fields, reactions, maxima, timing).
+#include <omp.h>
+
+#include <algorithm>
+#include <cstdio>
+
+#include "analysis/rigid_modes.h"
+#include "analysis/static_analysis.h"
+#include "material/factory.h"
+#include "mesh/primitive_mesher.h"
+
+namespace pba {
+namespace {
+
+constexpr double kMm = 1e-3;
+
+std::string Format(const char* format, auto... args) {
+  char buffer[256];
+  std::snprintf(buffer, sizeof buffer, format, args...);
+  return buffer;
+}
+
+std::string DescribeGeometry(const GeometrySpec& g) {
+  if (g.kind == GeometrySpec::Kind::kBox) {
+    return Format("box %g x %g x %g mm", g.box.size_mm[0], g.box.size_mm[1], g.box.size_mm[2]);
+  }
+  return Format("cylinder r = %g mm, h = %g mm", g.cylinder.radius_mm, g.cylinder.height_mm);
+}
+
+}  // namespace
+
+const char* SolverVersion() { return PBA_VERSION; }
+
+Status SolveScene(const SceneSpec& scene, const SolveOptions& options, Solution* solution) {
+  PBA_RETURN_IF_ERROR(ValidateScene(scene));
+  if (options.threads > 0) omp_set_num_threads(options.threads);
+  *solution = Solution();
+  Summary& summary = solution->summary;
+  PhaseClock clock(options, &summary.phases);
+
+  clock.Begin("mesh", 0.0, 0.05, "meshing the " + DescribeGeometry(scene.geometry));
+  const Model model = BuildModel(scene);
+  const Mesh& mesh = model.mesh;
+  const DofMap& dofs = model.dofs;
+  const std::string free_modes = DescribeFreeRigidModes(mesh, dofs);
+  if (!free_modes.empty()) {
+    return Status::FailedPrecondition("the boundary conditions leave the body free to move: " +
+                                      free_modes + "; hold it with further conditions");
+  }
+  clock.End();
+  if (clock.cancelled()) return Status::Cancelled("cancelled during mesh");
+
+  summary.scene_name = scene.name;
+  summary.geometry = DescribeGeometry(scene.geometry);
+  summary.element_type = "TET4";
+  summary.nodes = mesh.num_nodes();
+  summary.elements = mesh.num_elements();
+  summary.dofs = dofs.num_free();
+  summary.constrained_dofs = dofs.num_dofs() - dofs.num_free();
+  summary.material = (scene.material.name.empty() ? std::string("material") : scene.material.name) +
+                     ": " + DescribeMaterial(scene.material);
+  summary.notes.push_back(
+      "mesh: " + model.mesh_description +
+      Format(" (element size %g mm)", EffectiveElementSize(scene.geometry, scene.mesh)));
+
+  StaticResult result;
+  switch (scene.analysis.type) {
+    case AnalysisSpec::Type::kLinearStatic:
+      PBA_RETURN_IF_ERROR(SolveLinearStatic(scene, model, &clock, solution, &result));
+      break;
+    case AnalysisSpec::Type::kNonlinearStatic:
+      PBA_RETURN_IF_ERROR(SolveNonlinearStatic(scene, model, &clock, solution, &result));
+      break;
+  }
+
+  for (const std::string& name : ReactionSetNames(scene)) {
+    Reaction reaction{name, {0, 0, 0}};
+    for (int node : mesh.face_sets.at(name).nodes) {
+      for (int c = 0; c < 3; ++c) reaction.force_n[c] += result.internal_force(3 * node + c);
+    }
+    summary.reactions.push_back(reaction);
+  }
+
+  // Fields in the units of result.h5: mm for lengths and displacements.
+  const int n = mesh.num_nodes(), ne = mesh.num_elements();
+  solution->nodes_mm.resize(3 * static_cast<std::size_t>(n));
+  solution->displacement_mm.resize(3 * static_cast<std::size_t>(n));
+  int max_node = 0;
+  double max_u = -1;
+  for (int i = 0; i < n; ++i) {
+    for (int c = 0; c < 3; ++c) {
+      solution->nodes_mm[3 * i + c] = mesh.nodes(i, c) / kMm;
+      solution->displacement_mm[3 * i + c] = result.u(3 * i + c) / kMm;
+    }
+    const double norm = result.u.segment<3>(3 * i).norm();
+    if (norm > max_u) max_u = norm, max_node = i;
+  }
+  solution->tets.resize(4 * static_cast<std::size_t>(ne));
+  for (int e = 0; e < ne; ++e) {
+    for (int a = 0; a < 4; ++a) solution->tets[4 * e + a] = mesh.tets[e][a];
+  }
+  summary.max_displacement_mm = max_u / kMm;
+  for (int c = 0; c < 3; ++c) summary.max_displacement_at_mm[c] = mesh.nodes(max_node, c) / kMm;
+  summary.max_von_mises_pa =
+      solution->von_mises_pa.empty()
+          ? 0
+          : *std::max_element(solution->von_mises_pa.begin(), solution->von_mises_pa.end());
+  summary.strain_energy_j = result.strain_energy_j;
+  summary.threads = omp_get_max_threads();
+  summary.wall_time_s = clock.elapsed_s();
+  return Status::Ok();
+}
+
+}  // namespace pba

@@ -1,0 +1,32 @@
+// The static analyses SolveScene dispatches to. Each fills the element
+// fields of `solution` and the analysis-specific parts of its summary, and
+// returns the displacement and internal force from which SolveScene derives
+// the shared results (nodal fields, reactions, maxima).
+#pragma once
+
+#include <Eigen/Core>
+#include <vector>
+
+#include "core/phase_clock.h"
+#include "pba/solve.h"
+#include "scene/model_builder.h"
+
+namespace pba {
+
+struct StaticResult {
+  Eigen::VectorXd u;               // full displacement [m]
+  Eigen::VectorXd internal_force;  // full internal force [N]; reactions on prescribed unknowns
+  double strain_energy_j = 0;
+  double max_strain = 0;  // largest strain component magnitude
+};
+
+// Small-strain linear elasticity, K u = f (hyperelastic models enter with
+// their initial moduli).
+Status SolveLinearStatic(const SceneSpec& scene, const Model& model, PhaseClock* clock,
+                         Solution* solution, StaticResult* result);
+
+// Finite strain, total Lagrangian, Newton-Raphson with load stepping.
+Status SolveNonlinearStatic(const SceneSpec& scene, const Model& model, PhaseClock* clock,
+                            Solution* solution, StaticResult* result);
+
+}  // namespace pba
