@@ -109,7 +109,23 @@ std::vector<SceneSpec> Cases() {
   GeometrySpec cylinder;
   cylinder.kind = GeometrySpec::Kind::kCylinder;
   cylinder.cylinder = {10, 20};
+  SceneSpec neo =
+      Scene("neo-Hookean block, bonded, pressed 20 % (nonlinear)", box, 2.5,
+            {Condition("bottom", K::kFixed), Condition("top", K::kDisplacement, {0.0, 0.0, -6.0})});
+  neo.material.kind = MaterialSpec::Kind::kNeoHookean;
+  neo.material.neo_hookean = {1000, 5e4};
+  neo.analysis.type = AnalysisSpec::Type::kNonlinearStatic;
+  SceneSpec ogden =
+      Scene("Ogden brain cylinder, bottom fixed, top pressed 15 % (nonlinear)", cylinder, 1.5,
+            {Condition("bottom", K::kFixed),
+             Condition("top", K::kDisplacement, {std::nullopt, std::nullopt, -3.0})});
+  ogden.material.kind = MaterialSpec::Kind::kOgden;
+  ogden.material.ogden.terms = {{842, -4.7}};
+  ogden.material.ogden.bulk_modulus_pa = 842e2;
+  ogden.analysis.type = AnalysisSpec::Type::kNonlinearStatic;
   return {
+      neo,
+      ogden,
       Scene("block, bottom fixed, top pressed 1.5 mm", box, 2,
             {Condition("bottom", K::kFixed), Condition("top", K::kDisplacement, {0.0, 0.0, -1.5})}),
       Scene("block, rollers, top pulled 0.3 mm", box, 2.5,
