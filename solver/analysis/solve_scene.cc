@@ -35,6 +35,11 @@ const char* SolverVersion() { return PBA_VERSION; }
 Status SolveScene(const SceneSpec& scene, const SolveOptions& options, Solution* solution) {
   PBA_RETURN_IF_ERROR(ValidateScene(scene));
   if (options.threads > 0) omp_set_num_threads(options.threads);
+  // CHOLMOD's supernodal factorisation asks OpenMP for a fixed team of 4
+  // threads (its compile-time default); on fewer cores that oversubscribes
+  // and the factorisations of a Newton solve spend their time waking
+  // threads. Dynamic teams let the runtime give it what the machine has.
+  omp_set_dynamic(1);
   *solution = Solution();
   Summary& summary = solution->summary;
   PhaseClock clock(options, &summary.phases);

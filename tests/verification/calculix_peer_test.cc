@@ -25,6 +25,10 @@ using testing::TempDir;
 
 // CalculiX prints 7 significant digits.
 constexpr double kPrintPrecision = 5e-6;
+// Nonlinear steps: both Newton solvers stop at a relative residual of 1e-8,
+// but CalculiX measures it against its average nodal force, a smaller scale
+// than PBA's, so its answer may sit a few 1e-6 from the exact discrete one.
+constexpr double kNonlinearPrecision = 2e-5;
 
 std::string FindCcx() {
   const char* path = std::getenv("PATH");
@@ -145,6 +149,9 @@ TEST_P(CalculixPeerTest, SameModelSameAnswer) {
   const std::string ccx = FindCcx();
   ASSERT_FALSE(ccx.empty()) << "CalculiX (ccx) not found; scripts/deps.sh installs calculix-ccx";
   const SceneSpec& scene = GetParam();
+  const double precision = scene.analysis.type == AnalysisSpec::Type::kNonlinearStatic
+                               ? kNonlinearPrecision
+                               : kPrintPrecision;
   Solution ours;
   const Status solved = SolveScene(scene, SolveOptions(), &ours);
   ASSERT_TRUE(solved.ok()) << solved.ToString();
@@ -173,7 +180,7 @@ TEST_P(CalculixPeerTest, SameModelSameAnswer) {
     const auto it = peer.totals.find(Upper(r.set));
     ASSERT_NE(it, peer.totals.end()) << r.set;
     for (int c = 0; c < 3; ++c) {
-      EXPECT_NEAR(r.force_n[c], it->second[c], kPrintPrecision * scale)
+      EXPECT_NEAR(r.force_n[c], it->second[c], precision * scale)
           << r.set << " component " << c;
       worst_force = std::max(worst_force, std::abs(r.force_n[c] - it->second[c]) / scale);
     }
@@ -188,7 +195,7 @@ TEST_P(CalculixPeerTest, SameModelSameAnswer) {
       u_diff = std::max(u_diff, std::abs(ours.displacement_mm[3 * i + c] * 1e-3 - u[c]));
     }
   }
-  EXPECT_LT(u_diff, kPrintPrecision * u_max);
+  EXPECT_LT(u_diff, precision * u_max);
   std::printf("| %s | %lld | %.3e | %.3e | %.3f s | %.3f s | %.2g %% (ZZ) |\n", scene.name.c_str(),
               static_cast<long long>(ours.summary.dofs), worst_force, u_diff / u_max,
               ours.summary.wall_time_s, ccx_seconds, 100 * ours.summary.error.relative_error);
