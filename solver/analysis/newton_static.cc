@@ -163,6 +163,7 @@ Status SolveNewtonStatic(const FiniteStrainModel& model, const DofMap& dofs,
       *u = std::move(trial);
       load = target;
       report->increments.push_back({load, iteration, residual});
+      if (options.on_increment) options.on_increment(load, *u);
       if (iteration <= options.quick_iterations) {
         step = std::min(step * 1.5, options.max_increment);
       }

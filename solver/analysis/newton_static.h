@@ -38,6 +38,8 @@ struct NewtonOptions {
   double max_increment = 0.5;   // largest load-factor increment when growing
   int quick_iterations = 4;     // an increment this quick lets the next grow 1.5x
   bool line_search = true;
+  // Called with each converged increment's load factor and full displacement.
+  std::function<void(double load_factor, const Eigen::VectorXd& u)> on_increment;
 };
 
 struct IncrementRecord {

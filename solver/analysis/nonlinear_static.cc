@@ -48,7 +48,11 @@ Status SolveNonlinearStatic(const SceneSpec& scene, const Model& model, PhaseClo
   const auto material = MakeHyperelasticMaterial(scene.material);
   const auto body = MakeTet4Model(mesh, *material);
   const auto solver = CreateLinearSolver(scene.analysis.linear_solver);
-  const NewtonOptions options = OptionsOf(scene.analysis.nonlinear);
+  NewtonOptions options = OptionsOf(scene.analysis.nonlinear);
+  options.on_increment = [solution](double load, const Eigen::VectorXd& u) {
+    solution->step_load_factor.push_back(load);
+    for (int i = 0; i < u.size(); ++i) solution->step_displacement_mm.push_back(u(i) / 1e-3);
+  };
 
   clock.Begin("newton", 0.05, 0.85,
               Format("Newton-Raphson on %d unknowns, %d initial increments", dofs.num_free(),

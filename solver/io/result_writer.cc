@@ -95,20 +95,21 @@ std::string ComponentAttribute(const std::string& name, const std::string& path,
          "\n        </DataItem>\n      </Attribute>\n";
 }
 
-std::string XdmfText(const SceneSpec& scene, const Solution& s) {
+// Rows [first, first + rows) of a rows_total x cols dataset.
+std::string RowSlab(const std::string& path, size_t first, size_t rows, size_t rows_total,
+                    int cols) {
+  const std::string n = std::to_string(rows), c = std::to_string(cols);
+  return "<DataItem ItemType=\"HyperSlab\" Dimensions=\"" + n + " " + c +
+         "\">\n          <DataItem Dimensions=\"3 2\" Format=\"XML\">" + std::to_string(first) +
+         " 0 1 1 " + n + " " + c + "</DataItem>\n          " +
+         Item(std::to_string(rows_total) + " " + c, path) + "\n        </DataItem>";
+}
+
+// The final fields as XDMF attributes of one grid.
+std::string FieldAttributes(const SceneSpec& scene, const Solution& s) {
   const size_t nodes = s.nodes_mm.size() / 3, elements = s.tets.size() / 4;
   const std::string nn = std::to_string(nodes), ne = std::to_string(elements);
-  std::string x =
-      "<?xml version=\"1.0\" ?>\n<!-- PBA result: lengths in mm, stresses in Pa. Open in ParaView. "
-      "-->\n"
-      "<Xdmf Version=\"3.0\">\n  <Domain>\n    <Grid Name=\"" +
-      (scene.name.empty() ? "result" : scene.name) +
-      "\" GridType=\"Uniform\">\n"
-      "      <Topology TopologyType=\"Tetrahedron\" NumberOfElements=\"" +
-      ne + "\">\n        " + Item(ne + " 4", "/mesh/tets", "Int", 8) +
-      "\n      </Topology>\n"
-      "      <Geometry GeometryType=\"XYZ\">\n        " +
-      Item(nn + " 3", "/mesh/nodes") + "\n      </Geometry>\n";
+  std::string x;
   if (scene.outputs.displacement) {
     x += "      <Attribute Name=\"displacement\" AttributeType=\"Vector\" Center=\"Node\">\n       "
          " " +
@@ -143,8 +144,47 @@ std::string XdmfText(const SceneSpec& scene, const Solution& s) {
     x += "      <Attribute Name=\"jacobian\" AttributeType=\"Scalar\" Center=\"Cell\">\n        " +
          Item(ne, "/fields/jacobian") + "\n      </Attribute>\n";
   }
-  x += "    </Grid>\n  </Domain>\n</Xdmf>\n";
   return x;
+}
+
+std::string XdmfText(const SceneSpec& scene, const Solution& s) {
+  const size_t nodes = s.nodes_mm.size() / 3, elements = s.tets.size() / 4;
+  const std::string nn = std::to_string(nodes), ne = std::to_string(elements);
+  const std::string name = scene.name.empty() ? "result" : scene.name;
+  const std::string mesh = "      <Topology TopologyType=\"Tetrahedron\" NumberOfElements=\"" + ne +
+                           "\">\n        " + Item(ne + " 4", "/mesh/tets", "Int", 8) +
+                           "\n      </Topology>\n"
+                           "      <Geometry GeometryType=\"XYZ\">\n        " +
+                           Item(nn + " 3", "/mesh/nodes") + "\n      </Geometry>\n";
+  std::string x =
+      "<?xml version=\"1.0\" ?>\n<!-- PBA result: lengths in mm, stresses in Pa. Open in ParaView. "
+      "-->\n<Xdmf Version=\"3.0\">\n  <Domain>\n";
+  const size_t steps = s.step_load_factor.size();
+  if (steps == 0) {
+    x += "    <Grid Name=\"" + name + "\" GridType=\"Uniform\">\n" + mesh +
+         FieldAttributes(scene, s) + "    </Grid>\n";
+  } else {
+    // A temporal collection over the load increments (time = load factor):
+    // the displacement of every increment, all fields at the last.
+    x += "    <Grid Name=\"" + name + "\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
+    for (size_t k = 0; k < steps; ++k) {
+      char time[32];
+      std::snprintf(time, sizeof time, "%.17g", s.step_load_factor[k]);
+      x += "    <Grid Name=\"increment " + std::to_string(k + 1) +
+           "\" GridType=\"Uniform\">\n      <Time Value=\"" + time + "\" />\n" + mesh;
+      if (k + 1 == steps) {
+        x += FieldAttributes(scene, s);
+      } else if (scene.outputs.displacement) {
+        x += "      <Attribute Name=\"displacement\" AttributeType=\"Vector\" Center=\"Node\">\n"
+             "        " +
+             RowSlab("/steps/displacement", k * nodes, nodes, steps * nodes, 3) +
+             "\n      </Attribute>\n";
+      }
+      x += "    </Grid>\n";
+    }
+    x += "    </Grid>\n";
+  }
+  return x + "  </Domain>\n</Xdmf>\n";
 }
 
 }  // namespace
@@ -184,6 +224,14 @@ Status WriteResultFiles(const SceneSpec& scene, Solution* solution,
     }
     if (!solution->error_indicator.empty()) {
       w.Dataset("/fields/error_indicator", solution->error_indicator, 0, "1");
+    }
+    if (!solution->step_load_factor.empty() && scene.outputs.displacement) {
+      // One record per converged load increment: the path to the answer.
+      w.Group("/steps");
+      w.Dataset("/steps/load_factor", solution->step_load_factor, 0, "1",
+                "fraction of the prescribed loads applied");
+      w.Dataset("/steps/displacement", solution->step_displacement_mm, 3, "mm",
+                "x y z; rows step-major: step k holds rows k*nodes .. (k+1)*nodes-1");
     }
     if (!w.ok()) return Status::Io("cannot write " + h5.string());
   }

@@ -106,6 +106,10 @@ struct Solution {
   std::vector<double> pk2_stress_pa;
   std::vector<double> almansi_strain;
   std::vector<double> jacobian;
+  // Nonlinear analyses: the displacement at the end of every converged load
+  // increment (steps x nodes x 3 [mm]) and its load factor (steps).
+  std::vector<double> step_load_factor;
+  std::vector<double> step_displacement_mm;
   // Element-wise estimated error share (ZZ), elements; empty if not estimated.
   std::vector<double> error_indicator;
   Summary summary;

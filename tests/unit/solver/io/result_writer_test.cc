@@ -106,6 +106,57 @@ TEST_F(ResultWriterTest, WritesFieldsWithUnitsAndAnXdmfThatPointsAtThem) {
   H5Fclose(file);
 }
 
+// A nonlinear solve adds the finite-strain fields and one displacement
+// record per load increment; the XDMF becomes a temporal collection over the
+// increments (time = load factor) whose every reference exists.
+TEST_F(ResultWriterTest, NonlinearSolveWritesFiniteStrainFieldsAndIncrements) {
+  SceneSpec scene = Scene();
+  scene.material.kind = MaterialSpec::Kind::kNeoHookean;
+  scene.material.neo_hookean = {1000, 1e5};
+  scene.analysis.type = AnalysisSpec::Type::kNonlinearStatic;
+  Solution solution;
+  const Status solved = SolveScene(scene, SolveOptions(), &solution);
+  ASSERT_TRUE(solved.ok()) << solved.ToString();
+  ASSERT_TRUE(WriteResultFiles(scene, &solution, dir_).ok());
+  const hid_t file = H5Fopen((dir_ / "result.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  ASSERT_GE(file, 0);
+  const hsize_t nodes = solution.nodes_mm.size() / 3, elements = solution.tets.size() / 4;
+  const hsize_t steps = solution.step_load_factor.size();
+  ASSERT_GE(steps, 1u);
+  EXPECT_EQ(solution.step_load_factor.back(), 1.0);
+  EXPECT_EQ(Dims(file, "/fields/pk2_stress"), (std::vector<hsize_t>{elements, 6}));
+  EXPECT_EQ(Dims(file, "/fields/almansi_strain"), (std::vector<hsize_t>{elements, 6}));
+  EXPECT_EQ(Dims(file, "/fields/jacobian"), (std::vector<hsize_t>{elements}));
+  EXPECT_EQ(Dims(file, "/steps/load_factor"), (std::vector<hsize_t>{steps}));
+  EXPECT_EQ(Dims(file, "/steps/displacement"), (std::vector<hsize_t>{steps * nodes, 3}));
+  // The last increment's record is the final displacement.
+  const hid_t records = H5Dopen2(file, "/steps/displacement", H5P_DEFAULT);
+  std::vector<double> all(steps * nodes * 3);
+  H5Dread(records, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, all.data());
+  H5Dclose(records);
+  EXPECT_EQ(std::vector<double>(all.end() - nodes * 3, all.end()), solution.displacement_mm);
+
+  std::ifstream in(dir_ / "result.xdmf");
+  std::stringstream xdmf;
+  xdmf << in.rdbuf();
+  const std::string text = xdmf.str();
+  EXPECT_NE(text.find("CollectionType=\"Temporal\""), std::string::npos);
+  std::size_t times = 0;
+  for (auto at = text.find("<Time Value="); at != std::string::npos;
+       at = text.find("<Time Value=", at + 1)) {
+    ++times;
+  }
+  EXPECT_EQ(times, steps);
+  const std::regex reference("result\\.h5:(/[a-z_/0-9]+)");
+  for (auto it = std::sregex_iterator(text.begin(), text.end(), reference);
+       it != std::sregex_iterator(); ++it) {
+    EXPECT_FALSE(Dims(file, (*it)[1].str().c_str()).empty()) << (*it)[1].str();
+  }
+  EXPECT_NE(text.find("Name=\"pk2_stress_zz\""), std::string::npos);
+  EXPECT_NE(text.find("Name=\"jacobian\""), std::string::npos);
+  H5Fclose(file);
+}
+
 TEST_F(ResultWriterTest, LeavesOutFieldsNotAskedFor) {
   SceneSpec scene = Scene();
   scene.outputs.stress = scene.outputs.strain = false;
