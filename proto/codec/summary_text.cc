@@ -41,7 +41,26 @@ std::string FormatSummary(const v1::Summary& summary) {
     out += Format("  reaction %-9s (%.6g, %.6g, %.6g) N\n", reaction.set().c_str(),
                   reaction.force_n(0), reaction.force_n(1), reaction.force_n(2));
   }
-  out += Format("  linear residual    %.2e (relative)\n", r.relative_residual());
+  if (!r.has_convergence()) {
+    out += Format("  linear residual    %.2e (relative)\n", r.relative_residual());
+  } else {
+    const v1::Convergence& c = r.convergence();
+    out += Format(
+        "  Newton             %d increments, %d iterations, %d cut back; final residual "
+        "%.2e (relative)\n",
+        c.increments_size(), c.newton_iterations(), c.increment_cuts(), r.relative_residual());
+    // The path, unless it is long: then its first and last few increments.
+    const int n = c.increments_size();
+    for (int i = 0; i < n; ++i) {
+      if (n > 10 && i == 3) {
+        out += Format("    ... %d more increments ...\n", n - 6);
+        i = n - 3;
+      }
+      const v1::Increment& inc = c.increments(i);
+      out += Format("    load %-8.4g %2d iterations, residual %.1e\n", inc.load_factor(),
+                    inc.iterations(), inc.relative_residual());
+    }
+  }
   out += Format("Wall time    %.3f s on %d thread(s):", p.wall_time_s(), p.threads());
   for (const auto& phase : p.phases()) {
     out += Format(" %s %.3f s,", phase.phase().c_str(), phase.seconds());

@@ -41,13 +41,43 @@ Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec) {
   }
   spec->mesh.element_size_mm = scene.mesh().element_size_mm();
 
-  spec->material.name = scene.material().name();
-  if (scene.material().has_linear_elastic()) {
-    spec->material.kind = MaterialSpec::Kind::kLinearElastic;
-    spec->material.linear_elastic.youngs_modulus_pa =
-        scene.material().linear_elastic().youngs_modulus_pa();
-    spec->material.linear_elastic.poissons_ratio =
-        scene.material().linear_elastic().poissons_ratio();
+  const v1::Material& material = scene.material();
+  MaterialSpec& m = spec->material;
+  m.name = material.name();
+  switch (material.model_case()) {
+    case v1::Material::kLinearElastic:
+      m.kind = MaterialSpec::Kind::kLinearElastic;
+      m.linear_elastic.youngs_modulus_pa = material.linear_elastic().youngs_modulus_pa();
+      m.linear_elastic.poissons_ratio = material.linear_elastic().poissons_ratio();
+      break;
+    case v1::Material::kNeoHookean:
+      m.kind = MaterialSpec::Kind::kNeoHookean;
+      m.neo_hookean.shear_modulus_pa = material.neo_hookean().shear_modulus_pa();
+      m.neo_hookean.bulk_modulus_pa = material.neo_hookean().bulk_modulus_pa();
+      break;
+    case v1::Material::kMooneyRivlin:
+      m.kind = MaterialSpec::Kind::kMooneyRivlin;
+      m.mooney_rivlin.c10_pa = material.mooney_rivlin().c10_pa();
+      m.mooney_rivlin.c01_pa = material.mooney_rivlin().c01_pa();
+      m.mooney_rivlin.bulk_modulus_pa = material.mooney_rivlin().bulk_modulus_pa();
+      break;
+    case v1::Material::kPolynomial:
+      m.kind = MaterialSpec::Kind::kPolynomial;
+      for (const v1::PolynomialTerm& t : material.polynomial().terms()) {
+        m.polynomial.terms.push_back({t.i(), t.j(), t.c_pa()});
+      }
+      m.polynomial.d_per_pa.assign(material.polynomial().d_per_pa().begin(),
+                                   material.polynomial().d_per_pa().end());
+      break;
+    case v1::Material::kOgden:
+      m.kind = MaterialSpec::Kind::kOgden;
+      for (const v1::OgdenTerm& t : material.ogden().terms()) {
+        m.ogden.terms.push_back({t.mu_pa(), t.alpha()});
+      }
+      m.ogden.bulk_modulus_pa = material.ogden().bulk_modulus_pa();
+      break;
+    case v1::Material::MODEL_NOT_SET:
+      break;  // ValidateScene names it
   }
 
   for (const v1::BoundaryCondition& bc : scene.boundary_conditions()) {
@@ -76,6 +106,9 @@ Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec) {
     case v1::Analysis::LINEAR_STATIC:
       spec->analysis.type = AnalysisSpec::Type::kLinearStatic;
       break;
+    case v1::Analysis::NONLINEAR_STATIC:
+      spec->analysis.type = AnalysisSpec::Type::kNonlinearStatic;
+      break;
     default:
       return Status::InvalidArgument(
           "analysis.type", "unknown analysis type " + std::to_string(scene.analysis().type()));
@@ -94,10 +127,20 @@ Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec) {
           "unknown linear solver " + std::to_string(scene.analysis().linear_solver()));
   }
 
+  const v1::NonlinearOptions& nonlinear = scene.analysis().nonlinear();
+  NonlinearOptionsSpec& n = spec->analysis.nonlinear;
+  n.increments = nonlinear.increments();
+  n.max_iterations = nonlinear.max_iterations();
+  n.residual_tolerance = nonlinear.residual_tolerance();
+  n.displacement_tolerance = nonlinear.displacement_tolerance();
+  n.min_increment = nonlinear.min_increment();
+  n.line_search = !nonlinear.has_line_search() || nonlinear.line_search();
+
   const auto& fields = scene.outputs().fields();
   if (!fields.empty()) {
     spec->outputs.displacement = spec->outputs.stress = spec->outputs.von_mises =
-        spec->outputs.strain = false;
+        spec->outputs.strain = spec->outputs.pk2_stress = spec->outputs.almansi_strain =
+            spec->outputs.jacobian = false;
     for (int i = 0; i < fields.size(); ++i) {
       switch (fields[i]) {
         case v1::Outputs::DISPLACEMENT:
@@ -111,6 +154,15 @@ Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec) {
           break;
         case v1::Outputs::STRAIN:
           spec->outputs.strain = true;
+          break;
+        case v1::Outputs::PK2_STRESS:
+          spec->outputs.pk2_stress = true;
+          break;
+        case v1::Outputs::ALMANSI_STRAIN:
+          spec->outputs.almansi_strain = true;
+          break;
+        case v1::Outputs::JACOBIAN:
+          spec->outputs.jacobian = true;
           break;
         default:
           return Status::InvalidArgument("outputs.fields[" + std::to_string(i) + "]",
@@ -157,6 +209,17 @@ v1::Summary SummaryToProto(const Summary& summary) {
     for (double f : reaction.force_n) r->add_force_n(f);
   }
   results->set_relative_residual(summary.relative_residual);
+  if (!summary.increments.empty()) {
+    v1::Convergence* convergence = results->mutable_convergence();
+    for (const IncrementSummary& i : summary.increments) {
+      v1::Increment* out = convergence->add_increments();
+      out->set_load_factor(i.load_factor);
+      out->set_iterations(i.iterations);
+      out->set_relative_residual(i.relative_residual);
+    }
+    convergence->set_newton_iterations(summary.newton_iterations);
+    convergence->set_increment_cuts(summary.increment_cuts);
+  }
 
   v1::Performance* performance = out.mutable_performance();
   performance->set_wall_time_s(summary.wall_time_s);

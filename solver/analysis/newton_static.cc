@@ -60,6 +60,7 @@ Status SolveNewtonStatic(const FiniteStrainModel& model, const DofMap& dofs,
                          Eigen::VectorXd* u, NewtonReport* report) {
   *u = Eigen::VectorXd::Zero(dofs.num_dofs());
   *report = NewtonReport();
+  std::unique_ptr<LinearSolver> indefinite;  // made when first needed
   double load = 0;
   double step = 1.0 / std::max(1, options.initial_increments);
   std::string last_failure;
@@ -109,15 +110,27 @@ Status SolveNewtonStatic(const FiniteStrainModel& model, const DofMap& dofs,
         if (!keep_going({load, iteration, residual})) return cancelled();
         status = model.Assemble(trial, dofs, AssemblyOptions(), &system);
         if (!status.ok()) break;
+        // Far from equilibrium the tangent may be indefinite: a nearly
+        // incompressible body's predictor leaves J - 1 = O(step^2), and the
+        // pressure K (J - 1) >> mu that follows destroys positive
+        // definiteness. Cholesky then fails; an LDL^T factorisation still
+        // gives the Newton direction, and the iteration usually returns to
+        // the positive definite region within a step or two.
+        LinearSolver* active = solver;
         status = solver->Factorize(system.k);
         if (!status.ok()) {
+          if (!indefinite) indefinite = CreateIndefiniteLdltSolver();
+          active = indefinite.get();
+          status = active->Factorize(system.k);
+          ++report->indefinite_iterations;
+        }
+        if (!status.ok()) {
           status = Status::Numerical(
-              Format("the tangent stiffness is not positive definite at iteration %d "
-                     "(relative residual %.3g)",
+              Format("the tangent stiffness is singular at iteration %d (relative residual %.3g)",
                      iteration, residual));
           break;
         }
-        status = solver->Solve(system.rhs, &du);
+        status = active->Solve(system.rhs, &du);
         if (!status.ok()) break;
         const double energy = std::abs(du.dot(current.free));
         // Backtracking line search: halve the step while it inverts an

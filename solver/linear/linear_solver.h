@@ -29,4 +29,8 @@ std::unique_ptr<LinearSolver> CreateLinearSolver(AnalysisSpec::LinearSolver kind
 std::unique_ptr<LinearSolver> CreateCholmodSolver();
 std::unique_ptr<LinearSolver> CreateEigenLdltSolver();
 
+// LDL^T without pivoting that accepts negative pivots (an indefinite
+// tangent far from equilibrium); only a singular matrix is refused.
+std::unique_ptr<LinearSolver> CreateIndefiniteLdltSolver();
+
 }  // namespace pba

@@ -127,6 +127,9 @@ std::vector<SceneSpec> Cases() {
   ogden.material.ogden.terms = {{842, -4.7}};
   ogden.material.ogden.bulk_modulus_pa = 842e2;
   ogden.analysis.type = AnalysisSpec::Type::kNonlinearStatic;
+  // CalculiX's own Newton diverges now and then from a first increment of
+  // 0.2 on this model (NaN forces); 0.05 keeps it on track.
+  ogden.analysis.nonlinear.increments = 20;
   return {
       neo,
       ogden,
@@ -180,8 +183,7 @@ TEST_P(CalculixPeerTest, SameModelSameAnswer) {
     const auto it = peer.totals.find(Upper(r.set));
     ASSERT_NE(it, peer.totals.end()) << r.set;
     for (int c = 0; c < 3; ++c) {
-      EXPECT_NEAR(r.force_n[c], it->second[c], precision * scale)
-          << r.set << " component " << c;
+      EXPECT_NEAR(r.force_n[c], it->second[c], precision * scale) << r.set << " component " << c;
       worst_force = std::max(worst_force, std::abs(r.force_n[c] - it->second[c]) / scale);
     }
   }

@@ -1,0 +1,178 @@
+// Scene YAML -> pba.v1.Scene -> SceneSpec for every material model and the
+// nonlinear analysis, the field paths of bad values, and the summary of a
+// nonlinear solve on its way back (proto and text).
+#include "convert/convert.h"
+
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "codec/summary_text.h"
+#include "codec/yaml_codec.h"
+
+namespace pba {
+namespace {
+
+constexpr const char* kBase = R"(
+name: block
+geometry: {box: {size_mm: [10, 10, 10]}}
+boundary_conditions:
+  - {set: bottom, fixed: {}}
+  - {set: top, displacement: {z_mm: -2}}
+)";
+
+SceneSpec Parse(const std::string& extra) {
+  v1::Scene scene;
+  codec::ParseError error;
+  EXPECT_TRUE(codec::ParseYaml(std::string(kBase) + extra, &scene, &error)) << error.ToString();
+  SceneSpec spec;
+  const Status status = SceneFromProto(scene, &spec);
+  EXPECT_TRUE(status.ok()) << status.ToString();
+  return spec;
+}
+
+Status Validate(const std::string& extra) {
+  v1::Scene scene;
+  codec::ParseError error;
+  EXPECT_TRUE(codec::ParseYaml(std::string(kBase) + extra, &scene, &error)) << error.ToString();
+  return ValidateSceneProto(scene);
+}
+
+TEST(SceneFromProto, EveryHyperelasticModel) {
+  SceneSpec s = Parse("material: {neo_hookean: {shear_modulus_pa: 1000, bulk_modulus_pa: 1e6}}");
+  EXPECT_EQ(s.material.kind, MaterialSpec::Kind::kNeoHookean);
+  EXPECT_EQ(s.material.neo_hookean.shear_modulus_pa, 1000);
+  EXPECT_EQ(s.material.neo_hookean.bulk_modulus_pa, 1e6);
+
+  s = Parse("material: {mooney_rivlin: {c10_pa: 300, c01_pa: 200, bulk_modulus_pa: 5e5}}");
+  EXPECT_EQ(s.material.kind, MaterialSpec::Kind::kMooneyRivlin);
+  EXPECT_EQ(s.material.mooney_rivlin.c01_pa, 200);
+
+  s = Parse(R"(material:
+  polynomial:
+    terms: [{i: 1, j: 0, c_pa: 300}, {i: 0, j: 1, c_pa: 200}, {i: 2, j: 0, c_pa: 10}]
+    d_per_pa: [4e-6, 1e-7]
+)");
+  EXPECT_EQ(s.material.kind, MaterialSpec::Kind::kPolynomial);
+  ASSERT_EQ(s.material.polynomial.terms.size(), 3u);
+  EXPECT_EQ(s.material.polynomial.terms[2].i, 2);
+  EXPECT_EQ(s.material.polynomial.terms[2].c_pa, 10);
+  EXPECT_EQ(s.material.polynomial.d_per_pa, (std::vector<double>{4e-6, 1e-7}));
+
+  s = Parse(
+      "material: {name: brain, ogden: {terms: [{mu_pa: 842, alpha: -4.7}], "
+      "bulk_modulus_pa: 8.42e7}}");
+  EXPECT_EQ(s.material.kind, MaterialSpec::Kind::kOgden);
+  EXPECT_EQ(s.material.name, "brain");
+  ASSERT_EQ(s.material.ogden.terms.size(), 1u);
+  EXPECT_EQ(s.material.ogden.terms[0].alpha, -4.7);
+  EXPECT_EQ(s.material.ogden.bulk_modulus_pa, 8.42e7);
+}
+
+TEST(SceneFromProto, NonlinearAnalysisAndOutputs) {
+  SceneSpec s = Parse(R"(material: {neo_hookean: {shear_modulus_pa: 1000, bulk_modulus_pa: 1e6}}
+analysis:
+  type: NONLINEAR_STATIC
+  nonlinear: {increments: 12, max_iterations: 30, residual_tolerance: 1e-9, line_search: false}
+outputs: {fields: [DISPLACEMENT, JACOBIAN]}
+)");
+  EXPECT_EQ(s.analysis.type, AnalysisSpec::Type::kNonlinearStatic);
+  EXPECT_EQ(s.analysis.nonlinear.increments, 12);
+  EXPECT_EQ(s.analysis.nonlinear.max_iterations, 30);
+  EXPECT_EQ(s.analysis.nonlinear.residual_tolerance, 1e-9);
+  EXPECT_FALSE(s.analysis.nonlinear.line_search);
+  EXPECT_TRUE(s.outputs.displacement);
+  EXPECT_TRUE(s.outputs.jacobian);
+  EXPECT_FALSE(s.outputs.pk2_stress);
+  EXPECT_FALSE(s.outputs.almansi_strain);
+  EXPECT_FALSE(s.outputs.stress);
+
+  // Unset: line search on, every field on.
+  s = Parse(
+      "material: {neo_hookean: {shear_modulus_pa: 1000, bulk_modulus_pa: 1e6}}\n"
+      "analysis: {type: NONLINEAR_STATIC}\n");
+  EXPECT_TRUE(s.analysis.nonlinear.line_search);
+  EXPECT_TRUE(s.outputs.pk2_stress && s.outputs.almansi_strain && s.outputs.jacobian);
+}
+
+TEST(ValidateSceneProto, NamesTheBadField) {
+  EXPECT_EQ(
+      Validate("material: {neo_hookean: {shear_modulus_pa: 0, bulk_modulus_pa: 1e6}}").field(),
+      "material.neo_hookean.shear_modulus_pa");
+  EXPECT_EQ(
+      Validate("material: {neo_hookean: {shear_modulus_pa: 1000, bulk_modulus_pa: 10}}").field(),
+      "material.neo_hookean.bulk_modulus_pa");
+  EXPECT_EQ(Validate("material: {ogden: {terms: [{mu_pa: 842, alpha: 0}], bulk_modulus_pa: 1e6}}")
+                .field(),
+            "material.ogden.terms[0].alpha");
+  EXPECT_EQ(Validate("material: {ogden: {terms: [], bulk_modulus_pa: 1e6}}").field(),
+            "material.ogden.terms");
+  EXPECT_EQ(Validate("material: {polynomial: {terms: [{i: 1, j: 0, c_pa: 500}], d_per_pa: "
+                     "[1e-6, 1e-7]}}")
+                .field(),
+            "material.polynomial.d_per_pa");
+  EXPECT_EQ(Validate("material: {polynomial: {terms: [{i: 2, j: 2, c_pa: 5}], d_per_pa: [1e-6]}}")
+                .field(),
+            "material.polynomial.terms[0]");
+  EXPECT_EQ(Validate("material: {mooney_rivlin: {c10_pa: 100, c01_pa: -200, bulk_modulus_pa: 1e6}}")
+                .field(),
+            "material.mooney_rivlin.c10_pa");
+  EXPECT_EQ(Validate("material: {linear_elastic: {youngs_modulus_pa: 3000, poissons_ratio: 0.45}}\n"
+                     "analysis: {type: NONLINEAR_STATIC}\n")
+                .field(),
+            "material");
+  EXPECT_EQ(Validate("material: {neo_hookean: {shear_modulus_pa: 1000, bulk_modulus_pa: 1e6}}\n"
+                     "analysis: {type: NONLINEAR_STATIC, nonlinear: {increments: -3}}\n")
+                .field(),
+            "analysis.nonlinear.increments");
+  EXPECT_EQ(Validate("material: {neo_hookean: {shear_modulus_pa: 1000, bulk_modulus_pa: 1e6}}\n"
+                     "analysis: {type: NONLINEAR_STATIC, nonlinear: {residual_tolerance: 2}}\n")
+                .field(),
+            "analysis.nonlinear.residual_tolerance");
+  EXPECT_TRUE(Validate("material: {ogden: {terms: [{mu_pa: 842, alpha: -4.7}], "
+                       "bulk_modulus_pa: 8.42e7}}\nanalysis: {type: NONLINEAR_STATIC}\n")
+                  .ok());
+}
+
+Summary NonlinearSummary(int increments) {
+  Summary s;
+  s.scene_name = "block";
+  s.analysis = "nonlinear static";
+  for (int i = 1; i <= increments; ++i) {
+    s.increments.push_back({static_cast<double>(i) / increments, 3, 1e-10 * i});
+  }
+  s.newton_iterations = 3 * increments;
+  s.increment_cuts = 1;
+  s.relative_residual = 1e-10;
+  return s;
+}
+
+TEST(SummaryToProto, CarriesTheNewtonPath) {
+  const v1::Summary proto = SummaryToProto(NonlinearSummary(4));
+  ASSERT_TRUE(proto.results().has_convergence());
+  const v1::Convergence& c = proto.results().convergence();
+  ASSERT_EQ(c.increments_size(), 4);
+  EXPECT_EQ(c.increments(3).load_factor(), 1.0);
+  EXPECT_EQ(c.increments(1).iterations(), 3);
+  EXPECT_EQ(c.newton_iterations(), 12);
+  EXPECT_EQ(c.increment_cuts(), 1);
+  EXPECT_FALSE(SummaryToProto(Summary()).results().has_convergence());
+}
+
+TEST(FormatSummary, NewtonLineAndAShortenedPath) {
+  std::string text = codec::FormatSummary(SummaryToProto(NonlinearSummary(4)));
+  EXPECT_NE(text.find("Newton             4 increments, 12 iterations, 1 cut back"),
+            std::string::npos)
+      << text;
+  EXPECT_EQ(text.find("linear residual"), std::string::npos);
+  EXPECT_NE(text.find("load 0.75"), std::string::npos) << text;
+  text = codec::FormatSummary(SummaryToProto(NonlinearSummary(20)));
+  EXPECT_NE(text.find("... 14 more increments ..."), std::string::npos) << text;
+  EXPECT_NE(text.find("load 1 "), std::string::npos) << text;
+  // A linear summary keeps its residual line.
+  EXPECT_NE(codec::FormatSummary(SummaryToProto(Summary())).find("linear residual"),
+            std::string::npos);
+}
+
+}  // namespace
+}  // namespace pba
