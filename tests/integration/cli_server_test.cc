@@ -98,6 +98,23 @@ class CliServerTest : public ::testing::Test {
   std::unique_ptr<ServerProcess> server_;
 };
 
+// A finite-strain job travels the same way and its summary shows the Newton
+// path and the nonlinear fields.
+TEST_F(CliServerTest, NonlinearJobReportsItsNewtonPath) {
+  const RunResult submitted = Pba(
+      {"job", "submit", std::string(PBA_EXAMPLES_DIR) + "/brain_sample_compression.yaml", "--wait"});
+  ASSERT_EQ(submitted.exit_code, 0) << submitted.out << submitted.err;
+  EXPECT_NE(submitted.out.find("SUCCEEDED"), std::string::npos) << submitted.out;
+  EXPECT_NE(submitted.out.find("Ogden"), std::string::npos) << submitted.out;
+  EXPECT_NE(submitted.out.find("Newton "), std::string::npos) << submitted.out;
+  EXPECT_NE(submitted.out.find("nonlinear static"), std::string::npos) << submitted.out;
+
+  const RunResult json = Pba({"--json", "job", "status", JobId(submitted)});
+  ASSERT_EQ(json.exit_code, 0) << json.err;
+  EXPECT_NE(json.out.find("\"convergence\""), std::string::npos) << json.out;
+  EXPECT_NE(json.out.find("\"newton_iterations\""), std::string::npos) << json.out;
+}
+
 TEST_F(CliServerTest, SubmitWaitFetchRoundTrip) {
   const RunResult submitted =
       Pba({"job", "submit", std::string(PBA_EXAMPLES_DIR) + "/quickstart.yaml", "--wait"});
