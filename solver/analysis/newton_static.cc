@@ -61,6 +61,29 @@ Status SolveNewtonStatic(const FiniteStrainModel& model, const DofMap& dofs,
   *u = Eigen::VectorXd::Zero(dofs.num_dofs());
   *report = NewtonReport();
   std::unique_ptr<LinearSolver> indefinite;  // made when first needed
+  // Far from equilibrium the tangent may be indefinite: a nearly
+  // incompressible body's predictor leaves J - 1 = O(step^2), and the
+  // pressure K (J - 1) >> mu that follows destroys positive definiteness.
+  // Cholesky then fails; an LDL^T factorisation still gives the Newton
+  // direction, and the iteration usually returns to the positive definite
+  // region within a step or two.
+  const auto solve = [&](const LinearSystem& system, int iteration, double residual,
+                         Eigen::VectorXd* du) {
+    LinearSolver* active = solver;
+    Status status = solver->Factorize(system.k);
+    if (!status.ok()) {
+      if (!indefinite) indefinite = CreateIndefiniteLdltSolver();
+      active = indefinite.get();
+      status = active->Factorize(system.k);
+      ++report->indefinite_iterations;
+    }
+    if (!status.ok()) {
+      return Status::Numerical(
+          Format("the tangent stiffness is singular at iteration %d (relative residual %.3g)",
+                 iteration, residual));
+    }
+    return active->Solve(system.rhs, du);
+  };
   double load = 0;
   double step = 1.0 / std::max(1, options.initial_increments);
   std::string last_failure;
@@ -85,8 +108,7 @@ Status SolveNewtonStatic(const FiniteStrainModel& model, const DofMap& dofs,
     Eigen::VectorXd trial = *u;
     Eigen::VectorXd du;
     Status status = model.Assemble(*u, increment, lift, &system);
-    if (status.ok() && dofs.num_free() > 0) status = solver->Factorize(system.k);
-    if (status.ok() && dofs.num_free() > 0) status = solver->Solve(system.rhs, &du);
+    if (status.ok() && dofs.num_free() > 0) status = solve(system, 0, 0.0, &du);
     bool converged = false;
     int iteration = 0;
     double residual = INFINITY;
@@ -110,27 +132,7 @@ Status SolveNewtonStatic(const FiniteStrainModel& model, const DofMap& dofs,
         if (!keep_going({load, iteration, residual})) return cancelled();
         status = model.Assemble(trial, dofs, AssemblyOptions(), &system);
         if (!status.ok()) break;
-        // Far from equilibrium the tangent may be indefinite: a nearly
-        // incompressible body's predictor leaves J - 1 = O(step^2), and the
-        // pressure K (J - 1) >> mu that follows destroys positive
-        // definiteness. Cholesky then fails; an LDL^T factorisation still
-        // gives the Newton direction, and the iteration usually returns to
-        // the positive definite region within a step or two.
-        LinearSolver* active = solver;
-        status = solver->Factorize(system.k);
-        if (!status.ok()) {
-          if (!indefinite) indefinite = CreateIndefiniteLdltSolver();
-          active = indefinite.get();
-          status = active->Factorize(system.k);
-          ++report->indefinite_iterations;
-        }
-        if (!status.ok()) {
-          status = Status::Numerical(
-              Format("the tangent stiffness is singular at iteration %d (relative residual %.3g)",
-                     iteration, residual));
-          break;
-        }
-        status = active->Solve(system.rhs, &du);
+        status = solve(system, iteration, residual, &du);
         if (!status.ok()) break;
         const double energy = std::abs(du.dot(current.free));
         // Backtracking line search: halve the step while it inverts an

@@ -52,7 +52,7 @@ struct NewtonReport {
   std::vector<IncrementRecord> increments;  // converged ones
   int total_iterations = 0;
   int cuts = 0;                          // increments cut back and retried
-  int indefinite_iterations = 0;  // solved by LDL^T because Cholesky failed
+  int indefinite_iterations = 0;         // solved by LDL^T because Cholesky failed
   std::vector<std::string> cut_reasons;  // why each cut happened
 };
 
