@@ -32,8 +32,13 @@ Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec) {
 
   switch (scene.mesh().element()) {
     case v1::MeshOptions::ELEMENT_TYPE_UNSPECIFIED:
+      spec->mesh.element = ElementType::kDefault;
+      break;
     case v1::MeshOptions::TET4:
       spec->mesh.element = ElementType::kTet4;
+      break;
+    case v1::MeshOptions::TET4_ANP:
+      spec->mesh.element = ElementType::kTet4Anp;
       break;
     default:
       return Status::InvalidArgument(

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "analysis/average_nodal_pressure_model.h"
 #include "analysis/error_estimator.h"
 #include "analysis/finite_strain_model.h"
 #include "analysis/newton_static.h"
@@ -46,7 +47,10 @@ Status SolveNonlinearStatic(const SceneSpec& scene, const Model& model, PhaseClo
   const Mesh& mesh = model.mesh;
   const DofMap& dofs = model.dofs;
   const auto material = MakeHyperelasticMaterial(scene.material);
-  const auto body = MakeTet4Model(mesh, *material);
+  const bool plain = scene.mesh.element == ElementType::kTet4;
+  const auto body =
+      plain ? MakeTet4Model(mesh, *material) : MakeAverageNodalPressureTet4Model(mesh, *material);
+  summary.element_type = plain ? "TET4" : "TET4_ANP";
   const auto solver = CreateLinearSolver(scene.analysis.linear_solver);
   NewtonOptions options = OptionsOf(scene.analysis.nonlinear);
   options.on_increment = [solution](double load, const Eigen::VectorXd& u) {

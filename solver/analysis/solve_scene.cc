@@ -58,7 +58,7 @@ Status SolveScene(const SceneSpec& scene, const SolveOptions& options, Solution*
 
   summary.scene_name = scene.name;
   summary.geometry = DescribeGeometry(scene.geometry);
-  summary.element_type = "TET4";
+  summary.element_type = "TET4";  // a nonlinear analysis may refine this
   summary.nodes = mesh.num_nodes();
   summary.elements = mesh.num_elements();
   summary.dofs = dofs.num_free();

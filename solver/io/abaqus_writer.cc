@@ -103,6 +103,12 @@ Status ExportAbaqusInput(const SceneSpec& scene, const std::filesystem::path& fi
                   mesh.nodes(i, 1), mesh.nodes(i, 2));
     out << line;
   }
+  if (scene.analysis.type == AnalysisSpec::Type::kNonlinearStatic &&
+      scene.mesh.element != ElementType::kTet4) {
+    out << "** PBA solves this scene with TET4_ANP (average nodal pressure); C3D4 is the plain\n"
+           "** tetrahedron, which locks when nearly incompressible: set mesh.element: TET4 to\n"
+           "** compare the same discrete problem.\n";
+  }
   out << "*ELEMENT, TYPE=C3D4, ELSET=EALL\n";
   for (int e = 0; e < mesh.num_elements(); ++e) {
     const auto& t = mesh.tets[e];

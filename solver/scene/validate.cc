@@ -135,6 +135,12 @@ Status ValidateScene(const SceneSpec& scene) {
                                     std::to_string(kMaxElements) + "; choose a larger size");
   }
 
+  if (scene.mesh.element == ElementType::kTet4Anp &&
+      scene.analysis.type != AnalysisSpec::Type::kNonlinearStatic) {
+    return Status::InvalidArgument(
+        "mesh.element", "TET4_ANP (average nodal pressure) is implemented for NONLINEAR_STATIC; "
+                        "a linear analysis uses TET4");
+  }
   PBA_RETURN_IF_ERROR(ValidateMaterialSpec(scene.material, "material"));
   PBA_RETURN_IF_ERROR(ValidateAnalysis(scene.analysis, scene.material));
 

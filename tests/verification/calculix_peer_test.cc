@@ -119,6 +119,7 @@ std::vector<SceneSpec> Cases() {
   neo.material.kind = MaterialSpec::Kind::kNeoHookean;
   neo.material.neo_hookean = {1000, 5e4};
   neo.analysis.type = AnalysisSpec::Type::kNonlinearStatic;
+  neo.mesh.element = ElementType::kTet4;  // CalculiX's C3D4 is the plain tetrahedron
   SceneSpec ogden =
       Scene("Ogden brain cylinder, bottom fixed, top pressed 15 % (nonlinear)", cylinder, 1.5,
             {Condition("bottom", K::kFixed),
@@ -127,6 +128,7 @@ std::vector<SceneSpec> Cases() {
   ogden.material.ogden.terms = {{842, -4.7}};
   ogden.material.ogden.bulk_modulus_pa = 842e2;
   ogden.analysis.type = AnalysisSpec::Type::kNonlinearStatic;
+  ogden.mesh.element = ElementType::kTet4;
   // CalculiX's own Newton diverges now and then from a first increment of
   // 0.2 on this model (NaN forces); 0.05 keeps it on track.
   ogden.analysis.nonlinear.increments = 20;

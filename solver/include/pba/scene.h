@@ -29,10 +29,14 @@ struct GeometrySpec {
   CylinderSpec cylinder;
 };
 
-enum class ElementType { kTet4 };
+enum class ElementType {
+  kDefault,  // TET4 for linear analyses, TET4_ANP for nonlinear ones
+  kTet4,     // 4-node tetrahedron, one F per element (locks when nearly incompressible)
+  kTet4Anp,  // 4-node tetrahedron with average nodal pressure (nonlinear analyses)
+};
 
 struct MeshSpec {
-  ElementType element = ElementType::kTet4;
+  ElementType element = ElementType::kDefault;
   // Target edge length of the structured grid [mm]; 0 picks a twentieth of the
   // body's largest dimension.
   double element_size_mm = 0;
