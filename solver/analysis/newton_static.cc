@@ -37,6 +37,7 @@ void AddFree(const DofMap& dofs, const Eigen::VectorXd& free, double scale, Eige
 struct Residual {
   double relative = INFINITY;
   Eigen::VectorXd free;
+  double work = 0;  // |u . f_int|, the scale of the state's energy
 };
 Residual Evaluate(const FiniteStrainModel& model, const DofMap& dofs, const Eigen::VectorXd& u) {
   Residual r;
@@ -49,6 +50,7 @@ Residual Evaluate(const FiniteStrainModel& model, const DofMap& dofs, const Eige
   }
   const double scale = force.norm();
   r.relative = r.free.norm() / (scale > 0 ? scale : 1.0);
+  r.work = std::abs(u.dot(force));
   return r;
 }
 
@@ -60,29 +62,39 @@ Status SolveNewtonStatic(const FiniteStrainModel& model, const DofMap& dofs,
                          Eigen::VectorXd* u, NewtonReport* report) {
   *u = Eigen::VectorXd::Zero(dofs.num_dofs());
   *report = NewtonReport();
-  std::unique_ptr<LinearSolver> indefinite;  // made when first needed
   // Far from equilibrium the tangent may be indefinite: a nearly
   // incompressible body's predictor leaves J - 1 = O(step^2), and the
-  // pressure K (J - 1) >> mu that follows destroys positive definiteness.
-  // Cholesky then fails; an LDL^T factorisation still gives the Newton
-  // direction, and the iteration usually returns to the positive definite
-  // region within a step or two.
+  // pressure K (J - 1) >> mu that follows destroys positive definiteness,
+  // so Cholesky fails. The iteration then takes a modified-Newton step with
+  // the last positive definite tangent, which is kept factorised in a second
+  // solver (usually the predictor's, at the last converged state): it
+  // removes the volumetric error to first order, and full Newton resumes as
+  // soon as the tangent is positive definite again. Without such a tangent
+  // the current one is shifted by tau diag(K), tau growing tenfold from 1e-4
+  // until Cholesky succeeds (Nocedal & Wright, Numerical Optimization, 3.4).
+  std::unique_ptr<LinearSolver> spare = solver->NewOfSameKind();
+  LinearSolver* good = nullptr;  // holds the last positive definite factorisation
+  SparseMatrix shifted;
   const auto solve = [&](const LinearSystem& system, int iteration, double residual,
                          Eigen::VectorXd* du) {
-    LinearSolver* active = solver;
-    Status status = solver->Factorize(system.k);
-    if (!status.ok()) {
-      if (!indefinite) indefinite = CreateIndefiniteLdltSolver();
-      active = indefinite.get();
-      status = active->Factorize(system.k);
-      ++report->indefinite_iterations;
+    LinearSolver* target = good == solver ? spare.get() : solver;
+    Status status = target->Factorize(system.k);
+    if (status.ok()) {
+      good = target;
+      return good->Solve(system.rhs, du);
     }
-    if (!status.ok()) {
-      return Status::Numerical(
-          Format("the tangent stiffness is singular at iteration %d (relative residual %.3g)",
-                 iteration, residual));
+    ++report->modified_iterations;
+    if (good != nullptr) return good->Solve(system.rhs, du);
+    const Eigen::VectorXd diagonal = system.k.diagonal().cwiseAbs();
+    for (double tau = 1e-4; tau <= 1e2; tau *= 10) {
+      shifted = system.k;
+      for (int i = 0; i < shifted.outerSize(); ++i) shifted.coeffRef(i, i) += tau * diagonal(i);
+      if (target->Factorize(shifted).ok()) return target->Solve(system.rhs, du);
     }
-    return active->Solve(system.rhs, du);
+    return Status::Numerical(
+        Format("the tangent stiffness could not be made positive definite at iteration %d "
+               "(relative residual %.3g)",
+               iteration, residual));
   };
   double load = 0;
   double step = 1.0 / std::max(1, options.initial_increments);
@@ -157,14 +169,17 @@ Status SolveNewtonStatic(const FiniteStrainModel& model, const DofMap& dofs,
         residual = current.relative;
         ++report->total_iterations;
         const double change = alpha * du.norm() / std::max(FreeNorm(dofs, trial), 1e-300);
-        // The residual of a nearly incompressible body has a rounding
-        // floor (K / mu up to 1e6 amplifies the error of J - 1); once the
-        // correction's energy is down at rounding level too, no further
-        // iteration can improve the state.
-        const bool rounding_floor = energy <= kRoundingEnergy * first_energy;
+        // The residual and the correction of a nearly incompressible body
+        // have a rounding floor (K / mu up to 1e6 amplifies the error of
+        // J - 1 and the condition number); once the correction's energy is
+        // down at rounding level, no further iteration can improve the state.
+        // Measured against the increment's own energy, or the state's when
+        // the increment is tiny (after cuts).
+        const double energy_scale = std::max(first_energy, current.work);
+        const bool rounding_floor = energy <= kRoundingEnergy * energy_scale;
         if ((residual <= options.residual_tolerance || rounding_floor) &&
-            change <= options.displacement_tolerance &&
-            energy <= options.energy_tolerance * std::max(first_energy, 1e-300)) {
+            (change <= options.displacement_tolerance || rounding_floor) &&
+            energy <= options.energy_tolerance * std::max(energy_scale, 1e-300)) {
           converged = true;
           break;
         }

@@ -29,8 +29,8 @@ struct NewtonOptions {
   //   ||du|| <= displacement_tolerance * ||u||,
   //   |du . R| <= energy_tolerance * |du_p . K du_p| (du_p: the increment's predictor).
   // When the energy ratio is below 1e-20 the correction is rounding noise and
-  // the residual test is waived: its floor (~1e-8 for K / mu = 1e6) is then
-  // reported as the increment's final residual.
+  // the residual and displacement tests are waived: their floors (~1e-8 for
+  // K / mu = 1e6) are then reported as the increment's final residual.
   double residual_tolerance = 1e-8;
   double displacement_tolerance = 1e-8;
   double energy_tolerance = 1e-12;
@@ -52,7 +52,7 @@ struct NewtonReport {
   std::vector<IncrementRecord> increments;  // converged ones
   int total_iterations = 0;
   int cuts = 0;                          // increments cut back and retried
-  int indefinite_iterations = 0;         // solved by LDL^T because Cholesky failed
+  int modified_iterations = 0;  // tangent not positive definite: an earlier one was used
   std::vector<std::string> cut_reasons;  // why each cut happened
 };
 

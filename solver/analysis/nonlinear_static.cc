@@ -149,11 +149,11 @@ Status SolveNonlinearStatic(const SceneSpec& scene, const Model& model, PhaseClo
   summary.analysis = "nonlinear static (finite strain, total Lagrangian, Newton-Raphson)";
   summary.linear_solver = solver->Name();
   summary.notes.push_back("elements: " + body->Describe());
-  if (report.indefinite_iterations > 0) {
-    summary.notes.push_back(Format(
-        "%d Newton iteration(s) met an indefinite tangent far from equilibrium and were solved "
-        "by LDL^T instead of Cholesky",
-        report.indefinite_iterations));
+  if (report.modified_iterations > 0) {
+    summary.notes.push_back(
+        Format("%d Newton iteration(s) met a tangent that was not positive definite (far from "
+               "equilibrium) and stepped with the last positive definite one instead",
+               report.modified_iterations));
   }
   if (report.cuts > 0) {
     summary.notes.push_back(Format("%d load increment(s) were cut back and retried; first: %s",

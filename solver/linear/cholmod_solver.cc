@@ -42,6 +42,9 @@ class CholmodSolver final : public LinearSolver {
   }
 
   std::string Name() const override { return "CHOLMOD supernodal Cholesky"; }
+  std::unique_ptr<LinearSolver> NewOfSameKind() const override {
+    return std::make_unique<CholmodSolver>();
+  }
 
  private:
   bool SamePattern(const Eigen::SparseMatrix<double>& a) const {

@@ -9,22 +9,12 @@ namespace {
 
 class EigenLdltSolver final : public LinearSolver {
  public:
-  explicit EigenLdltSolver(bool allow_indefinite) : allow_indefinite_(allow_indefinite) {}
-
   Status Factorize(const Eigen::SparseMatrix<double>& a) override {
     solver_.compute(a);
     if (solver_.info() != Eigen::Success) {
       return Status::Numerical("Eigen's LDL^T could not factorise the stiffness matrix");
     }
     const auto& d = solver_.vectorD();
-    if (allow_indefinite_) {
-      // Without pivoting a tiny pivot amplifies rounding without bound.
-      const double scale = d.cwiseAbs().maxCoeff();
-      if (!d.allFinite() || (d.array().abs() <= 1e-14 * scale).any()) {
-        return Status::Numerical("the stiffness matrix is singular to working precision");
-      }
-      return Status::Ok();
-    }
     if ((d.array() <= 0).any()) {
       return Status::Numerical(
           "the stiffness matrix is not positive definite (a body not held against rigid motion, or "
@@ -42,20 +32,18 @@ class EigenLdltSolver final : public LinearSolver {
   }
 
   std::string Name() const override { return "Eigen simplicial LDL^T"; }
+  std::unique_ptr<LinearSolver> NewOfSameKind() const override {
+    return std::make_unique<EigenLdltSolver>();
+  }
 
  private:
-  bool allow_indefinite_;
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower> solver_;
 };
 
 }  // namespace
 
 std::unique_ptr<LinearSolver> CreateEigenLdltSolver() {
-  return std::make_unique<EigenLdltSolver>(false);
-}
-
-std::unique_ptr<LinearSolver> CreateIndefiniteLdltSolver() {
-  return std::make_unique<EigenLdltSolver>(true);
+  return std::make_unique<EigenLdltSolver>();
 }
 
 }  // namespace pba

@@ -21,6 +21,8 @@ class LinearSolver {
   virtual Status Solve(const Eigen::VectorXd& b, Eigen::VectorXd* x) = 0;
   // For people, e.g. "CHOLMOD supernodal Cholesky".
   virtual std::string Name() const = 0;
+  // A fresh solver of the same kind (to hold a second factorisation).
+  virtual std::unique_ptr<LinearSolver> NewOfSameKind() const = 0;
 };
 
 std::unique_ptr<LinearSolver> CreateLinearSolver(AnalysisSpec::LinearSolver kind);
@@ -28,9 +30,5 @@ std::unique_ptr<LinearSolver> CreateLinearSolver(AnalysisSpec::LinearSolver kind
 // The backends (linear/cholmod_solver.cc, linear/eigen_ldlt_solver.cc).
 std::unique_ptr<LinearSolver> CreateCholmodSolver();
 std::unique_ptr<LinearSolver> CreateEigenLdltSolver();
-
-// LDL^T without pivoting that accepts negative pivots (an indefinite
-// tangent far from equilibrium); only a singular matrix is refused.
-std::unique_ptr<LinearSolver> CreateIndefiniteLdltSolver();
 
 }  // namespace pba

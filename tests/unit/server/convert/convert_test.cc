@@ -129,6 +129,10 @@ TEST(ValidateSceneProto, NamesTheBadField) {
                      "analysis: {type: NONLINEAR_STATIC, nonlinear: {residual_tolerance: 2}}\n")
                 .field(),
             "analysis.nonlinear.residual_tolerance");
+  EXPECT_EQ(Validate("material: {neo_hookean: {shear_modulus_pa: 1000, bulk_modulus_pa: 1e6}}\n"
+                     "mesh: {element: TET4_ANP}\n")
+                .field(),
+            "mesh.element");
   EXPECT_TRUE(Validate("material: {ogden: {terms: [{mu_pa: 842, alpha: -4.7}], "
                        "bulk_modulus_pa: 8.42e7}}\nanalysis: {type: NONLINEAR_STATIC}\n")
                   .ok());
