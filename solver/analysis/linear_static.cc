@@ -6,6 +6,7 @@
 #include "analysis/error_estimator.h"
 #include "analysis/static_analysis.h"
 #include "assembly/assembler.h"
+#include "core/format.h"
 #include "linear/linear_solver.h"
 #include "material/factory.h"
 #include "material/linear_elastic.h"
@@ -16,12 +17,6 @@ namespace {
 // Beyond this strain the small-strain answer is no longer a fair model of
 // soft tissue, which has no linear range (DOMAIN.md section 2).
 constexpr double kSmallStrainLimit = 0.05;
-
-std::string Format(const char* format, auto... args) {
-  char buffer[256];
-  std::snprintf(buffer, sizeof buffer, format, args...);
-  return buffer;
-}
 
 }  // namespace
 

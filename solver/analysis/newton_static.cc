@@ -4,18 +4,14 @@
 #include <cmath>
 #include <cstdio>
 
+#include "core/format.h"
+
 namespace pba {
 namespace {
 
 // Energy ratio |du . R| / |du_p . K du_p| at which a Newton correction is
 // rounding noise.
 constexpr double kRoundingEnergy = 1e-20;
-
-std::string Format(const char* format, auto... args) {
-  char buffer[256];
-  std::snprintf(buffer, sizeof buffer, format, args...);
-  return buffer;
-}
 
 double FreeNorm(const DofMap& dofs, const Eigen::VectorXd& full) {
   double sum = 0;

@@ -11,6 +11,7 @@
 #include "analysis/finite_strain_model.h"
 #include "analysis/newton_static.h"
 #include "analysis/static_analysis.h"
+#include "core/format.h"
 #include "fem/tet4_finite_strain.h"
 #include "linear/linear_solver.h"
 #include "material/factory.h"
@@ -19,12 +20,6 @@
 
 namespace pba {
 namespace {
-
-std::string Format(const char* format, auto... args) {
-  char buffer[512];
-  std::snprintf(buffer, sizeof buffer, format, args...);
-  return buffer;
-}
 
 NewtonOptions OptionsOf(const NonlinearOptionsSpec& spec) {
   NewtonOptions options;

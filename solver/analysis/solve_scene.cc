@@ -7,6 +7,7 @@
 
 #include "analysis/rigid_modes.h"
 #include "analysis/static_analysis.h"
+#include "core/format.h"
 #include "material/factory.h"
 #include "mesh/primitive_mesher.h"
 
@@ -14,12 +15,6 @@ namespace pba {
 namespace {
 
 constexpr double kMm = 1e-3;
-
-std::string Format(const char* format, auto... args) {
-  char buffer[256];
-  std::snprintf(buffer, sizeof buffer, format, args...);
-  return buffer;
-}
 
 std::string DescribeGeometry(const GeometrySpec& g) {
   if (g.kind == GeometrySpec::Kind::kBox) {

@@ -14,6 +14,7 @@
 #include <map>
 #include <sstream>
 
+#include "common/scene_builders.h"
 #include "integration/subprocess.h"
 #include "pba/solve.h"
 
@@ -84,14 +85,7 @@ std::string Upper(std::string s) {
   return s;
 }
 
-BoundaryConditionSpec Condition(const std::string& set, BoundaryConditionSpec::Kind kind,
-                                std::array<std::optional<double>, 3> value = {}) {
-  BoundaryConditionSpec bc;
-  bc.set = set;
-  bc.kind = kind;
-  bc.displacement_mm = value;
-  return bc;
-}
+using testing::Condition;
 
 SceneSpec Scene(const std::string& name, GeometrySpec geometry, double h,
                 std::vector<BoundaryConditionSpec> conditions) {

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <memory>
 
+#include "common/scene_builders.h"
 #include "material/factory.h"
 #include "material/hyperelastic.h"
 #include "pba/solve.h"
@@ -18,14 +19,7 @@ namespace {
 
 using K = BoundaryConditionSpec::Kind;
 
-BoundaryConditionSpec Condition(const std::string& set, K kind,
-                                std::array<std::optional<double>, 3> value = {}) {
-  BoundaryConditionSpec bc;
-  bc.set = set;
-  bc.kind = kind;
-  bc.displacement_mm = value;
-  return bc;
-}
+using testing::Condition;
 
 MaterialSpec NeoHookean(double mu, double bulk) {
   MaterialSpec m;
