@@ -92,6 +92,9 @@ Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec) {
       case v1::BoundaryCondition::kFixed:
         out.kind = BoundaryConditionSpec::Kind::kFixed;
         break;
+      case v1::BoundaryCondition::kSymmetry:
+        out.kind = BoundaryConditionSpec::Kind::kSymmetry;
+        break;
       case v1::BoundaryCondition::kDisplacement: {
         out.kind = BoundaryConditionSpec::Kind::kDisplacement;
         const auto& d = bc.displacement();

@@ -14,7 +14,14 @@ Model BuildModel(const SceneSpec& scene) {
   model.mesh_description = stats.description;
   model.dofs = DofMap(model.mesh.num_nodes());
   for (const BoundaryConditionSpec& bc : scene.boundary_conditions) {
+    const int normal = bc.kind == BoundaryConditionSpec::Kind::kSymmetry
+                           ? PlaneNormalAxis(scene.geometry, bc.set)
+                           : -1;
     for (int node : model.mesh.face_sets.at(bc.set).nodes) {
+      if (normal >= 0) {
+        model.dofs.Prescribe(node, normal, 0.0);
+        continue;
+      }
       for (int c = 0; c < 3; ++c) {
         if (bc.kind == BoundaryConditionSpec::Kind::kFixed) {
           model.dofs.Prescribe(node, c, 0.0);

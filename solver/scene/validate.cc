@@ -56,19 +56,20 @@ Status ValidateAnalysis(const AnalysisSpec& analysis, const MaterialSpec& materi
   if (analysis.type != AnalysisSpec::Type::kNonlinearStatic) return Status::Ok();
   if (!material.hyperelastic()) {
     return Status::InvalidArgument(
-        "material", "a nonlinear static analysis needs a hyperelastic material (neo_hookean, "
-                    "mooney_rivlin, polynomial or ogden); linear_elastic is for LINEAR_STATIC");
+        "material",
+        "a nonlinear static analysis needs a hyperelastic material (neo_hookean, "
+        "mooney_rivlin, polynomial or ogden); linear_elastic is for LINEAR_STATIC");
   }
   const NonlinearOptionsSpec& n = analysis.nonlinear;
   if (n.increments < 0 || n.increments > 10000) {
-    return Status::InvalidArgument("analysis.nonlinear.increments",
-                                   "must lie in 1..10000 (0 for the default 5), got " +
-                                       std::to_string(n.increments));
+    return Status::InvalidArgument(
+        "analysis.nonlinear.increments",
+        "must lie in 1..10000 (0 for the default 5), got " + std::to_string(n.increments));
   }
   if (n.max_iterations < 0 || n.max_iterations > 1000) {
-    return Status::InvalidArgument("analysis.nonlinear.max_iterations",
-                                   "must lie in 1..1000 (0 for the default 20), got " +
-                                       std::to_string(n.max_iterations));
+    return Status::InvalidArgument(
+        "analysis.nonlinear.max_iterations",
+        "must lie in 1..1000 (0 for the default 20), got " + std::to_string(n.max_iterations));
   }
   const std::pair<const char*, double> fractions[] = {
       {"residual_tolerance", n.residual_tolerance},
@@ -76,8 +77,9 @@ Status ValidateAnalysis(const AnalysisSpec& analysis, const MaterialSpec& materi
       {"min_increment", n.min_increment}};
   for (const auto& [name, value] : fractions) {
     if (!std::isfinite(value) || value < 0 || value >= 1) {
-      return Status::InvalidArgument(std::string("analysis.nonlinear.") + name,
-                                     "must lie in [0, 1) (0 for the default), got " + Number(value));
+      return Status::InvalidArgument(
+          std::string("analysis.nonlinear.") + name,
+          "must lie in [0, 1) (0 for the default), got " + Number(value));
     }
   }
   return Status::Ok();
@@ -118,6 +120,14 @@ std::vector<std::string> FaceSetNames(const GeometrySpec& geometry) {
   }
 }
 
+int PlaneNormalAxis(const GeometrySpec& geometry, const std::string& set) {
+  if (set == "bottom" || set == "top") return geometry.kind == GeometrySpec::Kind::kNone ? -1 : 2;
+  if (geometry.kind != GeometrySpec::Kind::kBox) return -1;
+  if (set == "x_min" || set == "x_max") return 0;
+  if (set == "y_min" || set == "y_max") return 1;
+  return -1;
+}
+
 Status ValidateScene(const SceneSpec& scene) {
   PBA_RETURN_IF_ERROR(ValidateGeometry(scene.geometry));
 
@@ -138,8 +148,9 @@ Status ValidateScene(const SceneSpec& scene) {
   if (scene.mesh.element == ElementType::kTet4Anp &&
       scene.analysis.type != AnalysisSpec::Type::kNonlinearStatic) {
     return Status::InvalidArgument(
-        "mesh.element", "TET4_ANP (average nodal pressure) is implemented for NONLINEAR_STATIC; "
-                        "a linear analysis uses TET4");
+        "mesh.element",
+        "TET4_ANP (average nodal pressure) is implemented for NONLINEAR_STATIC; "
+        "a linear analysis uses TET4");
   }
   PBA_RETURN_IF_ERROR(ValidateMaterialSpec(scene.material, "material"));
   PBA_RETURN_IF_ERROR(ValidateAnalysis(scene.analysis, scene.material));
@@ -160,10 +171,21 @@ Status ValidateScene(const SceneSpec& scene) {
     }
     switch (bc.kind) {
       case BoundaryConditionSpec::Kind::kNone:
-        return Status::InvalidArgument(path, "no condition given: set fixed or displacement");
+        return Status::InvalidArgument(path,
+                                       "no condition given: set fixed, displacement or symmetry");
       case BoundaryConditionSpec::Kind::kFixed:
         held[0] = held[1] = held[2] = true;
         break;
+      case BoundaryConditionSpec::Kind::kSymmetry: {
+        const int axis = PlaneNormalAxis(scene.geometry, bc.set);
+        if (axis < 0) {
+          return Status::InvalidArgument(
+              path + ".symmetry", "a symmetry condition needs a planar face set; '" + bc.set +
+                                      "' is curved (hold it with displacement components instead)");
+        }
+        held[axis] = true;
+        break;
+      }
       case BoundaryConditionSpec::Kind::kDisplacement: {
         bool any = false;
         static const char* kNames[3] = {"x_mm", "y_mm", "z_mm"};

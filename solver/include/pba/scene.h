@@ -104,7 +104,9 @@ struct MaterialSpec {
 };
 
 struct BoundaryConditionSpec {
-  enum class Kind { kNone, kFixed, kDisplacement };
+  // kSymmetry: the displacement normal to a planar face set is zero, the
+  // others are free (a mirror plane of the model).
+  enum class Kind { kNone, kFixed, kDisplacement, kSymmetry };
   std::string set;  // named face set of the geometry
   Kind kind = Kind::kNone;
   // kDisplacement: prescribed x, y, z components [mm]; nullopt = free.
@@ -161,6 +163,10 @@ struct SceneSpec {
 // Face set names a geometry defines (box: bottom top x_min x_max y_min y_max;
 // cylinder: bottom top side).
 std::vector<std::string> FaceSetNames(const GeometrySpec& geometry);
+
+// The axis (0 = x, 1 = y, 2 = z) normal to a planar face set, or -1 when the
+// set is curved (the cylinder's side) or unknown.
+int PlaneNormalAxis(const GeometrySpec& geometry, const std::string& set);
 
 // Checks everything that can be checked without meshing: a geometry and a
 // material are given, sizes and moduli are in range, every boundary condition

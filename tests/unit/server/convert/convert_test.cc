@@ -95,6 +95,26 @@ outputs: {fields: [DISPLACEMENT, JACOBIAN]}
   EXPECT_TRUE(s.outputs.pk2_stress && s.outputs.almansi_strain && s.outputs.jacobian);
 }
 
+TEST(SceneFromProto, SymmetryCondition) {
+  v1::Scene scene;
+  codec::ParseError error;
+  ASSERT_TRUE(codec::ParseYaml(R"(
+geometry: {cylinder: {radius_mm: 5, height_mm: 10}}
+material: {neo_hookean: {shear_modulus_pa: 1000, bulk_modulus_pa: 1e6}}
+boundary_conditions:
+  - {set: bottom, symmetry: {}}
+  - {set: side, symmetry: {}}
+)",
+                               &scene, &error))
+      << error.ToString();
+  SceneSpec spec;
+  ASSERT_TRUE(SceneFromProto(scene, &spec).ok());
+  EXPECT_EQ(spec.boundary_conditions[0].kind, BoundaryConditionSpec::Kind::kSymmetry);
+  const Status status = ValidateSceneProto(scene);
+  EXPECT_EQ(status.field(), "boundary_conditions[1].symmetry") << status.ToString();
+  EXPECT_NE(status.message().find("curved"), std::string::npos);
+}
+
 TEST(ValidateSceneProto, NamesTheBadField) {
   EXPECT_EQ(
       Validate("material: {neo_hookean: {shear_modulus_pa: 0, bulk_modulus_pa: 1e6}}").field(),
