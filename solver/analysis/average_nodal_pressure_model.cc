@@ -1,9 +1,10 @@
 #include "analysis/average_nodal_pressure_model.h"
 
-#include <Eigen/LU>
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
+#include <string>
+#include <vector>
 
 #include "fem/tet4_finite_strain.h"
 #include "material/hyperelastic.h"
@@ -11,273 +12,438 @@
 namespace pba {
 namespace {
 
-// Per element at a state: the isochoric force and tangent, the current
-// volume v_e and its gradient dv_e/dx = v_e grad_x N_b.
-struct ElementState {
-  Vector12d iso_force;
-  Matrix12d iso_tangent;
-  double iso_energy = 0;
-  double volume = 0;                         // current v_e
-  Eigen::Matrix<double, 4, 3> spatial_grad;  // grad_x N_b, one row per node
+// Derivation (Pi as in the header; x the current positions, G_b = grad_X N_b,
+// F_e = sum_b x_b (x) G_b, v_e = V_e det F_e):
+//
+//   dv_e/dx_b = V_e cof(F_e) G_b, cof F = d(det F)/dF = (det F) F^-T
+//     (Jacobi's formula for the derivative of a determinant). It is the
+//     cofactor form of the tet: 1/6 of the cross product of two edges of the
+//     face opposite b, normal to that face and pointing towards b;
+//   d2v_e/dx_b,i dx_c,j = V_e eps_ijm eps_kln F_mn G_bk G_cl
+//                       = -V_e [F_e (G_b x G_c)]_x,
+//     with [w]_x y = w x y; the second derivative of det F is
+//     eps_ijm eps_kln F_mn because det F = (1/6) eps_ijm eps_kln F_ik F_jl F_mn.
+//     It is linear in x (through F) and skew in the node pair:
+//     block (c, b) = block (b, c)^T = -block (b, c), blocks (b, b) = 0. Since
+//     F (G_b x G_c) = det F (g_b x g_c) with g = grad_x N, it is also
+//     v_e (g_b g_c^T - g_c g_b^T), the current-configuration form.
+//
+//   f = sum_e [V_e B_e^T S_iso,e + pbar_e dv_e/dx],
+//     p_a = U'(J_a), pbar_e = (1/4) sum_{a in e} p_a,
+//     because dPi_vol/dx = sum_a V_a U'(J_a) (1/V_a) dv_a/dx and
+//     dv_a/dx = sum_{e ∋ a} (1/4) dv_e/dx; regrouping by element gives pbar_e.
+//   K = sum_e [K_iso,e + pbar_e d2v_e/dx2] + sum_a (U''(J_a) / V_a) g_a g_a^T,
+//     g_a = dv_a/dx = sum_{e ∋ a} (1/4) dv_e/dx, nonzero on the nodes of a's
+//     patch; K_iso,e is the usual total-Lagrangian material plus geometric
+//     stiffness of W_iso (fem/tet4_finite_strain.h).
+//
+// The isochoric split W = W_iso(C_bar) + U(J) is that of
+// material/hyperelastic.h; on a homogeneous deformation J_a = J_e everywhere
+// and the model is the plain tetrahedron.
+
+// Compressed rows of ints: row i holds index[offset[i] .. offset[i + 1]).
+struct Csr {
+  std::vector<int> offset;
+  std::vector<int> index;
+
+  int begin(int i) const { return offset[i]; }
+  int end(int i) const { return offset[i + 1]; }
+  // Position in `index` of `value` within sorted row i (must be present).
+  int Find(int i, int value) const {
+    const auto first = index.begin() + offset[i], last = index.begin() + offset[i + 1];
+    return static_cast<int>(std::lower_bound(first, last, value) - index.begin());
+  }
 };
 
-class AverageNodalPressureModel final : public FiniteStrainModel {
+Csr Flatten(const std::vector<std::vector<int>>& rows) {
+  Csr csr;
+  csr.offset.assign(rows.size() + 1, 0);
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    csr.offset[i + 1] = csr.offset[i] + static_cast<int>(rows[i].size());
+  }
+  csr.index.reserve(csr.offset.back());
+  for (const auto& row : rows) csr.index.insert(csr.index.end(), row.begin(), row.end());
+  return csr;
+}
+
+// [w]_x, the matrix of y -> w x y.
+Eigen::Matrix3d Skew(const Eigen::Vector3d& w) {
+  Eigen::Matrix3d s;
+  s << 0, -w.z(), w.y(), w.z(), 0, -w.x(), -w.y(), w.x(), 0;
+  return s;
+}
+
+// Below this many elements the passes run on one thread: starting a team
+// and its barriers would cost more than the work (a Newton solve on a small
+// mesh makes thousands of passes).
+constexpr int kParallelFrom = 2000;
+
+// One element at a state.
+struct ElementState {
+  Eigen::Matrix3d f;
+  Vector12d force;            // isochoric, then with pbar dv/dx added
+  Vector12d volume_gradient;  // dv_e/dx
+  double iso_energy = 0;      // V_e W_iso
+  double volume = 0;          // v_e
+};
+
+struct State {
+  std::vector<ElementState> elements;
+  std::vector<Matrix12d> tangents;       // element-local part of K, when asked for
+  std::vector<ScalarDerivatives> nodal;  // U, U', U'' at J_a
+  double energy = 0;
+};
+
+class NodalPressureModel final : public FiniteStrainModel {
  public:
-  AverageNodalPressureModel(const Mesh& mesh, const HyperelasticMaterial& material)
-      : mesh_(mesh), material_(material), nodal_volume_(mesh.num_nodes(), 0.0) {
-    geometry_.reserve(mesh.num_elements());
-    patch_.resize(mesh.num_nodes());
-    for (int e = 0; e < mesh.num_elements(); ++e) {
+  NodalPressureModel(const Mesh& mesh, const HyperelasticMaterial& material)
+      : mesh_(mesh), material_(material), parallel_(mesh.num_elements() >= kParallelFrom) {
+    const int ne = mesh.num_elements(), nn = mesh.num_nodes();
+    geometry_.reserve(ne);
+    reference_volume_.reserve(ne);
+    nodal_volume_.assign(nn, 0.0);
+    std::vector<std::vector<int>> elements_of(nn);
+    for (int e = 0; e < ne; ++e) {
       geometry_.push_back(ComputeTet4Geometry(TetCorners(mesh, e)));
+      reference_volume_.push_back(std::abs(geometry_[e].volume));
       for (int a : mesh.tets[e]) {
-        nodal_volume_[a] += std::abs(geometry_[e].volume) / 4;
-        patch_[a].push_back(e);
+        nodal_volume_[a] += reference_volume_[e] / 4;
+        elements_of[a].push_back(e);
+      }
+    }
+    incidence_ = Flatten(elements_of);
+    incidence_corner_.resize(incidence_.index.size());
+    for (int a = 0; a < nn; ++a) {
+      for (int t = incidence_.begin(a); t < incidence_.end(a); ++t) {
+        const auto& tet = mesh.tets[incidence_.index[t]];
+        incidence_corner_[t] = static_cast<int>(std::find(tet.begin(), tet.end(), a) - tet.begin());
+      }
+    }
+
+    // Patch of a: the nodes of the elements around a (a included), sorted.
+    std::vector<std::vector<int>> rows(nn);
+#pragma omp parallel for schedule(static) if (parallel_)
+    for (int a = 0; a < nn; ++a) {
+      for (int e : elements_of[a]) {
+        rows[a].insert(rows[a].end(), mesh.tets[e].begin(), mesh.tets[e].end());
+      }
+      std::sort(rows[a].begin(), rows[a].end());
+      rows[a].erase(std::unique(rows[a].begin(), rows[a].end()), rows[a].end());
+    }
+    patch_ = Flatten(rows);
+
+    // Column c of K couples with every node of the patch of every node in
+    // c's patch (the support of the g_a g_a^T terms that involve c).
+#pragma omp parallel for schedule(static) if (parallel_)
+    for (int c = 0; c < nn; ++c) {
+      std::vector<int> wide;
+      for (int m = patch_.begin(c); m < patch_.end(c); ++m) {
+        const int a = patch_.index[m];
+        wide.insert(wide.end(), patch_.index.begin() + patch_.begin(a),
+                    patch_.index.begin() + patch_.end(a));
+      }
+      std::sort(wide.begin(), wide.end());
+      wide.erase(std::unique(wide.begin(), wide.end()), wide.end());
+      rows[c] = std::move(wide);
+    }
+    wide_ = Flatten(rows);
+
+    // Lookups for the numeric passes, so they need no searching.
+    patch_transpose_.resize(patch_.index.size());
+#pragma omp parallel for schedule(static) if (parallel_)
+    for (int c = 0; c < nn; ++c) {
+      for (int m = patch_.begin(c); m < patch_.end(c); ++m) {
+        patch_transpose_[m] = patch_.Find(patch_.index[m], c);
+      }
+    }
+    incidence_patch_.resize(4 * incidence_.index.size());
+#pragma omp parallel for schedule(static) if (parallel_)
+    for (int a = 0; a < nn; ++a) {
+      for (int t = incidence_.begin(a); t < incidence_.end(a); ++t) {
+        const auto& tet = mesh.tets[incidence_.index[t]];
+        for (int j = 0; j < 4; ++j) incidence_patch_[4 * t + j] = patch_.Find(a, tet[j]);
+      }
+    }
+    element_block_.resize(16 * static_cast<std::size_t>(ne));
+#pragma omp parallel for schedule(static) if (parallel_)
+    for (int e = 0; e < ne; ++e) {
+      const auto& tet = mesh.tets[e];
+      for (int i = 0; i < 4; ++i) {
+        for (int j = 0; j < 4; ++j) element_block_[16 * e + 4 * i + j] = wide_.Find(tet[j], tet[i]);
       }
     }
   }
 
   bool InternalForce(const Eigen::VectorXd& u, Eigen::VectorXd* force,
                      double* energy) const override {
-    std::vector<ElementState> states;
-    std::vector<double> j_node;
-    if (!Evaluate(u, false, &states, &j_node)) return false;
     *force = Eigen::VectorXd::Zero(u.size());
-    double total = 0;
-    const std::vector<double> pressure = NodalPressure(j_node, &total);
-    for (int e = 0; e < mesh_.num_elements(); ++e) {
-      const ElementState& s = states[e];
-      total += s.iso_energy;
-      const Vector12d f = s.iso_force + MeanPressure(e, pressure) * VolumeGradient(s);
-      for (int a = 0; a < 4; ++a) force->segment<3>(3 * mesh_.tets[e][a]) += f.segment<3>(3 * a);
-    }
-    if (energy) *energy = total;
-    return force->allFinite() && std::isfinite(total);
+    State state;
+    if (Evaluate(u, false, &state) >= 0) return false;
+    GatherForce(state, force);
+    if (energy) *energy = state.energy;
+    return force->allFinite() && std::isfinite(state.energy);
   }
 
   Status Assemble(const Eigen::VectorXd& u, const DofMap& dofs, const AssemblyOptions& options,
                   LinearSystem* system) const override {
-    std::vector<ElementState> states;
-    std::vector<double> j_node;
-    if (!Evaluate(u, true, &states, &j_node)) {
-      return Status::Numerical("an element is inverted (J <= 0)");
+    State state;
+    const int bad = Evaluate(u, true, &state);
+    if (bad >= 0) {
+      return Status::Numerical("element " + std::to_string(bad) +
+                               " could not be evaluated (inverted: det F <= 0)");
     }
-    PreparePattern(dofs);
-    system->k = pattern_;
-    system->rhs = Eigen::VectorXd::Zero(dofs.num_free());
-    double unused = 0;
-    const std::vector<double> pressure = NodalPressure(j_node, &unused);
-    const auto scatter = [&](int row_dof, int col_dof, double value) {
-      const int i = dofs.free_index(row_dof);
-      if (i < 0 || value == 0) return;
-      const int j = dofs.free_index(col_dof);
-      if (j >= 0) {
-        Coefficient(&system->k, i, j) += value;
-      } else if (options.lift_prescribed) {
-        system->rhs(i) -= value * dofs.prescribed_value(col_dof);
-      }
-    };
-    // Element terms: isochoric tangent and p_e d2v_e/dx2.
-    for (int e = 0; e < mesh_.num_elements(); ++e) {
-      const ElementState& s = states[e];
-      const double p = MeanPressure(e, pressure);
-      Matrix12d k = s.iso_tangent;
-      // d2v/dx_b dx_c = v (g_b g_c^T - g_c g_b^T), g = grad_x N.
-      for (int b = 0; b < 4; ++b) {
-        for (int c = 0; c < 4; ++c) {
-          const Eigen::Vector3d gb = s.spatial_grad.row(b), gc = s.spatial_grad.row(c);
-          k.block<3, 3>(3 * b, 3 * c) += p * s.volume * (gb * gc.transpose() - gc * gb.transpose());
-        }
-      }
-      const Vector12d f = s.iso_force + p * VolumeGradient(s);
-      const auto& tet = mesh_.tets[e];
-      for (int b = 0; b < 4; ++b) {
-        for (int r = 0; r < 3; ++r) {
-          const int i = dofs.free_index(3 * tet[b] + r);
-          if (i >= 0) system->rhs(i) -= f(3 * b + r);
-          for (int c = 0; c < 4; ++c) {
-            for (int q = 0; q < 3; ++q) {
-              scatter(3 * tet[b] + r, 3 * tet[c] + q, k(3 * b + r, 3 * c + q));
-            }
-          }
-        }
-      }
-    }
-    // Nodal terms: (U''(J_a) / V_a) g_a g_a^T with g_a = dv_a/dx, supported
-    // on the nodes of a's patch.
-    std::vector<int> nodes;
-    std::vector<Eigen::Vector3d> g;
-    for (int a = 0; a < mesh_.num_nodes(); ++a) {
-      if (patch_[a].empty()) continue;
-      const double weight = material_.Volumetric(j_node[a]).second / nodal_volume_[a];
-      nodes.clear();
-      g.clear();
-      for (int e : patch_[a]) {
-        for (int b = 0; b < 4; ++b) {
-          const int node = mesh_.tets[e][b];
-          const Eigen::Vector3d contribution =
-              states[e].volume / 4 * states[e].spatial_grad.row(b).transpose();
-          const auto at = std::find(nodes.begin(), nodes.end(), node);
-          if (at == nodes.end()) {
-            nodes.push_back(node);
-            g.push_back(contribution);
-          } else {
-            g[at - nodes.begin()] += contribution;
-          }
-        }
-      }
-      for (std::size_t m = 0; m < nodes.size(); ++m) {
-        for (std::size_t n = 0; n < nodes.size(); ++n) {
-          const Eigen::Matrix3d block = weight * g[m] * g[n].transpose();
-          for (int r = 0; r < 3; ++r) {
-            for (int q = 0; q < 3; ++q) scatter(3 * nodes[m] + r, 3 * nodes[n] + q, block(r, q));
-          }
-        }
-      }
-    }
+    Eigen::VectorXd force = Eigen::VectorXd::Zero(u.size());
+    GatherForce(state, &force);
+    const std::vector<Eigen::Matrix3d> blocks = NodeBlocks(state);
+    FillSystem(force, blocks, dofs, options, system);
     return Status::Ok();
   }
 
   std::string Describe() const override {
-    return "TET4 with average nodal pressure (volumetric energy on nodal volumes), total "
-           "Lagrangian";
+    return "TET4 with average nodal pressure (nodal volumetric energy), total Lagrangian";
   }
 
  private:
-  // Element states in parallel; J at every node. False when an element is
-  // inverted.
-  bool Evaluate(const Eigen::VectorXd& u, bool with_tangent, std::vector<ElementState>* states,
-                std::vector<double>* j_node) const {
-    const int ne = mesh_.num_elements();
-    states->resize(ne);
-    bool ok = true;
-#pragma omp parallel for schedule(static) reduction(&& : ok)
+  // Elements and nodes at `u`. Returns the lowest index of an element that is
+  // inverted or not finite, -1 when all are fine.
+  int Evaluate(const Eigen::VectorXd& u, bool with_tangent, State* state) const {
+    const int ne = mesh_.num_elements(), nn = mesh_.num_nodes();
+    state->elements.resize(ne);
+    if (with_tangent) state->tangents.resize(ne);
+    int bad = ne;
+#pragma omp parallel for schedule(static) if (parallel_) reduction(min : bad)
     for (int e = 0; e < ne; ++e) {
       const Tet4Geometry& g = geometry_[e];
-      const Eigen::Matrix3d f = DeformationGradient(g, GatherElement(mesh_, e, u));
-      const double j = f.determinant();
-      if (!(j > 0) || !f.allFinite()) {
-        ok = false;
+      ElementState& s = state->elements[e];
+      s.f = DeformationGradient(g, GatherElement(mesh_, e, u));
+      const double j = s.f.determinant();
+      // Checked here because the material aborts on det F <= 0.
+      if (!(j > 0) || !s.f.allFinite()) {
+        bad = std::min(bad, e);
         continue;
       }
-      ElementState& s = (*states)[e];
-      const double v0 = std::abs(g.volume);
+      const double v0 = reference_volume_[e];
       Vector6d stress;
       Matrix6d tangent;
-      material_.Isochoric(f, &s.iso_energy, &stress, with_tangent ? &tangent : nullptr);
+      material_.Isochoric(s.f, &s.iso_energy, &stress, with_tangent ? &tangent : nullptr);
       s.iso_energy *= v0;
-      const BMatrix b = GreenLagrangeVariation(g, f);
-      s.iso_force = v0 * b.transpose() * stress;
+      const BMatrix b = GreenLagrangeVariation(g, s.f);
+      s.force = v0 * b.transpose() * stress;
+      s.volume = v0 * j;
+      // cof F by columns: (f2 x f3, f3 x f1, f1 x f2), no inverse needed.
+      Eigen::Matrix3d cof;
+      cof.col(0) = s.f.col(1).cross(s.f.col(2));
+      cof.col(1) = s.f.col(2).cross(s.f.col(0));
+      cof.col(2) = s.f.col(0).cross(s.f.col(1));
+      for (int a = 0; a < 4; ++a) {
+        s.volume_gradient.segment<3>(3 * a) = v0 * cof * g.grad.row(a).transpose();
+      }
       if (with_tangent) {
-        s.iso_tangent = v0 * b.transpose() * tangent * b;
+        Matrix12d& k = state->tangents[e];
+        k = v0 * b.transpose() * tangent * b;
+        // Geometric stiffness of S_iso: (G_a . S_iso G_c) I.
         const Eigen::Matrix<double, 4, 4> geo =
             g.grad * VoigtToSymmetric(stress) * g.grad.transpose();
         for (int a = 0; a < 4; ++a) {
-          for (int c = 0; c < 4; ++c) {
-            s.iso_tangent.block<3, 3>(3 * a, 3 * c).diagonal().array() += v0 * geo(a, c);
-          }
+          for (int c = 0; c < 4; ++c)
+            k.block<3, 3>(3 * a, 3 * c).diagonal().array() += v0 * geo(a, c);
         }
       }
-      s.volume = j * v0;
-      s.spatial_grad = g.grad * f.inverse();  // grad_x N = F^-T grad_X N, as rows
     }
-    if (!ok) return false;
-    j_node->assign(mesh_.num_nodes(), 0.0);
+    if (bad < ne) return bad;
+
+    state->nodal.assign(nn, ScalarDerivatives());
+    double energy = 0;
+#pragma omp parallel for schedule(static) if (parallel_) reduction(+ : energy)
+    for (int a = 0; a < nn; ++a) {
+      if (nodal_volume_[a] == 0) continue;  // a node outside every element
+      double v = 0;
+      for (int t = incidence_.begin(a); t < incidence_.end(a); ++t) {
+        v += state->elements[incidence_.index[t]].volume / 4;
+      }
+      state->nodal[a] = material_.Volumetric(v / nodal_volume_[a]);
+      energy += nodal_volume_[a] * state->nodal[a].value;
+    }
+
+#pragma omp parallel for schedule(static) if (parallel_) reduction(+ : energy)
     for (int e = 0; e < ne; ++e) {
-      for (int a : mesh_.tets[e]) (*j_node)[a] += (*states)[e].volume / 4;
-    }
-    for (int a = 0; a < mesh_.num_nodes(); ++a) {
-      if (nodal_volume_[a] > 0) (*j_node)[a] /= nodal_volume_[a];
-    }
-    return true;
-  }
-
-  // p_a = U'(J_a); adds sum V_a U(J_a) to `energy`.
-  std::vector<double> NodalPressure(const std::vector<double>& j_node, double* energy) const {
-    std::vector<double> pressure(j_node.size(), 0.0);
-    for (std::size_t a = 0; a < j_node.size(); ++a) {
-      if (nodal_volume_[a] == 0) continue;
-      const ScalarDerivatives u = material_.Volumetric(j_node[a]);
-      pressure[a] = u.first;
-      *energy += nodal_volume_[a] * u.value;
-    }
-    return pressure;
-  }
-
-  double MeanPressure(int e, const std::vector<double>& pressure) const {
-    double p = 0;
-    for (int a : mesh_.tets[e]) p += pressure[a];
-    return p / 4;
-  }
-
-  static Vector12d VolumeGradient(const ElementState& s) {
-    Vector12d g;
-    for (int b = 0; b < 4; ++b) g.segment<3>(3 * b) = s.volume * s.spatial_grad.row(b).transpose();
-    return g;
-  }
-
-  static double& Coefficient(SparseMatrix* k, int row, int col) {
-    const int* begin = k->innerIndexPtr() + k->outerIndexPtr()[col];
-    const int* end = k->innerIndexPtr() + k->outerIndexPtr()[col + 1];
-    const int* at = std::lower_bound(begin, end, row);
-    return k->valuePtr()[at - k->innerIndexPtr()];
-  }
-
-  // The pattern of K_ff: free dofs of nodes that share some node's patch.
-  void PreparePattern(const DofMap& dofs) const {
-    std::vector<int> free(dofs.num_dofs());
-    for (int d = 0; d < dofs.num_dofs(); ++d) free[d] = dofs.free_index(d);
-    if (free == pattern_free_ && pattern_.rows() == dofs.num_free()) return;
-    const int n = mesh_.num_nodes();
-    std::vector<std::vector<int>> neighbours(n);  // nodes of the patch
-    for (int a = 0; a < n; ++a) {
-      for (int e : patch_[a]) {
-        for (int b : mesh_.tets[e]) neighbours[a].push_back(b);
-      }
-      std::sort(neighbours[a].begin(), neighbours[a].end());
-      neighbours[a].erase(std::unique(neighbours[a].begin(), neighbours[a].end()),
-                          neighbours[a].end());
-    }
-    std::vector<std::vector<int>> coupled(n);
-    for (int a = 0; a < n; ++a) {
-      for (int b : neighbours[a]) {
-        coupled[b].insert(coupled[b].end(), neighbours[a].begin(), neighbours[a].end());
+      ElementState& s = state->elements[e];
+      energy += s.iso_energy;
+      double pbar = 0;
+      for (int a : mesh_.tets[e]) pbar += state->nodal[a].first / 4;
+      s.force += pbar * s.volume_gradient;
+      if (!with_tangent) continue;
+      Matrix12d& k = state->tangents[e];
+      const Tet4Geometry& g = geometry_[e];
+      for (int b = 0; b < 4; ++b) {
+        for (int c = b + 1; c < 4; ++c) {
+          const Eigen::Vector3d gb = g.grad.row(b).transpose(), gc = g.grad.row(c).transpose();
+          const Eigen::Matrix3d block = -pbar * reference_volume_[e] * Skew(s.f * gb.cross(gc));
+          k.block<3, 3>(3 * b, 3 * c) += block;
+          k.block<3, 3>(3 * c, 3 * b) += block.transpose();
+        }
       }
     }
-    std::vector<Eigen::Triplet<double, int>> entries;
-    for (int b = 0; b < n; ++b) {
-      std::sort(coupled[b].begin(), coupled[b].end());
-      coupled[b].erase(std::unique(coupled[b].begin(), coupled[b].end()), coupled[b].end());
-      for (int c : coupled[b]) {
-        for (int r = 0; r < 3; ++r) {
-          const int i = free[3 * b + r];
-          if (i < 0) continue;
-          for (int q = 0; q < 3; ++q) {
-            const int j = free[3 * c + q];
-            if (j >= 0) entries.emplace_back(i, j, 0.0);
+    state->energy = energy;
+    return -1;
+  }
+
+  // Full internal force, node by node (a gather: no two threads write one entry).
+  void GatherForce(const State& state, Eigen::VectorXd* force) const {
+    const int nn = mesh_.num_nodes();
+#pragma omp parallel for schedule(static) if (parallel_)
+    for (int a = 0; a < nn; ++a) {
+      Eigen::Vector3d f = Eigen::Vector3d::Zero();
+      for (int t = incidence_.begin(a); t < incidence_.end(a); ++t) {
+        f += state.elements[incidence_.index[t]].force.segment<3>(3 * incidence_corner_[t]);
+      }
+      force->segment<3>(3 * a) = f;
+    }
+  }
+
+  // The 3 x 3 blocks of K on the wide node pattern: blocks[k] is K_bc for
+  // column node c and row node b = wide_.index[k], k in c's row of wide_.
+  // Each column is gathered by one thread from the element tangents and the
+  // nodal g_a g_a^T terms, so the pass needs neither colouring nor locks.
+  std::vector<Eigen::Matrix3d> NodeBlocks(const State& state) const {
+    const int nn = mesh_.num_nodes();
+    // g_a = dv_a/dx on a's patch, one vector per patch entry.
+    std::vector<Eigen::Vector3d> g(patch_.index.size());
+    std::vector<double> weight(nn, 0.0);
+#pragma omp parallel for schedule(static) if (parallel_)
+    for (int a = 0; a < nn; ++a) {
+      for (int m = patch_.begin(a); m < patch_.end(a); ++m) g[m].setZero();
+      for (int t = incidence_.begin(a); t < incidence_.end(a); ++t) {
+        const ElementState& s = state.elements[incidence_.index[t]];
+        for (int j = 0; j < 4; ++j) {
+          g[incidence_patch_[4 * t + j]] += s.volume_gradient.segment<3>(3 * j) / 4;
+        }
+      }
+      if (nodal_volume_[a] > 0) weight[a] = state.nodal[a].second / nodal_volume_[a];
+    }
+
+    std::vector<Eigen::Matrix3d> blocks(wide_.index.size());
+#pragma omp parallel for schedule(static) if (parallel_)
+    for (int c = 0; c < nn; ++c) {
+      for (int k = wide_.begin(c); k < wide_.end(c); ++k) blocks[k].setZero();
+      for (int t = incidence_.begin(c); t < incidence_.end(c); ++t) {
+        const int e = incidence_.index[t], j = incidence_corner_[t];
+        for (int i = 0; i < 4; ++i) {
+          blocks[element_block_[16 * e + 4 * i + j]] += state.tangents[e].block<3, 3>(3 * i, 3 * j);
+        }
+      }
+      for (int m = patch_.begin(c); m < patch_.end(c); ++m) {
+        const int a = patch_.index[m];
+        if (weight[a] == 0) continue;
+        const Eigen::Vector3d gc = weight[a] * g[patch_transpose_[m]];
+        // a's patch is sorted and contained in c's sorted wide row: a merge walk.
+        int k = wide_.begin(c);
+        for (int n = patch_.begin(a); n < patch_.end(a); ++n) {
+          while (wide_.index[k] != patch_.index[n]) ++k;
+          blocks[k] += g[n] * gc.transpose();
+        }
+      }
+    }
+    return blocks;
+  }
+
+  // K_ff (compressed columns, both triangles) and rhs = -f_f (- K_fp u_p).
+  void FillSystem(const Eigen::VectorXd& force, const std::vector<Eigen::Matrix3d>& blocks,
+                  const DofMap& dofs, const AssemblyOptions& options, LinearSystem* system) const {
+    const int nn = mesh_.num_nodes(), nf = dofs.num_free();
+    std::vector<int> free_of_node(nn, 0);
+    for (int b = 0; b < nn; ++b) {
+      for (int r = 0; r < 3; ++r) free_of_node[b] += dofs.free_index(3 * b + r) >= 0;
+    }
+    // Free unknowns are numbered in dof order, so walking nodes and rows in
+    // ascending order yields sorted columns with sorted row indices.
+    std::vector<int> outer(nf + 1, 0);
+#pragma omp parallel for schedule(static) if (parallel_)
+    for (int c = 0; c < nn; ++c) {
+      int count = 0;
+      for (int k = wide_.begin(c); k < wide_.end(c); ++k) count += free_of_node[wide_.index[k]];
+      for (int q = 0; q < 3; ++q) {
+        const int j = dofs.free_index(3 * c + q);
+        if (j >= 0) outer[j + 1] = count;
+      }
+    }
+    for (int j = 0; j < nf; ++j) outer[j + 1] += outer[j];
+
+    SparseMatrix& k = system->k;
+    k.resize(nf, nf);
+    k.resizeNonZeros(outer[nf]);
+    std::copy(outer.begin(), outer.end(), k.outerIndexPtr());
+    int* inner = k.innerIndexPtr();
+    double* values = k.valuePtr();
+#pragma omp parallel for schedule(static) if (parallel_)
+    for (int c = 0; c < nn; ++c) {
+      for (int q = 0; q < 3; ++q) {
+        const int j = dofs.free_index(3 * c + q);
+        if (j < 0) continue;
+        int at = outer[j];
+        for (int w = wide_.begin(c); w < wide_.end(c); ++w) {
+          const int b = wide_.index[w];
+          for (int r = 0; r < 3; ++r) {
+            const int i = dofs.free_index(3 * b + r);
+            if (i < 0) continue;
+            inner[at] = i;
+            values[at] = blocks[w](r, q);
+            ++at;
           }
         }
       }
     }
-    pattern_.resize(dofs.num_free(), dofs.num_free());
-    pattern_.setFromTriplets(entries.begin(), entries.end());
-    pattern_.makeCompressed();
-    pattern_free_ = std::move(free);
+
+    system->rhs.resize(nf);
+#pragma omp parallel for schedule(static) if (parallel_)
+    for (int b = 0; b < nn; ++b) {
+      for (int r = 0; r < 3; ++r) {
+        const int i = dofs.free_index(3 * b + r);
+        if (i < 0) continue;
+        double rhs = -force(3 * b + r);
+        if (options.lift_prescribed) {
+          // K(b r, c q) = K(c q, b r) = blocks[w](q, r) with w in b's column:
+          // K is symmetric, and reading b's own column keeps the row private.
+          for (int w = wide_.begin(b); w < wide_.end(b); ++w) {
+            const int c = wide_.index[w];
+            for (int q = 0; q < 3; ++q) {
+              const int dof = 3 * c + q;
+              if (dofs.prescribed(dof) && dofs.prescribed_value(dof) != 0.0) {
+                rhs -= blocks[w](q, r) * dofs.prescribed_value(dof);
+              }
+            }
+          }
+        }
+        system->rhs(i) = rhs;
+      }
+    }
   }
 
   const Mesh& mesh_;
   const HyperelasticMaterial& material_;
+  const bool parallel_;  // use OpenMP threads
   std::vector<Tet4Geometry> geometry_;
-  std::vector<double> nodal_volume_;     // V_a
-  std::vector<std::vector<int>> patch_;  // elements around each node
-  mutable SparseMatrix pattern_;
-  mutable std::vector<int> pattern_free_;
+  std::vector<double> reference_volume_;  // V_e
+  std::vector<double> nodal_volume_;      // V_a
+  Csr incidence_;                         // elements around each node
+  std::vector<int> incidence_corner_;     // which corner of the element the node is
+  Csr patch_;                             // nodes of those elements, sorted
+  Csr wide_;                              // node pattern of K, sorted
+  // For patch entry m (row c, node a): the entry of c in a's patch.
+  std::vector<int> patch_transpose_;
+  // For incidence t (node a, element e) and corner j: the entry of
+  // tets[e][j] in a's patch.
+  std::vector<int> incidence_patch_;
+  // For element e, corners i (row) and j (column): the entry of block
+  // (tets[e][i], tets[e][j]) in wide_.
+  std::vector<int> element_block_;
 };
 
 }  // namespace
 
 std::unique_ptr<FiniteStrainModel> MakeAverageNodalPressureTet4Model(
     const Mesh& mesh, const HyperelasticMaterial& material) {
-  return std::make_unique<AverageNodalPressureModel>(mesh, material);
+  return std::make_unique<NodalPressureModel>(mesh, material);
 }
 
 }  // namespace pba
