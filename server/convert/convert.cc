@@ -1,6 +1,8 @@
 #include "convert/convert.h"
 
+#include <array>
 #include <string>
+#include <utility>
 
 namespace pba {
 Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec) {
@@ -26,6 +28,11 @@ Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec) {
       spec->geometry.cylinder.radius_mm = geometry.cylinder().radius_mm();
       spec->geometry.cylinder.height_mm = geometry.cylinder().height_mm();
       break;
+    case v1::Geometry::kSphericalShell:
+      spec->geometry.kind = GeometrySpec::Kind::kSphericalShell;
+      spec->geometry.spherical_shell.inner_radius_mm = geometry.spherical_shell().inner_radius_mm();
+      spec->geometry.spherical_shell.outer_radius_mm = geometry.spherical_shell().outer_radius_mm();
+      break;
     case v1::Geometry::SHAPE_NOT_SET:
       break;  // ValidateScene names it
   }
@@ -49,6 +56,7 @@ Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec) {
   const v1::Material& material = scene.material();
   MaterialSpec& m = spec->material;
   m.name = material.name();
+  m.density_kg_per_m3 = material.density_kg_per_m3();
   switch (material.model_case()) {
     case v1::Material::kLinearElastic:
       m.kind = MaterialSpec::Kind::kLinearElastic;
@@ -81,6 +89,34 @@ Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec) {
       }
       m.ogden.bulk_modulus_pa = material.ogden().bulk_modulus_pa();
       break;
+    case v1::Material::kOrthotropicElastic: {
+      m.kind = MaterialSpec::Kind::kOrthotropicElastic;
+      const v1::OrthotropicElastic& o = material.orthotropic_elastic();
+      OrthotropicElasticParams& p = m.orthotropic_elastic;
+      p.e1_pa = o.e1_pa();
+      p.e2_pa = o.e2_pa();
+      p.e3_pa = o.e3_pa();
+      p.nu12 = o.nu12();
+      p.nu13 = o.nu13();
+      p.nu23 = o.nu23();
+      p.g12_pa = o.g12_pa();
+      p.g13_pa = o.g13_pa();
+      p.g23_pa = o.g23_pa();
+      // An absent axis keeps the spec's default (the global x or y axis).
+      const std::pair<const google::protobuf::RepeatedField<double>*, std::array<double, 3>*>
+          axes[] = {{&o.axis_1(), &p.axis_1}, {&o.axis_2(), &p.axis_2}};
+      for (int a = 0; a < 2; ++a) {
+        const auto& given = *axes[a].first;
+        if (given.empty()) continue;
+        if (given.size() != 3) {
+          return Status::InvalidArgument(
+              "material.orthotropic_elastic.axis_" + std::to_string(a + 1),
+              "expected three components (x, y, z), got " + std::to_string(given.size()));
+        }
+        for (int i = 0; i < 3; ++i) (*axes[a].second)[i] = given[i];
+      }
+      break;
+    }
     case v1::Material::MODEL_NOT_SET:
       break;  // ValidateScene names it
   }
@@ -103,10 +139,37 @@ Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec) {
         if (d.has_z_mm()) out.displacement_mm[2] = d.z_mm();
         break;
       }
+      case v1::BoundaryCondition::kPressure:
+        out.kind = BoundaryConditionSpec::Kind::kPressure;
+        out.pressure_pa = bc.pressure().pressure_pa();
+        break;
+      case v1::BoundaryCondition::kTraction: {
+        out.kind = BoundaryConditionSpec::Kind::kTraction;
+        const auto& t = bc.traction().traction_pa();
+        if (t.size() != 3) {
+          return Status::InvalidArgument(
+              "boundary_conditions[" + std::to_string(spec->boundary_conditions.size()) +
+                  "].traction.traction_pa",
+              "expected three components (x, y, z) in Pa, got " + std::to_string(t.size()));
+        }
+        for (int i = 0; i < 3; ++i) out.traction_pa[i] = t[i];
+        break;
+      }
       case v1::BoundaryCondition::KIND_NOT_SET:
         break;  // ValidateScene names it
     }
     spec->boundary_conditions.push_back(std::move(out));
+  }
+
+  if (scene.has_gravity()) {
+    const auto& g = scene.gravity().acceleration_m_per_s2();
+    if (g.size() != 3) {
+      return Status::InvalidArgument(
+          "gravity.acceleration_m_per_s2",
+          "expected three components (x, y, z) in m/s^2, got " + std::to_string(g.size()));
+    }
+    spec->gravity.enabled = true;
+    for (int i = 0; i < 3; ++i) spec->gravity.acceleration_m_per_s2[i] = g[i];
   }
 
   switch (scene.analysis().type()) {
@@ -128,6 +191,9 @@ Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec) {
       break;
     case v1::Analysis::EIGEN_LDLT:
       spec->analysis.linear_solver = AnalysisSpec::LinearSolver::kEigenLdlt;
+      break;
+    case v1::Analysis::PCG:
+      spec->analysis.linear_solver = AnalysisSpec::LinearSolver::kPcg;
       break;
     default:
       return Status::InvalidArgument(

@@ -178,7 +178,7 @@ class NodalPressureModel final : public FiniteStrainModel {
                      double* energy) const override {
     *force = Eigen::VectorXd::Zero(u.size());
     State state;
-    if (Evaluate(u, false, &state) >= 0) return false;
+    if (Evaluate(u, false, false, &state) >= 0) return false;
     GatherForce(state, force);
     if (energy) *energy = state.energy;
     return force->allFinite() && std::isfinite(state.energy);
@@ -187,7 +187,7 @@ class NodalPressureModel final : public FiniteStrainModel {
   Status Assemble(const Eigen::VectorXd& u, const DofMap& dofs, const AssemblyOptions& options,
                   LinearSystem* system) const override {
     State state;
-    const int bad = Evaluate(u, true, &state);
+    const int bad = Evaluate(u, true, options.drop_pressure_stiffness, &state);
     if (bad >= 0) {
       return Status::Numerical("element " + std::to_string(bad) +
                                " could not be evaluated (inverted: det F <= 0)");
@@ -206,7 +206,8 @@ class NodalPressureModel final : public FiniteStrainModel {
  private:
   // Elements and nodes at `u`. Returns the lowest index of an element that is
   // inverted or not finite, -1 when all are fine.
-  int Evaluate(const Eigen::VectorXd& u, bool with_tangent, State* state) const {
+  int Evaluate(const Eigen::VectorXd& u, bool with_tangent, bool drop_pressure_stiffness,
+               State* state) const {
     const int ne = mesh_.num_elements(), nn = mesh_.num_nodes();
     state->elements.resize(ne);
     if (with_tangent) state->tangents.resize(ne);
@@ -272,7 +273,7 @@ class NodalPressureModel final : public FiniteStrainModel {
       double pbar = 0;
       for (int a : mesh_.tets[e]) pbar += state->nodal[a].first / 4;
       s.force += pbar * s.volume_gradient;
-      if (!with_tangent) continue;
+      if (!with_tangent || drop_pressure_stiffness) continue;
       Matrix12d& k = state->tangents[e];
       const Tet4Geometry& g = geometry_[e];
       for (int b = 0; b < 4; ++b) {

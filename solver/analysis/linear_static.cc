@@ -29,8 +29,8 @@ Status SolveLinearStatic(const SceneSpec& scene, const Model& model, PhaseClock*
   auto cancelled = [&] {
     return Status::Cancelled("cancelled during " + summary.phases.back().phase);
   };
-  const InitialModuli p = InitialElasticModuli(scene.material);
-  const Matrix6d d = IsotropicElasticity(p.youngs_modulus_pa, p.poissons_ratio);
+  // In the global frame; an orthotropic material's axes are already applied.
+  const Matrix6d d = ElasticityMatrix(scene.material);
   clock.Begin("assemble", 0.05, 0.25,
               Format("assembling %d elements, %d unknowns", mesh.num_elements(), dofs.num_free()));
   const auto colours = ColourElements(mesh);
@@ -42,6 +42,18 @@ Status SolveLinearStatic(const SceneSpec& scene, const Model& model, PhaseClock*
         return !clock.cancelled();
       },
       &system));
+  const ExternalLoads loads = BuildLoads(scene, mesh);
+  Eigen::VectorXd external;
+  if (!loads.empty()) {
+    external = loads.Force(Eigen::VectorXd::Zero(dofs.num_dofs()));
+    for (int dof = 0; dof < dofs.num_dofs(); ++dof) {
+      const int f = dofs.free_index(dof);
+      if (f >= 0) system.rhs(f) += external(dof);
+    }
+    const Eigen::Vector3d total = loads.ReferenceResultant();
+    summary.notes.push_back(Format("applied loads: resultant (%.6g, %.6g, %.6g) N", total.x(),
+                                   total.y(), total.z()));
+  }
   clock.End();
 
   const auto solver = CreateLinearSolver(scene.analysis.linear_solver);
@@ -97,8 +109,7 @@ Status SolveLinearStatic(const SceneSpec& scene, const Model& model, PhaseClock*
 
   clock.Begin("estimate", 0.9, 0.95, "Zienkiewicz-Zhu error estimate");
   const ErrorEstimateResult estimate =
-      EstimateZzError(mesh, solution->stress_pa, volume,
-                      IsotropicCompliance(p.youngs_modulus_pa, p.poissons_ratio));
+      EstimateZzError(mesh, solution->stress_pa, volume, ComplianceMatrix(scene.material));
   solution->error_indicator = estimate.element_share;
   summary.error.estimated = true;
   summary.error.method = "Zienkiewicz-Zhu stress recovery (nodal averaging)";
@@ -123,6 +134,7 @@ Status SolveLinearStatic(const SceneSpec& scene, const Model& model, PhaseClock*
   summary.relative_residual = residual;
   result->u = std::move(u);
   result->internal_force = std::move(internal);
+  result->external_force = std::move(external);
   result->strain_energy_j = energy;
   result->max_strain = max_strain;
   return Status::Ok();

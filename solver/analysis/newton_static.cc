@@ -28,26 +28,60 @@ void AddFree(const DofMap& dofs, const Eigen::VectorXd& free, double scale, Eige
   }
 }
 
-// Residual of state `u`: ||R_f|| / ||f_int|| (infinite when an element is
-// inverted) and R on the free unknowns.
+// The loads at one load factor.
+struct Loading {
+  const ExternalLoads* loads;  // may be null
+  double factor;
+  bool active() const { return loads != nullptr && !loads->empty() && factor != 0; }
+};
+
+// Residual of state `u`: ||R_f|| / max(||f_int||, ||lambda f_ext||)
+// (infinite when an element is inverted) and R = lambda f_ext - f_int on the
+// free unknowns.
 struct Residual {
   double relative = INFINITY;
   Eigen::VectorXd free;
   double work = 0;  // |u . f_int|, the scale of the state's energy
 };
-Residual Evaluate(const FiniteStrainModel& model, const DofMap& dofs, const Eigen::VectorXd& u) {
+Residual Evaluate(const FiniteStrainModel& model, const Loading& loading, const DofMap& dofs,
+                  const Eigen::VectorXd& u) {
   Residual r;
   Eigen::VectorXd force;
   if (!model.InternalForce(u, &force, nullptr)) return r;
+  r.work = std::abs(u.dot(force));
+  double scale = force.norm();
+  if (loading.active()) {
+    const Eigen::VectorXd external = loading.factor * loading.loads->Force(u);
+    scale = std::max(scale, external.norm());
+    force -= external;
+  }
   r.free.resize(dofs.num_free());
   for (int dof = 0; dof < dofs.num_dofs(); ++dof) {
     const int f = dofs.free_index(dof);
     if (f >= 0) r.free(f) = -force(dof);
   }
-  const double scale = force.norm();
   r.relative = r.free.norm() / (scale > 0 ? scale : 1.0);
-  r.work = std::abs(u.dot(force));
   return r;
+}
+
+// The model's tangent and rhs with the loads at `loading` added: rhs gains
+// lambda f_ext on the free unknowns, K the load stiffness of follower loads.
+Status AssembleLoaded(const FiniteStrainModel& model, const Loading& loading,
+                      const Eigen::VectorXd& u, const DofMap& dofs, const AssemblyOptions& options,
+                      LinearSystem* system) {
+  PBA_RETURN_IF_ERROR(model.Assemble(u, dofs, options, system));
+  if (!loading.active()) return Status::Ok();
+  const Eigen::VectorXd external = loading.loads->Force(u);
+  for (int dof = 0; dof < dofs.num_dofs(); ++dof) {
+    const int f = dofs.free_index(dof);
+    if (f >= 0) system->rhs(f) += loading.factor * external(dof);
+  }
+  if (loading.loads->follows_deformation() && !options.drop_pressure_stiffness) {
+    // The loaded triangles' nodes share a tetrahedron, so the sum keeps
+    // K's pattern (and the solver's symbolic analysis).
+    system->k += loading.loads->Stiffness(u, dofs, loading.factor);
+  }
+  return Status::Ok();
 }
 
 }  // namespace
@@ -56,26 +90,43 @@ Status SolveNewtonStatic(const FiniteStrainModel& model, const DofMap& dofs,
                          const NewtonOptions& options, LinearSolver* solver,
                          const std::function<bool(const NewtonProgress&)>& keep_going,
                          Eigen::VectorXd* u, NewtonReport* report) {
+  return SolveNewtonStatic(model, nullptr, dofs, options, solver, keep_going, u, report);
+}
+
+Status SolveNewtonStatic(const FiniteStrainModel& model, const ExternalLoads* loads,
+                         const DofMap& dofs, const NewtonOptions& options, LinearSolver* solver,
+                         const std::function<bool(const NewtonProgress&)>& keep_going,
+                         Eigen::VectorXd* u, NewtonReport* report) {
   *u = Eigen::VectorXd::Zero(dofs.num_dofs());
   *report = NewtonReport();
   // Far from equilibrium the tangent may be indefinite: a nearly
   // incompressible body's predictor leaves J - 1 = O(step^2), and the
-  // pressure K (J - 1) >> mu that follows destroys positive definiteness,
-  // so Cholesky fails. The iteration then takes a modified-Newton step with
-  // the last positive definite tangent, which is kept factorised in a second
-  // solver (usually the predictor's, at the last converged state): it
-  // removes the volumetric error to first order, and full Newton resumes as
-  // soon as the tangent is positive definite again. Without such a tangent
-  // the current one is shifted by tau diag(K), tau growing tenfold from 1e-4
-  // until Cholesky succeeds (Nocedal & Wright, Numerical Optimization, 3.4).
+  // pressure K (J - 1) >> mu that follows destroys positive definiteness
+  // through its initial-stress stiffness, so Cholesky fails. The iteration
+  // then first tries the current tangent without the pressure's (and a
+  // follower load's) initial-stress terms, which keeps the volumetric
+  // stiffness of the current state; failing that, a modified-Newton step
+  // with the last positive definite tangent, kept factorised in a second
+  // solver (usually the predictor's, at the last converged state). Full
+  // Newton resumes as soon as the tangent is positive definite again.
+  // Without any such tangent the current one is shifted by tau diag(K), tau
+  // growing tenfold from 1e-4 until Cholesky succeeds (Nocedal & Wright,
+  // Numerical Optimization, 3.4).
   std::unique_ptr<LinearSolver> spare = solver->NewOfSameKind();
   LinearSolver* good = nullptr;  // holds the last positive definite factorisation
   SparseMatrix shifted;
+  LinearSystem approximate;
   const auto solve = [&](const LinearSystem& system, int iteration, double residual,
+                         const std::function<Status(LinearSystem*)>& assemble_approximate,
                          Eigen::VectorXd* du) {
     LinearSolver* target = good == solver ? spare.get() : solver;
     Status status = target->Factorize(system.k);
     if (status.ok()) {
+      good = target;
+      return good->Solve(system.rhs, du);
+    }
+    if (assemble_approximate(&approximate).ok() && target->Factorize(approximate.k).ok()) {
+      ++report->approximate_iterations;
       good = target;
       return good->Solve(system.rhs, du);
     }
@@ -100,6 +151,7 @@ Status SolveNewtonStatic(const FiniteStrainModel& model, const DofMap& dofs,
   while (load < 1.0) {
     if (!keep_going({load, 0, INFINITY})) return cancelled();
     const double target = std::min(1.0, load + step);
+    const Loading loading{loads, target};
 
     // Predictor: the tangent at the converged state carries the prescribed
     // increment into the free unknowns.
@@ -115,8 +167,19 @@ Status SolveNewtonStatic(const FiniteStrainModel& model, const DofMap& dofs,
     LinearSystem system;
     Eigen::VectorXd trial = *u;
     Eigen::VectorXd du;
-    Status status = model.Assemble(*u, increment, lift, &system);
-    if (status.ok() && dofs.num_free() > 0) status = solve(system, 0, 0.0, &du);
+    // At the converged state f_int = lambda_old f_ext, so the rhs
+    // lambda_new f_ext - f_int is the load increment.
+    Status status = AssembleLoaded(model, loading, *u, increment, lift, &system);
+    if (status.ok() && dofs.num_free() > 0) {
+      status = solve(
+          system, 0, 0.0,
+          [&](LinearSystem* out) {
+            AssemblyOptions definite = lift;
+            definite.drop_pressure_stiffness = true;
+            return AssembleLoaded(model, loading, *u, increment, definite, out);
+          },
+          &du);
+    }
     bool converged = false;
     int iteration = 0;
     double residual = INFINITY;
@@ -128,7 +191,7 @@ Status SolveNewtonStatic(const FiniteStrainModel& model, const DofMap& dofs,
       for (int dof = 0; dof < dofs.num_dofs(); ++dof) {
         if (dofs.prescribed(dof)) trial(dof) = target * dofs.prescribed_value(dof);
       }
-      Residual current = Evaluate(model, dofs, trial);
+      Residual current = Evaluate(model, loading, dofs, trial);
       residual = current.relative;
       if (!std::isfinite(residual)) {
         status = Status::Numerical("the predictor inverted an element");
@@ -138,9 +201,16 @@ Status SolveNewtonStatic(const FiniteStrainModel& model, const DofMap& dofs,
       for (iteration = 1; status.ok() && !converged && iteration <= options.max_iterations;
            ++iteration) {
         if (!keep_going({load, iteration, residual})) return cancelled();
-        status = model.Assemble(trial, dofs, AssemblyOptions(), &system);
+        status = AssembleLoaded(model, loading, trial, dofs, AssemblyOptions(), &system);
         if (!status.ok()) break;
-        status = solve(system, iteration, residual, &du);
+        status = solve(
+            system, iteration, residual,
+            [&](LinearSystem* out) {
+              AssemblyOptions definite;
+              definite.drop_pressure_stiffness = true;
+              return AssembleLoaded(model, loading, trial, dofs, definite, out);
+            },
+            &du);
         if (!status.ok()) break;
         const double energy = std::abs(du.dot(current.free));
         // Backtracking line search: halve the step while it inverts an
@@ -148,13 +218,13 @@ Status SolveNewtonStatic(const FiniteStrainModel& model, const DofMap& dofs,
         double alpha = 1.0;
         Eigen::VectorXd next = trial;
         AddFree(dofs, du, alpha, &next);
-        Residual candidate = Evaluate(model, dofs, next);
+        Residual candidate = Evaluate(model, loading, dofs, next);
         while (options.line_search && alpha > 1.0 / 64 &&
                !(candidate.relative < std::max(current.relative, 1e-300))) {
           alpha *= 0.5;
           next = trial;
           AddFree(dofs, du, alpha, &next);
-          candidate = Evaluate(model, dofs, next);
+          candidate = Evaluate(model, loading, dofs, next);
         }
         if (!std::isfinite(candidate.relative)) {
           status = Status::Numerical("an element inverted");

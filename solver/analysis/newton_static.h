@@ -1,6 +1,7 @@
 // Quasi-static large-deformation equilibrium by Newton-Raphson:
-// f_int(u) = 0 on the free unknowns, the prescribed displacements ramped
-// linearly from zero to their values in increments of the load factor.
+// f_int(u) = lambda f_ext(u) on the free unknowns, the prescribed
+// displacements and the external loads ramped linearly from zero to their
+// full values in increments of the load factor lambda.
 //
 // Each increment starts from a linearised predictor (the tangent at the last
 // converged state carries the prescribed increment into the free unknowns),
@@ -14,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "analysis/external_loads.h"
 #include "analysis/finite_strain_model.h"
 #include "assembly/dof_map.h"
 #include "linear/linear_solver.h"
@@ -25,7 +27,8 @@ struct NewtonOptions {
   int initial_increments = 5;
   int max_iterations = 20;  // per increment
   // An iteration has converged when all three hold:
-  //   ||R_f|| <= residual_tolerance * ||f_int|| (all unknowns, reactions included),
+  //   ||R_f|| <= residual_tolerance * max(||f_int||, ||lambda f_ext||)
+  //     (f_int on all unknowns, reactions included; R = lambda f_ext - f_int),
   //   ||du|| <= displacement_tolerance * ||u||,
   //   |du . R| <= energy_tolerance * |du_p . K du_p| (du_p: the increment's predictor).
   // When the energy ratio is below 1e-20 the correction is rounding noise and
@@ -52,7 +55,11 @@ struct NewtonReport {
   std::vector<IncrementRecord> increments;  // converged ones
   int total_iterations = 0;
   int cuts = 0;                          // increments cut back and retried
-  int modified_iterations = 0;  // tangent not positive definite: an earlier one was used
+  // Iterations whose consistent tangent was not positive definite and that
+  // used the tangent without pressure initial-stress terms instead, or
+  // (modified) an earlier positive definite tangent.
+  int approximate_iterations = 0;
+  int modified_iterations = 0;
   std::vector<std::string> cut_reasons;  // why each cut happened
 };
 
@@ -70,6 +77,13 @@ struct NewtonProgress {
 // and the last failure when the increments cannot be cut any further.
 Status SolveNewtonStatic(const FiniteStrainModel& model, const DofMap& dofs,
                          const NewtonOptions& options, LinearSolver* solver,
+                         const std::function<bool(const NewtonProgress&)>& keep_going,
+                         Eigen::VectorXd* u, NewtonReport* report);
+
+// The same with external loads (tractions, body forces, follower pressure),
+// ramped with the load factor; `loads` may be null.
+Status SolveNewtonStatic(const FiniteStrainModel& model, const ExternalLoads* loads,
+                         const DofMap& dofs, const NewtonOptions& options, LinearSolver* solver,
                          const std::function<bool(const NewtonProgress&)>& keep_going,
                          Eigen::VectorXd* u, NewtonReport* report);
 

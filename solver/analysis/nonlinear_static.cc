@@ -58,8 +58,16 @@ Status SolveNonlinearStatic(const SceneSpec& scene, const Model& model, PhaseClo
                      options.initial_increments));
   NewtonReport report;
   Eigen::VectorXd u;
+  const ExternalLoads loads = BuildLoads(scene, mesh);
+  if (!loads.empty()) {
+    const Eigen::Vector3d total = loads.ReferenceResultant();
+    summary.notes.push_back(
+        Format("applied loads: resultant (%.6g, %.6g, %.6g) N on the reference configuration%s",
+               total.x(), total.y(), total.z(),
+               loads.follows_deformation() ? "; pressure follows the deformed surface" : ""));
+  }
   const Status status = SolveNewtonStatic(
-      *body, dofs, options, solver.get(),
+      *body, &loads, dofs, options, solver.get(),
       [&](const NewtonProgress& p) {
         clock.Update(p.load_factor,
                      p.iteration == 0
@@ -76,9 +84,9 @@ Status SolveNonlinearStatic(const SceneSpec& scene, const Model& model, PhaseClo
   }
   if (status.code() == Status::Code::kNumerical) {
     return Status::Numerical(status.message() +
-                             "; the prescribed deformation may be too large for this mesh "
-                             "(elements invert) - try a finer mesh, more increments "
-                             "(analysis.nonlinear.increments) or a smaller displacement");
+                             "; the prescribed deformation or load may be too large for this "
+                             "mesh (elements invert) - try a finer mesh, more increments "
+                             "(analysis.nonlinear.increments) or a smaller displacement or load");
   }
   PBA_RETURN_IF_ERROR(status);
   clock.End();
@@ -121,13 +129,12 @@ Status SolveNonlinearStatic(const SceneSpec& scene, const Model& model, PhaseClo
   if (!body->InternalForce(u, &result->internal_force, &energy)) {
     return Status::Internal("an element inverted after a converged solve");
   }
+  if (!loads.empty()) result->external_force = loads.Force(u);
   clock.End();
 
   clock.Begin("estimate", 0.95, 0.99, "Zienkiewicz-Zhu error estimate");
-  const InitialModuli moduli = InitialElasticModuli(scene.material);
   const ErrorEstimateResult estimate =
-      EstimateZzError(mesh, solution->pk2_stress_pa, volume,
-                      IsotropicCompliance(moduli.youngs_modulus_pa, moduli.poissons_ratio));
+      EstimateZzError(mesh, solution->pk2_stress_pa, volume, ComplianceMatrix(scene.material));
   solution->error_indicator = estimate.element_share;
   summary.error.estimated = true;
   summary.error.method =
@@ -144,6 +151,12 @@ Status SolveNonlinearStatic(const SceneSpec& scene, const Model& model, PhaseClo
   summary.analysis = "nonlinear static (finite strain, total Lagrangian, Newton-Raphson)";
   summary.linear_solver = solver->Name();
   summary.notes.push_back("elements: " + body->Describe());
+  if (report.approximate_iterations > 0) {
+    summary.notes.push_back(
+        Format("%d Newton iteration(s) met a tangent that was not positive definite (far from "
+               "equilibrium) and stepped with it less the pressure's initial-stress terms",
+               report.approximate_iterations));
+  }
   if (report.modified_iterations > 0) {
     summary.notes.push_back(
         Format("%d Newton iteration(s) met a tangent that was not positive definite (far from "

@@ -20,6 +20,10 @@ std::string DescribeGeometry(const GeometrySpec& g) {
   if (g.kind == GeometrySpec::Kind::kBox) {
     return Format("box %g x %g x %g mm", g.box.size_mm[0], g.box.size_mm[1], g.box.size_mm[2]);
   }
+  if (g.kind == GeometrySpec::Kind::kSphericalShell) {
+    return Format("spherical shell octant, radii %g and %g mm", g.spherical_shell.inner_radius_mm,
+                  g.spherical_shell.outer_radius_mm);
+  }
   return Format("cylinder r = %g mm, h = %g mm", g.cylinder.radius_mm, g.cylinder.height_mm);
 }
 
@@ -77,7 +81,12 @@ Status SolveScene(const SceneSpec& scene, const SolveOptions& options, Solution*
   for (const std::string& name : ReactionSetNames(scene)) {
     Reaction reaction{name, {0, 0, 0}};
     for (int node : mesh.face_sets.at(name).nodes) {
-      for (int c = 0; c < 3; ++c) reaction.force_n[c] += result.internal_force(3 * node + c);
+      for (int c = 0; c < 3; ++c) {
+        reaction.force_n[c] += result.internal_force(3 * node + c);
+        if (result.external_force.size() > 0) {
+          reaction.force_n[c] -= result.external_force(3 * node + c);
+        }
+      }
     }
     summary.reactions.push_back(reaction);
   }

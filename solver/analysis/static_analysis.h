@@ -15,7 +15,10 @@ namespace pba {
 
 struct StaticResult {
   Eigen::VectorXd u;               // full displacement [m]
-  Eigen::VectorXd internal_force;  // full internal force [N]; reactions on prescribed unknowns
+  Eigen::VectorXd internal_force;  // full internal force [N]
+  // Full external force at the solution [N] (empty when there are no loads);
+  // the reactions are internal_force - external_force on held unknowns.
+  Eigen::VectorXd external_force;
   double strain_energy_j = 0;
   double max_strain = 0;  // largest strain component magnitude
 };

@@ -4,6 +4,8 @@
 #include <atomic>
 #include <bitset>
 
+#include "mesh/quadratic.h"
+
 namespace pba {
 namespace {
 
@@ -21,10 +23,13 @@ struct Pattern {
   }
 };
 
-Pattern BuildPattern(const Mesh& mesh, const DofMap& dofs) {
+// `nodes_of(e)` gives element e's node indices (a std::array).
+template <typename NodesOf>
+Pattern BuildPattern(const Mesh& mesh, const NodesOf& nodes_of, const DofMap& dofs) {
   const int n = mesh.num_nodes();
   std::vector<std::vector<int>> neighbours(n);
-  for (const auto& t : mesh.tets) {
+  for (int e = 0; e < mesh.num_elements(); ++e) {
+    const auto t = nodes_of(e);
     for (int a : t) neighbours[a].insert(neighbours[a].end(), t.begin(), t.end());
   }
   Pattern p;
@@ -75,11 +80,24 @@ Vector12d GatherElement(const Mesh& mesh, int e, const Eigen::VectorXd& u) {
   return ue;
 }
 
-Status AssembleSystem(const Mesh& mesh, const DofMap& dofs,
-                      const std::vector<std::vector<int>>& colours, const ElementKernel& kernel,
-                      const AssemblyOptions& options, const std::function<bool(double)>& keep_going,
-                      LinearSystem* system) {
-  const Pattern pattern = BuildPattern(mesh, dofs);
+Vector30d GatherElementTet10(const Mesh& mesh, int e, const Eigen::VectorXd& u) {
+  Vector30d ue;
+  const std::array<int, 10> nodes = Tet10NodeIndices(mesh, e);
+  for (int a = 0; a < 10; ++a) ue.segment<3>(3 * a) = u.segment<3>(3 * nodes[a]);
+  return ue;
+}
+
+namespace {
+
+// The assembly of AssembleSystem for elements of N nodes: `nodes_of(e)`
+// gives their indices, `kernel` their 3N x 3N stiffness and 3N force.
+template <int N, typename NodesOf, typename Kernel>
+Status AssembleElements(const Mesh& mesh, const NodesOf& nodes_of, const DofMap& dofs,
+                        const std::vector<std::vector<int>>& colours, const Kernel& kernel,
+                        const AssemblyOptions& options,
+                        const std::function<bool(double)>& keep_going, LinearSystem* system) {
+  constexpr int kUnknowns = 3 * N;
+  const Pattern pattern = BuildPattern(mesh, nodes_of, dofs);
   std::vector<double> values(pattern.inner.size(), 0.0);
   system->rhs = Eigen::VectorXd::Zero(dofs.num_free());
   double* rhs = system->rhs.data();
@@ -96,34 +114,35 @@ Status AssembleSystem(const Mesh& mesh, const DofMap& dofs,
     for (std::size_t k = 0; k < elements.size(); ++k) {
       if (failed.load(std::memory_order_relaxed) >= 0) continue;
       const int e = elements[k];
-      Matrix12d ke;
-      Vector12d fe;
+      Eigen::Matrix<double, kUnknowns, kUnknowns> ke;
+      Eigen::Matrix<double, kUnknowns, 1> fe;
       if (!kernel(e, &ke, &fe)) {
         failed.store(e);
         continue;
       }
-      int free[12];
-      double up[12];
-      for (int a = 0; a < 4; ++a) {
+      int free[kUnknowns];
+      double up[kUnknowns];
+      const auto nodes = nodes_of(e);
+      for (int a = 0; a < N; ++a) {
         for (int i = 0; i < 3; ++i) {
-          const int dof = 3 * mesh.tets[e][a] + i;
+          const int dof = 3 * nodes[a] + i;
           free[3 * a + i] = dofs.free_index(dof);
           up[3 * a + i] =
               options.lift_prescribed && dofs.prescribed(dof) ? dofs.prescribed_value(dof) : 0.0;
         }
       }
-      for (int p = 0; p < 12; ++p) {
+      for (int p = 0; p < kUnknowns; ++p) {
         if (free[p] >= 0) rhs[free[p]] += fe(p);
       }
-      for (int q = 0; q < 12; ++q) {
+      for (int q = 0; q < kUnknowns; ++q) {
         if (free[q] < 0) {
           if (up[q] == 0.0) continue;
-          for (int p = 0; p < 12; ++p) {
+          for (int p = 0; p < kUnknowns; ++p) {
             if (free[p] >= 0) rhs[free[p]] -= ke(p, q) * up[q];
           }
           continue;
         }
-        for (int p = 0; p < 12; ++p) {
+        for (int p = 0; p < kUnknowns; ++p) {
           if (free[p] >= 0) values[pattern.Find(free[p], free[q])] += ke(p, q);
         }
       }
@@ -144,6 +163,26 @@ Status AssembleSystem(const Mesh& mesh, const DofMap& dofs,
   return Status::Ok();
 }
 
+}  // namespace
+
+Status AssembleSystem(const Mesh& mesh, const DofMap& dofs,
+                      const std::vector<std::vector<int>>& colours, const ElementKernel& kernel,
+                      const AssemblyOptions& options, const std::function<bool(double)>& keep_going,
+                      LinearSystem* system) {
+  return AssembleElements<4>(
+      mesh, [&](int e) { return mesh.tets[e]; }, dofs, colours, kernel, options, keep_going,
+      system);
+}
+
+Status AssembleSystemTet10(const Mesh& mesh, const DofMap& dofs,
+                           const std::vector<std::vector<int>>& colours,
+                           const Tet10ElementKernel& kernel, const AssemblyOptions& options,
+                           const std::function<bool(double)>& keep_going, LinearSystem* system) {
+  return AssembleElements<10>(
+      mesh, [&](int e) { return Tet10NodeIndices(mesh, e); }, dofs, colours, kernel, options,
+      keep_going, system);
+}
+
 Status AssembleLinearSystem(const Mesh& mesh, const Matrix6d& d, const DofMap& dofs,
                             const std::vector<std::vector<int>>& colours,
                             const std::function<bool(double)>& keep_going, LinearSystem* system) {
@@ -155,6 +194,20 @@ Status AssembleLinearSystem(const Mesh& mesh, const Matrix6d& d, const DofMap& d
   AssemblyOptions options;
   options.lift_prescribed = true;
   return AssembleSystem(mesh, dofs, colours, kernel, options, keep_going, system);
+}
+
+Status AssembleLinearSystemTet10(const Mesh& mesh, const Matrix6d& d, const DofMap& dofs,
+                                 const std::vector<std::vector<int>>& colours,
+                                 const std::function<bool(double)>& keep_going,
+                                 LinearSystem* system) {
+  const Tet10ElementKernel kernel = [&](int e, Matrix30d* k, Vector30d* f) {
+    *k = Tet10Stiffness(Tet10Coordinates(mesh, e), d);
+    f->setZero();
+    return true;
+  };
+  AssemblyOptions options;
+  options.lift_prescribed = true;
+  return AssembleSystemTet10(mesh, dofs, colours, kernel, options, keep_going, system);
 }
 
 }  // namespace pba

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "assembly/dof_map.h"
+#include "fem/tet10.h"
 #include "fem/tet4.h"
 #include "mesh/mesh.h"
 #include "pba/status.h"
@@ -19,7 +20,9 @@ namespace pba {
 
 using SparseMatrix = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
 
-// Element indices by colour; elements of one colour share no node.
+// Element indices by colour; elements of one colour share no node. Made
+// from the corners (Mesh::tets), it serves quadratic meshes too: elements
+// that share no corner share no edge, hence no mid-edge node.
 std::vector<std::vector<int>> ColourElements(const Mesh& mesh);
 
 struct LinearSystem {
@@ -31,6 +34,9 @@ struct LinearSystem {
 // 12 unknowns); returns false to stop the assembly (for example an inverted
 // element). Called concurrently for elements of one colour.
 using ElementKernel = std::function<bool(int element, Matrix12d* k, Vector12d* f)>;
+// The same for a 10-node element, in its 30 unknowns (node order of
+// fem/tet10.h: corners, then Mesh::midside).
+using Tet10ElementKernel = std::function<bool(int element, Matrix30d* k, Vector30d* f)>;
 
 struct AssemblyOptions {
   // Subtract K_fp u_p (the prescribed values' pull on the free unknowns) from
@@ -38,6 +44,13 @@ struct AssemblyOptions {
   // element's state. A Newton iteration, whose state already holds u_p,
   // leaves it off.
   bool lift_prescribed = false;
+  // Finite-strain models: leave out the initial-stress stiffness of the
+  // volumetric pressure (p d2v/dx2), which a nearly incompressible body far
+  // from equilibrium (K (J - 1) >> mu) makes indefinite. What remains is
+  // positive definite for a stable material and still carries the full
+  // volumetric stiffness K; Newton falls back on it when the consistent
+  // tangent cannot be factorised. Models without such a term ignore it.
+  bool drop_pressure_stiffness = false;
 };
 
 // Assembles K_ff = sum k and rhs_f = sum f (minus K_fp u_p when lifting).
@@ -49,6 +62,12 @@ Status AssembleSystem(const Mesh& mesh, const DofMap& dofs,
                       const AssemblyOptions& options, const std::function<bool(double)>& keep_going,
                       LinearSystem* system);
 
+// AssembleSystem for a quadratic mesh (Mesh::quadratic()): 10-node elements.
+Status AssembleSystemTet10(const Mesh& mesh, const DofMap& dofs,
+                           const std::vector<std::vector<int>>& colours,
+                           const Tet10ElementKernel& kernel, const AssemblyOptions& options,
+                           const std::function<bool(double)>& keep_going, LinearSystem* system);
+
 // Assembles K_ff and the right-hand side for elasticity matrix `d`.
 // `keep_going(fraction)` is called between colours; returning false stops
 // the assembly with Status::Cancelled.
@@ -56,7 +75,17 @@ Status AssembleLinearSystem(const Mesh& mesh, const Matrix6d& d, const DofMap& d
                             const std::vector<std::vector<int>>& colours,
                             const std::function<bool(double)>& keep_going, LinearSystem* system);
 
+// AssembleLinearSystem for a quadratic mesh: small-strain 10-node elements
+// (Tet10Stiffness), prescribed values lifted to the right-hand side.
+Status AssembleLinearSystemTet10(const Mesh& mesh, const Matrix6d& d, const DofMap& dofs,
+                                 const std::vector<std::vector<int>>& colours,
+                                 const std::function<bool(double)>& keep_going,
+                                 LinearSystem* system);
+
 // Gathers the 12 element unknowns of tet `e` from the full vector `u`.
 Vector12d GatherElement(const Mesh& mesh, int e, const Eigen::VectorXd& u);
+
+// Gathers the 30 element unknowns of 10-node tet `e` of a quadratic mesh.
+Vector30d GatherElementTet10(const Mesh& mesh, int e, const Eigen::VectorXd& u);
 
 }  // namespace pba

@@ -5,6 +5,7 @@
 #include <fstream>
 #include <string>
 
+#include "material/linear_elastic.h"
 #include "pba/solve.h"
 #include "scene/model_builder.h"
 
@@ -44,6 +45,14 @@ std::string MaterialCards(const MaterialSpec& m) {
     case MaterialSpec::Kind::kLinearElastic:
       return "*ELASTIC\n" +
              DataLines({m.linear_elastic.youngs_modulus_pa, m.linear_elastic.poissons_ratio});
+    case MaterialSpec::Kind::kOrthotropicElastic: {
+      // Abaqus order: E1 E2 E3 nu12 nu13 nu23 G12 G13 on the first line, G23
+      // on the second; nu_ij means -eps_j / eps_i there too.
+      const OrthotropicElasticParams& p = m.orthotropic_elastic;
+      return "*ELASTIC, TYPE=ENGINEERING CONSTANTS\n" +
+             DataLines(
+                 {p.e1_pa, p.e2_pa, p.e3_pa, p.nu12, p.nu13, p.nu23, p.g12_pa, p.g13_pa, p.g23_pa});
+    }
     case MaterialSpec::Kind::kNeoHookean:
       return "*HYPERELASTIC, NEO HOOKE\n" +
              DataLines({m.neo_hookean.shear_modulus_pa / 2, 2 / m.neo_hookean.bulk_modulus_pa});
@@ -119,8 +128,19 @@ Status ExportAbaqusInput(const SceneSpec& scene, const std::filesystem::path& fi
     out << "*NSET, NSET=" << Upper(name) << "\n";
     WriteIdList(out, set.nodes);
   }
+  // An orthotropic model's axes as a rectangular system: local 1 through
+  // point a, the 1-2 plane through point b (the orthonormalised axes, so the
+  // deck's Gram-Schmidt is PBA's).
+  const bool oriented = scene.material.kind == MaterialSpec::Kind::kOrthotropicElastic;
+  if (oriented) {
+    const OrthotropicElasticParams& p = scene.material.orthotropic_elastic;
+    const Eigen::Matrix3d q = MaterialFrame(p.axis_1, p.axis_2);
+    out << "*ORIENTATION, NAME=MATERIAL_AXES, SYSTEM=RECTANGULAR\n"
+        << DataLines({q(0, 0), q(1, 0), q(2, 0), q(0, 1), q(1, 1), q(2, 1)});
+  }
   out << "*MATERIAL, NAME=TISSUE\n"
-      << MaterialCards(scene.material) << "*SOLID SECTION, ELSET=EALL, MATERIAL=TISSUE\n";
+      << MaterialCards(scene.material) << "*SOLID SECTION, ELSET=EALL, MATERIAL=TISSUE"
+      << (oriented ? ", ORIENTATION=MATERIAL_AXES" : "") << "\n";
   if (scene.analysis.type == AnalysisSpec::Type::kNonlinearStatic) {
     // Geometric nonlinearity, automatic incrementation from the same first
     // increment PBA takes.
@@ -142,6 +162,34 @@ Status ExportAbaqusInput(const SceneSpec& scene, const std::filesystem::path& fi
     if (!model.dofs.prescribed(dof)) continue;
     std::snprintf(line, sizeof line, "%d, %d, %d, %.13g\n", dof / 3 + 1, dof % 3 + 1, dof % 3 + 1,
                   model.dofs.prescribed_value(dof));
+    out << line;
+  }
+  // Pressure on element faces (C3D4 faces: S1 = 1-2-3, S2 = 1-4-2,
+  // S3 = 2-4-3, S4 = 3-4-1, i.e. the face opposite corner 4, 3, 1, 2); with
+  // NLGEOM CalculiX makes it a follower load, as PBA does.
+  static const int kFaceOpposite[4] = {3, 4, 2, 1};  // corner (0-based) -> face label
+  bool dload = false;
+  for (const BoundaryConditionSpec& bc : scene.boundary_conditions) {
+    if (bc.kind != BoundaryConditionSpec::Kind::kPressure || bc.pressure_pa == 0) continue;
+    if (!dload) out << "*DLOAD\n";
+    dload = true;
+    for (const auto& [element, corner] : FaceElements(mesh, mesh.face_sets.at(bc.set))) {
+      if (element < 0) continue;
+      std::snprintf(line, sizeof line, "%d, P%d, %.13g\n", element + 1, kFaceOpposite[corner],
+                    bc.pressure_pa);
+      out << line;
+    }
+  }
+  // Tractions and gravity as the nodal forces PBA lumps them to (exact for
+  // linear elements under uniform loads).
+  const ExternalLoads loads = BuildLoads(scene, mesh);
+  bool cload = false;
+  for (int dof = 0; dof < model.dofs.num_dofs(); ++dof) {
+    const double f = loads.dead_force()(dof);
+    if (f == 0) continue;
+    if (!cload) out << "*CLOAD\n";
+    cload = true;
+    std::snprintf(line, sizeof line, "%d, %d, %.13g\n", dof / 3 + 1, dof % 3 + 1, f);
     out << line;
   }
   for (const auto& name : ReactionSetNames(scene)) {

@@ -27,8 +27,16 @@ class LinearSolver {
 
 std::unique_ptr<LinearSolver> CreateLinearSolver(AnalysisSpec::LinearSolver kind);
 
-// The backends (linear/cholmod_solver.cc, linear/eigen_ldlt_solver.cc).
+// The backends (linear/cholmod_solver.cc, linear/eigen_ldlt_solver.cc,
+// linear/pcg_solver.cc).
 std::unique_ptr<LinearSolver> CreateCholmodSolver();
 std::unique_ptr<LinearSolver> CreateEigenLdltSolver();
+// Iterative: conjugate gradients with an incomplete Cholesky preconditioner,
+// aiming at ||b - A x|| / ||b|| <= 1e-12 in at most max(1000, 10 n)
+// iterations. Factorize computes the preconditioner (and keeps a copy of
+// `a`); Solve fails with Status::Numerical, naming the iterations and the
+// residual reached, when the true residual ends above 1e-8. After a solve,
+// Name() carries its iteration count and residual.
+std::unique_ptr<LinearSolver> CreatePcgSolver();
 
 }  // namespace pba

@@ -1,9 +1,12 @@
 #include "material/factory.h"
 
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <set>
 #include <utility>
 
+#include "material/linear_elastic.h"
 #include "material/ogden.h"
 #include "material/polynomial.h"
 
@@ -91,9 +94,12 @@ Status ValidateMaterialSpec(const MaterialSpec& m, const std::string& path) {
     case MaterialSpec::Kind::kNone:
       return Status::InvalidArgument(path,
                                      "no material model given: set one of linear_elastic, "
-                                     "neo_hookean, mooney_rivlin, polynomial, ogden");
+                                     "orthotropic_elastic, neo_hookean, mooney_rivlin, "
+                                     "polynomial, ogden");
     case MaterialSpec::Kind::kLinearElastic:
       return m.linear_elastic.Validate(path + ".linear_elastic");
+    case MaterialSpec::Kind::kOrthotropicElastic:
+      return m.orthotropic_elastic.Validate(path + ".orthotropic_elastic");
     case MaterialSpec::Kind::kNeoHookean: {
       const std::string p = path + ".neo_hookean";
       PBA_RETURN_IF_ERROR(RequirePositive(m.neo_hookean.shear_modulus_pa, p + ".shear_modulus_pa"));
@@ -148,14 +154,53 @@ InitialModuli InitialElasticModuli(const MaterialSpec& m) {
     return {m.linear_elastic.youngs_modulus_pa, m.linear_elastic.poissons_ratio};
   }
   const auto material = MakeHyperelasticMaterial(m);
+  if (material == nullptr) {
+    // An orthotropic (or missing) model has no isotropic pair; callers that
+    // may meet one go through ElasticityMatrix().
+    std::fprintf(stderr, "InitialElasticModuli: material kind %d is not isotropic\n",
+                 static_cast<int>(m.kind));
+    std::abort();
+  }
   const double mu = material->ShearModulus(), k = material->BulkModulus();
   return {9 * k * mu / (3 * k + mu), (3 * k - 2 * mu) / (2 * (3 * k + mu))};
+}
+
+Matrix6d ElasticityMatrix(const MaterialSpec& m) {
+  if (m.kind == MaterialSpec::Kind::kOrthotropicElastic) {
+    const OrthotropicElasticParams& p = m.orthotropic_elastic;
+    return RotateElasticity(OrthotropicElasticity(p), MaterialFrame(p.axis_1, p.axis_2));
+  }
+  const InitialModuli p = InitialElasticModuli(m);
+  return IsotropicElasticity(p.youngs_modulus_pa, p.poissons_ratio);
+}
+
+Matrix6d ComplianceMatrix(const MaterialSpec& m) {
+  if (m.kind == MaterialSpec::Kind::kOrthotropicElastic) {
+    const OrthotropicElasticParams& p = m.orthotropic_elastic;
+    return RotateCompliance(OrthotropicCompliance(p), MaterialFrame(p.axis_1, p.axis_2));
+  }
+  const InitialModuli p = InitialElasticModuli(m);
+  return IsotropicCompliance(p.youngs_modulus_pa, p.poissons_ratio);
 }
 
 std::string DescribeMaterial(const MaterialSpec& m) {
   if (m.kind == MaterialSpec::Kind::kLinearElastic) {
     return "linear elastic, E = " + FormatNumber(m.linear_elastic.youngs_modulus_pa) +
            " Pa, nu = " + FormatNumber(m.linear_elastic.poissons_ratio);
+  }
+  if (m.kind == MaterialSpec::Kind::kOrthotropicElastic) {
+    const OrthotropicElasticParams& p = m.orthotropic_elastic;
+    const Eigen::Matrix3d q = MaterialFrame(p.axis_1, p.axis_2);
+    auto axis = [&](int c) {
+      return "(" + FormatNumber(q(0, c)) + ", " + FormatNumber(q(1, c)) + ", " +
+             FormatNumber(q(2, c)) + ")";
+    };
+    return "orthotropic linear elastic, E1 = " + FormatNumber(p.e1_pa) +
+           " Pa, E2 = " + FormatNumber(p.e2_pa) + " Pa, E3 = " + FormatNumber(p.e3_pa) +
+           " Pa, nu12 = " + FormatNumber(p.nu12) + ", nu13 = " + FormatNumber(p.nu13) +
+           ", nu23 = " + FormatNumber(p.nu23) + ", G12 = " + FormatNumber(p.g12_pa) +
+           " Pa, G13 = " + FormatNumber(p.g13_pa) + " Pa, G23 = " + FormatNumber(p.g23_pa) +
+           " Pa, axis 1 = " + axis(0) + ", axis 2 = " + axis(1);
   }
   return MakeHyperelasticMaterial(m)->Describe();
 }

@@ -1,8 +1,34 @@
 #include "material/linear_elastic.h"
 
+#include <Eigen/Geometry>
+#include <Eigen/LU>
 #include <cmath>
+#include <string>
+
+#include "material/hyperelastic.h"
 
 namespace pba {
+namespace {
+
+// Voigt index -> tensor index pair, order xx yy zz yz xz xy.
+constexpr int kVoigtPair[6][2] = {{0, 0}, {1, 1}, {2, 2}, {1, 2}, {0, 2}, {0, 1}};
+
+// Below this sine of the angle between axis_1 and axis_2 the 1-2 plane is
+// not defined to any useful precision.
+constexpr double kMinAxisSine = 1e-6;
+
+Eigen::Vector3d Vector(const std::array<double, 3>& v) { return {v[0], v[1], v[2]}; }
+
+Status RequireAxis(const std::array<double, 3>& axis, const std::string& field) {
+  const Eigen::Vector3d v = Vector(axis);
+  if (!v.allFinite() || v.norm() == 0) {
+    return Status::InvalidArgument(field,
+                                   "must be a non-zero direction (x, y, z) of finite numbers");
+  }
+  return Status::Ok();
+}
+
+}  // namespace
 
 Matrix6d IsotropicElasticity(double e, double nu) {
   const double lambda = e * nu / ((1 + nu) * (1 - 2 * nu));
@@ -24,6 +50,112 @@ Matrix6d IsotropicCompliance(double e, double nu) {
     c(i + 3, i + 3) = 2 * (1 + nu) / e;
   }
   return c;
+}
+
+Status OrthotropicElasticParams::Validate(const std::string& path) const {
+  const double e[3] = {e1_pa, e2_pa, e3_pa};
+  static const char* kModuli[3] = {".e1_pa", ".e2_pa", ".e3_pa"};
+  for (int i = 0; i < 3; ++i) PBA_RETURN_IF_ERROR(RequirePositive(e[i], path + kModuli[i]));
+  PBA_RETURN_IF_ERROR(RequirePositive(g12_pa, path + ".g12_pa"));
+  PBA_RETURN_IF_ERROR(RequirePositive(g13_pa, path + ".g13_pa"));
+  PBA_RETURN_IF_ERROR(RequirePositive(g23_pa, path + ".g23_pa"));
+  // |nu_ij| < sqrt(E_i / E_j) keeps each 2 x 2 minor of the compliance
+  // positive (Jones, Mechanics of Composite Materials, 2nd ed., sec. 2.4).
+  struct Ratio {
+    const char* name;
+    double value;
+    int i, j;
+  };
+  const Ratio ratios[3] = {{"nu12", nu12, 0, 1}, {"nu13", nu13, 0, 2}, {"nu23", nu23, 1, 2}};
+  for (const Ratio& r : ratios) {
+    const std::string field = path + "." + r.name;
+    PBA_RETURN_IF_ERROR(RequireFinite(r.value, field));
+    const double bound = std::sqrt(e[r.i] / e[r.j]);
+    if (!(std::abs(r.value) < bound)) {
+      return Status::InvalidArgument(
+          field, std::string("must satisfy |") + r.name + "| < sqrt(E" + std::to_string(r.i + 1) +
+                     " / E" + std::to_string(r.j + 1) + ") = " + FormatNumber(bound) +
+                     " for a positive definite compliance, got " + FormatNumber(r.value));
+    }
+  }
+  // The determinant of the normal block, scaled by E1 E2 E3, must be > 0 too
+  // (same source); no single ratio is to blame, so the block is named.
+  const double nu21 = nu12 * e2_pa / e1_pa, nu31 = nu13 * e3_pa / e1_pa,
+               nu32 = nu23 * e3_pa / e2_pa;
+  const double delta = 1 - nu12 * nu21 - nu23 * nu32 - nu31 * nu13 - 2 * nu21 * nu32 * nu13;
+  if (!(delta > 0)) {
+    return Status::InvalidArgument(
+        path,
+        "the Poisson's ratios make the compliance indefinite: 1 - nu12 nu21 - nu23 nu32 - "
+        "nu31 nu13 - 2 nu21 nu32 nu13 = " +
+            FormatNumber(delta) +
+            " must be > 0 (nu_ji = nu_ij E_j / E_i); lower nu12, nu13 or nu23");
+  }
+  PBA_RETURN_IF_ERROR(RequireAxis(axis_1, path + ".axis_1"));
+  PBA_RETURN_IF_ERROR(RequireAxis(axis_2, path + ".axis_2"));
+  const Eigen::Vector3d a = Vector(axis_1), b = Vector(axis_2);
+  if (!(a.cross(b).norm() > kMinAxisSine * a.norm() * b.norm())) {
+    return Status::InvalidArgument(path + ".axis_2",
+                                   "is parallel to axis_1, so it does not fix the 1-2 plane; give "
+                                   "a direction in that plane");
+  }
+  return Status::Ok();
+}
+
+Matrix6d OrthotropicCompliance(const OrthotropicElasticParams& p) {
+  Matrix6d s = Matrix6d::Zero();
+  s(0, 0) = 1 / p.e1_pa;
+  s(1, 1) = 1 / p.e2_pa;
+  s(2, 2) = 1 / p.e3_pa;
+  s(0, 1) = s(1, 0) = -p.nu12 / p.e1_pa;
+  s(0, 2) = s(2, 0) = -p.nu13 / p.e1_pa;
+  s(1, 2) = s(2, 1) = -p.nu23 / p.e2_pa;
+  s(3, 3) = 1 / p.g23_pa;
+  s(4, 4) = 1 / p.g13_pa;
+  s(5, 5) = 1 / p.g12_pa;
+  return s;
+}
+
+Matrix6d OrthotropicElasticity(const OrthotropicElasticParams& p) {
+  const Matrix6d s = OrthotropicCompliance(p);
+  Matrix6d d = Matrix6d::Zero();
+  d.topLeftCorner<3, 3>() = s.topLeftCorner<3, 3>().inverse();
+  for (int i = 3; i < 6; ++i) d(i, i) = 1 / s(i, i);
+  return d;
+}
+
+Eigen::Matrix3d MaterialFrame(const std::array<double, 3>& axis_1,
+                              const std::array<double, 3>& axis_2) {
+  const Eigen::Vector3d a = Vector(axis_1).normalized();
+  const Eigen::Vector3d v = Vector(axis_2);
+  const Eigen::Vector3d b = (v - a.dot(v) * a).normalized();
+  Eigen::Matrix3d q;
+  q << a, b, a.cross(b);
+  return q;
+}
+
+Matrix6d StressRotation(const Eigen::Matrix3d& q) {
+  Matrix6d m;
+  for (int row = 0; row < 6; ++row) {
+    const int i = kVoigtPair[row][0], j = kVoigtPair[row][1];
+    for (int col = 0; col < 6; ++col) {
+      const int k = kVoigtPair[col][0], l = kVoigtPair[col][1];
+      // A shear column stands for both sigma_kl and sigma_lk.
+      m(row, col) = k == l ? q(i, k) * q(j, k) : q(i, k) * q(j, l) + q(i, l) * q(j, k);
+    }
+  }
+  return m;
+}
+
+Matrix6d RotateElasticity(const Matrix6d& d_material, const Eigen::Matrix3d& frame) {
+  const Matrix6d m = StressRotation(frame);
+  return m * d_material * m.transpose();
+}
+
+Matrix6d RotateCompliance(const Matrix6d& s_material, const Eigen::Matrix3d& frame) {
+  // The strain transformation M^-T, with M^-1 the Bond matrix of Q^-1 = Q^T.
+  const Matrix6d n = StressRotation(frame.transpose()).transpose();
+  return n * s_material * n.transpose();
 }
 
 double VonMises(const Vector6d& s) {

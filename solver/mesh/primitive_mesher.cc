@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <map>
 #include <numbers>
 
 namespace pba {
@@ -19,6 +20,13 @@ struct Section {
 
 int Divisions(double length, double h) {
   return std::max(1, static_cast<int>(std::ceil(length / h - 1e-9)));
+}
+
+// Cells along each edge of a shell patch: a patch edge spans a quarter
+// circle's half (pi / 4 of arc) at the mean radius.
+double ShellDivisions(const SphericalShellSpec& s, double h) {
+  const double arc = std::numbers::pi / 4 * 0.5 * (s.inner_radius_mm + s.outer_radius_mm);
+  return std::max(1.0, std::ceil(arc / h - 1e-9));
 }
 
 Section RectangleSection(double lx, double ly, int nx, int ny) {
@@ -165,9 +173,69 @@ Mesh Extrude(const Section& section, double height, int nz) {
   return mesh;
 }
 
+// Octant of a spherical shell, radii a < b [mm]: the octant of the unit
+// sphere is covered by three patches, the central projections of the cube
+// faces x = 1, y = 1, z = 1 over [0, 1]^2 (a cubed sphere, with equiangular
+// spacing so the cells are nearly uniform), each cut n x n; the surface
+// quadrilaterals are split into triangles and extruded radially in nr
+// layers into prisms, cut into tetrahedra as in Extrude.
+Mesh SphericalShellOctant(double a, double b, int n, int nr) {
+  std::vector<Eigen::Vector3d> directions;
+  std::map<std::array<int, 3>, int> index;  // integer cube-surface coordinates -> point
+  const auto point = [&](std::array<int, 3> key) {
+    const auto [it, added] = index.emplace(key, static_cast<int>(directions.size()));
+    if (added) {
+      Eigen::Vector3d x;
+      for (int c = 0; c < 3; ++c) x(c) = std::tan(std::numbers::pi / 4 * key[c] / n);
+      directions.push_back(x.normalized());
+    }
+    return it->second;
+  };
+  std::vector<std::array<int, 4>> quads;
+  for (int face = 0; face < 3; ++face) {
+    const int u = (face + 1) % 3, v = (face + 2) % 3;
+    for (int i = 0; i < n; ++i) {
+      for (int j = 0; j < n; ++j) {
+        std::array<int, 4> q;
+        const int di[4] = {0, 1, 1, 0}, dj[4] = {0, 0, 1, 1};
+        for (int k = 0; k < 4; ++k) {
+          std::array<int, 3> key;
+          key[face] = n;
+          key[u] = i + di[k];
+          key[v] = j + dj[k];
+          q[k] = point(key);
+        }
+        quads.push_back(q);
+      }
+    }
+  }
+  Mesh mesh;
+  const int np = static_cast<int>(directions.size());
+  mesh.nodes.resize(static_cast<Eigen::Index>(np) * (nr + 1), 3);
+  for (int k = 0; k <= nr; ++k) {
+    const double r = (a + (b - a) * k / nr) * kMm;
+    for (int p = 0; p < np; ++p) mesh.nodes.row(k * np + p) = r * directions[p].transpose();
+  }
+  for (int k = 0; k < nr; ++k) {
+    const int lo = k * np, hi = (k + 1) * np;
+    for (const auto& q : quads) {
+      for (const auto& tri :
+           {std::array<int, 3>{q[0], q[1], q[2]}, std::array<int, 3>{q[0], q[2], q[3]}}) {
+        SplitPrism({lo + tri[0], lo + tri[1], lo + tri[2], hi + tri[0], hi + tri[1], hi + tri[2]},
+                   &mesh.tets);
+      }
+    }
+  }
+  for (auto& t : mesh.tets) {
+    if (SignedVolume(mesh, t) < 0) std::swap(t[2], t[3]);
+  }
+  return mesh;
+}
+
 // Fills mesh.face_sets: a tetrahedron face belongs to a set when its three
-// nodes lie on that set's surface (the bodies are convex, so such a face is
-// on the boundary).
+// nodes lie on that set's surface. Only boundary faces can: the bodies are
+// convex, or (the shell) their curved surfaces are the first and last layer
+// of an extrusion, whose faces within a layer are prism ends.
 void ClassifyFaces(const std::vector<std::string>& names,
                    const std::vector<std::function<bool(const Eigen::Vector3d&)>>& on_surface,
                    Mesh* mesh) {
@@ -208,6 +276,8 @@ double EffectiveElementSize(const GeometrySpec& geometry, const MeshSpec& option
     largest = *std::max_element(geometry.box.size_mm.begin(), geometry.box.size_mm.end());
   } else if (geometry.kind == GeometrySpec::Kind::kCylinder) {
     largest = std::max(2 * geometry.cylinder.radius_mm, geometry.cylinder.height_mm);
+  } else if (geometry.kind == GeometrySpec::Kind::kSphericalShell) {
+    largest = geometry.spherical_shell.outer_radius_mm;
   }
   return largest / 20.0;
 }
@@ -224,6 +294,10 @@ int64_t EstimateElementCount(const GeometrySpec& geometry, const MeshSpec& optio
     const double n = std::max(2.0, std::ceil(geometry.cylinder.radius_mm / h));
     const double m = std::ceil(0.5 * geometry.cylinder.radius_mm / h);
     count = 6.0 * (n * n + 4 * n * m) * std::ceil(geometry.cylinder.height_mm / h);
+  } else if (geometry.kind == GeometrySpec::Kind::kSphericalShell) {
+    const SphericalShellSpec& s = geometry.spherical_shell;
+    const double n = ShellDivisions(s, h), nr = std::ceil((s.outer_radius_mm - s.inner_radius_mm) / h);
+    count = 6.0 * 3 * n * n * nr;
   }
   return count > 9e18 ? INT64_MAX : static_cast<int64_t>(count);
 }
@@ -247,6 +321,23 @@ Mesh BuildPrimitiveMesh(const GeometrySpec& geometry, const MeshSpec& options, M
                   &mesh);
     stats->description = "structured grid of " + std::to_string(nx) + " x " + std::to_string(ny) +
                          " x " + std::to_string(nz) + " cells, each cut into 6 tetrahedra";
+  } else if (geometry.kind == GeometrySpec::Kind::kSphericalShell) {
+    const SphericalShellSpec& s = geometry.spherical_shell;
+    const int n = static_cast<int>(ShellDivisions(s, h));
+    const int nr = Divisions(s.outer_radius_mm - s.inner_radius_mm, h);
+    mesh = SphericalShellOctant(s.inner_radius_mm, s.outer_radius_mm, n, nr);
+    const double a = s.inner_radius_mm * kMm, b = s.outer_radius_mm * kMm;
+    const double eps = 1e-9 * b;
+    ClassifyFaces({"inner", "outer", "x0", "y0", "z0"},
+                  {[=](const Eigen::Vector3d& x) { return x.norm() < a + eps; },
+                   [=](const Eigen::Vector3d& x) { return x.norm() > b - eps; },
+                   [=](const Eigen::Vector3d& x) { return x.x() < eps; },
+                   [=](const Eigen::Vector3d& x) { return x.y() < eps; },
+                   [=](const Eigen::Vector3d& x) { return x.z() < eps; }},
+                  &mesh);
+    stats->description = "cubed-sphere octant: 3 patches of " + std::to_string(n) + " x " +
+                         std::to_string(n) + " cells, extruded radially in " + std::to_string(nr) +
+                         " layers, each prism cut into 3 tetrahedra";
   } else {
     const double r = geometry.cylinder.radius_mm, height = geometry.cylinder.height_mm;
     const DiskDivisions d = DiskCounts(r, h);

@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "analysis/external_loads.h"
 #include "assembly/dof_map.h"
 #include "mesh/mesh.h"
 #include "pba/scene.h"
@@ -22,8 +23,14 @@ struct Model {
 // Expects a validated scene.
 Model BuildModel(const SceneSpec& scene);
 
+// The loads of the scene's pressure and traction conditions and its gravity,
+// at full value (SI). Pressure follows the deformation in a nonlinear
+// analysis. `mesh` must outlive the result.
+ExternalLoads BuildLoads(const SceneSpec& scene, const Mesh& mesh);
+
 // The sets whose reactions are reported: outputs.reaction_sets, or else every
-// set a boundary condition names, in the order of first mention.
+// set a displacement-type condition (fixed, displacement, symmetry) names, in
+// the order of first mention.
 std::vector<std::string> ReactionSetNames(const SceneSpec& scene);
 
 }  // namespace pba

@@ -25,8 +25,24 @@ bool PositiveFinite(double value) { return std::isfinite(value) && value > 0; }
 Status ValidateGeometry(const GeometrySpec& geometry) {
   switch (geometry.kind) {
     case GeometrySpec::Kind::kNone:
-      return Status::InvalidArgument("geometry",
-                                     "no shape given: set geometry.box or geometry.cylinder");
+      return Status::InvalidArgument(
+          "geometry",
+          "no shape given: set geometry.box, geometry.cylinder or geometry.spherical_shell");
+    case GeometrySpec::Kind::kSphericalShell: {
+      const SphericalShellSpec& s = geometry.spherical_shell;
+      if (!PositiveFinite(s.inner_radius_mm)) {
+        return Status::InvalidArgument(
+            "geometry.spherical_shell.inner_radius_mm",
+            "must be a positive number of mm, got " + Number(s.inner_radius_mm));
+      }
+      if (!std::isfinite(s.outer_radius_mm) || s.outer_radius_mm <= s.inner_radius_mm) {
+        return Status::InvalidArgument(
+            "geometry.spherical_shell.outer_radius_mm",
+            "must be a number of mm larger than the inner radius (" + Number(s.inner_radius_mm) +
+                "), got " + Number(s.outer_radius_mm));
+      }
+      return Status::Ok();
+    }
     case GeometrySpec::Kind::kBox:
       for (double size : geometry.box.size_mm) {
         if (!PositiveFinite(size)) {
@@ -53,6 +69,16 @@ Status ValidateGeometry(const GeometrySpec& geometry) {
 }
 
 Status ValidateAnalysis(const AnalysisSpec& analysis, const MaterialSpec& material) {
+  // Small-strain orthotropy has no finite-strain counterpart here (that would
+  // be an anisotropic hyperelastic model), so only the linear solve takes it.
+  if (material.kind == MaterialSpec::Kind::kOrthotropicElastic &&
+      analysis.type != AnalysisSpec::Type::kLinearStatic) {
+    return Status::InvalidArgument(
+        "material",
+        "orthotropic_elastic is small-strain linear elasticity, for LINEAR_STATIC only; a "
+        "nonlinear static analysis needs a hyperelastic material (neo_hookean, mooney_rivlin, "
+        "polynomial or ogden)");
+  }
   if (analysis.type != AnalysisSpec::Type::kNonlinearStatic) return Status::Ok();
   if (!material.hyperelastic()) {
     return Status::InvalidArgument(
@@ -115,12 +141,20 @@ std::vector<std::string> FaceSetNames(const GeometrySpec& geometry) {
       return {"bottom", "top", "x_min", "x_max", "y_min", "y_max"};
     case GeometrySpec::Kind::kCylinder:
       return {"bottom", "top", "side"};
+    case GeometrySpec::Kind::kSphericalShell:
+      return {"inner", "outer", "x0", "y0", "z0"};
     default:
       return {};
   }
 }
 
 int PlaneNormalAxis(const GeometrySpec& geometry, const std::string& set) {
+  if (geometry.kind == GeometrySpec::Kind::kSphericalShell) {
+    if (set == "x0") return 0;
+    if (set == "y0") return 1;
+    if (set == "z0") return 2;
+    return -1;
+  }
   if (set == "bottom" || set == "top") return geometry.kind == GeometrySpec::Kind::kNone ? -1 : 2;
   if (geometry.kind != GeometrySpec::Kind::kBox) return -1;
   if (set == "x_min" || set == "x_max") return 0;
@@ -171,8 +205,24 @@ Status ValidateScene(const SceneSpec& scene) {
     }
     switch (bc.kind) {
       case BoundaryConditionSpec::Kind::kNone:
-        return Status::InvalidArgument(path,
-                                       "no condition given: set fixed, displacement or symmetry");
+        return Status::InvalidArgument(
+            path, "no condition given: set fixed, displacement, symmetry, pressure or traction");
+      case BoundaryConditionSpec::Kind::kPressure:
+        if (!std::isfinite(bc.pressure_pa)) {
+          return Status::InvalidArgument(path + ".pressure.pressure_pa",
+                                         "must be a finite number of Pa, got " +
+                                             Number(bc.pressure_pa));
+        }
+        break;
+      case BoundaryConditionSpec::Kind::kTraction:
+        for (int c = 0; c < 3; ++c) {
+          if (!std::isfinite(bc.traction_pa[c])) {
+            return Status::InvalidArgument(
+                path + ".traction.traction_pa[" + std::to_string(c) + "]",
+                "must be a finite number of Pa, got " + Number(bc.traction_pa[c]));
+          }
+        }
+        break;
       case BoundaryConditionSpec::Kind::kFixed:
         held[0] = held[1] = held[2] = true;
         break;
@@ -203,6 +253,28 @@ Status ValidateScene(const SceneSpec& scene) {
         }
         break;
       }
+    }
+  }
+  const double density = scene.material.density_kg_per_m3;
+  if (!std::isfinite(density) || density < 0) {
+    return Status::InvalidArgument("material.density_kg_per_m3",
+                                   "must be a non-negative number of kg/m^3, got " +
+                                       Number(density));
+  }
+  if (scene.gravity.enabled) {
+    for (int c = 0; c < 3; ++c) {
+      if (!std::isfinite(scene.gravity.acceleration_m_per_s2[c])) {
+        return Status::InvalidArgument(
+            "gravity.acceleration_m_per_s2[" + std::to_string(c) + "]",
+            "must be a finite number of m/s^2, got " +
+                Number(scene.gravity.acceleration_m_per_s2[c]));
+      }
+    }
+    if (density == 0) {
+      return Status::InvalidArgument(
+          "material.density_kg_per_m3",
+          "gravity acts on the material's density, which is not given (brain tissue: about "
+          "1040 kg/m^3)");
     }
   }
   std::string free;

@@ -1,9 +1,12 @@
 // Speed beside error for the linear static solve: wall time per phase and the
 // Zienkiewicz-Zhu error estimate as the mesh of the quickstart block is
-// refined. A benchmark, not a test: scripts/bench.sh runs it and writes the
-// table in docs/performance.md.
+// refined, with the direct (CHOLMOD) and the iterative (PCG) linear solver.
+// A benchmark, not a test: scripts/bench.sh runs it and writes the table in
+// docs/performance.md.
 #include <benchmark/benchmark.h>
+#include <sys/resource.h>
 
+#include <cmath>
 #include <string>
 
 #include "pba/solve.h"
@@ -31,8 +34,9 @@ SceneSpec Block(double element_size_mm) {
 }
 
 // Argument: element size in tenths of a millimetre.
-void BM_LinearStaticBlock(benchmark::State& state) {
-  const SceneSpec scene = Block(state.range(0) / 10.0);
+void BM_LinearStaticBlock(benchmark::State& state, AnalysisSpec::LinearSolver linear_solver) {
+  SceneSpec scene = Block(state.range(0) / 10.0);
+  scene.analysis.linear_solver = linear_solver;
   Solution solution;
   for (auto _ : state) {
     const Status status = SolveScene(scene, SolveOptions(), &solution);
@@ -44,10 +48,30 @@ void BM_LinearStaticBlock(benchmark::State& state) {
   const Summary& s = solution.summary;
   state.counters["dofs"] = static_cast<double>(s.dofs);
   state.counters["zz_error_pct"] = 100 * s.error.relative_error;
+  // -log10 of ||K u - f|| / ||f||: digits of the linear solve (a plain
+  // counter would print 1e-13 as 0).
+  state.counters["residual_digits"] =
+      s.relative_residual > 0 ? -std::log10(s.relative_residual) : 99;
   for (const PhaseTime& phase : s.phases) state.counters[phase.phase + "_s"] = phase.seconds;
+  // The process's peak resident memory so far: the row's own only when it
+  // runs alone (--benchmark_filter), as for the figures in docs/performance.md.
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  state.counters["peak_rss_mb"] = usage.ru_maxrss / 1024.0;
+  state.SetLabel(s.linear_solver);
 }
 
-BENCHMARK(BM_LinearStaticBlock)
+BENCHMARK_CAPTURE(BM_LinearStaticBlock, cholmod, AnalysisSpec::LinearSolver::kCholmod)
+    ->Arg(40)
+    ->Arg(20)
+    ->Arg(13)
+    ->Arg(10)
+    ->Arg(7)
+    ->Unit(benchmark::kSecond)
+    ->UseRealTime()
+    ->Iterations(1);
+
+BENCHMARK_CAPTURE(BM_LinearStaticBlock, pcg, AnalysisSpec::LinearSolver::kPcg)
     ->Arg(40)
     ->Arg(20)
     ->Arg(13)

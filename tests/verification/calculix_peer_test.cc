@@ -126,6 +126,20 @@ std::vector<SceneSpec> Cases() {
   // CalculiX's own Newton diverges now and then from a first increment of
   // 0.2 on this model (NaN forces); 0.05 keeps it on track.
   ogden.analysis.nonlinear.increments = 20;
+  // Oblique material axes (none along x, y or z) couple the stretch to shear
+  // and make the field inhomogeneous, so the deck's *ORIENTATION and
+  // ENGINEERING CONSTANTS must mean what PBA's frame and constants mean.
+  SceneSpec orthotropic =
+      Scene("orthotropic block, oblique axes, rollers, top pulled 0.3 mm", box, 2.5,
+            {Condition("bottom", K::kDisplacement, {std::nullopt, std::nullopt, 0.0}),
+             Condition("x_min", K::kDisplacement, {0.0, std::nullopt, std::nullopt}),
+             Condition("y_min", K::kDisplacement, {std::nullopt, 0.0, std::nullopt}),
+             Condition("top", K::kDisplacement, {std::nullopt, std::nullopt, 0.3})});
+  orthotropic.material.kind = MaterialSpec::Kind::kOrthotropicElastic;
+  OrthotropicElasticParams& p = orthotropic.material.orthotropic_elastic;
+  p = {6000, 3000, 1500, 0.3, 0.35, 0.4, 1500, 900, 600};
+  p.axis_1 = {1, 2, 0.5};
+  p.axis_2 = {-1, 0.3, 2};
   return {
       neo,
       ogden,
@@ -139,6 +153,7 @@ std::vector<SceneSpec> Cases() {
       Scene("cylinder, bottom fixed, top pressed 1 mm", cylinder, 1.5,
             {Condition("bottom", K::kFixed),
              Condition("top", K::kDisplacement, {std::nullopt, std::nullopt, -1.0})}),
+      orthotropic,
   };
 }
 

@@ -22,11 +22,19 @@ struct CylinderSpec {
   double height_mm = 0;  // [mm], axis along z, bottom centre at the origin
 };
 
+// One octant (x, y, z >= 0) of a thick spherical shell centred at the
+// origin, e.g. a pressurised cavity; its cut planes carry symmetry conditions.
+struct SphericalShellSpec {
+  double inner_radius_mm = 0;  // [mm], > 0
+  double outer_radius_mm = 0;  // [mm], > inner
+};
+
 struct GeometrySpec {
-  enum class Kind { kNone, kBox, kCylinder };
+  enum class Kind { kNone, kBox, kCylinder, kSphericalShell };
   Kind kind = Kind::kNone;
   BoxSpec box;
   CylinderSpec cylinder;
+  SphericalShellSpec spherical_shell;
 };
 
 enum class ElementType {
@@ -47,6 +55,34 @@ struct LinearElasticParams {
   double youngs_modulus_pa = 0;  // E [Pa], > 0
   double poissons_ratio = 0;     // nu [-], -1 < nu < 0.5
   // Names the bad field as `path` + ".youngs_modulus_pa" or ".poissons_ratio".
+  Status Validate(const std::string& path) const;
+};
+
+// Orthotropic small-strain elasticity from engineering constants in the
+// material frame (1, 2, 3); LINEAR_STATIC only. nu_ij is the contraction
+// along j under uniaxial stress along i, -eps_j / eps_i; the other ratios
+// follow from the symmetry nu_ji / E_j = nu_ij / E_i (Jones, Mechanics of
+// Composite Materials, 2nd ed. 1999, sec. 2.3). E = E_i, nu = nu_ij and
+// G = E / (2 (1 + nu)) is isotropic elasticity.
+struct OrthotropicElasticParams {
+  double e1_pa = 0;   // E1 [Pa], > 0
+  double e2_pa = 0;   // E2 [Pa], > 0
+  double e3_pa = 0;   // E3 [Pa], > 0
+  double nu12 = 0;    // [-], |nu12| < sqrt(E1 / E2)
+  double nu13 = 0;    // [-], |nu13| < sqrt(E1 / E3)
+  double nu23 = 0;    // [-], |nu23| < sqrt(E2 / E3)
+  double g12_pa = 0;  // G12 [Pa], > 0
+  double g13_pa = 0;  // G13 [Pa], > 0
+  double g23_pa = 0;  // G23 [Pa], > 0
+  // Material directions 1 and 2 as vectors in the global x, y, z frame (any
+  // length). Direction 1 is axis_1 normalised; direction 2 is the part of
+  // axis_2 orthogonal to it (Gram-Schmidt), normalised, so axis_2 need only
+  // lie in the 1-2 plane on the side of +2; direction 3 = 1 x 2.
+  std::array<double, 3> axis_1{1, 0, 0};
+  std::array<double, 3> axis_2{0, 1, 0};
+  // Names the bad field as `path` + ".e1_pa", ".nu23", ".axis_2" and so on;
+  // a compliance that is not positive definite (a condition on all three
+  // Poisson's ratios together) names `path` itself.
   Status Validate(const std::string& path) const;
 };
 
@@ -91,26 +127,57 @@ struct OgdenParams {
 };
 
 struct MaterialSpec {
-  enum class Kind { kNone, kLinearElastic, kNeoHookean, kMooneyRivlin, kPolynomial, kOgden };
+  enum class Kind {
+    kNone,
+    kLinearElastic,
+    kOrthotropicElastic,
+    kNeoHookean,
+    kMooneyRivlin,
+    kPolynomial,
+    kOgden
+  };
   std::string name;
   Kind kind = Kind::kNone;
+  // Mass density [kg/m^3], >= 0; needed by gravity (brain tissue about 1040).
+  double density_kg_per_m3 = 0;
   LinearElasticParams linear_elastic;
+  OrthotropicElasticParams orthotropic_elastic;
   NeoHookeanParams neo_hookean;
   MooneyRivlinParams mooney_rivlin;
   PolynomialParams polynomial;
   OgdenParams ogden;
 
-  bool hyperelastic() const { return kind != Kind::kNone && kind != Kind::kLinearElastic; }
+  bool hyperelastic() const {
+    return kind != Kind::kNone && kind != Kind::kLinearElastic &&
+           kind != Kind::kOrthotropicElastic;
+  }
 };
 
 struct BoundaryConditionSpec {
   // kSymmetry: the displacement normal to a planar face set is zero, the
   // others are free (a mirror plane of the model).
-  enum class Kind { kNone, kFixed, kDisplacement, kSymmetry };
+  // kPressure: a pressure on the face set, pushing into the body when
+  // positive; in a NONLINEAR_STATIC analysis it follows the deformed surface
+  // (acts on the current area along the current normal).
+  // kTraction: a force per reference area of fixed direction (a dead load).
+  // Loads are ramped with the load factor like prescribed displacements.
+  enum class Kind { kNone, kFixed, kDisplacement, kSymmetry, kPressure, kTraction };
   std::string set;  // named face set of the geometry
   Kind kind = Kind::kNone;
   // kDisplacement: prescribed x, y, z components [mm]; nullopt = free.
   std::array<std::optional<double>, 3> displacement_mm;
+  double pressure_pa = 0;                  // kPressure [Pa]
+  std::array<double, 3> traction_pa{0, 0, 0};  // kTraction, x y z [Pa]
+
+  // True for the conditions that load a set rather than hold it.
+  bool is_load() const { return kind == Kind::kPressure || kind == Kind::kTraction; }
+};
+
+// A uniform body force: the acceleration of gravity acting on the
+// material's density (material.density_kg_per_m3).
+struct GravitySpec {
+  bool enabled = false;
+  std::array<double, 3> acceleration_m_per_s2{0, 0, 0};  // e.g. (0, 0, -9.81)
 };
 
 // Load stepping and Newton-Raphson controls of a nonlinear static analysis;
@@ -129,7 +196,14 @@ struct AnalysisSpec {
     kLinearStatic,     // small strain, K u = f; hyperelastic models use their initial moduli
     kNonlinearStatic,  // finite strain, total Lagrangian, Newton-Raphson; needs a hyperelastic model
   };
-  enum class LinearSolver { kCholmod, kEigenLdlt };
+  enum class LinearSolver {
+    kCholmod,    // supernodal sparse Cholesky (SuiteSparse), the default
+    kEigenLdlt,  // Eigen's simplicial LDL^T, the fallback
+    // Conjugate gradients with an incomplete Cholesky preconditioner, to a
+    // relative residual of 1e-12: memory near the matrix's own, for systems
+    // too big to factorise; slow to converge when nearly incompressible.
+    kPcg,
+  };
   Type type = Type::kLinearStatic;
   LinearSolver linear_solver = LinearSolver::kCholmod;
   NonlinearOptionsSpec nonlinear;
@@ -156,12 +230,14 @@ struct SceneSpec {
   MeshSpec mesh;
   MaterialSpec material;
   std::vector<BoundaryConditionSpec> boundary_conditions;
+  GravitySpec gravity;
   AnalysisSpec analysis;
   OutputSpec outputs;
 };
 
 // Face set names a geometry defines (box: bottom top x_min x_max y_min y_max;
-// cylinder: bottom top side).
+// cylinder: bottom top side; spherical shell: inner outer x0 y0 z0, the last
+// three the cut planes x = 0, y = 0, z = 0).
 std::vector<std::string> FaceSetNames(const GeometrySpec& geometry);
 
 // The axis (0 = x, 1 = y, 2 = z) normal to a planar face set, or -1 when the

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <string>
 
 #include "codec/summary_text.h"
@@ -69,6 +70,65 @@ TEST(SceneFromProto, EveryHyperelasticModel) {
   EXPECT_EQ(s.material.ogden.bulk_modulus_pa, 8.42e7);
 }
 
+TEST(SceneFromProto, OrthotropicElasticFromYaml) {
+  SceneSpec s = Parse(R"(material:
+  orthotropic_elastic:
+    e1_pa: 6000
+    e2_pa: 3000
+    e3_pa: 1500
+    nu12: 0.3
+    nu13: 0.35
+    nu23: 0.4
+    g12_pa: 1500
+    g13_pa: 900
+    g23_pa: 600
+    axis_1: [1, 1, 0]
+    axis_2: [-1, 1, 0.5]
+)");
+  ASSERT_EQ(s.material.kind, MaterialSpec::Kind::kOrthotropicElastic);
+  const OrthotropicElasticParams& p = s.material.orthotropic_elastic;
+  EXPECT_EQ(p.e1_pa, 6000);
+  EXPECT_EQ(p.e2_pa, 3000);
+  EXPECT_EQ(p.e3_pa, 1500);
+  EXPECT_EQ(p.nu12, 0.3);
+  EXPECT_EQ(p.nu13, 0.35);
+  EXPECT_EQ(p.nu23, 0.4);
+  EXPECT_EQ(p.g12_pa, 1500);
+  EXPECT_EQ(p.g13_pa, 900);
+  EXPECT_EQ(p.g23_pa, 600);
+  EXPECT_EQ(p.axis_1, (std::array<double, 3>{1, 1, 0}));
+  EXPECT_EQ(p.axis_2, (std::array<double, 3>{-1, 1, 0.5}));
+  EXPECT_FALSE(s.material.hyperelastic());
+
+  // Axes left out are the global x and y axes.
+  s = Parse(
+      "material: {orthotropic_elastic: {e1_pa: 1, e2_pa: 1, e3_pa: 1, g12_pa: 1, g13_pa: 1, "
+      "g23_pa: 1}}");
+  EXPECT_EQ(s.material.orthotropic_elastic.axis_1, (std::array<double, 3>{1, 0, 0}));
+  EXPECT_EQ(s.material.orthotropic_elastic.axis_2, (std::array<double, 3>{0, 1, 0}));
+
+  v1::Scene scene;
+  scene.mutable_material()->mutable_orthotropic_elastic()->add_axis_2(1);
+  SceneSpec spec;
+  EXPECT_EQ(SceneFromProto(scene, &spec).field(), "material.orthotropic_elastic.axis_2");
+
+  const std::string good =
+      "material: {orthotropic_elastic: {e1_pa: 6000, e2_pa: 3000, e3_pa: 1500, nu12: 0.3, "
+      "nu13: 0.35, nu23: 0.4, g12_pa: 1500, g13_pa: 900, g23_pa: 600, axis_1: [0, 0, 1], "
+      "axis_2: [1, 0, 0]}}\n";
+  EXPECT_TRUE(Validate(good).ok()) << Validate(good).ToString();
+  std::string bad = good;
+  bad.replace(bad.find("nu12: 0.3"), 9, "nu12: 1.6");
+  EXPECT_EQ(Validate(bad).field(), "material.orthotropic_elastic.nu12");
+  bad = good;
+  bad.replace(bad.find("axis_2: [1, 0, 0]"), 17, "axis_2: [0, 0, 2]");
+  EXPECT_EQ(Validate(bad).field(), "material.orthotropic_elastic.axis_2");
+  const Status nonlinear = Validate(good + "analysis: {type: NONLINEAR_STATIC}\n");
+  EXPECT_EQ(nonlinear.field(), "material");
+  EXPECT_NE(nonlinear.message().find("LINEAR_STATIC only"), std::string::npos)
+      << nonlinear.ToString();
+}
+
 TEST(SceneFromProto, NonlinearAnalysisAndOutputs) {
   SceneSpec s = Parse(R"(material: {neo_hookean: {shear_modulus_pa: 1000, bulk_modulus_pa: 1e6}}
 analysis:
@@ -93,6 +153,33 @@ outputs: {fields: [DISPLACEMENT, JACOBIAN]}
       "analysis: {type: NONLINEAR_STATIC}\n");
   EXPECT_TRUE(s.analysis.nonlinear.line_search);
   EXPECT_TRUE(s.outputs.pk2_stress && s.outputs.almansi_strain && s.outputs.jacobian);
+}
+
+TEST(SceneFromProto, EveryLinearSolver) {
+  const std::string material =
+      "material: {linear_elastic: {youngs_modulus_pa: 3000, poissons_ratio: 0.45}}\n";
+  EXPECT_EQ(Parse(material).analysis.linear_solver, AnalysisSpec::LinearSolver::kCholmod);
+  EXPECT_EQ(Parse(material + "analysis: {linear_solver: CHOLMOD}\n").analysis.linear_solver,
+            AnalysisSpec::LinearSolver::kCholmod);
+  EXPECT_EQ(Parse(material + "analysis: {linear_solver: EIGEN_LDLT}\n").analysis.linear_solver,
+            AnalysisSpec::LinearSolver::kEigenLdlt);
+  // Enum names are matched case-insensitively in YAML.
+  EXPECT_EQ(Parse(material + "analysis: {linear_solver: PCG}\n").analysis.linear_solver,
+            AnalysisSpec::LinearSolver::kPcg);
+  EXPECT_EQ(Parse(material + "analysis: {linear_solver: pcg}\n").analysis.linear_solver,
+            AnalysisSpec::LinearSolver::kPcg);
+  EXPECT_TRUE(Validate(material + "analysis: {linear_solver: PCG}\n").ok());
+
+  // A number the solver does not know (a newer client) names the field.
+  v1::Scene scene;
+  scene.mutable_analysis()->set_linear_solver(static_cast<v1::Analysis::LinearSolver>(99));
+  SceneSpec spec;
+  EXPECT_EQ(SceneFromProto(scene, &spec).field(), "analysis.linear_solver");
+
+  // The solver's name comes back in the summary.
+  Summary summary;
+  summary.linear_solver = "conjugate gradient with incomplete Cholesky (IC) preconditioner";
+  EXPECT_EQ(SummaryToProto(summary).modelled().linear_solver(), summary.linear_solver);
 }
 
 TEST(SceneFromProto, SymmetryCondition) {

@@ -323,7 +323,7 @@ double BondedReaction(bool nodal_pressure, double h_mm, double compression) {
       "  %-5s h = %4.3g mm, %4.3g %%: reaction %.6g N (%zu increments, %d iterations, %d cuts, "
       "%d modified)\n",
       nodal_pressure ? "ANP" : "plain", h_mm, 100 * compression, reaction, report.increments.size(),
-      report.total_iterations, report.cuts, report.modified_iterations);
+      report.total_iterations, report.cuts, report.approximate_iterations + report.modified_iterations);
   return reaction;
 }
 

@@ -79,6 +79,19 @@ INSTANTIATE_TEST_SUITE_P(
              "material.linear_elastic.poissons_ratio", "hyperelastic"},
         Case{"nu_too_low", [](SceneSpec* s) { s->material.linear_elastic.poissons_ratio = -1; },
              "material.linear_elastic.poissons_ratio", "(-1, 0.5)"},
+        Case{"orthotropic_nu12",
+             [](SceneSpec* s) {
+               s->material.kind = MaterialSpec::Kind::kOrthotropicElastic;
+               s->material.orthotropic_elastic = {6000, 3000, 1500, 1.5, 0.35, 0.4, 1500, 900, 600};
+             },
+             "material.orthotropic_elastic.nu12", "sqrt(E1 / E2)"},
+        Case{"orthotropic_nonlinear",
+             [](SceneSpec* s) {
+               s->material.kind = MaterialSpec::Kind::kOrthotropicElastic;
+               s->material.orthotropic_elastic = {6000, 3000, 1500, 0.3, 0.35, 0.4, 1500, 900, 600};
+               s->analysis.type = AnalysisSpec::Type::kNonlinearStatic;
+             },
+             "material", "LINEAR_STATIC only"},
         Case{"no_conditions", [](SceneSpec* s) { s->boundary_conditions.clear(); },
              "boundary_conditions", "free to move"},
         Case{"unknown_set", [](SceneSpec* s) { s->boundary_conditions[1].set = "lid"; },

@@ -1,0 +1,20 @@
+// The 10-node quadratic tetrahedron (C3D10, fem/tet10.h) as a finite-strain
+// model: total Lagrangian, four integration points per element
+// (fem/tet10_finite_strain.h). Quadratic displacements carry the linear
+// strain fields the 4-node element lacks, which eases its volumetric and
+// bending locking, and curved edges follow a curved boundary.
+#pragma once
+
+#include <memory>
+
+#include "analysis/finite_strain_model.h"
+
+namespace pba {
+
+// `mesh` must be quadratic (Mesh::quadratic(), e.g. from MakeQuadratic);
+// unknowns are 3 per node, corners and mid-edge nodes alike, in node order
+// [m, N]. `mesh` and `material` must outlive the model.
+std::unique_ptr<FiniteStrainModel> MakeTet10Model(const Mesh& mesh,
+                                                  const HyperelasticMaterial& material);
+
+}  // namespace pba

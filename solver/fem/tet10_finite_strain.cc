@@ -1,0 +1,68 @@
+#include "fem/tet10_finite_strain.h"
+
+#include "material/hyperelastic.h"
+
+namespace pba {
+namespace {
+
+// delta E (Voigt) = B_NL delta u_e: delta E_ij = (F_ki G_aj + F_kj G_ai) delta u_ak / 2,
+// the shear rows carrying 2 delta E_ij (as GreenLagrangeVariation for tet4).
+Tet10BMatrix NonlinearStrainDisplacement(const Tet10Nodes& grad, const Eigen::Matrix3d& f) {
+  static constexpr int kPairs[6][2] = {{0, 0}, {1, 1}, {2, 2}, {1, 2}, {0, 2}, {0, 1}};
+  Tet10BMatrix b;
+  for (int a = 0; a < 10; ++a) {
+    for (int row = 0; row < 6; ++row) {
+      const int i = kPairs[row][0], j = kPairs[row][1];
+      for (int k = 0; k < 3; ++k) {
+        b(row, 3 * a + k) =
+            i == j ? f(k, i) * grad(a, i) : f(k, i) * grad(a, j) + f(k, j) * grad(a, i);
+      }
+    }
+  }
+  return b;
+}
+
+}  // namespace
+
+bool Tet10FiniteStrain(const Tet10Geometry& reference, const Vector30d& u,
+                       const HyperelasticMaterial& material, bool with_tangent,
+                       Tet10FiniteStrainResult* result) {
+  if (!(reference.min_jacobian > 0)) return false;
+  // All four F first: the material must not see an inadmissible one.
+  for (int q = 0; q < 4; ++q) {
+    Eigen::Matrix3d& f = result->f[q];
+    f.setIdentity();
+    for (int a = 0; a < 10; ++a) f += u.segment<3>(3 * a) * reference.grad[q].row(a);
+    if (!IsAdmissible(f)) return false;
+  }
+  result->force.setZero();
+  result->energy = 0;
+  if (with_tangent) result->tangent.setZero();
+  for (int q = 0; q < 4; ++q) {
+    const Eigen::Matrix3d& f = result->f[q];
+    const Tet10Nodes& grad = reference.grad[q];
+    const double dv = reference.volume[q];
+    const Vector6d s = material.Stress(f);
+    const Tet10BMatrix b = NonlinearStrainDisplacement(grad, f);
+    result->force.noalias() += dv * b.transpose() * s;
+    result->energy += dv * material.Energy(f);
+    if (!with_tangent) continue;
+    result->tangent.noalias() += dv * b.transpose() * material.Tangent(f) * b;
+    const Eigen::Matrix<double, 10, 10> geometric =
+        dv * grad * VoigtToSymmetric(s) * grad.transpose();
+    for (int a = 0; a < 10; ++a) {
+      for (int c = 0; c < 10; ++c) {
+        result->tangent.block<3, 3>(3 * a, 3 * c).diagonal().array() += geometric(a, c);
+      }
+    }
+  }
+  return true;
+}
+
+bool Tet10FiniteStrain(const Tet10Nodes& reference, const Vector30d& u,
+                       const HyperelasticMaterial& material, bool with_tangent,
+                       Tet10FiniteStrainResult* result) {
+  return Tet10FiniteStrain(ComputeTet10Geometry(reference), u, material, with_tangent, result);
+}
+
+}  // namespace pba

@@ -1,0 +1,183 @@
+// The thick-walled sphere under internal pressure (VALIDATION.md), solved on
+// one octant with symmetry planes:
+//   - small strain against the Lame solution, converging under refinement,
+//     with the Zienkiewicz-Zhu estimate checked against the true error in the
+//     energy norm (effectivity index within 0.5 .. 2);
+//   - finite strain, nearly incompressible neo-Hookean under a follower
+//     pressure, against the incompressible pressure-stretch curve.
+#include <gtest/gtest.h>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cmath>
+#include <cstdio>
+
+#include "common/scene_builders.h"
+#include "pba/solve.h"
+
+namespace pba {
+namespace {
+
+using K = BoundaryConditionSpec::Kind;
+using testing::Condition;
+
+constexpr double kA = 10, kB = 20;  // radii [mm]
+
+SceneSpec PressurisedShell(const MaterialSpec& material, double pressure_pa, double h_mm) {
+  SceneSpec s;
+  s.name = "thick sphere";
+  s.geometry.kind = GeometrySpec::Kind::kSphericalShell;
+  s.geometry.spherical_shell = {kA, kB};
+  s.mesh.element_size_mm = h_mm;
+  s.material = material;
+  BoundaryConditionSpec pressure = Condition("inner", K::kPressure);
+  pressure.pressure_pa = pressure_pa;
+  s.boundary_conditions = {Condition("x0", K::kSymmetry), Condition("y0", K::kSymmetry),
+                           Condition("z0", K::kSymmetry), pressure};
+  return s;
+}
+
+// Mean radial displacement of the nodes on the sphere of radius r [mm].
+double MeanRadialDisplacement(const Solution& solution, double r) {
+  double sum = 0;
+  int count = 0;
+  for (std::size_t i = 0; i < solution.nodes_mm.size() / 3; ++i) {
+    const Eigen::Vector3d x(&solution.nodes_mm[3 * i]);
+    if (std::abs(x.norm() - r) > 1e-6 * r) continue;
+    sum += Eigen::Vector3d(&solution.displacement_mm[3 * i]).dot(x.normalized());
+    ++count;
+  }
+  return sum / count;
+}
+
+// Lame: u(r) = p a^3 / (E (b^3 - a^3)) [(1 - 2 nu) r + (1 + nu) b^3 / (2 r^2)],
+// sigma_rr = p a^3 / (b^3 - a^3) (1 - b^3 / r^3),
+// sigma_tt = p a^3 / (b^3 - a^3) (1 + b^3 / (2 r^3)).
+struct Lame {
+  double p, e, nu;
+  double U(double r) const {
+    return p * kA * kA * kA / (e * (kB * kB * kB - kA * kA * kA)) *
+           ((1 - 2 * nu) * r + (1 + nu) * kB * kB * kB / (2 * r * r));
+  }
+  Eigen::Matrix3d Stress(const Eigen::Vector3d& x) const {
+    const double r = x.norm(), c = p * kA * kA * kA / (kB * kB * kB - kA * kA * kA);
+    const double b3r3 = kB * kB * kB / (r * r * r);
+    const double srr = c * (1 - b3r3), stt = c * (1 + 0.5 * b3r3);
+    const Eigen::Vector3d n = x / r;
+    return stt * Eigen::Matrix3d::Identity() + (srr - stt) * n * n.transpose();
+  }
+};
+
+// sigma : C^-1 : sigma for isotropic compliance, per unit volume [Pa].
+double EnergyDensity2(const Eigen::Matrix3d& s, double e, double nu) {
+  const double tr = s.trace();
+  return ((1 + nu) * (s.array() * s.array()).sum() - nu * tr * tr) / e;
+}
+
+struct EnergyErrors {
+  double exact_error = 0;  // ||sigma - sigma_h||_E, true [sqrt(Pa) m^1.5 up to units]
+  double estimated_error = 0;
+};
+
+// True energy-norm error by the 4-point rule per element, beside the ZZ
+// estimate recovered from the summary's relative figure
+// eta = sqrt(E*^2 / (E*^2 + U_h^2)), U_h^2 = integral sigma_h : C^-1 : sigma_h.
+EnergyErrors EnergyNormErrors(const Solution& solution, const Lame& lame) {
+  constexpr double kAlpha = 0.5854101966249685, kBeta = 0.1381966011250105;
+  double error2 = 0, energy2 = 0;
+  const std::size_t ne = solution.tets.size() / 4;
+  for (std::size_t e = 0; e < ne; ++e) {
+    Eigen::Matrix<double, 4, 3> x;
+    for (int a = 0; a < 4; ++a)
+      x.row(a) = Eigen::RowVector3d(&solution.nodes_mm[3 * solution.tets[4 * e + a]]);
+    const double volume =
+        std::abs((x.row(1) - x.row(0)).cross(x.row(2) - x.row(0)).dot(x.row(3) - x.row(0))) / 6;
+    const double* s = &solution.stress_pa[6 * e];
+    Eigen::Matrix3d sh;
+    sh << s[0], s[5], s[4], s[5], s[1], s[3], s[4], s[3], s[2];
+    energy2 += volume * EnergyDensity2(sh, lame.e, lame.nu);
+    for (int q = 0; q < 4; ++q) {
+      Eigen::Vector3d point = Eigen::Vector3d::Zero();
+      for (int a = 0; a < 4; ++a) point += (a == q ? kAlpha : kBeta) * x.row(a).transpose();
+      error2 += 0.25 * volume * EnergyDensity2(lame.Stress(point) - sh, lame.e, lame.nu);
+    }
+  }
+  const double eta = solution.summary.error.relative_error;
+  return {std::sqrt(error2), std::sqrt(eta * eta * energy2 / (1 - eta * eta))};
+}
+
+TEST(ThickSphere, LinearMatchesLameAndTheErrorEstimateIsEffective) {
+  const Lame lame{100, 3000, 0.49};
+  MaterialSpec material;
+  material.kind = MaterialSpec::Kind::kLinearElastic;
+  material.linear_elastic = {lame.e, lame.nu};
+  ASSERT_NEAR(lame.U(kA), 0.284762, 1e-6);  // the reference values
+  ASSERT_NEAR(lame.U(kB), 0.072857, 1e-6);
+  double previous_error = INFINITY;
+  for (double h : {2.5, 1.25}) {
+    Solution solution;
+    const Status status = SolveScene(PressurisedShell(material, lame.p, h), {}, &solution);
+    ASSERT_TRUE(status.ok()) << status.message();
+    const double ua = MeanRadialDisplacement(solution, kA);
+    const double ub = MeanRadialDisplacement(solution, kB);
+    const EnergyErrors errors = EnergyNormErrors(solution, lame);
+    const double effectivity = errors.estimated_error / errors.exact_error;
+    std::printf(
+        "h = %4.2f mm, %d elements: u(a) = %.6f mm (Lame %.6f, %+.2f %%), u(b) = %.6f mm "
+        "(%+.2f %%); energy-norm error estimated %.4g, true %.4g, effectivity %.3f; %.2f s\n",
+        h, static_cast<int>(solution.summary.elements), ua, lame.U(kA), 100 * (ua / lame.U(kA) - 1),
+        ub, 100 * (ub / lame.U(kB) - 1), errors.estimated_error, errors.exact_error, effectivity,
+        solution.summary.wall_time_s);
+    // Plain linear tetrahedra at nu = 0.49 (K / mu = 50) are too stiff and
+    // converge at first order: halving h must halve the error.
+    const double error = std::abs(ua / lame.U(kA) - 1) + std::abs(ub / lame.U(kB) - 1);
+    EXPECT_LT(error, 0.6 * previous_error);
+    previous_error = error;
+    EXPECT_GT(effectivity, 0.5);
+    EXPECT_LT(effectivity, 2.0);
+  }
+}
+
+// Incompressible neo-Hookean sphere, radii A = 1, B = 2 (here 10 and 20 mm):
+// p / mu = 2 (1 / lb - 1 / la) + (lb^-4 - la^-4) / 2,
+// lb^3 = 1 + (A / B)^3 (la^3 - 1).
+double IncompressiblePressure(double la) {
+  const double lb = std::cbrt(1 + (la * la * la - 1) / 8);
+  return 2 * (1 / lb - 1 / la) + (std::pow(lb, -4) - std::pow(la, -4)) / 2;
+}
+
+TEST(ThickSphere, FiniteStrainFollowsTheIncompressiblePressureStretchCurve) {
+  ASSERT_NEAR(IncompressiblePressure(1.25), 0.551869, 1e-6);
+  ASSERT_NEAR(IncompressiblePressure(1.5), 0.755433, 1e-6);
+  const double mu = 1000;
+  MaterialSpec material;
+  material.kind = MaterialSpec::Kind::kNeoHookean;
+  material.neo_hookean = {mu, 1e4 * mu};
+  // The curve peaks near la = 1.8 (p / mu = 0.81): pressure control reaches
+  // the rising branch. The faceted inner surface and the linear elements
+  // converge at second order in h.
+  for (double stretch : {1.25, 1.5}) {
+    double previous_error = INFINITY;
+    for (double h : {2.5, 1.25}) {
+      SceneSpec scene = PressurisedShell(material, IncompressiblePressure(stretch) * mu, h);
+      scene.analysis.type = AnalysisSpec::Type::kNonlinearStatic;
+      Solution solution;
+      const Status status = SolveScene(scene, {}, &solution);
+      ASSERT_TRUE(status.ok()) << status.message();
+      const double la = 1 + MeanRadialDisplacement(solution, kA) / kA;
+      const double error = std::abs(la / stretch - 1);
+      std::printf(
+          "p / mu = %.6f, h = %4.2f mm: inner stretch %.5f (incompressible %.2f, %+.2f %%), %zu "
+          "increments, %d Newton iterations, %.2f s\n",
+          IncompressiblePressure(stretch), h, la, stretch, 100 * (la / stretch - 1),
+          solution.summary.increments.size(), solution.summary.newton_iterations,
+          solution.summary.wall_time_s);
+      EXPECT_LT(error, previous_error / 3) << "h = " << h;
+      previous_error = error;
+    }
+    EXPECT_LT(previous_error, 0.01);
+  }
+}
+
+}  // namespace
+}  // namespace pba
