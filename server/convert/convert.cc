@@ -47,6 +47,9 @@ Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec) {
     case v1::MeshOptions::TET4_ANP:
       spec->mesh.element = ElementType::kTet4Anp;
       break;
+    case v1::MeshOptions::TET10:
+      spec->mesh.element = ElementType::kTet10;
+      break;
     default:
       return Status::InvalidArgument(
           "mesh.element", "unknown element type " + std::to_string(scene.mesh().element()));

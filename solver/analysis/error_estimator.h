@@ -10,6 +10,8 @@
 // (Zienkiewicz & Zhu 1987, Int. J. Numer. Meth. Eng. 24:337).
 #pragma once
 
+#include <Eigen/Core>
+#include <functional>
 #include <vector>
 
 #include "fem/tet4.h"
@@ -25,5 +27,16 @@ struct ErrorEstimateResult {
 // `stress` is elements x 6 (Voigt), `volume` per element [m^3].
 ErrorEstimateResult EstimateZzError(const Mesh& mesh, const std::vector<double>& stress,
                                     const std::vector<double>& volume, const Matrix6d& compliance);
+
+// The same estimate for 10-node tetrahedra (a quadratic mesh), whose stress
+// varies within the element: `stress(e, xi)` is the finite-element stress
+// of element e at natural point xi (fem/tet10.h). The recovered field takes
+// at each of the 10 nodes the volume-weighted average of the stresses the
+// elements around it give there, and is interpolated with the quadratic
+// shape functions; the integrals use the 14-point degree-5 rule.
+// `stress` is called concurrently.
+using ElementStress = std::function<Vector6d(int element, const Eigen::Vector3d& xi)>;
+ErrorEstimateResult EstimateZzErrorTet10(const Mesh& mesh, const ElementStress& stress,
+                                         const Matrix6d& compliance);
 
 }  // namespace pba

@@ -2,8 +2,13 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
 
+#include "fem/tet10.h"
 #include "fem/tet4.h"
+#include "mesh/quadratic.h"
 
 namespace pba {
 namespace {
@@ -15,46 +20,181 @@ Eigen::Matrix3d Skew(const Eigen::Vector3d& w) {
   return s;
 }
 
+// A point of a rule on the reference triangle xi, eta >= 0, xi + eta <= 1;
+// the weights of a rule sum to 1/2, its area.
+struct TrianglePoint {
+  Eigen::Vector2d xi;
+  double weight = 0;
+};
+
+// The 7-point rule exact for degree 5 (Radon 1948; Dunavant 1985, IJNME 21,
+// degree 5): the centroid with weight 9/40 of the area and the orbits of the
+// area coordinates (a, a, 1 - 2a), a = (6 -+ sqrt 15) / 21, with weights
+// (155 -+ sqrt 15) / 1200.
+std::vector<TrianglePoint> MakeTriangleRule() {
+  const double r = std::sqrt(15.0);
+  std::vector<TrianglePoint> rule = {{Eigen::Vector2d(1.0 / 3, 1.0 / 3), 0.5 * 9 / 40}};
+  for (const double sign : {-1.0, 1.0}) {
+    const double a = (6 + sign * r) / 21, w = 0.5 * (155 + sign * r) / 1200;
+    rule.push_back({Eigen::Vector2d(a, a), w});
+    rule.push_back({Eigen::Vector2d(1 - 2 * a, a), w});
+    rule.push_back({Eigen::Vector2d(a, 1 - 2 * a), w});
+  }
+  return rule;
+}
+
+const std::vector<TrianglePoint>& TriangleRule() {
+  static const std::vector<TrianglePoint> rule = MakeTriangleRule();
+  return rule;
+}
+
+using Tri6Vector = Eigen::Matrix<double, 6, 1>;
+using Tri6Gradients = Eigen::Matrix<double, 6, 2>;  // dN_a/dxi, dN_a/deta
+
+// The 6-node triangle's shape functions at `xi` (see the header) and their
+// natural derivatives; nodes: corners 0..2, then edges (0,1), (1,2), (2,0).
+void Tri6Shape(const Eigen::Vector2d& xi, Tri6Vector* n, Tri6Gradients* dn) {
+  const Eigen::Vector3d l(1 - xi.x() - xi.y(), xi.x(), xi.y());
+  Eigen::Matrix<double, 3, 2> dl;
+  dl << -1, -1, 1, 0, 0, 1;
+  for (int a = 0; a < 3; ++a) {
+    (*n)(a) = l(a) * (2 * l(a) - 1);
+    dn->row(a) = (4 * l(a) - 1) * dl.row(a);
+  }
+  for (int k = 0; k < 3; ++k) {
+    const int i = k, j = (k + 1) % 3;
+    (*n)(3 + k) = 4 * l(i) * l(j);
+    dn->row(3 + k) = 4 * (l(j) * dl.row(i) + l(i) * dl.row(j));
+  }
+}
+
+// The mid-edge nodes of triangle `corners`, a face of element `element`.
+std::array<int, 3> MidsideFromElement(const Mesh& mesh, int element,
+                                      const std::array<int, 3>& corners) {
+  const auto& tet = mesh.tets[element];
+  const auto local = [&](int node) {
+    return static_cast<int>(std::find(tet.begin(), tet.end(), node) - tet.begin());
+  };
+  std::array<int, 3> mid = {-1, -1, -1};
+  for (int k = 0; k < 3; ++k) {
+    const int i = local(corners[k]), j = local(corners[(k + 1) % 3]);
+    for (int edge = 0; edge < 6; ++edge) {
+      const int p = kTet10Edges[edge][0], q = kTet10Edges[edge][1];
+      if ((p == i && q == j) || (p == j && q == i)) mid[k] = mesh.midside[element][edge];
+    }
+  }
+  return mid;
+}
+
+// The mid-edge nodes of each triangle of `set` on quadratic `mesh`: the
+// set's own, or, for a set assembled without them, those of the element
+// behind each triangle.
+std::vector<std::array<int, 3>> TriangleMidside(const Mesh& mesh, const FaceSet& set) {
+  if (set.triangle_midside.size() == set.triangles.size()) return set.triangle_midside;
+  const std::vector<std::array<int, 2>> owners = FaceElements(mesh, set);
+  std::vector<std::array<int, 3>> mid(set.triangles.size());
+  for (std::size_t i = 0; i < set.triangles.size(); ++i) {
+    if (owners[i][0] < 0) {
+      // Without an element there is no edge to take the mid-edge node from.
+      std::fprintf(stderr,
+                   "pba: ExternalLoads: triangle (%d, %d, %d) of a quadratic mesh has no "
+                   "mid-edge nodes and is no element's face\n",
+                   set.triangles[i][0], set.triangles[i][1], set.triangles[i][2]);
+      std::abort();
+    }
+    mid[i] = MidsideFromElement(mesh, owners[i][0], set.triangles[i]);
+  }
+  return mid;
+}
+
 }  // namespace
 
 ExternalLoads::ExternalLoads(const Mesh& mesh)
     : mesh_(mesh), dead_(Eigen::VectorXd::Zero(3 * mesh.num_nodes())) {}
 
-Eigen::Vector3d ExternalLoads::Corner(int node, const Eigen::VectorXd* u) const {
+Eigen::Vector3d ExternalLoads::Position(int node, const Eigen::VectorXd* u) const {
   Eigen::Vector3d x = mesh_.nodes.row(node).transpose();
   if (u != nullptr) x += u->segment<3>(3 * node);
   return x;
 }
 
 void ExternalLoads::AddTraction(const FaceSet& set, const Eigen::Vector3d& traction_pa) {
-  for (const auto& t : set.triangles) {
-    const double area = 0.5 * (Corner(t[1], nullptr) - Corner(t[0], nullptr))
-                                  .cross(Corner(t[2], nullptr) - Corner(t[0], nullptr))
-                                  .norm();
-    for (int a : t) dead_.segment<3>(3 * a) += traction_pa * area / 3;
+  if (!mesh_.quadratic()) {
+    for (const auto& t : set.triangles) {
+      const double area = 0.5 * (Position(t[1], nullptr) - Position(t[0], nullptr))
+                                    .cross(Position(t[2], nullptr) - Position(t[0], nullptr))
+                                    .norm();
+      for (int a : t) dead_.segment<3>(3 * a) += traction_pa * area / 3;
+    }
+    return;
+  }
+  const std::vector<std::array<int, 3>> midside = TriangleMidside(mesh_, set);
+  Tri6Vector n;
+  Tri6Gradients dn;
+  for (std::size_t i = 0; i < set.triangles.size(); ++i) {
+    std::array<int, 6> nodes;
+    Eigen::Matrix<double, 6, 3> x;
+    for (int k = 0; k < 3; ++k) {
+      nodes[k] = set.triangles[i][k];
+      nodes[3 + k] = midside[i][k];
+    }
+    for (int a = 0; a < 6; ++a) x.row(a) = Position(nodes[a], nullptr).transpose();
+    Tri6Vector share = Tri6Vector::Zero();  // integral N_a dA
+    for (const TrianglePoint& q : TriangleRule()) {
+      Tri6Shape(q.xi, &n, &dn);
+      const Eigen::Matrix<double, 3, 2> g = x.transpose() * dn;  // columns G1, G2
+      share += q.weight * g.col(0).cross(g.col(1)).norm() * n;
+    }
+    for (int a = 0; a < 6; ++a) dead_.segment<3>(3 * nodes[a]) += traction_pa * share(a);
   }
 }
 
 void ExternalLoads::AddBodyForce(const Eigen::Vector3d& force_per_volume) {
+  if (!mesh_.quadratic()) {
+    for (int e = 0; e < mesh_.num_elements(); ++e) {
+      const double volume = std::abs(ComputeTet4Geometry(TetCorners(mesh_, e)).volume);
+      for (int a : mesh_.tets[e]) dead_.segment<3>(3 * a) += force_per_volume * volume / 4;
+    }
+    return;
+  }
   for (int e = 0; e < mesh_.num_elements(); ++e) {
-    const double volume = std::abs(ComputeTet4Geometry(TetCorners(mesh_, e)).volume);
-    for (int a : mesh_.tets[e]) dead_.segment<3>(3 * a) += force_per_volume * volume / 4;
+    const Tet10Nodes x = Tet10Coordinates(mesh_, e);
+    const std::array<int, 10> nodes = Tet10NodeIndices(mesh_, e);
+    Tet10Vector share = Tet10Vector::Zero();  // integral N_a dV
+    for (const QuadraturePoint& q : Tet10MassRule()) {
+      const double det = (x.transpose() * Tet10NaturalGradients(q.xi)).determinant();
+      // |det J|, as Tet10Stiffness takes it, so that a consistently
+      // negatively oriented element still loads along b, not against it.
+      share += q.weight * std::abs(det) * Tet10ShapeFunctions(q.xi);
+    }
+    for (int a = 0; a < 10; ++a) dead_.segment<3>(3 * nodes[a]) += force_per_volume * share(a);
   }
 }
 
 void ExternalLoads::AddPressure(const FaceSet& set, double pressure_pa, bool follower) {
   // The tetrahedron behind each triangle tells which side is out.
   const std::vector<std::array<int, 2>> owners = FaceElements(mesh_, set);
+  std::vector<std::array<int, 3>> midside;
+  if (mesh_.quadratic()) midside = TriangleMidside(mesh_, set);
   for (std::size_t i = 0; i < set.triangles.size(); ++i) {
     std::array<int, 3> t = set.triangles[i];
+    std::array<int, 3> m = mesh_.quadratic() ? midside[i] : std::array<int, 3>{-1, -1, -1};
     const auto [element, corner] = owners[i];
     if (element >= 0) {
-      const Eigen::Vector3d x0 = Corner(t[0], nullptr);
-      const Eigen::Vector3d normal = (Corner(t[1], nullptr) - x0).cross(Corner(t[2], nullptr) - x0);
+      // The corners' plane decides, also for a curved 6-node triangle, whose
+      // mid-edge nodes lie close to that plane on any usable mesh.
+      const Eigen::Vector3d x0 = Position(t[0], nullptr);
+      const Eigen::Vector3d normal =
+          (Position(t[1], nullptr) - x0).cross(Position(t[2], nullptr) - x0);
       const int inside = mesh_.tets[element][corner];
-      if (normal.dot(Corner(inside, nullptr) - x0) > 0) std::swap(t[1], t[2]);
+      if (normal.dot(Position(inside, nullptr) - x0) > 0) {
+        // Corners (0, 2, 1) have edges (0,2), (2,1), (1,0): the old third,
+        // second and first.
+        std::swap(t[1], t[2]);
+        std::swap(m[0], m[2]);
+      }
     }
-    pressure_.push_back({t, pressure_pa, follower});
+    pressure_.push_back({t, m, pressure_pa, follower});
   }
 }
 
@@ -65,41 +205,93 @@ bool ExternalLoads::follows_deformation() const {
 
 Eigen::VectorXd ExternalLoads::Force(const Eigen::VectorXd& u) const {
   Eigen::VectorXd f = dead_;
+  Tri6Vector n;
+  Tri6Gradients dn;
   for (const Pressure& p : pressure_) {
     const Eigen::VectorXd* state = p.follower ? &u : nullptr;
-    const Eigen::Vector3d x0 = Corner(p.nodes[0], state);
-    const Eigen::Vector3d area2 =
-        (Corner(p.nodes[1], state) - x0).cross(Corner(p.nodes[2], state) - x0);
-    for (int a : p.nodes) f.segment<3>(3 * a) -= p.pressure_pa / 6 * area2;
+    if (!mesh_.quadratic()) {
+      const Eigen::Vector3d x0 = Position(p.nodes[0], state);
+      const Eigen::Vector3d area2 =
+          (Position(p.nodes[1], state) - x0).cross(Position(p.nodes[2], state) - x0);
+      for (int a : p.nodes) f.segment<3>(3 * a) -= p.pressure_pa / 6 * area2;
+      continue;
+    }
+    const std::array<int, 6> nodes = {p.nodes[0],   p.nodes[1],   p.nodes[2],
+                                      p.midside[0], p.midside[1], p.midside[2]};
+    Eigen::Matrix<double, 6, 3> x;
+    for (int a = 0; a < 6; ++a) x.row(a) = Position(nodes[a], state).transpose();
+    Eigen::Matrix<double, 6, 3> share = Eigen::Matrix<double, 6, 3>::Zero();  // int N_a g1 x g2
+    for (const TrianglePoint& q : TriangleRule()) {
+      Tri6Shape(q.xi, &n, &dn);
+      const Eigen::Matrix<double, 3, 2> g = x.transpose() * dn;
+      share += q.weight * n * g.col(0).cross(g.col(1)).transpose();
+    }
+    for (int a = 0; a < 6; ++a) {
+      f.segment<3>(3 * nodes[a]) -= p.pressure_pa * share.row(a).transpose();
+    }
   }
   return f;
 }
 
 SparseMatrix ExternalLoads::Stiffness(const Eigen::VectorXd& u, const DofMap& dofs,
                                       double factor) const {
-  // f_a = -(p / 6) A, A = (x1 - x0) x (x2 - x0) = x0 x x1 + x1 x x2 + x2 x x0,
-  // so dA/dx_b = [x_{b+2} - x_{b+1}]_x (indices mod 3) and
-  // K_L(a, b) = -df_a/dx_b = (p / 6) [w_b]_x, w_b = x_{b+2} - x_{b+1};
-  // its symmetric part is (p / 12)([w_b]_x - [w_a]_x) (a skew matrix's
-  // transpose is its negative).
   std::vector<Eigen::Triplet<double>> entries;
+  const auto add_block = [&](int node_a, int node_b, const Eigen::Matrix3d& block) {
+    for (int r = 0; r < 3; ++r) {
+      const int i = dofs.free_index(3 * node_a + r);
+      if (i < 0) continue;
+      for (int c = 0; c < 3; ++c) {
+        const int j = dofs.free_index(3 * node_b + c);
+        if (j >= 0) entries.emplace_back(i, j, block(r, c));
+      }
+    }
+  };
+  Tri6Vector n;
+  Tri6Gradients dn;
   for (const Pressure& p : pressure_) {
     if (!p.follower) continue;
-    Eigen::Vector3d x[3], w[3];
-    for (int k = 0; k < 3; ++k) x[k] = Corner(p.nodes[k], &u);
-    for (int b = 0; b < 3; ++b) w[b] = x[(b + 2) % 3] - x[(b + 1) % 3];
-    for (int a = 0; a < 3; ++a) {
-      for (int b = 0; b < 3; ++b) {
-        if (a == b) continue;
-        const Eigen::Matrix3d block = factor * p.pressure_pa / 12 * (Skew(w[b]) - Skew(w[a]));
-        for (int r = 0; r < 3; ++r) {
-          const int i = dofs.free_index(3 * p.nodes[a] + r);
-          if (i < 0) continue;
-          for (int c = 0; c < 3; ++c) {
-            const int j = dofs.free_index(3 * p.nodes[b] + c);
-            if (j >= 0) entries.emplace_back(i, j, block(r, c));
-          }
+    if (!mesh_.quadratic()) {
+      // f_a = -(p / 6) A, A = (x1 - x0) x (x2 - x0) = x0 x x1 + x1 x x2 + x2 x x0,
+      // so dA/dx_b = [x_{b+2} - x_{b+1}]_x (indices mod 3) and
+      // K_L(a, b) = -df_a/dx_b = (p / 6) [w_b]_x, w_b = x_{b+2} - x_{b+1};
+      // its symmetric part is (p / 12)([w_b]_x - [w_a]_x) (a skew matrix's
+      // transpose is its negative).
+      Eigen::Vector3d x[3], w[3];
+      for (int k = 0; k < 3; ++k) x[k] = Position(p.nodes[k], &u);
+      for (int b = 0; b < 3; ++b) w[b] = x[(b + 2) % 3] - x[(b + 1) % 3];
+      for (int a = 0; a < 3; ++a) {
+        for (int b = 0; b < 3; ++b) {
+          if (a == b) continue;
+          add_block(p.nodes[a], p.nodes[b],
+                    factor * p.pressure_pa / 12 * (Skew(w[b]) - Skew(w[a])));
         }
+      }
+      continue;
+    }
+    // The symmetric part [v_ab]_x of the header, v_ab = -v_ba (so the
+    // diagonal blocks vanish).
+    const std::array<int, 6> nodes = {p.nodes[0],   p.nodes[1],   p.nodes[2],
+                                      p.midside[0], p.midside[1], p.midside[2]};
+    Eigen::Matrix<double, 6, 3> x;
+    for (int a = 0; a < 6; ++a) x.row(a) = Position(nodes[a], &u).transpose();
+    std::array<std::array<Eigen::Vector3d, 6>, 6> v;
+    for (auto& row : v) row.fill(Eigen::Vector3d::Zero());
+    for (const TrianglePoint& q : TriangleRule()) {
+      Tri6Shape(q.xi, &n, &dn);
+      const Eigen::Matrix<double, 3, 2> g = x.transpose() * dn;
+      for (int a = 0; a < 6; ++a) {
+        for (int b = a + 1; b < 6; ++b) {
+          const double c_eta = n(a) * dn(b, 1) - n(b) * dn(a, 1);
+          const double c_xi = n(a) * dn(b, 0) - n(b) * dn(a, 0);
+          v[a][b] += q.weight * (c_eta * g.col(0) - c_xi * g.col(1));
+        }
+      }
+    }
+    for (int a = 0; a < 6; ++a) {
+      for (int b = a + 1; b < 6; ++b) {
+        const Eigen::Matrix3d block = factor * p.pressure_pa / 2 * Skew(v[a][b]);
+        add_block(nodes[a], nodes[b], block);
+        add_block(nodes[b], nodes[a], block.transpose());
       }
     }
   }

@@ -11,6 +11,27 @@
 // corners x0, x1, x2 numbered anticlockwise seen from outside, each corner
 // carries f_a = -(p / 6) (x1 - x0) x (x2 - x0), one third of -p n da
 // (Bonet & Wood, Nonlinear Continuum Mechanics for FEA, 2nd ed., 8.4).
+//
+// On a quadratic mesh (Mesh::quadratic()) a boundary triangle has six
+// nodes, corners 0..2 then the mid-edge nodes of edges (0,1), (1,2), (2,0),
+// and its surface is the isoparametric map x(xi, eta) = sum_a N_a x_a over
+// xi, eta >= 0, xi + eta <= 1: with L0 = 1 - xi - eta, L1 = xi, L2 = eta,
+// corner N_a = L_a (2 L_a - 1), mid-edge N = 4 L_a L_b (the quadratic
+// triangle of the Lagrange family; Zienkiewicz, Taylor & Zhu, The Finite
+// Element Method: Its Basis and Fundamentals, 7th ed.), curved where the
+// mid-edge nodes lie off the straight edges. With g1 = x_,xi, g2 = x_,eta
+// (current x for a follower pressure, reference X otherwise) and G1, G2 the
+// same on the reference surface, the loads are consistent, not lumped:
+//   traction     f_a = t  integral N_a |G1 x G2| dxi deta,
+//   pressure     f_a = -p integral N_a (g1 x g2) dxi deta  (Bonet & Wood 8.4),
+//   body force   f_a = b  integral N_a det J dr ds dt  (the 10-node map of
+//                fem/tet10.h, over the reference tetrahedron).
+// A flat triangle under a uniform traction t thus gives nothing to its
+// corners and t A/3 to each mid-edge node; a straight element gives -b V/20
+// to each corner and b V/5 to each mid-edge node. The surface integrals use
+// the 7-point rule of degree 5 (Radon 1948; Dunavant 1985, IJNME 21), exact
+// for pressure, whose integrand is of degree 4; the volume integral the
+// 14-point rule of degree 5, exact as N_a det J is of degree 5.
 #pragma once
 
 #include <Eigen/Core>
@@ -30,17 +51,23 @@ class ExternalLoads {
 
   // Adds a traction t [Pa] (force per reference area, fixed direction) on
   // the triangles of `set`, lumped to their corners (exact for a linear
-  // triangle under a uniform traction).
+  // triangle under a uniform traction); on a quadratic mesh the consistent
+  // load over the reference (possibly curved) 6-node triangles, their
+  // mid-edge nodes found as for AddPressure.
   void AddTraction(const FaceSet& set, const Eigen::Vector3d& traction_pa);
 
   // Adds a body force b [N/m^3] (for gravity rho g) over every element,
-  // a quarter of b V_e to each corner (exact for a linear tetrahedron).
+  // a quarter of b V_e to each corner (exact for a linear tetrahedron); on a
+  // quadratic mesh the consistent load of each 10-node element.
   void AddBodyForce(const Eigen::Vector3d& force_per_volume);
 
   // Adds a pressure p [Pa] on the triangles of `set`, a boundary face set of
   // the mesh; each triangle is turned to face out of its tetrahedron. With
   // `follower`, the force follows the deformed surface; otherwise it acts on
   // the reference area along the reference normal (a small-strain analysis).
+  // On a quadratic mesh the mid-edge nodes come from set.triangle_midside,
+  // or, when that is empty (a set assembled by hand), from the element
+  // behind each triangle.
   void AddPressure(const FaceSet& set, double pressure_pa, bool follower);
 
   bool empty() const { return dead_.isZero(0) && pressure_.empty(); }
@@ -59,6 +86,14 @@ class ExternalLoads {
   // those edges are held or lie in symmetry planes. The symmetric part is
   // returned so that Cholesky applies; elsewhere Newton converges linearly
   // rather than quadratically.
+  //
+  // On a 6-node triangle, from f_a above and d(g1 x g2) = dg1 x g2 +
+  // g1 x dg2 = (N_b,eta [g1]_x - N_b,xi [g2]_x) dx_b ([w]_x: y -> w x y),
+  //   K_L(a, b) = p integral N_a (N_b,eta [g1]_x - N_b,xi [g2]_x) dxi deta,
+  // and its symmetric part (K_L(a, b) + K_L(b, a)^T) / 2 is [v_ab]_x with
+  //   v_ab = (p / 2) integral (N_a N_b,eta - N_b N_a,eta) g1
+  //                          - (N_a N_b,xi  - N_b N_a,xi ) g2 dxi deta,
+  // a degree-4 integrand, integrated exactly.
   SparseMatrix Stiffness(const Eigen::VectorXd& u, const DofMap& dofs, double factor) const;
 
   // The dead part alone (tractions, body forces), full length [N].
@@ -71,10 +106,14 @@ class ExternalLoads {
  private:
   struct Pressure {
     std::array<int, 3> nodes;  // anticlockwise seen from outside the body
+    // Quadratic mesh only: the mid-edge nodes of edges (0,1), (1,2), (2,0)
+    // of `nodes`.
+    std::array<int, 3> midside;
     double pressure_pa;
     bool follower;
   };
-  Eigen::Vector3d Corner(int node, const Eigen::VectorXd* u) const;
+  // Position of `node` [m], in the reference configuration when `u` is null.
+  Eigen::Vector3d Position(int node, const Eigen::VectorXd* u) const;
 
   const Mesh& mesh_;
   Eigen::VectorXd dead_;

@@ -1,4 +1,4 @@
-// LINEAR_STATIC: small-strain linear elasticity on linear tetrahedra,
+// LINEAR_STATIC: small-strain linear elasticity on 4- or 10-node tetrahedra,
 // K_ff u_f = f_f - K_fp u_p, with a Zienkiewicz-Zhu error estimate.
 #include <cmath>
 #include <cstdio>
@@ -10,6 +10,7 @@
 #include "linear/linear_solver.h"
 #include "material/factory.h"
 #include "material/linear_elastic.h"
+#include "mesh/quadratic.h"
 
 namespace pba {
 namespace {
@@ -35,13 +36,13 @@ Status SolveLinearStatic(const SceneSpec& scene, const Model& model, PhaseClock*
               Format("assembling %d elements, %d unknowns", mesh.num_elements(), dofs.num_free()));
   const auto colours = ColourElements(mesh);
   LinearSystem system;
-  PBA_RETURN_IF_ERROR(AssembleLinearSystem(
-      mesh, d, dofs, colours,
-      [&](double f) {
-        clock.Update(f);
-        return !clock.cancelled();
-      },
-      &system));
+  const auto keep_going = [&](double f) {
+    clock.Update(f);
+    return !clock.cancelled();
+  };
+  PBA_RETURN_IF_ERROR(mesh.quadratic()
+                          ? AssembleLinearSystemTet10(mesh, d, dofs, colours, keep_going, &system)
+                          : AssembleLinearSystem(mesh, d, dofs, colours, keep_going, &system));
   const ExternalLoads loads = BuildLoads(scene, mesh);
   Eigen::VectorXd external;
   if (!loads.empty()) {
@@ -51,8 +52,8 @@ Status SolveLinearStatic(const SceneSpec& scene, const Model& model, PhaseClock*
       if (f >= 0) system.rhs(f) += external(dof);
     }
     const Eigen::Vector3d total = loads.ReferenceResultant();
-    summary.notes.push_back(Format("applied loads: resultant (%.6g, %.6g, %.6g) N", total.x(),
-                                   total.y(), total.z()));
+    summary.notes.push_back(
+        Format("applied loads: resultant (%.6g, %.6g, %.6g) N", total.x(), total.y(), total.z()));
   }
   clock.End();
 
@@ -87,6 +88,36 @@ Status SolveLinearStatic(const SceneSpec& scene, const Model& model, PhaseClock*
   Eigen::VectorXd internal = Eigen::VectorXd::Zero(dofs.num_dofs());
   double energy = 0, max_strain = 0;
   for (const auto& colour : colours) {
+    if (mesh.quadratic()) {
+      // Per element: the volume averages of the strain and stress, which
+      // vary linearly in a straight 10-node element, over the 4 points.
+#pragma omp parallel for reduction(+ : energy) reduction(max : max_strain) schedule(static)
+      for (std::size_t k = 0; k < colour.size(); ++k) {
+        const int e = colour[k];
+        const Tet10Geometry g = ComputeTet10Geometry(Tet10Coordinates(mesh, e));
+        const Vector30d ue = GatherElementTet10(mesh, e, u);
+        Vector6d strain_sum = Vector6d::Zero(), stress_sum = Vector6d::Zero();
+        Vector30d force = Vector30d::Zero();
+        double v = 0;
+        for (int q = 0; q < 4; ++q) {
+          const Tet10BMatrix b = Tet10StrainDisplacement(g.grad[q]);
+          const Vector6d strain = b * ue, stress = d * strain;
+          strain_sum += g.volume[q] * strain;
+          stress_sum += g.volume[q] * stress;
+          force += g.volume[q] * b.transpose() * stress;
+          energy += 0.5 * g.volume[q] * stress.dot(strain);
+          max_strain = std::max(max_strain, strain.cwiseAbs().maxCoeff());
+          v += g.volume[q];
+        }
+        Eigen::Map<Vector6d>(&solution->strain[6 * e]) = strain_sum / v;
+        Eigen::Map<Vector6d>(&solution->stress_pa[6 * e]) = stress_sum / v;
+        solution->von_mises_pa[e] = VonMises(stress_sum / v);
+        volume[e] = v;
+        const std::array<int, 10> nodes = Tet10NodeIndices(mesh, e);
+        for (int a = 0; a < 10; ++a) internal.segment<3>(3 * nodes[a]) += force.segment<3>(3 * a);
+      }
+      continue;
+    }
 #pragma omp parallel for reduction(+ : energy) reduction(max : max_strain) schedule(static)
     for (std::size_t k = 0; k < colour.size(); ++k) {
       const int e = colour[k];
@@ -109,10 +140,20 @@ Status SolveLinearStatic(const SceneSpec& scene, const Model& model, PhaseClock*
 
   clock.Begin("estimate", 0.9, 0.95, "Zienkiewicz-Zhu error estimate");
   const ErrorEstimateResult estimate =
-      EstimateZzError(mesh, solution->stress_pa, volume, ComplianceMatrix(scene.material));
+      mesh.quadratic()
+          ? EstimateZzErrorTet10(
+                mesh,
+                [&](int e, const Eigen::Vector3d& xi) -> Vector6d {
+                  return d *
+                         Tet10Strain(Tet10Coordinates(mesh, e), GatherElementTet10(mesh, e, u), xi);
+                },
+                ComplianceMatrix(scene.material))
+          : EstimateZzError(mesh, solution->stress_pa, volume, ComplianceMatrix(scene.material));
   solution->error_indicator = estimate.element_share;
   summary.error.estimated = true;
-  summary.error.method = "Zienkiewicz-Zhu stress recovery (nodal averaging)";
+  summary.error.method = mesh.quadratic()
+                             ? "Zienkiewicz-Zhu stress recovery (nodal averaging, quadratic)"
+                             : "Zienkiewicz-Zhu stress recovery (nodal averaging)";
   summary.error.relative_error = estimate.relative_error;
   summary.error.note =
       "estimated discretisation error in the energy norm, relative to the solution's energy norm; "

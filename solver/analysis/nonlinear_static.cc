@@ -11,15 +11,53 @@
 #include "analysis/finite_strain_model.h"
 #include "analysis/newton_static.h"
 #include "analysis/static_analysis.h"
+#include "analysis/tet10_model.h"
 #include "core/format.h"
 #include "fem/tet4_finite_strain.h"
 #include "linear/linear_solver.h"
 #include "material/factory.h"
 #include "material/hyperelastic.h"
 #include "material/linear_elastic.h"
+#include "mesh/quadratic.h"
 
 namespace pba {
 namespace {
+
+// F = I + sum_a u_a (x) grad N_a for a 10-node element (rows of `grad`:
+// dN_a/dX).
+Eigen::Matrix3d DeformationGradientTet10(const Tet10Nodes& grad, const Vector30d& ue) {
+  Eigen::Matrix3d f = Eigen::Matrix3d::Identity();
+  for (int a = 0; a < 10; ++a) f += ue.segment<3>(3 * a) * grad.row(a);
+  return f;
+}
+
+// The finite-strain fields at a material point, Voigt order, engineering
+// shear in the strains as for small strain.
+struct PointFields {
+  Vector6d green = Vector6d::Zero(), almansi = Vector6d::Zero();
+  Vector6d pk2 = Vector6d::Zero(), cauchy = Vector6d::Zero();
+  double j = 0;
+  void Add(double weight, const PointFields& p) {
+    green += weight * p.green;
+    almansi += weight * p.almansi;
+    pk2 += weight * p.pk2;
+    cauchy += weight * p.cauchy;
+    j += weight * p.j;
+  }
+};
+
+PointFields FieldsAt(const HyperelasticMaterial& material, const Eigen::Matrix3d& f) {
+  PointFields p;
+  p.j = f.determinant();
+  const Eigen::Matrix3d identity = Eigen::Matrix3d::Identity();
+  p.green = SymmetricToVoigt(0.5 * (f.transpose() * f - identity));
+  p.almansi = SymmetricToVoigt(0.5 * (identity - (f * f.transpose()).inverse()));
+  p.green.tail<3>() *= 2;
+  p.almansi.tail<3>() *= 2;
+  p.pk2 = material.Stress(f);
+  p.cauchy = SymmetricToVoigt(f * VoigtToSymmetric(p.pk2) * f.transpose() / p.j);
+  return p;
+}
 
 NewtonOptions OptionsOf(const NonlinearOptionsSpec& spec) {
   NewtonOptions options;
@@ -43,9 +81,10 @@ Status SolveNonlinearStatic(const SceneSpec& scene, const Model& model, PhaseClo
   const DofMap& dofs = model.dofs;
   const auto material = MakeHyperelasticMaterial(scene.material);
   const bool plain = scene.mesh.element == ElementType::kTet4;
-  const auto body =
-      plain ? MakeTet4Model(mesh, *material) : MakeAverageNodalPressureTet4Model(mesh, *material);
-  summary.element_type = plain ? "TET4" : "TET4_ANP";
+  const auto body = mesh.quadratic() ? MakeTet10Model(mesh, *material)
+                    : plain          ? MakeTet4Model(mesh, *material)
+                                     : MakeAverageNodalPressureTet4Model(mesh, *material);
+  summary.element_type = mesh.quadratic() ? "TET10" : plain ? "TET4" : "TET4_ANP";
   const auto solver = CreateLinearSolver(scene.analysis.linear_solver);
   NewtonOptions options = OptionsOf(scene.analysis.nonlinear);
   options.on_increment = [solution](double load, const Eigen::VectorXd& u) {
@@ -103,27 +142,32 @@ Status SolveNonlinearStatic(const SceneSpec& scene, const Model& model, PhaseClo
   double max_strain = 0;
 #pragma omp parallel for reduction(max : max_strain) schedule(static)
   for (int e = 0; e < ne; ++e) {
-    const Tet4Geometry g = ComputeTet4Geometry(TetCorners(mesh, e));
-    const Eigen::Matrix3d f = DeformationGradient(g, GatherElement(mesh, e, u));
-    const double j = f.determinant();
-    const Eigen::Matrix3d identity = Eigen::Matrix3d::Identity();
-    const Eigen::Matrix3d green = 0.5 * (f.transpose() * f - identity);
-    const Eigen::Matrix3d almansi = 0.5 * (identity - (f * f.transpose()).inverse());
-    const Vector6d pk2 = material->Stress(f);
-    const Eigen::Matrix3d cauchy = f * VoigtToSymmetric(pk2) * f.transpose() / j;
-    // Engineering shear in the Voigt strain vectors, as for small strain.
-    Vector6d e_voigt = SymmetricToVoigt(green), a_voigt = SymmetricToVoigt(almansi);
-    e_voigt.tail<3>() *= 2;
-    a_voigt.tail<3>() *= 2;
-    Eigen::Map<Vector6d>(&solution->strain[6 * e]) = e_voigt;
-    Eigen::Map<Vector6d>(&solution->almansi_strain[6 * e]) = a_voigt;
-    Eigen::Map<Vector6d>(&solution->pk2_stress_pa[6 * e]) = pk2;
-    const Vector6d sigma = SymmetricToVoigt(cauchy);
-    Eigen::Map<Vector6d>(&solution->stress_pa[6 * e]) = sigma;
-    solution->von_mises_pa[e] = VonMises(sigma);
-    solution->jacobian[e] = j;
-    volume[e] = g.volume;
-    max_strain = std::max(max_strain, e_voigt.cwiseAbs().maxCoeff());
+    // One point for a 4-node element; the volume average over the four
+    // integration points for a 10-node one.
+    PointFields sum;
+    double v = 0;
+    if (mesh.quadratic()) {
+      const Tet10Geometry g = ComputeTet10Geometry(Tet10Coordinates(mesh, e));
+      const Vector30d ue = GatherElementTet10(mesh, e, u);
+      for (int q = 0; q < 4; ++q) {
+        const PointFields p = FieldsAt(*material, DeformationGradientTet10(g.grad[q], ue));
+        sum.Add(g.volume[q], p);
+        v += g.volume[q];
+        max_strain = std::max(max_strain, p.green.cwiseAbs().maxCoeff());
+      }
+    } else {
+      const Tet4Geometry g = ComputeTet4Geometry(TetCorners(mesh, e));
+      v = g.volume;
+      sum.Add(v, FieldsAt(*material, DeformationGradient(g, GatherElement(mesh, e, u))));
+      max_strain = std::max(max_strain, sum.green.cwiseAbs().maxCoeff() / v);
+    }
+    Eigen::Map<Vector6d>(&solution->strain[6 * e]) = sum.green / v;
+    Eigen::Map<Vector6d>(&solution->almansi_strain[6 * e]) = sum.almansi / v;
+    Eigen::Map<Vector6d>(&solution->pk2_stress_pa[6 * e]) = sum.pk2 / v;
+    Eigen::Map<Vector6d>(&solution->stress_pa[6 * e]) = sum.cauchy / v;
+    solution->von_mises_pa[e] = VonMises(sum.cauchy / v);
+    solution->jacobian[e] = sum.j / v;
+    volume[e] = v;
   }
   double energy = 0;
   if (!body->InternalForce(u, &result->internal_force, &energy)) {
@@ -134,7 +178,17 @@ Status SolveNonlinearStatic(const SceneSpec& scene, const Model& model, PhaseClo
 
   clock.Begin("estimate", 0.95, 0.99, "Zienkiewicz-Zhu error estimate");
   const ErrorEstimateResult estimate =
-      EstimateZzError(mesh, solution->pk2_stress_pa, volume, ComplianceMatrix(scene.material));
+      mesh.quadratic() ? EstimateZzErrorTet10(
+                             mesh,
+                             [&](int e, const Eigen::Vector3d& xi) -> Vector6d {
+                               Tet10Nodes grad;
+                               Tet10Gradients(Tet10Coordinates(mesh, e), xi, &grad);
+                               return material->Stress(
+                                   DeformationGradientTet10(grad, GatherElementTet10(mesh, e, u)));
+                             },
+                             ComplianceMatrix(scene.material))
+                       : EstimateZzError(mesh, solution->pk2_stress_pa, volume,
+                                         ComplianceMatrix(scene.material));
   solution->error_indicator = estimate.element_share;
   summary.error.estimated = true;
   summary.error.method =

@@ -57,7 +57,8 @@ Status SolveScene(const SceneSpec& scene, const SolveOptions& options, Solution*
 
   summary.scene_name = scene.name;
   summary.geometry = DescribeGeometry(scene.geometry);
-  summary.element_type = "TET4";  // a nonlinear analysis may refine this
+  // A nonlinear analysis may refine this.
+  summary.element_type = mesh.quadratic() ? "TET10" : "TET4";
   summary.nodes = mesh.num_nodes();
   summary.elements = mesh.num_elements();
   summary.dofs = dofs.num_free();
@@ -105,9 +106,14 @@ Status SolveScene(const SceneSpec& scene, const SolveOptions& options, Solution*
     const double norm = result.u.segment<3>(3 * i).norm();
     if (norm > max_u) max_u = norm, max_node = i;
   }
-  solution->tets.resize(4 * static_cast<std::size_t>(ne));
+  const int per_element = mesh.quadratic() ? 10 : 4;
+  solution->nodes_per_element = per_element;
+  solution->tets.resize(per_element * static_cast<std::size_t>(ne));
   for (int e = 0; e < ne; ++e) {
-    for (int a = 0; a < 4; ++a) solution->tets[4 * e + a] = mesh.tets[e][a];
+    for (int a = 0; a < 4; ++a) solution->tets[per_element * e + a] = mesh.tets[e][a];
+    if (mesh.quadratic()) {
+      for (int k = 0; k < 6; ++k) solution->tets[10 * e + 4 + k] = mesh.midside[e][k];
+    }
   }
   summary.max_displacement_mm = max_u / kMm;
   for (int c = 0; c < 3; ++c) summary.max_displacement_at_mm[c] = mesh.nodes(max_node, c) / kMm;

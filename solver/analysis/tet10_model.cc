@@ -66,7 +66,8 @@ class Tet10Model final : public FiniteStrainModel {
                   LinearSystem* system) const override {
     const Tet10ElementKernel kernel = [&](int e, Matrix30d* k, Vector30d* f) {
       Tet10FiniteStrainResult r;
-      if (!Tet10FiniteStrain(geometry_[e], GatherElementTet10(mesh_, e, u), material_, true, &r)) {
+      if (!Tet10FiniteStrain(geometry_[e], GatherElementTet10(mesh_, e, u), material_, true, &r,
+                             options.drop_pressure_stiffness)) {
         return false;
       }
       *k = r.tangent;

@@ -1,5 +1,7 @@
 #include "fem/tet10_finite_strain.h"
 
+#include <Eigen/LU>
+
 #include "material/hyperelastic.h"
 
 namespace pba {
@@ -26,7 +28,7 @@ Tet10BMatrix NonlinearStrainDisplacement(const Tet10Nodes& grad, const Eigen::Ma
 
 bool Tet10FiniteStrain(const Tet10Geometry& reference, const Vector30d& u,
                        const HyperelasticMaterial& material, bool with_tangent,
-                       Tet10FiniteStrainResult* result) {
+                       Tet10FiniteStrainResult* result, bool drop_pressure_stiffness) {
   if (!(reference.min_jacobian > 0)) return false;
   // All four F first: the material must not see an inadmissible one.
   for (int q = 0; q < 4; ++q) {
@@ -47,9 +49,20 @@ bool Tet10FiniteStrain(const Tet10Geometry& reference, const Vector30d& u,
     result->force.noalias() += dv * b.transpose() * s;
     result->energy += dv * material.Energy(f);
     if (!with_tangent) continue;
-    result->tangent.noalias() += dv * b.transpose() * material.Tangent(f) * b;
+    Matrix6d tangent;
+    Vector6d geometric_stress = s;
+    if (drop_pressure_stiffness) {
+      double w_iso;
+      material.Isochoric(f, &w_iso, &geometric_stress, &tangent);
+      const double j = f.determinant();
+      const Vector6d c_inv = SymmetricToVoigt((f.transpose() * f).inverse());
+      tangent += material.Volumetric(j).second * j * j * c_inv * c_inv.transpose();
+    } else {
+      tangent = material.Tangent(f);
+    }
+    result->tangent.noalias() += dv * b.transpose() * tangent * b;
     const Eigen::Matrix<double, 10, 10> geometric =
-        dv * grad * VoigtToSymmetric(s) * grad.transpose();
+        dv * grad * VoigtToSymmetric(geometric_stress) * grad.transpose();
     for (int a = 0; a < 10; ++a) {
       for (int c = 0; c < 10; ++c) {
         result->tangent.block<3, 3>(3 * a, 3 * c).diagonal().array() += geometric(a, c);

@@ -36,9 +36,17 @@ struct Tet10FiniteStrainResult {
 // unspecified, when the reference element is inverted (det J <= 0 at an
 // integration point) or F is not admissible (det F <= 0 or not finite) at
 // one.
+//
+// With `drop_pressure_stiffness` the tangent is the positive definite
+// approximation Newton falls back on when the consistent one is indefinite
+// (far from equilibrium, K (J - 1) >> mu): the isochoric material and
+// geometric stiffness plus only the volumetric term U''(J) J^2 C^-1 (x) C^-1,
+// without the pressure's initial-stress terms
+// (J U'(J) (C^-1 (x) C^-1 - 2 I_C^-1) and the geometric stiffness of
+// U'(J) J C^-1). The force and energy are unchanged.
 bool Tet10FiniteStrain(const Tet10Geometry& reference, const Vector30d& u,
                        const HyperelasticMaterial& material, bool with_tangent,
-                       Tet10FiniteStrainResult* result);
+                       Tet10FiniteStrainResult* result, bool drop_pressure_stiffness = false);
 
 // The same from the reference node coordinates (10 x 3 [m]).
 bool Tet10FiniteStrain(const Tet10Nodes& reference, const Vector30d& u,

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "material/linear_elastic.h"
+#include "mesh/quadratic.h"
 #include "pba/solve.h"
 #include "scene/model_builder.h"
 
@@ -112,17 +113,27 @@ Status ExportAbaqusInput(const SceneSpec& scene, const std::filesystem::path& fi
                   mesh.nodes(i, 1), mesh.nodes(i, 2));
     out << line;
   }
-  if (scene.analysis.type == AnalysisSpec::Type::kNonlinearStatic &&
-      scene.mesh.element != ElementType::kTet4) {
+  if (mesh.quadratic()) {
+    out << "** PBA solves this scene with TET10; C3D10 is the same element (the same 10 nodes in\n"
+           "** the same order, the same 4-point rule), so both codes answer one discrete "
+           "problem.\n";
+  } else if (scene.analysis.type == AnalysisSpec::Type::kNonlinearStatic &&
+             scene.mesh.element != ElementType::kTet4) {
     out << "** PBA solves this scene with TET4_ANP (average nodal pressure); C3D4 is the plain\n"
-           "** tetrahedron, which locks when nearly incompressible: set mesh.element: TET4 to\n"
-           "** compare the same discrete problem.\n";
+           "** tetrahedron, which locks when nearly incompressible: set mesh.element: TET4 (or\n"
+           "** TET10, C3D10) to compare the same discrete problem.\n";
   }
-  out << "*ELEMENT, TYPE=C3D4, ELSET=EALL\n";
+  // PBA's 10-node order (corners, then edges (0,1) (1,2) (2,0) (0,3) (1,3)
+  // (2,3)) is C3D10's, so the nodes go out as they are.
+  out << "*ELEMENT, TYPE=" << (mesh.quadratic() ? "C3D10" : "C3D4") << ", ELSET=EALL\n";
   for (int e = 0; e < mesh.num_elements(); ++e) {
-    const auto& t = mesh.tets[e];
-    out << e + 1 << ", " << t[0] + 1 << ", " << t[1] + 1 << ", " << t[2] + 1 << ", " << t[3] + 1
-        << "\n";
+    out << e + 1;
+    if (mesh.quadratic()) {
+      for (int node : Tet10NodeIndices(mesh, e)) out << ", " << node + 1;
+    } else {
+      for (int node : mesh.tets[e]) out << ", " << node + 1;
+    }
+    out << "\n";
   }
   for (const auto& [name, set] : mesh.face_sets) {
     out << "*NSET, NSET=" << Upper(name) << "\n";
@@ -164,9 +175,10 @@ Status ExportAbaqusInput(const SceneSpec& scene, const std::filesystem::path& fi
                   model.dofs.prescribed_value(dof));
     out << line;
   }
-  // Pressure on element faces (C3D4 faces: S1 = 1-2-3, S2 = 1-4-2,
-  // S3 = 2-4-3, S4 = 3-4-1, i.e. the face opposite corner 4, 3, 1, 2); with
-  // NLGEOM CalculiX makes it a follower load, as PBA does.
+  // Pressure on element faces (C3D4 and C3D10 faces alike, by their corners:
+  // S1 = 1-2-3, S2 = 1-4-2, S3 = 2-4-3, S4 = 3-4-1, i.e. the face opposite
+  // corner 4, 3, 1, 2; a C3D10 face also holds the mid-edge nodes of its
+  // edges); with NLGEOM CalculiX makes it a follower load, as PBA does.
   static const int kFaceOpposite[4] = {3, 4, 2, 1};  // corner (0-based) -> face label
   bool dload = false;
   for (const BoundaryConditionSpec& bc : scene.boundary_conditions) {
@@ -180,8 +192,9 @@ Status ExportAbaqusInput(const SceneSpec& scene, const std::filesystem::path& fi
       out << line;
     }
   }
-  // Tractions and gravity as the nodal forces PBA lumps them to (exact for
-  // linear elements under uniform loads).
+  // Tractions and gravity as the nodal forces PBA turns them into (exact for
+  // uniform loads; on a 10-node mesh the consistent forces, mid-edge nodes
+  // included).
   const ExternalLoads loads = BuildLoads(scene, mesh);
   bool cload = false;
   for (int dof = 0; dof < model.dofs.num_dofs(); ++dof) {

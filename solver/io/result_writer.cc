@@ -45,6 +45,13 @@ class H5Writer {
   bool ok() const { return file_.ok() && ok_; }
   hid_t file() const { return file_.get(); }
 
+  // A string attribute on the existing object `object`.
+  void Attribute(const char* object, const char* name, const std::string& value) {
+    if (!ok()) return;
+    Handle handle(H5Oopen(file_.get(), object, H5P_DEFAULT), H5Oclose);
+    ok_ = handle.ok() && WriteStringAttribute(handle.get(), name, value);
+  }
+
   void Group(const char* name) {
     Handle group(H5Gcreate2(file_.get(), name, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Gclose);
     ok_ = ok_ && group.ok();
@@ -81,6 +88,12 @@ std::string Item(const std::string& dims, const std::string& path,
          std::to_string(precision) + "\" Format=\"HDF\">result.h5:" + path + "</DataItem>";
 }
 
+// The XDMF cell of a connectivity with `nodes_per_element` columns (4 or 10,
+// checked by WriteResultFiles); both share VTK's and Abaqus' node order.
+const char* XdmfTopologyType(int nodes_per_element) {
+  return nodes_per_element == 10 ? "Tetrahedron_10" : "Tetrahedron";
+}
+
 // One column of an elements x 6 dataset as a scalar cell attribute.
 std::string ComponentAttribute(const std::string& name, const std::string& path, int column,
                                size_t rows) {
@@ -107,7 +120,7 @@ std::string RowSlab(const std::string& path, size_t first, size_t rows, size_t r
 
 // The final fields as XDMF attributes of one grid.
 std::string FieldAttributes(const SceneSpec& scene, const Solution& s) {
-  const size_t nodes = s.nodes_mm.size() / 3, elements = s.tets.size() / 4;
+  const size_t nodes = s.nodes_mm.size() / 3, elements = s.tets.size() / s.nodes_per_element;
   const std::string nn = std::to_string(nodes), ne = std::to_string(elements);
   std::string x;
   if (scene.outputs.displacement) {
@@ -148,11 +161,18 @@ std::string FieldAttributes(const SceneSpec& scene, const Solution& s) {
 }
 
 std::string XdmfText(const SceneSpec& scene, const Solution& s) {
-  const size_t nodes = s.nodes_mm.size() / 3, elements = s.tets.size() / 4;
+  const size_t nodes = s.nodes_mm.size() / 3, elements = s.tets.size() / s.nodes_per_element;
   const std::string nn = std::to_string(nodes), ne = std::to_string(elements);
+  const std::string npe = std::to_string(s.nodes_per_element);
   const std::string name = scene.name.empty() ? "result" : scene.name;
-  const std::string mesh = "      <Topology TopologyType=\"Tetrahedron\" NumberOfElements=\"" + ne +
-                           "\">\n        " + Item(ne + " 4", "/mesh/tets", "Int", 8) +
+  // NodesPerElement only for the quadratic cell, where it restates the type;
+  // 4-node files stay as they were.
+  const std::string per_element =
+      s.nodes_per_element == 10 ? "\" NodesPerElement=\"" + npe : std::string();
+  const std::string mesh = std::string("      <Topology TopologyType=\"") +
+                           XdmfTopologyType(s.nodes_per_element) + "\" NumberOfElements=\"" + ne +
+                           per_element + "\">\n        " +
+                           Item(ne + " " + npe, "/mesh/tets", "Int", 8) +
                            "\n      </Topology>\n"
                            "      <Geometry GeometryType=\"XYZ\">\n        " +
                            Item(nn + " 3", "/mesh/nodes") + "\n      </Geometry>\n";
@@ -192,6 +212,12 @@ std::string XdmfText(const SceneSpec& scene, const Solution& s) {
 Status WriteResultFiles(const SceneSpec& scene, Solution* solution,
                         const std::filesystem::path& dir) {
   const auto start = std::chrono::steady_clock::now();
+  const int npe = solution->nodes_per_element;
+  if ((npe != 4 && npe != 10) || solution->tets.size() % npe != 0) {
+    return Status::Internal("solution connectivity: " + std::to_string(solution->tets.size()) +
+                            " indices, " + std::to_string(npe) +
+                            " nodes per element (4 or 10, dividing the count)");
+  }
   const std::filesystem::path h5 = dir / "result.h5";
   {
     H5Writer w(h5);
@@ -201,7 +227,11 @@ Status WriteResultFiles(const SceneSpec& scene, Solution* solution,
     w.Group("/mesh");
     w.Group("/fields");
     w.Dataset("/mesh/nodes", solution->nodes_mm, 3, "mm", "x y z");
-    w.Dataset("/mesh/tets", solution->tets, 4, "1", "node indices, 0-based");
+    w.Dataset("/mesh/tets", solution->tets, npe, "1",
+              npe == 10 ? "node indices, 0-based: corners 0-3, then the mid-edge nodes of edges "
+                          "(0,1) (1,2) (2,0) (0,3) (1,3) (2,3)"
+                        : "node indices, 0-based");
+    w.Attribute("/mesh/tets", "element_type", npe == 10 ? "TET10" : "TET4");
     const std::string voigt = "xx yy zz yz xz xy";
     if (scene.outputs.displacement)
       w.Dataset("/fields/displacement", solution->displacement_mm, 3, "mm", "x y z");

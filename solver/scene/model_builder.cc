@@ -3,8 +3,38 @@
 #include <algorithm>
 
 #include "mesh/primitive_mesher.h"
+#include "mesh/quadratic.h"
 
 namespace pba {
+
+namespace {
+
+// Where the mid-edge nodes of a 10-node mesh go on the geometry's curved
+// faces: radially onto the cylinder's side, onto the shell's spheres. Flat
+// faces keep their edge midpoints, which lie in them.
+MidsideProjection CurvedSurfaces(const GeometrySpec& g) {
+  constexpr double kMm = 1e-3;
+  if (g.kind == GeometrySpec::Kind::kCylinder) {
+    const double r = g.cylinder.radius_mm * kMm;
+    return [r](const Eigen::Vector3d& x, const std::string& set) -> Eigen::Vector3d {
+      if (set != "side") return x;
+      const Eigen::Vector2d radial = x.head<2>();
+      return Eigen::Vector3d(r * radial.x() / radial.norm(), r * radial.y() / radial.norm(), x.z());
+    };
+  }
+  if (g.kind == GeometrySpec::Kind::kSphericalShell) {
+    const double a = g.spherical_shell.inner_radius_mm * kMm;
+    const double b = g.spherical_shell.outer_radius_mm * kMm;
+    return [a, b](const Eigen::Vector3d& x, const std::string& set) -> Eigen::Vector3d {
+      if (set == "inner") return a * x.normalized();
+      if (set == "outer") return b * x.normalized();
+      return x;
+    };
+  }
+  return {};
+}
+
+}  // namespace
 
 Model BuildModel(const SceneSpec& scene) {
   constexpr double kMm = 1e-3;
@@ -12,6 +42,11 @@ Model BuildModel(const SceneSpec& scene) {
   MeshStats stats;
   model.mesh = BuildPrimitiveMesh(scene.geometry, scene.mesh, &stats);
   model.mesh_description = stats.description;
+  if (scene.mesh.element == ElementType::kTet10) {
+    model.mesh = MakeQuadratic(model.mesh, CurvedSurfaces(scene.geometry));
+    model.mesh_description +=
+        "; 10-node: a node on every edge, on the true surface of curved faces";
+  }
   model.dofs = DofMap(model.mesh.num_nodes());
   for (const BoundaryConditionSpec& bc : scene.boundary_conditions) {
     if (bc.is_load()) continue;  // see BuildLoads

@@ -1,8 +1,9 @@
 // Peer check: the same meshed model, exported as an Abaqus deck, solved by
 // CalculiX (Debian package calculix-ccx, installed by scripts/deps.sh). Same
-// mesh, same element (C3D4), same constraints: the answers must agree to the
-// precision CalculiX prints (7 significant digits). Each case prints a row of
-// the speed-beside-error table in docs/validation.md.
+// mesh, same element (C3D4, or C3D10 for TET10 scenes), same constraints: the
+// answers must agree to the precision CalculiX prints (7 significant digits).
+// Each case prints a row of the speed-beside-error table in
+// docs/validation.md.
 
 #include <gtest/gtest.h>
 
@@ -140,6 +141,44 @@ std::vector<SceneSpec> Cases() {
   p = {6000, 3000, 1500, 0.3, 0.35, 0.4, 1500, 900, 600};
   p.axis_1 = {1, 2, 0.5};
   p.axis_2 = {-1, 0.3, 2};
+  // 10-node elements (C3D10): every mid-edge node is an unknown of both
+  // codes, compared like a corner. The pressure on x_max, held by the x_min
+  // rollers, checks the deck's face labels and PBA's quadratic face load
+  // against CalculiX's. Only x_min's reaction is compared: CalculiX prints
+  // a node's internal force as its RF, so on a set sharing nodes with the
+  // loaded face (every other side) it counts their share of the pressure
+  // as reaction, which PBA does not.
+  SceneSpec stretched10 =
+      Scene("10-node block, rollers, top pulled 0.3 mm, 20 Pa on x_max", box, 5,
+            {Condition("bottom", K::kDisplacement, {std::nullopt, std::nullopt, 0.0}),
+             Condition("x_min", K::kDisplacement, {0.0, std::nullopt, std::nullopt}),
+             Condition("y_min", K::kDisplacement, {std::nullopt, 0.0, std::nullopt}),
+             Condition("top", K::kDisplacement, {std::nullopt, std::nullopt, 0.3}),
+             Condition("x_max", K::kPressure)});
+  stretched10.boundary_conditions.back().pressure_pa = 20;
+  stretched10.outputs.reaction_sets = {"x_min"};
+  stretched10.mesh.element = ElementType::kTet10;
+  // Inhomogeneous fields: a bonded block bulging under a pressure, whose
+  // reactions sit on the set opposite the loaded face; a cylinder, whose
+  // side's mid-edge nodes lie on the curved surface and must go into the
+  // deck there. No pressure on a face with curved edges: CalculiX integrates
+  // a C3D10 face load with 3 points, exact only on straight-edged faces,
+  // where PBA's rule is exact on curved ones too.
+  SceneSpec bonded10 = Scene("10-node block, bottom fixed, 50 Pa on top", box, 5,
+                             {Condition("bottom", K::kFixed), Condition("top", K::kPressure)});
+  bonded10.boundary_conditions.back().pressure_pa = 50;
+  bonded10.mesh.element = ElementType::kTet10;
+  SceneSpec cylinder10 =
+      Scene("10-node cylinder, bottom fixed, top pressed 0.5 mm", cylinder, 2.5,
+            {Condition("bottom", K::kFixed),
+             Condition("top", K::kDisplacement, {std::nullopt, std::nullopt, -0.5})});
+  cylinder10.mesh.element = ElementType::kTet10;
+  // The first case on 10-node elements (C3D10 with NLGEOM), at a coarser
+  // size for the same number of nodes.
+  SceneSpec neo10 = neo;
+  neo10.name = "10-node neo-Hookean block, bonded, pressed 20 % (nonlinear)";
+  neo10.mesh.element_size_mm = 5;
+  neo10.mesh.element = ElementType::kTet10;
   return {
       neo,
       ogden,
@@ -154,6 +193,10 @@ std::vector<SceneSpec> Cases() {
             {Condition("bottom", K::kFixed),
              Condition("top", K::kDisplacement, {std::nullopt, std::nullopt, -1.0})}),
       orthotropic,
+      stretched10,
+      neo10,
+      bonded10,
+      cylinder10,
   };
 }
 

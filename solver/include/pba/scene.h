@@ -41,6 +41,7 @@ enum class ElementType {
   kDefault,  // TET4 for linear analyses, TET4_ANP for nonlinear ones
   kTet4,     // 4-node tetrahedron, one F per element (locks when nearly incompressible)
   kTet4Anp,  // 4-node tetrahedron with average nodal pressure (nonlinear analyses)
+  kTet10,    // 10-node quadratic tetrahedron; mid-edge nodes on curved faces lie on the surface
 };
 
 struct MeshSpec {

@@ -90,10 +90,14 @@ struct Summary {
 
 // The solved fields, in the units result.h5 uses.
 struct Solution {
-  // Mesh: node coordinates [mm], nodes x 3 row-major; tet4 connectivity,
-  // elements x 4 row-major, 0-based, positively oriented.
+  // Mesh: node coordinates [mm], nodes x 3 row-major; tetrahedron
+  // connectivity, elements x nodes_per_element row-major, 0-based,
+  // positively oriented: 4 corners, then for 10-node elements the mid-edge
+  // nodes of edges (0,1) (1,2) (2,0) (0,3) (1,3) (2,3) (the order of
+  // Abaqus C3D10, VTK and XDMF quadratic tetrahedra).
   std::vector<double> nodes_mm;
   std::vector<int64_t> tets;
+  int nodes_per_element = 4;
   // Nodal displacement [mm], nodes x 3.
   std::vector<double> displacement_mm;
   // Per element, Voigt order xx yy zz yz xz xy (engineering shear strain).

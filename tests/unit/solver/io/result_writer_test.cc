@@ -50,6 +50,39 @@ std::vector<hsize_t> Dims(hid_t file, const char* path) {
   return dims;
 }
 
+std::string ReadText(const fs::path& path) {
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+// Two positively oriented 10-node tetrahedra sharing the face 1-2-3 and its
+// mid-edge nodes (corners 0..4, then one node per edge), with made-up
+// fields: enough to see the writer keep the ten columns.
+Solution TwoQuadraticTets() {
+  Solution s;
+  s.nodes_per_element = 10;
+  const double corners[5][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 1, 1}};
+  for (const auto& c : corners) s.nodes_mm.insert(s.nodes_mm.end(), c, c + 3);
+  // Mid-edge nodes 5..13 at the midpoints of these edges.
+  const int edges[][2] = {{0, 1}, {1, 2}, {2, 0}, {0, 3}, {1, 3}, {2, 3}, {2, 4}, {4, 1}, {4, 3}};
+  for (const auto& e : edges) {
+    for (int c = 0; c < 3; ++c) s.nodes_mm.push_back((corners[e[0]][c] + corners[e[1]][c]) / 2);
+  }
+  // Both in the order (0,1) (1,2) (2,0) (0,3) (1,3) (2,3) of their corners.
+  s.tets = {0, 1, 2, 3, 5,  6,  7, 8, 9,  10,  //
+            1, 4, 2, 3, 12, 11, 6, 9, 13, 10};
+  const std::size_t nodes = s.nodes_mm.size() / 3, elements = 2;
+  for (std::size_t i = 0; i < nodes; ++i) {
+    s.displacement_mm.insert(s.displacement_mm.end(), {0, 0, -0.01 * static_cast<double>(i)});
+  }
+  s.stress_pa.assign(elements * 6, 10.0);
+  s.strain.assign(elements * 6, 1e-3);
+  s.von_mises_pa.assign(elements, 5.0);
+  return s;
+}
+
 class ResultWriterTest : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -77,6 +110,9 @@ TEST_F(ResultWriterTest, WritesFieldsWithUnitsAndAnXdmfThatPointsAtThem) {
   EXPECT_EQ(Dims(file, "/fields/stress"), (std::vector<hsize_t>{elements, 6}));
   EXPECT_EQ(Dims(file, "/fields/von_mises"), (std::vector<hsize_t>{elements}));
   EXPECT_EQ(ReadAttribute(file, "scene_name"), "writer-test");
+  const hid_t tets = H5Dopen2(file, "/mesh/tets", H5P_DEFAULT);
+  EXPECT_EQ(ReadAttribute(tets, "element_type"), "TET4");
+  H5Dclose(tets);
 
   const hid_t displacement = H5Dopen2(file, "/fields/displacement", H5P_DEFAULT);
   EXPECT_EQ(ReadAttribute(displacement, "unit"), "mm");
@@ -155,6 +191,86 @@ TEST_F(ResultWriterTest, NonlinearSolveWritesFiniteStrainFieldsAndIncrements) {
   EXPECT_NE(text.find("Name=\"pk2_stress_zz\""), std::string::npos);
   EXPECT_NE(text.find("Name=\"jacobian\""), std::string::npos);
   H5Fclose(file);
+}
+
+// A 10-node solution keeps its ten columns in /mesh/tets (named TET10) and
+// becomes XDMF's Tetrahedron_10, whose node order is PBA's.
+TEST_F(ResultWriterTest, TenNodeSolutionWritesQuadraticCells) {
+  const SceneSpec scene = Scene();
+  Solution solution = TwoQuadraticTets();
+  ASSERT_TRUE(WriteResultFiles(scene, &solution, dir_).ok());
+
+  const hid_t file = H5Fopen((dir_ / "result.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  ASSERT_GE(file, 0);
+  const hsize_t nodes = solution.nodes_mm.size() / 3;
+  EXPECT_EQ(Dims(file, "/mesh/nodes"), (std::vector<hsize_t>{nodes, 3}));
+  EXPECT_EQ(Dims(file, "/mesh/tets"), (std::vector<hsize_t>{2, 10}));
+  EXPECT_EQ(Dims(file, "/fields/stress"), (std::vector<hsize_t>{2, 6}));
+  EXPECT_EQ(Dims(file, "/fields/von_mises"), (std::vector<hsize_t>{2}));
+  const hid_t tets = H5Dopen2(file, "/mesh/tets", H5P_DEFAULT);
+  EXPECT_EQ(ReadAttribute(tets, "element_type"), "TET10");
+  EXPECT_NE(ReadAttribute(tets, "components").find("(0,1) (1,2) (2,0) (0,3) (1,3) (2,3)"),
+            std::string::npos);
+  std::vector<int64_t> connectivity(solution.tets.size());
+  H5Dread(tets, H5T_NATIVE_INT64, H5S_ALL, H5S_ALL, H5P_DEFAULT, connectivity.data());
+  EXPECT_EQ(connectivity, solution.tets);
+  H5Dclose(tets);
+
+  const std::string text = ReadText(dir_ / "result.xdmf");
+  EXPECT_NE(text.find("TopologyType=\"Tetrahedron_10\" NumberOfElements=\"2\" "
+                      "NodesPerElement=\"10\""),
+            std::string::npos)
+      << text;
+  EXPECT_EQ(text.find("TopologyType=\"Tetrahedron\""), std::string::npos);
+  EXPECT_NE(text.find("<DataItem Dimensions=\"2 10\" NumberType=\"Int\" Precision=\"8\" "
+                      "Format=\"HDF\">result.h5:/mesh/tets<"),
+            std::string::npos);
+  // Cell attributes have one value per element, not per 4 indices.
+  EXPECT_NE(text.find("<DataItem Dimensions=\"2\" NumberType=\"Float\" Precision=\"8\" "
+                      "Format=\"HDF\">result.h5:/fields/von_mises<"),
+            std::string::npos);
+  EXPECT_EQ(text.find("Dimensions=\"5 6\""), std::string::npos);  // 20 / 4 elements
+  const std::regex reference("result\\.h5:(/[a-z_/]+)");
+  for (auto it = std::sregex_iterator(text.begin(), text.end(), reference);
+       it != std::sregex_iterator(); ++it) {
+    EXPECT_FALSE(Dims(file, (*it)[1].str().c_str()).empty()) << (*it)[1].str();
+  }
+  H5Fclose(file);
+}
+
+// A TET10 scene, solved: whatever the analysis fills in, the files agree
+// with it (ten columns once the analyses hand back 10-node solutions).
+TEST_F(ResultWriterTest, Tet10SceneWritesTheConnectivityItSolvedWith) {
+  SceneSpec scene = Scene();
+  scene.mesh.element = ElementType::kTet10;
+  Solution solution;
+  const Status solved = SolveScene(scene, SolveOptions(), &solution);
+  ASSERT_TRUE(solved.ok()) << solved.ToString();
+  ASSERT_TRUE(WriteResultFiles(scene, &solution, dir_).ok());
+  const hid_t file = H5Fopen((dir_ / "result.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  ASSERT_GE(file, 0);
+  const hsize_t per_element = static_cast<hsize_t>(solution.nodes_per_element);
+  const hsize_t elements = solution.tets.size() / per_element;
+  EXPECT_EQ(Dims(file, "/mesh/tets"), (std::vector<hsize_t>{elements, per_element}));
+  EXPECT_EQ(Dims(file, "/fields/stress"), (std::vector<hsize_t>{elements, 6}));
+  const std::string text = ReadText(dir_ / "result.xdmf");
+  EXPECT_NE(text.find(per_element == 10 ? "TopologyType=\"Tetrahedron_10\""
+                                        : "TopologyType=\"Tetrahedron\""),
+            std::string::npos);
+  H5Fclose(file);
+}
+
+// A connectivity that is neither 4- nor 10-node is a bug upstream, reported
+// before any file is made.
+TEST_F(ResultWriterTest, MalformedConnectivityIsAnInternalError) {
+  const SceneSpec scene = Scene();
+  Solution solution = TwoQuadraticTets();
+  solution.nodes_per_element = 8;
+  EXPECT_EQ(WriteResultFiles(scene, &solution, dir_).code(), Status::Code::kInternal);
+  solution.nodes_per_element = 10;
+  solution.tets.pop_back();
+  EXPECT_EQ(WriteResultFiles(scene, &solution, dir_).code(), Status::Code::kInternal);
+  EXPECT_FALSE(fs::exists(dir_ / "result.h5"));
 }
 
 TEST_F(ResultWriterTest, LeavesOutFieldsNotAskedFor) {
