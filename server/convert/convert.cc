@@ -50,6 +50,9 @@ Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec) {
     case v1::MeshOptions::TET10:
       spec->mesh.element = ElementType::kTet10;
       break;
+    case v1::MeshOptions::HEX8:
+      spec->mesh.element = ElementType::kHex8;
+      break;
     default:
       return Status::InvalidArgument(
           "mesh.element", "unknown element type " + std::to_string(scene.mesh().element()));

@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "assembly/assembler.h"
+#include "fem/hex8.h"
 #include "fem/tet10.h"
 #include "mesh/quadratic.h"
 
@@ -53,32 +55,34 @@ ErrorEstimateResult EstimateZzError(const Mesh& mesh, const std::vector<double>&
   return result;
 }
 
-ErrorEstimateResult EstimateZzErrorTet10(const Mesh& mesh, const ElementStress& stress,
-                                         const Matrix6d& compliance) {
+namespace {
+
+// ZZ with recovery at the element's own nodes, for elements whose stress
+// varies within them (10-node tetrahedra, hexahedra). `Element` supplies:
+//   kNodes; Nodes(mesh, e) -> node indices; NodeXi(a) -> natural point of
+//   node a; Shape(xi) -> the N shape functions; Rule() -> points with
+//   `xi` and `weight`; Jacobian(mesh, e, xi) -> det J.
+template <typename Element>
+ErrorEstimateResult EstimateZzRecovered(const Mesh& mesh, const ElementStress& stress,
+                                        const Matrix6d& compliance) {
+  constexpr int kN = Element::kNodes;
   const int n = mesh.num_nodes(), ne = mesh.num_elements();
-  // Natural coordinates of the ten nodes (fem/tet10.h).
-  std::array<Eigen::Vector3d, 10> node_xi;
-  const Eigen::Vector3d corner[4] = {Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitX(),
-                                     Eigen::Vector3d::UnitY(), Eigen::Vector3d::UnitZ()};
-  for (int a = 0; a < 4; ++a) node_xi[a] = corner[a];
-  for (int k = 0; k < 6; ++k) {
-    node_xi[4 + k] = 0.5 * (corner[kTet10Edges[k][0]] + corner[kTet10Edges[k][1]]);
-  }
   // The stresses each element gives at its nodes, computed in parallel, then
-  // averaged node by node (a serial scatter, cheap next to the solve).
-  std::vector<Eigen::Matrix<double, 10, 6>> at_nodes(ne);
-  std::vector<double> volume(ne);
+  // averaged node by node, weighted by element volume (a serial scatter,
+  // cheap next to the solve).
+  std::vector<Eigen::Matrix<double, kN, 6>> at_nodes(ne);
+  std::vector<double> volume(ne, 0.0);
 #pragma omp parallel for schedule(static)
   for (int e = 0; e < ne; ++e) {
-    volume[e] = Tet10Volume(Tet10Coordinates(mesh, e));
-    for (int a = 0; a < 10; ++a) at_nodes[e].row(a) = stress(e, node_xi[a]).transpose();
+    for (const auto& q : Element::Rule()) volume[e] += q.weight * Element::Jacobian(mesh, e, q.xi);
+    for (int a = 0; a < kN; ++a) at_nodes[e].row(a) = stress(e, Element::NodeXi(a)).transpose();
   }
   Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor> nodal =
       Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor>::Zero(n, 6);
   Eigen::VectorXd weight = Eigen::VectorXd::Zero(n);
   for (int e = 0; e < ne; ++e) {
-    const std::array<int, 10> nodes = Tet10NodeIndices(mesh, e);
-    for (int a = 0; a < 10; ++a) {
+    const auto nodes = Element::Nodes(mesh, e);
+    for (int a = 0; a < kN; ++a) {
       nodal.row(nodes[a]) += volume[e] * at_nodes[e].row(a);
       weight(nodes[a]) += volume[e];
     }
@@ -87,20 +91,17 @@ ErrorEstimateResult EstimateZzErrorTet10(const Mesh& mesh, const ElementStress& 
     if (weight(a) > 0) nodal.row(a) /= weight(a);
   }
 
-  const std::vector<QuadraturePoint>& rule = Tet10MassRule();
   std::vector<double> eta2(ne, 0.0);
   double error2 = 0, energy2 = 0;
 #pragma omp parallel for reduction(+ : error2, energy2) schedule(static)
   for (int e = 0; e < ne; ++e) {
-    const Tet10Nodes x = Tet10Coordinates(mesh, e);
-    const std::array<int, 10> nodes = Tet10NodeIndices(mesh, e);
-    Tet10Nodes grad;
+    const auto nodes = Element::Nodes(mesh, e);
     double sum = 0, energy = 0;
-    for (const QuadraturePoint& q : rule) {
-      const double dv = q.weight * Tet10Gradients(x, q.xi, &grad);
-      const Tet10Vector shape = Tet10ShapeFunctions(q.xi);
+    for (const auto& q : Element::Rule()) {
+      const double dv = q.weight * Element::Jacobian(mesh, e, q.xi);
+      const auto shape = Element::Shape(q.xi);
       Vector6d recovered = Vector6d::Zero();
-      for (int a = 0; a < 10; ++a) recovered += shape(a) * nodal.row(nodes[a]).transpose();
+      for (int a = 0; a < kN; ++a) recovered += shape(a) * nodal.row(nodes[a]).transpose();
       const Vector6d sh = stress(e, q.xi);
       const Vector6d diff = recovered - sh;
       sum += dv * diff.dot(compliance * diff);
@@ -115,6 +116,52 @@ ErrorEstimateResult EstimateZzErrorTet10(const Mesh& mesh, const ElementStress& 
   result.element_share.resize(ne);
   for (int e = 0; e < ne; ++e) result.element_share[e] = error2 > 0 ? eta2[e] / error2 : 0.0;
   return result;
+}
+
+// The 10-node tetrahedron, integrated with the 14-point degree-5 rule.
+struct Tet10Traits {
+  static constexpr int kNodes = 10;
+  static std::array<int, 10> Nodes(const Mesh& mesh, int e) { return Tet10NodeIndices(mesh, e); }
+  static Eigen::Vector3d NodeXi(int a) {
+    const Eigen::Vector3d corner[4] = {Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitX(),
+                                       Eigen::Vector3d::UnitY(), Eigen::Vector3d::UnitZ()};
+    if (a < 4) return corner[a];
+    return 0.5 * (corner[kTet10Edges[a - 4][0]] + corner[kTet10Edges[a - 4][1]]);
+  }
+  static Tet10Vector Shape(const Eigen::Vector3d& xi) { return Tet10ShapeFunctions(xi); }
+  static const std::vector<QuadraturePoint>& Rule() { return Tet10MassRule(); }
+  static double Jacobian(const Mesh& mesh, int e, const Eigen::Vector3d& xi) {
+    Tet10Nodes grad;
+    return Tet10Gradients(Tet10Coordinates(mesh, e), xi, &grad);
+  }
+};
+
+// The 8-node hexahedron, integrated with the 2 x 2 x 2 rule (exact for the
+// product of two trilinear fields on a parallelepiped).
+struct Hex8Traits {
+  static constexpr int kNodes = 8;
+  static std::array<int, 8> Nodes(const Mesh& mesh, int e) { return mesh.hexes[e]; }
+  static Eigen::Vector3d NodeXi(int a) {
+    return Eigen::Vector3d(kHex8NodeNatural[a][0], kHex8NodeNatural[a][1], kHex8NodeNatural[a][2]);
+  }
+  static Hex8Vector Shape(const Eigen::Vector3d& xi) { return Hex8ShapeFunctions(xi); }
+  static const std::array<Hex8QuadraturePoint, 8>& Rule() { return Hex8Rule(); }
+  static double Jacobian(const Mesh& mesh, int e, const Eigen::Vector3d& xi) {
+    Hex8Nodes grad;
+    return Hex8Gradients(Hex8Coordinates(mesh, e), xi, &grad);
+  }
+};
+
+}  // namespace
+
+ErrorEstimateResult EstimateZzErrorTet10(const Mesh& mesh, const ElementStress& stress,
+                                         const Matrix6d& compliance) {
+  return EstimateZzRecovered<Tet10Traits>(mesh, stress, compliance);
+}
+
+ErrorEstimateResult EstimateZzErrorHex8(const Mesh& mesh, const ElementStress& stress,
+                                        const Matrix6d& compliance) {
+  return EstimateZzRecovered<Hex8Traits>(mesh, stress, compliance);
 }
 
 }  // namespace pba

@@ -39,4 +39,10 @@ using ElementStress = std::function<Vector6d(int element, const Eigen::Vector3d&
 ErrorEstimateResult EstimateZzErrorTet10(const Mesh& mesh, const ElementStress& stress,
                                          const Matrix6d& compliance);
 
+// The same for 8-node hexahedra (a hexahedral mesh): nodal averages at the
+// 8 corners, trilinear interpolation, the 2 x 2 x 2 rule; `stress(e, xi)`
+// with xi in [-1, 1]^3 (fem/hex8.h).
+ErrorEstimateResult EstimateZzErrorHex8(const Mesh& mesh, const ElementStress& stress,
+                                        const Matrix6d& compliance);
+
 }  // namespace pba

@@ -68,6 +68,143 @@ void Tri6Shape(const Eigen::Vector2d& xi, Tri6Vector* n, Tri6Gradients* dn) {
   }
 }
 
+// A point of a rule on a reference face with the shape functions of an
+// N-node face there and their natural derivatives (dN_a/dxi, dN_a/deta).
+template <int N>
+struct SurfacePoint {
+  Eigen::Matrix<double, N, 1> n;
+  Eigen::Matrix<double, N, 2> dn;
+  double weight = 0;
+};
+
+const std::vector<SurfacePoint<6>>& Tri6Rule() {
+  static const std::vector<SurfacePoint<6>> rule = [] {
+    std::vector<SurfacePoint<6>> points;
+    for (const TrianglePoint& q : TriangleRule()) {
+      SurfacePoint<6> p;
+      Tri6Shape(q.xi, &p.n, &p.dn);
+      p.weight = q.weight;
+      points.push_back(p);
+    }
+    return points;
+  }();
+  return rule;
+}
+
+// Natural coordinates of the C3D8 nodes (see Mesh::hexes); the first four
+// are those of a bilinear quad's nodes 0..3 on (xi, eta).
+constexpr int kHexCorner[8][3] = {{-1, -1, -1}, {1, -1, -1}, {1, 1, -1}, {-1, 1, -1},
+                                  {-1, -1, 1},  {1, -1, 1},  {1, 1, 1},  {-1, 1, 1}};
+
+// The 2-point Gauss abscissa on [-1, 1] (weights 1), exact for cubics.
+const double kGauss = 1 / std::sqrt(3.0);
+
+// The bilinear quad N_a = (1 + xi xi_a)(1 + eta eta_a) / 4 at the 2 x 2
+// Gauss points. Pressure's integrand N_a (g1 x g2) is at most quadratic in
+// each coordinate (g1 = x_,xi is linear in eta alone, g2 in xi alone) and
+// so is the load stiffness's, so the rule integrates both exactly.
+const std::vector<SurfacePoint<4>>& Quad4Rule() {
+  static const std::vector<SurfacePoint<4>> rule = [] {
+    std::vector<SurfacePoint<4>> points;
+    for (const double eta : {-kGauss, kGauss}) {
+      for (const double xi : {-kGauss, kGauss}) {
+        SurfacePoint<4> p;
+        for (int a = 0; a < 4; ++a) {
+          const double ca = kHexCorner[a][0], cb = kHexCorner[a][1];
+          p.n(a) = (1 + xi * ca) * (1 + eta * cb) / 4;
+          p.dn(a, 0) = ca * (1 + eta * cb) / 4;
+          p.dn(a, 1) = cb * (1 + xi * ca) / 4;
+        }
+        p.weight = 1;
+        points.push_back(p);
+      }
+    }
+    return points;
+  }();
+  return rule;
+}
+
+// integral N_a |G1 x G2| dxi deta over a face with node positions `x`
+// (one row per node): its share of a uniform traction per unit area.
+template <int N>
+Eigen::Matrix<double, N, 1> AreaShares(const Eigen::Matrix<double, N, 3>& x,
+                                       const std::vector<SurfacePoint<N>>& rule) {
+  Eigen::Matrix<double, N, 1> share = Eigen::Matrix<double, N, 1>::Zero();
+  for (const SurfacePoint<N>& q : rule) {
+    const Eigen::Matrix<double, 3, 2> g = x.transpose() * q.dn;  // columns G1, G2
+    share += q.weight * g.col(0).cross(g.col(1)).norm() * q.n;
+  }
+  return share;
+}
+
+// integral N_a (g1 x g2) dxi deta (row a): minus a pressure's force on node
+// a per unit pressure.
+template <int N>
+Eigen::Matrix<double, N, 3> VectorAreaShares(const Eigen::Matrix<double, N, 3>& x,
+                                             const std::vector<SurfacePoint<N>>& rule) {
+  Eigen::Matrix<double, N, 3> share = Eigen::Matrix<double, N, 3>::Zero();
+  for (const SurfacePoint<N>& q : rule) {
+    const Eigen::Matrix<double, 3, 2> g = x.transpose() * q.dn;
+    share += q.weight * q.n * g.col(0).cross(g.col(1)).transpose();
+  }
+  return share;
+}
+
+// The symmetric part of a pressure's load stiffness on one face, [v_ab]_x
+// of the header (v_ab = -v_ba, so the diagonal blocks vanish), times
+// `scale` = factor p, passed block by block to add_block(a, b, block) for
+// local nodes a != b.
+template <int N, typename AddBlock>
+void SymmetricPressureStiffness(const Eigen::Matrix<double, N, 3>& x,
+                                const std::vector<SurfacePoint<N>>& rule, double scale,
+                                const AddBlock& add_block) {
+  std::array<std::array<Eigen::Vector3d, N>, N> v;
+  for (auto& row : v) row.fill(Eigen::Vector3d::Zero());
+  for (const SurfacePoint<N>& q : rule) {
+    const Eigen::Matrix<double, 3, 2> g = x.transpose() * q.dn;
+    for (int a = 0; a < N; ++a) {
+      for (int b = a + 1; b < N; ++b) {
+        const double c_eta = q.n(a) * q.dn(b, 1) - q.n(b) * q.dn(a, 1);
+        const double c_xi = q.n(a) * q.dn(b, 0) - q.n(b) * q.dn(a, 0);
+        v[a][b] += q.weight * (c_eta * g.col(0) - c_xi * g.col(1));
+      }
+    }
+  }
+  for (int a = 0; a < N; ++a) {
+    for (int b = a + 1; b < N; ++b) {
+      const Eigen::Matrix3d block = scale / 2 * Skew(v[a][b]);
+      add_block(a, b, block);
+      add_block(b, a, block.transpose());
+    }
+  }
+}
+
+// integral N_a det J over the trilinear brick with node positions `x`, by
+// the 2 x 2 x 2 Gauss rule: exact, N_a being linear and det J at most
+// quadratic in each natural coordinate (each column of J is constant along
+// its own coordinate).
+Eigen::Matrix<double, 8, 1> HexVolumeShares(const Eigen::Matrix<double, 8, 3>& x) {
+  Eigen::Matrix<double, 8, 1> share = Eigen::Matrix<double, 8, 1>::Zero();
+  for (int q = 0; q < 8; ++q) {
+    double p[3];
+    for (int j = 0; j < 3; ++j) p[j] = kHexCorner[q][j] * kGauss;
+    Eigen::Matrix<double, 8, 1> n;
+    Eigen::Matrix<double, 8, 3> dn;
+    for (int a = 0; a < 8; ++a) {
+      double f[3];
+      for (int j = 0; j < 3; ++j) f[j] = 1 + p[j] * kHexCorner[a][j];
+      n(a) = f[0] * f[1] * f[2] / 8;
+      dn(a, 0) = kHexCorner[a][0] * f[1] * f[2] / 8;
+      dn(a, 1) = kHexCorner[a][1] * f[0] * f[2] / 8;
+      dn(a, 2) = kHexCorner[a][2] * f[0] * f[1] / 8;
+    }
+    // |det J|, as for the 10-node tetrahedron: a consistently negatively
+    // oriented brick still loads along b.
+    share += std::abs((x.transpose() * dn).determinant()) * n;
+  }
+  return share;
+}
+
 // The mid-edge nodes of triangle `corners`, a face of element `element`.
 std::array<int, 3> MidsideFromElement(const Mesh& mesh, int element,
                                       const std::array<int, 3>& corners) {
@@ -119,6 +256,12 @@ Eigen::Vector3d ExternalLoads::Position(int node, const Eigen::VectorXd* u) cons
 }
 
 void ExternalLoads::AddTraction(const FaceSet& set, const Eigen::Vector3d& traction_pa) {
+  for (const auto& quad : set.quads) {
+    Eigen::Matrix<double, 4, 3> x;
+    for (int a = 0; a < 4; ++a) x.row(a) = Position(quad[a], nullptr).transpose();
+    const Eigen::Vector4d share = AreaShares<4>(x, Quad4Rule());  // integral N_a dA
+    for (int a = 0; a < 4; ++a) dead_.segment<3>(3 * quad[a]) += traction_pa * share(a);
+  }
   if (!mesh_.quadratic()) {
     for (const auto& t : set.triangles) {
       const double area = 0.5 * (Position(t[1], nullptr) - Position(t[0], nullptr))
@@ -129,8 +272,6 @@ void ExternalLoads::AddTraction(const FaceSet& set, const Eigen::Vector3d& tract
     return;
   }
   const std::vector<std::array<int, 3>> midside = TriangleMidside(mesh_, set);
-  Tri6Vector n;
-  Tri6Gradients dn;
   for (std::size_t i = 0; i < set.triangles.size(); ++i) {
     std::array<int, 6> nodes;
     Eigen::Matrix<double, 6, 3> x;
@@ -139,17 +280,21 @@ void ExternalLoads::AddTraction(const FaceSet& set, const Eigen::Vector3d& tract
       nodes[3 + k] = midside[i][k];
     }
     for (int a = 0; a < 6; ++a) x.row(a) = Position(nodes[a], nullptr).transpose();
-    Tri6Vector share = Tri6Vector::Zero();  // integral N_a dA
-    for (const TrianglePoint& q : TriangleRule()) {
-      Tri6Shape(q.xi, &n, &dn);
-      const Eigen::Matrix<double, 3, 2> g = x.transpose() * dn;  // columns G1, G2
-      share += q.weight * g.col(0).cross(g.col(1)).norm() * n;
-    }
+    const Tri6Vector share = AreaShares<6>(x, Tri6Rule());  // integral N_a dA
     for (int a = 0; a < 6; ++a) dead_.segment<3>(3 * nodes[a]) += traction_pa * share(a);
   }
 }
 
 void ExternalLoads::AddBodyForce(const Eigen::Vector3d& force_per_volume) {
+  if (mesh_.hexahedral()) {
+    for (int e = 0; e < mesh_.num_elements(); ++e) {
+      const Eigen::Matrix<double, 8, 1> share = HexVolumeShares(HexCorners(mesh_, e));
+      for (int a = 0; a < 8; ++a) {
+        dead_.segment<3>(3 * mesh_.hexes[e][a]) += force_per_volume * share(a);
+      }
+    }
+    return;
+  }
   if (!mesh_.quadratic()) {
     for (int e = 0; e < mesh_.num_elements(); ++e) {
       const double volume = std::abs(ComputeTet4Geometry(TetCorners(mesh_, e)).volume);
@@ -196,17 +341,44 @@ void ExternalLoads::AddPressure(const FaceSet& set, double pressure_pa, bool fol
     }
     pressure_.push_back({t, m, pressure_pa, follower});
   }
+  // The brick behind each quad tells which side is out.
+  const std::vector<std::array<int, 2>> quad_owners = QuadFaceElements(mesh_, set);
+  for (std::size_t i = 0; i < set.quads.size(); ++i) {
+    std::array<int, 4> q = set.quads[i];
+    const int element = quad_owners[i][0];
+    if (element >= 0) {
+      // The diagonals' cross product is the quad's mean normal (4 g1 x g2
+      // at its centre), right-handed about 0-1-2-3; the brick's centroid is
+      // inside even for a warped face.
+      Eigen::Vector3d centre = Eigen::Vector3d::Zero(), inside = Eigen::Vector3d::Zero();
+      for (int node : q) centre += Position(node, nullptr) / 4;
+      for (int node : mesh_.hexes[element]) inside += Position(node, nullptr) / 8;
+      const Eigen::Vector3d normal = (Position(q[2], nullptr) - Position(q[0], nullptr))
+                                         .cross(Position(q[3], nullptr) - Position(q[1], nullptr));
+      if (normal.dot(inside - centre) > 0) std::swap(q[1], q[3]);
+    }
+    quad_pressure_.push_back({q, pressure_pa, follower});
+  }
 }
 
 bool ExternalLoads::follows_deformation() const {
   return std::any_of(pressure_.begin(), pressure_.end(),
-                     [](const Pressure& p) { return p.follower; });
+                     [](const Pressure& p) { return p.follower; }) ||
+         std::any_of(quad_pressure_.begin(), quad_pressure_.end(),
+                     [](const QuadPressure& p) { return p.follower; });
 }
 
 Eigen::VectorXd ExternalLoads::Force(const Eigen::VectorXd& u) const {
   Eigen::VectorXd f = dead_;
-  Tri6Vector n;
-  Tri6Gradients dn;
+  for (const QuadPressure& p : quad_pressure_) {
+    const Eigen::VectorXd* state = p.follower ? &u : nullptr;
+    Eigen::Matrix<double, 4, 3> x;
+    for (int a = 0; a < 4; ++a) x.row(a) = Position(p.nodes[a], state).transpose();
+    const Eigen::Matrix<double, 4, 3> share = VectorAreaShares<4>(x, Quad4Rule());
+    for (int a = 0; a < 4; ++a) {
+      f.segment<3>(3 * p.nodes[a]) -= p.pressure_pa * share.row(a).transpose();
+    }
+  }
   for (const Pressure& p : pressure_) {
     const Eigen::VectorXd* state = p.follower ? &u : nullptr;
     if (!mesh_.quadratic()) {
@@ -220,12 +392,7 @@ Eigen::VectorXd ExternalLoads::Force(const Eigen::VectorXd& u) const {
                                       p.midside[0], p.midside[1], p.midside[2]};
     Eigen::Matrix<double, 6, 3> x;
     for (int a = 0; a < 6; ++a) x.row(a) = Position(nodes[a], state).transpose();
-    Eigen::Matrix<double, 6, 3> share = Eigen::Matrix<double, 6, 3>::Zero();  // int N_a g1 x g2
-    for (const TrianglePoint& q : TriangleRule()) {
-      Tri6Shape(q.xi, &n, &dn);
-      const Eigen::Matrix<double, 3, 2> g = x.transpose() * dn;
-      share += q.weight * n * g.col(0).cross(g.col(1)).transpose();
-    }
+    const Eigen::Matrix<double, 6, 3> share = VectorAreaShares<6>(x, Tri6Rule());
     for (int a = 0; a < 6; ++a) {
       f.segment<3>(3 * nodes[a]) -= p.pressure_pa * share.row(a).transpose();
     }
@@ -246,8 +413,15 @@ SparseMatrix ExternalLoads::Stiffness(const Eigen::VectorXd& u, const DofMap& do
       }
     }
   };
-  Tri6Vector n;
-  Tri6Gradients dn;
+  for (const QuadPressure& p : quad_pressure_) {
+    if (!p.follower) continue;
+    Eigen::Matrix<double, 4, 3> x;
+    for (int a = 0; a < 4; ++a) x.row(a) = Position(p.nodes[a], &u).transpose();
+    SymmetricPressureStiffness<4>(x, Quad4Rule(), factor * p.pressure_pa,
+                                  [&](int a, int b, const Eigen::Matrix3d& block) {
+                                    add_block(p.nodes[a], p.nodes[b], block);
+                                  });
+  }
   for (const Pressure& p : pressure_) {
     if (!p.follower) continue;
     if (!mesh_.quadratic()) {
@@ -268,32 +442,13 @@ SparseMatrix ExternalLoads::Stiffness(const Eigen::VectorXd& u, const DofMap& do
       }
       continue;
     }
-    // The symmetric part [v_ab]_x of the header, v_ab = -v_ba (so the
-    // diagonal blocks vanish).
     const std::array<int, 6> nodes = {p.nodes[0],   p.nodes[1],   p.nodes[2],
                                       p.midside[0], p.midside[1], p.midside[2]};
     Eigen::Matrix<double, 6, 3> x;
     for (int a = 0; a < 6; ++a) x.row(a) = Position(nodes[a], &u).transpose();
-    std::array<std::array<Eigen::Vector3d, 6>, 6> v;
-    for (auto& row : v) row.fill(Eigen::Vector3d::Zero());
-    for (const TrianglePoint& q : TriangleRule()) {
-      Tri6Shape(q.xi, &n, &dn);
-      const Eigen::Matrix<double, 3, 2> g = x.transpose() * dn;
-      for (int a = 0; a < 6; ++a) {
-        for (int b = a + 1; b < 6; ++b) {
-          const double c_eta = n(a) * dn(b, 1) - n(b) * dn(a, 1);
-          const double c_xi = n(a) * dn(b, 0) - n(b) * dn(a, 0);
-          v[a][b] += q.weight * (c_eta * g.col(0) - c_xi * g.col(1));
-        }
-      }
-    }
-    for (int a = 0; a < 6; ++a) {
-      for (int b = a + 1; b < 6; ++b) {
-        const Eigen::Matrix3d block = factor * p.pressure_pa / 2 * Skew(v[a][b]);
-        add_block(nodes[a], nodes[b], block);
-        add_block(nodes[b], nodes[a], block.transpose());
-      }
-    }
+    SymmetricPressureStiffness<6>(
+        x, Tri6Rule(), factor * p.pressure_pa,
+        [&](int a, int b, const Eigen::Matrix3d& block) { add_block(nodes[a], nodes[b], block); });
   }
   SparseMatrix k(dofs.num_free(), dofs.num_free());
   k.setFromTriplets(entries.begin(), entries.end());

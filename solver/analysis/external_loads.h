@@ -3,7 +3,7 @@
 //   - dead nodal forces, fixed in size and direction: surface tractions per
 //     unit reference area and body forces such as gravity (rho g per unit
 //     reference volume);
-//   - pressure on boundary triangles, which in a finite-strain analysis
+//   - pressure on boundary triangles or quads, which in a finite-strain analysis
 //     follows the surface as it moves and turns (a follower load: the
 //     force acts on the current area along the current normal).
 //
@@ -32,6 +32,24 @@
 // the 7-point rule of degree 5 (Radon 1948; Dunavant 1985, IJNME 21), exact
 // for pressure, whose integrand is of degree 4; the volume integral the
 // 14-point rule of degree 5, exact as N_a det J is of degree 5.
+//
+// On a hexahedral mesh (Mesh::hexahedral()) a boundary face is a bilinear
+// quad, nodes 0..3 at natural (xi, eta) = (-1,-1), (1,-1), (1,1), (-1,1),
+// N_a = (1 + xi xi_a)(1 + eta eta_a) / 4 over [-1, 1]^2, and an element
+// the trilinear brick of Mesh::hexes, N_a = (1 + xi xi_a)(1 + eta eta_a)
+// (1 + zeta zeta_a) / 8. The same consistent integrals apply, traction and
+// pressure over the quad, body force over the brick, by Gauss rules of 2
+// points per direction (exact for cubics in each coordinate):
+//   - pressure: g1 = x_,xi is linear in eta alone and g2 = x_,eta in xi
+//     alone, so N_a (g1 x g2) is at most quadratic in each and 2 x 2
+//     points are exact, warped (non-planar) quads included; the result is
+//     the quad's vector area shared among its nodes, a quarter each on a
+//     flat parallelogram;
+//   - traction: |G1 x G2| is constant on a flat parallelogram, where each
+//     node gets t A/4 exactly; on other quads the rule is an approximation;
+//   - body force: each column of J is constant along its own coordinate, so
+//     det J and N_a det J are at most quadratic and cubic in each, and
+//     2 x 2 x 2 points are exact (b V/8 per node on a parallelepiped).
 #pragma once
 
 #include <Eigen/Core>
@@ -53,12 +71,14 @@ class ExternalLoads {
   // the triangles of `set`, lumped to their corners (exact for a linear
   // triangle under a uniform traction); on a quadratic mesh the consistent
   // load over the reference (possibly curved) 6-node triangles, their
-  // mid-edge nodes found as for AddPressure.
+  // mid-edge nodes found as for AddPressure; and on the quads of `set` the
+  // consistent load over the reference bilinear surface.
   void AddTraction(const FaceSet& set, const Eigen::Vector3d& traction_pa);
 
   // Adds a body force b [N/m^3] (for gravity rho g) over every element,
   // a quarter of b V_e to each corner (exact for a linear tetrahedron); on a
-  // quadratic mesh the consistent load of each 10-node element.
+  // quadratic mesh the consistent load of each 10-node element, on a
+  // hexahedral one that of each trilinear brick.
   void AddBodyForce(const Eigen::Vector3d& force_per_volume);
 
   // Adds a pressure p [Pa] on the triangles of `set`, a boundary face set of
@@ -67,10 +87,12 @@ class ExternalLoads {
   // the reference area along the reference normal (a small-strain analysis).
   // On a quadratic mesh the mid-edge nodes come from set.triangle_midside,
   // or, when that is empty (a set assembled by hand), from the element
-  // behind each triangle.
+  // behind each triangle. The quads of `set` likewise each face out of the
+  // brick behind them (QuadFaceElements); a triangle or quad that is no
+  // element's face is taken as numbered, anticlockwise seen from outside.
   void AddPressure(const FaceSet& set, double pressure_pa, bool follower);
 
-  bool empty() const { return dead_.isZero(0) && pressure_.empty(); }
+  bool empty() const { return dead_.isZero(0) && pressure_.empty() && quad_pressure_.empty(); }
   // True when the force depends on the displacement (follower pressure).
   bool follows_deformation() const;
 
@@ -93,7 +115,9 @@ class ExternalLoads {
   // and its symmetric part (K_L(a, b) + K_L(b, a)^T) / 2 is [v_ab]_x with
   //   v_ab = (p / 2) integral (N_a N_b,eta - N_b N_a,eta) g1
   //                          - (N_a N_b,xi  - N_b N_a,xi ) g2 dxi deta,
-  // a degree-4 integrand, integrated exactly.
+  // a degree-4 integrand, integrated exactly. On a bilinear quad the same
+  // with its N_a, the integrand at most quadratic in each coordinate and
+  // the 2 x 2 Gauss rule exact.
   SparseMatrix Stiffness(const Eigen::VectorXd& u, const DofMap& dofs, double factor) const;
 
   // The dead part alone (tractions, body forces), full length [N].
@@ -112,12 +136,19 @@ class ExternalLoads {
     double pressure_pa;
     bool follower;
   };
+  // Pressure on a bilinear quad of a hexahedral mesh.
+  struct QuadPressure {
+    std::array<int, 4> nodes;  // anticlockwise seen from outside the body
+    double pressure_pa;
+    bool follower;
+  };
   // Position of `node` [m], in the reference configuration when `u` is null.
   Eigen::Vector3d Position(int node, const Eigen::VectorXd* u) const;
 
   const Mesh& mesh_;
   Eigen::VectorXd dead_;
   std::vector<Pressure> pressure_;
+  std::vector<QuadPressure> quad_pressure_;
 };
 
 }  // namespace pba

@@ -1,5 +1,6 @@
-// LINEAR_STATIC: small-strain linear elasticity on 4- or 10-node tetrahedra,
-// K_ff u_f = f_f - K_fp u_p, with a Zienkiewicz-Zhu error estimate.
+// LINEAR_STATIC: small-strain linear elasticity on 4- or 10-node tetrahedra
+// or 8-node hexahedra (B-bar), K_ff u_f = f_f - K_fp u_p, with a
+// Zienkiewicz-Zhu error estimate.
 #include <cmath>
 #include <cstdio>
 
@@ -10,6 +11,7 @@
 #include "linear/linear_solver.h"
 #include "material/factory.h"
 #include "material/linear_elastic.h"
+#include "fem/hex8.h"
 #include "mesh/quadratic.h"
 
 namespace pba {
@@ -40,8 +42,9 @@ Status SolveLinearStatic(const SceneSpec& scene, const Model& model, PhaseClock*
     clock.Update(f);
     return !clock.cancelled();
   };
-  PBA_RETURN_IF_ERROR(mesh.quadratic()
-                          ? AssembleLinearSystemTet10(mesh, d, dofs, colours, keep_going, &system)
+  PBA_RETURN_IF_ERROR(
+      mesh.quadratic()     ? AssembleLinearSystemTet10(mesh, d, dofs, colours, keep_going, &system)
+      : mesh.hexahedral() ? AssembleLinearSystemHex8(mesh, d, dofs, colours, keep_going, &system)
                           : AssembleLinearSystem(mesh, d, dofs, colours, keep_going, &system));
   const ExternalLoads loads = BuildLoads(scene, mesh);
   Eigen::VectorXd external;
@@ -118,6 +121,36 @@ Status SolveLinearStatic(const SceneSpec& scene, const Model& model, PhaseClock*
       }
       continue;
     }
+    if (mesh.hexahedral()) {
+      // Per element: volume averages of the B-bar strain and its stress
+      // over the 2 x 2 x 2 points.
+#pragma omp parallel for reduction(+ : energy) reduction(max : max_strain) schedule(static)
+      for (std::size_t k = 0; k < colour.size(); ++k) {
+        const int e = colour[k];
+        const Hex8Geometry g = ComputeHex8Geometry(Hex8Coordinates(mesh, e));
+        const Vector24d ue = GatherElementHex8(mesh, e, u);
+        Vector6d strain_sum = Vector6d::Zero(), stress_sum = Vector6d::Zero();
+        Vector24d force = Vector24d::Zero();
+        for (int q = 0; q < 8; ++q) {
+          const Hex8BMatrix b = Hex8StrainDisplacementBar(g.grad[q], g.mean_grad);
+          const Vector6d strain = b * ue, stress = d * strain;
+          strain_sum += g.volume[q] * strain;
+          stress_sum += g.volume[q] * stress;
+          force += g.volume[q] * b.transpose() * stress;
+          energy += 0.5 * g.volume[q] * stress.dot(strain);
+          max_strain = std::max(max_strain, strain.cwiseAbs().maxCoeff());
+        }
+        const double v = g.element_volume;
+        Eigen::Map<Vector6d>(&solution->strain[6 * e]) = strain_sum / v;
+        Eigen::Map<Vector6d>(&solution->stress_pa[6 * e]) = stress_sum / v;
+        solution->von_mises_pa[e] = VonMises(stress_sum / v);
+        volume[e] = v;
+        for (int a = 0; a < 8; ++a) {
+          internal.segment<3>(3 * mesh.hexes[e][a]) += force.segment<3>(3 * a);
+        }
+      }
+      continue;
+    }
 #pragma omp parallel for reduction(+ : energy) reduction(max : max_strain) schedule(static)
     for (std::size_t k = 0; k < colour.size(); ++k) {
       const int e = colour[k];
@@ -148,12 +181,21 @@ Status SolveLinearStatic(const SceneSpec& scene, const Model& model, PhaseClock*
                          Tet10Strain(Tet10Coordinates(mesh, e), GatherElementTet10(mesh, e, u), xi);
                 },
                 ComplianceMatrix(scene.material))
+      : mesh.hexahedral()
+          ? EstimateZzErrorHex8(
+                mesh,
+                [&](int e, const Eigen::Vector3d& xi) -> Vector6d {
+                  return d *
+                         Hex8Strain(Hex8Coordinates(mesh, e), GatherElementHex8(mesh, e, u), xi);
+                },
+                ComplianceMatrix(scene.material))
           : EstimateZzError(mesh, solution->stress_pa, volume, ComplianceMatrix(scene.material));
   solution->error_indicator = estimate.element_share;
   summary.error.estimated = true;
-  summary.error.method = mesh.quadratic()
-                             ? "Zienkiewicz-Zhu stress recovery (nodal averaging, quadratic)"
-                             : "Zienkiewicz-Zhu stress recovery (nodal averaging)";
+  summary.error.method =
+      mesh.quadratic()    ? "Zienkiewicz-Zhu stress recovery (nodal averaging, quadratic)"
+      : mesh.hexahedral() ? "Zienkiewicz-Zhu stress recovery (nodal averaging, trilinear)"
+                          : "Zienkiewicz-Zhu stress recovery (nodal averaging)";
   summary.error.relative_error = estimate.relative_error;
   summary.error.note =
       "estimated discretisation error in the energy norm, relative to the solution's energy norm; "

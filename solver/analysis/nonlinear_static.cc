@@ -3,6 +3,7 @@
 // element: Green-Lagrange and Euler-Almansi strain, second Piola-Kirchhoff
 // and Cauchy stress, J, von Mises of the Cauchy stress.
 #include <Eigen/LU>
+#include <optional>
 #include <cmath>
 #include <cstdio>
 
@@ -11,6 +12,7 @@
 #include "analysis/finite_strain_model.h"
 #include "analysis/newton_static.h"
 #include "analysis/static_analysis.h"
+#include "analysis/hex8_model.h"
 #include "analysis/tet10_model.h"
 #include "core/format.h"
 #include "fem/tet4_finite_strain.h"
@@ -18,6 +20,7 @@
 #include "material/factory.h"
 #include "material/hyperelastic.h"
 #include "material/linear_elastic.h"
+#include "fem/hex8.h"
 #include "mesh/quadratic.h"
 
 namespace pba {
@@ -29,6 +32,28 @@ Eigen::Matrix3d DeformationGradientTet10(const Tet10Nodes& grad, const Vector30d
   Eigen::Matrix3d f = Eigen::Matrix3d::Identity();
   for (int a = 0; a < 10; ++a) f += ue.segment<3>(3 * a) * grad.row(a);
   return f;
+}
+
+// F = I + sum_a u_a (x) grad N_a for an 8-node element.
+Eigen::Matrix3d DeformationGradientHex8(const Hex8Nodes& grad, const Vector24d& ue) {
+  Eigen::Matrix3d f = Eigen::Matrix3d::Identity();
+  for (int a = 0; a < 8; ++a) f += ue.segment<3>(3 * a) * grad.row(a);
+  return f;
+}
+
+// theta = v / V, the brick's current over reference volume.
+double MeanDilatation(const Hex8Geometry& g, const Vector24d& ue) {
+  double v = 0;
+  for (int q = 0; q < 8; ++q) {
+    v += g.volume[q] * DeformationGradientHex8(g.grad[q], ue).determinant();
+  }
+  return v / g.element_volume;
+}
+
+// F_bar = (theta / det F)^(1/3) F.
+Eigen::Matrix3d MeanDilatationF(const Hex8Nodes& grad, const Vector24d& ue, double theta) {
+  const Eigen::Matrix3d f = DeformationGradientHex8(grad, ue);
+  return std::cbrt(theta / f.determinant()) * f;
 }
 
 // The finite-strain fields at a material point, Voigt order, engineering
@@ -46,7 +71,11 @@ struct PointFields {
   }
 };
 
-PointFields FieldsAt(const HyperelasticMaterial& material, const Eigen::Matrix3d& f) {
+// With `pressure` (an average-nodal-pressure element), the volumetric part
+// of the stress is that pressure, not U'(det F): S = S_iso(F) + p J C^-1,
+// sigma = sigma_iso + p I; `volume_ratio` then replaces det F as J.
+PointFields FieldsAt(const HyperelasticMaterial& material, const Eigen::Matrix3d& f,
+                     std::optional<double> pressure = std::nullopt, double volume_ratio = 0) {
   PointFields p;
   p.j = f.determinant();
   const Eigen::Matrix3d identity = Eigen::Matrix3d::Identity();
@@ -54,8 +83,15 @@ PointFields FieldsAt(const HyperelasticMaterial& material, const Eigen::Matrix3d
   p.almansi = SymmetricToVoigt(0.5 * (identity - (f * f.transpose()).inverse()));
   p.green.tail<3>() *= 2;
   p.almansi.tail<3>() *= 2;
-  p.pk2 = material.Stress(f);
+  if (pressure) {
+    double w;
+    material.Isochoric(f, &w, &p.pk2, nullptr);
+    p.pk2 += *pressure * p.j * SymmetricToVoigt((f.transpose() * f).inverse());
+  } else {
+    p.pk2 = material.Stress(f);
+  }
   p.cauchy = SymmetricToVoigt(f * VoigtToSymmetric(p.pk2) * f.transpose() / p.j);
+  if (pressure) p.j = volume_ratio;
   return p;
 }
 
@@ -81,10 +117,14 @@ Status SolveNonlinearStatic(const SceneSpec& scene, const Model& model, PhaseClo
   const DofMap& dofs = model.dofs;
   const auto material = MakeHyperelasticMaterial(scene.material);
   const bool plain = scene.mesh.element == ElementType::kTet4;
-  const auto body = mesh.quadratic() ? MakeTet10Model(mesh, *material)
-                    : plain          ? MakeTet4Model(mesh, *material)
-                                     : MakeAverageNodalPressureTet4Model(mesh, *material);
-  summary.element_type = mesh.quadratic() ? "TET10" : plain ? "TET4" : "TET4_ANP";
+  const auto body = mesh.quadratic()    ? MakeTet10Model(mesh, *material)
+                    : mesh.hexahedral() ? MakeHex8Model(mesh, *material)
+                    : plain             ? MakeTet4Model(mesh, *material)
+                                        : MakeAverageNodalPressureTet4Model(mesh, *material);
+  summary.element_type = mesh.quadratic()    ? "TET10"
+                         : mesh.hexahedral() ? "HEX8"
+                         : plain             ? "TET4"
+                                             : "TET4_ANP";
   const auto solver = CreateLinearSolver(scene.analysis.linear_solver);
   NewtonOptions options = OptionsOf(scene.analysis.nonlinear);
   options.on_increment = [solution](double load, const Eigen::VectorXd& u) {
@@ -140,13 +180,50 @@ Status SolveNonlinearStatic(const SceneSpec& scene, const Model& model, PhaseClo
   solution->jacobian.resize(ne);
   std::vector<double> volume(ne);
   double max_strain = 0;
+  // The average-nodal-pressure element's pressure and volume ratio: the
+  // means over its corners of U'(J_a) and J_a, J_a = v_a / V_a the nodal
+  // volume ratios its volumetric energy is written in (its own det F
+  // carries the volumetric noise that element would lock on).
+  std::vector<double> element_pressure, element_volume_ratio;
+  const bool nodal_pressure = !plain && !mesh.quadratic() && !mesh.hexahedral();
+  if (nodal_pressure) {
+    std::vector<double> v0(mesh.num_nodes(), 0.0), v(mesh.num_nodes(), 0.0);
+    for (int e = 0; e < ne; ++e) {
+      const Tet4Geometry g = ComputeTet4Geometry(TetCorners(mesh, e));
+      const double j = DeformationGradient(g, GatherElement(mesh, e, u)).determinant();
+      for (int a : mesh.tets[e]) {
+        v0[a] += g.volume / 4;
+        v[a] += j * g.volume / 4;
+      }
+    }
+    element_pressure.assign(ne, 0.0);
+    element_volume_ratio.assign(ne, 0.0);
+    for (int e = 0; e < ne; ++e) {
+      for (int a : mesh.tets[e]) {
+        element_pressure[e] += material->Volumetric(v[a] / v0[a]).first / 4;
+        element_volume_ratio[e] += v[a] / v0[a] / 4;
+      }
+    }
+  }
 #pragma omp parallel for reduction(max : max_strain) schedule(static)
   for (int e = 0; e < ne; ++e) {
     // One point for a 4-node element; the volume average over the four
     // integration points for a 10-node one.
     PointFields sum;
     double v = 0;
-    if (mesh.quadratic()) {
+    if (mesh.hexahedral()) {
+      // The mean-dilatation brick's stress comes from F_bar = (theta /
+      // J)^(1/3) F: F's isochoric part with the element's mean volume ratio.
+      const Hex8Geometry g = ComputeHex8Geometry(Hex8Coordinates(mesh, e));
+      const Vector24d ue = GatherElementHex8(mesh, e, u);
+      const double theta = MeanDilatation(g, ue);
+      for (int q = 0; q < 8; ++q) {
+        const PointFields p = FieldsAt(*material, MeanDilatationF(g.grad[q], ue, theta));
+        sum.Add(g.volume[q], p);
+        v += g.volume[q];
+        max_strain = std::max(max_strain, p.green.cwiseAbs().maxCoeff());
+      }
+    } else if (mesh.quadratic()) {
       const Tet10Geometry g = ComputeTet10Geometry(Tet10Coordinates(mesh, e));
       const Vector30d ue = GatherElementTet10(mesh, e, u);
       for (int q = 0; q < 4; ++q) {
@@ -158,7 +235,10 @@ Status SolveNonlinearStatic(const SceneSpec& scene, const Model& model, PhaseClo
     } else {
       const Tet4Geometry g = ComputeTet4Geometry(TetCorners(mesh, e));
       v = g.volume;
-      sum.Add(v, FieldsAt(*material, DeformationGradient(g, GatherElement(mesh, e, u))));
+      const Eigen::Matrix3d f = DeformationGradient(g, GatherElement(mesh, e, u));
+      sum.Add(v, nodal_pressure
+                     ? FieldsAt(*material, f, element_pressure[e], element_volume_ratio[e])
+                     : FieldsAt(*material, f));
       max_strain = std::max(max_strain, sum.green.cwiseAbs().maxCoeff() / v);
     }
     Eigen::Map<Vector6d>(&solution->strain[6 * e]) = sum.green / v;
@@ -178,17 +258,29 @@ Status SolveNonlinearStatic(const SceneSpec& scene, const Model& model, PhaseClo
 
   clock.Begin("estimate", 0.95, 0.99, "Zienkiewicz-Zhu error estimate");
   const ErrorEstimateResult estimate =
-      mesh.quadratic() ? EstimateZzErrorTet10(
-                             mesh,
-                             [&](int e, const Eigen::Vector3d& xi) -> Vector6d {
-                               Tet10Nodes grad;
-                               Tet10Gradients(Tet10Coordinates(mesh, e), xi, &grad);
-                               return material->Stress(
-                                   DeformationGradientTet10(grad, GatherElementTet10(mesh, e, u)));
-                             },
-                             ComplianceMatrix(scene.material))
-                       : EstimateZzError(mesh, solution->pk2_stress_pa, volume,
-                                         ComplianceMatrix(scene.material));
+      mesh.quadratic()
+          ? EstimateZzErrorTet10(
+                mesh,
+                [&](int e, const Eigen::Vector3d& xi) -> Vector6d {
+                  Tet10Nodes grad;
+                  Tet10Gradients(Tet10Coordinates(mesh, e), xi, &grad);
+                  return material->Stress(
+                      DeformationGradientTet10(grad, GatherElementTet10(mesh, e, u)));
+                },
+                ComplianceMatrix(scene.material))
+      : mesh.hexahedral()
+          ? EstimateZzErrorHex8(
+                mesh,
+                [&](int e, const Eigen::Vector3d& xi) -> Vector6d {
+                  const Hex8Nodes x = Hex8Coordinates(mesh, e);
+                  const Vector24d ue = GatherElementHex8(mesh, e, u);
+                  Hex8Nodes grad;
+                  Hex8Gradients(x, xi, &grad);
+                  return material->Stress(
+                      MeanDilatationF(grad, ue, MeanDilatation(ComputeHex8Geometry(x), ue)));
+                },
+                ComplianceMatrix(scene.material))
+          : EstimateZzError(mesh, solution->pk2_stress_pa, volume, ComplianceMatrix(scene.material));
   solution->error_indicator = estimate.element_share;
   summary.error.estimated = true;
   summary.error.method =

@@ -58,7 +58,7 @@ Status SolveScene(const SceneSpec& scene, const SolveOptions& options, Solution*
   summary.scene_name = scene.name;
   summary.geometry = DescribeGeometry(scene.geometry);
   // A nonlinear analysis may refine this.
-  summary.element_type = mesh.quadratic() ? "TET10" : "TET4";
+  summary.element_type = mesh.quadratic() ? "TET10" : mesh.hexahedral() ? "HEX8" : "TET4";
   summary.nodes = mesh.num_nodes();
   summary.elements = mesh.num_elements();
   summary.dofs = dofs.num_free();
@@ -106,10 +106,14 @@ Status SolveScene(const SceneSpec& scene, const SolveOptions& options, Solution*
     const double norm = result.u.segment<3>(3 * i).norm();
     if (norm > max_u) max_u = norm, max_node = i;
   }
-  const int per_element = mesh.quadratic() ? 10 : 4;
+  const int per_element = mesh.quadratic() ? 10 : mesh.hexahedral() ? 8 : 4;
   solution->nodes_per_element = per_element;
   solution->tets.resize(per_element * static_cast<std::size_t>(ne));
   for (int e = 0; e < ne; ++e) {
+    if (mesh.hexahedral()) {
+      for (int a = 0; a < 8; ++a) solution->tets[8 * e + a] = mesh.hexes[e][a];
+      continue;
+    }
     for (int a = 0; a < 4; ++a) solution->tets[per_element * e + a] = mesh.tets[e][a];
     if (mesh.quadratic()) {
       for (int k = 0; k < 6; ++k) solution->tets[10 * e + 4 + k] = mesh.midside[e][k];

@@ -1,6 +1,7 @@
 #include "assembly/assembler.h"
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <bitset>
 
@@ -54,14 +55,15 @@ Pattern BuildPattern(const Mesh& mesh, const NodesOf& nodes_of, const DofMap& do
   return p;
 }
 
-}  // namespace
-
-std::vector<std::vector<int>> ColourElements(const Mesh& mesh) {
-  std::vector<std::bitset<kMaxColours>> used(mesh.num_nodes());
+// Greedy colouring of `elements` (node index arrays) on `num_nodes` nodes.
+template <std::size_t N>
+std::vector<std::vector<int>> Colour(int num_nodes,
+                                     const std::vector<std::array<int, N>>& elements) {
+  std::vector<std::bitset<kMaxColours>> used(num_nodes);
   std::vector<std::vector<int>> colours;
-  for (int e = 0; e < mesh.num_elements(); ++e) {
+  for (int e = 0; e < static_cast<int>(elements.size()); ++e) {
     std::bitset<kMaxColours> taken;
-    for (int a : mesh.tets[e]) taken |= used[a];
+    for (int a : elements[e]) taken |= used[a];
     int c = 0;
     while (c < kMaxColours && taken[c]) ++c;
     // Structured tetrahedral meshes need a few dozen colours; running out
@@ -69,9 +71,16 @@ std::vector<std::vector<int>> ColourElements(const Mesh& mesh) {
     if (c == kMaxColours) c = kMaxColours - 1;
     if (c >= static_cast<int>(colours.size())) colours.resize(c + 1);
     colours[c].push_back(e);
-    for (int a : mesh.tets[e]) used[a].set(c);
+    for (int a : elements[e]) used[a].set(c);
   }
   return colours;
+}
+
+}  // namespace
+
+std::vector<std::vector<int>> ColourElements(const Mesh& mesh) {
+  if (mesh.hexahedral()) return Colour(mesh.num_nodes(), mesh.hexes);
+  return Colour(mesh.num_nodes(), mesh.tets);
 }
 
 Vector12d GatherElement(const Mesh& mesh, int e, const Eigen::VectorXd& u) {
@@ -85,6 +94,18 @@ Vector30d GatherElementTet10(const Mesh& mesh, int e, const Eigen::VectorXd& u) 
   const std::array<int, 10> nodes = Tet10NodeIndices(mesh, e);
   for (int a = 0; a < 10; ++a) ue.segment<3>(3 * a) = u.segment<3>(3 * nodes[a]);
   return ue;
+}
+
+Vector24d GatherElementHex8(const Mesh& mesh, int e, const Eigen::VectorXd& u) {
+  Vector24d ue;
+  for (int a = 0; a < 8; ++a) ue.segment<3>(3 * a) = u.segment<3>(3 * mesh.hexes[e][a]);
+  return ue;
+}
+
+Hex8Nodes Hex8Coordinates(const Mesh& mesh, int e) {
+  Hex8Nodes x;
+  for (int a = 0; a < 8; ++a) x.row(a) = mesh.nodes.row(mesh.hexes[e][a]);
+  return x;
 }
 
 namespace {
@@ -104,7 +125,7 @@ Status AssembleElements(const Mesh& mesh, const NodesOf& nodes_of, const DofMap&
   std::atomic<int> failed{-1};
 
   std::size_t done = 0;
-  const std::size_t total = mesh.tets.size();
+  const std::size_t total = static_cast<std::size_t>(mesh.num_elements());
   // Elements of the last colour may share nodes (see ColourElements), so it
   // is assembled by one thread.
   for (std::size_t c = 0; c < colours.size() && failed.load() < 0; ++c) {
@@ -183,6 +204,15 @@ Status AssembleSystemTet10(const Mesh& mesh, const DofMap& dofs,
       keep_going, system);
 }
 
+Status AssembleSystemHex8(const Mesh& mesh, const DofMap& dofs,
+                          const std::vector<std::vector<int>>& colours,
+                          const Hex8ElementKernel& kernel, const AssemblyOptions& options,
+                          const std::function<bool(double)>& keep_going, LinearSystem* system) {
+  return AssembleElements<8>(
+      mesh, [&](int e) { return mesh.hexes[e]; }, dofs, colours, kernel, options, keep_going,
+      system);
+}
+
 Status AssembleLinearSystem(const Mesh& mesh, const Matrix6d& d, const DofMap& dofs,
                             const std::vector<std::vector<int>>& colours,
                             const std::function<bool(double)>& keep_going, LinearSystem* system) {
@@ -208,6 +238,20 @@ Status AssembleLinearSystemTet10(const Mesh& mesh, const Matrix6d& d, const DofM
   AssemblyOptions options;
   options.lift_prescribed = true;
   return AssembleSystemTet10(mesh, dofs, colours, kernel, options, keep_going, system);
+}
+
+Status AssembleLinearSystemHex8(const Mesh& mesh, const Matrix6d& d, const DofMap& dofs,
+                                const std::vector<std::vector<int>>& colours,
+                                const std::function<bool(double)>& keep_going,
+                                LinearSystem* system) {
+  const Hex8ElementKernel kernel = [&](int e, Matrix24d* k, Vector24d* f) {
+    *k = Hex8Stiffness(Hex8Coordinates(mesh, e), d);
+    f->setZero();
+    return true;
+  };
+  AssemblyOptions options;
+  options.lift_prescribed = true;
+  return AssembleSystemHex8(mesh, dofs, colours, kernel, options, keep_going, system);
 }
 
 }  // namespace pba

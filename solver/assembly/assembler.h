@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "assembly/dof_map.h"
+#include "fem/hex8.h"
 #include "fem/tet10.h"
 #include "fem/tet4.h"
 #include "mesh/mesh.h"
@@ -22,7 +23,8 @@ using SparseMatrix = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
 
 // Element indices by colour; elements of one colour share no node. Made
 // from the corners (Mesh::tets), it serves quadratic meshes too: elements
-// that share no corner share no edge, hence no mid-edge node.
+// that share no corner share no edge, hence no mid-edge node. For a
+// hexahedral mesh, from the eight nodes of Mesh::hexes.
 std::vector<std::vector<int>> ColourElements(const Mesh& mesh);
 
 struct LinearSystem {
@@ -37,6 +39,9 @@ using ElementKernel = std::function<bool(int element, Matrix12d* k, Vector12d* f
 // The same for a 10-node element, in its 30 unknowns (node order of
 // fem/tet10.h: corners, then Mesh::midside).
 using Tet10ElementKernel = std::function<bool(int element, Matrix30d* k, Vector30d* f)>;
+// The same for an 8-node hexahedron (Mesh::hexes, node order of
+// fem/hex8.h), in its 24 unknowns.
+using Hex8ElementKernel = std::function<bool(int element, Matrix24d* k, Vector24d* f)>;
 
 struct AssemblyOptions {
   // Subtract K_fp u_p (the prescribed values' pull on the free unknowns) from
@@ -68,6 +73,12 @@ Status AssembleSystemTet10(const Mesh& mesh, const DofMap& dofs,
                            const Tet10ElementKernel& kernel, const AssemblyOptions& options,
                            const std::function<bool(double)>& keep_going, LinearSystem* system);
 
+// AssembleSystem for a hexahedral mesh (Mesh::hexahedral()): 8-node elements.
+Status AssembleSystemHex8(const Mesh& mesh, const DofMap& dofs,
+                          const std::vector<std::vector<int>>& colours,
+                          const Hex8ElementKernel& kernel, const AssemblyOptions& options,
+                          const std::function<bool(double)>& keep_going, LinearSystem* system);
+
 // Assembles K_ff and the right-hand side for elasticity matrix `d`.
 // `keep_going(fraction)` is called between colours; returning false stops
 // the assembly with Status::Cancelled.
@@ -82,10 +93,24 @@ Status AssembleLinearSystemTet10(const Mesh& mesh, const Matrix6d& d, const DofM
                                  const std::function<bool(double)>& keep_going,
                                  LinearSystem* system);
 
+// AssembleLinearSystem for a hexahedral mesh: small-strain 8-node elements
+// with B-bar mean dilatation (Hex8Stiffness), prescribed values lifted to
+// the right-hand side.
+Status AssembleLinearSystemHex8(const Mesh& mesh, const Matrix6d& d, const DofMap& dofs,
+                                const std::vector<std::vector<int>>& colours,
+                                const std::function<bool(double)>& keep_going,
+                                LinearSystem* system);
+
 // Gathers the 12 element unknowns of tet `e` from the full vector `u`.
 Vector12d GatherElement(const Mesh& mesh, int e, const Eigen::VectorXd& u);
 
 // Gathers the 30 element unknowns of 10-node tet `e` of a quadratic mesh.
 Vector30d GatherElementTet10(const Mesh& mesh, int e, const Eigen::VectorXd& u);
+
+// Gathers the 24 element unknowns of hexahedron `e` (Mesh::hexes).
+Vector24d GatherElementHex8(const Mesh& mesh, int e, const Eigen::VectorXd& u);
+
+// Reference coordinates of hexahedron `e`, one row per node [m].
+Hex8Nodes Hex8Coordinates(const Mesh& mesh, int e);
 
 }  // namespace pba

@@ -125,11 +125,14 @@ Status ExportAbaqusInput(const SceneSpec& scene, const std::filesystem::path& fi
   }
   // PBA's 10-node order (corners, then edges (0,1) (1,2) (2,0) (0,3) (1,3)
   // (2,3)) is C3D10's, so the nodes go out as they are.
-  out << "*ELEMENT, TYPE=" << (mesh.quadratic() ? "C3D10" : "C3D4") << ", ELSET=EALL\n";
+  out << "*ELEMENT, TYPE="
+      << (mesh.quadratic() ? "C3D10" : mesh.hexahedral() ? "C3D8" : "C3D4") << ", ELSET=EALL\n";
   for (int e = 0; e < mesh.num_elements(); ++e) {
     out << e + 1;
     if (mesh.quadratic()) {
       for (int node : Tet10NodeIndices(mesh, e)) out << ", " << node + 1;
+    } else if (mesh.hexahedral()) {
+      for (int node : mesh.hexes[e]) out << ", " << node + 1;
     } else {
       for (int node : mesh.tets[e]) out << ", " << node + 1;
     }
@@ -185,7 +188,18 @@ Status ExportAbaqusInput(const SceneSpec& scene, const std::filesystem::path& fi
     if (bc.kind != BoundaryConditionSpec::Kind::kPressure || bc.pressure_pa == 0) continue;
     if (!dload) out << "*DLOAD\n";
     dload = true;
-    for (const auto& [element, corner] : FaceElements(mesh, mesh.face_sets.at(bc.set))) {
+    const FaceSet& set = mesh.face_sets.at(bc.set);
+    if (mesh.hexahedral()) {
+      // C3D8 faces S1..S6 (mesh.h, kHex8Faces).
+      for (const auto& [element, face] : QuadFaceElements(mesh, set)) {
+        if (element < 0) continue;
+        std::snprintf(line, sizeof line, "%d, P%d, %.13g\n", element + 1, face + 1,
+                      bc.pressure_pa);
+        out << line;
+      }
+      continue;
+    }
+    for (const auto& [element, corner] : FaceElements(mesh, set)) {
       if (element < 0) continue;
       std::snprintf(line, sizeof line, "%d, P%d, %.13g\n", element + 1, kFaceOpposite[corner],
                     bc.pressure_pa);

@@ -88,10 +88,16 @@ std::string Item(const std::string& dims, const std::string& path,
          std::to_string(precision) + "\" Format=\"HDF\">result.h5:" + path + "</DataItem>";
 }
 
-// The XDMF cell of a connectivity with `nodes_per_element` columns (4 or 10,
-// checked by WriteResultFiles); both share VTK's and Abaqus' node order.
+// The XDMF cell of a connectivity with `nodes_per_element` columns (4, 10
+// or 8, checked by WriteResultFiles); all share VTK's and Abaqus' node order.
 const char* XdmfTopologyType(int nodes_per_element) {
-  return nodes_per_element == 10 ? "Tetrahedron_10" : "Tetrahedron";
+  return nodes_per_element == 10  ? "Tetrahedron_10"
+         : nodes_per_element == 8 ? "Hexahedron"
+                                  : "Tetrahedron";
+}
+
+const char* ElementTypeName(int nodes_per_element) {
+  return nodes_per_element == 10 ? "TET10" : nodes_per_element == 8 ? "HEX8" : "TET4";
 }
 
 // One column of an elements x 6 dataset as a scalar cell attribute.
@@ -213,10 +219,10 @@ Status WriteResultFiles(const SceneSpec& scene, Solution* solution,
                         const std::filesystem::path& dir) {
   const auto start = std::chrono::steady_clock::now();
   const int npe = solution->nodes_per_element;
-  if ((npe != 4 && npe != 10) || solution->tets.size() % npe != 0) {
+  if ((npe != 4 && npe != 10 && npe != 8) || solution->tets.size() % npe != 0) {
     return Status::Internal("solution connectivity: " + std::to_string(solution->tets.size()) +
                             " indices, " + std::to_string(npe) +
-                            " nodes per element (4 or 10, dividing the count)");
+                            " nodes per element (4, 10 or 8, dividing the count)");
   }
   const std::filesystem::path h5 = dir / "result.h5";
   {
@@ -228,10 +234,12 @@ Status WriteResultFiles(const SceneSpec& scene, Solution* solution,
     w.Group("/fields");
     w.Dataset("/mesh/nodes", solution->nodes_mm, 3, "mm", "x y z");
     w.Dataset("/mesh/tets", solution->tets, npe, "1",
-              npe == 10 ? "node indices, 0-based: corners 0-3, then the mid-edge nodes of edges "
-                          "(0,1) (1,2) (2,0) (0,3) (1,3) (2,3)"
-                        : "node indices, 0-based");
-    w.Attribute("/mesh/tets", "element_type", npe == 10 ? "TET10" : "TET4");
+              npe == 10  ? "node indices, 0-based: corners 0-3, then the mid-edge nodes of edges "
+                           "(0,1) (1,2) (2,0) (0,3) (1,3) (2,3)"
+              : npe == 8 ? "node indices, 0-based: one face 0-3, then the opposite face, node "
+                           "4 + i across from node i (VTK_HEXAHEDRON, Abaqus C3D8)"
+                         : "node indices, 0-based");
+    w.Attribute("/mesh/tets", "element_type", ElementTypeName(npe));
     const std::string voigt = "xx yy zz yz xz xy";
     if (scene.outputs.displacement)
       w.Dataset("/fields/displacement", solution->displacement_mm, 3, "mm", "x y z");

@@ -1,7 +1,10 @@
 #include "mesh/mesh.h"
 
 #include <Eigen/Geometry>
+#include <Eigen/LU>
 #include <algorithm>
+#include <cmath>
+#include <map>
 #include <unordered_map>
 
 namespace pba {
@@ -12,6 +15,34 @@ Eigen::Matrix<double, 4, 3> TetCorners(const Mesh& mesh, int e) {
   return x;
 }
 
+Eigen::Matrix<double, 8, 3> HexCorners(const Mesh& mesh, int e) {
+  Eigen::Matrix<double, 8, 3> x;
+  for (int a = 0; a < 8; ++a) x.row(a) = mesh.nodes.row(mesh.hexes[e][a]);
+  return x;
+}
+
+double HexVolume(const Mesh& mesh, int e) {
+  static constexpr int kCorner[8][3] = {{-1, -1, -1}, {1, -1, -1}, {1, 1, -1}, {-1, 1, -1},
+                                        {-1, -1, 1},  {1, -1, 1},  {1, 1, 1},  {-1, 1, 1}};
+  const Eigen::Matrix<double, 8, 3> x = HexCorners(mesh, e);
+  const double g = 1 / std::sqrt(3.0);  // 2-point Gauss abscissa, weight 1
+  double volume = 0;
+  for (int q = 0; q < 8; ++q) {
+    const double p[3] = {kCorner[q][0] * g, kCorner[q][1] * g, kCorner[q][2] * g};
+    // dN_a/dxi_i of the trilinear N_a = prod_j (1 + xi_j c_aj) / 8.
+    Eigen::Matrix<double, 8, 3> dn;
+    for (int a = 0; a < 8; ++a) {
+      const double f[3] = {1 + p[0] * kCorner[a][0], 1 + p[1] * kCorner[a][1],
+                           1 + p[2] * kCorner[a][2]};
+      dn(a, 0) = kCorner[a][0] * f[1] * f[2] / 8;
+      dn(a, 1) = kCorner[a][1] * f[0] * f[2] / 8;
+      dn(a, 2) = kCorner[a][2] * f[0] * f[1] / 8;
+    }
+    volume += (x.transpose() * dn).determinant();
+  }
+  return volume;
+}
+
 double FaceSetArea(const Mesh& mesh, const FaceSet& set) {
   double area = 0;
   for (const auto& t : set.triangles) {
@@ -19,6 +50,20 @@ double FaceSetArea(const Mesh& mesh, const FaceSet& set) {
     const Eigen::Vector3d b = mesh.nodes.row(t[1]).transpose();
     const Eigen::Vector3d c = mesh.nodes.row(t[2]).transpose();
     area += 0.5 * (b - a).cross(c - a).norm();
+  }
+  const double g = 1 / std::sqrt(3.0);
+  for (const auto& quad : set.quads) {
+    Eigen::Vector3d x[4];
+    for (int k = 0; k < 4; ++k) x[k] = mesh.nodes.row(quad[k]).transpose();
+    for (const double xi : {-g, g}) {
+      for (const double eta : {-g, g}) {
+        // x_,xi and x_,eta of the bilinear map with corners at (-1,-1),
+        // (1,-1), (1,1), (-1,1).
+        const Eigen::Vector3d g1 = ((1 - eta) * (x[1] - x[0]) + (1 + eta) * (x[2] - x[3])) / 4;
+        const Eigen::Vector3d g2 = ((1 - xi) * (x[3] - x[0]) + (1 + xi) * (x[2] - x[1])) / 4;
+        area += g1.cross(g2).norm();
+      }
+    }
   }
   return area;
 }
@@ -41,7 +86,7 @@ std::vector<std::array<int, 2>> FaceElements(const Mesh& mesh, const FaceSet& se
   }
   std::vector<std::array<int, 2>> owner(set.triangles.size(), {-1, -1});
   if (index.empty()) return owner;
-  for (int e = 0; e < mesh.num_elements(); ++e) {
+  for (int e = 0; e < static_cast<int>(mesh.tets.size()); ++e) {
     const auto& tet = mesh.tets[e];
     for (int skip = 0; skip < 4; ++skip) {
       std::array<int, 3> key;
@@ -51,6 +96,29 @@ std::vector<std::array<int, 2>> FaceElements(const Mesh& mesh, const FaceSet& se
       std::sort(key.begin(), key.end());
       const auto it = index.find(key);
       if (it != index.end()) owner[it->second] = {e, skip};
+    }
+  }
+  return owner;
+}
+
+std::vector<std::array<int, 2>> QuadFaceElements(const Mesh& mesh, const FaceSet& set) {
+  // As FaceElements: sorted quad -> its index in the set, then one pass over
+  // the bricks' faces.
+  std::map<std::array<int, 4>, int> index;
+  for (std::size_t i = 0; i < set.quads.size(); ++i) {
+    std::array<int, 4> key = set.quads[i];
+    std::sort(key.begin(), key.end());
+    index.emplace(key, static_cast<int>(i));
+  }
+  std::vector<std::array<int, 2>> owner(set.quads.size(), {-1, -1});
+  if (index.empty()) return owner;
+  for (int e = 0; e < static_cast<int>(mesh.hexes.size()); ++e) {
+    for (int face = 0; face < 6; ++face) {
+      std::array<int, 4> key;
+      for (int k = 0; k < 4; ++k) key[k] = mesh.hexes[e][kHex8Faces[face][k]];
+      std::sort(key.begin(), key.end());
+      const auto it = index.find(key);
+      if (it != index.end()) owner[it->second] = {e, face};
     }
   }
   return owner;

@@ -1,4 +1,5 @@
-// Mesh: nodes, linear tetrahedra and named boundary face sets.
+// Mesh: nodes, tetrahedra (4- or 10-node) or 8-node hexahedra, and named
+// boundary face sets.
 // Coordinates in metres (SI inside the solver).
 #pragma once
 
@@ -17,6 +18,9 @@ struct FaceSet {
   // Quadratic mesh only (else empty): the mid-edge nodes of each triangle,
   // on its edges (0,1), (1,2), (2,0).
   std::vector<std::array<int, 3>> triangle_midside;
+  // Hexahedral mesh only (then `triangles` is empty): the boundary
+  // quadrilaterals, node indices in order around the face.
+  std::vector<std::array<int, 4>> quads;
   std::vector<int> nodes;  // sorted, unique; mid-edge nodes included
 };
 
@@ -30,22 +34,57 @@ struct Mesh {
   // Abaqus / CalculiX C3D10 order: edges (0,1), (1,2), (2,0), (0,3), (1,3),
   // (2,3) of tets[e] (see mesh/quadratic.h, fem/tet10.h).
   std::vector<std::array<int, 6>> midside;
+  // Hexahedral mesh only (else empty; `tets` is then empty): 8-node bricks
+  // in the Abaqus C3D8 / VTK_HEXAHEDRON order: 0-1-2-3 one face, 4-7 the
+  // opposite one with node 4 + i across from node i, positively oriented
+  // (natural coordinates (-1,-1,-1), (1,-1,-1), (1,1,-1), (-1,1,-1), then
+  // the same at +1, map to a right-handed brick; see fem/hex8.h).
+  std::vector<std::array<int, 8>> hexes;
   std::map<std::string, FaceSet> face_sets;
 
   int num_nodes() const { return static_cast<int>(nodes.rows()); }
-  int num_elements() const { return static_cast<int>(tets.size()); }
+  int num_elements() const { return static_cast<int>(hexes.empty() ? tets.size() : hexes.size()); }
   bool quadratic() const { return !midside.empty(); }
+  bool hexahedral() const { return !hexes.empty(); }
 };
 
 // Corner coordinates of tetrahedron `e`, one row per node [m].
 Eigen::Matrix<double, 4, 3> TetCorners(const Mesh& mesh, int e);
 
-// Total area of a face set [m^2].
+// Corner coordinates of hexahedron `e`, one row per node in the C3D8 order
+// [m].
+Eigen::Matrix<double, 8, 3> HexCorners(const Mesh& mesh, int e);
+
+// Signed volume of hexahedron `e` [m^3]: the integral of det J of its
+// trilinear map over [-1, 1]^3, by the 2 x 2 x 2 Gauss rule, which is exact
+// (det J is at most quadratic in each natural coordinate). Positive for a
+// positively oriented brick.
+double HexVolume(const Mesh& mesh, int e);
+
+// Total area of a face set [m^2]: its triangles (flat) and its quadrilaterals
+// (the bilinear surface through their four nodes, whose area element
+// |x_,xi x x_,eta| is integrated by the 2 x 2 Gauss rule: exact for a flat
+// parallelogram, close for a gently warped quad).
 double FaceSetArea(const Mesh& mesh, const FaceSet& set);
 
 // The tetrahedron behind each triangle of a boundary face set: for triangle
 // i, {element, corner}, `corner` (0..3) being the element's node opposite the
 // triangle; {-1, -1} for a triangle that is no element's face.
 std::vector<std::array<int, 2>> FaceElements(const Mesh& mesh, const FaceSet& set);
+
+// The faces of a C3D8 brick, 0-based local nodes in the Abaqus order and
+// numbering: face k is Abaqus's S(k+1), S1 = 1-2-3-4, S2 = 5-8-7-6,
+// S3 = 1-5-6-2, S4 = 2-6-7-3, S5 = 3-7-8-4, S6 = 4-8-5-1 (1-based). Each
+// is listed anticlockwise seen from inside the brick (its right-hand normal
+// points into a positively oriented brick), so reversed it faces out.
+inline constexpr int kHex8Faces[6][4] = {{0, 1, 2, 3}, {4, 7, 6, 5}, {0, 4, 5, 1},
+                                         {1, 5, 6, 2}, {2, 6, 7, 3}, {3, 7, 4, 0}};
+
+// The hexahedron behind each quadrilateral of a boundary face set: for quad
+// i, {element, face}, `face` (0..5) the local face of kHex8Faces, that is
+// the Abaqus face label S(face + 1) a distributed load on it is written
+// with; {-1, -1} for a quad that is no element's face. The quad's nodes may
+// start anywhere and run either way round.
+std::vector<std::array<int, 2>> QuadFaceElements(const Mesh& mesh, const FaceSet& set);
 
 }  // namespace pba

@@ -145,7 +145,45 @@ void SplitPrism(const std::array<int, 6>& v, std::vector<std::array<int, 4>>* te
   tets->push_back({a, e, f, d});
 }
 
-Mesh Extrude(const Section& section, double height, int nz) {
+// Turns every brick of `mesh` positively: a negative one (its section quad
+// clockwise seen from the extrusion direction) is mirrored by swapping
+// natural xi and eta, nodes 1 <-> 3 and 5 <-> 7, which keeps the C3D8 order.
+void OrientHexes(Mesh* mesh) {
+  for (int e = 0; e < static_cast<int>(mesh->hexes.size()); ++e) {
+    if (HexVolume(*mesh, e) < 0) {
+      auto& h = mesh->hexes[e];
+      std::swap(h[1], h[3]);
+      std::swap(h[5], h[7]);
+    }
+  }
+}
+
+// The layer between node layers `lo` and `hi` (offsets of the first node of
+// each) over the quads of a surface: bricks when `hex`, else prisms cut into
+// tetrahedra.
+void AddLayer(const std::vector<std::array<int, 4>>& quads, int lo, int hi, bool hex, Mesh* mesh) {
+  for (const auto& q : quads) {
+    if (hex) {
+      mesh->hexes.push_back(
+          {lo + q[0], lo + q[1], lo + q[2], lo + q[3], hi + q[0], hi + q[1], hi + q[2], hi + q[3]});
+      continue;
+    }
+    for (const auto& tri :
+         {std::array<int, 3>{q[0], q[1], q[2]}, std::array<int, 3>{q[0], q[2], q[3]}}) {
+      SplitPrism({lo + tri[0], lo + tri[1], lo + tri[2], hi + tri[0], hi + tri[1], hi + tri[2]},
+                 &mesh->tets);
+    }
+  }
+}
+
+void Orient(Mesh* mesh) {
+  for (auto& t : mesh->tets) {
+    if (SignedVolume(*mesh, t) < 0) std::swap(t[2], t[3]);
+  }
+  OrientHexes(mesh);
+}
+
+Mesh Extrude(const Section& section, double height, int nz, bool hex) {
   Mesh mesh;
   const int np = static_cast<int>(section.points.size());
   mesh.nodes.resize(static_cast<Eigen::Index>(np) * (nz + 1), 3);
@@ -156,20 +194,13 @@ Mesh Extrude(const Section& section, double height, int nz) {
           z * kMm;
     }
   }
-  mesh.tets.reserve(section.quads.size() * 6 * nz);
-  for (int k = 0; k < nz; ++k) {
-    const int lo = k * np, hi = (k + 1) * np;
-    for (const auto& q : section.quads) {
-      for (const auto& tri :
-           {std::array<int, 3>{q[0], q[1], q[2]}, std::array<int, 3>{q[0], q[2], q[3]}}) {
-        SplitPrism({lo + tri[0], lo + tri[1], lo + tri[2], hi + tri[0], hi + tri[1], hi + tri[2]},
-                   &mesh.tets);
-      }
-    }
+  if (hex) {
+    mesh.hexes.reserve(section.quads.size() * nz);
+  } else {
+    mesh.tets.reserve(section.quads.size() * 6 * nz);
   }
-  for (auto& t : mesh.tets) {
-    if (SignedVolume(mesh, t) < 0) std::swap(t[2], t[3]);
-  }
+  for (int k = 0; k < nz; ++k) AddLayer(section.quads, k * np, (k + 1) * np, hex, &mesh);
+  Orient(&mesh);
   return mesh;
 }
 
@@ -178,8 +209,9 @@ Mesh Extrude(const Section& section, double height, int nz) {
 // faces x = 1, y = 1, z = 1 over [0, 1]^2 (a cubed sphere, with equiangular
 // spacing so the cells are nearly uniform), each cut n x n; the surface
 // quadrilaterals are split into triangles and extruded radially in nr
-// layers into prisms, cut into tetrahedra as in Extrude.
-Mesh SphericalShellOctant(double a, double b, int n, int nr) {
+// layers into prisms, cut into tetrahedra as in Extrude, or (`hex`) the
+// quadrilaterals themselves extruded into bricks.
+Mesh SphericalShellOctant(double a, double b, int n, int nr, bool hex) {
   std::vector<Eigen::Vector3d> directions;
   std::map<std::array<int, 3>, int> index;  // integer cube-surface coordinates -> point
   const auto point = [&](std::array<int, 3> key) {
@@ -216,26 +248,16 @@ Mesh SphericalShellOctant(double a, double b, int n, int nr) {
     const double r = (a + (b - a) * k / nr) * kMm;
     for (int p = 0; p < np; ++p) mesh.nodes.row(k * np + p) = r * directions[p].transpose();
   }
-  for (int k = 0; k < nr; ++k) {
-    const int lo = k * np, hi = (k + 1) * np;
-    for (const auto& q : quads) {
-      for (const auto& tri :
-           {std::array<int, 3>{q[0], q[1], q[2]}, std::array<int, 3>{q[0], q[2], q[3]}}) {
-        SplitPrism({lo + tri[0], lo + tri[1], lo + tri[2], hi + tri[0], hi + tri[1], hi + tri[2]},
-                   &mesh.tets);
-      }
-    }
-  }
-  for (auto& t : mesh.tets) {
-    if (SignedVolume(mesh, t) < 0) std::swap(t[2], t[3]);
-  }
+  for (int k = 0; k < nr; ++k) AddLayer(quads, k * np, (k + 1) * np, hex, &mesh);
+  Orient(&mesh);
   return mesh;
 }
 
-// Fills mesh.face_sets: a tetrahedron face belongs to a set when its three
-// nodes lie on that set's surface. Only boundary faces can: the bodies are
-// convex, or (the shell) their curved surfaces are the first and last layer
-// of an extrusion, whose faces within a layer are prism ends.
+// Fills mesh.face_sets: a tetrahedron face (brick face) belongs to a set
+// when its three (four) nodes lie on that set's surface. Only boundary faces
+// can: the bodies are convex, or (the shell) their curved surfaces are the
+// first and last layer of an extrusion, whose faces within a layer are prism
+// or brick ends. A set's quads are numbered anticlockwise seen from outside.
 void ClassifyFaces(const std::vector<std::string>& names,
                    const std::vector<std::function<bool(const Eigen::Vector3d&)>>& on_surface,
                    Mesh* mesh) {
@@ -249,6 +271,16 @@ void ClassifyFaces(const std::vector<std::string>& names,
   }
   static constexpr int kFaces[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
   std::vector<FaceSet> sets(names.size());
+  for (const auto& h : mesh->hexes) {
+    for (const auto& f : kHex8Faces) {
+      const uint32_t common = mask[h[f[0]]] & mask[h[f[1]]] & mask[h[f[2]]] & mask[h[f[3]]];
+      if (common == 0) continue;
+      for (std::size_t s = 0; s < names.size(); ++s) {
+        // kHex8Faces lists each face as seen from inside: reversed.
+        if (common & (1u << s)) sets[s].quads.push_back({h[f[0]], h[f[3]], h[f[2]], h[f[1]]});
+      }
+    }
+  }
   for (const auto& t : mesh->tets) {
     for (const auto& f : kFaces) {
       const uint32_t common = mask[t[f[0]]] & mask[t[f[1]]] & mask[t[f[2]]];
@@ -261,6 +293,7 @@ void ClassifyFaces(const std::vector<std::string>& names,
   for (std::size_t s = 0; s < names.size(); ++s) {
     auto& nodes = sets[s].nodes;
     for (const auto& tri : sets[s].triangles) nodes.insert(nodes.end(), tri.begin(), tri.end());
+    for (const auto& quad : sets[s].quads) nodes.insert(nodes.end(), quad.begin(), quad.end());
     std::sort(nodes.begin(), nodes.end());
     nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
     mesh->face_sets[names[s]] = std::move(sets[s]);
@@ -285,30 +318,34 @@ double EffectiveElementSize(const GeometrySpec& geometry, const MeshSpec& option
 int64_t EstimateElementCount(const GeometrySpec& geometry, const MeshSpec& options) {
   const double h = EffectiveElementSize(geometry, options);
   if (!(h > 0)) return 0;
-  // Counted in doubles: an absurd size must not overflow the count.
+  // Counted in doubles: an absurd size must not overflow the count. Each
+  // cell is one brick, or 6 tetrahedra (two prisms of 3).
+  const double per_cell = options.element == ElementType::kHex8 ? 1.0 : 6.0;
   double count = 0;
   if (geometry.kind == GeometrySpec::Kind::kBox) {
     const auto& s = geometry.box.size_mm;
-    count = 6.0 * std::ceil(s[0] / h) * std::ceil(s[1] / h) * std::ceil(s[2] / h);
+    count = per_cell * std::ceil(s[0] / h) * std::ceil(s[1] / h) * std::ceil(s[2] / h);
   } else if (geometry.kind == GeometrySpec::Kind::kCylinder) {
     const double n = std::max(2.0, std::ceil(geometry.cylinder.radius_mm / h));
     const double m = std::ceil(0.5 * geometry.cylinder.radius_mm / h);
-    count = 6.0 * (n * n + 4 * n * m) * std::ceil(geometry.cylinder.height_mm / h);
+    count = per_cell * (n * n + 4 * n * m) * std::ceil(geometry.cylinder.height_mm / h);
   } else if (geometry.kind == GeometrySpec::Kind::kSphericalShell) {
     const SphericalShellSpec& s = geometry.spherical_shell;
-    const double n = ShellDivisions(s, h), nr = std::ceil((s.outer_radius_mm - s.inner_radius_mm) / h);
-    count = 6.0 * 3 * n * n * nr;
+    const double n = ShellDivisions(s, h),
+                 nr = std::ceil((s.outer_radius_mm - s.inner_radius_mm) / h);
+    count = per_cell * 3 * n * n * nr;
   }
   return count > 9e18 ? INT64_MAX : static_cast<int64_t>(count);
 }
 
 Mesh BuildPrimitiveMesh(const GeometrySpec& geometry, const MeshSpec& options, MeshStats* stats) {
   const double h = EffectiveElementSize(geometry, options);
+  const bool hex = options.element == ElementType::kHex8;
   Mesh mesh;
   if (geometry.kind == GeometrySpec::Kind::kBox) {
     const auto& s = geometry.box.size_mm;
     const int nx = Divisions(s[0], h), ny = Divisions(s[1], h), nz = Divisions(s[2], h);
-    mesh = Extrude(RectangleSection(s[0], s[1], nx, ny), s[2], nz);
+    mesh = Extrude(RectangleSection(s[0], s[1], nx, ny), s[2], nz, hex);
     const double eps = 1e-9 * std::max({s[0], s[1], s[2]}) * kMm;
     const double lx = s[0] * kMm, ly = s[1] * kMm, lz = s[2] * kMm;
     ClassifyFaces({"bottom", "top", "x_min", "x_max", "y_min", "y_max"},
@@ -320,12 +357,13 @@ Mesh BuildPrimitiveMesh(const GeometrySpec& geometry, const MeshSpec& options, M
                    [=](const Eigen::Vector3d& x) { return x.y() > ly - eps; }},
                   &mesh);
     stats->description = "structured grid of " + std::to_string(nx) + " x " + std::to_string(ny) +
-                         " x " + std::to_string(nz) + " cells, each cut into 6 tetrahedra";
+                         " x " + std::to_string(nz) +
+                         (hex ? " hexahedra" : " cells, each cut into 6 tetrahedra");
   } else if (geometry.kind == GeometrySpec::Kind::kSphericalShell) {
     const SphericalShellSpec& s = geometry.spherical_shell;
     const int n = static_cast<int>(ShellDivisions(s, h));
     const int nr = Divisions(s.outer_radius_mm - s.inner_radius_mm, h);
-    mesh = SphericalShellOctant(s.inner_radius_mm, s.outer_radius_mm, n, nr);
+    mesh = SphericalShellOctant(s.inner_radius_mm, s.outer_radius_mm, n, nr, hex);
     const double a = s.inner_radius_mm * kMm, b = s.outer_radius_mm * kMm;
     const double eps = 1e-9 * b;
     ClassifyFaces({"inner", "outer", "x0", "y0", "z0"},
@@ -335,14 +373,15 @@ Mesh BuildPrimitiveMesh(const GeometrySpec& geometry, const MeshSpec& options, M
                    [=](const Eigen::Vector3d& x) { return x.y() < eps; },
                    [=](const Eigen::Vector3d& x) { return x.z() < eps; }},
                   &mesh);
-    stats->description = "cubed-sphere octant: 3 patches of " + std::to_string(n) + " x " +
-                         std::to_string(n) + " cells, extruded radially in " + std::to_string(nr) +
-                         " layers, each prism cut into 3 tetrahedra";
+    stats->description =
+        "cubed-sphere octant: 3 patches of " + std::to_string(n) + " x " + std::to_string(n) +
+        " cells, extruded radially in " + std::to_string(nr) +
+        (hex ? " layers of hexahedra" : " layers, each prism cut into 3 tetrahedra");
   } else {
     const double r = geometry.cylinder.radius_mm, height = geometry.cylinder.height_mm;
     const DiskDivisions d = DiskCounts(r, h);
     const int nz = Divisions(height, h);
-    mesh = Extrude(DiskSection(r, d), height, nz);
+    mesh = Extrude(DiskSection(r, d), height, nz, hex);
     const double eps = 1e-9 * std::max(r, height) * kMm;
     const double rm = r * kMm, hm = height * kMm;
     ClassifyFaces({"bottom", "top", "side"},
@@ -350,10 +389,11 @@ Mesh BuildPrimitiveMesh(const GeometrySpec& geometry, const MeshSpec& options, M
                    [=](const Eigen::Vector3d& x) { return x.z() > hm - eps; },
                    [=](const Eigen::Vector3d& x) { return x.head<2>().norm() > rm - eps; }},
                   &mesh);
-    stats->description = "O-grid cross-section (central square " + std::to_string(d.n) + " x " +
-                         std::to_string(d.n) + ", ring of " + std::to_string(d.m) +
-                         " layers) extruded in " + std::to_string(nz) +
-                         " layers, each prism cut into 3 tetrahedra";
+    stats->description =
+        "O-grid cross-section (central square " + std::to_string(d.n) + " x " +
+        std::to_string(d.n) + ", ring of " + std::to_string(d.m) + " layers) extruded in " +
+        std::to_string(nz) +
+        (hex ? " layers of hexahedra" : " layers, each prism cut into 3 tetrahedra");
   }
   return mesh;
 }

@@ -1,7 +1,8 @@
 // Speed beside error for the finite-strain solve: a quarter of a bonded brain
 // tissue cube (symmetry planes x = 0 and y = 0, bottom fixed, top pressed
 // 20 % and held sideways), Ogden brain fit with K / mu = 1e4, on refined
-// meshes, with the average nodal pressure tetrahedron and the plain one. A
+// meshes, with each element: the average nodal pressure tetrahedron, the
+// plain one, the 10-node tetrahedron and the mean-dilatation hexahedron. A
 // benchmark, not a test: scripts/bench.sh runs it for docs/performance.md.
 #include <benchmark/benchmark.h>
 
@@ -35,10 +36,13 @@ SceneSpec BondedQuarterCube(double element_size_mm, ElementType element) {
   return s;
 }
 
-// Arguments: element size in hundredths of a millimetre; 1 = TET4_ANP, 0 = TET4.
+// Arguments: element size in hundredths of a millimetre; the element, an
+// index into kElements.
+constexpr ElementType kElements[] = {ElementType::kTet4, ElementType::kTet4Anp, ElementType::kTet10,
+                                     ElementType::kHex8};
+
 void BM_NonlinearBondedCube(benchmark::State& state) {
-  const SceneSpec scene = BondedQuarterCube(
-      state.range(0) / 100.0, state.range(1) ? ElementType::kTet4Anp : ElementType::kTet4);
+  const SceneSpec scene = BondedQuarterCube(state.range(0) / 100.0, kElements[state.range(1)]);
   Solution solution;
   for (auto _ : state) {
     const Status status = SolveScene(scene, SolveOptions(), &solution);
@@ -57,7 +61,8 @@ void BM_NonlinearBondedCube(benchmark::State& state) {
 }
 
 BENCHMARK(BM_NonlinearBondedCube)
-    ->ArgsProduct({{250, 125}, {1, 0}})
+    ->ArgNames({"h_mm_x100", "element"})
+    ->ArgsProduct({{250, 125}, {1, 2, 3, 0}})
     ->Unit(benchmark::kSecond)
     ->UseRealTime()
     ->Iterations(1);

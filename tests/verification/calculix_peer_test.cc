@@ -179,6 +179,24 @@ std::vector<SceneSpec> Cases() {
   neo10.name = "10-node neo-Hookean block, bonded, pressed 20 % (nonlinear)";
   neo10.mesh.element_size_mm = 5;
   neo10.mesh.element = ElementType::kTet10;
+  // 8-node bricks (C3D8). CalculiX's C3D8 is fully integrated, which locks
+  // where PBA's mean-dilatation brick does not, so the two agree only where
+  // the strain is uniform: the stretched block with its pressure (face
+  // labels S1..S6, the quadrilateral face load) and, at finite strain, the
+  // same block compressed to 80 %.
+  SceneSpec stretched8 = stretched10;
+  stretched8.name = "8-node block, rollers, top pulled 0.3 mm, 20 Pa on x_max";
+  stretched8.mesh.element = ElementType::kHex8;
+  stretched8.mesh.element_size_mm = 2.5;
+  SceneSpec compressed8 =
+      Scene("8-node neo-Hookean block, rollers, top pressed 20 % (nonlinear)", box, 5,
+            {Condition("bottom", K::kDisplacement, {std::nullopt, std::nullopt, 0.0}),
+             Condition("x_min", K::kDisplacement, {0.0, std::nullopt, std::nullopt}),
+             Condition("y_min", K::kDisplacement, {std::nullopt, 0.0, std::nullopt}),
+             Condition("top", K::kDisplacement, {std::nullopt, std::nullopt, -6.0})});
+  compressed8.material = neo.material;
+  compressed8.analysis.type = AnalysisSpec::Type::kNonlinearStatic;
+  compressed8.mesh.element = ElementType::kHex8;
   return {
       neo,
       ogden,
@@ -197,6 +215,8 @@ std::vector<SceneSpec> Cases() {
       neo10,
       bonded10,
       cylinder10,
+      stretched8,
+      compressed8,
   };
 }
 

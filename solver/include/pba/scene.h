@@ -42,6 +42,7 @@ enum class ElementType {
   kTet4,     // 4-node tetrahedron, one F per element (locks when nearly incompressible)
   kTet4Anp,  // 4-node tetrahedron with average nodal pressure (nonlinear analyses)
   kTet10,    // 10-node quadratic tetrahedron; mid-edge nodes on curved faces lie on the surface
+  kHex8,     // 8-node hexahedron with a mean-dilatation (B-bar) volumetric treatment
 };
 
 struct MeshSpec {

@@ -90,11 +90,13 @@ struct Summary {
 
 // The solved fields, in the units result.h5 uses.
 struct Solution {
-  // Mesh: node coordinates [mm], nodes x 3 row-major; tetrahedron
-  // connectivity, elements x nodes_per_element row-major, 0-based,
-  // positively oriented: 4 corners, then for 10-node elements the mid-edge
-  // nodes of edges (0,1) (1,2) (2,0) (0,3) (1,3) (2,3) (the order of
-  // Abaqus C3D10, VTK and XDMF quadratic tetrahedra).
+  // Mesh: node coordinates [mm], nodes x 3 row-major; element connectivity
+  // (named `tets` after the first element type), elements x
+  // nodes_per_element row-major, 0-based, positively oriented: 4 corners of
+  // a tetrahedron, then for 10-node elements the mid-edge nodes of edges
+  // (0,1) (1,2) (2,0) (0,3) (1,3) (2,3); for 8-node hexahedra one face
+  // 0-1-2-3 and the opposite one, node 4 + i across from node i (the orders
+  // of Abaqus C3D4 / C3D10 / C3D8, VTK and XDMF).
   std::vector<double> nodes_mm;
   std::vector<int64_t> tets;
   int nodes_per_element = 4;

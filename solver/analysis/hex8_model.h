@@ -1,0 +1,21 @@
+// The 8-node hexahedron (C3D8, fem/hex8.h) with mean dilatation as a
+// finite-strain model: total Lagrangian, the isochoric energy at 2 x 2 x 2
+// Gauss points, the volumetric energy once per element on its mean
+// dilatation (fem/hex8_finite_strain.h). One volume constraint per element
+// keeps a nearly incompressible body (brain tissue, K / mu = 1e3..1e6) from
+// locking, and the tangent stays element by element (no wider pattern than
+// the plain brick's, unlike the average nodal pressure tetrahedron).
+#pragma once
+
+#include <memory>
+
+#include "analysis/finite_strain_model.h"
+
+namespace pba {
+
+// `mesh` must be hexahedral (Mesh::hexahedral()); unknowns are 3 per node in
+// node order [m, N]. `mesh` and `material` must outlive the model.
+std::unique_ptr<FiniteStrainModel> MakeHex8Model(const Mesh& mesh,
+                                                 const HyperelasticMaterial& material);
+
+}  // namespace pba

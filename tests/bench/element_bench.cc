@@ -1,0 +1,95 @@
+// Speed beside true error, element by element, on the thick-walled sphere
+// (VALIDATION.md), whose exact answers are known: the linear Lame problem
+// (E = 3 kPa, nu = 0.49) and the nearly incompressible neo-Hookean one
+// (K / mu = 1e4) inflated by a follower pressure to an inner stretch of 1.5.
+// A benchmark, not a test: scripts/bench.sh runs it for docs/performance.md.
+#include <benchmark/benchmark.h>
+
+#include <cmath>
+
+#include "common/thick_sphere.h"
+
+namespace pba {
+namespace {
+
+using testing::kSphereInnerMm;
+using testing::kSphereOuterMm;
+
+constexpr ElementType kElements[] = {ElementType::kTet4, ElementType::kTet4Anp, ElementType::kTet10,
+                                     ElementType::kHex8};
+
+void Report(benchmark::State& state, const Solution& solution, double error) {
+  const Summary& s = solution.summary;
+  state.counters["dofs"] = static_cast<double>(s.dofs);
+  state.counters["true_error_pct"] = 100 * error;
+  state.counters["zz_error_pct"] = 100 * s.error.relative_error;
+  state.counters["solve_s"] = s.wall_time_s;
+  state.counters["iterations"] = s.newton_iterations;
+}
+
+// Arguments: element size in tenths of a millimetre; the element (index
+// into kElements). True error: the larger relative error of the mean radial
+// displacement of the inner and the outer surface.
+void BM_LameSphere(benchmark::State& state) {
+  const double p = 100, e = 3000, nu = 0.49;
+  MaterialSpec material;
+  material.kind = MaterialSpec::Kind::kLinearElastic;
+  material.linear_elastic = {e, nu};
+  const SceneSpec scene =
+      testing::PressurisedShell(material, p, state.range(0) / 10.0, kElements[state.range(1)]);
+  Solution solution;
+  for (auto _ : state) {
+    const Status status = SolveScene(scene, SolveOptions(), &solution);
+    if (!status.ok()) {
+      state.SkipWithError(status.ToString().c_str());
+      return;
+    }
+  }
+  double error = 0;
+  for (double r : {kSphereInnerMm, kSphereOuterMm}) {
+    const double exact = testing::LameDisplacement(p, e, nu, r);
+    error = std::max(error, std::abs(testing::MeanRadialDisplacement(solution, r) / exact - 1));
+  }
+  Report(state, solution, error);
+}
+
+// True error: of the inner stretch against 1.5.
+void BM_InflatedSphere(benchmark::State& state) {
+  const double mu = 1000, stretch = 1.5;
+  MaterialSpec material;
+  material.kind = MaterialSpec::Kind::kNeoHookean;
+  material.neo_hookean = {mu, 1e4 * mu};
+  SceneSpec scene =
+      testing::PressurisedShell(material, testing::IncompressiblePressure(stretch) * mu,
+                                state.range(0) / 10.0, kElements[state.range(1)]);
+  scene.analysis.type = AnalysisSpec::Type::kNonlinearStatic;
+  Solution solution;
+  for (auto _ : state) {
+    const Status status = SolveScene(scene, SolveOptions(), &solution);
+    if (!status.ok()) {
+      state.SkipWithError(status.ToString().c_str());
+      return;
+    }
+  }
+  const double la = 1 + testing::MeanRadialDisplacement(solution, kSphereInnerMm) / kSphereInnerMm;
+  Report(state, solution, std::abs(la / stretch - 1));
+}
+
+BENCHMARK(BM_LameSphere)
+    ->ArgNames({"h_mm_x10", "element"})
+    ->ArgsProduct({{50, 25, 12}, {0, 2, 3}})
+    ->Unit(benchmark::kSecond)
+    ->UseRealTime()
+    ->Iterations(1);
+
+BENCHMARK(BM_InflatedSphere)
+    ->ArgNames({"h_mm_x10", "element"})
+    ->ArgsProduct({{50, 25, 12}, {1, 2, 3}})
+    ->Unit(benchmark::kSecond)
+    ->UseRealTime()
+    ->Iterations(1);
+
+}  // namespace
+}  // namespace pba
+
+BENCHMARK_MAIN();
