@@ -70,6 +70,14 @@ std::string FormatSummary(const v1::Summary& summary) {
   if (e.estimated()) {
     out += Format("Error        about %.2g %% in the energy norm (%s)\n",
                   100.0 * e.relative_error(), e.method().c_str());
+    // Per structure when there are several.
+    if (e.regions_size() > 1) {
+      for (const auto& r : e.regions()) {
+        out += Format("    %-24s about %.2g %% (%.0f %% of the error, %lld elements)\n",
+                      r.name().c_str(), 100.0 * r.relative_error(), 100.0 * r.share(),
+                      static_cast<long long>(r.elements()));
+      }
+    }
   } else {
     out +=
         "Error        not estimated" + (e.note().empty() ? std::string() : ": " + e.note()) + "\n";

@@ -314,6 +314,13 @@ v1::Summary SummaryToProto(const Summary& summary) {
   error->set_estimated(summary.error.estimated);
   error->set_method(summary.error.method);
   error->set_relative_error(summary.error.relative_error);
+  for (const RegionErrorEstimate& r : summary.error.regions) {
+    v1::RegionError* region = error->add_regions();
+    region->set_name(r.name);
+    region->set_elements(r.elements);
+    region->set_relative_error(r.relative_error);
+    region->set_share(r.share);
+  }
   error->set_note(summary.error.estimated
                       ? summary.error.note
                       : (summary.error.note.empty() ? "not estimated" : summary.error.note));

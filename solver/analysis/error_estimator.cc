@@ -8,6 +8,45 @@
 #include "mesh/quadratic.h"
 
 namespace pba {
+namespace {
+
+ErrorEstimateResult Finish(std::vector<double> eta2, std::vector<double> u2, double error2,
+                           double energy2) {
+  ErrorEstimateResult result;
+  result.relative_error = error2 + energy2 > 0 ? std::sqrt(error2 / (error2 + energy2)) : 0.0;
+  result.element_share.resize(eta2.size());
+  for (std::size_t e = 0; e < eta2.size(); ++e) {
+    result.element_share[e] = error2 > 0 ? eta2[e] / error2 : 0.0;
+  }
+  result.element_error2 = std::move(eta2);
+  result.element_energy2 = std::move(u2);
+  return result;
+}
+
+}  // namespace
+
+std::vector<RegionError> ErrorByRegion(const Mesh& mesh, const ErrorEstimateResult& estimate,
+                                       const std::string& body) {
+  const bool one = mesh.region_names.empty();
+  const std::size_t n = one ? 1 : mesh.region_names.size();
+  std::vector<double> error2(n, 0.0), energy2(n, 0.0);
+  std::vector<RegionError> regions(n);
+  double total = 0;
+  for (std::size_t e = 0; e < estimate.element_error2.size(); ++e) {
+    const int r = one ? 0 : mesh.element_region[e];
+    error2[r] += estimate.element_error2[e];
+    energy2[r] += estimate.element_energy2[e];
+    ++regions[r].elements;
+    total += estimate.element_error2[e];
+  }
+  for (std::size_t r = 0; r < n; ++r) {
+    regions[r].name = one ? body : mesh.region_names[r];
+    const double sum = error2[r] + energy2[r];
+    regions[r].relative_error = sum > 0 ? std::sqrt(error2[r] / sum) : 0.0;
+    regions[r].share = total > 0 ? error2[r] / total : 0.0;
+  }
+  return regions;
+}
 
 ErrorEstimateResult EstimateZzError(const Mesh& mesh, const std::vector<double>& stress,
                                     const std::vector<double>& volume, const Matrix6d& compliance) {
@@ -30,7 +69,7 @@ ErrorEstimateResult EstimateZzError(const Mesh& mesh, const std::vector<double>&
 
   // 4-point rule on the tetrahedron, degree 2 (barycentric alpha, beta).
   constexpr double kAlpha = 0.5854101966249685, kBeta = 0.1381966011250105;
-  std::vector<double> eta2(ne, 0.0);
+  std::vector<double> eta2(ne, 0.0), u2(ne, 0.0);
   double error2 = 0, energy2 = 0;
 #pragma omp parallel for reduction(+ : error2, energy2) schedule(static)
   for (int e = 0; e < ne; ++e) {
@@ -45,14 +84,11 @@ ErrorEstimateResult EstimateZzError(const Mesh& mesh, const std::vector<double>&
       sum += 0.25 * volume[e] * diff.dot(compliance * diff);
     }
     eta2[e] = sum;
+    u2[e] = volume[e] * sh.dot(compliance * sh);
     error2 += sum;
-    energy2 += volume[e] * sh.dot(compliance * sh);
+    energy2 += u2[e];
   }
-  ErrorEstimateResult result;
-  result.relative_error = error2 + energy2 > 0 ? std::sqrt(error2 / (error2 + energy2)) : 0.0;
-  result.element_share.resize(ne);
-  for (int e = 0; e < ne; ++e) result.element_share[e] = error2 > 0 ? eta2[e] / error2 : 0.0;
-  return result;
+  return Finish(std::move(eta2), std::move(u2), error2, energy2);
 }
 
 namespace {
@@ -91,7 +127,7 @@ ErrorEstimateResult EstimateZzRecovered(const Mesh& mesh, const ElementStress& s
     if (weight(a) > 0) nodal.row(a) /= weight(a);
   }
 
-  std::vector<double> eta2(ne, 0.0);
+  std::vector<double> eta2(ne, 0.0), u2(ne, 0.0);
   double error2 = 0, energy2 = 0;
 #pragma omp parallel for reduction(+ : error2, energy2) schedule(static)
   for (int e = 0; e < ne; ++e) {
@@ -108,14 +144,11 @@ ErrorEstimateResult EstimateZzRecovered(const Mesh& mesh, const ElementStress& s
       energy += dv * sh.dot(compliance * sh);
     }
     eta2[e] = sum;
+    u2[e] = energy;
     error2 += sum;
     energy2 += energy;
   }
-  ErrorEstimateResult result;
-  result.relative_error = error2 + energy2 > 0 ? std::sqrt(error2 / (error2 + energy2)) : 0.0;
-  result.element_share.resize(ne);
-  for (int e = 0; e < ne; ++e) result.element_share[e] = error2 > 0 ? eta2[e] / error2 : 0.0;
-  return result;
+  return Finish(std::move(eta2), std::move(u2), error2, energy2);
 }
 
 // The 10-node tetrahedron, integrated with the 14-point degree-5 rule.

@@ -11,7 +11,9 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cstdint>
 #include <functional>
+#include <string>
 #include <vector>
 
 #include "fem/tet4.h"
@@ -22,7 +24,21 @@ namespace pba {
 struct ErrorEstimateResult {
   double relative_error = 0;          // eta, a fraction
   std::vector<double> element_share;  // eta_e^2 / sum eta_e^2, per element
+  std::vector<double> element_error2;   // eta_e^2, per element
+  std::vector<double> element_energy2;  // ||u_h||_E^2 on element e
 };
+
+// The estimate of each region of the mesh (Mesh::region_names; one region
+// named `body` when the mesh has none): eta_r = sqrt(E_r^2 / (E_r^2 +
+// U_r^2)) over the region's elements, and its share of the total E^2.
+struct RegionError {
+  std::string name;
+  int64_t elements = 0;
+  double relative_error = 0;
+  double share = 0;
+};
+std::vector<RegionError> ErrorByRegion(const Mesh& mesh, const ErrorEstimateResult& estimate,
+                                       const std::string& body);
 
 // `stress` is elements x 6 (Voigt), `volume` per element [m^3].
 ErrorEstimateResult EstimateZzError(const Mesh& mesh, const std::vector<double>& stress,

@@ -197,6 +197,9 @@ Status SolveLinearStatic(const SceneSpec& scene, const Model& model, PhaseClock*
       : mesh.hexahedral() ? "Zienkiewicz-Zhu stress recovery (nodal averaging, trilinear)"
                           : "Zienkiewicz-Zhu stress recovery (nodal averaging)";
   summary.error.relative_error = estimate.relative_error;
+  for (const RegionError& r : ErrorByRegion(mesh, estimate, "body")) {
+    summary.error.regions.push_back({r.name, r.elements, r.relative_error, r.share});
+  }
   summary.error.note =
       "estimated discretisation error in the energy norm, relative to the solution's energy norm; "
       "refine the mesh (mesh.element_size_mm) to reduce it";

@@ -287,6 +287,9 @@ Status SolveNonlinearStatic(const SceneSpec& scene, const Model& model, PhaseClo
       "Zienkiewicz-Zhu recovery of the second Piola-Kirchhoff stress (nodal averaging), "
       "measured with the initial compliance";
   summary.error.relative_error = estimate.relative_error;
+  for (const RegionError& r : ErrorByRegion(mesh, estimate, "body")) {
+    summary.error.regions.push_back({r.name, r.elements, r.relative_error, r.share});
+  }
   summary.error.note =
       "estimated discretisation error in the energy norm, relative to the solution's; at large "
       "strain the initial-compliance norm makes it an indicator rather than a bound; refine the "

@@ -41,6 +41,10 @@ struct Mesh {
   // the same at +1, map to a right-handed brick; see fem/hex8.h).
   std::vector<std::array<int, 8>> hexes;
   std::map<std::string, FaceSet> face_sets;
+  // Element regions (the atlas's structures): region_names[element_region[e]]
+  // is element e's region. Both empty for a one-region body.
+  std::vector<std::string> region_names;
+  std::vector<int> element_region;
 
   int num_nodes() const { return static_cast<int>(nodes.rows()); }
   int num_elements() const { return static_cast<int>(hexes.empty() ? tets.size() : hexes.size()); }

@@ -285,5 +285,23 @@ TEST(FormatSummary, NewtonLineAndAShortenedPath) {
             std::string::npos);
 }
 
+TEST(FormatSummary, ErrorPerStructureWhenThereAreSeveral) {
+  Summary s;
+  s.error.estimated = true;
+  s.error.method = "ZZ";
+  s.error.relative_error = 0.05;
+  s.error.regions = {{"body", 10, 0.05, 1.0}};
+  std::string text = codec::FormatSummary(SummaryToProto(s));
+  EXPECT_EQ(text.find("body"), std::string::npos) << text;  // one region: the overall line
+  s.error.regions = {{"putamen", 120, 0.08, 0.75}, {"caudate", 80, 0.03, 0.25}};
+  const v1::Summary proto = SummaryToProto(s);
+  ASSERT_EQ(proto.error_estimate().regions_size(), 2);
+  EXPECT_EQ(proto.error_estimate().regions(0).elements(), 120);
+  text = codec::FormatSummary(proto);
+  EXPECT_NE(text.find("putamen"), std::string::npos) << text;
+  EXPECT_NE(text.find("about 8 % (75 % of the error, 120 elements)"), std::string::npos) << text;
+  EXPECT_NE(text.find("caudate"), std::string::npos) << text;
+}
+
 }  // namespace
 }  // namespace pba
