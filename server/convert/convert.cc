@@ -53,6 +53,9 @@ Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec) {
     case v1::MeshOptions::HEX8:
       spec->mesh.element = ElementType::kHex8;
       break;
+    case v1::MeshOptions::HEX8_FULL:
+      spec->mesh.element = ElementType::kHex8Full;
+      break;
     default:
       return Status::InvalidArgument(
           "mesh.element", "unknown element type " + std::to_string(scene.mesh().element()));

@@ -19,15 +19,19 @@ namespace {
 // work.
 constexpr int kParallelFrom = 256;
 
+// Both bricks: `full_integration` picks Hex8FiniteStrainFull over the
+// mean-dilatation Hex8FiniteStrain; everything else is shared.
 class Hex8Model final : public FiniteStrainModel {
  public:
-  Hex8Model(const Mesh& mesh, const HyperelasticMaterial& material)
+  Hex8Model(const Mesh& mesh, const HyperelasticMaterial& material, bool full_integration)
       : mesh_(mesh),
         material_(material),
+        full_integration_(full_integration),
         parallel_(mesh.num_elements() >= kParallelFrom),
         colours_(ColourElements(mesh)) {
     if (mesh.num_elements() > 0 && !mesh.hexahedral()) {
-      std::fprintf(stderr, "pba: MakeHex8Model needs a hexahedral mesh (Mesh::hexes)\n");
+      std::fprintf(stderr, "pba: %s needs a hexahedral mesh (Mesh::hexes)\n",
+                   full_integration ? "MakeHex8FullModel" : "MakeHex8Model");
       std::abort();
     }
     geometry_.resize(mesh.num_elements());
@@ -48,7 +52,7 @@ class Hex8Model final : public FiniteStrainModel {
       for (std::size_t k = 0; k < colour.size(); ++k) {
         const int e = colour[k];
         Hex8FiniteStrainResult r;
-        if (!Hex8FiniteStrain(geometry_[e], GatherElementHex8(mesh_, e, u), material_, false, &r)) {
+        if (!Evaluate(e, u, false, false, &r)) {
           ok = false;
           continue;
         }
@@ -65,10 +69,7 @@ class Hex8Model final : public FiniteStrainModel {
                   LinearSystem* system) const override {
     const Hex8ElementKernel kernel = [&](int e, Matrix24d* k, Vector24d* f) {
       Hex8FiniteStrainResult r;
-      if (!Hex8FiniteStrain(geometry_[e], GatherElementHex8(mesh_, e, u), material_, true, &r,
-                            options.drop_pressure_stiffness)) {
-        return false;
-      }
+      if (!Evaluate(e, u, true, options.drop_pressure_stiffness, &r)) return false;
       *k = r.tangent;
       *f = -r.force;
       return true;
@@ -91,10 +92,23 @@ class Hex8Model final : public FiniteStrainModel {
   }
 
   std::string Describe() const override {
-    return "HEX8 (2x2x2 integration, mean dilatation), total Lagrangian";
+    return full_integration_
+               ? "HEX8, full 2x2x2 integration (locks when nearly incompressible), total "
+                 "Lagrangian"
+               : "HEX8 (2x2x2 integration, mean dilatation), total Lagrangian";
   }
 
  private:
+  // Element `e` at the global displacement `u`, by this model's kernel.
+  bool Evaluate(int e, const Eigen::VectorXd& u, bool with_tangent, bool drop_pressure_stiffness,
+                Hex8FiniteStrainResult* r) const {
+    const Vector24d ue = GatherElementHex8(mesh_, e, u);
+    return full_integration_ ? Hex8FiniteStrainFull(geometry_[e], ue, material_, with_tangent, r,
+                                                    drop_pressure_stiffness)
+                             : Hex8FiniteStrain(geometry_[e], ue, material_, with_tangent, r,
+                                                drop_pressure_stiffness);
+  }
+
   // The lowest element whose reference det J or whose F at an integration
   // point at `u` is not admissible; -1 when there is none.
   int LowestInverted(const Eigen::VectorXd& u) const {
@@ -117,7 +131,8 @@ class Hex8Model final : public FiniteStrainModel {
 
   const Mesh& mesh_;
   const HyperelasticMaterial& material_;
-  const bool parallel_;  // use OpenMP threads
+  const bool full_integration_;  // Hex8FiniteStrainFull, not mean dilatation
+  const bool parallel_;          // use OpenMP threads
   std::vector<std::vector<int>> colours_;
   std::vector<Hex8Geometry> geometry_;
 };
@@ -126,7 +141,12 @@ class Hex8Model final : public FiniteStrainModel {
 
 std::unique_ptr<FiniteStrainModel> MakeHex8Model(const Mesh& mesh,
                                                  const HyperelasticMaterial& material) {
-  return std::make_unique<Hex8Model>(mesh, material);
+  return std::make_unique<Hex8Model>(mesh, material, false);
+}
+
+std::unique_ptr<FiniteStrainModel> MakeHex8FullModel(const Mesh& mesh,
+                                                     const HyperelasticMaterial& material) {
+  return std::make_unique<Hex8Model>(mesh, material, true);
 }
 
 }  // namespace pba

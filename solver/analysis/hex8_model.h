@@ -5,6 +5,11 @@
 // keeps a nearly incompressible body (brain tissue, K / mu = 1e3..1e6) from
 // locking, and the tangent stays element by element (no wider pattern than
 // the plain brick's, unlike the average nodal pressure tetrahedron).
+//
+// MakeHex8FullModel is the plain, fully integrated brick (C3D8 of Abaqus and
+// CalculiX, Hex8FiniteStrainFull): the whole energy at the eight points. It
+// locks when nearly incompressible; it is there to show that, and to compare
+// with codes whose C3D8 is this element.
 #pragma once
 
 #include <memory>
@@ -17,5 +22,9 @@ namespace pba {
 // node order [m, N]. `mesh` and `material` must outlive the model.
 std::unique_ptr<FiniteStrainModel> MakeHex8Model(const Mesh& mesh,
                                                  const HyperelasticMaterial& material);
+
+// The fully integrated brick, on the same terms as MakeHex8Model.
+std::unique_ptr<FiniteStrainModel> MakeHex8FullModel(const Mesh& mesh,
+                                                     const HyperelasticMaterial& material);
 
 }  // namespace pba

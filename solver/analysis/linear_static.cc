@@ -38,12 +38,15 @@ Status SolveLinearStatic(const SceneSpec& scene, const Model& model, PhaseClock*
               Format("assembling %d elements, %d unknowns", mesh.num_elements(), dofs.num_free()));
   const auto colours = ColourElements(mesh);
   LinearSystem system;
+  // Bricks with the plain B (full integration) instead of B-bar.
+  const bool full_bricks = scene.mesh.element == ElementType::kHex8Full;
   const auto keep_going = [&](double f) {
     clock.Update(f);
     return !clock.cancelled();
   };
   PBA_RETURN_IF_ERROR(
       mesh.quadratic()     ? AssembleLinearSystemTet10(mesh, d, dofs, colours, keep_going, &system)
+      : full_bricks ? AssembleLinearSystemHex8Full(mesh, d, dofs, colours, keep_going, &system)
       : mesh.hexahedral() ? AssembleLinearSystemHex8(mesh, d, dofs, colours, keep_going, &system)
                           : AssembleLinearSystem(mesh, d, dofs, colours, keep_going, &system));
   const ExternalLoads loads = BuildLoads(scene, mesh);
@@ -132,7 +135,8 @@ Status SolveLinearStatic(const SceneSpec& scene, const Model& model, PhaseClock*
         Vector6d strain_sum = Vector6d::Zero(), stress_sum = Vector6d::Zero();
         Vector24d force = Vector24d::Zero();
         for (int q = 0; q < 8; ++q) {
-          const Hex8BMatrix b = Hex8StrainDisplacementBar(g.grad[q], g.mean_grad);
+          const Hex8BMatrix b = full_bricks ? Hex8StrainDisplacement(g.grad[q])
+                                            : Hex8StrainDisplacementBar(g.grad[q], g.mean_grad);
           const Vector6d strain = b * ue, stress = d * strain;
           strain_sum += g.volume[q] * strain;
           stress_sum += g.volume[q] * stress;
@@ -185,8 +189,9 @@ Status SolveLinearStatic(const SceneSpec& scene, const Model& model, PhaseClock*
           ? EstimateZzErrorHex8(
                 mesh,
                 [&](int e, const Eigen::Vector3d& xi) -> Vector6d {
-                  return d *
-                         Hex8Strain(Hex8Coordinates(mesh, e), GatherElementHex8(mesh, e, u), xi);
+                  const Hex8Nodes x = Hex8Coordinates(mesh, e);
+                  const Vector24d ue = GatherElementHex8(mesh, e, u);
+                  return d * (full_bricks ? Hex8StrainFull(x, ue, xi) : Hex8Strain(x, ue, xi));
                 },
                 ComplianceMatrix(scene.material))
           : EstimateZzError(mesh, solution->stress_pa, volume, ComplianceMatrix(scene.material));

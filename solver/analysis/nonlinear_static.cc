@@ -117,11 +117,14 @@ Status SolveNonlinearStatic(const SceneSpec& scene, const Model& model, PhaseClo
   const DofMap& dofs = model.dofs;
   const auto material = MakeHyperelasticMaterial(scene.material);
   const bool plain = scene.mesh.element == ElementType::kTet4;
+  const bool full_bricks = scene.mesh.element == ElementType::kHex8Full;
   const auto body = mesh.quadratic()    ? MakeTet10Model(mesh, *material)
+                    : full_bricks       ? MakeHex8FullModel(mesh, *material)
                     : mesh.hexahedral() ? MakeHex8Model(mesh, *material)
                     : plain             ? MakeTet4Model(mesh, *material)
                                         : MakeAverageNodalPressureTet4Model(mesh, *material);
   summary.element_type = mesh.quadratic()    ? "TET10"
+                         : full_bricks       ? "HEX8_FULL"
                          : mesh.hexahedral() ? "HEX8"
                          : plain             ? "TET4"
                                              : "TET4_ANP";
@@ -218,7 +221,9 @@ Status SolveNonlinearStatic(const SceneSpec& scene, const Model& model, PhaseClo
       const Vector24d ue = GatherElementHex8(mesh, e, u);
       const double theta = MeanDilatation(g, ue);
       for (int q = 0; q < 8; ++q) {
-        const PointFields p = FieldsAt(*material, MeanDilatationF(g.grad[q], ue, theta));
+        const PointFields p =
+            FieldsAt(*material, full_bricks ? DeformationGradientHex8(g.grad[q], ue)
+                                            : MeanDilatationF(g.grad[q], ue, theta));
         sum.Add(g.volume[q], p);
         v += g.volume[q];
         max_strain = std::max(max_strain, p.green.cwiseAbs().maxCoeff());
@@ -277,7 +282,9 @@ Status SolveNonlinearStatic(const SceneSpec& scene, const Model& model, PhaseClo
                   Hex8Nodes grad;
                   Hex8Gradients(x, xi, &grad);
                   return material->Stress(
-                      MeanDilatationF(grad, ue, MeanDilatation(ComputeHex8Geometry(x), ue)));
+                      full_bricks
+                          ? DeformationGradientHex8(grad, ue)
+                          : MeanDilatationF(grad, ue, MeanDilatation(ComputeHex8Geometry(x), ue)));
                 },
                 ComplianceMatrix(scene.material))
           : EstimateZzError(mesh, solution->pk2_stress_pa, volume, ComplianceMatrix(scene.material));

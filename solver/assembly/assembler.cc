@@ -178,9 +178,9 @@ Status AssembleElements(const Mesh& mesh, const NodesOf& nodes_of, const DofMap&
                              " could not be evaluated (inverted: det F <= 0)");
   }
   const int n = dofs.num_free();
-  system->k = Eigen::Map<const SparseMatrix>(n, n, static_cast<int>(values.size()),
-                                             pattern.outer.data(), pattern.inner.data(),
-                                             values.data());
+  system->k =
+      Eigen::Map<const SparseMatrix>(n, n, static_cast<int>(values.size()), pattern.outer.data(),
+                                     pattern.inner.data(), values.data());
   return Status::Ok();
 }
 
@@ -240,18 +240,38 @@ Status AssembleLinearSystemTet10(const Mesh& mesh, const Matrix6d& d, const DofM
   return AssembleSystemTet10(mesh, dofs, colours, kernel, options, keep_going, system);
 }
 
-Status AssembleLinearSystemHex8(const Mesh& mesh, const Matrix6d& d, const DofMap& dofs,
-                                const std::vector<std::vector<int>>& colours,
-                                const std::function<bool(double)>& keep_going,
-                                LinearSystem* system) {
+namespace {
+
+// The small-strain hexahedral assembly with element stiffness `stiffness`
+// (Hex8Stiffness or Hex8StiffnessFull), prescribed values lifted.
+Status AssembleLinearHex8(const Mesh& mesh, const Matrix6d& d,
+                          Matrix24d (*stiffness)(const Hex8Nodes&, const Matrix6d&),
+                          const DofMap& dofs, const std::vector<std::vector<int>>& colours,
+                          const std::function<bool(double)>& keep_going, LinearSystem* system) {
   const Hex8ElementKernel kernel = [&](int e, Matrix24d* k, Vector24d* f) {
-    *k = Hex8Stiffness(Hex8Coordinates(mesh, e), d);
+    *k = stiffness(Hex8Coordinates(mesh, e), d);
     f->setZero();
     return true;
   };
   AssemblyOptions options;
   options.lift_prescribed = true;
   return AssembleSystemHex8(mesh, dofs, colours, kernel, options, keep_going, system);
+}
+
+}  // namespace
+
+Status AssembleLinearSystemHex8(const Mesh& mesh, const Matrix6d& d, const DofMap& dofs,
+                                const std::vector<std::vector<int>>& colours,
+                                const std::function<bool(double)>& keep_going,
+                                LinearSystem* system) {
+  return AssembleLinearHex8(mesh, d, Hex8Stiffness, dofs, colours, keep_going, system);
+}
+
+Status AssembleLinearSystemHex8Full(const Mesh& mesh, const Matrix6d& d, const DofMap& dofs,
+                                    const std::vector<std::vector<int>>& colours,
+                                    const std::function<bool(double)>& keep_going,
+                                    LinearSystem* system) {
+  return AssembleLinearHex8(mesh, d, Hex8StiffnessFull, dofs, colours, keep_going, system);
 }
 
 }  // namespace pba

@@ -101,6 +101,13 @@ Status AssembleLinearSystemHex8(const Mesh& mesh, const Matrix6d& d, const DofMa
                                 const std::function<bool(double)>& keep_going,
                                 LinearSystem* system);
 
+// The same with the plain, fully integrated brick (Hex8StiffnessFull, C3D8
+// of Abaqus and CalculiX), which locks as nu -> 1/2.
+Status AssembleLinearSystemHex8Full(const Mesh& mesh, const Matrix6d& d, const DofMap& dofs,
+                                    const std::vector<std::vector<int>>& colours,
+                                    const std::function<bool(double)>& keep_going,
+                                    LinearSystem* system);
+
 // Gathers the 12 element unknowns of tet `e` from the full vector `u`.
 Vector12d GatherElement(const Mesh& mesh, int e, const Eigen::VectorXd& u);
 

@@ -26,6 +26,20 @@ double JacobianDeterminant(const Hex8Nodes& x, const Eigen::Vector3d& xi) {
   return (x.transpose() * Hex8NaturalGradients(xi)).determinant();
 }
 
+// sum_q B_q^T D B_q |w_q det J_q|, B_q the B-bar or the plain matrix.
+// |det J| as for the tetrahedra, so that a consistently negatively oriented
+// element still gives its (positive) stiffness.
+Matrix24d Stiffness(const Hex8Nodes& x, const Matrix6d& d, bool mean_dilatation) {
+  const Hex8Geometry g = ComputeHex8Geometry(x);
+  Matrix24d k = Matrix24d::Zero();
+  for (int q = 0; q < 8; ++q) {
+    const Hex8BMatrix b = mean_dilatation ? Hex8StrainDisplacementBar(g.grad[q], g.mean_grad)
+                                          : Hex8StrainDisplacement(g.grad[q]);
+    k.noalias() += std::abs(g.volume[q]) * b.transpose() * d * b;
+  }
+  return k;
+}
+
 }  // namespace
 
 const std::array<Hex8QuadraturePoint, 8>& Hex8Rule() {
@@ -111,16 +125,10 @@ Hex8Geometry ComputeHex8Geometry(const Hex8Nodes& x) {
   return g;
 }
 
-Matrix24d Hex8Stiffness(const Hex8Nodes& x, const Matrix6d& d) {
-  // |det J| as for the tetrahedra, so that a consistently negatively oriented
-  // element still gives its (positive) stiffness.
-  const Hex8Geometry g = ComputeHex8Geometry(x);
-  Matrix24d k = Matrix24d::Zero();
-  for (int q = 0; q < 8; ++q) {
-    const Hex8BMatrix b = Hex8StrainDisplacementBar(g.grad[q], g.mean_grad);
-    k.noalias() += std::abs(g.volume[q]) * b.transpose() * d * b;
-  }
-  return k;
+Matrix24d Hex8Stiffness(const Hex8Nodes& x, const Matrix6d& d) { return Stiffness(x, d, true); }
+
+Matrix24d Hex8StiffnessFull(const Hex8Nodes& x, const Matrix6d& d) {
+  return Stiffness(x, d, false);
 }
 
 Vector6d Hex8Strain(const Hex8Nodes& x, const Vector24d& u, const Eigen::Vector3d& xi) {
@@ -128,6 +136,13 @@ Vector6d Hex8Strain(const Hex8Nodes& x, const Vector24d& u, const Eigen::Vector3
   if (Hex8Gradients(x, xi, &grad) == 0)
     return Vector6d::Constant(std::numeric_limits<double>::quiet_NaN());
   return Hex8StrainDisplacementBar(grad, ComputeHex8Geometry(x).mean_grad) * u;
+}
+
+Vector6d Hex8StrainFull(const Hex8Nodes& x, const Vector24d& u, const Eigen::Vector3d& xi) {
+  Hex8Nodes grad;
+  if (Hex8Gradients(x, xi, &grad) == 0)
+    return Vector6d::Constant(std::numeric_limits<double>::quiet_NaN());
+  return Hex8StrainDisplacement(grad) * u;
 }
 
 double Hex8Volume(const Hex8Nodes& x) {

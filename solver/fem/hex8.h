@@ -25,6 +25,9 @@
 //   B_bar = B - B_vol + mean(B_vol),  B_vol = (1/3) m m^T B,  m = (1 1 1 0 0 0)^T,
 // mean(.) = (1/V) sum_q (.) w_q det J_q. It is valid for any 6 x 6 D, and
 // the stiffness stays symmetric: K = sum_q B_bar^T D B_bar w_q det J_q.
+// The plain, fully integrated element (Hex8StiffnessFull, Hex8StrainFull) is
+// kept beside it: to show the locking, and to compare with codes whose C3D8
+// is the plain brick (Abaqus, CalculiX). On a uniform strain the two agree.
 #pragma once
 
 #include <Eigen/Core>
@@ -102,6 +105,15 @@ Matrix24d Hex8Stiffness(const Hex8Nodes& x, const Matrix6d& d);
 // displacement `u` (24) [m]: the deviatoric part of the strain at xi, the
 // volumetric part the element mean. NaN when det J = 0 at xi.
 Vector6d Hex8Strain(const Hex8Nodes& x, const Vector24d& u, const Eigen::Vector3d& xi);
+
+// The fully integrated (C3D8) stiffness sum_q B_q^T D B_q |w_q det J_q|
+// with the plain B of every point: no mean dilatation, so it locks as
+// nu -> 1/2 [N/m], 24 x 24 as Hex8Stiffness.
+Matrix24d Hex8StiffnessFull(const Hex8Nodes& x, const Matrix6d& d);
+
+// The plain strain B(xi) u at natural point `xi` (Voigt, engineering shear),
+// the strain of the fully integrated element. NaN when det J = 0 at xi.
+Vector6d Hex8StrainFull(const Hex8Nodes& x, const Vector24d& u, const Eigen::Vector3d& xi);
 
 // Volume by the 2 x 2 x 2 rule [m^3], exact for any trilinear brick.
 double Hex8Volume(const Hex8Nodes& x);

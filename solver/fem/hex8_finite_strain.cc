@@ -28,9 +28,10 @@ namespace {
 //     B_NL^T C_iso B_NL plus geometric (G_a . S_iso G_b) I.
 //
 // On a homogeneous deformation theta = det F and Pi = V W(F), the plain
-// element's value. At u = 0, U'(1) = 0, dv/dx_a = V mean(G_a) and
-// C_iso = the deviatoric part of the initial elasticity, so K is the B-bar
-// stiffness of fem/hex8.h with D = D_dev + K m m^T.
+// element's (Hex8FiniteStrainFull) value. At u = 0, U'(1) = 0,
+// dv/dx_a = V mean(G_a) and C_iso = the deviatoric part of the initial
+// elasticity, so K is the B-bar stiffness of fem/hex8.h with
+// D = D_dev + K m m^T.
 
 // delta E (Voigt) = B_NL delta u_e: delta E_ij = (F_ki G_aj + F_kj G_ai) delta u_ak / 2,
 // the shear rows carrying 2 delta E_ij (as for the tetrahedra).
@@ -65,13 +66,13 @@ Eigen::Matrix3d Skew(const Eigen::Vector3d& w) {
   return s;
 }
 
-}  // namespace
-
-bool Hex8FiniteStrain(const Hex8Geometry& reference, const Vector24d& u,
-                      const HyperelasticMaterial& material, bool with_tangent,
-                      Hex8FiniteStrainResult* result, bool drop_pressure_stiffness) {
+// F at all eight points into result->f and the force, energy and (when
+// `with_tangent`) tangent zeroed; false when the reference element is
+// inverted or an F is not admissible. All eight F come first: the material
+// must not see an inadmissible one.
+bool StartElement(const Hex8Geometry& reference, const Vector24d& u, bool with_tangent,
+                  Hex8FiniteStrainResult* result) {
   if (!(reference.min_jacobian > 0)) return false;
-  // All eight F first: the material must not see an inadmissible one.
   for (int q = 0; q < 8; ++q) {
     Eigen::Matrix3d& f = result->f[q];
     f.setIdentity();
@@ -81,6 +82,27 @@ bool Hex8FiniteStrain(const Hex8Geometry& reference, const Vector24d& u,
   result->force.setZero();
   result->energy = 0;
   if (with_tangent) result->tangent.setZero();
+  return true;
+}
+
+// The initial-stress stiffness of stress `s` (Voigt) at one point of volume
+// `dv`: (G_a . S G_b) I in block (a, b).
+void AddGeometricStiffness(const Hex8Nodes& grad, const Vector6d& s, double dv,
+                           Matrix24d* tangent) {
+  const Eigen::Matrix<double, 8, 8> geometric = dv * grad * VoigtToSymmetric(s) * grad.transpose();
+  for (int a = 0; a < 8; ++a) {
+    for (int e = 0; e < 8; ++e) {
+      tangent->block<3, 3>(3 * a, 3 * e).diagonal().array() += geometric(a, e);
+    }
+  }
+}
+
+}  // namespace
+
+bool Hex8FiniteStrain(const Hex8Geometry& reference, const Vector24d& u,
+                      const HyperelasticMaterial& material, bool with_tangent,
+                      Hex8FiniteStrainResult* result, bool drop_pressure_stiffness) {
+  if (!StartElement(reference, u, with_tangent, result)) return false;
   const bool with_pressure_stiffness = with_tangent && !drop_pressure_stiffness;
   Vector24d volume_gradient = Vector24d::Zero();  // dv/dx
   Matrix24d volume_hessian;                       // d2v/dx2
@@ -104,13 +126,7 @@ bool Hex8FiniteStrain(const Hex8Geometry& reference, const Vector24d& u,
     }
     if (!with_tangent) continue;
     result->tangent.noalias() += dv * b.transpose() * c * b;
-    const Eigen::Matrix<double, 8, 8> geometric =
-        dv * grad * VoigtToSymmetric(s) * grad.transpose();
-    for (int a = 0; a < 8; ++a) {
-      for (int e = 0; e < 8; ++e) {
-        result->tangent.block<3, 3>(3 * a, 3 * e).diagonal().array() += geometric(a, e);
-      }
-    }
+    AddGeometricStiffness(grad, s, dv, &result->tangent);
     if (!with_pressure_stiffness) continue;
     for (int a = 0; a < 8; ++a) {
       for (int e = a + 1; e < 8; ++e) {
@@ -139,6 +155,50 @@ bool Hex8FiniteStrain(const Hex8Nodes& reference, const Vector24d& u,
                       Hex8FiniteStrainResult* result, bool drop_pressure_stiffness) {
   return Hex8FiniteStrain(ComputeHex8Geometry(reference), u, material, with_tangent, result,
                           drop_pressure_stiffness);
+}
+
+bool Hex8FiniteStrainFull(const Hex8Geometry& reference, const Vector24d& u,
+                          const HyperelasticMaterial& material, bool with_tangent,
+                          Hex8FiniteStrainResult* result, bool drop_pressure_stiffness) {
+  if (!StartElement(reference, u, with_tangent, result)) return false;
+  double volume = 0;  // v, for theta only
+  for (int q = 0; q < 8; ++q) {
+    const Eigen::Matrix3d& f = result->f[q];
+    const Hex8Nodes& grad = reference.grad[q];
+    const double dv = reference.volume[q];
+    const Vector6d s = material.Stress(f);
+    const Hex8BMatrix b = NonlinearStrainDisplacement(grad, f);
+    result->force.noalias() += dv * b.transpose() * s;
+    result->energy += dv * material.Energy(f);
+    volume += dv * f.determinant();
+    if (!with_tangent) continue;
+    Matrix6d c;
+    Vector6d geometric_stress = s;
+    if (drop_pressure_stiffness) {
+      // The point's volumetric Hessian is U'' dJ dJ^T + U' d2J; with
+      // dJ = J C^-1 : delta E the first is U'' J^2 C^-1 (x) C^-1 in the
+      // material part, and U' d2J is what the J U' C^-1 parts of the
+      // material tangent and of S in the geometric term add up to.
+      double w_iso = 0;
+      material.Isochoric(f, &w_iso, &geometric_stress, &c);
+      const double j = f.determinant();
+      const Vector6d c_inv = SymmetricToVoigt((f.transpose() * f).inverse());
+      c.noalias() += material.Volumetric(j).second * j * j * c_inv * c_inv.transpose();
+    } else {
+      c = material.Tangent(f);
+    }
+    result->tangent.noalias() += dv * b.transpose() * c * b;
+    AddGeometricStiffness(grad, geometric_stress, dv, &result->tangent);
+  }
+  result->theta = volume / reference.element_volume;
+  return true;
+}
+
+bool Hex8FiniteStrainFull(const Hex8Nodes& reference, const Vector24d& u,
+                          const HyperelasticMaterial& material, bool with_tangent,
+                          Hex8FiniteStrainResult* result, bool drop_pressure_stiffness) {
+  return Hex8FiniteStrainFull(ComputeHex8Geometry(reference), u, material, with_tangent, result,
+                              drop_pressure_stiffness);
 }
 
 }  // namespace pba

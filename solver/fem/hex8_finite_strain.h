@@ -27,6 +27,17 @@
 // instead of eight removes the volumetric locking of the fully integrated
 // brick; at u = 0 the tangent is the B-bar stiffness of fem/hex8.h.
 //
+// Hex8FiniteStrainFull is the plain, fully integrated brick (C3D8 of Abaqus
+// and CalculiX): the whole energy W(F_q) at each of the eight points,
+//
+//   Pi = sum_q W(F_q) dV_q,  f = sum_q B_NL^T S_q dV_q,
+//   K  = sum_q [B_NL^T C_q B_NL + (G_a . S_q G_b) I] dV_q,
+//
+// with S, C the material's full stress and tangent. Eight volume constraints
+// per element: it locks when nearly incompressible; at u = 0 its tangent is
+// Hex8StiffnessFull. On a homogeneous deformation the two elements give the
+// same energy and force.
+//
 // Reference configuration, Voigt order xx yy zz yz xz xy with engineering
 // shear strains, node order and natural coordinates as in fem/hex8.h.
 #pragma once
@@ -46,7 +57,9 @@ struct Hex8FiniteStrainResult {
   double energy = 0;  // stored energy [J]
   // Deformation gradient at each point of Hex8Rule().
   std::array<Eigen::Matrix3d, 8> f;
-  double theta = 1;  // mean dilatation v / V
+  // Mean dilatation v / V: Hex8FiniteStrain's volume constraint;
+  // Hex8FiniteStrainFull reports it for information.
+  double theta = 1;
 };
 
 // Force, energy and (when `with_tangent`) tangent of one element with
@@ -70,5 +83,20 @@ bool Hex8FiniteStrain(const Hex8Geometry& reference, const Vector24d& u,
 bool Hex8FiniteStrain(const Hex8Nodes& reference, const Vector24d& u,
                       const HyperelasticMaterial& material, bool with_tangent,
                       Hex8FiniteStrainResult* result, bool drop_pressure_stiffness = false);
+
+// The fully integrated element of the header, arguments and failures as for
+// Hex8FiniteStrain. With `drop_pressure_stiffness` the tangent leaves out
+// U'(J_q) d2J_q/dx2 at every point, as fem/tet10_finite_strain.h does: the
+// material part is the isochoric tangent plus U''(J) J^2 C^-1 (x) C^-1, the
+// geometric part that of the isochoric stress S_iso. Force and energy are
+// unchanged; at u = 0 the two tangents agree.
+bool Hex8FiniteStrainFull(const Hex8Geometry& reference, const Vector24d& u,
+                          const HyperelasticMaterial& material, bool with_tangent,
+                          Hex8FiniteStrainResult* result, bool drop_pressure_stiffness = false);
+
+// The same from the reference node coordinates (8 x 3 [m]).
+bool Hex8FiniteStrainFull(const Hex8Nodes& reference, const Vector24d& u,
+                          const HyperelasticMaterial& material, bool with_tangent,
+                          Hex8FiniteStrainResult* result, bool drop_pressure_stiffness = false);
 
 }  // namespace pba

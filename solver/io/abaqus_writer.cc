@@ -117,8 +117,13 @@ Status ExportAbaqusInput(const SceneSpec& scene, const std::filesystem::path& fi
     out << "** PBA solves this scene with TET10; C3D10 is the same element (the same 10 nodes in\n"
            "** the same order, the same 4-point rule), so both codes answer one discrete "
            "problem.\n";
+  } else if (scene.mesh.element == ElementType::kHex8) {
+    out << "** PBA solves this scene with HEX8 (mean dilatation); C3D8 is fully integrated and\n"
+           "** locks when nearly incompressible: set mesh.element: HEX8_FULL to compare the same\n"
+           "** discrete problem.\n";
   } else if (scene.analysis.type == AnalysisSpec::Type::kNonlinearStatic &&
-             scene.mesh.element != ElementType::kTet4) {
+             (scene.mesh.element == ElementType::kTet4Anp ||
+              scene.mesh.element == ElementType::kDefault)) {
     out << "** PBA solves this scene with TET4_ANP (average nodal pressure); C3D4 is the plain\n"
            "** tetrahedron, which locks when nearly incompressible: set mesh.element: TET4 (or\n"
            "** TET10, C3D10) to compare the same discrete problem.\n";

@@ -320,7 +320,7 @@ int64_t EstimateElementCount(const GeometrySpec& geometry, const MeshSpec& optio
   if (!(h > 0)) return 0;
   // Counted in doubles: an absurd size must not overflow the count. Each
   // cell is one brick, or 6 tetrahedra (two prisms of 3).
-  const double per_cell = options.element == ElementType::kHex8 ? 1.0 : 6.0;
+  const double per_cell = IsHexahedral(options.element) ? 1.0 : 6.0;
   double count = 0;
   if (geometry.kind == GeometrySpec::Kind::kBox) {
     const auto& s = geometry.box.size_mm;
@@ -340,7 +340,7 @@ int64_t EstimateElementCount(const GeometrySpec& geometry, const MeshSpec& optio
 
 Mesh BuildPrimitiveMesh(const GeometrySpec& geometry, const MeshSpec& options, MeshStats* stats) {
   const double h = EffectiveElementSize(geometry, options);
-  const bool hex = options.element == ElementType::kHex8;
+  const bool hex = IsHexahedral(options.element);
   Mesh mesh;
   if (geometry.kind == GeometrySpec::Kind::kBox) {
     const auto& s = geometry.box.size_mm;

@@ -197,6 +197,15 @@ std::vector<SceneSpec> Cases() {
   compressed8.material = neo.material;
   compressed8.analysis.type = AnalysisSpec::Type::kNonlinearStatic;
   compressed8.mesh.element = ElementType::kHex8;
+  // The fully integrated brick is C3D8 itself: non-uniform fields compare,
+  // at small and at finite strain.
+  SceneSpec bonded8 =
+      Scene("8-node full-integration block, bottom fixed, top pressed 1.5 mm", box, 2.5,
+            {Condition("bottom", K::kFixed), Condition("top", K::kDisplacement, {0.0, 0.0, -1.5})});
+  bonded8.mesh.element = ElementType::kHex8Full;
+  SceneSpec neo8 = neo;
+  neo8.name = "8-node full-integration neo-Hookean block, bonded, pressed 20 % (nonlinear)";
+  neo8.mesh.element = ElementType::kHex8Full;
   return {
       neo,
       ogden,
@@ -217,6 +226,8 @@ std::vector<SceneSpec> Cases() {
       cylinder10,
       stretched8,
       compressed8,
+      bonded8,
+      neo8,
   };
 }
 

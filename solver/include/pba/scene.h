@@ -43,7 +43,13 @@ enum class ElementType {
   kTet4Anp,  // 4-node tetrahedron with average nodal pressure (nonlinear analyses)
   kTet10,    // 10-node quadratic tetrahedron; mid-edge nodes on curved faces lie on the surface
   kHex8,     // 8-node hexahedron with a mean-dilatation (B-bar) volumetric treatment
+  kHex8Full,  // 8-node hexahedron, full 2x2x2 integration (locks when nearly incompressible)
 };
+
+// True for the brick elements (the primitive is meshed into hexahedra).
+inline bool IsHexahedral(ElementType e) {
+  return e == ElementType::kHex8 || e == ElementType::kHex8Full;
+}
 
 struct MeshSpec {
   ElementType element = ElementType::kDefault;

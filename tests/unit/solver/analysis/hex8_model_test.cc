@@ -1,11 +1,12 @@
-// The mean-dilatation hexahedron as a finite-strain model, on structured
-// brick meshes built here: colouring, force = dPi/du and tangent =
-// d(force)/du by central differences (prescribed values lifted, the
-// definite option honoured), a homogeneous stretch in equilibrium with its
-// traction, the lowest inverted element named, Newton uniaxial compression
-// reaching the homogeneous answer, the small-strain patch test, and bonded
-// compression of a nearly incompressible cube agreeing with the average
-// nodal pressure tetrahedron.
+// The mean-dilatation and the fully integrated hexahedra as finite-strain
+// models, on structured brick meshes built here: colouring, force = dPi/du
+// and tangent = d(force)/du by central differences (prescribed values
+// lifted, the definite option honoured), a homogeneous stretch in
+// equilibrium with its traction, the lowest inverted element named, Newton
+// uniaxial compression reaching the homogeneous answer, the small-strain
+// patch test of both linear assemblies, bonded compression of a nearly
+// incompressible cube agreeing with the average nodal pressure tetrahedron,
+// and the fully integrated brick locking there.
 #include "analysis/hex8_model.h"
 
 #include <gtest/gtest.h>
@@ -15,6 +16,7 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <memory>
 #include <random>
 #include <set>
@@ -127,6 +129,18 @@ struct MaterialCase {
   std::shared_ptr<HyperelasticMaterial> material;
 };
 
+using ModelFactory = std::unique_ptr<FiniteStrainModel> (*)(const Mesh&,
+                                                            const HyperelasticMaterial&);
+
+struct ModelCase {
+  const char* name;
+  ModelFactory make;
+};
+
+std::vector<ModelCase> Models() {
+  return {{"mean_dilatation", &MakeHex8Model}, {"full", &MakeHex8FullModel}};
+}
+
 std::vector<MaterialCase> Materials() {
   OgdenCoefficients brain;
   brain.terms = {{842, -4.7}};
@@ -135,11 +149,30 @@ std::vector<MaterialCase> Materials() {
           {"ogden_brain", std::make_shared<OgdenMaterial>(brain)}};
 }
 
+// Every model with every material.
+struct Case {
+  std::string name;
+  ModelFactory make;
+  std::shared_ptr<HyperelasticMaterial> material;
+};
+
+std::vector<Case> Cases() {
+  std::vector<Case> cases;
+  for (const ModelCase& m : Models()) {
+    for (const MaterialCase& c : Materials()) {
+      cases.push_back({std::string(m.name) + "/" + c.name, m.make, c.material});
+    }
+  }
+  return cases;
+}
+
 TEST(Hex8Model, DescribesItself) {
   const Mesh mesh = HexCube(2);
   const PolynomialMaterial material(NeoHookeanCoefficients(1000, 1e6));
   EXPECT_EQ(MakeHex8Model(mesh, material)->Describe(),
             "HEX8 (2x2x2 integration, mean dilatation), total Lagrangian");
+  EXPECT_EQ(MakeHex8FullModel(mesh, material)->Describe(),
+            "HEX8, full 2x2x2 integration (locks when nearly incompressible), total Lagrangian");
 }
 
 TEST(Hex8Model, ColoursSeparateBricksThatShareANode) {
@@ -160,8 +193,8 @@ TEST(Hex8Model, ColoursSeparateBricksThatShareANode) {
 
 TEST(Hex8Model, ForceIsTheEnergyDerivative) {
   const Mesh mesh = HexCube(3, 0.2);
-  for (const MaterialCase& c : Materials()) {
-    const auto model = MakeHex8Model(mesh, *c.material);
+  for (const Case& c : Cases()) {
+    const auto model = c.make(mesh, *c.material);
     const Eigen::VectorXd u = RandomSmooth(mesh, 0.06, 7);
     Eigen::VectorXd force;
     double energy = 0;
@@ -201,8 +234,8 @@ DofMap SomeFixed(const Mesh& mesh) {
 TEST(Hex8Model, TangentIsTheForceDerivativeAndLiftsPrescribedValues) {
   const Mesh mesh = HexCube(3, 0.2);
   const DofMap dofs = SomeFixed(mesh);
-  for (const MaterialCase& c : Materials()) {
-    const auto model = MakeHex8Model(mesh, *c.material);
+  for (const Case& c : Cases()) {
+    const auto model = c.make(mesh, *c.material);
     const Eigen::VectorXd u = RandomSmooth(mesh, 0.05, 11);
     LinearSystem plain, lifted, definite;
     ASSERT_TRUE(model->Assemble(u, dofs, AssemblyOptions(), &plain).ok());
@@ -274,8 +307,8 @@ TEST(Hex8Model, HomogeneousStretchIsInEquilibriumWithItsTraction) {
   for (const auto& [name, set] : mesh.face_sets)
     boundary.insert(set.nodes.begin(), set.nodes.end());
   ASSERT_LT(static_cast<int>(boundary.size()), mesh.num_nodes());
-  for (const MaterialCase& c : Materials()) {
-    const auto model = MakeHex8Model(mesh, *c.material);
+  for (const Case& c : Cases()) {
+    const auto model = c.make(mesh, *c.material);
     Eigen::VectorXd force;
     double energy = 0;
     ASSERT_TRUE(model->InternalForce(u, &force, &energy));
@@ -297,7 +330,6 @@ TEST(Hex8Model, HomogeneousStretchIsInEquilibriumWithItsTraction) {
 TEST(Hex8Model, InvertedElementIsReportedByItsLowestIndex) {
   const Mesh mesh = HexCube(2);
   const PolynomialMaterial material(NeoHookeanCoefficients(1000, 1e6));
-  const auto model = MakeHex8Model(mesh, material);
   Eigen::VectorXd u = Eigen::VectorXd::Zero(3 * mesh.num_nodes());
   int centre = -1;
   for (int i = 0; i < mesh.num_nodes(); ++i) {
@@ -316,16 +348,20 @@ TEST(Hex8Model, InvertedElementIsReportedByItsLowestIndex) {
     }
   }
   ASSERT_GE(first_inverted, 0);
-  Eigen::VectorXd force;
-  EXPECT_FALSE(model->InternalForce(u, &force, nullptr));
   DofMap dofs(mesh.num_nodes());
   dofs.Finalize();
-  LinearSystem system;
-  const Status status = model->Assemble(u, dofs, AssemblyOptions(), &system);
-  EXPECT_EQ(status.code(), Status::Code::kNumerical);
-  EXPECT_NE(status.message().find("element " + std::to_string(first_inverted) + " "),
-            std::string::npos)
-      << status.message();
+  // Both kernels refuse the same states (an F with det F <= 0 at a point).
+  for (const ModelCase& m : Models()) {
+    const auto model = m.make(mesh, material);
+    Eigen::VectorXd force;
+    EXPECT_FALSE(model->InternalForce(u, &force, nullptr)) << m.name;
+    LinearSystem system;
+    const Status status = model->Assemble(u, dofs, AssemblyOptions(), &system);
+    EXPECT_EQ(status.code(), Status::Code::kNumerical) << m.name;
+    EXPECT_NE(status.message().find("element " + std::to_string(first_inverted) + " "),
+              std::string::npos)
+        << m.name << ": " << status.message();
+  }
 }
 
 // Uniaxial nominal stress P_zz of the uncoupled neo-Hookean
@@ -357,35 +393,44 @@ TEST(Hex8Model, NewtonUniaxialCompressionReachesTheHomogeneousAnswer) {
   for (int n : mesh.face_sets.at("top").nodes) dofs.Prescribe(n, 2, (stretch - 1) * 0.01);
   dofs.Finalize();
   const auto solver = CreateLinearSolver(AnalysisSpec::LinearSolver::kCholmod);
-  for (double ratio : {1e1, 1e3, 1e5}) {
-    const PolynomialMaterial material(NeoHookeanCoefficients(mu, ratio * mu));
-    const auto model = MakeHex8Model(mesh, material);
-    Eigen::VectorXd u;
-    NewtonReport report;
-    const Status status = SolveNewtonStatic(
-        *model, dofs, NewtonOptions(), solver.get(), [](const NewtonProgress&) { return true; }, &u,
-        &report);
-    ASSERT_TRUE(status.ok()) << status.ToString();
-    Eigen::VectorXd force;
-    ASSERT_TRUE(model->InternalForce(u, &force, nullptr));
-    double reaction = 0;
-    for (int n : mesh.face_sets.at("top").nodes) reaction += force(3 * n + 2);
-    const double exact = UniaxialNominalStress(mu, ratio * mu, stretch);
-    std::printf(
-        "  K/mu = %5.0e: P_zz = %.8f Pa (semi-analytic %.8f), %zu increments, %d iterations\n",
-        ratio, reaction / area, exact, report.increments.size(), report.total_iterations);
-    EXPECT_NEAR(reaction / area, exact, 1e-6 * std::abs(exact)) << "K/mu " << ratio;
-    // The homogeneous field, interior (distorted) nodes included: u_z = (l - 1) Z.
-    for (int i = 0; i < mesh.num_nodes(); ++i) {
-      EXPECT_NEAR(u(3 * i + 2), (stretch - 1) * mesh.nodes(i, 2), 1e-9) << i;
+  // The field is uniform, so the fully integrated brick does not lock here:
+  // it gives the same answer as the mean-dilatation one.
+  for (const ModelCase& m : Models()) {
+    for (double ratio : {1e1, 1e3, 1e5}) {
+      const PolynomialMaterial material(NeoHookeanCoefficients(mu, ratio * mu));
+      const auto model = m.make(mesh, material);
+      Eigen::VectorXd u;
+      NewtonReport report;
+      const Status status = SolveNewtonStatic(
+          *model, dofs, NewtonOptions(), solver.get(), [](const NewtonProgress&) { return true; },
+          &u, &report);
+      ASSERT_TRUE(status.ok()) << m.name << ": " << status.ToString();
+      Eigen::VectorXd force;
+      ASSERT_TRUE(model->InternalForce(u, &force, nullptr));
+      double reaction = 0;
+      for (int n : mesh.face_sets.at("top").nodes) reaction += force(3 * n + 2);
+      const double exact = UniaxialNominalStress(mu, ratio * mu, stretch);
+      std::printf(
+          "  %-15s K/mu = %5.0e: P_zz = %.8f Pa (semi-analytic %.8f), %zu increments, %d "
+          "iterations\n",
+          m.name, ratio, reaction / area, exact, report.increments.size(), report.total_iterations);
+      EXPECT_NEAR(reaction / area, exact, 1e-6 * std::abs(exact)) << m.name << " K/mu " << ratio;
+      // The homogeneous field, interior (distorted) nodes included: u_z = (l - 1) Z.
+      for (int i = 0; i < mesh.num_nodes(); ++i) {
+        EXPECT_NEAR(u(3 * i + 2), (stretch - 1) * mesh.nodes(i, 2), 1e-9) << m.name << " " << i;
+      }
     }
   }
 }
 
-// Small-strain patch test of AssembleLinearSystemHex8 on distorted bricks:
-// uniaxial stress by a prescribed top displacement and symmetry planes is
-// reproduced exactly, even at nu = 0.4999.
+// Small-strain patch test of AssembleLinearSystemHex8 and
+// AssembleLinearSystemHex8Full on distorted bricks: uniaxial stress by a
+// prescribed top displacement and symmetry planes is reproduced exactly,
+// even at nu = 0.4999 (a uniform field: no locking for either).
 TEST(AssembleLinearSystemHex8, UniaxialStressIsExact) {
+  using Assembly =
+      Status (*)(const Mesh&, const Matrix6d&, const DofMap&, const std::vector<std::vector<int>>&,
+                 const std::function<bool(double)>&, LinearSystem*);
   const Mesh mesh = HexCube(3, 0.2);
   const double delta = 1e-4, height = 0.01;
   DofMap dofs(mesh.num_nodes());
@@ -394,29 +439,32 @@ TEST(AssembleLinearSystemHex8, UniaxialStressIsExact) {
   for (int n : mesh.face_sets.at("bottom").nodes) dofs.Prescribe(n, 2, 0.0);
   for (int n : mesh.face_sets.at("top").nodes) dofs.Prescribe(n, 2, delta);
   dofs.Finalize();
-  for (double nu : {0.3, 0.4999}) {
-    LinearSystem system;
-    ASSERT_TRUE(AssembleLinearSystemHex8(
-                    mesh, IsotropicElasticity(3000, nu), dofs, ColourElements(mesh),
-                    [](double) { return true; }, &system)
-                    .ok());
-    const auto solver = CreateLinearSolver(AnalysisSpec::LinearSolver::kCholmod);
-    ASSERT_TRUE(solver->Factorize(system.k).ok());
-    Eigen::VectorXd u_free;
-    ASSERT_TRUE(solver->Solve(system.rhs, &u_free).ok());
-    const double strain = delta / height;
-    double worst = 0;
-    for (int i = 0; i < mesh.num_nodes(); ++i) {
-      const Eigen::Vector3d x = mesh.nodes.row(i).transpose();
-      const Eigen::Vector3d exact(-nu * strain * x.x(), -nu * strain * x.y(), strain * x.z());
-      for (int c = 0; c < 3; ++c) {
-        const int dof = 3 * i + c;
-        const double value =
-            dofs.prescribed(dof) ? dofs.prescribed_value(dof) : u_free(dofs.free_index(dof));
-        worst = std::max(worst, std::abs(value - exact(c)));
+  for (Assembly assemble : {&AssembleLinearSystemHex8, &AssembleLinearSystemHex8Full}) {
+    const char* name = assemble == &AssembleLinearSystemHex8 ? "B-bar" : "full";
+    for (double nu : {0.3, 0.4999}) {
+      LinearSystem system;
+      ASSERT_TRUE(assemble(
+                      mesh, IsotropicElasticity(3000, nu), dofs, ColourElements(mesh),
+                      [](double) { return true; }, &system)
+                      .ok());
+      const auto solver = CreateLinearSolver(AnalysisSpec::LinearSolver::kCholmod);
+      ASSERT_TRUE(solver->Factorize(system.k).ok());
+      Eigen::VectorXd u_free;
+      ASSERT_TRUE(solver->Solve(system.rhs, &u_free).ok());
+      const double strain = delta / height;
+      double worst = 0;
+      for (int i = 0; i < mesh.num_nodes(); ++i) {
+        const Eigen::Vector3d x = mesh.nodes.row(i).transpose();
+        const Eigen::Vector3d exact(-nu * strain * x.x(), -nu * strain * x.y(), strain * x.z());
+        for (int c = 0; c < 3; ++c) {
+          const int dof = 3 * i + c;
+          const double value =
+              dofs.prescribed(dof) ? dofs.prescribed_value(dof) : u_free(dofs.free_index(dof));
+          worst = std::max(worst, std::abs(value - exact(c)));
+        }
       }
+      EXPECT_LT(worst, 1e-9 * delta) << name << " nu " << nu;
     }
-    EXPECT_LT(worst, 1e-9 * delta) << "nu " << nu;
   }
 }
 
@@ -433,7 +481,8 @@ Mesh TetCube(double h_mm) {
 // Bonded compression (platens glued: x, y of bottom and top held) of a
 // 10 mm cube, K / mu = 1e4, by `compression` (a fraction of the height);
 // returns the z reaction on the top face [N].
-double BondedReaction(const Mesh& mesh, bool hexahedra, double compression) {
+// `label` names the model in the printout.
+double BondedReaction(const Mesh& mesh, ModelFactory make, const char* label, double compression) {
   const PolynomialMaterial material(NeoHookeanCoefficients(1000, 1e7));
   DofMap dofs(mesh.num_nodes());
   for (int n : mesh.face_sets.at("bottom").nodes) {
@@ -445,8 +494,7 @@ double BondedReaction(const Mesh& mesh, bool hexahedra, double compression) {
     dofs.Prescribe(n, 2, -compression * 0.01);
   }
   dofs.Finalize();
-  const auto model =
-      hexahedra ? MakeHex8Model(mesh, material) : MakeAverageNodalPressureTet4Model(mesh, material);
+  const auto model = make(mesh, material);
   const auto solver = CreateLinearSolver(AnalysisSpec::LinearSolver::kCholmod);
   Eigen::VectorXd u;
   NewtonReport report;
@@ -459,10 +507,10 @@ double BondedReaction(const Mesh& mesh, bool hexahedra, double compression) {
   double reaction = 0;
   for (int n : mesh.face_sets.at("top").nodes) reaction += force(3 * n + 2);
   std::printf(
-      "  %-4s %4d elements, %4.3g %%: reaction %.6g N (%zu increments, %d iterations, %d cuts, "
+      "  %-9s %4d elements, %4.3g %%: reaction %.6g N (%zu increments, %d iterations, %d cuts, "
       "%d approximate)\n",
-      hexahedra ? "HEX8" : "ANP", mesh.num_elements(), 100 * compression, reaction,
-      report.increments.size(), report.total_iterations, report.cuts,
+      label, mesh.num_elements(), 100 * compression, reaction, report.increments.size(),
+      report.total_iterations, report.cuts,
       report.approximate_iterations + report.modified_iterations);
   return reaction;
 }
@@ -475,13 +523,26 @@ TEST(Hex8Model, BondedCompressionAgreesWithTheNodalPressureTetrahedron) {
   const Mesh bricks = HexCube(8);
   const Mesh tets = TetCube(1.25);
   for (double compression : {0.0025, 0.1}) {
-    const double hex = BondedReaction(bricks, true, compression);
-    const double anp = BondedReaction(tets, false, compression);
+    const double hex = BondedReaction(bricks, &MakeHex8Model, "HEX8", compression);
+    const double anp = BondedReaction(tets, &MakeAverageNodalPressureTet4Model, "ANP", compression);
     // Lubricated platens: mu (l - l^-2) A; bonding stiffens.
     const double l = 1 - compression, lubricated = 1000 * (l - 1 / (l * l)) * 1e-4;
     EXPECT_LT(hex, lubricated) << compression;
     EXPECT_LT(std::abs(hex - anp), 0.2 * std::abs(anp)) << compression;
   }
+}
+
+// The same bonded cube with the fully integrated brick: eight volume
+// constraints per element against 3 unknowns per node lock it: it comes out
+// over ten times stiffer than the mean-dilatation brick (which agrees with
+// the nodal-pressure tetrahedron above).
+TEST(Hex8Model, FullIntegrationLocksInBondedCompression) {
+  const Mesh bricks = HexCube(8);
+  const double compression = 0.0025;
+  const double mean = BondedReaction(bricks, &MakeHex8Model, "HEX8", compression);
+  const double full = BondedReaction(bricks, &MakeHex8FullModel, "HEX8_FULL", compression);
+  std::printf("  full / mean dilatation: %.3g\n", full / mean);
+  EXPECT_GT(full / mean, 10);
 }
 
 }  // namespace

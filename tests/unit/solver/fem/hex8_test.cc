@@ -1,14 +1,17 @@
 // The 8-node hexahedron's kernels: shape functions (Kronecker property,
 // partition of unity, derivatives), the exactness of the 2 x 2 x 2 rule,
-// the patch test on a distorted brick, the stiffness's null space, B-bar
-// against full integration for a nearly incompressible material, volume and
-// Jacobian ratio.
+// the patch test on a distorted brick (B-bar and fully integrated), the
+// stiffnesses' null spaces, the two elements agreeing on a uniform strain and
+// B-bar's strain being the fully integrated one with its volumetric part
+// averaged, B-bar against full integration in bending for a nearly
+// incompressible material, volume and Jacobian ratio.
 #include "fem/hex8.h"
 
 #include <gtest/gtest.h>
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <random>
@@ -153,50 +156,99 @@ TEST(Hex8PatchTest, LinearFieldGivesExactConstantStrain) {
     const Vector24d u = LinearField(x, grad_u);
     for (const Eigen::Vector3d& xi : InteriorPoints(10, 3)) {
       EXPECT_LT((Hex8Strain(x, u, xi) - expected).norm(), 1e-15);
+      EXPECT_LT((Hex8StrainFull(x, u, xi) - expected).norm(), 1e-15);
     }
     for (int a = 0; a < 8; ++a) {
       EXPECT_LT((Hex8Strain(x, u, NodeNatural(a)) - expected).norm(), 1e-15);
+      EXPECT_LT((Hex8StrainFull(x, u, NodeNatural(a)) - expected).norm(), 1e-15);
     }
-    // The stiffness gives the energy of that constant strain:
+    // The stiffnesses give the energy of that constant strain:
     // u^T K u = eps^T D eps V.
     const Matrix6d d = IsotropicElasticity(kE, kNu);
-    const double energy = u.dot(Hex8Stiffness(x, d) * u);
-    EXPECT_NEAR(energy, expected.dot(d * expected) * Hex8Volume(x), 1e-12 * energy);
+    const double exact = expected.dot(d * expected) * Hex8Volume(x);
+    EXPECT_NEAR(u.dot(Hex8Stiffness(x, d) * u), exact, 1e-12 * exact);
+    EXPECT_NEAR(u.dot(Hex8StiffnessFull(x, d) * u), exact, 1e-12 * exact);
   }
 }
 
+using StiffnessFunction = Matrix24d (*)(const Hex8Nodes&, const Matrix6d&);
+
 TEST(Hex8Stiffness, ExactlySixRigidModes) {
-  for (const Hex8Nodes& x : {Brick(), Distorted()}) {
-    for (double nu : {0.3, 0.4999}) {
-      const Matrix24d k = Hex8Stiffness(x, IsotropicElasticity(kE, nu));
-      EXPECT_LT((k - k.transpose()).norm(), 1e-13 * k.norm());
-      Eigen::SelfAdjointEigenSolver<Matrix24d> eigen(k);
-      const double largest = eigen.eigenvalues().maxCoeff();
-      for (int i = 0; i < 6; ++i) EXPECT_LT(std::abs(eigen.eigenvalues()(i)), 1e-12 * largest);
-      // No hourglass mode: the deviatoric part is fully integrated. Its
-      // stiffness is mu-sized against K for the largest, hence the bound.
-      for (int i = 6; i < 24; ++i) EXPECT_GT(eigen.eigenvalues()(i), 1e-6 * largest) << i;
-      Vector24d rotation, translation;
-      const Eigen::Vector3d axis = Eigen::Vector3d(0.3, -0.5, 0.8).normalized();
-      for (int a = 0; a < 8; ++a) {
-        rotation.segment<3>(3 * a) = axis.cross(Eigen::Vector3d(x.row(a).transpose()));
-        translation.segment<3>(3 * a) << 1, 2, 3;
+  for (StiffnessFunction stiffness : {&Hex8Stiffness, &Hex8StiffnessFull}) {
+    const char* name = stiffness == &Hex8Stiffness ? "B-bar" : "full";
+    for (const Hex8Nodes& x : {Brick(), Distorted()}) {
+      for (double nu : {0.3, 0.4999}) {
+        const Matrix24d k = stiffness(x, IsotropicElasticity(kE, nu));
+        EXPECT_LT((k - k.transpose()).norm(), 1e-13 * k.norm()) << name;
+        Eigen::SelfAdjointEigenSolver<Matrix24d> eigen(k);
+        const double largest = eigen.eigenvalues().maxCoeff();
+        for (int i = 0; i < 6; ++i) {
+          EXPECT_LT(std::abs(eigen.eigenvalues()(i)), 1e-12 * largest) << name;
+        }
+        // No hourglass mode: the deviatoric part is fully integrated in
+        // both. Its stiffness is mu-sized against K for the largest, hence
+        // the bound.
+        for (int i = 6; i < 24; ++i) {
+          EXPECT_GT(eigen.eigenvalues()(i), 1e-6 * largest) << name << " " << i;
+        }
+        Vector24d rotation, translation;
+        const Eigen::Vector3d axis = Eigen::Vector3d(0.3, -0.5, 0.8).normalized();
+        for (int a = 0; a < 8; ++a) {
+          rotation.segment<3>(3 * a) = axis.cross(Eigen::Vector3d(x.row(a).transpose()));
+          translation.segment<3>(3 * a) << 1, 2, 3;
+        }
+        EXPECT_LT((k * rotation).norm(), 1e-12 * largest) << name;
+        EXPECT_LT((k * translation).norm(), 1e-12 * largest) << name;
       }
-      EXPECT_LT((k * rotation).norm(), 1e-12 * largest);
-      EXPECT_LT((k * translation).norm(), 1e-12 * largest);
     }
   }
 }
 
-// The fully integrated stiffness sum_q B^T D B dV, for comparison.
-Matrix24d FullStiffness(const Hex8Nodes& x, const Matrix6d& d) {
-  const Hex8Geometry g = ComputeHex8Geometry(x);
-  Matrix24d k = Matrix24d::Zero();
-  for (int q = 0; q < 8; ++q) {
-    const Hex8BMatrix b = Hex8StrainDisplacement(g.grad[q]);
-    k += g.volume[q] * b.transpose() * d * b;
+// On a uniform strain B u = B_bar u at every point, and the B-bar
+// correction sum_q (B_vol,q - mean B_vol)^T sigma dV_q vanishes for a
+// constant sigma: both elements give the same nodal forces K u, at any nu.
+TEST(Hex8Stiffness, UniformStrainGivesTheSameForceWithAndWithoutBBar) {
+  Eigen::Matrix3d grad_u;
+  grad_u << 0.01, 0.002, -0.003, 0.004, -0.02, 0.005, 0.001, 0.006, 0.03;
+  for (const Hex8Nodes& x : {Brick(), Distorted()}) {
+    const Vector24d u = LinearField(x, grad_u);
+    for (double nu : {0.3, 0.4999}) {
+      const Matrix6d d = IsotropicElasticity(kE, nu);
+      const Vector24d bar = Hex8Stiffness(x, d) * u, full = Hex8StiffnessFull(x, d) * u;
+      EXPECT_LT((bar - full).cwiseAbs().maxCoeff(), 1e-12 * full.cwiseAbs().maxCoeff()) << nu;
+      // And they differ on a non-uniform field, or the test would be empty.
+      const Vector24d v = u + 0.01 * Vector24d::LinSpaced(-1, 1).array().sin().matrix();
+      EXPECT_GT((Hex8Stiffness(x, d) * v - Hex8StiffnessFull(x, d) * v).norm(),
+                1e-3 * (Hex8StiffnessFull(x, d) * v).norm())
+          << nu;
+    }
   }
-  return k;
+}
+
+// For any displacement the B-bar strain is the plain one with its
+// volumetric part replaced by the element mean of the plain one's.
+TEST(Hex8StrainFull, BBarStrainIsThePlainStrainWithTheMeanVolumetricPart) {
+  const Hex8Nodes x = Distorted();
+  std::mt19937 rng(4);
+  std::uniform_real_distribution<double> c(-1e-3, 1e-3);
+  Vector24d u;
+  for (int i = 0; i < 24; ++i) u(i) = c(rng);
+  const Hex8Geometry g = ComputeHex8Geometry(x);
+  double mean_volumetric = 0;
+  for (int q = 0; q < 8; ++q) {
+    mean_volumetric += g.volume[q] * Hex8StrainFull(x, u, Hex8Rule()[q].xi).head<3>().sum();
+  }
+  mean_volumetric /= g.element_volume;
+  Vector6d m = Vector6d::Zero();
+  m.head<3>().setOnes();
+  double spread = 0;
+  for (const Eigen::Vector3d& xi : InteriorPoints(10, 5)) {
+    const Vector6d full = Hex8StrainFull(x, u, xi), bar = Hex8Strain(x, u, xi);
+    const double volumetric = full.head<3>().sum();
+    spread = std::max(spread, std::abs(volumetric - mean_volumetric));
+    EXPECT_LT((bar - (full + (mean_volumetric - volumetric) / 3 * m)).norm(), 1e-15);
+  }
+  EXPECT_GT(spread, 1e-4);  // the volumetric strain does vary
 }
 
 // In-plane bending of one element, u_x = c (X - Xc)(Y - Yc): its axial
@@ -214,8 +266,8 @@ TEST(Hex8Stiffness, BBarDoesNotLockInBending) {
   const double bar_3 = energy(Hex8Stiffness(x, IsotropicElasticity(kE, 0.3)));
   const double bar_4 = energy(Hex8Stiffness(x, IsotropicElasticity(kE, 0.4999)));
   const double bar_5 = energy(Hex8Stiffness(x, IsotropicElasticity(kE, 0.49999)));
-  const double full_4 = energy(FullStiffness(x, IsotropicElasticity(kE, 0.4999)));
-  const double full_5 = energy(FullStiffness(x, IsotropicElasticity(kE, 0.49999)));
+  const double full_4 = energy(Hex8StiffnessFull(x, IsotropicElasticity(kE, 0.4999)));
+  const double full_5 = energy(Hex8StiffnessFull(x, IsotropicElasticity(kE, 0.49999)));
   std::printf(
       "bending energy: B-bar %.4g (nu 0.3), %.4g (0.4999), %.4g (0.49999); full %.4g, %.4g\n",
       bar_3, bar_4, bar_5, full_4, full_5);
