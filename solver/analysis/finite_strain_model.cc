@@ -22,7 +22,10 @@ class Tet4Model final : public FiniteStrainModel {
     bool ok = true;
     double total = 0;
     for (const auto& colour : colours_) {
-#pragma omp parallel for schedule(static) reduction(&& : ok) reduction(+ : total)
+      // A colour too small to repay starting a team runs on one thread (a
+      // Newton solve on a small mesh evaluates the force thousands of times).
+#pragma omp parallel for schedule(static) reduction(&& : ok) reduction(+ : total) \
+    if (colour.size() >= 64)
       for (std::size_t k = 0; k < colour.size(); ++k) {
         const int e = colour[k];
         Tet4FiniteStrainResult r;

@@ -112,6 +112,9 @@ namespace {
 
 // The assembly of AssembleSystem for elements of N nodes: `nodes_of(e)`
 // gives their indices, `kernel` their 3N x 3N stiffness and 3N force.
+// Smallest colour assembled by a team of threads.
+constexpr int kParallelColourFrom = 64;
+
 template <int N, typename NodesOf, typename Kernel>
 Status AssembleElements(const Mesh& mesh, const NodesOf& nodes_of, const DofMap& dofs,
                         const std::vector<std::vector<int>>& colours, const Kernel& kernel,
@@ -127,10 +130,13 @@ Status AssembleElements(const Mesh& mesh, const NodesOf& nodes_of, const DofMap&
   std::size_t done = 0;
   const std::size_t total = static_cast<std::size_t>(mesh.num_elements());
   // Elements of the last colour may share nodes (see ColourElements), so it
-  // is assembled by one thread.
+  // is assembled by one thread; so is a colour too small to repay starting
+  // a team (a Newton solve on a small mesh assembles thousands of times,
+  // and oversubscribed threads make each parallel region cost milliseconds).
   for (std::size_t c = 0; c < colours.size() && failed.load() < 0; ++c) {
     const std::vector<int>& elements = colours[c];
-    const bool serial = c + 1 == static_cast<std::size_t>(kMaxColours);
+    const bool serial = c + 1 == static_cast<std::size_t>(kMaxColours) ||
+                        elements.size() < static_cast<std::size_t>(kParallelColourFrom);
 #pragma omp parallel for schedule(static) if (!serial)
     for (std::size_t k = 0; k < elements.size(); ++k) {
       if (failed.load(std::memory_order_relaxed) >= 0) continue;
