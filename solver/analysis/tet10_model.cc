@@ -1,133 +1,51 @@
 #include "analysis/tet10_model.h"
 
-#include <algorithm>
-#include <cmath>
-#include <cstdio>
-#include <cstdlib>
-#include <string>
-#include <vector>
-
+#include "analysis/element_model.h"
 #include "fem/tet10_finite_strain.h"
-#include "material/hyperelastic.h"
 #include "mesh/quadratic.h"
 
 namespace pba {
 namespace {
 
-// Below this many elements the passes run on one thread: a Newton solve on a
-// small mesh makes many passes, and starting a team would cost more than the
-// work.
-constexpr int kParallelFrom = 256;
+struct Tet10Element {
+  static constexpr int kNodes = 10;
+  using Geometry = Tet10Geometry;
+  using Result = Tet10FiniteStrainResult;
+  using Unknowns = Vector30d;
+  using Kernel = Tet10ElementKernel;
 
-class Tet10Model final : public FiniteStrainModel {
- public:
-  Tet10Model(const Mesh& mesh, const HyperelasticMaterial& material)
-      : mesh_(mesh),
-        material_(material),
-        parallel_(mesh.num_elements() >= kParallelFrom),
-        colours_(ColourElements(mesh)) {
-    if (mesh.num_elements() > 0 && !mesh.quadratic()) {
-      std::fprintf(stderr, "pba: MakeTet10Model needs a quadratic mesh (see MakeQuadratic)\n");
-      std::abort();
-    }
-    geometry_.resize(mesh.num_elements());
-#pragma omp parallel for schedule(static) if (parallel_)
-    for (int e = 0; e < mesh.num_elements(); ++e) {
-      geometry_[e] = ComputeTet10Geometry(Tet10Coordinates(mesh, e));
-    }
+  static bool Fits(const Mesh& mesh) { return mesh.quadratic(); }
+  static const char* Requirement() {
+    return "MakeTet10Model needs a quadratic mesh (see MakeQuadratic)";
   }
-
-  bool InternalForce(const Eigen::VectorXd& u, Eigen::VectorXd* force,
-                     double* energy) const override {
-    *force = Eigen::VectorXd::Zero(u.size());
-    bool ok = true;
-    double total = 0;
-    // Elements of one colour share no node, so their scatters never collide.
-    for (const auto& colour : colours_) {
-#pragma omp parallel for schedule(static) if (parallel_) reduction(&& : ok) reduction(+ : total)
-      for (std::size_t k = 0; k < colour.size(); ++k) {
-        const int e = colour[k];
-        Tet10FiniteStrainResult r;
-        if (!Tet10FiniteStrain(geometry_[e], GatherElementTet10(mesh_, e, u), material_, false,
-                               &r)) {
-          ok = false;
-          continue;
-        }
-        total += r.energy;
-        const std::array<int, 10> nodes = Tet10NodeIndices(mesh_, e);
-        for (int a = 0; a < 10; ++a) force->segment<3>(3 * nodes[a]) += r.force.segment<3>(3 * a);
-      }
-    }
-    if (energy) *energy = total;
-    return ok && force->allFinite() && std::isfinite(total);
+  static Geometry ComputeGeometry(const Mesh& mesh, int e) {
+    return ComputeTet10Geometry(Tet10Coordinates(mesh, e));
   }
-
-  Status Assemble(const Eigen::VectorXd& u, const DofMap& dofs, const AssemblyOptions& options,
-                  LinearSystem* system) const override {
-    const Tet10ElementKernel kernel = [&](int e, Matrix30d* k, Vector30d* f) {
-      Tet10FiniteStrainResult r;
-      if (!Tet10FiniteStrain(geometry_[e], GatherElementTet10(mesh_, e, u), material_, true, &r,
-                             options.drop_pressure_stiffness)) {
-        return false;
-      }
-      *k = r.tangent;
-      *f = -r.force;
-      return true;
-    };
-    const Status status = AssembleSystemTet10(
-        mesh_, dofs, colours_, kernel, options, [](double) { return true; }, system);
-    if (status.code() != Status::Code::kNumerical) return status;
-    // The assembly stops at whichever failing element a thread met first;
-    // the message names the lowest one, the same on any number of threads.
-    const int e = LowestInverted(u);
-    if (e >= 0 && !(geometry_[e].min_jacobian > 0)) {
-      return Status::Numerical("element " + std::to_string(e) +
-                               " is inverted in the reference configuration (det J <= 0)");
-    }
-    if (e >= 0) {
-      return Status::Numerical("element " + std::to_string(e) +
-                               " could not be evaluated (inverted: det F <= 0)");
-    }
-    return status;
+  static std::array<int, 10> Nodes(const Mesh& mesh, int e) { return Tet10NodeIndices(mesh, e); }
+  static Unknowns Gather(const Mesh& mesh, int e, const Eigen::VectorXd& u) {
+    return GatherElementTet10(mesh, e, u);
   }
-
-  std::string Describe() const override {
+  static Status AssembleSystem(const Mesh& mesh, const DofMap& dofs,
+                               const std::vector<std::vector<int>>& colours, const Kernel& kernel,
+                               const AssemblyOptions& options,
+                               const std::function<bool(double)>& keep_going,
+                               LinearSystem* system) {
+    return AssembleSystemTet10(mesh, dofs, colours, kernel, options, keep_going, system);
+  }
+  bool Evaluate(const Geometry& g, const Unknowns& ue, const HyperelasticMaterial& material,
+                bool with_tangent, bool drop_pressure_stiffness, Result* r) const {
+    return Tet10FiniteStrain(g, ue, material, with_tangent, r, drop_pressure_stiffness);
+  }
+  std::string Describe() const {
     return "TET10 (quadratic, 4-point integration), total Lagrangian";
   }
-
- private:
-  // The lowest element whose reference det J or whose F at an integration
-  // point at `u` is not admissible; -1 when there is none.
-  int LowestInverted(const Eigen::VectorXd& u) const {
-    const int ne = mesh_.num_elements();
-    int lowest = ne;
-#pragma omp parallel for schedule(static) if (parallel_) reduction(min : lowest)
-    for (int e = 0; e < ne; ++e) {
-      const Tet10Geometry& g = geometry_[e];
-      bool bad = !(g.min_jacobian > 0);
-      const Vector30d ue = GatherElementTet10(mesh_, e, u);
-      for (int q = 0; q < 4 && !bad; ++q) {
-        Eigen::Matrix3d f = Eigen::Matrix3d::Identity();
-        for (int a = 0; a < 10; ++a) f += ue.segment<3>(3 * a) * g.grad[q].row(a);
-        bad = !IsAdmissible(f);
-      }
-      if (bad) lowest = std::min(lowest, e);
-    }
-    return lowest < ne ? lowest : -1;
-  }
-
-  const Mesh& mesh_;
-  const HyperelasticMaterial& material_;
-  const bool parallel_;  // use OpenMP threads
-  std::vector<std::vector<int>> colours_;
-  std::vector<Tet10Geometry> geometry_;
 };
 
 }  // namespace
 
 std::unique_ptr<FiniteStrainModel> MakeTet10Model(const Mesh& mesh,
                                                   const HyperelasticMaterial& material) {
-  return std::make_unique<Tet10Model>(mesh, material);
+  return std::make_unique<ElementModel<Tet10Element>>(mesh, material, Tet10Element());
 }
 
 }  // namespace pba

@@ -1,0 +1,146 @@
+// A FiniteStrainModel for meshes of one kind of element whose kernel
+// computes force, energy and tangent element by element (10-node tetrahedra,
+// hexahedra): the force is scattered colour by colour (elements of a colour
+// share no node), the tangent assembled by the colour-parallel assembler,
+// and an inverted element reported by its lowest index, the same on any
+// number of threads. Internal to the analyses; the element supplies:
+//
+//   static constexpr int kNodes;   using Geometry, Result, Unknowns, Kernel;
+//   static bool Fits(const Mesh&); static const char* Requirement();
+//   static Geometry ComputeGeometry(const Mesh&, int e);
+//   static std::array<int, kNodes> Nodes(const Mesh&, int e);
+//   static Unknowns Gather(const Mesh&, int e, const Eigen::VectorXd& u);
+//   static Status AssembleSystem(mesh, dofs, colours, kernel, options, keep_going, system);
+//   bool Evaluate(const Geometry&, const Unknowns&, const HyperelasticMaterial&,
+//                 bool with_tangent, bool drop_pressure_stiffness, Result*) const;
+//   std::string Describe() const;
+//
+// Geometry has `grad` (dN/dX per integration point) and `min_jacobian`.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <vector>
+
+#include "analysis/finite_strain_model.h"
+#include "material/hyperelastic.h"
+
+namespace pba {
+
+template <typename Element>
+class ElementModel final : public FiniteStrainModel {
+ public:
+  // Below this many elements the passes run on one thread: a Newton solve
+  // on a small mesh makes many passes, and starting a team would cost more
+  // than the work.
+  static constexpr int kParallelFrom = 256;
+
+  ElementModel(const Mesh& mesh, const HyperelasticMaterial& material, Element element)
+      : mesh_(mesh),
+        material_(material),
+        element_(element),
+        parallel_(mesh.num_elements() >= kParallelFrom),
+        colours_(ColourElements(mesh)) {
+    if (mesh.num_elements() > 0 && !Element::Fits(mesh)) {
+      std::fprintf(stderr, "pba: %s\n", Element::Requirement());
+      std::abort();
+    }
+    geometry_.resize(mesh.num_elements());
+#pragma omp parallel for schedule(static) if (parallel_)
+    for (int e = 0; e < mesh.num_elements(); ++e) {
+      geometry_[e] = Element::ComputeGeometry(mesh, e);
+    }
+  }
+
+  bool InternalForce(const Eigen::VectorXd& u, Eigen::VectorXd* force,
+                     double* energy) const override {
+    *force = Eigen::VectorXd::Zero(u.size());
+    bool ok = true;
+    double total = 0;
+    for (const auto& colour : colours_) {
+#pragma omp parallel for schedule(static) if (parallel_) reduction(&& : ok) reduction(+ : total)
+      for (std::size_t k = 0; k < colour.size(); ++k) {
+        const int e = colour[k];
+        typename Element::Result r;
+        if (!element_.Evaluate(geometry_[e], Element::Gather(mesh_, e, u), material_, false, false,
+                               &r)) {
+          ok = false;
+          continue;
+        }
+        total += r.energy;
+        const auto nodes = Element::Nodes(mesh_, e);
+        for (int a = 0; a < Element::kNodes; ++a) {
+          force->template segment<3>(3 * nodes[a]) += r.force.template segment<3>(3 * a);
+        }
+      }
+    }
+    if (energy) *energy = total;
+    return ok && force->allFinite() && std::isfinite(total);
+  }
+
+  Status Assemble(const Eigen::VectorXd& u, const DofMap& dofs, const AssemblyOptions& options,
+                  LinearSystem* system) const override {
+    const typename Element::Kernel kernel = [&](int e, auto* k, auto* f) {
+      typename Element::Result r;
+      if (!element_.Evaluate(geometry_[e], Element::Gather(mesh_, e, u), material_, true,
+                             options.drop_pressure_stiffness, &r)) {
+        return false;
+      }
+      *k = r.tangent;
+      *f = -r.force;
+      return true;
+    };
+    const Status status = Element::AssembleSystem(
+        mesh_, dofs, colours_, kernel, options, [](double) { return true; }, system);
+    if (status.code() != Status::Code::kNumerical) return status;
+    // The assembly stops at whichever failing element a thread met first;
+    // the message names the lowest one.
+    const int e = LowestInverted(u);
+    if (e >= 0 && !(geometry_[e].min_jacobian > 0)) {
+      return Status::Numerical("element " + std::to_string(e) +
+                               " is inverted in the reference configuration (det J <= 0)");
+    }
+    if (e >= 0) {
+      return Status::Numerical("element " + std::to_string(e) +
+                               " could not be evaluated (inverted: det F <= 0)");
+    }
+    return status;
+  }
+
+  std::string Describe() const override { return element_.Describe(); }
+
+ private:
+  // The lowest element whose reference det J or whose F at an integration
+  // point at `u` is not admissible; -1 when there is none.
+  int LowestInverted(const Eigen::VectorXd& u) const {
+    const int ne = mesh_.num_elements();
+    int lowest = ne;
+#pragma omp parallel for schedule(static) if (parallel_) reduction(min : lowest)
+    for (int e = 0; e < ne; ++e) {
+      const auto& g = geometry_[e];
+      bool bad = !(g.min_jacobian > 0);
+      const auto ue = Element::Gather(mesh_, e, u);
+      for (std::size_t q = 0; q < g.grad.size() && !bad; ++q) {
+        Eigen::Matrix3d f = Eigen::Matrix3d::Identity();
+        for (int a = 0; a < Element::kNodes; ++a) {
+          f += ue.template segment<3>(3 * a) * g.grad[q].row(a);
+        }
+        bad = !IsAdmissible(f);
+      }
+      if (bad) lowest = std::min(lowest, e);
+    }
+    return lowest < ne ? lowest : -1;
+  }
+
+  const Mesh& mesh_;
+  const HyperelasticMaterial& material_;
+  const Element element_;
+  const bool parallel_;  // use OpenMP threads
+  std::vector<std::vector<int>> colours_;
+  std::vector<typename Element::Geometry> geometry_;
+};
+
+}  // namespace pba
