@@ -70,6 +70,81 @@ TEST(SceneFromProto, EveryHyperelasticModel) {
   EXPECT_EQ(s.material.ogden.bulk_modulus_pa, 8.42e7);
 }
 
+TEST(SceneFromProto, LoadsShellAndElements) {
+  SceneSpec s = Parse(
+      R"(material: {density_kg_per_m3: 1040, neo_hookean: {shear_modulus_pa: 1000, bulk_modulus_pa: 1e6}}
+gravity: {acceleration_m_per_s2: [0, 0, -9.81]}
+mesh: {element: TET10}
+analysis: {type: NONLINEAR_STATIC}
+)");
+  EXPECT_EQ(s.material.density_kg_per_m3, 1040);
+  EXPECT_TRUE(s.gravity.enabled);
+  EXPECT_EQ(s.gravity.acceleration_m_per_s2[2], -9.81);
+  EXPECT_EQ(s.mesh.element, ElementType::kTet10);
+  EXPECT_FALSE(Parse("mesh: {element: TET4}").gravity.enabled);
+  EXPECT_EQ(Parse("mesh: {element: HEX8}").mesh.element, ElementType::kHex8);
+  EXPECT_EQ(Parse("mesh: {element: HEX8_FULL}").mesh.element, ElementType::kHex8Full);
+
+  // Conditions beyond the base's two.
+  v1::Scene scene;
+  codec::ParseError error;
+  ASSERT_TRUE(codec::ParseYaml(R"(
+name: cavity
+geometry: {spherical_shell: {inner_radius_mm: 10, outer_radius_mm: 20}}
+boundary_conditions:
+  - {set: x0, symmetry: {}}
+  - {set: inner, pressure: {pressure_pa: 550}}
+  - {set: outer, traction: {traction_pa: [1, 2, 3]}}
+)",
+                               &scene, &error))
+      << error.ToString();
+  ASSERT_TRUE(SceneFromProto(scene, &s).ok());
+  EXPECT_EQ(s.geometry.kind, GeometrySpec::Kind::kSphericalShell);
+  EXPECT_EQ(s.geometry.spherical_shell.outer_radius_mm, 20);
+  ASSERT_EQ(s.boundary_conditions.size(), 3u);
+  EXPECT_EQ(s.boundary_conditions[1].kind, BoundaryConditionSpec::Kind::kPressure);
+  EXPECT_EQ(s.boundary_conditions[1].pressure_pa, 550);
+  EXPECT_TRUE(s.boundary_conditions[1].is_load());
+  EXPECT_EQ(s.boundary_conditions[2].kind, BoundaryConditionSpec::Kind::kTraction);
+  EXPECT_EQ(s.boundary_conditions[2].traction_pa[2], 3);
+}
+
+TEST(SceneFromProto, LoadFieldPathsOfBadValues) {
+  v1::Scene scene;
+  codec::ParseError error;
+  ASSERT_TRUE(codec::ParseYaml(std::string(kBase) + "gravity: {acceleration_m_per_s2: [0, -9.81]}",
+                               &scene, &error));
+  SceneSpec s;
+  Status status = SceneFromProto(scene, &s);
+  EXPECT_EQ(status.field(), "gravity.acceleration_m_per_s2") << status.ToString();
+  ASSERT_TRUE(codec::ParseYaml(R"(
+geometry: {box: {size_mm: [10, 10, 10]}}
+boundary_conditions:
+  - {set: bottom, fixed: {}}
+  - {set: top, traction: {traction_pa: [1, 2]}}
+)",
+                               &scene, &error));
+  status = SceneFromProto(scene, &s);
+  EXPECT_EQ(status.field(), "boundary_conditions[1].traction.traction_pa") << status.ToString();
+  // Gravity without a density is refused naming the density.
+  status = Validate(
+      "material: {linear_elastic: {youngs_modulus_pa: 3000, poissons_ratio: 0.45}}\n"
+      "gravity: {acceleration_m_per_s2: [0, 0, -9.81]}");
+  EXPECT_EQ(status.field(), "material.density_kg_per_m3") << status.ToString();
+  // A shell whose outer radius is not beyond the inner one.
+  ASSERT_TRUE(codec::ParseYaml(R"(
+geometry: {spherical_shell: {inner_radius_mm: 10, outer_radius_mm: 10}}
+material: {linear_elastic: {youngs_modulus_pa: 3000, poissons_ratio: 0.45}}
+boundary_conditions:
+  - {set: x0, symmetry: {}}
+  - {set: y0, symmetry: {}}
+  - {set: z0, symmetry: {}}
+)",
+                               &scene, &error));
+  status = ValidateSceneProto(scene);
+  EXPECT_EQ(status.field(), "geometry.spherical_shell.outer_radius_mm") << status.ToString();
+}
+
 TEST(SceneFromProto, OrthotropicElasticFromYaml) {
   SceneSpec s = Parse(R"(material:
   orthotropic_elastic:
