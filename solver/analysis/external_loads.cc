@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <cstdlib>
 
+#include "fem/hex8.h"
 #include "fem/tet10.h"
 #include "fem/tet4.h"
 #include "mesh/quadratic.h"
@@ -179,31 +180,6 @@ void SymmetricPressureStiffness(const Eigen::Matrix<double, N, 3>& x,
   }
 }
 
-// integral N_a det J over the trilinear brick with node positions `x`, by
-// the 2 x 2 x 2 Gauss rule: exact, N_a being linear and det J at most
-// quadratic in each natural coordinate (each column of J is constant along
-// its own coordinate).
-Eigen::Matrix<double, 8, 1> HexVolumeShares(const Eigen::Matrix<double, 8, 3>& x) {
-  Eigen::Matrix<double, 8, 1> share = Eigen::Matrix<double, 8, 1>::Zero();
-  for (int q = 0; q < 8; ++q) {
-    double p[3];
-    for (int j = 0; j < 3; ++j) p[j] = kHexCorner[q][j] * kGauss;
-    Eigen::Matrix<double, 8, 1> n;
-    Eigen::Matrix<double, 8, 3> dn;
-    for (int a = 0; a < 8; ++a) {
-      double f[3];
-      for (int j = 0; j < 3; ++j) f[j] = 1 + p[j] * kHexCorner[a][j];
-      n(a) = f[0] * f[1] * f[2] / 8;
-      dn(a, 0) = kHexCorner[a][0] * f[1] * f[2] / 8;
-      dn(a, 1) = kHexCorner[a][1] * f[0] * f[2] / 8;
-      dn(a, 2) = kHexCorner[a][2] * f[0] * f[1] / 8;
-    }
-    // |det J|, as for the 10-node tetrahedron: a consistently negatively
-    // oriented brick still loads along b.
-    share += std::abs((x.transpose() * dn).determinant()) * n;
-  }
-  return share;
-}
 
 // The mid-edge nodes of triangle `corners`, a face of element `element`.
 std::array<int, 3> MidsideFromElement(const Mesh& mesh, int element,
@@ -286,33 +262,53 @@ void ExternalLoads::AddTraction(const FaceSet& set, const Eigen::Vector3d& tract
 }
 
 void ExternalLoads::AddBodyForce(const Eigen::Vector3d& force_per_volume) {
+  AddBodyForceField([&](const Eigen::Vector3d&) { return force_per_volume; });
+}
+
+void ExternalLoads::AddBodyForceField(const BodyForceField& force_per_volume) {
+  // f_a = integral b(x) N_a dV over each element, by a rule exact for a
+  // uniform b (and of degree 5 on tetrahedra, 5 per coordinate on bricks, for
+  // a varying one); |det J| so that a consistently negatively oriented
+  // element still loads along b, not against it.
   if (mesh_.hexahedral()) {
+    const double g[3] = {-std::sqrt(0.6), 0, std::sqrt(0.6)}, w[3] = {5.0 / 9, 8.0 / 9, 5.0 / 9};
     for (int e = 0; e < mesh_.num_elements(); ++e) {
-      const Eigen::Matrix<double, 8, 1> share = HexVolumeShares(HexCorners(mesh_, e));
-      for (int a = 0; a < 8; ++a) {
-        dead_.segment<3>(3 * mesh_.hexes[e][a]) += force_per_volume * share(a);
+      const Hex8Nodes x = HexCorners(mesh_, e);
+      for (int i = 0; i < 3; ++i) {
+        for (int j = 0; j < 3; ++j) {
+          for (int k = 0; k < 3; ++k) {
+            const Eigen::Vector3d xi(g[i], g[j], g[k]);
+            const Hex8Vector n = Hex8ShapeFunctions(xi);
+            const double det = (x.transpose() * Hex8NaturalGradients(xi)).determinant();
+            const Eigen::Vector3d b =
+                w[i] * w[j] * w[k] * std::abs(det) * force_per_volume(x.transpose() * n);
+            for (int a = 0; a < 8; ++a) dead_.segment<3>(3 * mesh_.hexes[e][a]) += n(a) * b;
+          }
+        }
       }
     }
     return;
   }
-  if (!mesh_.quadratic()) {
-    for (int e = 0; e < mesh_.num_elements(); ++e) {
-      const double volume = std::abs(ComputeTet4Geometry(TetCorners(mesh_, e)).volume);
-      for (int a : mesh_.tets[e]) dead_.segment<3>(3 * a) += force_per_volume * volume / 4;
-    }
-    return;
-  }
   for (int e = 0; e < mesh_.num_elements(); ++e) {
-    const Tet10Nodes x = Tet10Coordinates(mesh_, e);
-    const std::array<int, 10> nodes = Tet10NodeIndices(mesh_, e);
-    Tet10Vector share = Tet10Vector::Zero();  // integral N_a dV
-    for (const QuadraturePoint& q : Tet10MassRule()) {
-      const double det = (x.transpose() * Tet10NaturalGradients(q.xi)).determinant();
-      // |det J|, as Tet10Stiffness takes it, so that a consistently
-      // negatively oriented element still loads along b, not against it.
-      share += q.weight * std::abs(det) * Tet10ShapeFunctions(q.xi);
+    if (mesh_.quadratic()) {
+      const Tet10Nodes x = Tet10Coordinates(mesh_, e);
+      const std::array<int, 10> nodes = Tet10NodeIndices(mesh_, e);
+      for (const QuadraturePoint& q : Tet10MassRule()) {
+        const Tet10Vector n = Tet10ShapeFunctions(q.xi);
+        const double det = (x.transpose() * Tet10NaturalGradients(q.xi)).determinant();
+        const Eigen::Vector3d b = q.weight * std::abs(det) * force_per_volume(x.transpose() * n);
+        for (int a = 0; a < 10; ++a) dead_.segment<3>(3 * nodes[a]) += n(a) * b;
+      }
+      continue;
     }
-    for (int a = 0; a < 10; ++a) dead_.segment<3>(3 * nodes[a]) += force_per_volume * share(a);
+    const Eigen::Matrix<double, 4, 3> x = TetCorners(mesh_, e);
+    const double volume = std::abs(ComputeTet4Geometry(x).volume);
+    for (const QuadraturePoint& q : Tet10MassRule()) {
+      // Linear shape functions: the volume coordinates at xi.
+      const Eigen::Vector4d n(1 - q.xi.sum(), q.xi.x(), q.xi.y(), q.xi.z());
+      const Eigen::Vector3d b = q.weight * 6 * volume * force_per_volume(x.transpose() * n);
+      for (int a = 0; a < 4; ++a) dead_.segment<3>(3 * mesh_.tets[e][a]) += n(a) * b;
+    }
   }
 }
 

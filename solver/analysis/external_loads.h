@@ -54,6 +54,7 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <functional>
 #include <vector>
 
 #include "assembly/assembler.h"
@@ -80,6 +81,12 @@ class ExternalLoads {
   // quadratic mesh the consistent load of each 10-node element, on a
   // hexahedral one that of each trilinear brick.
   void AddBodyForce(const Eigen::Vector3d& force_per_volume);
+
+  // Adds a body force that varies in space, b(X) [N/m^3] at reference
+  // position X [m] (e.g. a manufactured solution's), integrated against the
+  // shape functions with a rule of degree 5.
+  using BodyForceField = std::function<Eigen::Vector3d(const Eigen::Vector3d& position)>;
+  void AddBodyForceField(const BodyForceField& force_per_volume);
 
   // Adds a pressure p [Pa] on the triangles of `set`, a boundary face set of
   // the mesh; each triangle is turned to face out of its tetrahedron. With
