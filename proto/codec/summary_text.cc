@@ -49,6 +49,8 @@ std::string FormatSummary(const v1::Summary& summary) {
         "  Newton             %d increments, %d iterations, %d cut back; final residual "
         "%.2e (relative)\n",
         c.increments_size(), c.newton_iterations(), c.increment_cuts(), r.relative_residual());
+    out += Format("    time: assembly %.3f s, linear solves %.3f s, residuals %.3f s\n",
+                  c.assembly_s(), c.linear_solve_s(), c.residual_s());
     // The path, unless it is long: then its first and last few increments.
     const int n = c.increments_size();
     for (int i = 0; i < n; ++i) {

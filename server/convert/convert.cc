@@ -302,6 +302,9 @@ v1::Summary SummaryToProto(const Summary& summary) {
     }
     convergence->set_newton_iterations(summary.newton_iterations);
     convergence->set_increment_cuts(summary.increment_cuts);
+    convergence->set_assembly_s(summary.newton_assembly_s);
+    convergence->set_linear_solve_s(summary.newton_linear_solve_s);
+    convergence->set_residual_s(summary.newton_residual_s);
   }
 
   v1::Performance* performance = out.mutable_performance();

@@ -1,6 +1,7 @@
 #include "analysis/newton_static.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 
@@ -8,6 +9,20 @@
 
 namespace pba {
 namespace {
+
+// Adds the wall time of its scope to `*seconds`.
+class ScopedTimer {
+ public:
+  explicit ScopedTimer(double* seconds)
+      : seconds_(seconds), start_(std::chrono::steady_clock::now()) {}
+  ~ScopedTimer() {
+    *seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  }
+
+ private:
+  double* seconds_;
+  std::chrono::steady_clock::time_point start_;
+};
 
 // Energy ratio |du . R| / |du_p . K du_p| at which a Newton correction is
 // rounding noise.
@@ -119,13 +134,25 @@ Status SolveNewtonStatic(const FiniteStrainModel& model, const ExternalLoads* lo
   const auto solve = [&](const LinearSystem& system, int iteration, double residual,
                          const std::function<Status(LinearSystem*)>& assemble_approximate,
                          Eigen::VectorXd* du) {
+    ScopedTimer timer(&report->linear_solve_s);
     LinearSolver* target = good == solver ? spare.get() : solver;
     Status status = target->Factorize(system.k);
     if (status.ok()) {
       good = target;
       return good->Solve(system.rhs, du);
     }
-    if (assemble_approximate(&approximate).ok() && target->Factorize(approximate.k).ok()) {
+    bool approximated = false;
+    {
+      // The approximate tangent's assembly counts as assembly, not solving.
+      double assembly = 0;
+      {
+        ScopedTimer assembling(&assembly);
+        approximated = assemble_approximate(&approximate).ok();
+      }
+      report->assembly_s += assembly;
+      report->linear_solve_s -= assembly;
+    }
+    if (approximated && target->Factorize(approximate.k).ok()) {
       ++report->approximate_iterations;
       good = target;
       return good->Solve(system.rhs, du);
@@ -169,7 +196,11 @@ Status SolveNewtonStatic(const FiniteStrainModel& model, const ExternalLoads* lo
     Eigen::VectorXd du;
     // At the converged state f_int = lambda_old f_ext, so the rhs
     // lambda_new f_ext - f_int is the load increment.
-    Status status = AssembleLoaded(model, loading, *u, increment, lift, &system);
+    Status status;
+    {
+      ScopedTimer timer(&report->assembly_s);
+      status = AssembleLoaded(model, loading, *u, increment, lift, &system);
+    }
     if (status.ok() && dofs.num_free() > 0) {
       status = solve(
           system, 0, 0.0,
@@ -191,7 +222,11 @@ Status SolveNewtonStatic(const FiniteStrainModel& model, const ExternalLoads* lo
       for (int dof = 0; dof < dofs.num_dofs(); ++dof) {
         if (dofs.prescribed(dof)) trial(dof) = target * dofs.prescribed_value(dof);
       }
-      Residual current = Evaluate(model, loading, dofs, trial);
+      const auto evaluate = [&](const Eigen::VectorXd& state) {
+        ScopedTimer timer(&report->residual_s);
+        return Evaluate(model, loading, dofs, state);
+      };
+      Residual current = evaluate(trial);
       residual = current.relative;
       if (!std::isfinite(residual)) {
         status = Status::Numerical("the predictor inverted an element");
@@ -201,7 +236,10 @@ Status SolveNewtonStatic(const FiniteStrainModel& model, const ExternalLoads* lo
       for (iteration = 1; status.ok() && !converged && iteration <= options.max_iterations;
            ++iteration) {
         if (!keep_going({load, iteration, residual})) return cancelled();
-        status = AssembleLoaded(model, loading, trial, dofs, AssemblyOptions(), &system);
+        {
+          ScopedTimer timer(&report->assembly_s);
+          status = AssembleLoaded(model, loading, trial, dofs, AssemblyOptions(), &system);
+        }
         if (!status.ok()) break;
         status = solve(
             system, iteration, residual,
@@ -218,13 +256,13 @@ Status SolveNewtonStatic(const FiniteStrainModel& model, const ExternalLoads* lo
         double alpha = 1.0;
         Eigen::VectorXd next = trial;
         AddFree(dofs, du, alpha, &next);
-        Residual candidate = Evaluate(model, loading, dofs, next);
+        Residual candidate = evaluate(next);
         while (options.line_search && alpha > 1.0 / 64 &&
                !(candidate.relative < std::max(current.relative, 1e-300))) {
           alpha *= 0.5;
           next = trial;
           AddFree(dofs, du, alpha, &next);
-          candidate = Evaluate(model, loading, dofs, next);
+          candidate = evaluate(next);
         }
         if (!std::isfinite(candidate.relative)) {
           status = Status::Numerical("an element inverted");

@@ -61,6 +61,11 @@ struct NewtonReport {
   int approximate_iterations = 0;
   int modified_iterations = 0;
   std::vector<std::string> cut_reasons;  // why each cut happened
+  // Wall time [s] spent assembling tangents, in factorisations and solves,
+  // and evaluating residuals (line search included).
+  double assembly_s = 0;
+  double linear_solve_s = 0;
+  double residual_s = 0;
 };
 
 // Where the solve is, for progress reports and cancellation.

@@ -161,6 +161,9 @@ Status SolveNonlinearStatic(const SceneSpec& scene, const Model& model, PhaseClo
       &u, &report);
   summary.newton_iterations = report.total_iterations;
   summary.increment_cuts = report.cuts;
+  summary.newton_assembly_s = report.assembly_s;
+  summary.newton_linear_solve_s = report.linear_solve_s;
+  summary.newton_residual_s = report.residual_s;
   for (const IncrementRecord& r : report.increments) {
     summary.increments.push_back({r.load_factor, r.iterations, r.relative_residual});
   }

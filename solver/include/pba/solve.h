@@ -90,6 +90,11 @@ struct Summary {
   std::vector<IncrementSummary> increments;
   int newton_iterations = 0;
   int increment_cuts = 0;
+  // Where the Newton phase's time went [s]: assembling tangents,
+  // factorising and solving, evaluating residuals (line search included).
+  double newton_assembly_s = 0;
+  double newton_linear_solve_s = 0;
+  double newton_residual_s = 0;
   ErrorEstimate error;
   // Speed.
   double wall_time_s = 0;

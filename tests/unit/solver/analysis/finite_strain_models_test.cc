@@ -6,10 +6,8 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
-#include <cmath>
 #include <functional>
 #include <memory>
-#include <random>
 #include <string>
 #include <vector>
 
@@ -17,9 +15,9 @@
 #include "analysis/finite_strain_model.h"
 #include "analysis/hex8_model.h"
 #include "analysis/tet10_model.h"
+#include "common/finite_strain_checks.h"
 #include "material/ogden.h"
 #include "material/polynomial.h"
-#include "mesh/primitive_mesher.h"
 #include "mesh/quadratic.h"
 
 namespace pba {
@@ -87,39 +85,11 @@ std::vector<MaterialCase> Materials() {
   };
 }
 
+// Two cells a side.
 Mesh CubeMesh(const ElementCase& element) {
-  GeometrySpec g;
-  g.kind = GeometrySpec::Kind::kBox;
-  g.box.size_mm = {kSize * 1e3, kSize * 1e3, kSize * 1e3};
-  MeshSpec options;
-  options.element_size_mm = kSize * 1e3 / 2;
-  options.element = element.mesh_element;
-  MeshStats stats;
-  Mesh mesh = BuildPrimitiveMesh(g, options, &stats);
+  const double size_mm = kSize * 1e3;
+  Mesh mesh = testing::BoxMesh(size_mm, size_mm, size_mm, size_mm / 2, element.mesh_element);
   return element.quadratic ? MakeQuadratic(mesh) : mesh;
-}
-
-// Smooth and inhomogeneous (linear, quadratic and sinusoidal terms with
-// random coefficients), up to a few percent strain.
-Eigen::VectorXd Displacement(const Mesh& mesh, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> coefficient(-1, 1);
-  double c[3][5];
-  for (auto& row : c) {
-    for (double& v : row) v = coefficient(rng);
-  }
-  Eigen::VectorXd u(3 * mesh.num_nodes());
-  for (int i = 0; i < mesh.num_nodes(); ++i) {
-    const Eigen::Vector3d x = mesh.nodes.row(i).transpose() / kSize;
-    const double basis[5] = {x.x(), x.y() * x.z(), x.z() * x.x(), x.x() * x.y(),
-                             std::sin(2 * x.x() + 3 * x.y() - x.z())};
-    for (int k = 0; k < 3; ++k) {
-      double v = 0;
-      for (int b = 0; b < 5; ++b) v += c[k][b] * basis[b];
-      u(3 * i + k) = 0.04 * kSize * v;
-    }
-  }
-  return u;
 }
 
 using Case = std::tuple<int, int>;  // element, material
@@ -132,51 +102,13 @@ TEST_P(FiniteStrainModels, ForceAndTangentAreDerivatives) {
   const Mesh mesh = CubeMesh(element);
   const auto material = material_case.make();
   const auto model = element.make(mesh, *material);
-  const Eigen::VectorXd u = Displacement(mesh, 11);
-  const int n = static_cast<int>(u.size());
-
-  Eigen::VectorXd force;
-  double energy = 0;
-  ASSERT_TRUE(model->InternalForce(u, &force, &energy));
+  // Smooth and inhomogeneous, a few percent strain.
+  const Eigen::VectorXd u = testing::RandomSmoothDisplacement(mesh, 0.04, 11, kSize);
   const double step = 1e-7 * kSize;
-  const auto energy_at = [&](const Eigen::VectorXd& v) {
-    Eigen::VectorXd f;
-    double w = 0;
-    EXPECT_TRUE(model->InternalForce(v, &f, &w));
-    return w;
-  };
-  const auto force_at = [&](const Eigen::VectorXd& v) {
-    Eigen::VectorXd f;
-    double w = 0;
-    EXPECT_TRUE(model->InternalForce(v, &f, &w));
-    return f;
-  };
-  double worst_force = 0;
-  for (int i = 0; i < n; ++i) {
-    Eigen::VectorXd plus = u, minus = u;
-    plus(i) += step;
-    minus(i) -= step;
-    worst_force = std::max(worst_force,
-                           std::abs((energy_at(plus) - energy_at(minus)) / (2 * step) - force(i)));
-  }
-  EXPECT_LT(worst_force, 1e-6 * force.cwiseAbs().maxCoeff()) << element.name;
-
+  testing::ExpectForceIsEnergyDerivative(*model, u, element.name, step, 1e-6);
   DofMap dofs(mesh.num_nodes());
   dofs.Finalize();  // every unknown free: the whole tangent
-  LinearSystem system;
-  ASSERT_TRUE(model->Assemble(u, dofs, AssemblyOptions(), &system).ok());
-  const Eigen::MatrixXd k = Eigen::MatrixXd(system.k);
-  EXPECT_LT((system.rhs + force).norm(), 1e-12 * force.norm());
-  EXPECT_LT((k - k.transpose()).norm(), 1e-12 * k.norm());
-  double worst_column = 0;
-  for (int j = 0; j < n; ++j) {
-    Eigen::VectorXd plus = u, minus = u;
-    plus(j) += step;
-    minus(j) -= step;
-    const Eigen::VectorXd column = (force_at(plus) - force_at(minus)) / (2 * step);
-    worst_column = std::max(worst_column, (column - k.col(j)).norm());
-  }
-  EXPECT_LT(worst_column, 1e-6 * k.norm()) << element.name;
+  testing::ExpectTangentIsForceDerivative(*model, u, dofs, element.name, step, 1e-6);
 }
 
 std::string CaseName(const ::testing::TestParamInfo<Case>& info) {
