@@ -305,7 +305,7 @@ Status SolveNewtonStatic(const FiniteStrainModel& model, const ExternalLoads* lo
     }
     if (status.code() == Status::Code::kCancelled) return status;
     last_failure = status.ok() ? Format("no convergence in %d iterations (relative residual %.3g)",
-                                        options.max_iterations, residual)
+                                        iteration - 1, residual)
                                : status.message();
     report->cut_reasons.push_back(Format("increment %.4g -> %.4g: ", load, target) + last_failure);
     step *= 0.5;

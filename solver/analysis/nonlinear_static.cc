@@ -265,6 +265,14 @@ Status SolveNonlinearStatic(const SceneSpec& scene, const Model& model, PhaseClo
   clock.End();
 
   clock.Begin("estimate", 0.95, 0.99, "Zienkiewicz-Zhu error estimate");
+  // The recovery samples the stress at an element's nodes, outside its
+  // integration points: under heavy compression F there may be inverted
+  // although the element is sound where it is integrated. There it takes
+  // the element's mean stress.
+  const auto stress_or_mean = [&](int e, const Eigen::Matrix3d& f) -> Vector6d {
+    if (IsAdmissible(f)) return material->Stress(f);
+    return Eigen::Map<const Vector6d>(&solution->pk2_stress_pa[6 * static_cast<std::size_t>(e)]);
+  };
   const ErrorEstimateResult estimate =
       mesh.quadratic()
           ? EstimateZzErrorTet10(
@@ -272,8 +280,8 @@ Status SolveNonlinearStatic(const SceneSpec& scene, const Model& model, PhaseClo
                 [&](int e, const Eigen::Vector3d& xi) -> Vector6d {
                   Tet10Nodes grad;
                   Tet10Gradients(Tet10Coordinates(mesh, e), xi, &grad);
-                  return material->Stress(
-                      DeformationGradientTet10(grad, GatherElementTet10(mesh, e, u)));
+                  return stress_or_mean(
+                      e, DeformationGradientTet10(grad, GatherElementTet10(mesh, e, u)));
                 },
                 ComplianceMatrix(scene.material))
       : mesh.hexahedral()
@@ -284,10 +292,10 @@ Status SolveNonlinearStatic(const SceneSpec& scene, const Model& model, PhaseClo
                   const Vector24d ue = GatherElementHex8(mesh, e, u);
                   Hex8Nodes grad;
                   Hex8Gradients(x, xi, &grad);
-                  return material->Stress(
-                      full_bricks
-                          ? DeformationGradientHex8(grad, ue)
-                          : MeanDilatationF(grad, ue, MeanDilatation(ComputeHex8Geometry(x), ue)));
+                  const Eigen::Matrix3d f = DeformationGradientHex8(grad, ue);
+                  if (full_bricks || !IsAdmissible(f)) return stress_or_mean(e, f);
+                  return stress_or_mean(
+                      e, MeanDilatationF(grad, ue, MeanDilatation(ComputeHex8Geometry(x), ue)));
                 },
                 ComplianceMatrix(scene.material))
           : EstimateZzError(mesh, solution->pk2_stress_pa, volume, ComplianceMatrix(scene.material));
