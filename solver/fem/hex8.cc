@@ -5,6 +5,8 @@
 #include <cmath>
 #include <limits>
 
+#include "fem/strain_displacement.h"
+
 namespace pba {
 namespace {
 
@@ -69,31 +71,10 @@ Hex8Nodes Hex8NaturalGradients(const Eigen::Vector3d& xi) {
 }
 
 double Hex8Gradients(const Hex8Nodes& x, const Eigen::Vector3d& xi, Hex8Nodes* grad) {
-  // J_ij = dX_i/dxi_j = sum_a X_ai dN_a/dxi_j; dN_a/dX = (dN_a/dxi) J^-1.
-  const Hex8Nodes natural = Hex8NaturalGradients(xi);
-  const Eigen::Matrix3d jacobian = x.transpose() * natural;
-  const double det = jacobian.determinant();
-  if (det != 0) *grad = natural * jacobian.inverse();
-  return det;
+  return PhysicalGradients<8>(x, Hex8NaturalGradients(xi), grad);
 }
 
-Hex8BMatrix Hex8StrainDisplacement(const Hex8Nodes& grad) {
-  Hex8BMatrix b = Hex8BMatrix::Zero();
-  for (int a = 0; a < 8; ++a) {
-    const double dx = grad(a, 0), dy = grad(a, 1), dz = grad(a, 2);
-    const int c = 3 * a;
-    b(0, c) = dx;
-    b(1, c + 1) = dy;
-    b(2, c + 2) = dz;
-    b(3, c + 1) = dz;  // gamma_yz
-    b(3, c + 2) = dy;
-    b(4, c) = dz;  // gamma_xz
-    b(4, c + 2) = dx;
-    b(5, c) = dy;  // gamma_xy
-    b(5, c + 1) = dx;
-  }
-  return b;
-}
+Hex8BMatrix Hex8StrainDisplacement(const Hex8Nodes& grad) { return SmallStrainB<8>(grad); }
 
 Hex8BMatrix Hex8StrainDisplacementBar(const Hex8Nodes& grad, const Hex8Nodes& mean_grad) {
   // The volumetric part of B is (1/3) m (div row), the div row of node a

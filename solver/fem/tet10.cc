@@ -5,6 +5,8 @@
 #include <cmath>
 #include <limits>
 
+#include "fem/strain_displacement.h"
+
 namespace pba {
 namespace {
 
@@ -102,31 +104,10 @@ Tet10Nodes Tet10NaturalGradients(const Eigen::Vector3d& xi) {
 }
 
 double Tet10Gradients(const Tet10Nodes& x, const Eigen::Vector3d& xi, Tet10Nodes* grad) {
-  // J_ij = dX_i/dxi_j = sum_a X_ai dN_a/dxi_j; dN_a/dX = (dN_a/dxi) J^-1.
-  const Tet10Nodes natural = Tet10NaturalGradients(xi);
-  const Eigen::Matrix3d jacobian = x.transpose() * natural;
-  const double det = jacobian.determinant();
-  if (det != 0) *grad = natural * jacobian.inverse();
-  return det;
+  return PhysicalGradients<10>(x, Tet10NaturalGradients(xi), grad);
 }
 
-Tet10BMatrix Tet10StrainDisplacement(const Tet10Nodes& grad) {
-  Tet10BMatrix b = Tet10BMatrix::Zero();
-  for (int a = 0; a < 10; ++a) {
-    const double dx = grad(a, 0), dy = grad(a, 1), dz = grad(a, 2);
-    const int c = 3 * a;
-    b(0, c) = dx;
-    b(1, c + 1) = dy;
-    b(2, c + 2) = dz;
-    b(3, c + 1) = dz;  // gamma_yz
-    b(3, c + 2) = dy;
-    b(4, c) = dz;  // gamma_xz
-    b(4, c + 2) = dx;
-    b(5, c) = dy;  // gamma_xy
-    b(5, c + 1) = dx;
-  }
-  return b;
-}
+Tet10BMatrix Tet10StrainDisplacement(const Tet10Nodes& grad) { return SmallStrainB<10>(grad); }
 
 Tet10Geometry ComputeTet10Geometry(const Tet10Nodes& x) {
   Tet10Geometry g;

@@ -2,6 +2,7 @@
 
 #include <Eigen/LU>
 
+#include "fem/strain_displacement.h"
 #include "material/hyperelastic.h"
 
 namespace pba {
@@ -10,18 +11,7 @@ namespace {
 // delta E (Voigt) = B_NL delta u_e: delta E_ij = (F_ki G_aj + F_kj G_ai) delta u_ak / 2,
 // the shear rows carrying 2 delta E_ij (as GreenLagrangeVariation for tet4).
 Tet10BMatrix NonlinearStrainDisplacement(const Tet10Nodes& grad, const Eigen::Matrix3d& f) {
-  static constexpr int kPairs[6][2] = {{0, 0}, {1, 1}, {2, 2}, {1, 2}, {0, 2}, {0, 1}};
-  Tet10BMatrix b;
-  for (int a = 0; a < 10; ++a) {
-    for (int row = 0; row < 6; ++row) {
-      const int i = kPairs[row][0], j = kPairs[row][1];
-      for (int k = 0; k < 3; ++k) {
-        b(row, 3 * a + k) =
-            i == j ? f(k, i) * grad(a, i) : f(k, i) * grad(a, j) + f(k, j) * grad(a, i);
-      }
-    }
-  }
-  return b;
+  return GreenLagrangeB<10>(grad, f);
 }
 
 }  // namespace

@@ -2,6 +2,8 @@
 
 #include <Eigen/LU>
 
+#include "fem/strain_displacement.h"
+
 namespace pba {
 
 Tet4Geometry ComputeTet4Geometry(const Eigen::Matrix<double, 4, 3>& x) {
@@ -19,23 +21,7 @@ Tet4Geometry ComputeTet4Geometry(const Eigen::Matrix<double, 4, 3>& x) {
   return g;
 }
 
-BMatrix StrainDisplacement(const Tet4Geometry& g) {
-  BMatrix b = BMatrix::Zero();
-  for (int a = 0; a < 4; ++a) {
-    const double dx = g.grad(a, 0), dy = g.grad(a, 1), dz = g.grad(a, 2);
-    const int c = 3 * a;
-    b(0, c) = dx;
-    b(1, c + 1) = dy;
-    b(2, c + 2) = dz;
-    b(3, c + 1) = dz;  // gamma_yz
-    b(3, c + 2) = dy;
-    b(4, c) = dz;  // gamma_xz
-    b(4, c + 2) = dx;
-    b(5, c) = dy;  // gamma_xy
-    b(5, c + 1) = dx;
-  }
-  return b;
-}
+BMatrix StrainDisplacement(const Tet4Geometry& g) { return SmallStrainB<4>(g.grad); }
 
 Matrix12d Tet4Stiffness(const Tet4Geometry& g, const Matrix6d& d) {
   const BMatrix b = StrainDisplacement(g);

@@ -2,6 +2,7 @@
 
 #include <Eigen/LU>
 
+#include "fem/strain_displacement.h"
 #include "material/hyperelastic.h"
 
 namespace pba {
@@ -13,20 +14,7 @@ Eigen::Matrix3d DeformationGradient(const Tet4Geometry& reference, const Vector1
 }
 
 BMatrix GreenLagrangeVariation(const Tet4Geometry& reference, const Eigen::Matrix3d& f) {
-  // delta E_ij = (F_ki dN_a/dX_j + F_kj dN_a/dX_i) delta u_ak / 2; the shear
-  // rows carry 2 delta E_ij.
-  static constexpr int kPairs[6][2] = {{0, 0}, {1, 1}, {2, 2}, {1, 2}, {0, 2}, {0, 1}};
-  BMatrix b;
-  for (int a = 0; a < 4; ++a) {
-    for (int row = 0; row < 6; ++row) {
-      const int i = kPairs[row][0], j = kPairs[row][1];
-      for (int k = 0; k < 3; ++k) {
-        b(row, 3 * a + k) = i == j ? f(k, i) * reference.grad(a, i)
-                                   : f(k, i) * reference.grad(a, j) + f(k, j) * reference.grad(a, i);
-      }
-    }
-  }
-  return b;
+  return GreenLagrangeB<4>(reference.grad, f);
 }
 
 bool Tet4FiniteStrain(const Tet4Geometry& reference, const Vector12d& u,
