@@ -13,6 +13,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   calculix-ccx
   libssl-dev
+  gnuplot-nox
 )
 
 missing=()
