@@ -131,6 +131,10 @@ Status SolveNewtonStatic(const FiniteStrainModel& model, const ExternalLoads* lo
   LinearSolver* good = nullptr;  // holds the last positive definite factorisation
   SparseMatrix shifted;
   LinearSystem approximate;
+  // Consecutive iterations whose consistent tangent was not positive
+  // definite: when an increment fails with the tangent still indefinite
+  // close to equilibrium, the equilibrium itself may be unstable.
+  int indefinite_streak = 0;
   const auto solve = [&](const LinearSystem& system, int iteration, double residual,
                          const std::function<Status(LinearSystem*)>& assemble_approximate,
                          Eigen::VectorXd* du) {
@@ -139,8 +143,10 @@ Status SolveNewtonStatic(const FiniteStrainModel& model, const ExternalLoads* lo
     Status status = target->Factorize(system.k);
     if (status.ok()) {
       good = target;
+      indefinite_streak = 0;
       return good->Solve(system.rhs, du);
     }
+    ++indefinite_streak;
     bool approximated = false;
     {
       // The approximate tangent's assembly counts as assembly, not solving.
@@ -307,6 +313,13 @@ Status SolveNewtonStatic(const FiniteStrainModel& model, const ExternalLoads* lo
     last_failure = status.ok() ? Format("no convergence in %d iterations (relative residual %.3g)",
                                         iteration - 1, residual)
                                : status.message();
+    if (status.ok() && indefinite_streak >= 3 && residual < 1e-4) {
+      last_failure += Format(
+          "; the tangent stiffness stayed indefinite for the last %d iterations although the "
+          "residual was small, so the equilibrium there may be unstable (buckling, or a "
+          "spurious mode of the element under strong compression)",
+          indefinite_streak);
+    }
     report->cut_reasons.push_back(Format("increment %.4g -> %.4g: ", load, target) + last_failure);
     step *= 0.5;
     ++report->cuts;
