@@ -22,8 +22,8 @@
 namespace pba {
 
 struct ErrorEstimateResult {
-  double relative_error = 0;          // eta, a fraction
-  std::vector<double> element_share;  // eta_e^2 / sum eta_e^2, per element
+  double relative_error = 0;            // eta, a fraction
+  std::vector<double> element_share;    // eta_e^2 / sum eta_e^2, per element
   std::vector<double> element_error2;   // eta_e^2, per element
   std::vector<double> element_energy2;  // ||u_h||_E^2 on element e
 };

@@ -180,7 +180,6 @@ void SymmetricPressureStiffness(const Eigen::Matrix<double, N, 3>& x,
   }
 }
 
-
 // The mid-edge nodes of triangle `corners`, a face of element `element`.
 std::array<int, 3> MidsideFromElement(const Mesh& mesh, int element,
                                       const std::array<int, 3>& corners) {

@@ -54,7 +54,7 @@ struct IncrementRecord {
 struct NewtonReport {
   std::vector<IncrementRecord> increments;  // converged ones
   int total_iterations = 0;
-  int cuts = 0;                          // increments cut back and retried
+  int cuts = 0;  // increments cut back and retried
   // Iterations whose consistent tangent was not positive definite and that
   // used the tangent without pressure initial-stress terms instead, or
   // (modified) an earlier positive definite tangent.

@@ -3,24 +3,24 @@
 // element: Green-Lagrange and Euler-Almansi strain, second Piola-Kirchhoff
 // and Cauchy stress, J, von Mises of the Cauchy stress.
 #include <Eigen/LU>
-#include <optional>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 
 #include "analysis/average_nodal_pressure_model.h"
 #include "analysis/error_estimator.h"
 #include "analysis/finite_strain_model.h"
+#include "analysis/hex8_model.h"
 #include "analysis/newton_static.h"
 #include "analysis/static_analysis.h"
-#include "analysis/hex8_model.h"
 #include "analysis/tet10_model.h"
 #include "core/format.h"
+#include "fem/hex8.h"
 #include "fem/tet4_finite_strain.h"
 #include "linear/linear_solver.h"
 #include "material/factory.h"
 #include "material/hyperelastic.h"
 #include "material/linear_elastic.h"
-#include "fem/hex8.h"
 #include "mesh/quadratic.h"
 
 namespace pba {
@@ -274,16 +274,15 @@ Status SolveNonlinearStatic(const SceneSpec& scene, const Model& model, PhaseClo
     return Eigen::Map<const Vector6d>(&solution->pk2_stress_pa[6 * static_cast<std::size_t>(e)]);
   };
   const ErrorEstimateResult estimate =
-      mesh.quadratic()
-          ? EstimateZzErrorTet10(
-                mesh,
-                [&](int e, const Eigen::Vector3d& xi) -> Vector6d {
-                  Tet10Nodes grad;
-                  Tet10Gradients(Tet10Coordinates(mesh, e), xi, &grad);
-                  return stress_or_mean(
-                      e, DeformationGradientTet10(grad, GatherElementTet10(mesh, e, u)));
-                },
-                ComplianceMatrix(scene.material))
+      mesh.quadratic() ? EstimateZzErrorTet10(
+                             mesh,
+                             [&](int e, const Eigen::Vector3d& xi) -> Vector6d {
+                               Tet10Nodes grad;
+                               Tet10Gradients(Tet10Coordinates(mesh, e), xi, &grad);
+                               return stress_or_mean(e, DeformationGradientTet10(
+                                                            grad, GatherElementTet10(mesh, e, u)));
+                             },
+                             ComplianceMatrix(scene.material))
       : mesh.hexahedral()
           ? EstimateZzErrorHex8(
                 mesh,
@@ -298,7 +297,8 @@ Status SolveNonlinearStatic(const SceneSpec& scene, const Model& model, PhaseClo
                       e, MeanDilatationF(grad, ue, MeanDilatation(ComputeHex8Geometry(x), ue)));
                 },
                 ComplianceMatrix(scene.material))
-          : EstimateZzError(mesh, solution->pk2_stress_pa, volume, ComplianceMatrix(scene.material));
+          : EstimateZzError(mesh, solution->pk2_stress_pa, volume,
+                            ComplianceMatrix(scene.material));
   solution->error_indicator = estimate.element_share;
   summary.error.estimated = true;
   summary.error.method =

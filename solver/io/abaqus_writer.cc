@@ -131,7 +131,10 @@ Status ExportAbaqusInput(const SceneSpec& scene, const std::filesystem::path& fi
   // PBA's 10-node order (corners, then edges (0,1) (1,2) (2,0) (0,3) (1,3)
   // (2,3)) is C3D10's, so the nodes go out as they are.
   out << "*ELEMENT, TYPE="
-      << (mesh.quadratic() ? "C3D10" : mesh.hexahedral() ? "C3D8" : "C3D4") << ", ELSET=EALL\n";
+      << (mesh.quadratic()    ? "C3D10"
+          : mesh.hexahedral() ? "C3D8"
+                              : "C3D4")
+      << ", ELSET=EALL\n";
   for (int e = 0; e < mesh.num_elements(); ++e) {
     out << e + 1;
     if (mesh.quadratic()) {
@@ -198,8 +201,7 @@ Status ExportAbaqusInput(const SceneSpec& scene, const std::filesystem::path& fi
       // C3D8 faces S1..S6 (mesh.h, kHex8Faces).
       for (const auto& [element, face] : QuadFaceElements(mesh, set)) {
         if (element < 0) continue;
-        std::snprintf(line, sizeof line, "%d, P%d, %.13g\n", element + 1, face + 1,
-                      bc.pressure_pa);
+        std::snprintf(line, sizeof line, "%d, P%d, %.13g\n", element + 1, face + 1, bc.pressure_pa);
         out << line;
       }
       continue;

@@ -54,13 +54,13 @@ Status ValidatePolynomial(const PolynomialParams& p, const std::string& path) {
     const PolynomialTermSpec& t = p.terms[k];
     const std::string term = path + ".terms[" + std::to_string(k) + "]";
     if (t.i < 0 || t.j < 0 || t.i + t.j < 1 || t.i + t.j > 3) {
-      return Status::InvalidArgument(term, "powers i = " + std::to_string(t.i) + ", j = " +
-                                               std::to_string(t.j) +
-                                               " are out of range: need i, j >= 0 and 1 <= i + j <= 3");
+      return Status::InvalidArgument(
+          term, "powers i = " + std::to_string(t.i) + ", j = " + std::to_string(t.j) +
+                    " are out of range: need i, j >= 0 and 1 <= i + j <= 3");
     }
     if (!seen.insert({t.i, t.j}).second) {
-      return Status::InvalidArgument(term, "C" + std::to_string(t.i) + std::to_string(t.j) +
-                                               " is given twice");
+      return Status::InvalidArgument(
+          term, "C" + std::to_string(t.i) + std::to_string(t.j) + " is given twice");
     }
     PBA_RETURN_IF_ERROR(RequireFinite(t.c_pa, term + ".c_pa"));
     order = std::max(order, t.i + t.j);

@@ -36,10 +36,10 @@ Status ValidateGeometry(const GeometrySpec& geometry) {
             "must be a positive number of mm, got " + Number(s.inner_radius_mm));
       }
       if (!std::isfinite(s.outer_radius_mm) || s.outer_radius_mm <= s.inner_radius_mm) {
-        return Status::InvalidArgument(
-            "geometry.spherical_shell.outer_radius_mm",
-            "must be a number of mm larger than the inner radius (" + Number(s.inner_radius_mm) +
-                "), got " + Number(s.outer_radius_mm));
+        return Status::InvalidArgument("geometry.spherical_shell.outer_radius_mm",
+                                       "must be a number of mm larger than the inner radius (" +
+                                           Number(s.inner_radius_mm) + "), got " +
+                                           Number(s.outer_radius_mm));
       }
       return Status::Ok();
     }
@@ -209,9 +209,9 @@ Status ValidateScene(const SceneSpec& scene) {
             path, "no condition given: set fixed, displacement, symmetry, pressure or traction");
       case BoundaryConditionSpec::Kind::kPressure:
         if (!std::isfinite(bc.pressure_pa)) {
-          return Status::InvalidArgument(path + ".pressure.pressure_pa",
-                                         "must be a finite number of Pa, got " +
-                                             Number(bc.pressure_pa));
+          return Status::InvalidArgument(
+              path + ".pressure.pressure_pa",
+              "must be a finite number of Pa, got " + Number(bc.pressure_pa));
         }
         break;
       case BoundaryConditionSpec::Kind::kTraction:
@@ -257,17 +257,16 @@ Status ValidateScene(const SceneSpec& scene) {
   }
   const double density = scene.material.density_kg_per_m3;
   if (!std::isfinite(density) || density < 0) {
-    return Status::InvalidArgument("material.density_kg_per_m3",
-                                   "must be a non-negative number of kg/m^3, got " +
-                                       Number(density));
+    return Status::InvalidArgument(
+        "material.density_kg_per_m3",
+        "must be a non-negative number of kg/m^3, got " + Number(density));
   }
   if (scene.gravity.enabled) {
     for (int c = 0; c < 3; ++c) {
       if (!std::isfinite(scene.gravity.acceleration_m_per_s2[c])) {
-        return Status::InvalidArgument(
-            "gravity.acceleration_m_per_s2[" + std::to_string(c) + "]",
-            "must be a finite number of m/s^2, got " +
-                Number(scene.gravity.acceleration_m_per_s2[c]));
+        return Status::InvalidArgument("gravity.acceleration_m_per_s2[" + std::to_string(c) + "]",
+                                       "must be a finite number of m/s^2, got " +
+                                           Number(scene.gravity.acceleration_m_per_s2[c]));
       }
     }
     if (density == 0) {

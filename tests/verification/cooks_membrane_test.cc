@@ -13,8 +13,8 @@
 
 #include "analysis/average_nodal_pressure_model.h"
 #include "analysis/external_loads.h"
-#include "analysis/hex8_model.h"
 #include "analysis/finite_strain_model.h"
+#include "analysis/hex8_model.h"
 #include "analysis/newton_static.h"
 #include "linear/linear_solver.h"
 #include "material/polynomial.h"

@@ -38,11 +38,11 @@ struct GeometrySpec {
 };
 
 enum class ElementType {
-  kDefault,  // TET4 for linear analyses, TET4_ANP for nonlinear ones
-  kTet4,     // 4-node tetrahedron, one F per element (locks when nearly incompressible)
-  kTet4Anp,  // 4-node tetrahedron with average nodal pressure (nonlinear analyses)
-  kTet10,    // 10-node quadratic tetrahedron; mid-edge nodes on curved faces lie on the surface
-  kHex8,     // 8-node hexahedron with a mean-dilatation (B-bar) volumetric treatment
+  kDefault,   // TET4 for linear analyses, TET4_ANP for nonlinear ones
+  kTet4,      // 4-node tetrahedron, one F per element (locks when nearly incompressible)
+  kTet4Anp,   // 4-node tetrahedron with average nodal pressure (nonlinear analyses)
+  kTet10,     // 10-node quadratic tetrahedron; mid-edge nodes on curved faces lie on the surface
+  kHex8,      // 8-node hexahedron with a mean-dilatation (B-bar) volumetric treatment
   kHex8Full,  // 8-node hexahedron, full 2x2x2 integration (locks when nearly incompressible)
 };
 
@@ -106,16 +106,16 @@ struct NeoHookeanParams {
 
 // W = C10 (I1b - 3) + C01 (I2b - 3) + (K / 2)(J - 1)^2; mu0 = 2 (C10 + C01).
 struct MooneyRivlinParams {
-  double c10_pa = 0;  // [Pa]
-  double c01_pa = 0;  // [Pa]; C10 + C01 > 0
+  double c10_pa = 0;           // [Pa]
+  double c01_pa = 0;           // [Pa]; C10 + C01 > 0
   double bulk_modulus_pa = 0;  // K [Pa], > 0
 };
 
 // W = sum C_ij (I1b - 3)^i (I2b - 3)^j + sum_k (1 / D_k)(J - 1)^(2k), order
 // N = max(i + j) <= 3, k = 1..N.
 struct PolynomialTermSpec {
-  int i = 0;  // power of (I1b - 3)
-  int j = 0;  // power of (I2b - 3); 1 <= i + j <= 3
+  int i = 0;        // power of (I1b - 3)
+  int j = 0;        // power of (I2b - 3); 1 <= i + j <= 3
   double c_pa = 0;  // C_ij [Pa]
 };
 struct PolynomialParams {
@@ -156,8 +156,7 @@ struct MaterialSpec {
   OgdenParams ogden;
 
   bool hyperelastic() const {
-    return kind != Kind::kNone && kind != Kind::kLinearElastic &&
-           kind != Kind::kOrthotropicElastic;
+    return kind != Kind::kNone && kind != Kind::kLinearElastic && kind != Kind::kOrthotropicElastic;
   }
 };
 
@@ -174,7 +173,7 @@ struct BoundaryConditionSpec {
   Kind kind = Kind::kNone;
   // kDisplacement: prescribed x, y, z components [mm]; nullopt = free.
   std::array<std::optional<double>, 3> displacement_mm;
-  double pressure_pa = 0;                  // kPressure [Pa]
+  double pressure_pa = 0;                      // kPressure [Pa]
   std::array<double, 3> traction_pa{0, 0, 0};  // kTraction, x y z [Pa]
 
   // True for the conditions that load a set rather than hold it.
@@ -191,8 +190,8 @@ struct GravitySpec {
 // Load stepping and Newton-Raphson controls of a nonlinear static analysis;
 // 0 (or unset) picks the default given.
 struct NonlinearOptionsSpec {
-  int increments = 0;       // initial number of load increments, default 5, <= 10000
-  int max_iterations = 0;   // Newton iterations per increment, default 20, <= 1000
+  int increments = 0;                 // initial number of load increments, default 5, <= 10000
+  int max_iterations = 0;             // Newton iterations per increment, default 20, <= 1000
   double residual_tolerance = 0;      // relative force residual, default 1e-8, < 1
   double displacement_tolerance = 0;  // relative displacement correction, default 1e-8, < 1
   double min_increment = 0;  // smallest load-factor increment before giving up, default 1e-4
@@ -202,7 +201,8 @@ struct NonlinearOptionsSpec {
 struct AnalysisSpec {
   enum class Type {
     kLinearStatic,     // small strain, K u = f; hyperelastic models use their initial moduli
-    kNonlinearStatic,  // finite strain, total Lagrangian, Newton-Raphson; needs a hyperelastic model
+    kNonlinearStatic,  // finite strain, total Lagrangian, Newton-Raphson; needs a hyperelastic
+                       // model
   };
   enum class LinearSolver {
     kCholmod,    // supernodal sparse Cholesky (SuiteSparse), the default

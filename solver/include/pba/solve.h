@@ -43,7 +43,7 @@ struct Reaction {
 
 // The estimate on one region (structure) of the model.
 struct RegionErrorEstimate {
-  std::string name;           // the region's (structure's) name; "body" when there is one
+  std::string name;  // the region's (structure's) name; "body" when there is one
   int64_t elements = 0;
   double relative_error = 0;  // energy-norm relative error on the region, fraction
   double share = 0;           // the region's share of the squared total error, 0..1
@@ -51,9 +51,9 @@ struct RegionErrorEstimate {
 
 struct ErrorEstimate {
   bool estimated = false;
-  std::string method;         // e.g. "Zienkiewicz-Zhu stress recovery"
-  double relative_error = 0;  // energy-norm relative error, fraction
-  std::string note;           // how to read it, or why it is not estimated
+  std::string method;                        // e.g. "Zienkiewicz-Zhu stress recovery"
+  double relative_error = 0;                 // energy-norm relative error, fraction
+  std::string note;                          // how to read it, or why it is not estimated
   std::vector<RegionErrorEstimate> regions;  // per region, in the mesh's order
 };
 
