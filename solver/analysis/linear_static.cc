@@ -8,10 +8,10 @@
 #include "analysis/static_analysis.h"
 #include "assembly/assembler.h"
 #include "core/format.h"
+#include "fem/hex8.h"
 #include "linear/linear_solver.h"
 #include "material/factory.h"
 #include "material/linear_elastic.h"
-#include "fem/hex8.h"
 #include "mesh/quadratic.h"
 
 namespace pba {
@@ -20,6 +20,42 @@ namespace {
 // Beyond this strain the small-strain answer is no longer a fair model of
 // soft tissue, which has no linear range (DOMAIN.md section 2).
 constexpr double kSmallStrainLimit = 0.05;
+
+// One element's recovered fields: the volume averages of its strain and
+// stress over its integration points (exact values for the constant-strain
+// tetrahedron; strain varies within a 10-node element or a brick).
+struct ElementRecovery {
+  Vector6d strain = Vector6d::Zero(), stress = Vector6d::Zero();
+  double volume = 0, energy = 0, max_strain = 0;
+};
+
+// Recovers element fields from `points` integration points, point(q, &dv)
+// giving B at point q and its share of volume dv, and adds the element's
+// internal force B^T sigma dV to `internal` at `nodes` (elements of one
+// colour share no node, so concurrent calls do not collide).
+template <int N, typename PointB>
+ElementRecovery RecoverElement(const std::array<int, N>& nodes,
+                               const Eigen::Matrix<double, 3 * N, 1>& ue, int points,
+                               const PointB& point, const Matrix6d& d, Eigen::VectorXd* internal) {
+  ElementRecovery r;
+  Eigen::Matrix<double, 3 * N, 1> force = Eigen::Matrix<double, 3 * N, 1>::Zero();
+  for (int q = 0; q < points; ++q) {
+    double dv = 0;
+    const Eigen::Matrix<double, 6, 3 * N> b = point(q, &dv);
+    const Vector6d strain = b * ue, stress = d * strain;
+    r.strain += dv * strain;
+    r.stress += dv * stress;
+    force += dv * b.transpose() * stress;
+    r.energy += 0.5 * dv * stress.dot(strain);
+    r.max_strain = std::max(r.max_strain, strain.cwiseAbs().maxCoeff());
+    r.volume += dv;
+  }
+  r.strain /= r.volume;
+  r.stress /= r.volume;
+  for (int a = 0; a < N; ++a)
+    internal->template segment<3>(3 * nodes[a]) += force.template segment<3>(3 * a);
+  return r;
+}
 
 }  // namespace
 
@@ -45,8 +81,8 @@ Status SolveLinearStatic(const SceneSpec& scene, const Model& model, PhaseClock*
     return !clock.cancelled();
   };
   PBA_RETURN_IF_ERROR(
-      mesh.quadratic()     ? AssembleLinearSystemTet10(mesh, d, dofs, colours, keep_going, &system)
-      : full_bricks ? AssembleLinearSystemHex8Full(mesh, d, dofs, colours, keep_going, &system)
+      mesh.quadratic() ? AssembleLinearSystemTet10(mesh, d, dofs, colours, keep_going, &system)
+      : full_bricks    ? AssembleLinearSystemHex8Full(mesh, d, dofs, colours, keep_going, &system)
       : mesh.hexahedral() ? AssembleLinearSystemHex8(mesh, d, dofs, colours, keep_going, &system)
                           : AssembleLinearSystem(mesh, d, dofs, colours, keep_going, &system));
   const ExternalLoads loads = BuildLoads(scene, mesh);
@@ -94,97 +130,58 @@ Status SolveLinearStatic(const SceneSpec& scene, const Model& model, PhaseClock*
   Eigen::VectorXd internal = Eigen::VectorXd::Zero(dofs.num_dofs());
   double energy = 0, max_strain = 0;
   for (const auto& colour : colours) {
-    if (mesh.quadratic()) {
-      // Per element: the volume averages of the strain and stress, which
-      // vary linearly in a straight 10-node element, over the 4 points.
-#pragma omp parallel for reduction(+ : energy) reduction(max : max_strain) schedule(static)
-      for (std::size_t k = 0; k < colour.size(); ++k) {
-        const int e = colour[k];
-        const Tet10Geometry g = ComputeTet10Geometry(Tet10Coordinates(mesh, e));
-        const Vector30d ue = GatherElementTet10(mesh, e, u);
-        Vector6d strain_sum = Vector6d::Zero(), stress_sum = Vector6d::Zero();
-        Vector30d force = Vector30d::Zero();
-        double v = 0;
-        for (int q = 0; q < 4; ++q) {
-          const Tet10BMatrix b = Tet10StrainDisplacement(g.grad[q]);
-          const Vector6d strain = b * ue, stress = d * strain;
-          strain_sum += g.volume[q] * strain;
-          stress_sum += g.volume[q] * stress;
-          force += g.volume[q] * b.transpose() * stress;
-          energy += 0.5 * g.volume[q] * stress.dot(strain);
-          max_strain = std::max(max_strain, strain.cwiseAbs().maxCoeff());
-          v += g.volume[q];
-        }
-        Eigen::Map<Vector6d>(&solution->strain[6 * e]) = strain_sum / v;
-        Eigen::Map<Vector6d>(&solution->stress_pa[6 * e]) = stress_sum / v;
-        solution->von_mises_pa[e] = VonMises(stress_sum / v);
-        volume[e] = v;
-        const std::array<int, 10> nodes = Tet10NodeIndices(mesh, e);
-        for (int a = 0; a < 10; ++a) internal.segment<3>(3 * nodes[a]) += force.segment<3>(3 * a);
-      }
-      continue;
-    }
-    if (mesh.hexahedral()) {
-      // Per element: volume averages of the B-bar strain and its stress
-      // over the 2 x 2 x 2 points.
-#pragma omp parallel for reduction(+ : energy) reduction(max : max_strain) schedule(static)
-      for (std::size_t k = 0; k < colour.size(); ++k) {
-        const int e = colour[k];
-        const Hex8Geometry g = ComputeHex8Geometry(Hex8Coordinates(mesh, e));
-        const Vector24d ue = GatherElementHex8(mesh, e, u);
-        Vector6d strain_sum = Vector6d::Zero(), stress_sum = Vector6d::Zero();
-        Vector24d force = Vector24d::Zero();
-        for (int q = 0; q < 8; ++q) {
-          const Hex8BMatrix b = full_bricks ? Hex8StrainDisplacement(g.grad[q])
-                                            : Hex8StrainDisplacementBar(g.grad[q], g.mean_grad);
-          const Vector6d strain = b * ue, stress = d * strain;
-          strain_sum += g.volume[q] * strain;
-          stress_sum += g.volume[q] * stress;
-          force += g.volume[q] * b.transpose() * stress;
-          energy += 0.5 * g.volume[q] * stress.dot(strain);
-          max_strain = std::max(max_strain, strain.cwiseAbs().maxCoeff());
-        }
-        const double v = g.element_volume;
-        Eigen::Map<Vector6d>(&solution->strain[6 * e]) = strain_sum / v;
-        Eigen::Map<Vector6d>(&solution->stress_pa[6 * e]) = stress_sum / v;
-        solution->von_mises_pa[e] = VonMises(stress_sum / v);
-        volume[e] = v;
-        for (int a = 0; a < 8; ++a) {
-          internal.segment<3>(3 * mesh.hexes[e][a]) += force.segment<3>(3 * a);
-        }
-      }
-      continue;
-    }
 #pragma omp parallel for reduction(+ : energy) reduction(max : max_strain) schedule(static)
     for (std::size_t k = 0; k < colour.size(); ++k) {
       const int e = colour[k];
-      const Tet4Geometry g = ComputeTet4Geometry(TetCorners(mesh, e));
-      const BMatrix b = StrainDisplacement(g);
-      const Vector6d strain = b * GatherElement(mesh, e, u);
-      const Vector6d stress = d * strain;
-      Eigen::Map<Vector6d>(&solution->strain[6 * e]) = strain;
-      Eigen::Map<Vector6d>(&solution->stress_pa[6 * e]) = stress;
-      solution->von_mises_pa[e] = VonMises(stress);
-      volume[e] = g.volume;
-      energy += 0.5 * g.volume * stress.dot(strain);
-      max_strain = std::max(max_strain, strain.cwiseAbs().maxCoeff());
-      const Vector12d force = g.volume * b.transpose() * stress;
-      for (int a = 0; a < 4; ++a)
-        internal.segment<3>(3 * mesh.tets[e][a]) += force.segment<3>(3 * a);
+      ElementRecovery r;
+      if (mesh.quadratic()) {
+        const Tet10Geometry g = ComputeTet10Geometry(Tet10Coordinates(mesh, e));
+        r = RecoverElement<10>(
+            Tet10NodeIndices(mesh, e), GatherElementTet10(mesh, e, u), 4,
+            [&](int q, double* dv) {
+              *dv = g.volume[q];
+              return Tet10StrainDisplacement(g.grad[q]);
+            },
+            d, &internal);
+      } else if (mesh.hexahedral()) {
+        const Hex8Geometry g = ComputeHex8Geometry(Hex8Coordinates(mesh, e));
+        r = RecoverElement<8>(
+            mesh.hexes[e], GatherElementHex8(mesh, e, u), 8,
+            [&](int q, double* dv) {
+              *dv = g.volume[q];
+              return full_bricks ? Hex8StrainDisplacement(g.grad[q])
+                                 : Hex8StrainDisplacementBar(g.grad[q], g.mean_grad);
+            },
+            d, &internal);
+      } else {
+        const Tet4Geometry g = ComputeTet4Geometry(TetCorners(mesh, e));
+        r = RecoverElement<4>(
+            mesh.tets[e], GatherElement(mesh, e, u), 1,
+            [&](int, double* dv) {
+              *dv = g.volume;
+              return StrainDisplacement(g);
+            },
+            d, &internal);
+      }
+      Eigen::Map<Vector6d>(&solution->strain[6 * e]) = r.strain;
+      Eigen::Map<Vector6d>(&solution->stress_pa[6 * e]) = r.stress;
+      solution->von_mises_pa[e] = VonMises(r.stress);
+      volume[e] = r.volume;
+      energy += r.energy;
+      max_strain = std::max(max_strain, r.max_strain);
     }
   }
   clock.End();
 
   clock.Begin("estimate", 0.9, 0.95, "Zienkiewicz-Zhu error estimate");
   const ErrorEstimateResult estimate =
-      mesh.quadratic()
-          ? EstimateZzErrorTet10(
-                mesh,
-                [&](int e, const Eigen::Vector3d& xi) -> Vector6d {
-                  return d *
-                         Tet10Strain(Tet10Coordinates(mesh, e), GatherElementTet10(mesh, e, u), xi);
-                },
-                ComplianceMatrix(scene.material))
+      mesh.quadratic() ? EstimateZzErrorTet10(
+                             mesh,
+                             [&](int e, const Eigen::Vector3d& xi) -> Vector6d {
+                               return d * Tet10Strain(Tet10Coordinates(mesh, e),
+                                                      GatherElementTet10(mesh, e, u), xi);
+                             },
+                             ComplianceMatrix(scene.material))
       : mesh.hexahedral()
           ? EstimateZzErrorHex8(
                 mesh,
