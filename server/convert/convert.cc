@@ -33,8 +33,32 @@ Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec) {
       spec->geometry.spherical_shell.inner_radius_mm = geometry.spherical_shell().inner_radius_mm();
       spec->geometry.spherical_shell.outer_radius_mm = geometry.spherical_shell().outer_radius_mm();
       break;
+    case v1::Geometry::kEllipsoid: {
+      const auto& axes = geometry.ellipsoid().semi_axes_mm();
+      if (axes.size() != 3) {
+        return Status::InvalidArgument(
+            "geometry.ellipsoid.semi_axes_mm",
+            "expected three semi-axes (x, y, z) in mm, got " + std::to_string(axes.size()));
+      }
+      spec->geometry.kind = GeometrySpec::Kind::kEllipsoid;
+      for (int i = 0; i < 3; ++i) spec->geometry.ellipsoid.semi_axes_mm[i] = axes[i];
+      break;
+    }
     case v1::Geometry::SHAPE_NOT_SET:
       break;  // ValidateScene names it
+  }
+  for (int i = 0; i < geometry.patches_size(); ++i) {
+    const v1::Patch& p = geometry.patches(i);
+    if (p.centre_mm_size() != 3) {
+      return Status::InvalidArgument(
+          "geometry.patches[" + std::to_string(i) + "].centre_mm",
+          "expected three coordinates (x, y, z) in mm, got " + std::to_string(p.centre_mm_size()));
+    }
+    PatchSpec& out = spec->geometry.patches.emplace_back();
+    out.name = p.name();
+    out.set = p.set();
+    for (int c = 0; c < 3; ++c) out.centre_mm[c] = p.centre_mm(c);
+    out.radius_mm = p.radius_mm();
   }
 
   switch (scene.mesh().element()) {

@@ -24,6 +24,10 @@ std::string DescribeGeometry(const GeometrySpec& g) {
     return Format("spherical shell octant, radii %g and %g mm", g.spherical_shell.inner_radius_mm,
                   g.spherical_shell.outer_radius_mm);
   }
+  if (g.kind == GeometrySpec::Kind::kEllipsoid) {
+    return Format("ellipsoid, semi-axes %g, %g and %g mm", g.ellipsoid.semi_axes_mm[0],
+                  g.ellipsoid.semi_axes_mm[1], g.ellipsoid.semi_axes_mm[2]);
+  }
   return Format("cylinder r = %g mm, h = %g mm", g.cylinder.radius_mm, g.cylinder.height_mm);
 }
 
@@ -44,7 +48,8 @@ Status SolveScene(const SceneSpec& scene, const SolveOptions& options, Solution*
   PhaseClock clock(options, &summary.phases);
 
   clock.Begin("mesh", 0.0, 0.05, "meshing the " + DescribeGeometry(scene.geometry));
-  const Model model = BuildModel(scene);
+  Model model;
+  PBA_RETURN_IF_ERROR(BuildModel(scene, &model));
   const Mesh& mesh = model.mesh;
   const DofMap& dofs = model.dofs;
   const std::string free_modes = DescribeFreeRigidModes(mesh, dofs);

@@ -99,7 +99,8 @@ std::string MaterialCards(const MaterialSpec& m) {
 
 Status ExportAbaqusInput(const SceneSpec& scene, const std::filesystem::path& file) {
   PBA_RETURN_IF_ERROR(ValidateScene(scene));
-  const Model model = BuildModel(scene);
+  Model model;
+  PBA_RETURN_IF_ERROR(BuildModel(scene, &model));
   const Mesh& mesh = model.mesh;
   std::ofstream out(file, std::ios::trunc);
   if (!out) return Status::Io("cannot write " + file.string());

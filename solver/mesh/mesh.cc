@@ -124,4 +124,30 @@ std::vector<std::array<int, 2>> QuadFaceElements(const Mesh& mesh, const FaceSet
   return owner;
 }
 
+FaceSet FacesWithin(const Mesh& mesh, const FaceSet& set, const Eigen::Vector3d& centre,
+                    double radius) {
+  const auto inside = [&](int node) {
+    return (mesh.nodes.row(node).transpose() - centre).norm() <= radius;
+  };
+  const auto all_inside = [&](const auto& face) {
+    return std::all_of(face.begin(), face.end(), inside);
+  };
+  FaceSet patch;
+  for (std::size_t t = 0; t < set.triangles.size(); ++t) {
+    if (!all_inside(set.triangles[t])) continue;
+    patch.triangles.push_back(set.triangles[t]);
+    if (!set.triangle_midside.empty()) patch.triangle_midside.push_back(set.triangle_midside[t]);
+  }
+  for (const auto& q : set.quads) {
+    if (all_inside(q)) patch.quads.push_back(q);
+  }
+  auto& nodes = patch.nodes;
+  for (const auto& t : patch.triangles) nodes.insert(nodes.end(), t.begin(), t.end());
+  for (const auto& t : patch.triangle_midside) nodes.insert(nodes.end(), t.begin(), t.end());
+  for (const auto& q : patch.quads) nodes.insert(nodes.end(), q.begin(), q.end());
+  std::sort(nodes.begin(), nodes.end());
+  nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
+  return patch;
+}
+
 }  // namespace pba

@@ -71,6 +71,12 @@ double HexVolume(const Mesh& mesh, int e);
 // parallelogram, close for a gently warped quad).
 double FaceSetArea(const Mesh& mesh, const FaceSet& set);
 
+// The faces of `set` whose corners all lie within `radius` of `centre` [m]
+// (a patch of it, e.g. where a punch presses), with their mid-edge nodes
+// on a quadratic mesh; `nodes` lists what they touch.
+FaceSet FacesWithin(const Mesh& mesh, const FaceSet& set, const Eigen::Vector3d& centre,
+                    double radius);
+
 // The tetrahedron behind each triangle of a boundary face set: for triangle
 // i, {element, corner}, `corner` (0..3) being the element's node opposite the
 // triangle; {-1, -1} for a triangle that is no element's face.

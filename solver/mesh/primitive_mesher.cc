@@ -253,6 +253,121 @@ Mesh SphericalShellOctant(double a, double b, int n, int nr, bool hex) {
   return mesh;
 }
 
+// Cuts a brick into six tetrahedra coned from its smallest-index node over
+// the three faces that do not hold it, each split through its own
+// smallest-index node. A face holding the apex is then split through the
+// apex, which is also that face's smallest node: every face is split
+// through its smallest global index whichever brick it is seen from
+// (Dompierre et al. 1999's rule), so neighbours agree and the mesh is
+// conforming. Orient() turns the tetrahedra positively afterwards.
+void SplitHex(const std::array<int, 8>& h, std::vector<std::array<int, 4>>* tets) {
+  const int apex = *std::min_element(h.begin(), h.end());
+  for (const auto& f : kHex8Faces) {
+    std::array<int, 4> q;
+    for (int k = 0; k < 4; ++k) q[k] = h[f[k]];
+    if (std::find(q.begin(), q.end(), apex) != q.end()) continue;
+    const int k = static_cast<int>(std::min_element(q.begin(), q.end()) - q.begin());
+    const int a = q[k], b = q[(k + 1) % 4], c = q[(k + 2) % 4], d = q[(k + 3) % 4];
+    tets->push_back({apex, a, b, c});
+    tets->push_back({apex, a, c, d});
+  }
+}
+
+// Half the edge of the unit ball's central cube. Its corners then lie at
+// 0.69 of the radius, leaving the corner cells of the outer blocks room:
+// the smallest dihedral angle of the tetrahedra is 18 degrees on a ball
+// and 12 to 14 on a 70 x 60 x 50 mm ellipsoid at 20, 10 and 5 mm, where
+// 0.5 flattens them to 7 (the cylinder's O-grid has 14).
+constexpr double kCoreHalfWidth = 0.4;
+
+// Solid ellipsoid with semi-axes `axes` [mm]: the image under x -> (a x,
+// b y, c z) of a unit ball meshed as a three-dimensional O-grid, a central
+// cube [-0.4, 0.4]^3 cut n x n x n and six blocks of n x n x m cells
+// between its faces and the sphere. A block's cells run along straight
+// lines from a point of the cube's face to the equiangular central
+// projection of the same point onto the sphere (the cubed sphere of
+// SphericalShellOctant), so every cell on the surface has one face on it
+// and none is flattened at the cube's edges. The surface nodes lie exactly
+// on the ellipsoid. Bricks when `hex`, else each cut into six tetrahedra
+// (SplitHex).
+Mesh Ellipsoid(const std::array<double, 3>& axes, int n, int m, bool hex) {
+  std::vector<Eigen::Vector3d> points;
+  // (i, j, k) on the cube's lattice [0, n]^3 and the layer l (0 = the cube)
+  std::map<std::array<int, 4>, int> index;
+  const auto node = [&](int i, int j, int k, int l) {
+    const std::array<int, 4> key{i, j, k, l};
+    const auto [it, added] = index.emplace(key, static_cast<int>(points.size()));
+    if (added) {
+      const Eigen::Vector3d c(2.0 * i / n - 1, 2.0 * j / n - 1, 2.0 * k / n - 1);
+      Eigen::Vector3d d;
+      for (int e = 0; e < 3; ++e) d(e) = std::tan(std::numbers::pi / 4 * c(e));
+      const double f = static_cast<double>(l) / m;
+      points.push_back((1 - f) * kCoreHalfWidth * c + f * d.normalized());
+    }
+    return it->second;
+  };
+  std::vector<std::array<int, 8>> cells;
+  for (int k = 0; k < n; ++k) {
+    for (int j = 0; j < n; ++j) {
+      for (int i = 0; i < n; ++i) {
+        cells.push_back({node(i, j, k, 0), node(i + 1, j, k, 0), node(i + 1, j + 1, k, 0),
+                         node(i, j + 1, k, 0), node(i, j, k + 1, 0), node(i + 1, j, k + 1, 0),
+                         node(i + 1, j + 1, k + 1, 0), node(i, j + 1, k + 1, 0)});
+      }
+    }
+  }
+  // The six blocks: the cube face normal to `axis` at lattice coordinate
+  // `side` (0 or n), its quads (u, v) extruded outwards layer by layer.
+  for (int axis = 0; axis < 3; ++axis) {
+    for (const int side : {0, n}) {
+      const int ua = (axis + 1) % 3, va = (axis + 2) % 3;
+      const auto at = [&](int u, int v, int l) {
+        std::array<int, 3> ijk;
+        ijk[axis] = side;
+        ijk[ua] = u;
+        ijk[va] = v;
+        return node(ijk[0], ijk[1], ijk[2], l);
+      };
+      for (int l = 0; l < m; ++l) {
+        for (int v = 0; v < n; ++v) {
+          for (int u = 0; u < n; ++u) {
+            cells.push_back({at(u, v, l), at(u + 1, v, l), at(u + 1, v + 1, l), at(u, v + 1, l),
+                             at(u, v, l + 1), at(u + 1, v, l + 1), at(u + 1, v + 1, l + 1),
+                             at(u, v + 1, l + 1)});
+          }
+        }
+      }
+    }
+  }
+  Mesh mesh;
+  mesh.nodes.resize(static_cast<Eigen::Index>(points.size()), 3);
+  for (std::size_t p = 0; p < points.size(); ++p) {
+    for (int e = 0; e < 3; ++e)
+      mesh.nodes(static_cast<Eigen::Index>(p), e) = points[p](e) * axes[e] * kMm;
+  }
+  if (hex) {
+    mesh.hexes = std::move(cells);
+  } else {
+    mesh.tets.reserve(6 * cells.size());
+    for (const auto& h : cells) SplitHex(h, &mesh.tets);
+  }
+  Orient(&mesh);
+  return mesh;
+}
+
+struct EllipsoidDivisions {
+  int n;  // cells along each edge of the central cube and of each surface patch
+  int m;  // layers between the cube and the surface
+};
+
+// A surface patch spans a quarter of a great circle, pi R / 2 of arc on the
+// largest semi-axis R; the layers span 0.6 R at most.
+EllipsoidDivisions EllipsoidCounts(const EllipsoidSpec& e, double h) {
+  const double r = *std::max_element(e.semi_axes_mm.begin(), e.semi_axes_mm.end());
+  return {std::max(2, Divisions(std::numbers::pi / 2 * r, h)),
+          Divisions((1 - kCoreHalfWidth) * r, h)};
+}
+
 // Fills mesh.face_sets: a tetrahedron face (brick face) belongs to a set
 // when its three (four) nodes lie on that set's surface. Only boundary faces
 // can: the bodies are convex, or (the shell) their curved surfaces are the
@@ -311,6 +426,9 @@ double EffectiveElementSize(const GeometrySpec& geometry, const MeshSpec& option
     largest = std::max(2 * geometry.cylinder.radius_mm, geometry.cylinder.height_mm);
   } else if (geometry.kind == GeometrySpec::Kind::kSphericalShell) {
     largest = geometry.spherical_shell.outer_radius_mm;
+  } else if (geometry.kind == GeometrySpec::Kind::kEllipsoid) {
+    const auto& a = geometry.ellipsoid.semi_axes_mm;
+    largest = 2 * *std::max_element(a.begin(), a.end());
   }
   return largest / 20.0;
 }
@@ -334,6 +452,10 @@ int64_t EstimateElementCount(const GeometrySpec& geometry, const MeshSpec& optio
     const double n = ShellDivisions(s, h),
                  nr = std::ceil((s.outer_radius_mm - s.inner_radius_mm) / h);
     count = per_cell * 3 * n * n * nr;
+  } else if (geometry.kind == GeometrySpec::Kind::kEllipsoid) {
+    const EllipsoidDivisions d = EllipsoidCounts(geometry.ellipsoid, h);
+    const double n = d.n, m = d.m;
+    count = per_cell * (n * n * n + 6 * n * n * m);
   }
   return count > 9e18 ? INT64_MAX : static_cast<int64_t>(count);
 }
@@ -377,6 +499,21 @@ Mesh BuildPrimitiveMesh(const GeometrySpec& geometry, const MeshSpec& options, M
         "cubed-sphere octant: 3 patches of " + std::to_string(n) + " x " + std::to_string(n) +
         " cells, extruded radially in " + std::to_string(nr) +
         (hex ? " layers of hexahedra" : " layers, each prism cut into 3 tetrahedra");
+  } else if (geometry.kind == GeometrySpec::Kind::kEllipsoid) {
+    const EllipsoidSpec& e = geometry.ellipsoid;
+    const EllipsoidDivisions d = EllipsoidCounts(e, h);
+    mesh = Ellipsoid(e.semi_axes_mm, d.n, d.m, hex);
+    const Eigen::Vector3d inverse(1 / (e.semi_axes_mm[0] * kMm), 1 / (e.semi_axes_mm[1] * kMm),
+                                  1 / (e.semi_axes_mm[2] * kMm));
+    ClassifyFaces({"surface"}, {[=](const Eigen::Vector3d& x) {
+                    return std::abs(x.cwiseProduct(inverse).squaredNorm() - 1) < 1e-9;
+                  }},
+                  &mesh);
+    stats->description = "ellipsoidal O-grid: a central block of " + std::to_string(d.n) + " x " +
+                         std::to_string(d.n) + " x " + std::to_string(d.n) +
+                         " cells and 6 blocks of " + std::to_string(d.n) + " x " +
+                         std::to_string(d.n) + " cells in " + std::to_string(d.m) +
+                         (hex ? " layers, hexahedra" : " layers, each cell cut into 6 tetrahedra");
   } else {
     const double r = geometry.cylinder.radius_mm, height = geometry.cylinder.height_mm;
     const DiskDivisions d = DiskCounts(r, h);

@@ -18,10 +18,11 @@ struct Model {
   std::string mesh_description;  // how the mesh was made, for the summary
 };
 
-// Meshes the geometry and applies the boundary conditions in order (a later
-// condition on the same node and component wins); displacements in metres.
-// Expects a validated scene.
-Model BuildModel(const SceneSpec& scene);
+// Meshes the geometry, cuts its patches and applies the boundary conditions
+// in order (a later condition on the same node and component wins);
+// displacements in metres. Expects a validated scene; fails (naming it) on
+// a patch that holds no face, which only the mesh can tell.
+Status BuildModel(const SceneSpec& scene, Model* model);
 
 // The loads of the scene's pressure and traction conditions and its gravity,
 // at full value (SI). Pressure follows the deformation in a nonlinear

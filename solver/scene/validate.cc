@@ -22,12 +22,29 @@ std::string Number(double value) {
 
 bool PositiveFinite(double value) { return std::isfinite(value) && value > 0; }
 
+std::string JoinNames(const std::vector<std::string>& names) {
+  std::string out;
+  for (const auto& name : names) out += (out.empty() ? "" : ", ") + name;
+  return out;
+}
+
 Status ValidateGeometry(const GeometrySpec& geometry) {
   switch (geometry.kind) {
     case GeometrySpec::Kind::kNone:
       return Status::InvalidArgument(
           "geometry",
-          "no shape given: set geometry.box, geometry.cylinder or geometry.spherical_shell");
+          "no shape given: set geometry.box, geometry.cylinder, geometry.spherical_shell or "
+          "geometry.ellipsoid");
+    case GeometrySpec::Kind::kEllipsoid:
+      for (int c = 0; c < 3; ++c) {
+        const double a = geometry.ellipsoid.semi_axes_mm[c];
+        if (!PositiveFinite(a)) {
+          return Status::InvalidArgument(
+              "geometry.ellipsoid.semi_axes_mm[" + std::to_string(c) + "]",
+              "every semi-axis must be a positive number of mm, got " + Number(a));
+        }
+      }
+      return Status::Ok();
     case GeometrySpec::Kind::kSphericalShell: {
       const SphericalShellSpec& s = geometry.spherical_shell;
       if (!PositiveFinite(s.inner_radius_mm)) {
@@ -66,6 +83,42 @@ Status ValidateGeometry(const GeometrySpec& geometry) {
       return Status::Ok();
   }
   return Status::Internal("unhandled geometry kind");
+}
+
+// Names unique and new, parents among the geometry's own sets, a ball that
+// can hold a face. Whether it does is known only after meshing (BuildModel).
+Status ValidatePatches(const GeometrySpec& geometry) {
+  GeometrySpec bare = geometry;
+  bare.patches.clear();
+  std::vector<std::string> names = FaceSetNames(bare);
+  const std::vector<std::string> own = names;
+  for (std::size_t i = 0; i < geometry.patches.size(); ++i) {
+    const PatchSpec& p = geometry.patches[i];
+    const std::string path = "geometry.patches[" + std::to_string(i) + "]";
+    if (p.name.empty()) return Status::InvalidArgument(path + ".name", "a patch needs a name");
+    if (std::find(names.begin(), names.end(), p.name) != names.end()) {
+      return Status::InvalidArgument(path + ".name",
+                                     "'" + p.name + "' is already a face set of this geometry");
+    }
+    if (std::find(own.begin(), own.end(), p.set) == own.end()) {
+      return Status::InvalidArgument(
+          path + ".set",
+          "unknown face set '" + p.set + "'; a patch is cut from one of: " + JoinNames(own));
+    }
+    for (int c = 0; c < 3; ++c) {
+      if (!std::isfinite(p.centre_mm[c])) {
+        return Status::InvalidArgument(
+            path + ".centre_mm[" + std::to_string(c) + "]",
+            "must be a finite number of mm, got " + Number(p.centre_mm[c]));
+      }
+    }
+    if (!PositiveFinite(p.radius_mm)) {
+      return Status::InvalidArgument(path + ".radius_mm",
+                                     "must be a positive number of mm, got " + Number(p.radius_mm));
+    }
+    names.push_back(p.name);
+  }
+  return Status::Ok();
 }
 
 Status ValidateAnalysis(const AnalysisSpec& analysis, const MaterialSpec& material) {
@@ -111,12 +164,6 @@ Status ValidateAnalysis(const AnalysisSpec& analysis, const MaterialSpec& materi
   return Status::Ok();
 }
 
-std::string JoinNames(const std::vector<std::string>& names) {
-  std::string out;
-  for (const auto& name : names) out += (out.empty() ? "" : ", ") + name;
-  return out;
-}
-
 }  // namespace
 
 Status LinearElasticParams::Validate(const std::string& path) const {
@@ -136,19 +183,32 @@ Status LinearElasticParams::Validate(const std::string& path) const {
 }
 
 std::vector<std::string> FaceSetNames(const GeometrySpec& geometry) {
+  std::vector<std::string> names;
   switch (geometry.kind) {
     case GeometrySpec::Kind::kBox:
-      return {"bottom", "top", "x_min", "x_max", "y_min", "y_max"};
+      names = {"bottom", "top", "x_min", "x_max", "y_min", "y_max"};
+      break;
     case GeometrySpec::Kind::kCylinder:
-      return {"bottom", "top", "side"};
+      names = {"bottom", "top", "side"};
+      break;
     case GeometrySpec::Kind::kSphericalShell:
-      return {"inner", "outer", "x0", "y0", "z0"};
-    default:
+      names = {"inner", "outer", "x0", "y0", "z0"};
+      break;
+    case GeometrySpec::Kind::kEllipsoid:
+      names = {"surface"};
+      break;
+    case GeometrySpec::Kind::kNone:
       return {};
   }
+  for (const PatchSpec& p : geometry.patches) names.push_back(p.name);
+  return names;
 }
 
 int PlaneNormalAxis(const GeometrySpec& geometry, const std::string& set) {
+  for (const PatchSpec& p : geometry.patches) {
+    if (p.name == set) return p.set == set ? -1 : PlaneNormalAxis(geometry, p.set);
+  }
+  if (geometry.kind == GeometrySpec::Kind::kEllipsoid) return -1;
   if (geometry.kind == GeometrySpec::Kind::kSphericalShell) {
     if (set == "x0") return 0;
     if (set == "y0") return 1;
@@ -164,6 +224,7 @@ int PlaneNormalAxis(const GeometrySpec& geometry, const std::string& set) {
 
 Status ValidateScene(const SceneSpec& scene) {
   PBA_RETURN_IF_ERROR(ValidateGeometry(scene.geometry));
+  PBA_RETURN_IF_ERROR(ValidatePatches(scene.geometry));
 
   if (!std::isfinite(scene.mesh.element_size_mm) || scene.mesh.element_size_mm < 0) {
     return Status::InvalidArgument(

@@ -140,6 +140,14 @@ INSTANTIATE_TEST_SUITE_P(
                   s->boundary_conditions = {p};
                 },
                 kInvalid, "boundary_conditions", "direction x, y, z"},
+        // A patch smaller than the elements it should hold: only the mesh can
+        // tell, and the message says what radius would do.
+        BadCase{"patch_smaller_than_an_element",
+                [](SceneSpec* s) {
+                  s->geometry.patches = {{"pad", "top", {5, 5, 10}, 2}};
+                  s->boundary_conditions[1].set = "pad";
+                },
+                kInvalid, "geometry.patches[0].radius_mm", "at least 5"},
         BadCase{"no_conditions", [](SceneSpec* s) { s->boundary_conditions.clear(); }, kInvalid,
                 "boundary_conditions", "free to move"},
         // Every direction is held somewhere, yet the body can turn about

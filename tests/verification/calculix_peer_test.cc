@@ -168,6 +168,21 @@ std::vector<SceneSpec> Cases() {
   mooney.analysis.type = AnalysisSpec::Type::kNonlinearStatic;
   mooney.mesh.element = ElementType::kTet4;
   mooney.analysis.nonlinear.increments = 10;
+  // The "brain": an ellipsoid of a brain's size, its base held on a patch and
+  // a patch on its crown pressed 5 mm down and held sideways (a bonded
+  // punch), neo-Hookean with K / mu = 50 on plain tetrahedra.
+  GeometrySpec brain;
+  brain.kind = GeometrySpec::Kind::kEllipsoid;
+  brain.ellipsoid.semi_axes_mm = {70, 60, 50};
+  brain.patches = {{"punch", "surface", {0, 0, 50}, 15}, {"base", "surface", {0, 0, -50}, 30}};
+  SceneSpec indented =
+      Scene("ellipsoidal brain, base held, crown patch pressed 5 mm (nonlinear)", brain, 10,
+            {Condition("base", K::kFixed), Condition("punch", K::kDisplacement, {0.0, 0.0, -5.0})});
+  indented.material = mooney.material;
+  indented.material.kind = MaterialSpec::Kind::kNeoHookean;
+  indented.material.neo_hookean = {1000, 5e4};
+  indented.analysis.type = AnalysisSpec::Type::kNonlinearStatic;
+  indented.mesh.element = ElementType::kTet4;
   return {
       neo,
       ogden,
@@ -191,6 +206,7 @@ std::vector<SceneSpec> Cases() {
       bonded8,
       neo8,
       mooney,
+      indented,
   };
 }
 

@@ -90,7 +90,9 @@ EnergyErrors EnergyNormErrors(const Solution& solution, const Lame& lame) {
 // element's own (14-point degree 5; 3 x 3 x 3 Gauss), all in mm and Pa.
 EnergyErrors EnergyNormErrorsHigher(const SceneSpec& scene, const Solution& solution,
                                     const Lame& lame) {
-  const Model model = BuildModel(scene);
+  Model model;
+  const Status built = BuildModel(scene, &model);
+  EXPECT_TRUE(built.ok()) << built.ToString();
   const Mesh& mesh = model.mesh;
   Eigen::VectorXd u(3 * mesh.num_nodes());
   for (int i = 0; i < u.size(); ++i) u(i) = solution.displacement_mm[i] * 1e-3;

@@ -29,12 +29,30 @@ struct SphericalShellSpec {
   double outer_radius_mm = 0;  // [mm], > inner
 };
 
+// A solid ellipsoid centred at the origin, (x/a)^2 + (y/b)^2 + (z/c)^2 <= 1,
+// e.g. a whole brain's envelope; one face set, surface.
+struct EllipsoidSpec {
+  std::array<double, 3> semi_axes_mm{0, 0, 0};  // a, b, c along x, y, z [mm], > 0
+};
+
+// A face set cut out of another: the faces of `set` whose nodes all lie
+// within `radius_mm` of `centre_mm`, e.g. the patch a punch presses on.
+// It names a region of a curved face for a condition of its own.
+struct PatchSpec {
+  std::string name;                          // new face set; not a name the geometry has
+  std::string set;                           // one of the geometry's own face sets
+  std::array<double, 3> centre_mm{0, 0, 0};  // [mm]
+  double radius_mm = 0;                      // [mm], > 0
+};
+
 struct GeometrySpec {
-  enum class Kind { kNone, kBox, kCylinder, kSphericalShell };
+  enum class Kind { kNone, kBox, kCylinder, kSphericalShell, kEllipsoid };
   Kind kind = Kind::kNone;
   BoxSpec box;
   CylinderSpec cylinder;
   SphericalShellSpec spherical_shell;
+  EllipsoidSpec ellipsoid;
+  std::vector<PatchSpec> patches;  // made in order, after the mesh
 };
 
 enum class ElementType {
@@ -245,11 +263,12 @@ struct SceneSpec {
 
 // Face set names a geometry defines (box: bottom top x_min x_max y_min y_max;
 // cylinder: bottom top side; spherical shell: inner outer x0 y0 z0, the last
-// three the cut planes x = 0, y = 0, z = 0).
+// three the cut planes x = 0, y = 0, z = 0; ellipsoid: surface), then its
+// patches' names.
 std::vector<std::string> FaceSetNames(const GeometrySpec& geometry);
 
-// The axis (0 = x, 1 = y, 2 = z) normal to a planar face set, or -1 when the
-// set is curved (the cylinder's side) or unknown.
+// The axis (0 = x, 1 = y, 2 = z) normal to a planar face set (or a patch of
+// one), or -1 when the set is curved (the cylinder's side) or unknown.
 int PlaneNormalAxis(const GeometrySpec& geometry, const std::string& set);
 
 // Checks everything that can be checked without meshing: a geometry and a

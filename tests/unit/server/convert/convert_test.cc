@@ -109,6 +109,44 @@ boundary_conditions:
   EXPECT_EQ(s.boundary_conditions[2].traction_pa[2], 3);
 }
 
+TEST(SceneFromProto, EllipsoidAndPatches) {
+  v1::Scene scene;
+  codec::ParseError error;
+  ASSERT_TRUE(codec::ParseYaml(R"(
+name: brain
+geometry:
+  ellipsoid: {semi_axes_mm: [67, 93, 59]}
+  patches:
+    - {name: punch, set: surface, centre_mm: [0, 0, 59], radius_mm: 15}
+    - {name: base, set: surface, centre_mm: [0, 0, -59], radius_mm: 40}
+boundary_conditions:
+  - {set: base, fixed: {}}
+  - {set: punch, displacement: {z_mm: -4}}
+)",
+                               &scene, &error))
+      << error.ToString();
+  SceneSpec s;
+  ASSERT_TRUE(SceneFromProto(scene, &s).ok());
+  EXPECT_EQ(s.geometry.kind, GeometrySpec::Kind::kEllipsoid);
+  EXPECT_EQ(s.geometry.ellipsoid.semi_axes_mm[1], 93);
+  ASSERT_EQ(s.geometry.patches.size(), 2u);
+  EXPECT_EQ(s.geometry.patches[0].name, "punch");
+  EXPECT_EQ(s.geometry.patches[0].set, "surface");
+  EXPECT_EQ(s.geometry.patches[0].centre_mm[2], 59);
+  EXPECT_EQ(s.geometry.patches[1].radius_mm, 40);
+
+  ASSERT_TRUE(codec::ParseYaml("geometry: {ellipsoid: {semi_axes_mm: [1, 2]}}", &scene, &error))
+      << error.ToString();
+  Status status = SceneFromProto(scene, &s);
+  EXPECT_EQ(status.field(), "geometry.ellipsoid.semi_axes_mm") << status.ToString();
+  ASSERT_TRUE(codec::ParseYaml(
+      "geometry: {box: {size_mm: [1, 2, 3]}, patches: [{name: p, set: top, centre_mm: [0, 0]}]}",
+      &scene, &error))
+      << error.ToString();
+  status = SceneFromProto(scene, &s);
+  EXPECT_EQ(status.field(), "geometry.patches[0].centre_mm") << status.ToString();
+}
+
 TEST(SceneFromProto, LoadFieldPathsOfBadValues) {
   v1::Scene scene;
   codec::ParseError error;

@@ -44,7 +44,8 @@ double RelativeDifference(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
 
 TEST(PcgSolver, MatchesCholmodOnAnAssembledStiffness) {
   const SceneSpec scene = Block(2.5, AnalysisSpec::LinearSolver::kPcg);
-  const Model model = BuildModel(scene);
+  Model model;
+  ASSERT_TRUE(BuildModel(scene, &model).ok());
   LinearSystem system;
   ASSERT_TRUE(AssembleLinearSystem(
                   model.mesh, IsotropicElasticity(3000, 0.45), model.dofs,
@@ -142,7 +143,8 @@ TEST(PcgSolver, UnheldBodyEndsWithAClearErrorNotNan) {
   // its bounded number of iterations.
   SceneSpec scene = Block(5.0, AnalysisSpec::LinearSolver::kPcg);
   scene.boundary_conditions.clear();
-  const Model model = BuildModel(scene);
+  Model model;
+  ASSERT_TRUE(BuildModel(scene, &model).ok());
   LinearSystem system;
   ASSERT_TRUE(AssembleLinearSystem(
                   model.mesh, IsotropicElasticity(3000, 0.45), model.dofs,

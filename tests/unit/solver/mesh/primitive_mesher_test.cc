@@ -292,6 +292,107 @@ TEST(PrimitiveMesherTest, HexShellVolumeIsCloseAndBricksArePositive) {
   EXPECT_LT(previous_error, 0.01);
 }
 
+// The smallest dihedral angle of the tetrahedra [degrees].
+double MinDihedralDegrees(const Mesh& mesh) {
+  static constexpr int kEdges[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
+  double smallest = 180;
+  for (int e = 0; e < mesh.num_elements(); ++e) {
+    const Eigen::Matrix<double, 4, 3> x = TetCorners(mesh, e);
+    for (const auto& edge : kEdges) {
+      int others[2], k = 0;
+      for (int v = 0; v < 4; ++v) {
+        if (v != edge[0] && v != edge[1]) others[k++] = v;
+      }
+      const Eigen::Vector3d axis = (x.row(edge[1]) - x.row(edge[0])).normalized();
+      Eigen::Vector3d a = x.row(others[0]) - x.row(edge[0]);
+      Eigen::Vector3d b = x.row(others[1]) - x.row(edge[0]);
+      a -= a.dot(axis) * axis;
+      b -= b.dot(axis) * axis;
+      const double angle = std::acos(std::clamp(a.normalized().dot(b.normalized()), -1.0, 1.0));
+      smallest = std::min(smallest, angle * 180 / std::numbers::pi);
+    }
+  }
+  return smallest;
+}
+
+// An ellipsoid of a brain's proportions: tetrahedra cut from an O-grid's
+// bricks, conforming, none flat, surface nodes on the ellipsoid, the volume
+// converging like h^2 to 4 pi a b c / 3.
+TEST(PrimitiveMesherTest, EllipsoidVolumeConvergesAndMeshIsConforming) {
+  GeometrySpec g;
+  g.kind = GeometrySpec::Kind::kEllipsoid;
+  g.ellipsoid.semi_axes_mm = {70, 60, 50};
+  const double exact = 4.0 / 3 * std::numbers::pi * 70e-3 * 60e-3 * 50e-3;
+  double previous_error = INFINITY;
+  for (double h : {20.0, 10.0, 5.0}) {
+    MeshSpec options;
+    options.element_size_mm = h;
+    MeshStats stats;
+    const Mesh mesh = BuildPrimitiveMesh(g, options, &stats);
+    EXPECT_EQ(mesh.num_elements(), EstimateElementCount(g, options));
+    double min_volume;
+    const double error = std::abs(TotalVolume(mesh, &min_volume) - exact) / exact;
+    EXPECT_GT(min_volume, 0) << "h = " << h;
+    EXPECT_LT(error, 0.4 * previous_error) << "h = " << h;
+    previous_error = error;
+    // Cells at the cube's corners are the most skewed; no sliver (the
+    // cylinder's O-grid has 14 degrees).
+    EXPECT_GT(MinDihedralDegrees(mesh), 12) << "h = " << h;
+    if (h == 10.0) ExpectConforming(mesh);
+    ASSERT_EQ(mesh.face_sets.size(), 1u);
+    for (int node : mesh.face_sets.at("surface").nodes) {
+      const Eigen::Vector3d x = mesh.nodes.row(node).transpose();
+      EXPECT_NEAR(x.cwiseQuotient(Eigen::Vector3d(70e-3, 60e-3, 50e-3)).norm(), 1, 1e-12);
+    }
+  }
+  EXPECT_LT(previous_error, 0.01);
+}
+
+TEST(PrimitiveMesherTest, HexEllipsoidIsConformingAndBricksArePositive) {
+  GeometrySpec g;
+  g.kind = GeometrySpec::Kind::kEllipsoid;
+  g.ellipsoid.semi_axes_mm = {70, 60, 50};
+  const double exact = 4.0 / 3 * std::numbers::pi * 70e-3 * 60e-3 * 50e-3;
+  MeshSpec options;
+  options.element = ElementType::kHex8;
+  options.element_size_mm = 10;
+  MeshStats stats;
+  const Mesh mesh = BuildPrimitiveMesh(g, options, &stats);
+  EXPECT_EQ(mesh.num_elements(), EstimateElementCount(g, options));
+  double min_volume, min_jacobian;
+  const double volume = HexTotalVolume(mesh, &min_volume, &min_jacobian);
+  EXPECT_NEAR(volume, exact, 0.02 * exact);
+  EXPECT_GT(min_jacobian, 0);
+  ExpectHexConforming(mesh);
+  // Every surface quad faces out: its normal points away from the centre.
+  for (const auto& q : mesh.face_sets.at("surface").quads) {
+    EXPECT_GT(QuadNormal(mesh, q).dot(Eigen::Vector3d(mesh.nodes.row(q[0]).transpose())), 0);
+  }
+}
+
+// A patch holds the faces whose nodes all lie in its ball, with their
+// mid-edge nodes on a quadratic mesh.
+TEST(PrimitiveMesherTest, FacesWithinKeepsTheFacesInsideTheBall) {
+  GeometrySpec g;
+  g.kind = GeometrySpec::Kind::kBox;
+  g.box.size_mm = {10, 10, 10};
+  MeshSpec options;
+  options.element_size_mm = 1;
+  MeshStats stats;
+  const Mesh mesh = BuildPrimitiveMesh(g, options, &stats);
+  const Eigen::Vector3d centre(5e-3, 5e-3, 10e-3);
+  const FaceSet patch = FacesWithin(mesh, mesh.face_sets.at("top"), centre, 3e-3);
+  ASSERT_FALSE(patch.triangles.empty());
+  for (const auto& t : patch.triangles) {
+    for (int v : t) EXPECT_LE((mesh.nodes.row(v).transpose() - centre).norm(), 3e-3);
+  }
+  // A disk of radius 3 mm less a rim of at most one cell.
+  const double area = FaceSetArea(mesh, patch);
+  EXPECT_LT(area, std::numbers::pi * 9e-6);
+  EXPECT_GT(area, std::numbers::pi * 4e-6);
+  EXPECT_TRUE(FacesWithin(mesh, mesh.face_sets.at("bottom"), centre, 3e-3).triangles.empty());
+}
+
 TEST(PrimitiveMesherTest, DefaultElementSizeIsATwentiethOfTheLargestDimension) {
   GeometrySpec g;
   g.kind = GeometrySpec::Kind::kBox;

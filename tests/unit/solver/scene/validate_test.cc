@@ -115,6 +115,56 @@ INSTANTIATE_TEST_SUITE_P(
                s->boundary_conditions[0].displacement_mm = {0.0, std::nullopt, 0.0};
              },
              "boundary_conditions", "direction y"},
+        Case{"zero_semi_axis",
+             [](SceneSpec* s) {
+               s->geometry.kind = GeometrySpec::Kind::kEllipsoid;
+               s->geometry.ellipsoid.semi_axes_mm = {70, 0, 50};
+             },
+             "geometry.ellipsoid.semi_axes_mm[1]", "positive"},
+        Case{"patch_without_name",
+             [](SceneSpec* s) {
+               s->geometry.patches = {{"", "top", {5, 5, 20}, 3}};
+             },
+             "geometry.patches[0].name", "needs a name"},
+        Case{"patch_named_like_a_set",
+             [](SceneSpec* s) {
+               s->geometry.patches = {{"top", "top", {5, 5, 20}, 3}};
+             },
+             "geometry.patches[0].name", "already a face set"},
+        Case{"patch_named_twice",
+             [](SceneSpec* s) {
+               s->geometry.patches = {{"pad", "top", {5, 5, 20}, 3}, {"pad", "top", {5, 5, 20}, 4}};
+             },
+             "geometry.patches[1].name", "already a face set"},
+        Case{"patch_of_unknown_set",
+             [](SceneSpec* s) {
+               s->geometry.patches = {{"pad", "lid", {5, 5, 20}, 3}};
+             },
+             "geometry.patches[0].set", "x_min"},
+        Case{"patch_of_a_patch",
+             [](SceneSpec* s) {
+               s->geometry.patches = {{"pad", "top", {5, 5, 20}, 3}, {"dot", "pad", {5, 5, 20}, 1}};
+             },
+             "geometry.patches[1].set", "unknown face set 'pad'"},
+        Case{"patch_centre_nan",
+             [](SceneSpec* s) {
+               s->geometry.patches = {{"pad", "top", {5, NAN, 20}, 3}};
+             },
+             "geometry.patches[0].centre_mm[1]", "finite"},
+        Case{"patch_radius_zero",
+             [](SceneSpec* s) {
+               s->geometry.patches = {{"pad", "top", {5, 5, 20}, 0}};
+             },
+             "geometry.patches[0].radius_mm", "positive"},
+        Case{"symmetry_on_curved_patch",
+             [](SceneSpec* s) {
+               s->geometry.kind = GeometrySpec::Kind::kCylinder;
+               s->geometry.cylinder = {5, 20};
+               s->geometry.patches = {{"pad", "side", {5, 0, 10}, 3}};
+               s->boundary_conditions[1].set = "pad";
+               s->boundary_conditions[1].kind = BoundaryConditionSpec::Kind::kSymmetry;
+             },
+             "boundary_conditions[1].symmetry", "curved"},
         Case{"bad_reaction_set",
              [](SceneSpec* s) {
                s->outputs.reaction_sets = {"top", "roof"};
@@ -128,6 +178,20 @@ TEST(FaceSetNamesTest, PerGeometry) {
   EXPECT_EQ(FaceSetNames(g), (std::vector<std::string>{"bottom", "top", "side"}));
   g.kind = GeometrySpec::Kind::kBox;
   EXPECT_EQ(FaceSetNames(g).size(), 6u);
+  g.kind = GeometrySpec::Kind::kEllipsoid;
+  EXPECT_EQ(FaceSetNames(g), (std::vector<std::string>{"surface"}));
+}
+
+// A patch is a face set of its own: conditions and reactions may name it,
+// and it is as planar as the set it is cut from.
+TEST(FaceSetNamesTest, PatchesFollowTheGeometrysSets) {
+  SceneSpec s = GoodScene();
+  s.geometry.patches = {{"pad", "top", {5, 5, 20}, 3}};
+  EXPECT_EQ(FaceSetNames(s.geometry).back(), "pad");
+  EXPECT_EQ(PlaneNormalAxis(s.geometry, "pad"), 2);
+  s.boundary_conditions[1].set = "pad";
+  s.outputs.reaction_sets = {"pad"};
+  EXPECT_TRUE(ValidateScene(s).ok()) << ValidateScene(s).ToString();
 }
 
 }  // namespace
