@@ -59,8 +59,12 @@ std::string FormatSummary(const v1::Summary& summary) {
         i = n - 3;
       }
       const v1::Increment& inc = c.increments(i);
-      out += Format("    load %-8.4g %2d iterations, residual %.1e\n", inc.load_factor(),
-                    inc.iterations(), inc.relative_residual());
+      out += Format(
+          "    load %-8.4g %2d iterations, residual %.1e%s\n", inc.load_factor(), inc.iterations(),
+          inc.relative_residual(),
+          inc.negative_eigenvalues() > 0
+              ? Format(", unstable (%d negative eigenvalues)", inc.negative_eigenvalues()).c_str()
+              : "");
     }
   }
   out += Format("Wall time    %.3f s on %d thread(s):", p.wall_time_s(), p.threads());

@@ -323,6 +323,7 @@ v1::Summary SummaryToProto(const Summary& summary) {
       out->set_load_factor(i.load_factor);
       out->set_iterations(i.iterations);
       out->set_relative_residual(i.relative_residual);
+      out->set_negative_eigenvalues(i.negative_eigenvalues);
     }
     convergence->set_newton_iterations(summary.newton_iterations);
     convergence->set_increment_cuts(summary.increment_cuts);

@@ -1,5 +1,6 @@
 #include "analysis/newton_static.h"
 
+#include <Eigen/SparseCholesky>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -27,6 +28,26 @@ class ScopedTimer {
 // Energy ratio |du . R| / |du_p . K du_p| at which a Newton correction is
 // rounding noise.
 constexpr double kRoundingEnergy = 1e-20;
+
+// Relative residual below which an iteration whose consistent tangent is not
+// positive definite steps with that tangent anyway (LDL^T): close to
+// equilibrium the indefiniteness is the equilibrium's own, not the transient
+// of a poor predictor.
+constexpr double kIndefiniteNewtonResidual = 1e-4;
+
+// Solves K du = rhs with the symmetric indefinite K by a sparse LDL^T
+// (fill-reducing ordering, no pivoting) and counts the negative pivots, which
+// by Sylvester's law of inertia are K's negative eigenvalues. False when a
+// pivot vanishes or the solve is inaccurate (no pivoting).
+bool SolveIndefinite(const LinearSystem& system,
+                     Eigen::SimplicialLDLT<SparseMatrix, Eigen::Lower>* ldlt, Eigen::VectorXd* du,
+                     int* negative) {
+  ldlt->compute(system.k);
+  if (ldlt->info() != Eigen::Success || !ldlt->vectorD().allFinite()) return false;
+  *negative = static_cast<int>((ldlt->vectorD().array() < 0).count());
+  *du = ldlt->solve(system.rhs);
+  return du->allFinite() && (system.k * *du - system.rhs).norm() <= 1e-6 * system.rhs.norm();
+}
 
 double FreeNorm(const DofMap& dofs, const Eigen::VectorXd& full) {
   double sum = 0;
@@ -127,7 +148,19 @@ Status SolveNewtonStatic(const FiniteStrainModel& model, const ExternalLoads* lo
   // Without any such tangent the current one is shifted by tau diag(K), tau
   // growing tenfold from 1e-4 until Cholesky succeeds (Nocedal & Wright,
   // Numerical Optimization, 3.4).
+  // Close to equilibrium (relative residual <= kIndefiniteNewtonResidual),
+  // and for the predictor when the last converged state's tangent was
+  // already indefinite, the consistent tangent is used although it is not
+  // positive definite (LDL^T): the path has then passed a critical point
+  // (e.g. TET4_ANP under 50 % bonded compression: the smallest eigenvalue
+  // crosses zero near 42 %), and the definite substitutes converge only
+  // linearly (~0.7 per iteration) to the equilibrium beyond it.
   std::unique_ptr<LinearSolver> spare = solver->NewOfSameKind();
+  Eigen::SimplicialLDLT<SparseMatrix, Eigen::Lower> ldlt;
+  // Negative eigenvalues of the tangent of the last step, when it was
+  // factorised by LDL^T (0 after a Cholesky of the consistent tangent, -1
+  // when the step used another tangent).
+  int step_negative = 0;
   LinearSolver* good = nullptr;  // holds the last positive definite factorisation
   SparseMatrix shifted;
   LinearSystem approximate;
@@ -135,48 +168,58 @@ Status SolveNewtonStatic(const FiniteStrainModel& model, const ExternalLoads* lo
   // definite: when an increment fails with the tangent still indefinite
   // close to equilibrium, the equilibrium itself may be unstable.
   int indefinite_streak = 0;
-  const auto solve = [&](const LinearSystem& system, int iteration, double residual,
-                         const std::function<Status(LinearSystem*)>& assemble_approximate,
-                         Eigen::VectorXd* du) {
-    ScopedTimer timer(&report->linear_solve_s);
-    LinearSolver* target = good == solver ? spare.get() : solver;
-    Status status = target->Factorize(system.k);
-    if (status.ok()) {
-      good = target;
-      indefinite_streak = 0;
-      return good->Solve(system.rhs, du);
-    }
-    ++indefinite_streak;
-    bool approximated = false;
-    {
-      // The approximate tangent's assembly counts as assembly, not solving.
-      double assembly = 0;
-      {
-        ScopedTimer assembling(&assembly);
-        approximated = assemble_approximate(&approximate).ok();
-      }
-      report->assembly_s += assembly;
-      report->linear_solve_s -= assembly;
-    }
-    if (approximated && target->Factorize(approximate.k).ok()) {
-      ++report->approximate_iterations;
-      good = target;
-      return good->Solve(system.rhs, du);
-    }
-    ++report->modified_iterations;
-    if (good != nullptr) return good->Solve(system.rhs, du);
-    const Eigen::VectorXd diagonal = system.k.diagonal().cwiseAbs();
-    for (double tau = 1e-4; tau <= 1e2; tau *= 10) {
-      shifted = system.k;
-      for (int i = 0; i < shifted.outerSize(); ++i) shifted.coeffRef(i, i) += tau * diagonal(i);
-      if (target->Factorize(shifted).ok()) return target->Solve(system.rhs, du);
-    }
-    return Status::Numerical(
-        Format("the tangent stiffness could not be made positive definite at iteration %d "
-               "(relative residual %.3g)",
-               iteration, residual));
-  };
+  const auto solve =
+      [&](const LinearSystem& system, int iteration, double residual, bool near_equilibrium,
+          const std::function<Status(LinearSystem*)>& assemble_approximate, Eigen::VectorXd* du) {
+        ScopedTimer timer(&report->linear_solve_s);
+        LinearSolver* target = good == solver ? spare.get() : solver;
+        Status status = target->Factorize(system.k);
+        if (status.ok()) {
+          good = target;
+          indefinite_streak = 0;
+          step_negative = 0;
+          return good->Solve(system.rhs, du);
+        }
+        ++indefinite_streak;
+        if (near_equilibrium && SolveIndefinite(system, &ldlt, du, &step_negative)) {
+          ++report->indefinite_iterations;
+          return Status::Ok();
+        }
+        step_negative = -1;
+        bool approximated = false;
+        {
+          // The approximate tangent's assembly counts as assembly, not solving.
+          double assembly = 0;
+          {
+            ScopedTimer assembling(&assembly);
+            approximated = assemble_approximate(&approximate).ok();
+          }
+          report->assembly_s += assembly;
+          report->linear_solve_s -= assembly;
+        }
+        if (approximated && target->Factorize(approximate.k).ok()) {
+          ++report->approximate_iterations;
+          good = target;
+          return good->Solve(system.rhs, du);
+        }
+        ++report->modified_iterations;
+        if (good != nullptr) return good->Solve(system.rhs, du);
+        const Eigen::VectorXd diagonal = system.k.diagonal().cwiseAbs();
+        for (double tau = 1e-4; tau <= 1e2; tau *= 10) {
+          shifted = system.k;
+          for (int i = 0; i < shifted.outerSize(); ++i) shifted.coeffRef(i, i) += tau * diagonal(i);
+          if (target->Factorize(shifted).ok()) return target->Solve(system.rhs, du);
+        }
+        return Status::Numerical(
+            Format("the tangent stiffness could not be made positive definite at iteration %d "
+                   "(relative residual %.3g)",
+                   iteration, residual));
+      };
   double load = 0;
+  // The last converged state's tangent had negative eigenvalues (the path
+  // passed a bifurcation and follows the now unstable fundamental branch):
+  // its indefinite tangent is then the right predictor.
+  bool unstable_branch = false;
   double step = 1.0 / std::max(1, options.initial_increments);
   std::string last_failure;
   auto cancelled = [&] { return Status::Cancelled(Format("cancelled at load factor %.4g", load)); };
@@ -209,7 +252,7 @@ Status SolveNewtonStatic(const FiniteStrainModel& model, const ExternalLoads* lo
     }
     if (status.ok() && dofs.num_free() > 0) {
       status = solve(
-          system, 0, 0.0,
+          system, 0, 0.0, unstable_branch,
           [&](LinearSystem* out) {
             AssemblyOptions definite = lift;
             definite.drop_pressure_stiffness = true;
@@ -248,7 +291,7 @@ Status SolveNewtonStatic(const FiniteStrainModel& model, const ExternalLoads* lo
         }
         if (!status.ok()) break;
         status = solve(
-            system, iteration, residual,
+            system, iteration, residual, residual <= kIndefiniteNewtonResidual,
             [&](LinearSystem* out) {
               AssemblyOptions definite;
               definite.drop_pressure_stiffness = true;
@@ -302,7 +345,8 @@ Status SolveNewtonStatic(const FiniteStrainModel& model, const ExternalLoads* lo
     if (converged) {
       *u = std::move(trial);
       load = target;
-      report->increments.push_back({load, iteration, residual});
+      report->increments.push_back({load, iteration, residual, step_negative});
+      unstable_branch = step_negative > 0;
       if (options.on_increment) options.on_increment(load, *u);
       if (iteration <= options.quick_iterations) {
         step = std::min(step * 1.5, options.max_increment);

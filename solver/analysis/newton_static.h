@@ -6,6 +6,12 @@
 // Each increment starts from a linearised predictor (the tangent at the last
 // converged state carries the prescribed increment into the free unknowns),
 // then iterates with the consistent tangent and a backtracking line search.
+// Far from equilibrium a tangent that is not positive definite is replaced by
+// a definite one (see newton_static.cc); close to it (relative residual
+// <= 1e-4) the iteration steps with the indefinite consistent tangent itself
+// (sparse LDL^T), so that it converges quadratically also to an equilibrium
+// that is unstable: past a bifurcation the load path follows the fundamental
+// branch, and IncrementRecord::negative_eigenvalues says so.
 // An increment that inverts an element, stalls or diverges is cut in half and
 // retried; one that converges quickly lets the next one grow.
 #pragma once
@@ -49,6 +55,10 @@ struct IncrementRecord {
   double load_factor = 0;  // at the end of the increment
   int iterations = 0;
   double relative_residual = 0;
+  // Negative eigenvalues of the tangent of the last iteration (close to the
+  // converged state): 0 when Cholesky succeeded, the count of negative LDL^T
+  // pivots when it did not, -1 when that iteration used an approximate tangent.
+  int negative_eigenvalues = 0;
 };
 
 struct NewtonReport {
@@ -60,6 +70,9 @@ struct NewtonReport {
   // (modified) an earlier positive definite tangent.
   int approximate_iterations = 0;
   int modified_iterations = 0;
+  // Iterations close to equilibrium whose consistent tangent was not
+  // positive definite and that stepped with it all the same (LDL^T).
+  int indefinite_iterations = 0;
   std::vector<std::string> cut_reasons;  // why each cut happened
   // Wall time [s] spent assembling tangents, in factorisations and solves,
   // and evaluating residuals (line search included).

