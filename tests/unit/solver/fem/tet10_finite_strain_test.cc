@@ -68,6 +68,33 @@ Vector30d RandomDisplacement(double amplitude, unsigned seed) {
   return u;
 }
 
+// The element kernels, by their Tet10Geometry overloads.
+using Kernel = bool (*)(const Tet10Geometry&, const Vector30d&, const HyperelasticMaterial&, bool,
+                        Tet10FiniteStrainResult*, bool);
+
+// Central differences at `u`: the force `r.force` is dPi/du and the tangent
+// `r.tangent` d(force)/du, column by column.
+void ExpectDerivatives(Kernel kernel, const Tet10Geometry& g, const Vector30d& u,
+                       const HyperelasticMaterial& material, const Tet10FiniteStrainResult& r,
+                       const char* name) {
+  const double h = 1e-8;  // m, against displacements of ~1e-3 m
+  const double force_scale = r.force.cwiseAbs().maxCoeff();
+  const double tangent_scale = r.tangent.cwiseAbs().maxCoeff();
+  for (int i = 0; i < 30; ++i) {
+    Vector30d plus = u, minus = u;
+    plus(i) += h;
+    minus(i) -= h;
+    Tet10FiniteStrainResult rp, rm;
+    ASSERT_TRUE(kernel(g, plus, material, false, &rp, false));
+    ASSERT_TRUE(kernel(g, minus, material, false, &rm, false));
+    EXPECT_NEAR(r.force(i), (rp.energy - rm.energy) / (2 * h), 1e-6 * force_scale)
+        << name << " unknown " << i;
+    const Vector30d column = (rp.force - rm.force) / (2 * h);
+    EXPECT_LT((r.tangent.col(i) - column).cwiseAbs().maxCoeff(), 1e-6 * tangent_scale)
+        << name << " unknown " << i;
+  }
+}
+
 TEST(Tet10FiniteStrain, ForceIsTheEnergyDerivativeAndTangentTheForceDerivative) {
   const Tet10Nodes x = CurvedElement();
   const Tet10Geometry g = ComputeTet10Geometry(x);
@@ -87,22 +114,7 @@ TEST(Tet10FiniteStrain, ForceIsTheEnergyDerivativeAndTangentTheForceDerivative) 
               1e-12 * r.tangent.cwiseAbs().maxCoeff())
         << c.name;
 
-    const double h = 1e-8;  // m, against displacements of ~1e-3 m
-    const double force_scale = r.force.cwiseAbs().maxCoeff();
-    const double tangent_scale = r.tangent.cwiseAbs().maxCoeff();
-    for (int i = 0; i < 30; ++i) {
-      Vector30d plus = u, minus = u;
-      plus(i) += h;
-      minus(i) -= h;
-      Tet10FiniteStrainResult rp, rm;
-      ASSERT_TRUE(Tet10FiniteStrain(x, plus, *c.material, false, &rp));
-      ASSERT_TRUE(Tet10FiniteStrain(x, minus, *c.material, false, &rm));
-      EXPECT_NEAR(r.force(i), (rp.energy - rm.energy) / (2 * h), 1e-6 * force_scale)
-          << c.name << " unknown " << i;
-      const Vector30d column = (rp.force - rm.force) / (2 * h);
-      EXPECT_LT((r.tangent.col(i) - column).cwiseAbs().maxCoeff(), 1e-6 * tangent_scale)
-          << c.name << " unknown " << i;
-    }
+    ExpectDerivatives(Tet10FiniteStrain, g, u, *c.material, r, c.name);
   }
 }
 
@@ -211,22 +223,7 @@ TEST(Tet10FiniteStrainMeanDilatation, ForceIsTheEnergyDerivativeAndTangentTheFor
     EXPECT_LT((r.tangent - r.tangent.transpose()).cwiseAbs().maxCoeff(),
               1e-12 * r.tangent.cwiseAbs().maxCoeff())
         << c.name;
-    const double h = 1e-8;  // m, against displacements of ~1e-3 m
-    const double force_scale = r.force.cwiseAbs().maxCoeff();
-    const double tangent_scale = r.tangent.cwiseAbs().maxCoeff();
-    for (int i = 0; i < 30; ++i) {
-      Vector30d plus = u, minus = u;
-      plus(i) += h;
-      minus(i) -= h;
-      Tet10FiniteStrainResult rp, rm;
-      ASSERT_TRUE(Tet10FiniteStrainMeanDilatation(g, plus, *c.material, false, &rp));
-      ASSERT_TRUE(Tet10FiniteStrainMeanDilatation(g, minus, *c.material, false, &rm));
-      EXPECT_NEAR(r.force(i), (rp.energy - rm.energy) / (2 * h), 1e-6 * force_scale)
-          << c.name << " unknown " << i;
-      const Vector30d column = (rp.force - rm.force) / (2 * h);
-      EXPECT_LT((r.tangent.col(i) - column).cwiseAbs().maxCoeff(), 1e-6 * tangent_scale)
-          << c.name << " unknown " << i;
-    }
+    ExpectDerivatives(Tet10FiniteStrainMeanDilatation, g, u, *c.material, r, c.name);
   }
 }
 
