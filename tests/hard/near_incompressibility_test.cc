@@ -146,6 +146,7 @@ struct Outcome {
   double reaction_n = NAN;  // top, z [N]
   int increments = 0, iterations = 0, cuts = 0;
   double seconds = 0;
+  std::string element_type;  // as the summary names it
 };
 
 Outcome Solve(const SceneSpec& scene) {
@@ -162,6 +163,7 @@ Outcome Solve(const SceneSpec& scene) {
   run.iterations = solution.summary.newton_iterations;
   run.cuts = solution.summary.increment_cuts;
   run.seconds = solution.summary.wall_time_s;
+  run.element_type = solution.summary.element_type;
   return run;
 }
 
@@ -191,6 +193,7 @@ TEST_P(FrictionlessTest, TopReactionIsTheClosedForm) {
     const Outcome run = Solve(FrictionlessCube(element, ratio, 5));
     ASSERT_TRUE(run.status.ok()) << element.name << ", K / mu = " << ratio << ": "
                                  << run.status.ToString();
+    EXPECT_EQ(run.element_type, element.name);
     const UniaxialAnswer answer = CompressibleUniaxial(kMu, ratio * kMu, kStretch);
     const double nominal = run.reaction_n / kArea;
     EXPECT_NEAR(nominal, answer.nominal_stress, 1e-5 * std::abs(answer.nominal_stress))
