@@ -1,14 +1,14 @@
 // Preconditioned conjugate gradients (Eigen) with an incomplete Cholesky
 // preconditioner (Lin & More 1999, as in Eigen's IncompleteCholesky: the
-// factor keeps the original matrix's entry count per column, AMD ordering,
-// diagonal scaling and a growing diagonal shift when a pivot fails). For
-// systems whose direct factor would not fit in memory: the preconditioner
-// costs about the matrix's own storage, where the Cholesky factor of a 3D
-// mesh grows like n^(4/3).
+// factor keeps the original matrix's entry count per column, diagonal
+// scaling and a growing diagonal shift when a pivot fails). For systems
+// whose direct factor would not fit in memory: the solver keeps the lower
+// triangle of the matrix and a factor of the same size, where the Cholesky
+// factor of a 3D mesh grows like n^(4/3).
 #include <Eigen/IterativeLinearSolvers>
 #include <algorithm>
 #include <cmath>
-#include <vector>
+#include <memory>
 
 #include "core/format.h"
 #include "linear/linear_solver.h"
@@ -45,17 +45,29 @@ class PcgSolver final : public LinearSolver {
   Status Factorize(const Eigen::SparseMatrix<double>& a) override {
     // Eigen's solver keeps a reference to the matrix it was given; Newton
     // reuses an older factorisation (a modified-Newton step) after its own
-    // matrix is gone, so the solver owns a copy.
+    // matrix is gone, so the solver owns a copy - of the lower triangle
+    // only, half the memory: the matrix is symmetric, CG multiplies through
+    // its selfadjoint view and the incomplete factorisation reads only that
+    // triangle. That product runs on one thread where the full matrix's
+    // would use OpenMP, but it reads half the data and is bound by memory
+    // bandwidth: on the 2-core machine CG was not slower for it (TET10,
+    // 101,277 unknowns in scaling_bench: 11.6 s against 16 s per Newton
+    // iteration, one run each).
+    //
+    // The last matrix and factor are released first, so that the new ones
+    // never coexist with them (Newton never refactorises the solver that
+    // holds its last good factorisation).
     factorized_ = false;
-    a_ = a;
-    a_.makeCompressed();
-    if (!a_.coeffs().allFinite()) {
+    cg_.reset();
+    lower_ = Eigen::SparseMatrix<double>();
+    lower_ = a.triangularView<Eigen::Lower>();
+    if (!Eigen::Map<const Eigen::VectorXd>(lower_.valuePtr(), lower_.nonZeros()).allFinite()) {
       return Status::Numerical("the stiffness matrix has entries that are not finite numbers");
     }
     // A positive definite matrix has a positive diagonal. The incomplete
     // factorisation would shift such a matrix into one it can factorise, and
     // CG would then wander, so this necessary condition is checked first.
-    const Eigen::VectorXd diagonal = a_.diagonal();
+    const Eigen::VectorXd diagonal = lower_.diagonal();
     for (Eigen::Index i = 0; i < diagonal.size(); ++i) {
       if (!(diagonal(i) > 0)) {
         return Status::Numerical(
@@ -64,35 +76,31 @@ class PcgSolver final : public LinearSolver {
                    static_cast<long long>(i), diagonal(i)));
       }
     }
-    // Newton iterations refactorise the same pattern: the AMD ordering is
-    // computed once per pattern.
-    if (!SamePattern(a_)) {
-      solver_.analyzePattern(a_);
-      outer_.assign(a_.outerIndexPtr(), a_.outerIndexPtr() + a_.outerSize() + 1);
-      inner_.assign(a_.innerIndexPtr(), a_.innerIndexPtr() + a_.nonZeros());
-    }
-    solver_.factorize(a_);
-    if (solver_.info() != Eigen::Success) {
+    // The natural ordering needs no analysis (see Cg below).
+    cg_ = std::make_unique<Cg>();
+    cg_->analyzePattern(lower_);
+    cg_->factorize(lower_);
+    if (cg_->info() != Eigen::Success) {
       return Status::Numerical(
           "the incomplete Cholesky preconditioner could not be computed even with a diagonal "
           "shift: the stiffness matrix is far from positive definite; try analysis.linear_solver "
           "CHOLMOD");
     }
-    solver_.setTolerance(kRelativeTolerance);
-    solver_.setMaxIterations(std::max<Eigen::Index>(
-        kMinIterations, kIterationsPerUnknown * static_cast<Eigen::Index>(a_.rows())));
+    cg_->setTolerance(kRelativeTolerance);
+    cg_->setMaxIterations(std::max<Eigen::Index>(
+        kMinIterations, kIterationsPerUnknown * static_cast<Eigen::Index>(lower_.rows())));
     factorized_ = true;
     return Status::Ok();
   }
 
   Status Solve(const Eigen::VectorXd& b, Eigen::VectorXd* x) override {
-    // After a failed Factorize, Eigen's solver still refers to the matrix
-    // that a_ held before.
     if (!factorized_) return Status::Internal("PCG solve without a successful Factorize");
-    *x = solver_.solve(b);
-    iterations_ = static_cast<int>(solver_.iterations());
+    *x = cg_->solve(b);
+    iterations_ = static_cast<int>(cg_->iterations());
     const double scale = b.norm();
-    residual_ = x->allFinite() ? (b - a_ * *x).norm() / (scale > 0 ? scale : 1.0) : INFINITY;
+    residual_ = x->allFinite() ? (b - lower_.selfadjointView<Eigen::Lower>() * *x).norm() /
+                                     (scale > 0 ? scale : 1.0)
+                               : INFINITY;
     if (!(residual_ <= kAcceptedResidual)) {
       return Status::Numerical(
           Format("conjugate gradients did not converge: %d iterations reached a relative "
@@ -121,21 +129,17 @@ class PcgSolver final : public LinearSolver {
   }
 
  private:
-  bool SamePattern(const Eigen::SparseMatrix<double>& a) const {
-    return outer_.size() == static_cast<std::size_t>(a.outerSize()) + 1 &&
-           inner_.size() == static_cast<std::size_t>(a.nonZeros()) &&
-           std::equal(outer_.begin(), outer_.end(), a.outerIndexPtr()) &&
-           std::equal(inner_.begin(), inner_.end(), a.innerIndexPtr());
-  }
-
-  Eigen::SparseMatrix<double> a_;
-  std::vector<int> outer_, inner_;
-  // Lower | Upper: both triangles are stored, so the matrix-vector product
-  // runs on the full matrix, which Eigen parallelises with OpenMP (it cannot
-  // for a product through a selfadjoint view of one triangle).
-  Eigen::ConjugateGradient<Eigen::SparseMatrix<double>, Eigen::Lower | Eigen::Upper,
-                           Eigen::IncompleteCholesky<double, Eigen::Lower, Eigen::AMDOrdering<int>>>
-      solver_;
+  Eigen::SparseMatrix<double> lower_;  // lower triangle of the last matrix factorised
+  // The incomplete factor in the natural ordering, the mesh's node
+  // numbering. An AMD ordering, made to limit the fill of complete factors,
+  // costs more CG iterations here (scaling_bench, K/mu = 10, 101,277
+  // unknowns: 714 against 503 per solve with TET10, 162 against 97 with
+  // TET4_ANP), and with it Eigen forms a permuted copy of the whole matrix,
+  // both triangles, at every factorisation.
+  using Cg = Eigen::ConjugateGradient<
+      Eigen::SparseMatrix<double>, Eigen::Lower,
+      Eigen::IncompleteCholesky<double, Eigen::Lower, Eigen::NaturalOrdering<int>>>;
+  std::unique_ptr<Cg> cg_;  // refers to lower_
   bool factorized_ = false;
   int iterations_ = -1;  // of the last solve; -1 before the first
   double residual_ = 0;  // true relative residual of the last solve

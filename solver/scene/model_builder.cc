@@ -58,7 +58,7 @@ MidsideProjection WithPatches(const GeometrySpec& g, MidsideProjection project) 
 }
 
 // Cuts the geometry's patches out of their sets; a patch that holds no
-// face is an error naming it and how far off its ball is.
+// face is an error naming it and the radius that would hold one.
 Status CutPatches(const GeometrySpec& g, Mesh* mesh) {
   constexpr double kMm = 1e-3;
   for (std::size_t i = 0; i < g.patches.size(); ++i) {

@@ -1,11 +1,15 @@
 // How a finite-strain Newton step grows with the number of unknowns: a
-// nearly incompressible neo-Hookean cube (K / mu = 1e3), bottom fixed, top
-// pressed 10 % in two increments, meshed ever finer with TET4_ANP and TET10;
-// per Newton iteration, the time of assembly, of the linear solves
-// (factorisation and substitution) and of the residuals, and the process's
-// peak memory. A benchmark, not a test: scripts/bench.sh runs it for
-// docs/performance.md; `--benchmark_filter` picks rows (peak memory is the
-// row's own only when it runs alone).
+// neo-Hookean cube, bottom fixed, top pressed 10 % in two increments, meshed
+// ever finer with TET4_ANP and TET10; per Newton iteration, the time of
+// assembly, of the linear solves (factorisation and substitution, or
+// incomplete factorisation and CG iterations) and of the residuals, and the
+// process's peak memory. The direct solver's rows are nearly incompressible
+// (K / mu = 1e3); the PCG rows, which reach about 1e6 unknowns, are
+// compressible (K / mu = 10, Poisson's ratio 0.45), because CG's iterations
+// grow with K / mu (see docs/performance.md). A benchmark, not a test:
+// scripts/bench.sh runs the direct solver's rows for docs/performance.md;
+// `--benchmark_filter` picks rows (peak memory is the row's own only when
+// it runs alone).
 #include <benchmark/benchmark.h>
 #include <sys/resource.h>
 
@@ -18,7 +22,7 @@ namespace {
 using testing::Condition;
 
 // Arguments: cells per cube edge; the element (0 = TET4_ANP, 1 = TET10);
-// the linear solver (0 = CHOLMOD, 1 = PCG, for rows added by hand).
+// the linear solver (0 = CHOLMOD, 1 = PCG); K / mu.
 void BM_NewtonScaling(benchmark::State& state) {
   using K = BoundaryConditionSpec::Kind;
   SceneSpec s;
@@ -28,7 +32,7 @@ void BM_NewtonScaling(benchmark::State& state) {
   s.mesh.element_size_mm = 10.0 / state.range(0);
   s.mesh.element = state.range(1) ? ElementType::kTet10 : ElementType::kTet4Anp;
   s.material.kind = MaterialSpec::Kind::kNeoHookean;
-  s.material.neo_hookean = {1000, 1e6};
+  s.material.neo_hookean = {1000, 1000.0 * static_cast<double>(state.range(3))};
   s.boundary_conditions = {Condition("bottom", K::kFixed),
                            Condition("top", K::kDisplacement, {0.0, 0.0, -1.0})};
   s.analysis.type = AnalysisSpec::Type::kNonlinearStatic;
@@ -52,19 +56,31 @@ void BM_NewtonScaling(benchmark::State& state) {
   state.counters["solve_per_it_s"] = m.newton_linear_solve_s / iterations;
   state.counters["residual_per_it_s"] = m.newton_residual_s / iterations;
   state.counters["reaction_N"] = m.reactions.at(0).force_n[2];
+  // PCG's name carries the CG iterations and residual of its last solve.
+  if (state.range(2)) state.SetLabel(m.linear_solver);
   rusage usage{};
   getrusage(RUSAGE_SELF, &usage);
   state.counters["peak_rss_mb"] = usage.ru_maxrss / 1024.0;
 }
 
+// The direct solver's rows, then PCG's from about 1e4 to 1e6 unknowns
+// (TET4_ANP has about 3 (n + 1)^3 unknowns for n cells per edge, TET10
+// about 3 (2 n + 1)^3), and PCG on the smallest meshes at K / mu = 100 and
+// 1e3, to show what near incompressibility costs it.
+void ScalingRows(benchmark::internal::Benchmark* b) {
+  b->ArgNames({"cells", "tet10", "pcg", "k_mu"});
+  for (int n : {10, 20, 30}) b->Args({n, 0, 0, 1000});
+  for (int n : {5, 10, 15}) b->Args({n, 1, 0, 1000});
+  for (int n : {14, 32, 46}) b->Args({n, 0, 1, 10});
+  for (int n : {7, 16, 23, 34}) b->Args({n, 1, 1, 10});
+  for (int k_mu : {100, 1000}) {
+    b->Args({14, 0, 1, k_mu});
+    b->Args({7, 1, 1, k_mu});
+  }
+}
+
 BENCHMARK(BM_NewtonScaling)
-    ->ArgNames({"cells", "tet10", "pcg"})
-    ->Args({10, 0, 0})
-    ->Args({20, 0, 0})
-    ->Args({30, 0, 0})
-    ->Args({5, 1, 0})
-    ->Args({10, 1, 0})
-    ->Args({15, 1, 0})
+    ->Apply(ScalingRows)
     ->Unit(benchmark::kSecond)
     ->UseRealTime()
     ->Iterations(1);
