@@ -5,6 +5,23 @@
 #include <utility>
 
 namespace pba {
+namespace {
+
+// Copies a list that must hold exactly three values (x, y, z); otherwise
+// refuses it naming `path` and what the three are ("edge lengths (x, y, z)
+// in mm").
+Status CopyThree(const google::protobuf::RepeatedField<double>& given, const std::string& path,
+                 const char* what, std::array<double, 3>* out) {
+  if (given.size() != 3) {
+    return Status::InvalidArgument(
+        path, std::string("expected three ") + what + ", got " + std::to_string(given.size()));
+  }
+  for (int i = 0; i < 3; ++i) (*out)[i] = given[i];
+  return Status::Ok();
+}
+
+}  // namespace
+
 Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec) {
   *spec = SceneSpec();
   spec->name = scene.name();
@@ -13,14 +30,9 @@ Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec) {
   const v1::Geometry& geometry = scene.geometry();
   switch (geometry.shape_case()) {
     case v1::Geometry::kBox: {
-      const auto& size = geometry.box().size_mm();
-      if (size.size() != 3) {
-        return Status::InvalidArgument(
-            "geometry.box.size_mm",
-            "expected three edge lengths (x, y, z) in mm, got " + std::to_string(size.size()));
-      }
+      PBA_RETURN_IF_ERROR(CopyThree(geometry.box().size_mm(), "geometry.box.size_mm",
+                                    "edge lengths (x, y, z) in mm", &spec->geometry.box.size_mm));
       spec->geometry.kind = GeometrySpec::Kind::kBox;
-      for (int i = 0; i < 3; ++i) spec->geometry.box.size_mm[i] = size[i];
       break;
     }
     case v1::Geometry::kCylinder:
@@ -34,14 +46,10 @@ Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec) {
       spec->geometry.spherical_shell.outer_radius_mm = geometry.spherical_shell().outer_radius_mm();
       break;
     case v1::Geometry::kEllipsoid: {
-      const auto& axes = geometry.ellipsoid().semi_axes_mm();
-      if (axes.size() != 3) {
-        return Status::InvalidArgument(
-            "geometry.ellipsoid.semi_axes_mm",
-            "expected three semi-axes (x, y, z) in mm, got " + std::to_string(axes.size()));
-      }
+      PBA_RETURN_IF_ERROR(CopyThree(geometry.ellipsoid().semi_axes_mm(),
+                                    "geometry.ellipsoid.semi_axes_mm", "semi-axes (x, y, z) in mm",
+                                    &spec->geometry.ellipsoid.semi_axes_mm));
       spec->geometry.kind = GeometrySpec::Kind::kEllipsoid;
-      for (int i = 0; i < 3; ++i) spec->geometry.ellipsoid.semi_axes_mm[i] = axes[i];
       break;
     }
     case v1::Geometry::SHAPE_NOT_SET:
@@ -49,15 +57,12 @@ Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec) {
   }
   for (int i = 0; i < geometry.patches_size(); ++i) {
     const v1::Patch& p = geometry.patches(i);
-    if (p.centre_mm_size() != 3) {
-      return Status::InvalidArgument(
-          "geometry.patches[" + std::to_string(i) + "].centre_mm",
-          "expected three coordinates (x, y, z) in mm, got " + std::to_string(p.centre_mm_size()));
-    }
     PatchSpec& out = spec->geometry.patches.emplace_back();
+    PBA_RETURN_IF_ERROR(CopyThree(p.centre_mm(),
+                                  "geometry.patches[" + std::to_string(i) + "].centre_mm",
+                                  "coordinates (x, y, z) in mm", &out.centre_mm));
     out.name = p.name();
     out.set = p.set();
-    for (int c = 0; c < 3; ++c) out.centre_mm[c] = p.centre_mm(c);
     out.radius_mm = p.radius_mm();
   }
 
@@ -142,14 +147,10 @@ Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec) {
       const std::pair<const google::protobuf::RepeatedField<double>*, std::array<double, 3>*>
           axes[] = {{&o.axis_1(), &p.axis_1}, {&o.axis_2(), &p.axis_2}};
       for (int a = 0; a < 2; ++a) {
-        const auto& given = *axes[a].first;
-        if (given.empty()) continue;
-        if (given.size() != 3) {
-          return Status::InvalidArgument(
-              "material.orthotropic_elastic.axis_" + std::to_string(a + 1),
-              "expected three components (x, y, z), got " + std::to_string(given.size()));
-        }
-        for (int i = 0; i < 3; ++i) (*axes[a].second)[i] = given[i];
+        if (axes[a].first->empty()) continue;
+        PBA_RETURN_IF_ERROR(CopyThree(*axes[a].first,
+                                      "material.orthotropic_elastic.axis_" + std::to_string(a + 1),
+                                      "components (x, y, z)", axes[a].second));
       }
       break;
     }
@@ -181,14 +182,11 @@ Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec) {
         break;
       case v1::BoundaryCondition::kTraction: {
         out.kind = BoundaryConditionSpec::Kind::kTraction;
-        const auto& t = bc.traction().traction_pa();
-        if (t.size() != 3) {
-          return Status::InvalidArgument(
-              "boundary_conditions[" + std::to_string(spec->boundary_conditions.size()) +
-                  "].traction.traction_pa",
-              "expected three components (x, y, z) in Pa, got " + std::to_string(t.size()));
-        }
-        for (int i = 0; i < 3; ++i) out.traction_pa[i] = t[i];
+        PBA_RETURN_IF_ERROR(CopyThree(bc.traction().traction_pa(),
+                                      "boundary_conditions[" +
+                                          std::to_string(spec->boundary_conditions.size()) +
+                                          "].traction.traction_pa",
+                                      "components (x, y, z) in Pa", &out.traction_pa));
         break;
       }
       case v1::BoundaryCondition::KIND_NOT_SET:
@@ -198,14 +196,10 @@ Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec) {
   }
 
   if (scene.has_gravity()) {
-    const auto& g = scene.gravity().acceleration_m_per_s2();
-    if (g.size() != 3) {
-      return Status::InvalidArgument(
-          "gravity.acceleration_m_per_s2",
-          "expected three components (x, y, z) in m/s^2, got " + std::to_string(g.size()));
-    }
+    PBA_RETURN_IF_ERROR(CopyThree(scene.gravity().acceleration_m_per_s2(),
+                                  "gravity.acceleration_m_per_s2", "components (x, y, z) in m/s^2",
+                                  &spec->gravity.acceleration_m_per_s2));
     spec->gravity.enabled = true;
-    for (int i = 0; i < 3; ++i) spec->gravity.acceleration_m_per_s2[i] = g[i];
   }
 
   switch (scene.analysis().type()) {

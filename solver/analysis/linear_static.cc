@@ -99,7 +99,7 @@ Status SolveLinearStatic(const SceneSpec& scene, const Model& model, PhaseClock*
   }
   clock.End();
 
-  const auto solver = CreateLinearSolver(scene.analysis.linear_solver);
+  auto solver = CreateLinearSolver(scene.analysis.linear_solver);
   Eigen::VectorXd u_free;
   double residual = 0;
   if (dofs.num_free() > 0) {
@@ -115,6 +115,12 @@ Status SolveLinearStatic(const SceneSpec& scene, const Model& model, PhaseClock*
     residual = (system.k * u_free - system.rhs).norm() / (scale > 0 ? scale : 1.0);
     clock.End();
   }
+  // Recovery needs neither the matrix nor its factorisation, only the
+  // solver's name (for the summary): both are released here rather than
+  // held through recovery and the error estimate.
+  const std::string solver_name = solver->Name();
+  solver.reset();
+  system = LinearSystem();
   if (clock.cancelled()) return cancelled();
 
   clock.Begin("recover", 0.8, 0.9, "element strain and stress, reactions");
@@ -211,7 +217,7 @@ Status SolveLinearStatic(const SceneSpec& scene, const Model& model, PhaseClock*
   summary.analysis = scene.material.hyperelastic()
                          ? "linear static (small strain, the material's initial moduli)"
                          : "linear static (small strain)";
-  summary.linear_solver = solver->Name();
+  summary.linear_solver = solver_name;
   if (max_strain > kSmallStrainLimit) {
     summary.notes.push_back(
         Format("the largest strain component is %.1f %%: beyond a few percent small-strain linear "

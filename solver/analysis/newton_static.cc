@@ -114,8 +114,17 @@ Status AssembleLoaded(const FiniteStrainModel& model, const Loading& loading,
   }
   if (loading.loads->follows_deformation() && !options.drop_pressure_stiffness) {
     // The loaded triangles' nodes share a tetrahedron, so the sum keeps
-    // K's pattern (and the solver's symbolic analysis).
-    system->k += loading.loads->Stiffness(u, dofs, loading.factor);
+    // K's pattern (and the solver's symbolic analysis); it is added in
+    // place, not by `k += s`, which builds the sum as a second matrix.
+    // Should an entry be missing after all, coeffRef inserts it and k is
+    // compressed again (the next assembly then builds a new pattern).
+    const SparseMatrix stiffness = loading.loads->Stiffness(u, dofs, loading.factor);
+    for (int col = 0; col < stiffness.outerSize(); ++col) {
+      for (SparseMatrix::InnerIterator it(stiffness, col); it; ++it) {
+        system->k.coeffRef(it.row(), col) += it.value();
+      }
+    }
+    system->k.makeCompressed();
   }
   return Status::Ok();
 }
@@ -153,8 +162,15 @@ Status SolveNewtonStatic(const FiniteStrainModel& model, const ExternalLoads* lo
   // already indefinite, the consistent tangent is used although it is not
   // positive definite (LDL^T): the path has then passed a critical point
   // (e.g. TET4_ANP under 50 % bonded compression: the smallest eigenvalue
-  // crosses zero near 42 %), and the definite substitutes converge only
-  // linearly (~0.7 per iteration) to the equilibrium beyond it.
+  // crosses zero between 41 and 43 %, as increment_cutting_test prints),
+  // and the definite substitutes converge only linearly to the equilibrium
+  // beyond it.
+  // The two solvers take turns, so both hold a factorisation between
+  // iterations. Releasing the older one once the newer succeeds would not
+  // lower the peak (a factorisation is attempted while the last good one
+  // must survive its failure, so two coexist then anyway), and a released
+  // CHOLMOD solver would redo its symbolic analysis, which each solver
+  // otherwise keeps for the unchanged pattern.
   std::unique_ptr<LinearSolver> spare = solver->NewOfSameKind();
   Eigen::SimplicialLDLT<SparseMatrix, Eigen::Lower> ldlt;
   // Negative eigenvalues of the tangent of the last step, when it was
@@ -215,6 +231,11 @@ Status SolveNewtonStatic(const FiniteStrainModel& model, const ExternalLoads* lo
                    "(relative residual %.3g)",
                    iteration, residual));
       };
+  // One tangent for the whole solve: the predictor's DofMap (`increment`
+  // below) frees the same unknowns as `dofs`, so every assembly fills the
+  // same pattern in place (see AssembleSystem) instead of building a new
+  // matrix beside the old one.
+  LinearSystem system;
   double load = 0;
   // The last converged state's tangent had negative eigenvalues (the path
   // passed a bifurcation and follows the now unstable fundamental branch):
@@ -240,7 +261,6 @@ Status SolveNewtonStatic(const FiniteStrainModel& model, const ExternalLoads* lo
     increment.Finalize();
     AssemblyOptions lift;
     lift.lift_prescribed = true;
-    LinearSystem system;
     Eigen::VectorXd trial = *u;
     Eigen::VectorXd du;
     // At the converged state f_int = lambda_old f_ext, so the rhs

@@ -141,7 +141,7 @@ Status SolveNonlinearStatic(const SceneSpec& scene, const Model& model, PhaseClo
                          : mesh.hexahedral() ? "HEX8"
                          : plain             ? "TET4"
                                              : "TET4_ANP";
-  const auto solver = CreateLinearSolver(scene.analysis.linear_solver);
+  auto solver = CreateLinearSolver(scene.analysis.linear_solver);
   NewtonOptions options = OptionsOf(scene.analysis.nonlinear);
   options.on_increment = [solution](double load, const Eigen::VectorXd& u) {
     solution->step_load_factor.push_back(load);
@@ -172,6 +172,11 @@ Status SolveNonlinearStatic(const SceneSpec& scene, const Model& model, PhaseClo
         return !clock.cancelled();
       },
       &u, &report);
+  // The factorisation (with PCG, a copy of the matrix and its incomplete
+  // factor) would otherwise stay resident through recovery and the error
+  // estimate; only the solver's name is wanted after Newton.
+  const std::string solver_name = solver->Name();
+  solver.reset();
   summary.newton_iterations = report.total_iterations;
   summary.increment_cuts = report.cuts;
   summary.newton_assembly_s = report.assembly_s;
@@ -339,7 +344,7 @@ Status SolveNonlinearStatic(const SceneSpec& scene, const Model& model, PhaseClo
   clock.End();
 
   summary.analysis = "nonlinear static (finite strain, total Lagrangian, Newton-Raphson)";
-  summary.linear_solver = solver->Name();
+  summary.linear_solver = solver_name;
   summary.notes.push_back("elements: " + body->Describe());
   if (report.approximate_iterations > 0) {
     summary.notes.push_back(

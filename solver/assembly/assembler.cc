@@ -12,47 +12,82 @@ namespace {
 
 constexpr int kMaxColours = 256;
 
-// Compressed-column pattern of K_ff: the free unknowns of every node pair that
-// shares an element.
-struct Pattern {
-  std::vector<int> outer;  // num_free + 1
-  std::vector<int> inner;  // row (free index) of each stored entry, sorted per column
-
-  int Find(int row, int col) const {
-    const auto begin = inner.begin() + outer[col], end = inner.begin() + outer[col + 1];
-    return static_cast<int>(std::lower_bound(begin, end, row) - inner.begin());
-  }
-};
-
-// `nodes_of(e)` gives element e's node indices (a std::array).
+// Builds in `k` (released beforehand by the caller) the compressed-column
+// pattern of K_ff, all values zero: the free unknowns of every node pair
+// that shares an element. `nodes_of(e)` gives element e's node indices (a
+// std::array). Free unknowns are numbered in dof order (DofMap::Finalize),
+// so walking nodes and components in ascending order gives sorted columns
+// with sorted rows. The exact size is counted first and the row indices
+// written straight into k, so that no growing vector or second copy of the
+// pattern coexists with the matrix.
 template <typename NodesOf>
-Pattern BuildPattern(const Mesh& mesh, const NodesOf& nodes_of, const DofMap& dofs) {
+void BuildPattern(const Mesh& mesh, const NodesOf& nodes_of, const DofMap& dofs, SparseMatrix* k) {
   const int n = mesh.num_nodes();
   std::vector<std::vector<int>> neighbours(n);
   for (int e = 0; e < mesh.num_elements(); ++e) {
     const auto t = nodes_of(e);
     for (int a : t) neighbours[a].insert(neighbours[a].end(), t.begin(), t.end());
   }
-  Pattern p;
-  p.outer.assign(dofs.num_free() + 1, 0);
+  std::vector<int> free_of_node(n, 0);
+  for (int a = 0; a < n; ++a) {
+    for (int i = 0; i < 3; ++i) free_of_node[a] += dofs.free_index(3 * a + i) >= 0;
+  }
+  const int num_free = dofs.num_free();
+  k->resize(num_free, num_free);
+  int* outer = k->outerIndexPtr();
+  outer[0] = 0;
+  Eigen::Index total = 0;
   for (int b = 0; b < n; ++b) {
     auto& list = neighbours[b];
     std::sort(list.begin(), list.end());
     list.erase(std::unique(list.begin(), list.end()), list.end());
+    list.shrink_to_fit();
+    int rows = 0;
+    for (int a : list) rows += free_of_node[a];
     for (int j = 0; j < 3; ++j) {
       const int col = dofs.free_index(3 * b + j);
       if (col < 0) continue;
+      total += rows;
+      outer[col + 1] = static_cast<int>(total);
+    }
+  }
+  k->resizeNonZeros(total);
+  int* inner = k->innerIndexPtr();
+  for (int b = 0; b < n; ++b) {
+    const auto& list = neighbours[b];
+    for (int j = 0; j < 3; ++j) {
+      const int col = dofs.free_index(3 * b + j);
+      if (col < 0) continue;
+      int at = outer[col];
       for (int a : list) {
         for (int i = 0; i < 3; ++i) {
           const int row = dofs.free_index(3 * a + i);
-          if (row >= 0) p.inner.push_back(row);
+          if (row >= 0) inner[at++] = row;
         }
       }
-      p.outer[col + 1] = static_cast<int>(p.inner.size());
     }
-    std::vector<int>().swap(list);
+    std::vector<int>().swap(neighbours[b]);
   }
-  return p;
+  std::fill(k->valuePtr(), k->valuePtr() + total, 0.0);
+}
+
+// True when `system->k` has the pattern that BuildPattern would build for
+// elements of `nodes_per_element` nodes of `mesh` under `dofs` (see
+// LinearSystem::pattern_source).
+bool SamePattern(const LinearSystem& system, const Mesh& mesh, int nodes_per_element,
+                 const DofMap& dofs) {
+  const PatternSource& source = system.pattern_source;
+  const int n = dofs.num_free();
+  if (source.mesh != &mesh || source.num_elements != mesh.num_elements() ||
+      source.nodes_per_element != nodes_per_element || system.k.rows() != n ||
+      system.k.cols() != n || !system.k.isCompressed() || system.k.nonZeros() != source.non_zeros ||
+      static_cast<int>(source.free_index.size()) != dofs.num_dofs()) {
+    return false;
+  }
+  for (int dof = 0; dof < dofs.num_dofs(); ++dof) {
+    if (source.free_index[dof] != dofs.free_index(dof)) return false;
+  }
+  return true;
 }
 
 // Greedy colouring of `elements` (node index arrays) on `num_nodes` nodes.
@@ -121,11 +156,37 @@ Status AssembleElements(const Mesh& mesh, const NodesOf& nodes_of, const DofMap&
                         const AssemblyOptions& options,
                         const std::function<bool(double)>& keep_going, LinearSystem* system) {
   constexpr int kUnknowns = 3 * N;
-  const Pattern pattern = BuildPattern(mesh, nodes_of, dofs);
-  std::vector<double> values(pattern.inner.size(), 0.0);
-  system->rhs = Eigen::VectorXd::Zero(dofs.num_free());
+  SparseMatrix& matrix = system->k;
+  const bool reused = SamePattern(*system, mesh, N, dofs);
+  if (reused) {
+    std::fill(matrix.valuePtr(), matrix.valuePtr() + matrix.nonZeros(), 0.0);
+  } else {
+    // The old matrix goes first, so that it never coexists with the new one.
+    system->pattern_source = PatternSource();
+    matrix = SparseMatrix();
+    BuildPattern(mesh, nodes_of, dofs, &matrix);
+    PatternSource& source = system->pattern_source;
+    source.mesh = &mesh;
+    source.num_elements = mesh.num_elements();
+    source.nodes_per_element = N;
+    source.free_index.resize(dofs.num_dofs());
+    for (int dof = 0; dof < dofs.num_dofs(); ++dof) source.free_index[dof] = dofs.free_index(dof);
+    source.non_zeros = matrix.nonZeros();
+  }
+  const int* outer = matrix.outerIndexPtr();
+  const int* inner = matrix.innerIndexPtr();
+  double* values = matrix.valuePtr();
+  // Position of entry (row, col) in k, or -1 when the pattern lacks it.
+  const auto find = [&](int row, int col) {
+    const int* begin = inner + outer[col];
+    const int* end = inner + outer[col + 1];
+    const int* at = std::lower_bound(begin, end, row);
+    return at != end && *at == row ? static_cast<int>(at - inner) : -1;
+  };
+  system->rhs.setZero(dofs.num_free());
   double* rhs = system->rhs.data();
   std::atomic<int> failed{-1};
+  std::atomic<bool> missing{false};  // an element entry not in k's pattern
 
   std::size_t done = 0;
   const std::size_t total = static_cast<std::size_t>(mesh.num_elements());
@@ -133,13 +194,15 @@ Status AssembleElements(const Mesh& mesh, const NodesOf& nodes_of, const DofMap&
   // is assembled by one thread; so is a colour too small to repay starting
   // a team (a Newton solve on a small mesh assembles thousands of times,
   // and oversubscribed threads make each parallel region cost milliseconds).
-  for (std::size_t c = 0; c < colours.size() && failed.load() < 0; ++c) {
+  for (std::size_t c = 0; c < colours.size() && failed.load() < 0 && !missing.load(); ++c) {
     const std::vector<int>& elements = colours[c];
     const bool serial = c + 1 == static_cast<std::size_t>(kMaxColours) ||
                         elements.size() < static_cast<std::size_t>(kParallelColourFrom);
 #pragma omp parallel for schedule(static) if (!serial)
     for (std::size_t k = 0; k < elements.size(); ++k) {
-      if (failed.load(std::memory_order_relaxed) >= 0) continue;
+      if (failed.load(std::memory_order_relaxed) >= 0 || missing.load(std::memory_order_relaxed)) {
+        continue;
+      }
       const int e = elements[k];
       Eigen::Matrix<double, kUnknowns, kUnknowns> ke;
       Eigen::Matrix<double, kUnknowns, 1> fe;
@@ -170,12 +233,19 @@ Status AssembleElements(const Mesh& mesh, const NodesOf& nodes_of, const DofMap&
           continue;
         }
         for (int p = 0; p < kUnknowns; ++p) {
-          if (free[p] >= 0) values[pattern.Find(free[p], free[q])] += ke(p, q);
+          if (free[p] < 0) continue;
+          const int at = find(free[p], free[q]);
+          if (at < 0) {
+            missing.store(true);
+            break;
+          }
+          values[at] += ke(p, q);
         }
       }
     }
     done += elements.size();
-    if (failed.load() < 0 && !keep_going(static_cast<double>(done) / static_cast<double>(total))) {
+    if (failed.load() < 0 && !missing.load() &&
+        !keep_going(static_cast<double>(done) / static_cast<double>(total))) {
       return Status::Cancelled("cancelled during assembly");
     }
   }
@@ -183,10 +253,14 @@ Status AssembleElements(const Mesh& mesh, const NodesOf& nodes_of, const DofMap&
     return Status::Numerical("element " + std::to_string(failed.load()) +
                              " could not be evaluated (inverted: det F <= 0)");
   }
-  const int n = dofs.num_free();
-  system->k =
-      Eigen::Map<const SparseMatrix>(n, n, static_cast<int>(values.size()), pattern.outer.data(),
-                                     pattern.inner.data(), values.data());
+  if (missing.load()) {
+    // A reused pattern that lacks an entry: k was changed since it was
+    // assembled (or the mesh was), so the pattern is built anew. A pattern
+    // just built holds every element entry by construction.
+    if (!reused) return Status::Internal("assembly: an element entry is missing from the pattern");
+    system->pattern_source = PatternSource();
+    return AssembleElements<N>(mesh, nodes_of, dofs, colours, kernel, options, keep_going, system);
+  }
   return Status::Ok();
 }
 

@@ -27,9 +27,29 @@ using SparseMatrix = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
 // hexahedral mesh, from the eight nodes of Mesh::hexes.
 std::vector<std::vector<int>> ColourElements(const Mesh& mesh);
 
+// What the pattern of LinearSystem::k was built from. A Newton solve
+// reassembles the same mesh with the same free unknowns many times; the
+// pattern (which entries of K_ff exist) is then the same each time, and
+// rebuilding it, and holding a second matrix while the new one is made,
+// cost time and memory (about three times the matrix at the end of each
+// assembly).
+struct PatternSource {
+  const Mesh* mesh = nullptr;  // compared, never dereferenced
+  int num_elements = 0;
+  int nodes_per_element = 0;
+  std::vector<int> free_index;  // DofMap::free_index of every dof
+  Eigen::Index non_zeros = 0;   // of k when the pattern was built
+};
+
 struct LinearSystem {
   SparseMatrix k;       // K_ff, symmetric, both triangles stored
   Eigen::VectorXd rhs;  // f_f - K_fp u_p
+  // Set by the assemblies below. The next one into this system keeps k's
+  // pattern and overwrites its values when the mesh, the element kind and
+  // every dof's free index are the same and k still has its size and number
+  // of entries; otherwise k is released and rebuilt. Code that writes k by
+  // other means need not clear it (see AssembleSystem).
+  PatternSource pattern_source;
 };
 
 // Computes one element's stiffness `k` and force `f` (both in the element's
@@ -61,7 +81,16 @@ struct AssemblyOptions {
 // Assembles K_ff = sum k and rhs_f = sum f (minus K_fp u_p when lifting).
 // `keep_going(fraction)` is called between colours; returning false stops
 // with Status::Cancelled. A kernel returning false stops with
-// Status::Numerical naming the element.
+// Status::Numerical naming the element. After an error, k's values and rhs
+// are unspecified.
+//
+// Into a system assembled before on the same mesh and free unknowns (see
+// LinearSystem::pattern_source) the matrix is filled in place: the values
+// are zeroed and each element's entries added at their row in k's column.
+// Every entry an element touches must be found there, else k is rebuilt;
+// as k also has the pattern's number of entries, its pattern is then
+// exactly the one a fresh assembly builds, and so is the matrix. A fresh
+// LinearSystem always gets a newly built pattern.
 Status AssembleSystem(const Mesh& mesh, const DofMap& dofs,
                       const std::vector<std::vector<int>>& colours, const ElementKernel& kernel,
                       const AssemblyOptions& options, const std::function<bool(double)>& keep_going,

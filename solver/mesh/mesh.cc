@@ -124,6 +124,16 @@ std::vector<std::array<int, 2>> QuadFaceElements(const Mesh& mesh, const FaceSet
   return owner;
 }
 
+void CollectFaceSetNodes(FaceSet* set) {
+  auto& nodes = set->nodes;
+  nodes.clear();
+  for (const auto& t : set->triangles) nodes.insert(nodes.end(), t.begin(), t.end());
+  for (const auto& t : set->triangle_midside) nodes.insert(nodes.end(), t.begin(), t.end());
+  for (const auto& q : set->quads) nodes.insert(nodes.end(), q.begin(), q.end());
+  std::sort(nodes.begin(), nodes.end());
+  nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
+}
+
 FaceSet FacesWithin(const Mesh& mesh, const FaceSet& set, const Eigen::Vector3d& centre,
                     double radius) {
   const auto inside = [&](int node) {
@@ -141,12 +151,7 @@ FaceSet FacesWithin(const Mesh& mesh, const FaceSet& set, const Eigen::Vector3d&
   for (const auto& q : set.quads) {
     if (all_inside(q)) patch.quads.push_back(q);
   }
-  auto& nodes = patch.nodes;
-  for (const auto& t : patch.triangles) nodes.insert(nodes.end(), t.begin(), t.end());
-  for (const auto& t : patch.triangle_midside) nodes.insert(nodes.end(), t.begin(), t.end());
-  for (const auto& q : patch.quads) nodes.insert(nodes.end(), q.begin(), q.end());
-  std::sort(nodes.begin(), nodes.end());
-  nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
+  CollectFaceSetNodes(&patch);
   return patch;
 }
 

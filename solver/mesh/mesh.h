@@ -71,6 +71,10 @@ double HexVolume(const Mesh& mesh, int e);
 // parallelogram, close for a gently warped quad).
 double FaceSetArea(const Mesh& mesh, const FaceSet& set);
 
+// Sets `set->nodes` to the nodes its faces touch (triangle corners, their
+// mid-edge nodes, quad corners), sorted and unique.
+void CollectFaceSetNodes(FaceSet* set);
+
 // The faces of `set` whose corners all lie within `radius` of `centre` [m]
 // (a patch of it, e.g. where a punch presses), with their mid-edge nodes
 // on a quadratic mesh; `nodes` lists what they touch.

@@ -274,10 +274,10 @@ void SplitHex(const std::array<int, 8>& h, std::vector<std::array<int, 4>>* tets
 }
 
 // Half the edge of the unit ball's central cube. Its corners then lie at
-// 0.69 of the radius, leaving the corner cells of the outer blocks room:
-// the smallest dihedral angle of the tetrahedra is 18 degrees on a ball
-// and 12 to 14 on a 70 x 60 x 50 mm ellipsoid at 20, 10 and 5 mm, where
-// 0.5 flattens them to 7 (the cylinder's O-grid has 14).
+// 0.69 of the radius, leaving the corner cells of the outer blocks room: a
+// larger core flattens them. primitive_mesher_test prints the smallest
+// dihedral angle of the tetrahedra of a 70 x 60 x 50 mm ellipsoid at 20, 10
+// and 5 mm (12 to 14 degrees).
 constexpr double kCoreHalfWidth = 0.4;
 
 // Solid ellipsoid with semi-axes `axes` [mm]: the image under x -> (a x,
@@ -406,11 +406,7 @@ void ClassifyFaces(const std::vector<std::string>& names,
     }
   }
   for (std::size_t s = 0; s < names.size(); ++s) {
-    auto& nodes = sets[s].nodes;
-    for (const auto& tri : sets[s].triangles) nodes.insert(nodes.end(), tri.begin(), tri.end());
-    for (const auto& quad : sets[s].quads) nodes.insert(nodes.end(), quad.begin(), quad.end());
-    std::sort(nodes.begin(), nodes.end());
-    nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
+    CollectFaceSetNodes(&sets[s]);
     mesh->face_sets[names[s]] = std::move(sets[s]);
   }
 }

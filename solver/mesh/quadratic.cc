@@ -77,9 +77,7 @@ Mesh MakeQuadratic(const Mesh& linear, const MidsideProjection& project) {
         mesh.nodes.row(node) = moved.transpose();
       }
     }
-    set.nodes.insert(set.nodes.end(), mid.begin(), mid.end());
-    std::sort(set.nodes.begin(), set.nodes.end());
-    set.nodes.erase(std::unique(set.nodes.begin(), set.nodes.end()), set.nodes.end());
+    CollectFaceSetNodes(&set);
   }
   return mesh;
 }

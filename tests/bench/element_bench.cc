@@ -7,6 +7,7 @@
 
 #include <cmath>
 
+#include "common/bench_solve.h"
 #include "common/thick_sphere.h"
 
 namespace pba {
@@ -38,13 +39,7 @@ void BM_LameSphere(benchmark::State& state) {
   const SceneSpec scene =
       testing::PressurisedShell(material, p, state.range(0) / 10.0, kElements[state.range(1)]);
   Solution solution;
-  for (auto _ : state) {
-    const Status status = SolveScene(scene, SolveOptions(), &solution);
-    if (!status.ok()) {
-      state.SkipWithError(status.ToString().c_str());
-      return;
-    }
-  }
+  if (!testing::SolveEachIteration(state, scene, &solution)) return;
   double error = 0;
   for (double r : {kSphereInnerMm, kSphereOuterMm}) {
     const double exact = testing::LameDisplacement(p, e, nu, r);
@@ -64,13 +59,7 @@ void BM_InflatedSphere(benchmark::State& state) {
                                 state.range(0) / 10.0, kElements[state.range(1)]);
   scene.analysis.type = AnalysisSpec::Type::kNonlinearStatic;
   Solution solution;
-  for (auto _ : state) {
-    const Status status = SolveScene(scene, SolveOptions(), &solution);
-    if (!status.ok()) {
-      state.SkipWithError(status.ToString().c_str());
-      return;
-    }
-  }
+  if (!testing::SolveEachIteration(state, scene, &solution)) return;
   const double la = 1 + testing::MeanRadialDisplacement(solution, kSphereInnerMm) / kSphereInnerMm;
   Report(state, solution, std::abs(la / stretch - 1));
 }

@@ -4,11 +4,11 @@
 // A benchmark, not a test: scripts/bench.sh runs it and writes the table in
 // docs/performance.md.
 #include <benchmark/benchmark.h>
-#include <sys/resource.h>
 
 #include <cmath>
 #include <string>
 
+#include "common/bench_solve.h"
 #include "pba/solve.h"
 
 namespace pba {
@@ -38,13 +38,7 @@ void BM_LinearStaticBlock(benchmark::State& state, AnalysisSpec::LinearSolver li
   SceneSpec scene = Block(state.range(0) / 10.0);
   scene.analysis.linear_solver = linear_solver;
   Solution solution;
-  for (auto _ : state) {
-    const Status status = SolveScene(scene, SolveOptions(), &solution);
-    if (!status.ok()) {
-      state.SkipWithError(status.ToString().c_str());
-      return;
-    }
-  }
+  if (!testing::SolveEachIteration(state, scene, &solution)) return;
   const Summary& s = solution.summary;
   state.counters["dofs"] = static_cast<double>(s.dofs);
   state.counters["zz_error_pct"] = 100 * s.error.relative_error;
@@ -55,9 +49,7 @@ void BM_LinearStaticBlock(benchmark::State& state, AnalysisSpec::LinearSolver li
   for (const PhaseTime& phase : s.phases) state.counters[phase.phase + "_s"] = phase.seconds;
   // The process's peak resident memory so far: the row's own only when it
   // runs alone (--benchmark_filter), as for the figures in docs/performance.md.
-  rusage usage{};
-  getrusage(RUSAGE_SELF, &usage);
-  state.counters["peak_rss_mb"] = usage.ru_maxrss / 1024.0;
+  state.counters["peak_rss_mb"] = testing::PeakRssMb();
   state.SetLabel(s.linear_solver);
 }
 

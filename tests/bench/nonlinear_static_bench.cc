@@ -8,6 +8,7 @@
 
 #include <string>
 
+#include "common/bench_solve.h"
 #include "common/scene_builders.h"
 #include "pba/solve.h"
 
@@ -45,13 +46,7 @@ void BM_NonlinearBondedCube(benchmark::State& state) {
   SceneSpec scene = BondedQuarterCube(state.range(0) / 100.0, kElements[state.range(1)]);
   if (state.range(2)) scene.analysis.linear_solver = AnalysisSpec::LinearSolver::kPcg;
   Solution solution;
-  for (auto _ : state) {
-    const Status status = SolveScene(scene, SolveOptions(), &solution);
-    if (!status.ok()) {
-      state.SkipWithError(status.ToString().c_str());
-      return;
-    }
-  }
+  if (!testing::SolveEachIteration(state, scene, &solution)) return;
   const Summary& s = solution.summary;
   state.counters["dofs"] = static_cast<double>(s.dofs);
   state.counters["increments"] = static_cast<double>(s.increments.size());

@@ -11,8 +11,8 @@
 // `--benchmark_filter` picks rows (peak memory is the row's own only when
 // it runs alone).
 #include <benchmark/benchmark.h>
-#include <sys/resource.h>
 
+#include "common/bench_solve.h"
 #include "common/scene_builders.h"
 #include "pba/solve.h"
 
@@ -41,13 +41,7 @@ void BM_NewtonScaling(benchmark::State& state) {
       state.range(2) ? AnalysisSpec::LinearSolver::kPcg : AnalysisSpec::LinearSolver::kCholmod;
   s.outputs.reaction_sets = {"top"};
   Solution solution;
-  for (auto _ : state) {
-    const Status status = SolveScene(s, SolveOptions(), &solution);
-    if (!status.ok()) {
-      state.SkipWithError(status.ToString().c_str());
-      return;
-    }
-  }
+  if (!testing::SolveEachIteration(state, s, &solution)) return;
   const Summary& m = solution.summary;
   const double iterations = std::max(1, m.newton_iterations);
   state.counters["dofs"] = static_cast<double>(m.dofs);
@@ -58,9 +52,7 @@ void BM_NewtonScaling(benchmark::State& state) {
   state.counters["reaction_N"] = m.reactions.at(0).force_n[2];
   // PCG's name carries the CG iterations and residual of its last solve.
   if (state.range(2)) state.SetLabel(m.linear_solver);
-  rusage usage{};
-  getrusage(RUSAGE_SELF, &usage);
-  state.counters["peak_rss_mb"] = usage.ru_maxrss / 1024.0;
+  state.counters["peak_rss_mb"] = testing::PeakRssMb();
 }
 
 // The direct solver's rows, then PCG's from about 1e4 to 1e6 unknowns

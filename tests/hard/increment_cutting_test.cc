@@ -109,6 +109,20 @@ TEST_P(IncrementCuttingTest, OneIncrementIsCutBackAndMatchesTwentyIncrements) {
                            [](const std::string& n) { return n.find("cut back") != n.npos; })
                   ->c_str()
             : "-");
+  // Where the 20-increment path meets the instability: the last stable
+  // increment's end and the first unstable one's, with its count.
+  double stable = 0;
+  for (const IncrementSummary& i : many.summary.increments) {
+    if (i.negative_eigenvalues > 0) {
+      std::printf(
+          "%s: 20 increments: the tangent is first indefinite at the end of the increment from "
+          "load %.4g to %.4g (%d negative eigenvalue(s); %d at load 1)\n",
+          c.name.c_str(), stable, i.load_factor, i.negative_eigenvalues,
+          many.summary.increments.back().negative_eigenvalues);
+      break;
+    }
+    stable = i.load_factor;
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(Elements, IncrementCuttingTest,
@@ -121,7 +135,7 @@ INSTANTIATE_TEST_SUITE_P(Elements, IncrementCuttingTest,
                              // 1.8e-8 and a cut).
                              CuttingCase{"HEX8_FULL", ElementType::kHex8Full, 1e5, "", false},
                              // K / mu = 1e3: cut (an element inverts), then past the point
-                             // near 42 % compression where the tangent's smallest
+                             // near 42 % compression (printed below) where the tangent's smallest
                              // eigenvalue crosses zero; both runs follow the (unstable)
                              // fundamental branch to the same equilibrium.
                              CuttingCase{"TET4_ANP", ElementType::kTet4Anp, 1e6, ""},

@@ -77,7 +77,11 @@ TEST(SolverProcessTest, SignalReachesTheWholeGroup) {
   TempDir dir;
   SolverCommand command;
   // The shell waits on a child; both must go when the group is signalled.
-  command.program = WriteScript(dir.path(), "echo started\nsleep 30\n");
+  // "started" comes only once the child exists. Printed before a foreground
+  // command, it let the signal land while the shell was still forking; a
+  // shell that holds signals blocked across its fork then dies alone and the
+  // new child keeps stdout open (about 1 run in 20 failed that way).
+  command.program = WriteScript(dir.path(), "sleep 30 &\necho started\nwait\n");
   command.stderr_log = dir.path() / "solve.log";
   SolverProcess process;
   ASSERT_TRUE(process.Start(command).ok());
