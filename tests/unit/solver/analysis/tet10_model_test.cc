@@ -50,11 +50,6 @@ TEST(Tet10Model, DescribesItself) {
   const PolynomialMaterial material(NeoHookeanCoefficients(1000, 1e6));
   EXPECT_EQ(MakeTet10Model(mesh, material)->Describe(),
             "TET10 (quadratic, 4-point integration), total Lagrangian");
-}
-
-TEST(Tet10Model, MeanDilatationDescribesItself) {
-  const Mesh mesh = Cube(5);
-  const PolynomialMaterial material(NeoHookeanCoefficients(1000, 1e6));
   EXPECT_EQ(MakeTet10MdModel(mesh, material)->Describe(),
             "TET10_MD (quadratic, 4-point integration, mean dilatation), total Lagrangian");
 }
