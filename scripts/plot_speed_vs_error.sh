@@ -25,7 +25,7 @@ awk -F, -v dir="$data" '
     split($1, part, "/")
     problem = part[1]; sub(/^BM_/, "", problem)
     element = part[3]; sub(/^element:/, "", element)
-    names[0] = "TET4"; names[1] = "TET4_ANP"; names[2] = "TET10"; names[3] = "HEX8"
+    names[0] = "TET4"; names[1] = "TET4_ANP"; names[2] = "TET10"; names[3] = "HEX8"; names[4] = "TET10_MD"
     print $13, $14 >> (dir "/" problem "_" names[element] ".dat")
   }' "$csv"
 

@@ -85,6 +85,9 @@ Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec) {
     case v1::MeshOptions::HEX8_FULL:
       spec->mesh.element = ElementType::kHex8Full;
       break;
+    case v1::MeshOptions::TET10_MD:
+      spec->mesh.element = ElementType::kTet10Md;
+      break;
     default:
       return Status::InvalidArgument(
           "mesh.element", "unknown element type " + std::to_string(scene.mesh().element()));

@@ -50,9 +50,19 @@ double MeanDilatation(const Hex8Geometry& g, const Vector24d& ue) {
   return v / g.element_volume;
 }
 
-// F_bar = (theta / det F)^(1/3) F.
-Eigen::Matrix3d MeanDilatationF(const Hex8Nodes& grad, const Vector24d& ue, double theta) {
-  const Eigen::Matrix3d f = DeformationGradientHex8(grad, ue);
+// theta = v / V for TET10_MD, by its 4-point rule (fem/tet10_finite_strain.h).
+double MeanDilatation(const Tet10Geometry& g, const Vector30d& ue) {
+  double v = 0, v0 = 0;
+  for (int q = 0; q < 4; ++q) {
+    v += g.volume[q] * DeformationGradientTet10(g.grad[q], ue).determinant();
+    v0 += g.volume[q];
+  }
+  return v / v0;
+}
+
+// F_bar = (theta / det F)^(1/3) F: F's isochoric part with the element's
+// mean volume ratio, the F a mean-dilatation element's stress comes from.
+Eigen::Matrix3d MeanDilatationF(const Eigen::Matrix3d& f, double theta) {
   return std::cbrt(theta / f.determinant()) * f;
 }
 
@@ -118,12 +128,15 @@ Status SolveNonlinearStatic(const SceneSpec& scene, const Model& model, PhaseClo
   const auto material = MakeHyperelasticMaterial(scene.material);
   const bool plain = scene.mesh.element == ElementType::kTet4;
   const bool full_bricks = scene.mesh.element == ElementType::kHex8Full;
-  const auto body = mesh.quadratic()    ? MakeTet10Model(mesh, *material)
+  const bool tet10_md = scene.mesh.element == ElementType::kTet10Md;
+  const auto body = tet10_md            ? MakeTet10MdModel(mesh, *material)
+                    : mesh.quadratic()  ? MakeTet10Model(mesh, *material)
                     : full_bricks       ? MakeHex8FullModel(mesh, *material)
                     : mesh.hexahedral() ? MakeHex8Model(mesh, *material)
                     : plain             ? MakeTet4Model(mesh, *material)
                                         : MakeAverageNodalPressureTet4Model(mesh, *material);
-  summary.element_type = mesh.quadratic()    ? "TET10"
+  summary.element_type = tet10_md            ? "TET10_MD"
+                         : mesh.quadratic()  ? "TET10"
                          : full_bricks       ? "HEX8_FULL"
                          : mesh.hexahedral() ? "HEX8"
                          : plain             ? "TET4"
@@ -231,8 +244,9 @@ Status SolveNonlinearStatic(const SceneSpec& scene, const Model& model, PhaseClo
       const double theta = MeanDilatation(g, ue);
       for (int q = 0; q < 8; ++q) {
         const PointFields p =
-            FieldsAt(*material, full_bricks ? DeformationGradientHex8(g.grad[q], ue)
-                                            : MeanDilatationF(g.grad[q], ue, theta));
+            FieldsAt(*material,
+                     full_bricks ? DeformationGradientHex8(g.grad[q], ue)
+                                 : MeanDilatationF(DeformationGradientHex8(g.grad[q], ue), theta));
         sum.Add(g.volume[q], p);
         v += g.volume[q];
         max_strain = std::max(max_strain, p.green.cwiseAbs().maxCoeff());
@@ -240,8 +254,11 @@ Status SolveNonlinearStatic(const SceneSpec& scene, const Model& model, PhaseClo
     } else if (mesh.quadratic()) {
       const Tet10Geometry g = ComputeTet10Geometry(Tet10Coordinates(mesh, e));
       const Vector30d ue = GatherElementTet10(mesh, e, u);
+      // TET10_MD: F_bar, as for the brick.
+      const double theta = tet10_md ? MeanDilatation(g, ue) : 0;
       for (int q = 0; q < 4; ++q) {
-        const PointFields p = FieldsAt(*material, DeformationGradientTet10(g.grad[q], ue));
+        const Eigen::Matrix3d f = DeformationGradientTet10(g.grad[q], ue);
+        const PointFields p = FieldsAt(*material, tet10_md ? MeanDilatationF(f, theta) : f);
         sum.Add(g.volume[q], p);
         v += g.volume[q];
         max_strain = std::max(max_strain, p.green.cwiseAbs().maxCoeff());
@@ -280,15 +297,20 @@ Status SolveNonlinearStatic(const SceneSpec& scene, const Model& model, PhaseClo
     return Eigen::Map<const Vector6d>(&solution->pk2_stress_pa[6 * static_cast<std::size_t>(e)]);
   };
   const ErrorEstimateResult estimate =
-      mesh.quadratic() ? EstimateZzErrorTet10(
-                             mesh,
-                             [&](int e, const Eigen::Vector3d& xi) -> Vector6d {
-                               Tet10Nodes grad;
-                               Tet10Gradients(Tet10Coordinates(mesh, e), xi, &grad);
-                               return stress_or_mean(e, DeformationGradientTet10(
-                                                            grad, GatherElementTet10(mesh, e, u)));
-                             },
-                             ComplianceMatrix(scene.material))
+      mesh.quadratic()
+          ? EstimateZzErrorTet10(
+                mesh,
+                [&](int e, const Eigen::Vector3d& xi) -> Vector6d {
+                  const Tet10Nodes x = Tet10Coordinates(mesh, e);
+                  const Vector30d ue = GatherElementTet10(mesh, e, u);
+                  Tet10Nodes grad;
+                  Tet10Gradients(x, xi, &grad);
+                  const Eigen::Matrix3d f = DeformationGradientTet10(grad, ue);
+                  if (!tet10_md || !IsAdmissible(f)) return stress_or_mean(e, f);
+                  return stress_or_mean(
+                      e, MeanDilatationF(f, MeanDilatation(ComputeTet10Geometry(x), ue)));
+                },
+                ComplianceMatrix(scene.material))
       : mesh.hexahedral()
           ? EstimateZzErrorHex8(
                 mesh,
@@ -300,7 +322,7 @@ Status SolveNonlinearStatic(const SceneSpec& scene, const Model& model, PhaseClo
                   const Eigen::Matrix3d f = DeformationGradientHex8(grad, ue);
                   if (full_bricks || !IsAdmissible(f)) return stress_or_mean(e, f);
                   return stress_or_mean(
-                      e, MeanDilatationF(grad, ue, MeanDilatation(ComputeHex8Geometry(x), ue)));
+                      e, MeanDilatationF(f, MeanDilatation(ComputeHex8Geometry(x), ue)));
                 },
                 ComplianceMatrix(scene.material))
           : EstimateZzError(mesh, solution->pk2_stress_pa, volume,

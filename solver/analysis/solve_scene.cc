@@ -63,10 +63,10 @@ Status SolveScene(const SceneSpec& scene, const SolveOptions& options, Solution*
   summary.scene_name = scene.name;
   summary.geometry = DescribeGeometry(scene.geometry);
   // A nonlinear analysis may refine this.
-  summary.element_type = mesh.quadratic() ? "TET10"
-                         : mesh.hexahedral()
-                             ? (scene.mesh.element == ElementType::kHex8Full ? "HEX8_FULL" : "HEX8")
-                             : "TET4";
+  summary.element_type =
+      mesh.quadratic()    ? (scene.mesh.element == ElementType::kTet10Md ? "TET10_MD" : "TET10")
+      : mesh.hexahedral() ? (scene.mesh.element == ElementType::kHex8Full ? "HEX8_FULL" : "HEX8")
+                          : "TET4";
   summary.nodes = mesh.num_nodes();
   summary.elements = mesh.num_elements();
   summary.dofs = dofs.num_free();

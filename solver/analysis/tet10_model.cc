@@ -7,6 +7,9 @@
 namespace pba {
 namespace {
 
+// Both 10-node elements: `mean_dilatation` picks
+// Tet10FiniteStrainMeanDilatation (TET10_MD) over the plain Tet10FiniteStrain;
+// everything else is shared.
 struct Tet10Element {
   static constexpr int kNodes = 10;
   using Geometry = Tet10Geometry;
@@ -14,9 +17,11 @@ struct Tet10Element {
   using Unknowns = Vector30d;
   using Kernel = Tet10ElementKernel;
 
+  bool mean_dilatation = false;
+
   static bool Fits(const Mesh& mesh) { return mesh.quadratic(); }
   static const char* Requirement() {
-    return "MakeTet10Model needs a quadratic mesh (see MakeQuadratic)";
+    return "MakeTet10Model and MakeTet10MdModel need a quadratic mesh (see MakeQuadratic)";
   }
   static Geometry ComputeGeometry(const Mesh& mesh, int e) {
     return ComputeTet10Geometry(Tet10Coordinates(mesh, e));
@@ -34,10 +39,15 @@ struct Tet10Element {
   }
   bool Evaluate(const Geometry& g, const Unknowns& ue, const HyperelasticMaterial& material,
                 bool with_tangent, bool drop_pressure_stiffness, Result* r) const {
-    return Tet10FiniteStrain(g, ue, material, with_tangent, r, drop_pressure_stiffness);
+    return mean_dilatation
+               ? Tet10FiniteStrainMeanDilatation(g, ue, material, with_tangent, r,
+                                                 drop_pressure_stiffness)
+               : Tet10FiniteStrain(g, ue, material, with_tangent, r, drop_pressure_stiffness);
   }
   std::string Describe() const {
-    return "TET10 (quadratic, 4-point integration), total Lagrangian";
+    return mean_dilatation
+               ? "TET10_MD (quadratic, 4-point integration, mean dilatation), total Lagrangian"
+               : "TET10 (quadratic, 4-point integration), total Lagrangian";
   }
 };
 
@@ -45,7 +55,12 @@ struct Tet10Element {
 
 std::unique_ptr<FiniteStrainModel> MakeTet10Model(const Mesh& mesh,
                                                   const HyperelasticMaterial& material) {
-  return std::make_unique<ElementModel<Tet10Element>>(mesh, material, Tet10Element());
+  return std::make_unique<ElementModel<Tet10Element>>(mesh, material, Tet10Element{false});
+}
+
+std::unique_ptr<FiniteStrainModel> MakeTet10MdModel(const Mesh& mesh,
+                                                    const HyperelasticMaterial& material) {
+  return std::make_unique<ElementModel<Tet10Element>>(mesh, material, Tet10Element{true});
 }
 
 }  // namespace pba

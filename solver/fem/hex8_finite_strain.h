@@ -23,7 +23,7 @@
 //   dv/dx_a = sum_q cof(F_q) G_a dV_q
 //   d2v/dx_a dx_b = -sum_q [F_q (G_a x G_b)]_x dV_q      ([w]_x y = w x y)
 //
-// (derivation in hex8_finite_strain.cc). One volume constraint per element
+// (derivation in fem/finite_strain_element.h). One volume constraint per element
 // instead of eight removes the volumetric locking of the fully integrated
 // brick; at u = 0 the tangent is the B-bar stiffness of fem/hex8.h.
 //

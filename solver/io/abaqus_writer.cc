@@ -114,7 +114,12 @@ Status ExportAbaqusInput(const SceneSpec& scene, const std::filesystem::path& fi
                   mesh.nodes(i, 1), mesh.nodes(i, 2));
     out << line;
   }
-  if (mesh.quadratic()) {
+  if (scene.mesh.element == ElementType::kTet10Md) {
+    out << "** PBA solves this scene with TET10_MD (10-node, mean dilatation); CalculiX has no\n"
+           "** mean-dilatation 10-node element, so C3D10 here is the plain element, which locks\n"
+           "** when nearly incompressible: set mesh.element: TET10 to compare the same discrete\n"
+           "** problem.\n";
+  } else if (mesh.quadratic()) {
     out << "** PBA solves this scene with TET10; C3D10 is the same element (the same 10 nodes in\n"
            "** the same order, the same 4-point rule), so both codes answer one discrete "
            "problem.\n";

@@ -100,7 +100,7 @@ Status BuildModel(const SceneSpec& scene, Model* out) {
   model.mesh = BuildPrimitiveMesh(scene.geometry, scene.mesh, &stats);
   model.mesh_description = stats.description;
   PBA_RETURN_IF_ERROR(CutPatches(scene.geometry, &model.mesh));
-  if (scene.mesh.element == ElementType::kTet10) {
+  if (IsQuadratic(scene.mesh.element)) {
     model.mesh =
         MakeQuadratic(model.mesh, WithPatches(scene.geometry, CurvedSurfaces(scene.geometry)));
     model.mesh_description +=

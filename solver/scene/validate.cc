@@ -247,6 +247,13 @@ Status ValidateScene(const SceneSpec& scene) {
         "TET4_ANP (average nodal pressure) is implemented for NONLINEAR_STATIC; "
         "a linear analysis uses TET4");
   }
+  if (scene.mesh.element == ElementType::kTet10Md &&
+      scene.analysis.type != AnalysisSpec::Type::kNonlinearStatic) {
+    return Status::InvalidArgument(
+        "mesh.element",
+        "TET10_MD (10-node tetrahedron with mean dilatation) is implemented for "
+        "NONLINEAR_STATIC; a linear analysis uses TET10 or HEX8");
+  }
   PBA_RETURN_IF_ERROR(ValidateMaterialSpec(scene.material, "material"));
   PBA_RETURN_IF_ERROR(ValidateAnalysis(scene.analysis, scene.material));
 

@@ -240,14 +240,16 @@ TEST(ThickSphere, FiniteStrainFollowsTheIncompressiblePressureStretchCurve) {
     }
     EXPECT_LT(previous_error, 0.01);
   }
-  // Bricks, and 10-node elements on a coarse mesh with curved faces.
+  // Bricks, and 10-node elements (plain and mean-dilatation) on a coarse mesh
+  // with curved faces.
   struct Coarse {
     const char* name;
     ElementType element;
     double h_mm;
   };
   for (const Coarse& c :
-       {Coarse{"HEX8", ElementType::kHex8, 2.5}, Coarse{"TET10", ElementType::kTet10, 3.0}}) {
+       {Coarse{"HEX8", ElementType::kHex8, 2.5}, Coarse{"TET10", ElementType::kTet10, 3.0},
+        Coarse{"TET10_MD", ElementType::kTet10Md, 3.0}}) {
     for (double stretch : {1.25, 1.5}) {
       SceneSpec scene = PressurisedShell(material, IncompressiblePressure(stretch) * mu, c.h_mm);
       scene.analysis.type = AnalysisSpec::Type::kNonlinearStatic;

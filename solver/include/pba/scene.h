@@ -62,7 +62,17 @@ enum class ElementType {
   kTet10,     // 10-node quadratic tetrahedron; mid-edge nodes on curved faces lie on the surface
   kHex8,      // 8-node hexahedron with a mean-dilatation (B-bar) volumetric treatment
   kHex8Full,  // 8-node hexahedron, full 2x2x2 integration (locks when nearly incompressible)
+  // 10-node tetrahedron with mean dilatation (constant element pressure,
+  // P2/P0): does not lock when nearly incompressible, unlike TET10 at
+  // K / mu = 1e6 (nonlinear analyses)
+  kTet10Md,
 };
+
+// True for the 10-node elements (the primitive's tetrahedra get a node on
+// every edge, see MakeQuadratic).
+inline bool IsQuadratic(ElementType e) {
+  return e == ElementType::kTet10 || e == ElementType::kTet10Md;
+}
 
 // True for the brick elements (the primitive is meshed into hexahedra).
 inline bool IsHexahedral(ElementType e) {

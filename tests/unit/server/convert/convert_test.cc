@@ -84,6 +84,7 @@ analysis: {type: NONLINEAR_STATIC}
   EXPECT_FALSE(Parse("mesh: {element: TET4}").gravity.enabled);
   EXPECT_EQ(Parse("mesh: {element: HEX8}").mesh.element, ElementType::kHex8);
   EXPECT_EQ(Parse("mesh: {element: HEX8_FULL}").mesh.element, ElementType::kHex8Full);
+  EXPECT_EQ(Parse("mesh: {element: TET10_MD}").mesh.element, ElementType::kTet10Md);
 
   // Conditions beyond the base's two.
   v1::Scene scene;
@@ -351,6 +352,10 @@ TEST(ValidateSceneProto, NamesTheBadField) {
             "analysis.nonlinear.residual_tolerance");
   EXPECT_EQ(Validate("material: {neo_hookean: {shear_modulus_pa: 1000, bulk_modulus_pa: 1e6}}\n"
                      "mesh: {element: TET4_ANP}\n")
+                .field(),
+            "mesh.element");
+  EXPECT_EQ(Validate("material: {neo_hookean: {shear_modulus_pa: 1000, bulk_modulus_pa: 1e6}}\n"
+                     "mesh: {element: TET10_MD}\n")
                 .field(),
             "mesh.element");
   EXPECT_TRUE(Validate("material: {ogden: {terms: [{mu_pa: 842, alpha: -4.7}], "

@@ -37,6 +37,7 @@ std::vector<ElementCase> Elements() {
       {"TET4", ElementType::kTet4, false, MakeTet4Model},
       {"TET4_ANP", ElementType::kTet4, false, MakeAverageNodalPressureTet4Model},
       {"TET10", ElementType::kTet4, true, MakeTet10Model},
+      {"TET10_MD", ElementType::kTet4, true, MakeTet10MdModel},
       {"HEX8", ElementType::kHex8, false, MakeHex8Model},
   };
 }
@@ -116,7 +117,9 @@ std::string CaseName(const ::testing::TestParamInfo<Case>& info) {
 }
 
 INSTANTIATE_TEST_SUITE_P(EveryElementAndMaterial, FiniteStrainModels,
-                         ::testing::Combine(::testing::Range(0, 4), ::testing::Range(0, 5)),
+                         ::testing::Combine(::testing::Range(0,
+                                                             static_cast<int>(Elements().size())),
+                                            ::testing::Range(0, 5)),
                          CaseName);
 
 }  // namespace

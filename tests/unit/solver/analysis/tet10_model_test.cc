@@ -50,6 +50,32 @@ TEST(Tet10Model, DescribesItself) {
   const PolynomialMaterial material(NeoHookeanCoefficients(1000, 1e6));
   EXPECT_EQ(MakeTet10Model(mesh, material)->Describe(),
             "TET10 (quadratic, 4-point integration), total Lagrangian");
+  EXPECT_EQ(MakeTet10MdModel(mesh, material)->Describe(),
+            "TET10_MD (quadratic, 4-point integration, mean dilatation), total Lagrangian");
+}
+
+// One TET10_MD element alone has three zero modes beyond the rigid ones
+// (Tet10FiniteStrainMeanDilatation.TangentAtRest); assembled, neighbours
+// constrain them: the free cube's tangent at rest, nearly incompressible,
+// has exactly six zero eigenvalues.
+TEST(Tet10Model, MeanDilatationTangentAtRestHasOnlyTheRigidModes) {
+  const Mesh mesh = BulgedCube(5);  // 2 x 2 x 2 cells, curved side faces
+  const PolynomialMaterial material(NeoHookeanCoefficients(1000, 1e7));
+  const auto model = MakeTet10MdModel(mesh, material);
+  DofMap dofs(mesh.num_nodes());
+  dofs.Finalize();
+  LinearSystem system;
+  ASSERT_TRUE(
+      model->Assemble(Eigen::VectorXd::Zero(dofs.num_dofs()), dofs, AssemblyOptions(), &system)
+          .ok());
+  const Eigen::MatrixXd k = Eigen::MatrixXd(system.k);
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(k);
+  const Eigen::VectorXd lambda = eigen.eigenvalues();
+  const double largest = lambda.maxCoeff();
+  std::printf("TET10_MD cube at rest, K / mu = 1e4: eigenvalues 5, 6 / largest %.3g, %.3g\n",
+              lambda(5) / largest, lambda(6) / largest);
+  for (int i = 0; i < 6; ++i) EXPECT_LT(std::abs(lambda(i)), 1e-11 * largest) << i;
+  EXPECT_GT(lambda(6), 1e-7 * largest);
 }
 
 TEST(Tet10Model, ForceIsTheEnergyDerivative) {

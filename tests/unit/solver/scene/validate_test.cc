@@ -67,6 +67,10 @@ INSTANTIATE_TEST_SUITE_P(
                s->geometry.cylinder = {5, 0};
              },
              "geometry.cylinder.height_mm", "positive"},
+        Case{"tet10_md_in_a_linear_analysis",
+             [](SceneSpec* s) { s->mesh.element = ElementType::kTet10Md; }, "mesh.element",
+             "TET10_MD (10-node tetrahedron with mean dilatation) is implemented for "
+             "NONLINEAR_STATIC; a linear analysis uses TET10 or HEX8"},
         Case{"negative_size", [](SceneSpec* s) { s->mesh.element_size_mm = -1; },
              "mesh.element_size_mm", "positive"},
         Case{"too_many_elements", [](SceneSpec* s) { s->mesh.element_size_mm = 0.01; },
