@@ -2,6 +2,17 @@
 find_package(Threads REQUIRED)
 find_package(Eigen3 3.4 REQUIRED NO_MODULE)
 find_package(HDF5 REQUIRED COMPONENTS C)
+find_package(PNG REQUIRED)
+find_package(ZLIB REQUIRED)
+# NIfTI-1 label volumes: nifti1_io and znzlib. Found by hand: the CMake package
+# in Debian 12's libnifti2-dev points at /usr/lib/libznz.so.3.0.0, which the
+# package installs under the multiarch directory instead.
+find_path(NIFTI_INCLUDE_DIR nifti1_io.h PATH_SUFFIXES nifti REQUIRED)
+find_library(NIFTIIO_LIBRARY niftiio REQUIRED)
+find_library(ZNZ_LIBRARY znz REQUIRED)
+add_library(pba_nifti INTERFACE)
+target_include_directories(pba_nifti INTERFACE ${NIFTI_INCLUDE_DIR})
+target_link_libraries(pba_nifti INTERFACE ${NIFTIIO_LIBRARY} ${ZNZ_LIBRARY} ZLIB::ZLIB m)
 find_package(Protobuf REQUIRED)
 find_package(gRPC CONFIG REQUIRED)
 find_package(SQLite3 REQUIRED)

@@ -1,0 +1,65 @@
+#include "atlas/distance_transform.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace pba {
+namespace {
+
+constexpr double kFar = std::numeric_limits<double>::infinity();
+
+// Squared 1-D distance transform of the sampled function f (n samples):
+// d[q] = min_p ((q - p)^2 + f[p]), as the lower envelope of the parabolas
+// rooted at the finite samples (Felzenszwalb & Huttenlocher 2012,
+// algorithm DT(f)). Infinite samples root no parabola; with none finite
+// every d is infinite. v (n ints) and z (n + 1 doubles) are scratch.
+void SquaredDistance1d(const double* f, int n, double* d, int* v, double* z) {
+  int k = -1;
+  for (int q = 0; q < n; ++q) {
+    if (!std::isfinite(f[q])) continue;
+    double s = -kFar;
+    while (k >= 0) {
+      const int p = v[k];
+      s = ((f[q] + double(q) * q) - (f[p] + double(p) * p)) / (2.0 * (q - p));
+      if (s > z[k]) break;
+      --k;
+    }
+    ++k;
+    v[k] = q;
+    z[k] = k == 0 ? -kFar : s;
+    z[k + 1] = kFar;
+  }
+  if (k < 0) {
+    std::fill(d, d + n, kFar);
+    return;
+  }
+  int j = 0;
+  for (int q = 0; q < n; ++q) {
+    while (z[j + 1] < q) ++j;
+    const double dq = q - v[j];
+    d[q] = dq * dq + f[v[j]];
+  }
+}
+
+}  // namespace
+
+void SquaredDistanceTransform2d(const std::vector<uint8_t>& feature, int w, int h,
+                                std::vector<double>* out) {
+  const int n = std::max(w, h);
+  std::vector<double> f(n), d(n), z(n + 1);
+  std::vector<int> v(n);
+  out->assign(static_cast<size_t>(w) * h, kFar);
+  for (int c = 0; c < w; ++c) {
+    for (int r = 0; r < h; ++r) f[r] = feature[static_cast<size_t>(r) * w + c] ? 0.0 : kFar;
+    SquaredDistance1d(f.data(), h, d.data(), v.data(), z.data());
+    for (int r = 0; r < h; ++r) (*out)[static_cast<size_t>(r) * w + c] = d[r];
+  }
+  for (int r = 0; r < h; ++r) {
+    double* row = out->data() + static_cast<size_t>(r) * w;
+    std::copy(row, row + w, f.begin());
+    SquaredDistance1d(f.data(), w, row, v.data(), z.data());
+  }
+}
+
+}  // namespace pba

@@ -1,0 +1,273 @@
+#include "atlas/plates.h"
+
+#include <stdlib.h>
+#include <yaml-cpp/yaml.h>
+
+#include <array>
+#include <charconv>
+#include <cmath>
+#include <fstream>
+#include <system_error>
+#include <unordered_map>
+
+#include "atlas/png_io.h"
+#include "core/format.h"
+
+namespace pba {
+namespace fs = std::filesystem;
+namespace {
+
+constexpr char kIndexFile[] = "plates.json";
+constexpr char kColourFile[] = "colour_table.csv";
+constexpr char kFormat[] = "pba-atlas-plates";
+
+// Shortest text that reads back as the same double.
+std::string Number(double value) {
+  char buffer[32];
+  const auto [end, error] = std::to_chars(buffer, buffer + sizeof buffer, value);
+  return error == std::errc() ? std::string(buffer, end) : "0";
+}
+
+std::string Quoted(const std::string& s) {
+  std::string out = "\"";
+  for (char c : s) {
+    if (c == '"' || c == '\\') out += '\\';
+    out += c;
+  }
+  return out + "\"";
+}
+
+std::string PlateFileName(int index, int count) {
+  std::string number = std::to_string(index + 1);
+  const size_t digits = std::max<size_t>(2, std::to_string(count).size());
+  number.insert(0, digits - std::min(digits, number.size()), '0');
+  return "plate_" + number + ".png";
+}
+
+struct Grid {
+  double pixel = 0;
+  Eigen::Vector2d origin;
+  int width = 0, height = 0;
+};
+
+// Pixels tile the volume's x-y extent from face to face.
+Grid PlateGrid(const LabelVolume& v, double pixel) {
+  const Eigen::Vector3d lo = v.origin_mm() - 0.5 * v.spacing_mm();
+  const Eigen::Vector3d hi =
+      v.VoxelCentreMm(v.nx() - 1, v.ny() - 1, v.nz() - 1) + 0.5 * v.spacing_mm();
+  Grid g;
+  g.pixel = pixel;
+  g.width = std::max(1, static_cast<int>(std::ceil((hi.x() - lo.x()) / pixel - 1e-9)));
+  g.height = std::max(1, static_cast<int>(std::ceil((hi.y() - lo.y()) / pixel - 1e-9)));
+  g.origin = Eigen::Vector2d(lo.x() + 0.5 * pixel, hi.y() - 0.5 * pixel);
+  return g;
+}
+
+std::string IndexJson(const Grid& g, const std::vector<double>& z,
+                      const std::vector<std::string>& files) {
+  std::string json = "{\n";
+  json += "  \"notice\": " + Quoted(kSyntheticAtlasNotice) + ",\n";
+  json += "  \"format\": " + Quoted(kFormat) + ",\n  \"version\": 1,\n";
+  json += "  \"colour_table\": " + Quoted(kColourFile) + ",\n";
+  json += "  \"pixel_size_mm\": " + Number(g.pixel) + ",\n";
+  json += "  \"origin_mm\": [" + Number(g.origin.x()) + ", " + Number(g.origin.y()) + "],\n";
+  json += Format("  \"width\": %d,\n  \"height\": %d,\n  \"plates\": [\n", g.width, g.height);
+  for (size_t p = 0; p < z.size(); ++p) {
+    json += "    {\"file\": " + Quoted(files[p]) + ", \"z_mm\": " + Number(z[p]) + "}" +
+            (p + 1 < z.size() ? ",\n" : "\n");
+  }
+  return json + "  ]\n}\n";
+}
+
+Status WriteText(const fs::path& path, const std::string& text) {
+  std::ofstream out(path, std::ios::binary);
+  if (!out) return Status::Io("cannot open " + path.string() + " for writing");
+  out << text;
+  out.close();
+  if (!out) return Status::Io("writing " + path.string() + " failed");
+  return Status::Ok();
+}
+
+Status WriteAll(const LabelVolume& volume, const ColourTable& colours, const PlateOptions& options,
+                const fs::path& dir) {
+  const Grid g = PlateGrid(volume, options.pixel_size_mm);
+  std::vector<const ColourEntry*> colour_of(65536, nullptr);
+  for (const ColourEntry& e : colours.entries()) colour_of[e.label] = &e;
+  std::vector<std::string> files;
+  const int count = static_cast<int>(options.z_mm.size());
+  for (int p = 0; p < count; ++p) {
+    files.push_back(PlateFileName(p, count));
+    RgbImage image;
+    image.width = g.width;
+    image.height = g.height;
+    image.rgb.assign(static_cast<size_t>(g.width) * g.height * 3, 0);
+    image.text = {{"Comment", kSyntheticAtlasNotice},
+                  {"Title", Format("PBA synthetic atlas plate %d of %d, z = ", p + 1, count) +
+                                Number(options.z_mm[p]) + " mm"}};
+    for (int r = 0; r < g.height; ++r) {
+      for (int c = 0; c < g.width; ++c) {
+        const Eigen::Vector3d point(g.origin.x() + c * g.pixel, g.origin.y() - r * g.pixel,
+                                    options.z_mm[p]);
+        const uint16_t label = volume.SampleNearest(point);
+        if (label == 0) continue;
+        const ColourEntry* e = colour_of[label];
+        if (e == nullptr) {
+          return Status::InvalidArgument(
+              "colours", Format("label %d (at x %g, y %g, z %g mm, plate %s) has no colour in the "
+                                "colour table",
+                                label, point.x(), point.y(), point.z(), files.back().c_str()));
+        }
+        uint8_t* px = &image.rgb[(static_cast<size_t>(r) * g.width + c) * 3];
+        px[0] = e->r;
+        px[1] = e->g;
+        px[2] = e->b;
+      }
+    }
+    PBA_RETURN_IF_ERROR(WriteRgbPng(dir / files.back(), image));
+  }
+  PBA_RETURN_IF_ERROR(WriteColourTableCsv(colours, dir / kColourFile));
+  return WriteText(dir / kIndexFile, IndexJson(g, options.z_mm, files));
+}
+
+// A plain file name inside the plate directory.
+bool SafeFileName(const std::string& name) {
+  return !name.empty() && name != "." && name != ".." && name.find('/') == std::string::npos &&
+         name.find('\\') == std::string::npos;
+}
+
+Status ReadIndex(const fs::path& dir, PlateStack* stack, std::string* colour_file) {
+  const fs::path path = dir / kIndexFile;
+  if (!fs::exists(path)) return Status::Io("missing " + path.string());
+  const auto bad = [](const std::string& field, const std::string& what) {
+    return Status::InvalidArgument(std::string(kIndexFile) + ":" + field, what);
+  };
+  try {
+    const YAML::Node root = YAML::LoadFile(path.string());
+    if (!root.IsMap()) return bad("", "not a JSON object");
+    if (!root["format"] || root["format"].as<std::string>() != kFormat) {
+      return bad("format", std::string("expected \"") + kFormat + "\"");
+    }
+    *colour_file = root["colour_table"] ? root["colour_table"].as<std::string>() : kColourFile;
+    if (!SafeFileName(*colour_file)) return bad("colour_table", "not a plain file name");
+    stack->pixel_size_mm = root["pixel_size_mm"].as<double>();
+    if (!(stack->pixel_size_mm > 0) || !std::isfinite(stack->pixel_size_mm)) {
+      return bad("pixel_size_mm", "must be positive");
+    }
+    const YAML::Node origin = root["origin_mm"];
+    if (!origin.IsSequence() || origin.size() != 2) return bad("origin_mm", "expected [x, y]");
+    stack->origin_mm = Eigen::Vector2d(origin[0].as<double>(), origin[1].as<double>());
+    stack->width = root["width"].as<int>();
+    stack->height = root["height"].as<int>();
+    if (stack->width <= 0 || stack->height <= 0)
+      return bad("width", "width and height must be positive");
+    const YAML::Node plates = root["plates"];
+    if (!plates.IsSequence() || plates.size() == 0)
+      return bad("plates", "expected a non-empty list");
+    for (size_t p = 0; p < plates.size(); ++p) {
+      const std::string field = Format("plates[%d]", static_cast<int>(p));
+      const std::string file = plates[p]["file"].as<std::string>();
+      if (!SafeFileName(file))
+        return bad(field + ".file", "'" + file + "' is not a plain file name");
+      const double z = plates[p]["z_mm"].as<double>();
+      if (!std::isfinite(z)) return bad(field + ".z_mm", "not a finite number");
+      if (p > 0 && !(z > stack->z_mm.back())) {
+        return bad(field + ".z_mm",
+                   Format("plate '%s' at z %g mm is not above the previous plate '%s' at z %g mm",
+                          file.c_str(), z, stack->files.back().c_str(), stack->z_mm.back()));
+      }
+      stack->files.push_back(file);
+      stack->z_mm.push_back(z);
+    }
+  } catch (const YAML::Exception& e) {
+    return bad("", std::string("malformed: ") + e.what());
+  }
+  return Status::Ok();
+}
+
+}  // namespace
+
+std::vector<double> DefaultPlateHeightsMm() {
+  std::vector<double> z = {-48, -43, -38, -33, -28, -24, -20};
+  for (double h = -16; h <= 20; h += 3) z.push_back(h);
+  for (double h : {24, 28, 33, 38, 43, 48, 53}) z.push_back(h);
+  return z;
+}
+
+Status PlateOptions::Validate() const {
+  if (!(pixel_size_mm > 0 && pixel_size_mm <= 10)) {
+    return Status::InvalidArgument("pixel_size_mm",
+                                   Format("%g is outside (0, 10] mm", pixel_size_mm));
+  }
+  if (z_mm.empty()) return Status::InvalidArgument("z_mm", "no plate heights");
+  for (size_t p = 0; p < z_mm.size(); ++p) {
+    if (!std::isfinite(z_mm[p]) || (p > 0 && !(z_mm[p] > z_mm[p - 1]))) {
+      return Status::InvalidArgument(Format("z_mm[%d]", static_cast<int>(p)),
+                                     Format("%g is not above the previous height", z_mm[p]));
+    }
+  }
+  return Status::Ok();
+}
+
+Status WritePlates(const LabelVolume& volume, const ColourTable& colours,
+                   const PlateOptions& options, const fs::path& dir) {
+  PBA_RETURN_IF_ERROR(options.Validate());
+  if (volume.num_voxels() == 0) return Status::InvalidArgument("volume", "empty label volume");
+  std::error_code ec;
+  if (fs::exists(dir, ec) && !(fs::is_directory(dir, ec) && fs::is_empty(dir, ec))) {
+    return Status::Io(dir.string() + " already exists and is not an empty directory");
+  }
+  const fs::path target = dir.has_filename() ? dir : dir.parent_path();
+  const fs::path parent = target.parent_path().empty() ? fs::path(".") : target.parent_path();
+  if (!fs::is_directory(parent, ec)) return Status::Io(parent.string() + " is not a directory");
+  std::string pattern = (parent / ("." + target.filename().string() + ".partial-XXXXXX")).string();
+  if (mkdtemp(pattern.data()) == nullptr) {
+    return Status::Io("cannot create a temporary directory in " + parent.string());
+  }
+  const fs::path temporary = pattern;
+  Status status = WriteAll(volume, colours, options, temporary);
+  if (status.ok()) {
+    fs::rename(temporary, target, ec);  // replaces an empty directory
+    if (ec) status = Status::Io("cannot rename into " + target.string() + ": " + ec.message());
+  }
+  if (!status.ok()) fs::remove_all(temporary, ec);
+  return status;
+}
+
+Status ReadPlates(const fs::path& dir, PlateStack* stack) {
+  PlateStack read;
+  std::string colour_file;
+  PBA_RETURN_IF_ERROR(ReadIndex(dir, &read, &colour_file));
+  PBA_RETURN_IF_ERROR(ReadColourTableCsv(dir / colour_file, &read.colours));
+  std::unordered_map<uint32_t, uint16_t> label_of = {{0u, uint16_t{0}}};
+  for (const ColourEntry& e : read.colours.entries()) {
+    label_of[(uint32_t{e.r} << 16) | (uint32_t{e.g} << 8) | e.b] = e.label;
+  }
+  for (int p = 0; p < read.num_plates(); ++p) {
+    const std::string& file = read.files[p];
+    RgbImage image;
+    if (!fs::exists(dir / file)) return Status::Io("missing plate " + (dir / file).string());
+    PBA_RETURN_IF_ERROR(ReadRgbPng(dir / file, &image));
+    if (image.width != read.width || image.height != read.height) {
+      return Status::InvalidArgument(
+          file, Format("plate is %d x %d pixels, %s says %d x %d", image.width, image.height,
+                       kIndexFile, read.width, read.height));
+    }
+    std::vector<uint16_t> labels(static_cast<size_t>(read.width) * read.height);
+    for (size_t i = 0; i < labels.size(); ++i) {
+      const uint8_t* px = &image.rgb[3 * i];
+      const auto it = label_of.find((uint32_t{px[0]} << 16) | (uint32_t{px[1]} << 8) | px[2]);
+      if (it == label_of.end()) {
+        const int column = static_cast<int>(i % read.width), row = static_cast<int>(i / read.width);
+        return Status::InvalidArgument(
+            file, Format("pixel (column %d, row %d) has colour RGB %d %d %d, not in %s", column,
+                         row, px[0], px[1], px[2], colour_file.c_str()));
+      }
+      labels[i] = it->second;
+    }
+    read.labels.push_back(std::move(labels));
+  }
+  *stack = std::move(read);
+  return Status::Ok();
+}
+
+}  // namespace pba
