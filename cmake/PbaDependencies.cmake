@@ -21,6 +21,9 @@ find_package(CLI11 CONFIG REQUIRED)
 find_package(spdlog CONFIG REQUIRED)
 find_package(OpenMP REQUIRED COMPONENTS CXX)
 find_package(OpenSSL REQUIRED COMPONENTS Crypto)
+# Header-only CGAL 5.5 (Mesh_3 for the atlas's labelled meshes), with GMP,
+# MPFR and Boost headers.
+find_package(CGAL 5.5 REQUIRED)
 
 # SuiteSparse (CHOLMOD) ships no CMake package in Debian 12: find it by hand.
 find_path(CHOLMOD_INCLUDE_DIR cholmod.h PATH_SUFFIXES suitesparse REQUIRED)

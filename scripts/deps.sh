@@ -7,6 +7,7 @@ packages=(
   build-essential cmake ninja-build ccache pkg-config git
   libeigen3-dev libsuitesparse-dev libopenblas-dev
   libhdf5-dev libpng-dev zlib1g-dev libnifti2-dev
+  libcgal-dev libgmp-dev libmpfr-dev
   libgrpc++-dev libgrpc-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler
   libsqlite3-dev
   libyaml-cpp-dev libcli11-dev libspdlog-dev libfmt-dev

@@ -1,0 +1,324 @@
+#include "atlas/label_mesher.h"
+
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Labeled_mesh_domain_3.h>
+#include <CGAL/Mesh_complex_3_in_triangulation_3.h>
+#include <CGAL/Mesh_criteria_3.h>
+#include <CGAL/Mesh_triangulation_3.h>
+#include <CGAL/Random.h>
+#include <CGAL/make_mesh_3.h>
+#include <CGAL/refine_mesh_3.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <exception>
+#include <map>
+#include <unordered_map>
+#include <utility>
+
+namespace pba {
+namespace {
+
+using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+using Domain = CGAL::Labeled_mesh_domain_3<Kernel>;
+using Triangulation = CGAL::Mesh_triangulation_3<Domain, CGAL::Default, CGAL::Sequential_tag>::type;
+using Complex = CGAL::Mesh_complex_3_in_triangulation_3<Triangulation>;
+using Criteria = CGAL::Mesh_criteria_3<Triangulation>;
+using CellHandle = Triangulation::Cell_handle;
+using VertexHandle = Triangulation::Vertex_handle;
+
+constexpr double kMetresPerMm = 1e-3;
+
+constexpr const char* kNoRegionMessage =
+    "no region found inside the box: the labelling function is 0 everywhere the mesher "
+    "sampled it (check the box, and that regions are not thinner than the facet size)";
+
+// The faces of a tetrahedron opposite its nodes 0..3, each anticlockwise
+// seen from outside a positively oriented one (as primitive_mesher.cc lists
+// them).
+constexpr int kTetFaces[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+
+// Seeds the triangulation with points on every surface and interface: the
+// label is sampled on a grid of spacing about `spacing` [mm] over the box,
+// and where it changes between neighbouring grid points the crossing is
+// found by bisection (the domain's intersection construction) and inserted
+// as a surface vertex, unless a seed already lies within `spacing`.
+// CGAL's own initialisation shoots random rays from one centre and finds
+// one crossing per ray, so a surface hidden behind another (the shell's
+// outer sphere behind the core's) may get no seed, and Delaunay refinement
+// never discovers a surface no seed touches: its region would be missing.
+// Returns the number of seeds; 0 when the label is the same (0) at every
+// grid point.
+int InsertSurfaceSeeds(const Domain& domain, const Domain::Fct& function, const LabelMeshOptions& o,
+                       double spacing, Complex* c3t3) {
+  const Eigen::Vector3d extent = o.box_max_mm - o.box_min_mm;
+  Eigen::Array3i n;  // grid points per axis
+  for (int c = 0; c < 3; ++c)
+    n[c] = std::max(2, static_cast<int>(std::ceil(extent[c] / spacing)) + 1);
+  const Eigen::Vector3d step = extent.array() / (n - 1).cast<double>();
+  const auto point = [&](int i, int j, int k) {
+    const Eigen::Vector3d x = o.box_min_mm + step.cwiseProduct(Eigen::Vector3d(i, j, k));
+    return Kernel::Point_3(x.x(), x.y(), x.z());
+  };
+  const auto flat = [&](int i, int j, int k) {
+    return (static_cast<std::size_t>(k) * n[1] + j) * n[0] + i;
+  };
+  std::vector<int> labels(static_cast<std::size_t>(n.prod()));
+  for (int k = 0; k < n[2]; ++k) {
+    for (int j = 0; j < n[1]; ++j) {
+      for (int i = 0; i < n[0]; ++i) labels[flat(i, j, k)] = function(point(i, j, k));
+    }
+  }
+
+  // Seeds kept so far, hashed by the cell of side `spacing` they fall in.
+  std::map<std::array<long, 3>, std::vector<Kernel::Point_3>> kept;
+  const auto cell_of = [&](const Kernel::Point_3& p) {
+    return std::array<long, 3>{std::lround(std::floor(p.x() / spacing)),
+                               std::lround(std::floor(p.y() / spacing)),
+                               std::lround(std::floor(p.z() / spacing))};
+  };
+  const auto crowded = [&](const Kernel::Point_3& p) {
+    const std::array<long, 3> c = cell_of(p);
+    for (long dz = -1; dz <= 1; ++dz) {
+      for (long dy = -1; dy <= 1; ++dy) {
+        for (long dx = -1; dx <= 1; ++dx) {
+          const auto it = kept.find({c[0] + dx, c[1] + dy, c[2] + dz});
+          if (it == kept.end()) continue;
+          for (const Kernel::Point_3& q : it->second) {
+            if (CGAL::squared_distance(p, q) < spacing * spacing) return true;
+          }
+        }
+      }
+    }
+    return false;
+  };
+
+  const auto construct_intersection = domain.construct_intersection_object();
+  const auto weighted = c3t3->triangulation().geom_traits().construct_weighted_point_3_object();
+  int seeds = 0;
+  const int offsets[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  for (int k = 0; k < n[2]; ++k) {
+    for (int j = 0; j < n[1]; ++j) {
+      for (int i = 0; i < n[0]; ++i) {
+        for (const auto& d : offsets) {
+          const int i2 = i + d[0], j2 = j + d[1], k2 = k + d[2];
+          if (i2 >= n[0] || j2 >= n[1] || k2 >= n[2]) continue;
+          if (labels[flat(i, j, k)] == labels[flat(i2, j2, k2)]) continue;
+          const auto crossing =
+              construct_intersection(Kernel::Segment_3(point(i, j, k), point(i2, j2, k2)));
+          if (std::get<2>(crossing) != 2) continue;  // no surface point found
+          const Kernel::Point_3& p = std::get<0>(crossing);
+          if (crowded(p)) continue;
+          kept[cell_of(p)].push_back(p);
+          const VertexHandle v = c3t3->triangulation().insert(weighted(p));
+          if (v == VertexHandle()) continue;  // hidden: cannot happen with zero weights
+          c3t3->set_dimension(v, 2);
+          c3t3->set_index(v, std::get<1>(crossing));
+          ++seeds;
+        }
+      }
+    }
+  }
+  return seeds;
+}
+
+Status ValidateOptions(const std::vector<std::string>& region_names, const LabelMeshOptions& o) {
+  if (region_names.empty())
+    return Status::InvalidArgument("region_names", "at least one region name is needed");
+  for (int c = 0; c < 3; ++c) {
+    if (!std::isfinite(o.box_min_mm[c]) || !std::isfinite(o.box_max_mm[c]))
+      return Status::InvalidArgument("box_min_mm", "the bounding box must be finite");
+    if (!(o.box_max_mm[c] > o.box_min_mm[c])) {
+      return Status::InvalidArgument(
+          "box_max_mm", "the bounding box is empty or inverted along axis " + std::to_string(c) +
+                            " (max " + std::to_string(o.box_max_mm[c]) + " <= min " +
+                            std::to_string(o.box_min_mm[c]) + ")");
+    }
+  }
+  if (!(o.cell_size_mm > 0) || !std::isfinite(o.cell_size_mm))
+    return Status::InvalidArgument("cell_size_mm", "must be positive");
+  if (!(o.facet_size_mm >= 0) || !std::isfinite(o.facet_size_mm))
+    return Status::InvalidArgument("facet_size_mm", "must be positive (or 0 for the cell size)");
+  if (!(o.facet_distance_mm >= 0) || !std::isfinite(o.facet_distance_mm)) {
+    return Status::InvalidArgument("facet_distance_mm",
+                                   "must be positive (or 0 for a tenth of the facet size)");
+  }
+  if (!(o.facet_angle_deg > 0 && o.facet_angle_deg <= 30)) {
+    return Status::InvalidArgument("facet_angle_deg",
+                                   "must lie in (0, 30]: refinement may not end above 30");
+  }
+  if (!(o.cell_radius_edge_ratio >= 2) || !std::isfinite(o.cell_radius_edge_ratio)) {
+    return Status::InvalidArgument("cell_radius_edge_ratio",
+                                   "must be at least 2: refinement may not end below 2");
+  }
+  if (!(o.optimisation_time_limit_s >= 0)) {
+    return Status::InvalidArgument("optimisation_time_limit_s", "must be >= 0 (0: no limit)");
+  }
+  if ((o.exude || o.perturb) && !(o.sliver_bound_deg > 0 && o.sliver_bound_deg < 70.5)) {
+    return Status::InvalidArgument("sliver_bound_deg",
+                                   "must lie in (0, 70.5): a regular tetrahedron's is 70.53");
+  }
+  if (!(o.relative_error_bound > 0 && o.relative_error_bound < 1))
+    return Status::InvalidArgument("relative_error_bound", "must lie in (0, 1)");
+  return Status::Ok();
+}
+
+// The tetrahedra of the complex as a pba::Mesh (see MeshLabels).
+Status ConvertComplex(const Complex& c3t3, const std::vector<std::string>& region_names,
+                      Mesh* mesh) {
+  const int num_regions = static_cast<int>(region_names.size());
+  std::unordered_map<const void*, int> node_of;  // vertex address -> node
+  std::vector<Eigen::Vector3d> points;
+  std::vector<CellHandle> cells;                    // element -> cell
+  std::unordered_map<const void*, int> element_of;  // cell address -> element
+  Mesh out;
+  for (auto c = c3t3.cells_in_complex_begin(); c != c3t3.cells_in_complex_end(); ++c) {
+    const int label = c3t3.subdomain_index(c);
+    if (label < 0) {
+      return Status::InvalidArgument("label", "the labelling function returned label " +
+                                                  std::to_string(label) +
+                                                  ": labels are 0 (outside) or positive");
+    }
+    if (label > num_regions) {
+      return Status::InvalidArgument(
+          "region_names", "the labelling function returned label " + std::to_string(label) +
+                              ", which has no name: there are " + std::to_string(num_regions) +
+                              " region names, for labels 1.." + std::to_string(num_regions));
+    }
+    std::array<int, 4> tet{};
+    for (int i = 0; i < 4; ++i) {
+      const VertexHandle v = c->vertex(i);
+      const auto [it, added] = node_of.emplace(&*v, static_cast<int>(points.size()));
+      if (added) {
+        const auto& p = v->point();  // weighted after exudation; the weight is not needed
+        points.emplace_back(CGAL::to_double(p.x()), CGAL::to_double(p.y()), CGAL::to_double(p.z()));
+      }
+      tet[i] = it->second;
+    }
+    const Eigen::Vector3d a = points[tet[1]] - points[tet[0]];
+    const Eigen::Vector3d b = points[tet[2]] - points[tet[0]];
+    const Eigen::Vector3d d = points[tet[3]] - points[tet[0]];
+    if (a.dot(b.cross(d)) < 0) std::swap(tet[2], tet[3]);
+    element_of.emplace(&*c, static_cast<int>(out.tets.size()));
+    cells.push_back(c);
+    out.tets.push_back(tet);
+    out.element_region.push_back(label - 1);
+  }
+  if (out.tets.empty()) {
+    return Status::FailedPrecondition(kNoRegionMessage);
+  }
+
+  out.nodes.resize(static_cast<int>(points.size()), 3);
+  for (std::size_t i = 0; i < points.size(); ++i)
+    out.nodes.row(static_cast<int>(i)) = kMetresPerMm * points[i].transpose();
+  out.region_names = region_names;
+
+  // Boundary and interface triangles, from the tetrahedra themselves (a face
+  // whose neighbour is outside the complex, or in another region), so that
+  // the sets always match the elements. Each is taken from the element on
+  // its outer side for "surface" and on the lower label's side for an
+  // interface, anticlockwise seen from outside that element.
+  FaceSet surface;
+  std::map<std::pair<int, int>, FaceSet> interfaces;
+  for (int e = 0; e < static_cast<int>(cells.size()); ++e) {
+    const CellHandle cell = cells[e];
+    const std::array<int, 4>& tet = out.tets[e];
+    for (int i = 0; i < 4; ++i) {
+      const CellHandle neighbour = cell->neighbor(i);
+      const VertexHandle opposite = cell->vertex(i);
+      const int local =
+          static_cast<int>(std::find(tet.begin(), tet.end(), node_of.at(&*opposite)) - tet.begin());
+      const std::array<int, 3> face{tet[kTetFaces[local][0]], tet[kTetFaces[local][1]],
+                                    tet[kTetFaces[local][2]]};
+      const auto other = element_of.find(&*neighbour);
+      if (other == element_of.end()) {
+        surface.triangles.push_back(face);
+        continue;
+      }
+      const int mine = out.element_region[e], theirs = out.element_region[other->second];
+      if (mine < theirs) interfaces[{mine, theirs}].triangles.push_back(face);
+    }
+  }
+  CollectFaceSetNodes(&surface);
+  out.face_sets["surface"] = std::move(surface);
+  for (auto& [pair, set] : interfaces) {
+    CollectFaceSetNodes(&set);
+    out.face_sets["interface:" + region_names[pair.first] + "|" + region_names[pair.second]] =
+        std::move(set);
+  }
+  *mesh = std::move(out);
+  return Status::Ok();
+}
+
+}  // namespace
+
+Status MeshLabels(const LabelFunction& label, const std::vector<std::string>& region_names,
+                  const LabelMeshOptions& options, Mesh* mesh) {
+  if (!label) return Status::InvalidArgument("label", "no labelling function given");
+  PBA_RETURN_IF_ERROR(ValidateOptions(region_names, options));
+  const double facet_size =
+      options.facet_size_mm > 0 ? options.facet_size_mm : options.cell_size_mm;
+  const double facet_distance =
+      options.facet_distance_mm > 0 ? options.facet_distance_mm : facet_size / 10;
+
+  try {
+    namespace params = CGAL::parameters;
+    // The wrapper returns 0 on and outside the box's faces (within a
+    // billionth of its diagonal), so that a region reaching them is closed
+    // there rather than left open. A label CGAL sees as a region but that
+    // has no name is reported after meshing (ConvertComplex), with the label
+    // in the message.
+    const double margin = 1e-9 * (options.box_max_mm - options.box_min_mm).norm();
+    const Eigen::Vector3d inner_min = options.box_min_mm.array() + margin;
+    const Eigen::Vector3d inner_max = options.box_max_mm.array() - margin;
+    Domain::Fct function = [&](const Kernel::Point_3& p) {
+      const Eigen::Vector3d x(p.x(), p.y(), p.z());
+      if ((x.array() <= inner_min.array()).any() || (x.array() >= inner_max.array()).any())
+        return 0;
+      return label(x);
+    };
+    const Kernel::Iso_cuboid_3 box(options.box_min_mm.x(), options.box_min_mm.y(),
+                                   options.box_min_mm.z(), options.box_max_mm.x(),
+                                   options.box_max_mm.y(), options.box_max_mm.z());
+    CGAL::Random random(options.seed);
+    const Domain domain(function, box, options.relative_error_bound, CGAL::Null_subdomain_index(),
+                        &random);
+    const Criteria criteria(params::facet_angle = options.facet_angle_deg,
+                            params::facet_size = facet_size,
+                            params::facet_distance = facet_distance,
+                            params::cell_radius_edge_ratio = options.cell_radius_edge_ratio,
+                            params::cell_size = options.cell_size_mm);
+    // An explicit time limit: CGAL's default (the refinement's own running
+    // time) would make every result depend on the machine's load. The
+    // sliver bound usually ends both steps well before it.
+    const double bound = options.sliver_bound_deg;
+    const double limit = options.optimisation_time_limit_s;
+    const auto perturb =
+        options.perturb ? params::perturb(params::time_limit = limit, params::sliver_bound = bound)
+                        : params::no_perturb();
+    const auto exude = options.exude
+                           ? params::exude(params::time_limit = limit, params::sliver_bound = bound)
+                           : params::no_exude();
+    const auto odt = options.odt ? params::odt(params::time_limit = limit) : params::no_odt();
+    const auto lloyd =
+        options.lloyd ? params::lloyd(params::time_limit = limit) : params::no_lloyd();
+    Complex c3t3;
+    if (InsertSurfaceSeeds(domain, function, options, facet_size, &c3t3) == 0)
+      return Status::FailedPrecondition(kNoRegionMessage);
+    // Too few seeds to span a tetrahedron (a region about one facet size
+    // across): add CGAL's random surface points, as make_mesh_3 would.
+    if (c3t3.triangulation().dimension() != 3)
+      CGAL::Mesh_3::internal::init_c3t3(c3t3, domain, criteria, 20);
+    CGAL::refine_mesh_3(c3t3, domain, criteria, odt, lloyd, perturb, exude,
+                        params::no_reset_c3t3());
+    return ConvertComplex(c3t3, region_names, mesh);
+  } catch (const std::exception& e) {
+    return Status::Internal(std::string("CGAL meshing failed: ") + e.what());
+  } catch (...) {
+    return Status::Internal("CGAL meshing failed with an unknown exception");
+  }
+}
+
+}  // namespace pba

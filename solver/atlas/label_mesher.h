@@ -1,0 +1,112 @@
+// Conforming multi-material tetrahedral meshes of a labelled body, by
+// Delaunay refinement (CGAL Mesh_3; Jamin, Alliez, Yvinec & Boissonnat,
+// "CGALmesh: a generic framework for Delaunay mesh generation", ACM TOMS 41,
+// 2015). The body is given by a labelling function: region k's points are
+// those where it returns k (1, 2, ...), 0 outside. Every region gets its own
+// tetrahedra, and the interfaces between regions are meshed once, shared by
+// the tetrahedra on both sides, so neighbouring structures of the atlas are
+// joined node to node.
+//
+// Only label_mesher.cc includes CGAL: it is heavy to compile and needs
+// -frounding-math, which the rest of the solver does without.
+#pragma once
+
+#include <Eigen/Core>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "mesh/mesh.h"
+#include "pba/status.h"
+
+namespace pba {
+
+// The region label at a point [mm]: 0 outside the body, k >= 1 inside region
+// k (region_names[k - 1]). Called many times, from one thread; it must be
+// deterministic for the mesh to be.
+using LabelFunction = std::function<int(const Eigen::Vector3d& x_mm)>;
+
+struct LabelMeshOptions {
+  // Bounding box of the labelled body [mm]; the function is only sampled
+  // inside it, and a region touching its faces is cut off there.
+  Eigen::Vector3d box_min_mm = Eigen::Vector3d::Zero();
+  Eigen::Vector3d box_max_mm = Eigen::Vector3d::Zero();
+  // Upper bound on the circumradius of a tetrahedron [mm], so roughly the
+  // edge length inside the regions; > 0.
+  double cell_size_mm = 0;
+  // Upper bound on the radius of the surface Delaunay balls of the surface
+  // and interface triangles [mm] (about their circumradius); 0: cell_size_mm.
+  double facet_size_mm = 0;
+  // Upper bound on the distance between a surface triangle's circumcentre
+  // and the centre of its surface Delaunay ball, a point of the true surface
+  // [mm]: how far the triangles may stray from the surface; 0: a tenth of
+  // the facet size.
+  double facet_distance_mm = 0;
+  // Lower bound on the angles of the surface triangles [degrees], <= 30
+  // (Delaunay refinement terminates only up to 30).
+  double facet_angle_deg = 25;
+  // Upper bound on a tetrahedron's circumradius over its shortest edge,
+  // >= 2 (refinement terminates only above 2). Does not remove slivers; the
+  // perturbation and exudation below do.
+  double cell_radius_edge_ratio = 3;
+  // Accuracy of the surface points found by bisection between labels,
+  // relative to the bounding box's diagonal.
+  double relative_error_bound = 1e-6;
+  // Sliver removal after refinement, both aiming at a smallest dihedral
+  // angle of `sliver_bound_deg` in every tetrahedron: perturbation moves
+  // vertices (pseudo-random, deterministically seeded), exudation then gives
+  // them weights, which reshapes the tetrahedra around the remaining slivers.
+  // Each stops when every tetrahedron is above the bound, when no move helps
+  // or at `optimisation_time_limit_s`. Without the limit either can run for
+  // minutes (CGAL 5.5's exuder on the nested spheres at 5 mm cells); when it
+  // is reached, the result depends on the machine's speed and load, and is
+  // no longer reproducible. Slivers with all four corners on a surface may
+  // remain.
+  bool perturb = true;
+  bool exude = true;
+  double sliver_bound_deg = 12;
+  double optimisation_time_limit_s = 20;  // per step; 0: no limit
+  // Global optimisation before the sliver removal (ODT, Lloyd): smooths the
+  // vertex distribution, slow (several passes over the mesh), under the same
+  // time limit. Off by default.
+  bool odt = false;
+  bool lloyd = false;
+  // Seed of CGAL's random surface sampling, used only when the grid seeding
+  // (see MeshLabels) finds too few points; the same inputs and seed give the
+  // same mesh (unless a time limit is reached).
+  unsigned seed = 0;
+};
+
+// Meshes the regions of `label` inside the box. On success `mesh` holds:
+//   nodes   the vertices of the tetrahedra, in metres (input is in mm);
+//           vertices of the refinement used by no tetrahedron are dropped;
+//   tets    positively oriented 4-node tetrahedra;
+//   region_names = `region_names`, element_region[e] = label - 1;
+//   face_sets
+//     "surface"                the boundary triangles (a region against the
+//                              outside), numbered anticlockwise seen from
+//                              outside the body;
+//     "interface:<a>|<b>"      the triangles between regions a and b
+//                              (names, a's label < b's), anticlockwise seen
+//                              from b, i.e. the normal points from a into b.
+//
+// Every surface is seeded where the label changes between the points of a
+// grid of spacing about the facet size over the box (CGAL's own random
+// seeding can miss a surface hidden behind another, and refinement never
+// finds a surface without a seed). A region missed by that grid, thinner
+// than the facet size, may therefore be missing from the mesh.
+//
+// Errors: InvalidArgument naming the field for bad options (sizes <= 0, an
+// empty or inverted box, no region names, a facet angle outside (0, 30], a
+// radius-edge ratio below 2, a sliver bound outside (0, 70.5));
+// InvalidArgument "region_names" for a label the function returns that has
+// no name, "label" for a negative label or no function; FailedPrecondition
+// when no region is found (the function is 0 at every grid point, or no
+// tetrahedron ends up inside a region); Internal for a failure inside CGAL
+// (no exception escapes). The function is only called from the calling
+// thread; the result is deterministic for a deterministic function.
+//
+Status MeshLabels(const LabelFunction& label, const std::vector<std::string>& region_names,
+                  const LabelMeshOptions& options, Mesh* mesh);
+
+}  // namespace pba
