@@ -1,0 +1,194 @@
+// pba-atlas: builds a physics-based atlas locally from files - the built-in
+// synthetic atlas, a plate stack, or a label volume - into one conforming
+// multi-material tetrahedral mesh, with its quality report and, when the
+// source has plates, its geometric validation against them.
+//
+//   pba-atlas plates -o DIR          the synthetic atlas's 27 plates
+//   pba-atlas build -o DIR [--plates DIR | --labels FILE] ...
+//
+// The output directory appears whole or not at all (StagingDir).
+// Exit codes: 0 success; 2 invalid input or command line; 3 the input cannot
+// be meshed as given; 4 I/O error; 1 internal error.
+
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "atlas/atlas_build.h"
+#include "atlas/label_volume_io.h"
+#include "atlas/synthetic_atlas.h"
+#include "solve/staging_dir.h"
+
+namespace pba {
+namespace {
+
+enum ExitCode { kExitOk = 0, kExitInternal = 1, kExitInvalid = 2, kExitMesh = 3, kExitIo = 4 };
+
+int Fail(const Status& status) {
+  std::fprintf(stderr, "pba-atlas: error: %s\n", status.ToString().c_str());
+  switch (status.code()) {
+    case Status::Code::kInvalidArgument:
+      return kExitInvalid;
+    case Status::Code::kFailedPrecondition:
+    case Status::Code::kNumerical:
+      return kExitMesh;
+    case Status::Code::kIo:
+      return kExitIo;
+    default:
+      return kExitInternal;
+  }
+}
+
+Status WriteText(const std::filesystem::path& file, const std::string& text) {
+  std::ofstream out(file, std::ios::binary);
+  out << text;
+  out.close();
+  if (!out) return Status::Io("cannot write " + file.string());
+  return Status::Ok();
+}
+
+// A report in its three forms, <stem>.txt, .csv and .json.
+Status WriteReport(const std::filesystem::path& dir, const std::string& stem,
+                   const ReportTable& table) {
+  PBA_RETURN_IF_ERROR(
+      WriteText(dir / (stem + ".txt"), FormatReportTable(table, TableFormat::kText)));
+  PBA_RETURN_IF_ERROR(
+      WriteText(dir / (stem + ".csv"), FormatReportTable(table, TableFormat::kCsv)));
+  return WriteText(dir / (stem + ".json"), FormatReportTable(table, TableFormat::kJson));
+}
+
+int RunPlates(const std::string& out_dir, double voxel_mm) {
+  SyntheticAtlasOptions options;
+  options.voxel_size_mm = voxel_mm;
+  if (Status s = options.Validate(); !s.ok()) return Fail(s);
+  const LabelVolume atlas = MakeSyntheticAtlas(options);
+  StagingDir staging;
+  if (Status s = StagingDir::Create(out_dir, &staging); !s.ok()) return Fail(s);
+  if (Status s =
+          WritePlates(atlas, ColourTable::Builtin(), PlateOptions(), staging.path() / "plates");
+      !s.ok()) {
+    return Fail(s);
+  }
+  if (Status s = WriteNifti(atlas, staging.path() / "labels.nii.gz"); !s.ok()) return Fail(s);
+  if (Status s = staging.Commit(); !s.ok()) return Fail(s);
+  std::printf("wrote %s/plates (27 plates, colour_table.csv, plates.json) and labels.nii.gz\n",
+              out_dir.c_str());
+  return kExitOk;
+}
+
+int RunBuild(AtlasBuildOptions options, const std::string& out_dir, TableFormat format) {
+  StagingDir staging;
+  if (Status s = StagingDir::Create(out_dir, &staging); !s.ok()) return Fail(s);
+  if (options.source == AtlasBuildOptions::Source::kSynthetic) {
+    options.plates_dir = staging.path() / "plates";
+  }
+  AtlasBuildResult result;
+  if (Status s = BuildAtlas(options, &result); !s.ok()) return Fail(s);
+
+  if (Status s = WriteNifti(result.volume, staging.path() / "labels.nii.gz"); !s.ok()) {
+    return Fail(s);
+  }
+  const ReportTable quality = QualityReportTable(result);
+  if (Status s = WriteReport(staging.path(), "quality", quality); !s.ok()) return Fail(s);
+  std::optional<ReportTable> validation;
+  if (result.validation) {
+    validation = ValidationReportTable(*result.validation);
+    if (Status s = WriteReport(staging.path(), "validation", *validation); !s.ok()) return Fail(s);
+  }
+  if (Status s = staging.Commit(); !s.ok()) return Fail(s);
+
+  std::printf("%s", FormatReportTable(quality, format).c_str());
+  if (validation) std::printf("\n%s", FormatReportTable(*validation, format).c_str());
+  if (format == TableFormat::kText) {
+    const AtlasBuildTimes& t = result.times;
+    std::printf(
+        "\n%d structures, %d tetrahedra, %d nodes%s; source %.2f s, loft %.2f s, mesh %.2f s, "
+        "quality %.2f s, validation %.2f s\nwrote %s\n",
+        static_cast<int>(result.region_labels.size()), result.mesh.num_elements(),
+        result.mesh.num_nodes(), result.mesh.quadratic() ? " (10-node)" : "", t.source_s, t.loft_s,
+        t.mesh_s + t.quadratic_s, t.quality_s, t.validation_s, out_dir.c_str());
+  }
+  return kExitOk;
+}
+
+}  // namespace
+}  // namespace pba
+
+int main(int argc, char** argv) {
+  CLI::App app{"pba-atlas: build a physics-based brain atlas mesh from plates or labels"};
+  app.require_subcommand(1);
+
+  std::string out_dir;
+  double voxel_mm = 1.0;
+  CLI::App* plates = app.add_subcommand(
+      "plates",
+      "Write the built-in synthetic atlas (not anatomy, not for clinical use) as 27 "
+      "colour-coded axial plates and a NIfTI label volume");
+  plates
+      ->add_option("-o,--out", out_dir,
+                   "Output directory (created; an older result there is replaced)")
+      ->required();
+  plates->add_option("--voxel-mm", voxel_mm, "Voxel edge of the painted atlas [mm]");
+
+  pba::AtlasBuildOptions build_options;
+  std::string plates_dir, labels_file, colour_table, format_name = "text";
+  std::vector<std::string> structures;
+  CLI::App* build = app.add_subcommand(
+      "build",
+      "Mesh an atlas: the synthetic one (default), a plate directory or a label volume; writes "
+      "labels.nii.gz, quality.{txt,csv,json} and, from plates, validation.{txt,csv,json}");
+  build
+      ->add_option("-o,--out", out_dir,
+                   "Output directory (created; an older result there is replaced)")
+      ->required();
+  auto* plates_option = build->add_option("--plates", plates_dir,
+                                          "Plate directory (plates.json, PNGs, colour table)");
+  build->add_option("--labels", labels_file, "Label volume (.nii, .nii.gz or .nrrd)")
+      ->excludes(plates_option);
+  build->add_option("--colour-table", colour_table,
+                    "Label table for --labels (CSV: label,name,r,g,b); default the built-in one");
+  build->add_option("--synthetic-voxel-mm", build_options.synthetic_voxel_mm,
+                    "Voxel edge of the painted synthetic atlas [mm]");
+  build->add_option("--loft-voxel-mm", build_options.loft_voxel_mm,
+                    "Voxel edge of the volume lofted from plates [mm]");
+  build->add_option("--cell-mm", build_options.cell_size_mm,
+                    "Tetrahedron size inside the structures [mm]");
+  build->add_option("--facet-mm", build_options.facet_size_mm,
+                    "Triangle size on surfaces and interfaces [mm]");
+  build->add_option("--facet-distance-mm", build_options.facet_distance_mm,
+                    "How far surface triangles may stray from the true surface [mm]; 0: a quarter "
+                    "of the facet size");
+  build->add_flag("--quadratic", build_options.quadratic, "10-node tetrahedra");
+  build->add_option("--structure", structures,
+                    "Keep only this structure (colour-table name; repeat for several)");
+  build->add_option("--format", format_name, "Report form on stdout")
+      ->check(CLI::IsMember({"text", "csv", "json"}));
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int code = app.exit(e);
+    return code == 0 ? 0 : pba::kExitInvalid;
+  }
+  try {
+    if (plates->parsed()) return pba::RunPlates(out_dir, voxel_mm);
+    if (!plates_dir.empty()) {
+      build_options.source = pba::AtlasBuildOptions::Source::kPlates;
+      build_options.input = plates_dir;
+    } else if (!labels_file.empty()) {
+      build_options.source = pba::AtlasBuildOptions::Source::kLabelVolume;
+      build_options.input = labels_file;
+      build_options.colour_table = colour_table;
+    }
+    build_options.structures = structures;
+    const pba::TableFormat format = format_name == "csv"    ? pba::TableFormat::kCsv
+                                    : format_name == "json" ? pba::TableFormat::kJson
+                                                            : pba::TableFormat::kText;
+    return pba::RunBuild(build_options, out_dir, format);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "pba-atlas: internal error: %s\n", e.what());
+    return pba::kExitInternal;
+  }
+}

@@ -1,0 +1,224 @@
+#include "atlas/atlas_build.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <string>
+
+#include "atlas/label_volume_io.h"
+#include "atlas/loft.h"
+#include "atlas/synthetic_atlas.h"
+#include "mesh/quadratic.h"
+
+namespace pba {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double SecondsSince(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+bool EndsWith(const std::string& s, const std::string& suffix) {
+  return s.size() >= suffix.size() &&
+         s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
+Status ReadLabelVolume(const std::filesystem::path& file, LabelVolume* volume) {
+  const std::string name = file.filename().string();
+  if (EndsWith(name, ".nii") || EndsWith(name, ".nii.gz")) return ReadNifti(file, volume);
+  if (EndsWith(name, ".nrrd")) return ReadNrrd(file, volume);
+  return Status::InvalidArgument("input",
+                                 file.string() + " is not a label volume (.nii, .nii.gz or .nrrd)");
+}
+
+// The labels the mesh keeps, in label order: those present in the volume
+// and, when the options name structures, among them.
+Status ChooseLabels(const AtlasBuildOptions& options, const ColourTable& colours,
+                    const LabelVolume& volume, std::vector<uint16_t>* labels) {
+  const std::vector<int64_t> counts = CountLabels(volume);
+  std::vector<bool> wanted(counts.size(), options.structures.empty());
+  for (size_t i = 0; i < options.structures.size(); ++i) {
+    const ColourEntry* entry = colours.FindByName(options.structures[i]);
+    if (entry == nullptr) {
+      return Status::InvalidArgument(
+          "structures[" + std::to_string(i) + "]",
+          "no structure \"" + options.structures[i] + "\" in the colour table");
+    }
+    if (counts[entry->label] == 0) {
+      return Status::InvalidArgument(
+          "structures[" + std::to_string(i) + "]",
+          "\"" + options.structures[i] + "\" is not in the label volume");
+    }
+    wanted[entry->label] = true;
+  }
+  labels->clear();
+  for (size_t label = 1; label < counts.size(); ++label) {
+    if (counts[label] == 0 || !wanted[label]) continue;
+    if (colours.FindByLabel(static_cast<uint16_t>(label)) == nullptr) {
+      return Status::InvalidArgument(
+          "colour_table", "label " + std::to_string(label) + " of the label volume has no entry");
+    }
+    labels->push_back(static_cast<uint16_t>(label));
+  }
+  if (labels->empty()) return Status::InvalidArgument("input", "the label volume has no structure");
+  return Status::Ok();
+}
+
+Status MeshVolume(const AtlasBuildOptions& options, const LabelVolume& volume,
+                  const ColourTable& colours, const std::vector<uint16_t>& labels, Mesh* mesh) {
+  // Region index + 1 of each label, 0 for the labels left out.
+  std::vector<int> region_of(65536, 0);
+  std::vector<std::string> names;
+  for (size_t r = 0; r < labels.size(); ++r) {
+    region_of[labels[r]] = static_cast<int>(r) + 1;
+    names.push_back(colours.FindByLabel(labels[r])->name);
+  }
+  LabelMeshOptions mesh_options;
+  // The grid's outer voxel faces, widened by a voxel so that no structure
+  // touches the box (the mesher cuts a region off at the box).
+  const Eigen::Vector3d half = 0.5 * volume.spacing_mm();
+  const Eigen::Vector3d last =
+      volume.VoxelCentreMm(volume.nx() - 1, volume.ny() - 1, volume.nz() - 1);
+  mesh_options.box_min_mm = volume.origin_mm() - half - volume.spacing_mm();
+  mesh_options.box_max_mm = last + half + volume.spacing_mm();
+  mesh_options.cell_size_mm = options.cell_size_mm;
+  mesh_options.facet_size_mm = options.facet_size_mm;
+  mesh_options.facet_distance_mm =
+      options.facet_distance_mm > 0 ? options.facet_distance_mm : options.facet_size_mm / 4;
+  const LabelFunction label = [&](const Eigen::Vector3d& x_mm) {
+    return region_of[volume.SampleNearest(x_mm)];
+  };
+  return MeshLabels(label, names, mesh_options, mesh);
+}
+
+}  // namespace
+
+Status AtlasBuildOptions::Validate() const {
+  const auto positive = [](double v) { return std::isfinite(v) && v > 0; };
+  if (source != Source::kSynthetic && input.empty()) {
+    return Status::InvalidArgument("input", "a plate directory or label volume file is required");
+  }
+  if (source == Source::kSynthetic && plates_dir.empty()) {
+    return Status::InvalidArgument("plates_dir",
+                                   "the synthetic atlas needs a directory for its plates");
+  }
+  if (!positive(synthetic_voxel_mm)) {
+    return Status::InvalidArgument("synthetic_voxel_mm", "must be positive");
+  }
+  if (!positive(loft_voxel_mm)) return Status::InvalidArgument("loft_voxel_mm", "must be positive");
+  if (!positive(cell_size_mm)) return Status::InvalidArgument("cell_size_mm", "must be positive");
+  if (!positive(facet_size_mm)) return Status::InvalidArgument("facet_size_mm", "must be positive");
+  if (!std::isfinite(facet_distance_mm) || facet_distance_mm < 0) {
+    return Status::InvalidArgument("facet_distance_mm",
+                                   "must be 0 (a quarter of the facet size) or positive");
+  }
+  return Status::Ok();
+}
+
+Status BuildAtlas(const AtlasBuildOptions& options, AtlasBuildResult* result) {
+  if (Status s = options.Validate(); !s.ok()) return s;
+  *result = AtlasBuildResult();
+  Clock::time_point start = Clock::now();
+
+  std::filesystem::path plates_dir = options.input;
+  if (options.source == AtlasBuildOptions::Source::kSynthetic) {
+    SyntheticAtlasOptions synthetic;
+    synthetic.voxel_size_mm = options.synthetic_voxel_mm;
+    if (Status s = synthetic.Validate(); !s.ok()) {
+      return Status::InvalidArgument("synthetic_voxel_mm", s.message());
+    }
+    const LabelVolume painted = MakeSyntheticAtlas(synthetic);
+    if (Status s = WritePlates(painted, ColourTable::Builtin(), PlateOptions(), options.plates_dir);
+        !s.ok()) {
+      return s;
+    }
+    plates_dir = options.plates_dir;
+  }
+  if (options.source == AtlasBuildOptions::Source::kLabelVolume) {
+    if (Status s = ReadLabelVolume(options.input, &result->volume); !s.ok()) return s;
+    if (options.colour_table.empty()) {
+      result->colours = ColourTable::Builtin();
+    } else if (Status s = ReadColourTableCsv(options.colour_table, &result->colours); !s.ok()) {
+      return s;
+    }
+    result->times.source_s = SecondsSince(start);
+  } else {
+    PlateStack stack;
+    if (Status s = ReadPlates(plates_dir, &stack); !s.ok()) return s;
+    result->times.source_s = SecondsSince(start);
+    start = Clock::now();
+    LoftOptions loft;
+    loft.voxel_size_mm = options.loft_voxel_mm;
+    if (Status s = LoftPlates(stack, loft, &result->volume); !s.ok()) return s;
+    result->colours = stack.colours;
+    result->plates = std::move(stack);
+    result->times.loft_s = SecondsSince(start);
+  }
+
+  if (Status s = ChooseLabels(options, result->colours, result->volume, &result->region_labels);
+      !s.ok()) {
+    return s;
+  }
+  start = Clock::now();
+  if (Status s = MeshVolume(options, result->volume, result->colours, result->region_labels,
+                            &result->mesh);
+      !s.ok()) {
+    return s;
+  }
+  result->times.mesh_s = SecondsSince(start);
+  if (options.quadratic) {
+    start = Clock::now();
+    result->mesh = MakeQuadratic(result->mesh);
+    result->times.quadratic_s = SecondsSince(start);
+  }
+  start = Clock::now();
+  result->quality = Summarise(result->mesh);
+  result->times.quality_s = SecondsSince(start);
+  if (result->plates) {
+    start = Clock::now();
+    GeometricValidation validation;
+    if (Status s = ValidateAgainstPlates(result->mesh, result->region_labels, *result->plates,
+                                         &validation);
+        !s.ok()) {
+      return s;
+    }
+    result->validation = std::move(validation);
+    result->times.validation_s = SecondsSince(start);
+  }
+  return Status::Ok();
+}
+
+ReportTable QualityReportTable(const AtlasBuildResult& result) {
+  ReportTable table;
+  table.title = "Mesh quality per structure";
+  table.columns = {{"structure", "structure", 0},
+                   {"label", "label", 0},
+                   {"elements", "elements", 0},
+                   {"volume [mm^3]", "volume_mm3", 1},
+                   {"AR min", "aspect_ratio_min", 2},
+                   {"AR median", "aspect_ratio_median", 2},
+                   {"AR max", "aspect_ratio_max", 2},
+                   {"min dihedral [deg]", "min_dihedral_deg", 1},
+                   {"max Jacobian ratio", "max_jacobian_ratio", 3}};
+  const auto row = [](const std::string& name, std::optional<int64_t> label,
+                      const QualityStats& q) {
+    return std::vector<ReportCell>{ReportCell::Text(name),
+                                   label ? ReportCell::Integer(*label) : ReportCell::Text(""),
+                                   ReportCell::Integer(q.count),
+                                   ReportCell::Real(q.volume * 1e9),
+                                   ReportCell::Real(q.min_aspect_ratio),
+                                   ReportCell::Real(q.median_aspect_ratio),
+                                   ReportCell::Real(q.max_aspect_ratio),
+                                   ReportCell::Real(q.min_dihedral_deg),
+                                   ReportCell::Real(q.max_jacobian_ratio)};
+  };
+  for (size_t r = 0; r < result.quality.regions.size(); ++r) {
+    table.rows.push_back(
+        row(result.mesh.region_names[r], result.region_labels.at(r), result.quality.regions[r]));
+  }
+  table.footer = row("overall", std::nullopt, result.quality.overall);
+  return table;
+}
+
+}  // namespace pba

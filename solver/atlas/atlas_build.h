@@ -1,0 +1,87 @@
+// Building a physics-based atlas: from its source (the built-in synthetic
+// atlas, a plate stack, or a label volume) to one conforming multi-material
+// tetrahedral mesh whose regions are the structures, with the reports it is
+// judged by.
+//
+//   synthetic ─► WritePlates ─┐
+//   plate stack ──────────────┴─► ReadPlates ─► LoftPlates ─┐
+//   label volume (NIfTI / NRRD) + colour table ─────────────┴─► label volume
+//     ─► MeshLabels (CGAL Mesh_3) ─► [MakeQuadratic] ─► Mesh (regions =
+//        structures) ─► quality report; against the plates, when there are
+//        plates, the geometric validation.
+//
+// The synthetic source goes through real plate files (written into
+// `plates_dir`), so it exercises the same path as a user's own plates.
+#pragma once
+
+#include <array>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "atlas/colour_table.h"
+#include "atlas/geometric_validation.h"
+#include "atlas/label_mesher.h"
+#include "atlas/label_volume.h"
+#include "atlas/plates.h"
+#include "atlas/report_format.h"
+#include "mesh/mesh.h"
+#include "mesh/quality.h"
+#include "pba/status.h"
+
+namespace pba {
+
+struct AtlasBuildOptions {
+  enum class Source { kSynthetic, kPlates, kLabelVolume };
+  Source source = Source::kSynthetic;
+  // kPlates: the plate directory (plates.h). kLabelVolume: a .nii, .nii.gz
+  // or .nrrd file.
+  std::filesystem::path input;
+  // kLabelVolume: the label table (colour_table.h CSV); empty: the built-in
+  // table.
+  std::filesystem::path colour_table;
+  // kSynthetic: where the rendered plates are written (must not exist).
+  std::filesystem::path plates_dir;
+  // kSynthetic: voxel edge of the painted atlas [mm].
+  double synthetic_voxel_mm = 1.0;
+  // Plates: voxel edge of the lofted label volume [mm].
+  double loft_voxel_mm = 1.0;
+  // Tetrahedron size inside the structures and on their surfaces [mm]
+  // (LabelMeshOptions::cell_size_mm and facet_size_mm; facet distance
+  // facet_size / 4 unless given).
+  double cell_size_mm = 4;
+  double facet_size_mm = 2;
+  double facet_distance_mm = 0;
+  // 10-node tetrahedra (mid-edge nodes at the midpoints of the straight
+  // edges).
+  bool quadratic = false;
+  // Keep only these structures (colour-table names); empty: all.
+  std::vector<std::string> structures;
+
+  Status Validate() const;
+};
+
+struct AtlasBuildTimes {
+  double source_s = 0, loft_s = 0, mesh_s = 0, quadratic_s = 0, quality_s = 0, validation_s = 0;
+};
+
+struct AtlasBuildResult {
+  ColourTable colours;
+  LabelVolume volume;                // the label volume the mesh was made from
+  std::optional<PlateStack> plates;  // the plates, when the source had them
+  Mesh mesh;                         // region r is structure region_labels[r]
+  std::vector<uint16_t> region_labels;
+  QualitySummary quality;
+  std::optional<GeometricValidation> validation;
+  AtlasBuildTimes times;
+};
+
+Status BuildAtlas(const AtlasBuildOptions& options, AtlasBuildResult* result);
+
+// The quality report: one row per structure (elements, volume [mm^3],
+// aspect ratio min / median / max, smallest dihedral angle, largest Jacobian
+// ratio) and an overall footer.
+ReportTable QualityReportTable(const AtlasBuildResult& result);
+
+}  // namespace pba
