@@ -160,6 +160,15 @@ int main(int argc, char** argv) {
   build->add_option("--facet-distance-mm", build_options.facet_distance_mm,
                     "How far surface triangles may stray from the true surface [mm]; 0: a quarter "
                     "of the facet size");
+  std::vector<double> roi;
+  build
+      ->add_option("--roi", roi,
+                   "Region of interest X,Y,Z,R [mm]: finer elements within R of (X, Y, Z), "
+                   "coarsening over one radius outside")
+      ->delimiter(',')
+      ->expected(4);
+  build->add_option("--roi-mm", build_options.roi_size_mm,
+                    "Element size in the region of interest [mm]; default half of --facet-mm");
   build->add_flag("--quadratic", build_options.quadratic, "10-node tetrahedra");
   build->add_option("--structure", structures,
                     "Keep only this structure (colour-table name; repeat for several)");
@@ -183,6 +192,12 @@ int main(int argc, char** argv) {
       build_options.colour_table = colour_table;
     }
     build_options.structures = structures;
+    if (!roi.empty()) {
+      build_options.roi_centre_mm = {roi[0], roi[1], roi[2]};
+      build_options.roi_radius_mm = roi[3];
+      if (build_options.roi_size_mm == 0)
+        build_options.roi_size_mm = build_options.facet_size_mm / 2;
+    }
     const pba::TableFormat format = format_name == "csv"    ? pba::TableFormat::kCsv
                                     : format_name == "json" ? pba::TableFormat::kJson
                                                             : pba::TableFormat::kText;

@@ -86,6 +86,9 @@ Status MeshVolume(const AtlasBuildOptions& options, const LabelVolume& volume,
   mesh_options.facet_size_mm = options.facet_size_mm;
   mesh_options.facet_distance_mm =
       options.facet_distance_mm > 0 ? options.facet_distance_mm : options.facet_size_mm / 4;
+  mesh_options.roi_centre_mm = options.roi_centre_mm;
+  mesh_options.roi_radius_mm = options.roi_radius_mm;
+  mesh_options.roi_size_mm = options.roi_size_mm;
   const LabelFunction label = [&](const Eigen::Vector3d& x_mm) {
     return region_of[volume.SampleNearest(x_mm)];
   };

@@ -53,6 +53,12 @@ struct AtlasBuildOptions {
   double cell_size_mm = 4;
   double facet_size_mm = 2;
   double facet_distance_mm = 0;
+  // Region of interest (radius 0: none): elements of at most roi_size_mm
+  // within roi_radius_mm of roi_centre_mm, growing to the sizes above over
+  // one radius outside it (LabelMeshOptions).
+  Eigen::Vector3d roi_centre_mm = Eigen::Vector3d::Zero();
+  double roi_radius_mm = 0;
+  double roi_size_mm = 0;
   // 10-node tetrahedra (mid-edge nodes at the midpoints of the straight
   // edges).
   bool quadratic = false;

@@ -141,6 +141,15 @@ Status ValidateOptions(const std::vector<std::string>& region_names, const Label
     return Status::InvalidArgument("cell_size_mm", "must be positive");
   if (!(o.facet_size_mm >= 0) || !std::isfinite(o.facet_size_mm))
     return Status::InvalidArgument("facet_size_mm", "must be positive (or 0 for the cell size)");
+  if (!(o.roi_radius_mm >= 0) || !std::isfinite(o.roi_radius_mm))
+    return Status::InvalidArgument("roi_radius_mm",
+                                   "must be 0 (no region of interest) or positive");
+  if (!(o.roi_transition_mm >= 0) || !std::isfinite(o.roi_transition_mm))
+    return Status::InvalidArgument("roi_transition_mm", "must be 0 (the radius) or positive");
+  if (o.roi_radius_mm > 0 && !(o.roi_size_mm > 0 && o.roi_size_mm <= o.cell_size_mm))
+    return Status::InvalidArgument("roi_size_mm", "must be positive and at most cell_size_mm");
+  if (!o.roi_centre_mm.allFinite())
+    return Status::InvalidArgument("roi_centre_mm", "must be finite");
   if (!(o.facet_distance_mm >= 0) || !std::isfinite(o.facet_distance_mm)) {
     return Status::InvalidArgument("facet_distance_mm",
                                    "must be positive (or 0 for a tenth of the facet size)");
@@ -252,6 +261,27 @@ Status ConvertComplex(const Complex& c3t3, const std::vector<std::string>& regio
   return Status::Ok();
 }
 
+// The size bound at a point: `coarse` away from the region of interest,
+// options.roi_size_mm (or `coarse` if smaller) inside it, linear between
+// (see LabelMeshOptions).
+struct SizeField {
+  using FT = Kernel::FT;  // CGAL's MeshDomainField_3
+  using Point_3 = Kernel::Point_3;
+  using Index = Domain::Index;
+  const LabelMeshOptions& options;
+  double coarse;
+  double operator()(const Kernel::Point_3& p, int, const Domain::Index&) const {
+    if (options.roi_radius_mm <= 0) return coarse;
+    const double fine = std::min(options.roi_size_mm, coarse);
+    const double transition =
+        options.roi_transition_mm > 0 ? options.roi_transition_mm : options.roi_radius_mm;
+    const double d = (Eigen::Vector3d(p.x(), p.y(), p.z()) - options.roi_centre_mm).norm() -
+                     options.roi_radius_mm;
+    if (d <= 0) return fine;
+    return std::min(coarse, fine + (coarse - fine) * d / transition);
+  }
+};
+
 }  // namespace
 
 Status MeshLabels(const LabelFunction& label, const std::vector<std::string>& region_names,
@@ -285,11 +315,13 @@ Status MeshLabels(const LabelFunction& label, const std::vector<std::string>& re
     CGAL::Random random(options.seed);
     const Domain domain(function, box, options.relative_error_bound, CGAL::Null_subdomain_index(),
                         &random);
+    const SizeField cell_size{options, options.cell_size_mm};
+    const SizeField facet_size_field{options, facet_size};
     const Criteria criteria(params::facet_angle = options.facet_angle_deg,
-                            params::facet_size = facet_size,
+                            params::facet_size = facet_size_field,
                             params::facet_distance = facet_distance,
                             params::cell_radius_edge_ratio = options.cell_radius_edge_ratio,
-                            params::cell_size = options.cell_size_mm);
+                            params::cell_size = cell_size);
     // An explicit time limit: CGAL's default (the refinement's own running
     // time) would make every result depend on the machine's load. The
     // sliver bound usually ends both steps well before it.

@@ -71,6 +71,15 @@ struct LabelMeshOptions {
   // time limit. Off by default.
   bool odt = false;
   bool lloyd = false;
+  // Region of interest (off when radius_mm is 0): within radius_mm of
+  // centre_mm cells and facets are at most roi_size_mm; beyond it the bound
+  // grows linearly with the distance from the sphere, reaching cell_size_mm
+  // (facet_size_mm) a further `transition_mm` out (0: radius_mm), and
+  // stays there. Refined where a scene acts, coarse where it does not.
+  Eigen::Vector3d roi_centre_mm = Eigen::Vector3d::Zero();
+  double roi_radius_mm = 0;
+  double roi_size_mm = 0;
+  double roi_transition_mm = 0;
   // Seed of CGAL's random surface sampling, used only when the grid seeding
   // (see MeshLabels) finds too few points; the same inputs and seed give the
   // same mesh (unless a time limit is reached).
@@ -98,7 +107,9 @@ struct LabelMeshOptions {
 //
 // Errors: InvalidArgument naming the field for bad options (sizes <= 0, an
 // empty or inverted box, no region names, a facet angle outside (0, 30], a
-// radius-edge ratio below 2, a sliver bound outside (0, 70.5));
+// radius-edge ratio below 2, a sliver bound outside (0, 70.5), a region of
+// interest with a negative radius or transition, or a size not in
+// (0, cell size]);
 // InvalidArgument "region_names" for a label the function returns that has
 // no name, "label" for a negative label or no function; FailedPrecondition
 // when no region is found (the function is 0 at every grid point, or no

@@ -89,10 +89,14 @@ TEST_F(PbaAtlasTest, PlatesThenMeshFromThemAndFromTheLabelVolume) {
   }
 
   const fs::path from_labels = dir_.path() / "from_labels";
-  args = {PBA_ATLAS_BIN,        "build",    "-o",
-          from_labels.string(), "--labels", (plates / "labels.nii.gz").string(),
-          "--structure",        "Putamen",  "--structure",
-          "Nucleus caudatus",   "--format", "json"};
+  args = {PBA_ATLAS_BIN, "build",
+          "-o",          from_labels.string(),
+          "--labels",    (plates / "labels.nii.gz").string(),
+          "--structure", "Putamen",
+          "--structure", "Nucleus caudatus",
+          "--format",    "json",
+          "--roi",       "-24,-5,6,12",
+          "--roi-mm",    "2"};
   for (const std::string& a : Coarse()) args.push_back(a);
   run = RunProcess(args);
   ASSERT_EQ(run.exit_code, 0) << run.err;
@@ -100,6 +104,15 @@ TEST_F(PbaAtlasTest, PlatesThenMeshFromThemAndFromTheLabelVolume) {
   // No plates, no validation; stdout is the report as JSON.
   EXPECT_FALSE(fs::exists(from_labels / "validation.json"));
   EXPECT_EQ(YAML::Load(run.out)["rows"].size(), 2u);
+  // The region of interest around the left putamen refines it: more
+  // elements than the 8 mm mesh from the plates gave it.
+  const auto putamen_elements = [](const fs::path& dir) {
+    for (const YAML::Node& row : YAML::LoadFile((dir / "quality.json").string())["rows"]) {
+      if (row["structure"].as<std::string>() == "Putamen") return row["elements"].as<int64_t>();
+    }
+    return int64_t{0};
+  };
+  EXPECT_GT(putamen_elements(from_labels), 2 * putamen_elements(from_plates));
 }
 
 TEST_F(PbaAtlasTest, SyntheticBuildKeepsItsPlates) {

@@ -232,9 +232,58 @@ TEST(LabelMesherTest, BadOptionsNameTheField) {
   o = SphereOptions();
   std::swap(o.box_min_mm, o.box_max_mm);
   EXPECT_EQ(field_of(o), "box_max_mm");
+  o = SphereOptions();
+  o.roi_radius_mm = 5;
+  o.roi_size_mm = 0;
+  EXPECT_EQ(field_of(o), "roi_size_mm");
+  o.roi_size_mm = 2 * o.cell_size_mm;
+  EXPECT_EQ(field_of(o), "roi_size_mm");
+  o.roi_radius_mm = -1;
+  EXPECT_EQ(field_of(o), "roi_radius_mm");
   EXPECT_EQ(field_of(SphereOptions(), {}), "region_names");
   Mesh mesh;
   EXPECT_EQ(MeshLabels(LabelFunction(), kNames, SphereOptions(), &mesh).field(), "label");
+}
+
+// A region of interest at one side of the shell: its elements are smaller
+// there than on the opposite side, and the coarse side is as without it.
+TEST(LabelMesherTest, RegionOfInterestRefinesOnlyThere) {
+  const auto mean_volume_near = [](const Mesh& mesh, const Eigen::Vector3d& centre_mm,
+                                   double radius_mm) {
+    double volume = 0;
+    int count = 0;
+    for (int e = 0; e < mesh.num_elements(); ++e) {
+      const Eigen::Matrix<double, 4, 3> x = TetCorners(mesh, e) * 1e3;  // mm
+      const Eigen::Vector3d centroid = x.colwise().mean().transpose();
+      if ((centroid - centre_mm).norm() > radius_mm) continue;
+      const Eigen::Matrix3d edges = (x.bottomRows<3>().rowwise() - x.row(0)).transpose();
+      volume += edges.determinant() / 6;
+      ++count;
+    }
+    EXPECT_GT(count, 0);
+    return volume / count;
+  };
+  const Eigen::Vector3d near(15, 0, 0), far(-15, 0, 0);
+  LabelMeshOptions options = SphereOptions();
+  Mesh plain, refined;
+  ASSERT_TRUE(MeshLabels(TwoSpheres, kNames, options, &plain).ok());
+  options.roi_centre_mm = near;
+  options.roi_radius_mm = 4;
+  options.roi_size_mm = 1.5;
+  ASSERT_TRUE(MeshLabels(TwoSpheres, kNames, options, &refined).ok());
+  const double plain_near = mean_volume_near(plain, near, 4);
+  const double refined_near = mean_volume_near(refined, near, 4);
+  const double plain_far = mean_volume_near(plain, far, 4);
+  const double refined_far = mean_volume_near(refined, far, 4);
+  std::printf(
+      "region of interest (r = 4 mm, 1.5 mm elements): %d tetrahedra against %d; mean volume "
+      "there %.3f mm^3 against %.3f, on the far side %.3f against %.3f\n",
+      refined.num_elements(), plain.num_elements(), refined_near, plain_near, refined_far,
+      plain_far);
+  // Halving the size divides the volume by about 8; ask for 3.
+  EXPECT_LT(refined_near, plain_near / 3);
+  EXPECT_NEAR(refined_far, plain_far, 0.35 * plain_far);
+  EXPECT_GT(refined.num_elements(), plain.num_elements());
 }
 
 TEST(LabelMesherTest, EmptyBodyAndUnnamedLabelAreReported) {
