@@ -20,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "core/atomic_write.h"
 #include "core/format.h"
 
 namespace pba {
@@ -29,48 +30,6 @@ namespace {
 bool EndsWith(const std::string& s, const std::string& suffix) {
   return s.size() >= suffix.size() &&
          s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
-}
-
-// Writes `file` atomically: write(fd, temporary path) fills a temporary file
-// (name ending in `suffix`) in the same directory, which is then synced and
-// renamed over `file`; on failure the temporary file is removed.
-Status AtomicWrite(const fs::path& file, const std::string& suffix,
-                   const std::function<Status(int, const std::string&)>& write) {
-  const fs::path dir = file.parent_path().empty() ? fs::path(".") : file.parent_path();
-  std::error_code ec;
-  if (!fs::is_directory(dir, ec)) return Status::Io(dir.string() + " is not a directory");
-  std::string temporary =
-      (dir / ("." + file.filename().string() + ".partial-XXXXXX" + suffix)).string();
-  const int fd = mkstemps(temporary.data(), static_cast<int>(suffix.size()));
-  if (fd < 0) return Status::Io("cannot create a temporary file in " + dir.string());
-  Status status = write(fd, temporary);
-  if (status.ok() && fsync(fd) != 0) status = Status::Io("cannot sync " + temporary);
-  if (close(fd) != 0 && status.ok()) status = Status::Io("cannot close " + temporary);
-  if (status.ok() && std::rename(temporary.c_str(), file.c_str()) != 0) {
-    status = Status::Io("cannot rename " + temporary + " to " + file.string());
-  }
-  if (!status.ok()) {
-    unlink(temporary.c_str());
-    return status;
-  }
-  const int dir_fd = open(dir.c_str(), O_RDONLY | O_DIRECTORY);
-  if (dir_fd >= 0) {
-    fsync(dir_fd);  // best effort: the rename itself is done
-    close(dir_fd);
-  }
-  return Status::Ok();
-}
-
-Status WriteAll(int fd, const void* data, size_t size, const std::string& path) {
-  const char* p = static_cast<const char*>(data);
-  while (size > 0) {
-    const ssize_t n = ::write(fd, p, size);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) return Status::Io("writing " + path + " failed: " + std::strerror(errno));
-    p += n;
-    size -= static_cast<size_t>(n);
-  }
-  return Status::Ok();
 }
 
 // Converts `count` values of type T (file order, i fastest over dims n) to

@@ -1,0 +1,59 @@
+#include "core/atomic_write.h"
+
+#include <fcntl.h>
+#include <stdlib.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+
+namespace pba {
+namespace fs = std::filesystem;
+
+Status AtomicWrite(const fs::path& file, const std::string& suffix,
+                   const std::function<Status(int, const std::string&)>& write) {
+  const fs::path dir = file.parent_path().empty() ? fs::path(".") : file.parent_path();
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec)) return Status::Io(dir.string() + " is not a directory");
+  std::string temporary =
+      (dir / ("." + file.filename().string() + ".partial-XXXXXX" + suffix)).string();
+  const int fd = mkstemps(temporary.data(), static_cast<int>(suffix.size()));
+  if (fd < 0) return Status::Io("cannot create a temporary file in " + dir.string());
+  Status status = write(fd, temporary);
+  if (status.ok() && fsync(fd) != 0) status = Status::Io("cannot sync " + temporary);
+  if (close(fd) != 0 && status.ok()) status = Status::Io("cannot close " + temporary);
+  if (status.ok() && std::rename(temporary.c_str(), file.c_str()) != 0) {
+    status = Status::Io("cannot rename " + temporary + " to " + file.string());
+  }
+  if (!status.ok()) {
+    unlink(temporary.c_str());
+    return status;
+  }
+  const int dir_fd = open(dir.c_str(), O_RDONLY | O_DIRECTORY);
+  if (dir_fd >= 0) {
+    fsync(dir_fd);  // best effort: the rename itself is done
+    close(dir_fd);
+  }
+  return Status::Ok();
+}
+
+Status WriteAll(int fd, const void* data, std::size_t size, const std::string& path) {
+  const char* p = static_cast<const char*>(data);
+  while (size > 0) {
+    const ssize_t n = ::write(fd, p, size);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) return Status::Io("writing " + path + " failed: " + std::strerror(errno));
+    p += n;
+    size -= static_cast<std::size_t>(n);
+  }
+  return Status::Ok();
+}
+
+Status AtomicWriteText(const fs::path& file, const std::string& text) {
+  return AtomicWrite(file, "", [&](int fd, const std::string& temporary) {
+    return WriteAll(fd, text.data(), text.size(), temporary);
+  });
+}
+
+}  // namespace pba

@@ -1,0 +1,31 @@
+// Atomic file writes: the content goes into a temporary file in the target
+// directory, which is synced and renamed over the target, so a reader sees
+// the old file or the whole new one, and a failed write leaves nothing.
+#pragma once
+
+#include <cstddef>
+#include <filesystem>
+#include <functional>
+#include <string>
+
+#include "pba/status.h"
+
+namespace pba {
+
+// Writes `file` atomically: write(fd, temporary path) fills a temporary file
+// (a hidden name beginning "." + file name, ending in `suffix`) in the same
+// directory, which is then synced and renamed over `file`; on failure the
+// temporary file is removed. The callback may write through `fd` or reopen
+// the path by name (e.g. a library that opens files itself). kIo when the
+// directory does not exist or any step fails.
+Status AtomicWrite(const std::filesystem::path& file, const std::string& suffix,
+                   const std::function<Status(int fd, const std::string& temporary)>& write);
+
+// write(2) of all `size` bytes, retrying on EINTR; `path` names the file in
+// the error.
+Status WriteAll(int fd, const void* data, std::size_t size, const std::string& path);
+
+// AtomicWrite of a text.
+Status AtomicWriteText(const std::filesystem::path& file, const std::string& text);
+
+}  // namespace pba
