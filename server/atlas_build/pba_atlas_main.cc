@@ -19,6 +19,7 @@
 #include "atlas/atlas_build.h"
 #include "atlas/label_volume_io.h"
 #include "atlas/synthetic_atlas.h"
+#include "io/mesh_export.h"
 #include "solve/staging_dir.h"
 
 namespace pba {
@@ -90,6 +91,17 @@ int RunBuild(AtlasBuildOptions options, const std::string& out_dir, TableFormat 
   if (Status s = WriteNifti(result.volume, staging.path() / "labels.nii.gz"); !s.ok()) {
     return Fail(s);
   }
+  // The mesh in the forms people open it with: ParaView (.vtu, .xdmf +
+  // .h5), Gmsh (.msh) and Abaqus / CalculiX (.inp); millimetres, regions
+  // named after the structures.
+  MeshExportOptions export_options;
+  export_options.title = result.synthetic ? std::string("PBA atlas mesh - ") + kSyntheticAtlasNotice
+                                          : std::string("PBA atlas mesh");
+  for (const char* name : {"atlas.vtu", "atlas.xdmf", "atlas.msh", "atlas.inp"}) {
+    if (Status s = ExportMesh(result.mesh, staging.path() / name, export_options); !s.ok()) {
+      return Fail(s);
+    }
+  }
   const ReportTable quality = QualityReportTable(result);
   if (Status s = WriteReport(staging.path(), "quality", quality); !s.ok()) return Fail(s);
   std::optional<ReportTable> validation;
@@ -138,7 +150,8 @@ int main(int argc, char** argv) {
   CLI::App* build = app.add_subcommand(
       "build",
       "Mesh an atlas: the synthetic one (default), a plate directory or a label volume; writes "
-      "labels.nii.gz, quality.{txt,csv,json} and, from plates, validation.{txt,csv,json}");
+      "atlas.{vtu,xdmf,msh,inp}, labels.nii.gz, quality.{txt,csv,json} and, from plates, "
+      "validation.{txt,csv,json}");
   build
       ->add_option("-o,--out", out_dir,
                    "Output directory (created; an older result there is replaced)")

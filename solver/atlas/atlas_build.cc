@@ -124,6 +124,7 @@ Status BuildAtlas(const AtlasBuildOptions& options, AtlasBuildResult* result) {
   *result = AtlasBuildResult();
   Clock::time_point start = Clock::now();
 
+  result->synthetic = options.source == AtlasBuildOptions::Source::kSynthetic;
   std::filesystem::path plates_dir = options.input;
   if (options.source == AtlasBuildOptions::Source::kSynthetic) {
     SyntheticAtlasOptions synthetic;

@@ -73,6 +73,7 @@ struct AtlasBuildTimes {
 };
 
 struct AtlasBuildResult {
+  bool synthetic = false;  // built from the synthetic atlas (its notice goes into every file)
   ColourTable colours;
   LabelVolume volume;                // the label volume the mesh was made from
   std::optional<PlateStack> plates;  // the plates, when the source had them

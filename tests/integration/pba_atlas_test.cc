@@ -46,6 +46,9 @@ void ExpectQualityReport(const fs::path& dir, size_t structures) {
   EXPECT_TRUE(fs::exists(dir / "quality.txt"));
   EXPECT_TRUE(fs::exists(dir / "quality.csv"));
   EXPECT_TRUE(fs::exists(dir / "labels.nii.gz"));
+  for (const char* mesh : {"atlas.vtu", "atlas.xdmf", "atlas.h5", "atlas.msh", "atlas.inp"}) {
+    EXPECT_TRUE(fs::exists(dir / mesh)) << mesh;
+  }
 }
 
 class PbaAtlasTest : public ::testing::Test {
@@ -127,6 +130,12 @@ TEST_F(PbaAtlasTest, SyntheticBuildKeepsItsPlates) {
   ExpectQualityReport(out, 44);
   EXPECT_TRUE(fs::exists(out / "plates" / "plates.json"));
   EXPECT_TRUE(fs::exists(out / "validation.csv"));
+  // The synthetic atlas says what it is in the files it writes.
+  for (const char* mesh : {"atlas.vtu", "atlas.msh", "atlas.inp"}) {
+    EXPECT_NE(ReadFile(out / mesh).find("not for clinical use"), std::string::npos) << mesh;
+  }
+  // 10-node elements in every form: VTK_QUADRATIC_TETRA, Gmsh type 11, C3D10.
+  EXPECT_NE(ReadFile(out / "atlas.inp").find("C3D10"), std::string::npos);
 }
 
 TEST_F(PbaAtlasTest, BadInputExitsTwoNamingItAndWritesNothing) {
