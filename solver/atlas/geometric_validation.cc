@@ -57,31 +57,7 @@ Status ValidateInputs(const Mesh& mesh, const std::vector<uint16_t>& region_labe
                                      Format("region %d of %zu", mesh.element_region[e], regions));
     }
   }
-  if (!(plates.pixel_size_mm > 0) || !std::isfinite(plates.pixel_size_mm)) {
-    return Status::InvalidArgument("plates.pixel_size_mm",
-                                   Format("%g is not a positive size", plates.pixel_size_mm));
-  }
-  if (plates.width < 1 || plates.height < 1) {
-    return Status::InvalidArgument("plates.width",
-                                   Format("plates of %d x %d pixels", plates.width, plates.height));
-  }
-  if (plates.labels.size() != plates.z_mm.size()) {
-    return Status::InvalidArgument(
-        "plates.labels",
-        Format("%zu plates of labels for %zu heights", plates.labels.size(), plates.z_mm.size()));
-  }
-  const size_t pixels = static_cast<size_t>(plates.width) * plates.height;
-  for (int p = 0; p < plates.num_plates(); ++p) {
-    if (plates.labels[p].size() != pixels) {
-      return Status::InvalidArgument(Format("plates.labels[%d]", p),
-                                     Format("%zu labels for %d x %d pixels",
-                                            plates.labels[p].size(), plates.width, plates.height));
-    }
-    if (!std::isfinite(plates.z_mm[p])) {
-      return Status::InvalidArgument(Format("plates.z_mm[%d]", p), "not finite");
-    }
-  }
-  return Status::Ok();
+  return ValidatePlateStack(plates, "plates", 1);
 }
 
 // The mesh cut at height z [mm] on the plates' pixel grid: per pixel the

@@ -28,42 +28,6 @@ struct Layer {
   double t = 0;
 };
 
-Status ValidateStack(const PlateStack& stack) {
-  if (stack.num_plates() < 2) {
-    return Status::InvalidArgument(
-        "stack.z_mm", Format("%d plate(s); the loft needs at least 2", stack.num_plates()));
-  }
-  if (!(stack.pixel_size_mm > 0) || !std::isfinite(stack.pixel_size_mm)) {
-    return Status::InvalidArgument("stack.pixel_size_mm",
-                                   Format("%g is not a positive size", stack.pixel_size_mm));
-  }
-  if (stack.width < 1 || stack.height < 1) {
-    return Status::InvalidArgument("stack.width",
-                                   Format("plates of %d x %d pixels", stack.width, stack.height));
-  }
-  if (!stack.origin_mm.allFinite()) {
-    return Status::InvalidArgument("stack.origin_mm", "not finite");
-  }
-  if (stack.labels.size() != stack.z_mm.size()) {
-    return Status::InvalidArgument(
-        "stack.labels", Format("%d plates of labels for %d heights",
-                               static_cast<int>(stack.labels.size()), stack.num_plates()));
-  }
-  const size_t pixels = static_cast<size_t>(stack.width) * stack.height;
-  for (int p = 0; p < stack.num_plates(); ++p) {
-    if (stack.labels[p].size() != pixels) {
-      return Status::InvalidArgument(Format("stack.labels[%d]", p),
-                                     Format("%zu labels for %d x %d pixels", stack.labels[p].size(),
-                                            stack.width, stack.height));
-    }
-    if (!std::isfinite(stack.z_mm[p]) || (p > 0 && !(stack.z_mm[p] > stack.z_mm[p - 1]))) {
-      return Status::InvalidArgument(Format("stack.z_mm[%d]", p),
-                                     Format("%g is not above the previous plate", stack.z_mm[p]));
-    }
-  }
-  return Status::Ok();
-}
-
 // Signed distance [mm] of `label` (kForeground: any label but background)
 // on plate p over `box` (row-major, box width fastest), negative inside;
 // returns the label's greatest depth (max of -d, 0 when absent) through
@@ -119,7 +83,7 @@ Status LoftOptions::Validate() const {
 
 Status LoftPlates(const PlateStack& stack, const LoftOptions& options, LabelVolume* volume) {
   PBA_RETURN_IF_ERROR(options.Validate());
-  PBA_RETURN_IF_ERROR(ValidateStack(stack));
+  PBA_RETURN_IF_ERROR(ValidatePlateStack(stack, "stack", 2));
   const int np = stack.num_plates();
   const double ps = stack.pixel_size_mm, vs = options.voxel_size_mm;
   const double bottom_gap = stack.z_mm[1] - stack.z_mm[0];

@@ -208,6 +208,41 @@ Status PlateOptions::Validate() const {
   return Status::Ok();
 }
 
+Status ValidatePlateStack(const PlateStack& stack, const std::string& name, int min_plates) {
+  if (stack.num_plates() < min_plates) {
+    return Status::InvalidArgument(
+        name + ".z_mm", Format("%d plate(s); at least %d needed", stack.num_plates(), min_plates));
+  }
+  if (!(stack.pixel_size_mm > 0) || !std::isfinite(stack.pixel_size_mm)) {
+    return Status::InvalidArgument(name + ".pixel_size_mm",
+                                   Format("%g is not a positive size", stack.pixel_size_mm));
+  }
+  if (stack.width < 1 || stack.height < 1) {
+    return Status::InvalidArgument(name + ".width",
+                                   Format("plates of %d x %d pixels", stack.width, stack.height));
+  }
+  if (!stack.origin_mm.allFinite())
+    return Status::InvalidArgument(name + ".origin_mm", "not finite");
+  if (stack.labels.size() != stack.z_mm.size()) {
+    return Status::InvalidArgument(
+        name + ".labels",
+        Format("%zu plates of labels for %zu heights", stack.labels.size(), stack.z_mm.size()));
+  }
+  const size_t pixels = static_cast<size_t>(stack.width) * stack.height;
+  for (int p = 0; p < stack.num_plates(); ++p) {
+    if (stack.labels[p].size() != pixels) {
+      return Status::InvalidArgument(Format("%s.labels[%d]", name.c_str(), p),
+                                     Format("%zu labels for %d x %d pixels", stack.labels[p].size(),
+                                            stack.width, stack.height));
+    }
+    if (!std::isfinite(stack.z_mm[p]) || (p > 0 && !(stack.z_mm[p] > stack.z_mm[p - 1]))) {
+      return Status::InvalidArgument(Format("%s.z_mm[%d]", name.c_str(), p),
+                                     Format("%g is not above the previous plate", stack.z_mm[p]));
+    }
+  }
+  return Status::Ok();
+}
+
 Status WritePlates(const LabelVolume& volume, const ColourTable& colours,
                    const PlateOptions& options, const fs::path& dir) {
   PBA_RETURN_IF_ERROR(options.Validate());

@@ -65,6 +65,12 @@ struct PlateStack {
   }
 };
 
+// Checks a stack's shape, naming the bad field under `name` (e.g.
+// "stack.z_mm[3]"): at least `min_plates` plates, a positive pixel size, at
+// least one pixel, a finite origin, one label image of width x height per
+// plate, finite and strictly increasing heights.
+Status ValidatePlateStack(const PlateStack& stack, const std::string& name, int min_plates);
+
 // Renders the plates of `volume` into the new directory `dir` (it must not
 // exist, or be empty). The pixel grid spans the volume's x-y extent (voxel
 // faces, not centres); each pixel takes the label of the voxel nearest to

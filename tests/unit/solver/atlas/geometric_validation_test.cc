@@ -13,6 +13,7 @@
 
 #include "atlas/loft.h"
 #include "atlas/synthetic_atlas.h"
+#include "common/plate_stacks.h"
 #include "mesh/primitive_mesher.h"
 
 namespace pba {
@@ -44,24 +45,10 @@ Eigen::Vector3d CentroidMm(const Mesh& mesh, int e) {
 PlateStack MakePlates(double pixel, int width, int height, const std::vector<double>& z_mm,
                       const ColourTable& colours,
                       const std::function<uint16_t(double, double, double)>& paint) {
-  PlateStack stack;
-  stack.pixel_size_mm = pixel;
-  stack.width = width;
-  stack.height = height;
-  stack.origin_mm = Eigen::Vector2d(-0.5 * (width - 1) * pixel, 0.5 * (height - 1) * pixel);
-  stack.z_mm = z_mm;
+  PlateStack stack =
+      testing::PaintPlateStack(pixel, width, height, z_mm,
+                               [&](int, double x, double y, double z) { return paint(x, y, z); });
   stack.colours = colours;
-  for (int p = 0; p < stack.num_plates(); ++p) {
-    std::vector<uint16_t> labels(static_cast<size_t>(width) * height);
-    for (int r = 0; r < height; ++r) {
-      for (int c = 0; c < width; ++c) {
-        const Eigen::Vector3d x = stack.PixelCentreMm(p, c, r);
-        labels[static_cast<size_t>(r) * width + c] = paint(x.x(), x.y(), x.z());
-      }
-    }
-    stack.labels.push_back(std::move(labels));
-    stack.files.push_back("plate");
-  }
   return stack;
 }
 

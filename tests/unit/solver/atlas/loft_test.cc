@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "atlas/synthetic_atlas.h"
+#include "common/plate_stacks.h"
 
 namespace pba {
 namespace {
@@ -23,24 +24,9 @@ namespace fs = std::filesystem;
 // paint(plate, x, y).
 PlateStack MakeStack(double pixel, int width, int height, const std::vector<double>& z_mm,
                      const std::function<uint16_t(int, double, double)>& paint) {
-  PlateStack stack;
-  stack.pixel_size_mm = pixel;
-  stack.width = width;
-  stack.height = height;
-  stack.origin_mm = Eigen::Vector2d(-0.5 * (width - 1) * pixel, 0.5 * (height - 1) * pixel);
-  stack.z_mm = z_mm;
-  for (int p = 0; p < stack.num_plates(); ++p) {
-    std::vector<uint16_t> labels(static_cast<size_t>(width) * height);
-    for (int r = 0; r < height; ++r) {
-      for (int c = 0; c < width; ++c) {
-        const Eigen::Vector3d x = stack.PixelCentreMm(p, c, r);
-        labels[static_cast<size_t>(r) * width + c] = paint(p, x.x(), x.y());
-      }
-    }
-    stack.labels.push_back(std::move(labels));
-    stack.files.push_back("plate");
-  }
-  return stack;
+  return testing::PaintPlateStack(
+      pixel, width, height, z_mm,
+      [&](int p, double x, double y, double) { return paint(p, x, y); });
 }
 
 // 4-connected components of `label` in layer k.
