@@ -114,6 +114,13 @@ int RunBuild(AtlasBuildOptions options, const std::string& out_dir, TableFormat 
   std::printf("%s", FormatReportTable(quality, format).c_str());
   if (validation) std::printf("\n%s", FormatReportTable(*validation, format).c_str());
   if (format == TableFormat::kText) {
+    if (!result.merged.empty()) {
+      std::printf("\n%zu structures merged into \"%s\" (not asked for)\n", result.merged.size(),
+                  kSurroundingTissue);
+    }
+    if (!result.dropped.empty()) {
+      std::printf("\n%zu structures dropped (not asked for)\n", result.dropped.size());
+    }
     const AtlasBuildTimes& t = result.times;
     std::printf(
         "\n%d structures, %d tetrahedra, %d nodes%s; source %.2f s, loft %.2f s, mesh %.2f s, "
@@ -185,6 +192,9 @@ int main(int argc, char** argv) {
   build->add_flag("--quadratic", build_options.quadratic, "10-node tetrahedra");
   build->add_option("--structure", structures,
                     "Keep only this structure (colour-table name; repeat for several)");
+  build->add_flag("--merge-rest", build_options.merge_rest,
+                  "With --structure: mesh every other structure as one region, \"Surrounding "
+                  "tissue\", instead of dropping it");
   build->add_option("--format", format_name, "Report form on stdout")
       ->check(CLI::IsMember({"text", "csv", "json"}));
 

@@ -35,7 +35,8 @@ Status ReadLabelVolume(const std::filesystem::path& file, LabelVolume* volume) {
 // The labels the mesh keeps, in label order: those present in the volume
 // and, when the options name structures, among them.
 Status ChooseLabels(const AtlasBuildOptions& options, const ColourTable& colours,
-                    const LabelVolume& volume, std::vector<uint16_t>* labels) {
+                    const LabelVolume& volume, std::vector<uint16_t>* labels,
+                    std::vector<std::string>* left_out) {
   const std::vector<int64_t> counts = CountLabels(volume);
   std::vector<bool> wanted(counts.size(), options.structures.empty());
   for (size_t i = 0; i < options.structures.size(); ++i) {
@@ -53,26 +54,42 @@ Status ChooseLabels(const AtlasBuildOptions& options, const ColourTable& colours
     wanted[entry->label] = true;
   }
   labels->clear();
+  left_out->clear();
   for (size_t label = 1; label < counts.size(); ++label) {
-    if (counts[label] == 0 || !wanted[label]) continue;
-    if (colours.FindByLabel(static_cast<uint16_t>(label)) == nullptr) {
+    if (counts[label] == 0) continue;
+    const ColourEntry* entry = colours.FindByLabel(static_cast<uint16_t>(label));
+    if (entry == nullptr) {
       return Status::InvalidArgument(
           "colour_table", "label " + std::to_string(label) + " of the label volume has no entry");
     }
-    labels->push_back(static_cast<uint16_t>(label));
+    if (wanted[label]) {
+      labels->push_back(static_cast<uint16_t>(label));
+    } else {
+      left_out->push_back(entry->name);
+    }
   }
   if (labels->empty()) return Status::InvalidArgument("input", "the label volume has no structure");
   return Status::Ok();
 }
 
+// `labels` are the regions kept; label 0 among them (merge_rest) stands for
+// every other label of the volume.
 Status MeshVolume(const AtlasBuildOptions& options, const LabelVolume& volume,
                   const ColourTable& colours, const std::vector<uint16_t>& labels, Mesh* mesh) {
   // Region index + 1 of each label, 0 for the labels left out.
   std::vector<int> region_of(65536, 0);
   std::vector<std::string> names;
   for (size_t r = 0; r < labels.size(); ++r) {
-    region_of[labels[r]] = static_cast<int>(r) + 1;
-    names.push_back(colours.FindByLabel(labels[r])->name);
+    if (labels[r] == 0) {
+      std::fill(region_of.begin(), region_of.end(), static_cast<int>(r) + 1);
+      names.push_back(kSurroundingTissue);
+    } else {
+      names.push_back(colours.FindByLabel(labels[r])->name);
+    }
+  }
+  region_of[0] = 0;
+  for (size_t r = 0; r < labels.size(); ++r) {
+    if (labels[r] != 0) region_of[labels[r]] = static_cast<int>(r) + 1;
   }
   LabelMeshOptions mesh_options;
   // The grid's outer voxel faces, widened by a voxel so that no structure
@@ -160,9 +177,14 @@ Status BuildAtlas(const AtlasBuildOptions& options, AtlasBuildResult* result) {
     result->times.loft_s = SecondsSince(start);
   }
 
-  if (Status s = ChooseLabels(options, result->colours, result->volume, &result->region_labels);
-      !s.ok()) {
-    return s;
+  std::vector<std::string> left_out;
+  PBA_RETURN_IF_ERROR(
+      ChooseLabels(options, result->colours, result->volume, &result->region_labels, &left_out));
+  if (options.merge_rest && !left_out.empty()) {
+    result->region_labels.push_back(0);
+    result->merged = std::move(left_out);
+  } else {
+    result->dropped = std::move(left_out);
   }
   start = Clock::now();
   if (Status s = MeshVolume(options, result->volume, result->colours, result->region_labels,
@@ -181,9 +203,18 @@ Status BuildAtlas(const AtlasBuildOptions& options, AtlasBuildResult* result) {
   result->times.quality_s = SecondsSince(start);
   if (result->plates) {
     start = Clock::now();
+    // Only the structures kept are judged: the plates without the others
+    // (merged or dropped ones would otherwise count as missing).
+    PlateStack kept = *result->plates;
+    if (!options.structures.empty()) {
+      std::vector<bool> keep(65536, false);
+      for (uint16_t label : result->region_labels) keep[label] = label != 0;
+      for (std::vector<uint16_t>& plate : kept.labels) {
+        for (uint16_t& label : plate) label = keep[label] ? label : 0;
+      }
+    }
     GeometricValidation validation;
-    if (Status s = ValidateAgainstPlates(result->mesh, result->region_labels, *result->plates,
-                                         &validation);
+    if (Status s = ValidateAgainstPlates(result->mesh, result->region_labels, kept, &validation);
         !s.ok()) {
       return s;
     }
@@ -218,8 +249,10 @@ ReportTable QualityReportTable(const AtlasBuildResult& result) {
                                    ReportCell::Real(q.max_jacobian_ratio)};
   };
   for (size_t r = 0; r < result.quality.regions.size(); ++r) {
-    table.rows.push_back(
-        row(result.mesh.region_names[r], result.region_labels.at(r), result.quality.regions[r]));
+    const uint16_t label = result.region_labels.at(r);
+    table.rows.push_back(row(result.mesh.region_names[r],
+                             label != 0 ? std::optional<int64_t>(label) : std::nullopt,
+                             result.quality.regions[r]));
   }
   table.footer = row("overall", std::nullopt, result.quality.overall);
   return table;

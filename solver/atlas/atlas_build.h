@@ -62,11 +62,17 @@ struct AtlasBuildOptions {
   // 10-node tetrahedra (mid-edge nodes at the midpoints of the straight
   // edges).
   bool quadratic = false;
-  // Keep only these structures (colour-table names); empty: all.
+  // Keep only these structures (colour-table names); empty: all. The
+  // others are dropped, or with `merge_rest` meshed as one region,
+  // kSurroundingTissue (region label 0: it is on no plate).
   std::vector<std::string> structures;
+  bool merge_rest = false;
 
   Status Validate() const;
 };
+
+// The region the structures a build does not keep become with merge_rest.
+inline constexpr char kSurroundingTissue[] = "Surrounding tissue";
 
 struct AtlasBuildTimes {
   double source_s = 0, loft_s = 0, mesh_s = 0, quadratic_s = 0, quality_s = 0, validation_s = 0;
@@ -79,6 +85,9 @@ struct AtlasBuildResult {
   std::optional<PlateStack> plates;  // the plates, when the source had them
   Mesh mesh;                         // region r is structure region_labels[r]
   std::vector<uint16_t> region_labels;
+  // Colour-table names of the structures merged into kSurroundingTissue
+  // and of those dropped.
+  std::vector<std::string> merged, dropped;
   QualitySummary quality;
   std::optional<GeometricValidation> validation;
   AtlasBuildTimes times;

@@ -138,6 +138,36 @@ TEST_F(PbaAtlasTest, SyntheticBuildKeepsItsPlates) {
   EXPECT_NE(ReadFile(out / "atlas.inp").find("C3D10"), std::string::npos);
 }
 
+// Two structures kept, the rest merged into one region around them; the
+// validation judges only the two.
+TEST_F(PbaAtlasTest, MergedRestIsOneRegionAndOnlyKeptStructuresAreJudged) {
+  const fs::path out = dir_.path() / "atlas";
+  std::vector<std::string> args = {PBA_ATLAS_BIN,
+                                   "build",
+                                   "-o",
+                                   out.string(),
+                                   "--synthetic-voxel-mm",
+                                   "2",
+                                   "--loft-voxel-mm",
+                                   "2",
+                                   "--structure",
+                                   "Putamen",
+                                   "--structure",
+                                   "Thalamus: pulvinar",
+                                   "--merge-rest"};
+  for (const std::string& a : Coarse()) args.push_back(a);
+  const RunResult run = RunProcess(args);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_NE(run.out.find("42 structures merged into \"Surrounding tissue\""), std::string::npos)
+      << run.out;
+  ExpectQualityReport(out, 3);
+  std::set<std::string> judged;
+  for (const YAML::Node& row : YAML::LoadFile((out / "validation.json").string())["rows"]) {
+    judged.insert(row["structure"].as<std::string>());
+  }
+  EXPECT_EQ(judged, (std::set<std::string>{"Putamen", "Thalamus: pulvinar"}));
+}
+
 TEST_F(PbaAtlasTest, BadInputExitsTwoNamingItAndWritesNothing) {
   const fs::path out = dir_.path() / "atlas";
   RunResult run = RunProcess({PBA_ATLAS_BIN, "build", "-o", out.string(), "--synthetic-voxel-mm",
