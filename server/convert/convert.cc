@@ -52,6 +52,24 @@ Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec) {
       spec->geometry.kind = GeometrySpec::Kind::kEllipsoid;
       break;
     }
+    case v1::Geometry::kAtlas: {
+      const v1::Atlas& a = geometry.atlas();
+      AtlasSpec& out = spec->geometry.atlas;
+      spec->geometry.kind = GeometrySpec::Kind::kAtlas;
+      out.source = a.source();
+      out.colour_table = a.colour_table();
+      out.structures.assign(a.structures().begin(), a.structures().end());
+      out.merge_rest = a.merge_rest();
+      out.voxel_size_mm = a.voxel_size_mm();
+      out.facet_size_mm = a.facet_size_mm();
+      if (a.roi_centre_mm_size() > 0) {
+        PBA_RETURN_IF_ERROR(CopyThree(a.roi_centre_mm(), "geometry.atlas.roi_centre_mm",
+                                      "coordinates (x, y, z) in mm", &out.roi_centre_mm));
+      }
+      out.roi_radius_mm = a.roi_radius_mm();
+      out.roi_element_size_mm = a.roi_element_size_mm();
+      break;
+    }
     case v1::Geometry::SHAPE_NOT_SET:
       break;  // ValidateScene names it
   }

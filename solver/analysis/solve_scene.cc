@@ -24,6 +24,11 @@ std::string DescribeGeometry(const GeometrySpec& g) {
     return Format("spherical shell octant, radii %g and %g mm", g.spherical_shell.inner_radius_mm,
                   g.spherical_shell.outer_radius_mm);
   }
+  if (g.kind == GeometrySpec::Kind::kAtlas) {
+    const std::string& source = g.atlas.source;
+    return source.empty() || source == "synthetic" ? std::string("synthetic atlas")
+                                                   : "atlas from " + source;
+  }
   if (g.kind == GeometrySpec::Kind::kEllipsoid) {
     return Format("ellipsoid, semi-axes %g, %g and %g mm", g.ellipsoid.semi_axes_mm[0],
                   g.ellipsoid.semi_axes_mm[1], g.ellipsoid.semi_axes_mm[2]);

@@ -41,4 +41,7 @@ int64_t EstimateElementCount(const GeometrySpec& geometry, const MeshSpec& optio
 // of the body's largest dimension [mm].
 double EffectiveElementSize(const GeometrySpec& geometry, const MeshSpec& options);
 
+// The element size of an atlas geometry when the scene gives none [mm].
+inline constexpr double kDefaultAtlasElementSizeMm = 8;
+
 }  // namespace pba

@@ -1,9 +1,13 @@
 #include "scene/model_builder.h"
 
+#include <stdlib.h>
+
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <map>
 
+#include "atlas/atlas_build.h"
 #include "core/format.h"
 #include "mesh/primitive_mesher.h"
 #include "mesh/quadratic.h"
@@ -90,6 +94,100 @@ Status CutPatches(const GeometrySpec& g, Mesh* mesh) {
   return Status::Ok();
 }
 
+// A temporary directory for the synthetic atlas's plates, removed with it.
+class TempPlatesDir {
+ public:
+  TempPlatesDir() {
+    std::string pattern = (std::filesystem::temp_directory_path() / "pba-atlas-XXXXXX").string();
+    if (::mkdtemp(pattern.data()) != nullptr) path_ = pattern;
+  }
+  ~TempPlatesDir() {
+    std::error_code ignored;
+    if (!path_.empty()) std::filesystem::remove_all(path_, ignored);
+  }
+  const std::filesystem::path& path() const { return path_; }
+
+ private:
+  std::filesystem::path path_;
+};
+
+// The atlas of the scene, meshed (BuildAtlas), and a description of what
+// was kept, merged or dropped and at what size, for the summary.
+Status BuildAtlasMesh(const SceneSpec& scene, Mesh* mesh, std::string* description) {
+  const AtlasSpec& a = scene.geometry.atlas;
+  AtlasBuildOptions options;
+  TempPlatesDir temp;
+  if (a.source.empty() || a.source == "synthetic") {
+    if (temp.path().empty()) return Status::Io("cannot create a temporary directory for plates");
+    options.source = AtlasBuildOptions::Source::kSynthetic;
+    options.plates_dir = temp.path() / "plates";
+  } else if (std::filesystem::is_directory(a.source)) {
+    options.source = AtlasBuildOptions::Source::kPlates;
+    options.input = a.source;
+  } else {
+    options.source = AtlasBuildOptions::Source::kLabelVolume;
+    options.input = a.source;
+    options.colour_table = a.colour_table;
+  }
+  const double h = EffectiveElementSize(scene.geometry, scene.mesh);
+  options.synthetic_voxel_mm = options.loft_voxel_mm = a.voxel_size_mm > 0 ? a.voxel_size_mm : 1.5;
+  options.cell_size_mm = h;
+  options.facet_size_mm = a.facet_size_mm > 0 ? a.facet_size_mm : h / 2;
+  options.structures = a.structures;
+  options.merge_rest = a.merge_rest;
+  options.roi_centre_mm =
+      Eigen::Vector3d(a.roi_centre_mm[0], a.roi_centre_mm[1], a.roi_centre_mm[2]);
+  options.roi_radius_mm = a.roi_radius_mm;
+  options.roi_size_mm = std::min(a.roi_element_size_mm, h);
+  AtlasBuildResult result;
+  if (Status s = BuildAtlas(options, &result); !s.ok()) {
+    // The build's fields, as the scene names them.
+    const std::string field = s.field() == "structures" || s.field().rfind("structures[", 0) == 0
+                                  ? "geometry.atlas." + s.field()
+                              : s.field() == "input" ? "geometry.atlas.source"
+                              : s.field().empty()    ? ""
+                                                     : "geometry.atlas";
+    if (s.code() == Status::Code::kInvalidArgument) {
+      // A field with no counterpart in the scene keeps its own name.
+      return Status::InvalidArgument(field, field == "geometry.atlas" ? s.ToString() : s.message());
+    }
+    return s;
+  }
+  *mesh = std::move(result.mesh);
+  const int kept = static_cast<int>(result.region_labels.size()) - (result.merged.empty() ? 0 : 1);
+  *description = Format("%s atlas, %d structure%s", result.synthetic ? "synthetic" : "user", kept,
+                        kept == 1 ? "" : "s");
+  if (!a.structures.empty()) description->append(" (as asked)");
+  if (!result.merged.empty()) {
+    description->append(Format(", %d more merged into \"%s\"",
+                               static_cast<int>(result.merged.size()), kSurroundingTissue));
+  }
+  if (!result.dropped.empty()) {
+    description->append(
+        Format(", %d dropped (not asked for)", static_cast<int>(result.dropped.size())));
+  }
+  description->append(
+      Format("; CGAL Mesh_3 from %.3g mm voxels, %.3g mm elements, %.3g mm on "
+             "surfaces",
+             options.loft_voxel_mm, options.cell_size_mm, options.facet_size_mm));
+  if (a.roi_radius_mm > 0) {
+    description->append(Format(", %.3g mm within %.3g mm of (%g, %g, %g) mm", options.roi_size_mm,
+                               a.roi_radius_mm, a.roi_centre_mm[0], a.roi_centre_mm[1],
+                               a.roi_centre_mm[2]));
+  }
+  std::string empty;
+  for (size_t r = 0; r < result.quality.regions.size(); ++r) {
+    if (result.quality.regions[r].count > 0) continue;
+    empty += (empty.empty() ? "" : ", ") + mesh->region_names[r];
+  }
+  if (!empty.empty()) {
+    description->append("; smaller than these elements, so without any: " + empty);
+  }
+  description->append(Format("; %d tetrahedra, smallest dihedral angle %.1f deg",
+                             mesh->num_elements(), result.quality.overall.min_dihedral_deg));
+  return Status::Ok();
+}
+
 }  // namespace
 
 Status BuildModel(const SceneSpec& scene, Model* out) {
@@ -97,14 +195,20 @@ Status BuildModel(const SceneSpec& scene, Model* out) {
   Model& model = *out;
   model = Model();
   MeshStats stats;
-  model.mesh = BuildPrimitiveMesh(scene.geometry, scene.mesh, &stats);
-  model.mesh_description = stats.description;
+  if (scene.geometry.kind == GeometrySpec::Kind::kAtlas) {
+    PBA_RETURN_IF_ERROR(BuildAtlasMesh(scene, &model.mesh, &model.mesh_description));
+  } else {
+    model.mesh = BuildPrimitiveMesh(scene.geometry, scene.mesh, &stats);
+    model.mesh_description = stats.description;
+  }
   PBA_RETURN_IF_ERROR(CutPatches(scene.geometry, &model.mesh));
   if (IsQuadratic(scene.mesh.element)) {
     model.mesh =
         MakeQuadratic(model.mesh, WithPatches(scene.geometry, CurvedSurfaces(scene.geometry)));
-    model.mesh_description +=
-        "; 10-node: a node on every edge, on the true surface of curved faces";
+    model.mesh_description += scene.geometry.kind == GeometrySpec::Kind::kAtlas
+                                  ? "; 10-node: a node at the middle of every edge"
+                                  : "; 10-node: a node on every edge, on the true surface of "
+                                    "curved faces";
   }
   model.dofs = DofMap(model.mesh.num_nodes());
   for (const BoundaryConditionSpec& bc : scene.boundary_conditions) {

@@ -33,8 +33,47 @@ Status ValidateGeometry(const GeometrySpec& geometry) {
     case GeometrySpec::Kind::kNone:
       return Status::InvalidArgument(
           "geometry",
-          "no shape given: set geometry.box, geometry.cylinder, geometry.spherical_shell or "
-          "geometry.ellipsoid");
+          "no shape given: set geometry.box, geometry.cylinder, geometry.spherical_shell, "
+          "geometry.ellipsoid or geometry.atlas");
+    case GeometrySpec::Kind::kAtlas: {
+      const AtlasSpec& a = geometry.atlas;
+      const auto non_negative = [](double v) { return std::isfinite(v) && v >= 0; };
+      if (!non_negative(a.voxel_size_mm)) {
+        return Status::InvalidArgument(
+            "geometry.atlas.voxel_size_mm",
+            "must be a positive number of mm (or 0 for 1.5), got " + Number(a.voxel_size_mm));
+      }
+      if (!non_negative(a.facet_size_mm)) {
+        return Status::InvalidArgument(
+            "geometry.atlas.facet_size_mm",
+            "must be a positive number of mm (or 0 for half the element size), got " +
+                Number(a.facet_size_mm));
+      }
+      if (!non_negative(a.roi_radius_mm)) {
+        return Status::InvalidArgument(
+            "geometry.atlas.roi_radius_mm",
+            "must be a positive number of mm (or 0 for none), got " + Number(a.roi_radius_mm));
+      }
+      if (a.roi_radius_mm > 0 && !PositiveFinite(a.roi_element_size_mm)) {
+        return Status::InvalidArgument("geometry.atlas.roi_element_size_mm",
+                                       "a region of interest needs a positive element size in "
+                                       "mm, got " +
+                                           Number(a.roi_element_size_mm));
+      }
+      for (int c = 0; c < 3; ++c) {
+        if (!std::isfinite(a.roi_centre_mm[c])) {
+          return Status::InvalidArgument("geometry.atlas.roi_centre_mm[" + std::to_string(c) + "]",
+                                         "must be finite");
+        }
+      }
+      for (std::size_t i = 0; i < a.structures.size(); ++i) {
+        if (a.structures[i].empty()) {
+          return Status::InvalidArgument("geometry.atlas.structures[" + std::to_string(i) + "]",
+                                         "is empty");
+        }
+      }
+      return Status::Ok();
+    }
     case GeometrySpec::Kind::kEllipsoid:
       for (int c = 0; c < 3; ++c) {
         const double a = geometry.ellipsoid.semi_axes_mm[c];
@@ -195,6 +234,7 @@ std::vector<std::string> FaceSetNames(const GeometrySpec& geometry) {
       names = {"inner", "outer", "x0", "y0", "z0"};
       break;
     case GeometrySpec::Kind::kEllipsoid:
+    case GeometrySpec::Kind::kAtlas:
       names = {"surface"};
       break;
     case GeometrySpec::Kind::kNone:
@@ -208,7 +248,10 @@ int PlaneNormalAxis(const GeometrySpec& geometry, const std::string& set) {
   for (const PatchSpec& p : geometry.patches) {
     if (p.name == set) return p.set == set ? -1 : PlaneNormalAxis(geometry, p.set);
   }
-  if (geometry.kind == GeometrySpec::Kind::kEllipsoid) return -1;
+  if (geometry.kind == GeometrySpec::Kind::kEllipsoid ||
+      geometry.kind == GeometrySpec::Kind::kAtlas) {
+    return -1;
+  }
   if (geometry.kind == GeometrySpec::Kind::kSphericalShell) {
     if (set == "x0") return 0;
     if (set == "y0") return 1;
@@ -231,6 +274,11 @@ Status ValidateScene(const SceneSpec& scene) {
         "mesh.element_size_mm",
         "must be a positive number of mm (or left out for the default), got " +
             Number(scene.mesh.element_size_mm));
+  }
+  if (scene.geometry.kind == GeometrySpec::Kind::kAtlas && IsHexahedral(scene.mesh.element)) {
+    return Status::InvalidArgument("mesh.element",
+                                   "an atlas is meshed with tetrahedra: choose TET4, TET4_ANP, "
+                                   "TET10 or TET10_MD");
   }
   const int64_t elements = EstimateElementCount(scene.geometry, scene.mesh);
   if (elements > kMaxElements) {

@@ -148,6 +148,23 @@ INSTANTIATE_TEST_SUITE_P(
                   s->boundary_conditions[1].set = "pad";
                 },
                 kInvalid, "geometry.patches[0].radius_mm", "at least 5"},
+        // An atlas structure the atlas does not have: only building the
+        // atlas can tell.
+        BadCase{"atlas_structure_unknown",
+                [](SceneSpec* s) {
+                  s->geometry.kind = GeometrySpec::Kind::kAtlas;
+                  s->geometry.atlas.voxel_size_mm = 3;
+                  s->geometry.atlas.structures = {"Amygdala"};
+                  s->boundary_conditions = {Condition("surface", K::kFixed)};
+                },
+                kInvalid, "geometry.atlas.structures[0]", "Amygdala"},
+        BadCase{"atlas_label_volume_missing",
+                [](SceneSpec* s) {
+                  s->geometry.kind = GeometrySpec::Kind::kAtlas;
+                  s->geometry.atlas.source = "no-such-dir/labels.nii.gz";
+                  s->boundary_conditions = {Condition("surface", K::kFixed)};
+                },
+                Status::Code::kIo, "", "no-such-dir/labels.nii.gz"},
         BadCase{"no_conditions", [](SceneSpec* s) { s->boundary_conditions.clear(); }, kInvalid,
                 "boundary_conditions", "free to move"},
         // Every direction is held somewhere, yet the body can turn about

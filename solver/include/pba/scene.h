@@ -35,6 +35,29 @@ struct EllipsoidSpec {
   std::array<double, 3> semi_axes_mm{0, 0, 0};  // a, b, c along x, y, z [mm], > 0
 };
 
+// A physics-based atlas meshed for the scene (docs/atlas.md): one
+// conforming tetrahedral mesh whose regions are the atlas's structures,
+// made with mesh.element_size_mm inside them (default 8 mm). Face sets:
+// surface (the outside of every structure kept) and
+// "interface:<a>|<b>" between structures.
+struct AtlasSpec {
+  // "synthetic" (or empty): the built-in synthetic atlas; else a plate
+  // directory or a label volume file (.nii, .nii.gz, .nrrd) on the machine
+  // that solves.
+  std::string source;
+  std::string colour_table;             // label table of a label volume; empty: built-in
+  std::vector<std::string> structures;  // keep only these (names); empty: all
+  bool merge_rest = false;   // the others as one region, "Surrounding tissue" (else dropped)
+  double voxel_size_mm = 0;  // of the painted or lofted label volume; 0: 1.5 mm
+  double facet_size_mm = 0;  // triangles on surfaces and interfaces; 0: half the element size
+  // Region of interest (radius 0: none): elements of at most
+  // roi_element_size_mm within roi_radius_mm of roi_centre_mm, coarsening
+  // over one radius outside.
+  std::array<double, 3> roi_centre_mm{0, 0, 0};
+  double roi_radius_mm = 0;
+  double roi_element_size_mm = 0;
+};
+
 // A face set cut out of another: the faces of `set` whose nodes all lie
 // within `radius_mm` of `centre_mm`, e.g. the patch a punch presses on.
 // It names a region of a curved face for a condition of its own.
@@ -46,12 +69,13 @@ struct PatchSpec {
 };
 
 struct GeometrySpec {
-  enum class Kind { kNone, kBox, kCylinder, kSphericalShell, kEllipsoid };
+  enum class Kind { kNone, kBox, kCylinder, kSphericalShell, kEllipsoid, kAtlas };
   Kind kind = Kind::kNone;
   BoxSpec box;
   CylinderSpec cylinder;
   SphericalShellSpec spherical_shell;
   EllipsoidSpec ellipsoid;
+  AtlasSpec atlas;
   std::vector<PatchSpec> patches;  // made in order, after the mesh
 };
 
@@ -273,8 +297,8 @@ struct SceneSpec {
 
 // Face set names a geometry defines (box: bottom top x_min x_max y_min y_max;
 // cylinder: bottom top side; spherical shell: inner outer x0 y0 z0, the last
-// three the cut planes x = 0, y = 0, z = 0; ellipsoid: surface), then its
-// patches' names.
+// three the cut planes x = 0, y = 0, z = 0; ellipsoid, atlas: surface),
+// then its patches' names.
 std::vector<std::string> FaceSetNames(const GeometrySpec& geometry);
 
 // The axis (0 = x, 1 = y, 2 = z) normal to a planar face set (or a patch of

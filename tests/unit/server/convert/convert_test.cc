@@ -148,6 +148,40 @@ boundary_conditions:
   EXPECT_EQ(status.field(), "geometry.patches[0].centre_mm") << status.ToString();
 }
 
+TEST(SceneFromProto, Atlas) {
+  v1::Scene scene;
+  codec::ParseError error;
+  ASSERT_TRUE(codec::ParseYaml(R"(
+geometry:
+  atlas:
+    source: synthetic
+    structures: [Putamen, "Thalamus: pulvinar"]
+    merge_rest: true
+    voxel_size_mm: 2
+    facet_size_mm: 3
+    roi_centre_mm: [-24, -5, 6]
+    roi_radius_mm: 12
+    roi_element_size_mm: 1.5
+  patches: [{name: base, set: surface, centre_mm: [0, -29, -54], radius_mm: 30}]
+)",
+                               &scene, &error))
+      << error.ToString();
+  SceneSpec s;
+  ASSERT_TRUE(SceneFromProto(scene, &s).ok());
+  EXPECT_EQ(s.geometry.kind, GeometrySpec::Kind::kAtlas);
+  const AtlasSpec& a = s.geometry.atlas;
+  EXPECT_EQ(a.source, "synthetic");
+  EXPECT_EQ(a.structures, (std::vector<std::string>{"Putamen", "Thalamus: pulvinar"}));
+  EXPECT_TRUE(a.merge_rest);
+  EXPECT_EQ(a.voxel_size_mm, 2);
+  EXPECT_EQ(a.facet_size_mm, 3);
+  EXPECT_EQ(a.roi_centre_mm[0], -24);
+  EXPECT_EQ(a.roi_radius_mm, 12);
+  EXPECT_EQ(a.roi_element_size_mm, 1.5);
+  ASSERT_TRUE(codec::ParseYaml("geometry: {atlas: {roi_centre_mm: [1, 2]}}", &scene, &error));
+  EXPECT_EQ(SceneFromProto(scene, &s).field(), "geometry.atlas.roi_centre_mm");
+}
+
 TEST(SceneFromProto, LoadFieldPathsOfBadValues) {
   v1::Scene scene;
   codec::ParseError error;

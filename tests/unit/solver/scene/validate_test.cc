@@ -71,6 +71,30 @@ INSTANTIATE_TEST_SUITE_P(
              [](SceneSpec* s) { s->mesh.element = ElementType::kTet10Md; }, "mesh.element",
              "TET10_MD (10-node tetrahedron with mean dilatation) is implemented for "
              "NONLINEAR_STATIC; a linear analysis uses TET10 or HEX8"},
+        Case{"atlas_negative_voxel",
+             [](SceneSpec* s) {
+               s->geometry.kind = GeometrySpec::Kind::kAtlas;
+               s->geometry.atlas.voxel_size_mm = -1;
+             },
+             "geometry.atlas.voxel_size_mm", "positive"},
+        Case{"atlas_roi_without_size",
+             [](SceneSpec* s) {
+               s->geometry.kind = GeometrySpec::Kind::kAtlas;
+               s->geometry.atlas.roi_radius_mm = 10;
+             },
+             "geometry.atlas.roi_element_size_mm", "region of interest"},
+        Case{"atlas_empty_structure",
+             [](SceneSpec* s) {
+               s->geometry.kind = GeometrySpec::Kind::kAtlas;
+               s->geometry.atlas.structures = {"Putamen", ""};
+             },
+             "geometry.atlas.structures[1]", "empty"},
+        Case{"atlas_of_bricks",
+             [](SceneSpec* s) {
+               s->geometry.kind = GeometrySpec::Kind::kAtlas;
+               s->mesh.element = ElementType::kHex8;
+             },
+             "mesh.element", "tetrahedra"},
         Case{"negative_size", [](SceneSpec* s) { s->mesh.element_size_mm = -1; },
              "mesh.element_size_mm", "positive"},
         Case{"too_many_elements", [](SceneSpec* s) { s->mesh.element_size_mm = 0.01; },
