@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Speed against error, element by element, on the thick sphere: runs
+# Speed against error, element by element, on the thick sphere and the
+# uniaxial compression: runs
 # element_bench (tests/bench/element_bench.cc), keeps its CSV and draws the
 # true error against the wall time, one curve per element and problem, in
 # docs/figures/speed_vs_error.png (the Pareto front a user chooses from).
@@ -34,6 +35,7 @@ for f in "$data"/*.dat; do
   label=$(basename "$f" .dat)
   label=${label/LameSphere_/Lamé, }
   label=${label/InflatedSphere_/inflation, }
+  label=${label/Uniaxial_/uniaxial, }
   plots+=("'$f' using 1:2 with linespoints lw 2 pt 7 title '$label'")
 done
 out="$root/docs/figures/speed_vs_error.png"
@@ -45,7 +47,7 @@ set format x "%g"
 set format y "%g"
 set xlabel "wall time of the solve [s] (2 cores)"
 set ylabel "true error [%]"
-set title "Thick sphere: speed against error (element_bench)"
+set title "Thick sphere and uniaxial compression: speed against error (element_bench)"
 set key outside right
 set grid
 plot $(IFS=,; echo "${plots[*]}")

@@ -230,17 +230,36 @@ ReportTable QualityReportTable(const AtlasBuildResult& result) {
   table.columns = {{"structure", "structure", 0},
                    {"label", "label", 0},
                    {"elements", "elements", 0},
+                   {"nodes", "nodes", 0},
                    {"volume [mm^3]", "volume_mm3", 1},
                    {"AR min", "aspect_ratio_min", 2},
                    {"AR median", "aspect_ratio_median", 2},
                    {"AR max", "aspect_ratio_max", 2},
                    {"min dihedral [deg]", "min_dihedral_deg", 1},
                    {"max Jacobian ratio", "max_jacobian_ratio", 3}};
-  const auto row = [](const std::string& name, std::optional<int64_t> label,
+  // Nodes of each region's elements (corner and mid-edge; a node on an
+  // interface counts for both sides).
+  const Mesh& mesh = result.mesh;
+  std::vector<std::vector<bool>> touches(result.quality.regions.size(),
+                                         std::vector<bool>(mesh.num_nodes(), false));
+  std::vector<int64_t> nodes(touches.size(), 0);
+  for (int e = 0; e < mesh.num_elements() && !mesh.element_region.empty(); ++e) {
+    std::vector<bool>& seen = touches[mesh.element_region[e]];
+    const auto count = [&](int node) {
+      if (!seen[node]) nodes[mesh.element_region[e]] += 1;
+      seen[node] = true;
+    };
+    for (int node : mesh.tets[e]) count(node);
+    if (mesh.quadratic()) {
+      for (int node : mesh.midside[e]) count(node);
+    }
+  }
+  const auto row = [](const std::string& name, std::optional<int64_t> label, int64_t node_count,
                       const QualityStats& q) {
     return std::vector<ReportCell>{ReportCell::Text(name),
                                    label ? ReportCell::Integer(*label) : ReportCell::Text(""),
                                    ReportCell::Integer(q.count),
+                                   ReportCell::Integer(node_count),
                                    ReportCell::Real(q.volume * 1e9),
                                    ReportCell::Real(q.min_aspect_ratio),
                                    ReportCell::Real(q.median_aspect_ratio),
@@ -251,10 +270,10 @@ ReportTable QualityReportTable(const AtlasBuildResult& result) {
   for (size_t r = 0; r < result.quality.regions.size(); ++r) {
     const uint16_t label = result.region_labels.at(r);
     table.rows.push_back(row(result.mesh.region_names[r],
-                             label != 0 ? std::optional<int64_t>(label) : std::nullopt,
+                             label != 0 ? std::optional<int64_t>(label) : std::nullopt, nodes[r],
                              result.quality.regions[r]));
   }
-  table.footer = row("overall", std::nullopt, result.quality.overall);
+  table.footer = row("overall", std::nullopt, mesh.num_nodes(), result.quality.overall);
   return table;
 }
 

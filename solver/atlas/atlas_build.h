@@ -95,7 +95,7 @@ struct AtlasBuildResult {
 
 Status BuildAtlas(const AtlasBuildOptions& options, AtlasBuildResult* result);
 
-// The quality report: one row per structure (elements, volume [mm^3],
+// The quality report: one row per structure (elements, nodes, volume [mm^3],
 // aspect ratio min / median / max, smallest dihedral angle, largest Jacobian
 // ratio) and an overall footer.
 ReportTable QualityReportTable(const AtlasBuildResult& result);

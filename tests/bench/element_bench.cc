@@ -1,14 +1,20 @@
-// Speed beside true error, element by element, on the thick-walled sphere
-// (VALIDATION.md), whose exact answers are known: the linear Lame problem
-// (E = 3 kPa, nu = 0.49) and the nearly incompressible neo-Hookean one
-// (K / mu = 1e4) inflated by a follower pressure to an inner stretch of 1.5.
+// Speed beside true error, element by element, on problems whose exact
+// answers are known: the thick-walled sphere (VALIDATION.md), linear (Lame,
+// E = 3 kPa, nu = 0.49) and nearly incompressible neo-Hookean (K / mu =
+// 1e4) inflated by a follower pressure to an inner stretch of 1.5; and the
+// uniaxial compression of a cube between frictionless platens (30 %,
+// neo-Hookean, K / mu = 1e4), whose homogeneous answer every element
+// represents exactly, so that its error is the Newton tolerance's and only
+// its time tells the elements apart.
 // A benchmark, not a test: scripts/bench.sh runs it for docs/performance.md.
 #include <benchmark/benchmark.h>
 
 #include <cmath>
 
 #include "common/bench_solve.h"
+#include "common/scene_builders.h"
 #include "common/thick_sphere.h"
+#include "common/uniaxial.h"
 
 namespace pba {
 namespace {
@@ -64,6 +70,33 @@ void BM_InflatedSphere(benchmark::State& state) {
   Report(state, solution, std::abs(la / stretch - 1));
 }
 
+// True error: of the top's nominal stress against the closed form.
+void BM_Uniaxial(benchmark::State& state) {
+  const double mu = 1000, bulk = 1e4 * mu, edge = 10, stretch = 0.7;
+  using K = BoundaryConditionSpec::Kind;
+  using testing::Condition;
+  SceneSpec scene;
+  scene.name = "uniaxial";
+  scene.geometry.kind = GeometrySpec::Kind::kBox;
+  scene.geometry.box.size_mm = {edge, edge, edge};
+  scene.mesh.element = kElements[state.range(1)];
+  scene.mesh.element_size_mm = state.range(0) / 10.0;
+  scene.material.kind = MaterialSpec::Kind::kNeoHookean;
+  scene.material.neo_hookean = {mu, bulk};
+  scene.analysis.type = AnalysisSpec::Type::kNonlinearStatic;
+  scene.boundary_conditions = {
+      Condition("bottom", K::kDisplacement, {std::nullopt, std::nullopt, 0.0}),
+      Condition("x_min", K::kDisplacement, {0.0, std::nullopt, std::nullopt}),
+      Condition("y_min", K::kDisplacement, {std::nullopt, 0.0, std::nullopt}),
+      Condition("top", K::kDisplacement, {std::nullopt, std::nullopt, edge * (stretch - 1)})};
+  scene.outputs.reaction_sets = {"top"};
+  Solution solution;
+  if (!testing::SolveEachIteration(state, scene, &solution)) return;
+  const double nominal = solution.summary.reactions.at(0).force_n[2] / (edge * edge * 1e-6);
+  const double exact = testing::CompressibleUniaxial(mu, bulk, stretch).nominal_stress;
+  Report(state, solution, std::abs(nominal / exact - 1));
+}
+
 BENCHMARK(BM_LameSphere)
     ->ArgNames({"h_mm_x10", "element"})
     ->ArgsProduct({{50, 25, 12}, {0, 2, 3}})
@@ -74,6 +107,13 @@ BENCHMARK(BM_LameSphere)
 BENCHMARK(BM_InflatedSphere)
     ->ArgNames({"h_mm_x10", "element"})
     ->ArgsProduct({{50, 25, 12}, {1, 2, 4, 3}})
+    ->Unit(benchmark::kSecond)
+    ->UseRealTime()
+    ->Iterations(1);
+
+BENCHMARK(BM_Uniaxial)
+    ->ArgNames({"h_mm_x10", "element"})
+    ->ArgsProduct({{50, 25, 12}, {0, 1, 2, 4, 3}})
     ->Unit(benchmark::kSecond)
     ->UseRealTime()
     ->Iterations(1);

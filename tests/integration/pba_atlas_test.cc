@@ -35,6 +35,9 @@ void ExpectQualityReport(const fs::path& dir, size_t structures) {
   std::set<std::string> names;
   for (const YAML::Node& row : report["rows"]) {
     EXPECT_GT(row["elements"].as<int64_t>(), 0) << row["structure"].as<std::string>();
+    // At least one tetrahedron's four nodes, at most ten per element.
+    EXPECT_GE(row["nodes"].as<int64_t>(), 4);
+    EXPECT_LE(row["nodes"].as<int64_t>(), 10 * row["elements"].as<int64_t>());
     EXPECT_GT(row["volume_mm3"].as<double>(), 0);
     EXPECT_GT(row["min_dihedral_deg"].as<double>(), 0);
     EXPECT_LT(row["aspect_ratio_max"].as<double>(), 1e3);
