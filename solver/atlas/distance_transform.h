@@ -6,10 +6,34 @@
 // contour distances).
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 namespace pba {
+
+// A bounding box of pixels, inclusive; empty until a pixel is added.
+// Columns and rows may lie outside the grid (e.g. -1, a virtual background
+// ring around a plate).
+struct PixelBox {
+  int c0 = std::numeric_limits<int>::max(), c1 = -1;
+  int r0 = std::numeric_limits<int>::max(), r1 = -1;
+  bool empty() const { return c1 < c0; }
+  int width() const { return c1 - c0 + 1; }
+  int height() const { return r1 - r0 + 1; }
+  void Add(int c, int r) {
+    c0 = std::min(c0, c);
+    c1 = std::max(c1, c);
+    r0 = std::min(r0, r);
+    r1 = std::max(r1, r);
+  }
+  void Add(const PixelBox& b) {
+    if (b.empty()) return;
+    Add(b.c0, b.r0);
+    Add(b.c1, b.r1);
+  }
+};
 
 // Squared Euclidean distance [pixels^2] from every pixel of a w x h grid
 // (row-major, `feature` and `out` both w * h) to the nearest pixel with

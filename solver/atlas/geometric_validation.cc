@@ -15,25 +15,7 @@ namespace {
 
 constexpr double kMmPerM = 1000.0;
 
-// Pixel bounding box, inclusive; empty until a pixel is added.
-struct Box {
-  int c0 = std::numeric_limits<int>::max(), c1 = -1;
-  int r0 = std::numeric_limits<int>::max(), r1 = -1;
-  bool empty() const { return c1 < c0; }
-  int width() const { return c1 - c0 + 1; }
-  int height() const { return r1 - r0 + 1; }
-  void Add(int c, int r) {
-    c0 = std::min(c0, c);
-    c1 = std::max(c1, c);
-    r0 = std::min(r0, r);
-    r1 = std::max(r1, r);
-  }
-  void Add(const Box& b) {
-    if (b.empty()) return;
-    Add(b.c0, b.r0);
-    Add(b.c1, b.r1);
-  }
-};
+using Box = PixelBox;
 
 Status ValidateInputs(const Mesh& mesh, const std::vector<uint16_t>& region_label,
                       const PlateStack& plates) {

@@ -11,15 +11,7 @@
 namespace pba {
 namespace {
 
-// Bounding box in pixels, inclusive; columns and rows may be -1 or
-// width / height (the virtual background ring around a plate).
-struct Box {
-  int c0 = std::numeric_limits<int>::max(), c1 = -1;
-  int r0 = std::numeric_limits<int>::max(), r1 = -1;
-  bool empty() const { return c1 < c0; }
-  int width() const { return c1 - c0 + 1; }
-  int height() const { return r1 - r0 + 1; }
-};
+using Box = PixelBox;
 
 // Where an output layer sits between two plates: plate indices a and b
 // (-1 for the virtual empty plate beyond an end) and the weight t of b.
@@ -136,11 +128,9 @@ Status LoftPlates(const PlateStack& stack, const LoftOptions& options, LabelVolu
       for (int c = 0; c < stack.width; ++c) {
         const uint16_t l = stack.at(p, c, r);
         if (l == 0) continue;
-        Box& b = boxes[l];
-        b.c0 = std::min(b.c0, c - 1);
-        b.c1 = std::max(b.c1, c + 1);
-        b.r0 = std::min(b.r0, r - 1);
-        b.r1 = std::max(b.r1, r + 1);
+        // With a one-pixel margin: the label's boundary lies inside.
+        boxes[l].Add(c - 1, r - 1);
+        boxes[l].Add(c + 1, r + 1);
       }
     }
   }
@@ -207,13 +197,7 @@ Status LoftPlates(const PlateStack& stack, const LoftOptions& options, LabelVolu
   // Foreground first: best = +inf inside (to be claimed by a label), -inf
   // outside (never claimed).
   Box all;
-  for (const Box& b : boxes) {
-    if (b.empty()) continue;
-    all.c0 = std::min(all.c0, b.c0);
-    all.c1 = std::max(all.c1, b.c1);
-    all.r0 = std::min(all.r0, b.r0);
-    all.r1 = std::max(all.r1, b.r1);
-  }
+  for (const Box& b : boxes) all.Add(b);
   std::vector<float> best(out.num_voxels(), -std::numeric_limits<float>::infinity());
   if (!all.empty()) {
     loft(kForeground, all, [&](int64_t v, float d) {
