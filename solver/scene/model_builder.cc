@@ -185,6 +185,12 @@ Status BuildAtlasMesh(const SceneSpec& scene, Mesh* mesh, std::string* descripti
   }
   description->append(Format("; %d tetrahedra, smallest dihedral angle %.1f deg",
                              mesh->num_elements(), result.quality.overall.min_dihedral_deg));
+  if (result.validation) {
+    description->append(
+        Format("; against its plates %.2g %% (thesis eq. 4.3, limit 0.65 %%) over "
+               "%d sections",
+               result.validation->overall_percentage_error, result.validation->total_sections));
+  }
   return Status::Ok();
 }
 
