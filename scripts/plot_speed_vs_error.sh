@@ -36,7 +36,14 @@ for f in "$data"/*.dat; do
   label=${label/LameSphere_/Lamé, }
   label=${label/InflatedSphere_/inflation, }
   label=${label/Uniaxial_/uniaxial, }
-  plots+=("'$f' using 1:2 with linespoints lw 2 pt 7 title '$label'")
+  # One colour per element, one line style per problem.
+  case $label in
+    *TET4_ANP) colour=1 ;; *TET4) colour=2 ;; *TET10_MD) colour=3 ;; *TET10) colour=4 ;; *) colour=5 ;;
+  esac
+  case $label in
+    Lam*) style="dt 1 pt 7" ;; inflation*) style="dt 2 pt 5" ;; *) style="dt 3 pt 9" ;;
+  esac
+  plots+=("'$f' using 1:2 with linespoints lw 2 lc $colour $style title '$label'")
 done
 out="$root/docs/figures/speed_vs_error.png"
 gnuplot <<GNUPLOT
