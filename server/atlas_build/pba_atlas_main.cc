@@ -12,13 +12,13 @@
 
 #include <CLI/CLI.hpp>
 #include <cstdio>
-#include <fstream>
 #include <string>
 #include <vector>
 
 #include "atlas/atlas_build.h"
 #include "atlas/label_volume_io.h"
 #include "atlas/synthetic_atlas.h"
+#include "core/atomic_write.h"
 #include "io/mesh_export.h"
 #include "solve/staging_dir.h"
 
@@ -42,22 +42,14 @@ int Fail(const Status& status) {
   }
 }
 
-Status WriteText(const std::filesystem::path& file, const std::string& text) {
-  std::ofstream out(file, std::ios::binary);
-  out << text;
-  out.close();
-  if (!out) return Status::Io("cannot write " + file.string());
-  return Status::Ok();
-}
-
 // A report in its three forms, <stem>.txt, .csv and .json.
 Status WriteReport(const std::filesystem::path& dir, const std::string& stem,
                    const ReportTable& table) {
   PBA_RETURN_IF_ERROR(
-      WriteText(dir / (stem + ".txt"), FormatReportTable(table, TableFormat::kText)));
+      AtomicWriteText(dir / (stem + ".txt"), FormatReportTable(table, TableFormat::kText)));
   PBA_RETURN_IF_ERROR(
-      WriteText(dir / (stem + ".csv"), FormatReportTable(table, TableFormat::kCsv)));
-  return WriteText(dir / (stem + ".json"), FormatReportTable(table, TableFormat::kJson));
+      AtomicWriteText(dir / (stem + ".csv"), FormatReportTable(table, TableFormat::kCsv)));
+  return AtomicWriteText(dir / (stem + ".json"), FormatReportTable(table, TableFormat::kJson));
 }
 
 int RunPlates(const std::string& out_dir, double voxel_mm) {

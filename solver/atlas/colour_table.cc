@@ -7,6 +7,7 @@
 #include <map>
 #include <sstream>
 
+#include "core/atomic_write.h"
 #include "core/format.h"
 
 namespace pba {
@@ -242,12 +243,7 @@ Status ParseColourTableCsv(std::string_view text, const std::string& source, Col
 }
 
 Status WriteColourTableCsv(const ColourTable& table, const std::filesystem::path& path) {
-  std::ofstream out(path, std::ios::binary);
-  if (!out) return Status::Io("cannot open " + path.string() + " for writing");
-  out << FormatColourTableCsv(table);
-  out.close();
-  if (!out) return Status::Io("writing " + path.string() + " failed");
-  return Status::Ok();
+  return AtomicWriteText(path, FormatColourTableCsv(table));
 }
 
 Status ReadColourTableCsv(const std::filesystem::path& path, ColourTable* table) {

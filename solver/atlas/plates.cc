@@ -6,11 +6,11 @@
 #include <array>
 #include <charconv>
 #include <cmath>
-#include <fstream>
 #include <system_error>
 #include <unordered_map>
 
 #include "atlas/png_io.h"
+#include "core/atomic_write.h"
 #include "core/format.h"
 
 namespace pba {
@@ -26,15 +26,6 @@ std::string Number(double value) {
   char buffer[32];
   const auto [end, error] = std::to_chars(buffer, buffer + sizeof buffer, value);
   return error == std::errc() ? std::string(buffer, end) : "0";
-}
-
-std::string Quoted(const std::string& s) {
-  std::string out = "\"";
-  for (char c : s) {
-    if (c == '"' || c == '\\') out += '\\';
-    out += c;
-  }
-  return out + "\"";
 }
 
 std::string PlateFileName(int index, int count) {
@@ -66,26 +57,17 @@ Grid PlateGrid(const LabelVolume& v, double pixel) {
 std::string IndexJson(const Grid& g, const std::vector<double>& z,
                       const std::vector<std::string>& files) {
   std::string json = "{\n";
-  json += "  \"notice\": " + Quoted(kSyntheticAtlasNotice) + ",\n";
-  json += "  \"format\": " + Quoted(kFormat) + ",\n  \"version\": 1,\n";
-  json += "  \"colour_table\": " + Quoted(kColourFile) + ",\n";
+  json += "  \"notice\": " + JsonQuoted(kSyntheticAtlasNotice) + ",\n";
+  json += "  \"format\": " + JsonQuoted(kFormat) + ",\n  \"version\": 1,\n";
+  json += "  \"colour_table\": " + JsonQuoted(kColourFile) + ",\n";
   json += "  \"pixel_size_mm\": " + Number(g.pixel) + ",\n";
   json += "  \"origin_mm\": [" + Number(g.origin.x()) + ", " + Number(g.origin.y()) + "],\n";
   json += Format("  \"width\": %d,\n  \"height\": %d,\n  \"plates\": [\n", g.width, g.height);
   for (size_t p = 0; p < z.size(); ++p) {
-    json += "    {\"file\": " + Quoted(files[p]) + ", \"z_mm\": " + Number(z[p]) + "}" +
+    json += "    {\"file\": " + JsonQuoted(files[p]) + ", \"z_mm\": " + Number(z[p]) + "}" +
             (p + 1 < z.size() ? ",\n" : "\n");
   }
   return json + "  ]\n}\n";
-}
-
-Status WriteText(const fs::path& path, const std::string& text) {
-  std::ofstream out(path, std::ios::binary);
-  if (!out) return Status::Io("cannot open " + path.string() + " for writing");
-  out << text;
-  out.close();
-  if (!out) return Status::Io("writing " + path.string() + " failed");
-  return Status::Ok();
 }
 
 Status WriteAll(const LabelVolume& volume, const ColourTable& colours, const PlateOptions& options,
@@ -126,7 +108,7 @@ Status WriteAll(const LabelVolume& volume, const ColourTable& colours, const Pla
     PBA_RETURN_IF_ERROR(WriteRgbPng(dir / files.back(), image));
   }
   PBA_RETURN_IF_ERROR(WriteColourTableCsv(colours, dir / kColourFile));
-  return WriteText(dir / kIndexFile, IndexJson(g, options.z_mm, files));
+  return AtomicWriteText(dir / kIndexFile, IndexJson(g, options.z_mm, files));
 }
 
 // A plain file name inside the plate directory.

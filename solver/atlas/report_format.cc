@@ -6,6 +6,8 @@
 #include <cstdlib>
 #include <utility>
 
+#include "core/format.h"
+
 namespace pba {
 namespace {
 
@@ -54,27 +56,10 @@ std::string CsvCell(const ReportCell& cell) {
   return {};
 }
 
-std::string JsonString(const std::string& s) {
-  std::string out = "\"";
-  for (unsigned char ch : s) {
-    if (ch == '"' || ch == '\\') {
-      out += '\\';
-      out += static_cast<char>(ch);
-    } else if (ch < 0x20) {
-      char buffer[8];
-      std::snprintf(buffer, sizeof buffer, "\\u%04x", ch);
-      out += buffer;
-    } else {
-      out += static_cast<char>(ch);
-    }
-  }
-  return out + "\"";
-}
-
 std::string JsonCell(const ReportCell& cell) {
   switch (cell.kind) {
     case ReportCell::Kind::kText:
-      return JsonString(cell.text);
+      return JsonQuoted(cell.text);
     case ReportCell::Kind::kInteger:
       return std::to_string(cell.integer);
     case ReportCell::Kind::kReal:
@@ -89,7 +74,7 @@ std::string JsonObject(const ReportTable& table, const std::vector<ReportCell>& 
   std::string out = "{";
   for (size_t c = 0; c < row.size(); ++c) {
     if (c > 0) out += ", ";
-    out += JsonString(table.columns[c].key) + ": " + JsonCell(row[c]);
+    out += JsonQuoted(table.columns[c].key) + ": " + JsonCell(row[c]);
   }
   return out + "}";
 }
@@ -156,13 +141,13 @@ std::string FormatCsv(const ReportTable& table) {
 }
 
 std::string FormatJson(const ReportTable& table) {
-  std::string out = "{\n  \"title\": " + JsonString(table.title) + ",\n  \"rows\": [";
+  std::string out = "{\n  \"title\": " + JsonQuoted(table.title) + ",\n  \"rows\": [";
   for (size_t r = 0; r < table.rows.size(); ++r) {
     out += (r > 0 ? ",\n    " : "\n    ") + JsonObject(table, table.rows[r]);
   }
   out += table.rows.empty() ? "]" : "\n  ]";
   if (table.footer) {
-    out += ",\n  " + JsonString(table.footer_key) + ": " + JsonObject(table, *table.footer);
+    out += ",\n  " + JsonQuoted(table.footer_key) + ": " + JsonObject(table, *table.footer);
   }
   return out + "\n}\n";
 }

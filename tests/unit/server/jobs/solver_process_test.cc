@@ -80,7 +80,7 @@ TEST(SolverProcessTest, SignalReachesTheWholeGroup) {
   // "started" comes only once the child exists. Printed before a foreground
   // command, it let the signal land while the shell was still forking; a
   // shell that holds signals blocked across its fork then dies alone and the
-  // new child keeps stdout open (about 1 run in 20 failed that way).
+  // new child keeps stdout open, so the test failed now and then.
   command.program = WriteScript(dir.path(), "sleep 30 &\necho started\nwait\n");
   command.stderr_log = dir.path() / "solve.log";
   SolverProcess process;
