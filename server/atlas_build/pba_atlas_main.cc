@@ -165,10 +165,23 @@ int main(int argc, char** argv) {
                     "Voxel edge of the painted synthetic atlas [mm]");
   build->add_option("--loft-voxel-mm", build_options.loft_voxel_mm,
                     "Voxel edge of the volume lofted from plates [mm]");
-  build->add_option("--cell-mm", build_options.cell_size_mm,
-                    "Tetrahedron size inside the structures [mm]");
-  build->add_option("--facet-mm", build_options.facet_size_mm,
-                    "Triangle size on surfaces and interfaces [mm]");
+  build
+      ->add_option("--cell-mm", build_options.cell_size_mm,
+                   "Tetrahedron size inside the structures [mm]")
+      ->capture_default_str();
+  build
+      ->add_option("--facet-mm", build_options.facet_size_mm,
+                   "Triangle size on surfaces and interfaces [mm]")
+      ->capture_default_str();
+  build
+      ->add_option("--facets-per-section", build_options.facets_per_section,
+                   "Smaller facets on small structures: at most a structure's mean section "
+                   "perimeter over this [-]; 0: --facet-mm everywhere")
+      ->capture_default_str();
+  build
+      ->add_option("--odt", build_options.odt_iterations,
+                   "Passes of ODT smoothing before sliver removal; 0: none")
+      ->capture_default_str();
   build->add_option("--facet-distance-mm", build_options.facet_distance_mm,
                     "How far surface triangles may stray from the true surface [mm]; 0: a quarter "
                     "of the facet size");

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <numbers>
 #include <string>
 
 #include "atlas/label_volume_io.h"
@@ -72,6 +73,97 @@ Status ChooseLabels(const AtlasBuildOptions& options, const ColourTable& colours
   return Status::Ok();
 }
 
+// Per region, the facet size bound of its surfaces (LabelMeshOptions::
+// region_facet_size_mm; 0 for none): its mean section perimeter over
+// options.facets_per_section, the perimeter estimated as that of a disc of
+// the structure's mean axial section area (voxel volume over the height
+// between its lowest and highest voxel layer). The disc has the smallest
+// perimeter of any section of that area, so the estimate errs towards
+// smaller facets.
+std::vector<double> StructureFacetSizes(const AtlasBuildOptions& options, const LabelVolume& volume,
+                                        const std::vector<uint16_t>& labels) {
+  if (options.facets_per_section <= 0) return {};
+  std::vector<int64_t> count(65536, 0);
+  std::vector<int> lowest(65536, volume.nz()), highest(65536, -1);
+  for (int k = 0; k < volume.nz(); ++k) {
+    for (int j = 0; j < volume.ny(); ++j) {
+      for (int i = 0; i < volume.nx(); ++i) {
+        const uint16_t l = volume.at(i, j, k);
+        ++count[l];
+        lowest[l] = std::min(lowest[l], k);
+        highest[l] = std::max(highest[l], k);
+      }
+    }
+  }
+  std::vector<double> sizes;
+  for (uint16_t label : labels) {
+    if (label == 0 || count[label] == 0) {  // the surrounding tissue: the global size
+      sizes.push_back(0);
+      continue;
+    }
+    const double height = (highest[label] - lowest[label] + 1) * volume.spacing_mm().z();
+    const double mean_area = count[label] * volume.voxel_volume_mm3() / height;
+    const double perimeter = 2 * std::sqrt(std::numbers::pi * mean_area);
+    sizes.push_back(perimeter / options.facets_per_section);
+  }
+  return sizes;
+}
+
+// A point inside each connected piece (6-connected voxels of one region) of
+// at least kMinPieceVoxels voxels: the centre of its voxel nearest to the
+// piece's centroid, which samples to the piece's own label and, for a
+// compact piece, lies well inside it. `region_of` maps labels to
+// regions (0: not meshed). Lets the mesher seed a piece smaller than its
+// seeding grid (LabelMeshOptions::interior_points_mm); a smaller speck is
+// left to the grid.
+std::vector<Eigen::Vector3d> PieceInteriorPoints(const LabelVolume& volume,
+                                                 const std::vector<int>& region_of) {
+  constexpr int64_t kMinPieceVoxels = 8;
+  std::vector<Eigen::Vector3d> points;
+  std::vector<char> seen(volume.num_voxels(), 0);
+  std::vector<int64_t> stack, piece;
+  const std::array<int, 3> dims = volume.dims();
+  const int64_t stride[3] = {1, dims[0], static_cast<int64_t>(dims[0]) * dims[1]};
+  for (int64_t first = 0; first < volume.num_voxels(); ++first) {
+    const int region = region_of[volume.labels()[first]];
+    if (seen[first] || region == 0) continue;
+    seen[first] = 1;
+    stack.assign(1, first);
+    piece.clear();
+    while (!stack.empty()) {
+      const int64_t v = stack.back();
+      stack.pop_back();
+      piece.push_back(v);
+      const int64_t ijk[3] = {v % dims[0], (v / dims[0]) % dims[1], v / stride[2]};
+      for (int axis = 0; axis < 3; ++axis) {
+        for (const int d : {-1, 1}) {
+          const int64_t c = ijk[axis] + d;
+          if (c < 0 || c >= dims[axis]) continue;
+          const int64_t w = v + d * stride[axis];
+          if (seen[w] || region_of[volume.labels()[w]] != region) continue;
+          seen[w] = 1;
+          stack.push_back(w);
+        }
+      }
+    }
+    if (static_cast<int64_t>(piece.size()) < kMinPieceVoxels) continue;
+    const auto centre = [&](int64_t v) {
+      return volume.VoxelCentreMm(static_cast<int>(v % dims[0]),
+                                  static_cast<int>((v / dims[0]) % dims[1]),
+                                  static_cast<int>(v / stride[2]));
+    };
+    Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+    for (const int64_t v : piece) centroid += centre(v);
+    centroid /= static_cast<double>(piece.size());
+    const int64_t nearest =
+        *std::min_element(piece.begin(), piece.end(), [&](int64_t a, int64_t b) {
+          return (centre(a) - centroid).squaredNorm() < (centre(b) - centroid).squaredNorm();
+        });
+    points.push_back(centre(nearest));
+  }
+  return points;
+}
+
 // `labels` are the regions kept; label 0 among them (merge_rest) stands for
 // every other label of the volume.
 Status MeshVolume(const AtlasBuildOptions& options, const LabelVolume& volume,
@@ -106,6 +198,9 @@ Status MeshVolume(const AtlasBuildOptions& options, const LabelVolume& volume,
   mesh_options.roi_centre_mm = options.roi_centre_mm;
   mesh_options.roi_radius_mm = options.roi_radius_mm;
   mesh_options.roi_size_mm = options.roi_size_mm;
+  mesh_options.region_facet_size_mm = StructureFacetSizes(options, volume, labels);
+  mesh_options.odt_iterations = options.odt_iterations;
+  mesh_options.interior_points_mm = PieceInteriorPoints(volume, region_of);
   const LabelFunction label = [&](const Eigen::Vector3d& x_mm) {
     return region_of[volume.SampleNearest(x_mm)];
   };
@@ -129,6 +224,11 @@ Status AtlasBuildOptions::Validate() const {
   if (!positive(loft_voxel_mm)) return Status::InvalidArgument("loft_voxel_mm", "must be positive");
   if (!positive(cell_size_mm)) return Status::InvalidArgument("cell_size_mm", "must be positive");
   if (!positive(facet_size_mm)) return Status::InvalidArgument("facet_size_mm", "must be positive");
+  if (!std::isfinite(facets_per_section) || facets_per_section < 0) {
+    return Status::InvalidArgument("facets_per_section",
+                                   "must be 0 (the facet size everywhere) or positive");
+  }
+  if (odt_iterations < 0) return Status::InvalidArgument("odt_iterations", "must be >= 0");
   if (!std::isfinite(facet_distance_mm) || facet_distance_mm < 0) {
     return Status::InvalidArgument("facet_distance_mm",
                                    "must be 0 (a quarter of the facet size) or positive");
@@ -234,6 +334,7 @@ ReportTable QualityReportTable(const AtlasBuildResult& result) {
                    {"volume [mm^3]", "volume_mm3", 1},
                    {"AR min", "aspect_ratio_min", 2},
                    {"AR median", "aspect_ratio_median", 2},
+                   {"AR p99", "aspect_ratio_p99", 2},
                    {"AR max", "aspect_ratio_max", 2},
                    {"min dihedral [deg]", "min_dihedral_deg", 1},
                    {"max Jacobian ratio", "max_jacobian_ratio", 3}};
@@ -263,6 +364,7 @@ ReportTable QualityReportTable(const AtlasBuildResult& result) {
                                    ReportCell::Real(q.volume * 1e9),
                                    ReportCell::Real(q.min_aspect_ratio),
                                    ReportCell::Real(q.median_aspect_ratio),
+                                   ReportCell::Real(q.p99_aspect_ratio),
                                    ReportCell::Real(q.max_aspect_ratio),
                                    ReportCell::Real(q.min_dihedral_deg),
                                    ReportCell::Real(q.max_jacobian_ratio)};

@@ -79,7 +79,7 @@ int InsertSurfaceSeeds(const Domain& domain, const Domain::Fct& function, const 
                                std::lround(std::floor(p.y() / spacing)),
                                std::lround(std::floor(p.z() / spacing))};
   };
-  const auto crowded = [&](const Kernel::Point_3& p) {
+  const auto crowded = [&](const Kernel::Point_3& p, double radius) {
     const std::array<long, 3> c = cell_of(p);
     for (long dz = -1; dz <= 1; ++dz) {
       for (long dy = -1; dy <= 1; ++dy) {
@@ -87,7 +87,7 @@ int InsertSurfaceSeeds(const Domain& domain, const Domain::Fct& function, const 
           const auto it = kept.find({c[0] + dx, c[1] + dy, c[2] + dz});
           if (it == kept.end()) continue;
           for (const Kernel::Point_3& q : it->second) {
-            if (CGAL::squared_distance(p, q) < spacing * spacing) return true;
+            if (CGAL::squared_distance(p, q) < radius * radius) return true;
           }
         }
       }
@@ -110,13 +110,59 @@ int InsertSurfaceSeeds(const Domain& domain, const Domain::Fct& function, const 
               construct_intersection(Kernel::Segment_3(point(i, j, k), point(i2, j2, k2)));
           if (std::get<2>(crossing) != 2) continue;  // no surface point found
           const Kernel::Point_3& p = std::get<0>(crossing);
-          if (crowded(p)) continue;
+          if (crowded(p, spacing)) continue;
           kept[cell_of(p)].push_back(p);
           const VertexHandle v = c3t3->triangulation().insert(weighted(p));
           if (v == VertexHandle()) continue;  // hidden: cannot happen with zero weights
           c3t3->set_dimension(v, 2);
           c3t3->set_index(v, std::get<1>(crossing));
           ++seeds;
+        }
+      }
+    }
+  }
+  // From each interior point, along the six axis directions to the first
+  // change of label: a seed on a surface of the point's region even when the
+  // grid above stepped over the region. Thinned like the grid's seeds, but
+  // to half the region's own facet size (it may be smaller than `spacing`).
+  const double walk_step = spacing / 16;
+  const double reach = extent.norm();
+  for (const Eigen::Vector3d& start : o.interior_points_mm) {
+    const Kernel::Point_3 p0(start.x(), start.y(), start.z());
+    const int inside = function(p0);
+    if (inside == 0) continue;
+    double radius = spacing / 2;
+    if (inside <= static_cast<int>(o.region_facet_size_mm.size()) &&
+        o.region_facet_size_mm[inside - 1] > 0) {
+      radius = std::min(radius, o.region_facet_size_mm[inside - 1] / 2);
+    }
+    for (int axis = 0; axis < 3; ++axis) {
+      for (const double sign : {-1.0, 1.0}) {
+        Eigen::Vector3d direction = Eigen::Vector3d::Zero();
+        direction[axis] = sign;
+        Eigen::Vector3d previous = start;
+        for (double t = walk_step; t <= reach; t += walk_step) {
+          const Eigen::Vector3d x = start + t * direction;
+          if (function(Kernel::Point_3(x.x(), x.y(), x.z())) == inside) {
+            previous = x;
+            continue;
+          }
+          const auto crossing = construct_intersection(
+              Kernel::Segment_3(Kernel::Point_3(previous.x(), previous.y(), previous.z()),
+                                Kernel::Point_3(x.x(), x.y(), x.z())));
+          if (std::get<2>(crossing) == 2) {
+            const Kernel::Point_3& p = std::get<0>(crossing);
+            if (!crowded(p, radius)) {
+              kept[cell_of(p)].push_back(p);
+              const VertexHandle v = c3t3->triangulation().insert(weighted(p));
+              if (v != VertexHandle()) {
+                c3t3->set_dimension(v, 2);
+                c3t3->set_index(v, std::get<1>(crossing));
+                ++seeds;
+              }
+            }
+          }
+          break;
         }
       }
     }
@@ -162,12 +208,33 @@ Status ValidateOptions(const std::vector<std::string>& region_names, const Label
     return Status::InvalidArgument("cell_radius_edge_ratio",
                                    "must be at least 2: refinement may not end below 2");
   }
+  if (o.odt_iterations < 0) return Status::InvalidArgument("odt_iterations", "must be >= 0");
+  if (o.lloyd_iterations < 0) return Status::InvalidArgument("lloyd_iterations", "must be >= 0");
   if (!(o.optimisation_time_limit_s >= 0)) {
     return Status::InvalidArgument("optimisation_time_limit_s", "must be >= 0 (0: no limit)");
   }
   if ((o.exude || o.perturb) && !(o.sliver_bound_deg > 0 && o.sliver_bound_deg < 70.5)) {
     return Status::InvalidArgument("sliver_bound_deg",
                                    "must lie in (0, 70.5): a regular tetrahedron's is 70.53");
+  }
+  if (!o.region_facet_size_mm.empty() && o.region_facet_size_mm.size() != region_names.size()) {
+    return Status::InvalidArgument("region_facet_size_mm",
+                                   "has " + std::to_string(o.region_facet_size_mm.size()) +
+                                       " entries for " + std::to_string(region_names.size()) +
+                                       " regions: give one per region, or none");
+  }
+  for (std::size_t r = 0; r < o.region_facet_size_mm.size(); ++r) {
+    const double size = o.region_facet_size_mm[r];
+    if (!(size >= 0) || !std::isfinite(size)) {
+      return Status::InvalidArgument(
+          "region_facet_size_mm[" + std::to_string(r) + "]",
+          "must be 0 (the global facet size) or positive, not " + std::to_string(size));
+    }
+  }
+  for (std::size_t i = 0; i < o.interior_points_mm.size(); ++i) {
+    if (!o.interior_points_mm[i].allFinite())
+      return Status::InvalidArgument("interior_points_mm[" + std::to_string(i) + "]",
+                                     "must be finite");
   }
   if (!(o.relative_error_bound > 0 && o.relative_error_bound < 1))
     return Status::InvalidArgument("relative_error_bound", "must lie in (0, 1)");
@@ -263,22 +330,36 @@ Status ConvertComplex(const Complex& c3t3, const std::vector<std::string>& regio
 
 // The size bound at a point: `coarse` away from the region of interest,
 // options.roi_size_mm (or `coarse` if smaller) inside it, linear between
-// (see LabelMeshOptions).
+// (see LabelMeshOptions); on a surface patch (dimension 2) at most the
+// regions' own facet bound, scaled by `scale` (1 for the facet size, facet
+// distance / facet size for the distance).
 struct SizeField {
   using FT = Kernel::FT;  // CGAL's MeshDomainField_3
   using Point_3 = Kernel::Point_3;
   using Index = Domain::Index;
   const LabelMeshOptions& options;
   double coarse;
-  double operator()(const Kernel::Point_3& p, int, const Domain::Index&) const {
-    if (options.roi_radius_mm <= 0) return coarse;
-    const double fine = std::min(options.roi_size_mm, coarse);
+  double scale = 0;  // 0: no per-region bound (the cell size field)
+  double operator()(const Kernel::Point_3& p, int dimension, const Domain::Index& index) const {
+    double bound = coarse;
+    if (scale > 0 && dimension == 2 && !options.region_facet_size_mm.empty()) {
+      if (const auto* patch = boost::get<Domain::Surface_patch_index>(&index)) {
+        for (const int region : {patch->first, patch->second}) {
+          if (region < 1 || region > static_cast<int>(options.region_facet_size_mm.size()))
+            continue;
+          const double own = options.region_facet_size_mm[region - 1];
+          if (own > 0) bound = std::min(bound, scale * own);
+        }
+      }
+    }
+    if (options.roi_radius_mm <= 0) return bound;
+    const double fine = std::min(options.roi_size_mm * (scale > 0 ? scale : 1), bound);
     const double transition =
         options.roi_transition_mm > 0 ? options.roi_transition_mm : options.roi_radius_mm;
     const double d = (Eigen::Vector3d(p.x(), p.y(), p.z()) - options.roi_centre_mm).norm() -
                      options.roi_radius_mm;
     if (d <= 0) return fine;
-    return std::min(coarse, fine + (coarse - fine) * d / transition);
+    return std::min(bound, fine + (bound - fine) * d / transition);
   }
 };
 
@@ -316,10 +397,11 @@ Status MeshLabels(const LabelFunction& label, const std::vector<std::string>& re
     const Domain domain(function, box, options.relative_error_bound, CGAL::Null_subdomain_index(),
                         &random);
     const SizeField cell_size{options, options.cell_size_mm};
-    const SizeField facet_size_field{options, facet_size};
+    const SizeField facet_size_field{options, facet_size, 1};
+    const SizeField facet_distance_field{options, facet_distance, facet_distance / facet_size};
     const Criteria criteria(params::facet_angle = options.facet_angle_deg,
                             params::facet_size = facet_size_field,
-                            params::facet_distance = facet_distance,
+                            params::facet_distance = facet_distance_field,
                             params::cell_radius_edge_ratio = options.cell_radius_edge_ratio,
                             params::cell_size = cell_size);
     // An explicit time limit: CGAL's default (the refinement's own running
@@ -333,9 +415,17 @@ Status MeshLabels(const LabelFunction& label, const std::vector<std::string>& re
     const auto exude = options.exude
                            ? params::exude(params::time_limit = limit, params::sliver_bound = bound)
                            : params::no_exude();
-    const auto odt = options.odt ? params::odt(params::time_limit = limit) : params::no_odt();
-    const auto lloyd =
-        options.lloyd ? params::lloyd(params::time_limit = limit) : params::no_lloyd();
+    // CGAL stops a pass early when fewer than `freeze_bound` of the vertices
+    // move (relative to their edges), and the whole step when the moves get
+    // below `convergence`; both at CGAL's defaults.
+    const auto odt = options.odt_iterations > 0
+                         ? params::odt(params::time_limit = limit,
+                                       params::max_iteration_number = options.odt_iterations)
+                         : params::no_odt();
+    const auto lloyd = options.lloyd_iterations > 0
+                           ? params::lloyd(params::time_limit = limit,
+                                           params::max_iteration_number = options.lloyd_iterations)
+                           : params::no_lloyd();
     Complex c3t3;
     if (InsertSurfaceSeeds(domain, function, options, facet_size, &c3t3) == 0)
       return Status::FailedPrecondition(kNoRegionMessage);

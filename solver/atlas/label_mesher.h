@@ -66,11 +66,17 @@ struct LabelMeshOptions {
   bool exude = true;
   double sliver_bound_deg = 12;
   double optimisation_time_limit_s = 20;  // per step; 0: no limit
-  // Global optimisation before the sliver removal (ODT, Lloyd): smooths the
-  // vertex distribution, slow (several passes over the mesh), under the same
-  // time limit. Off by default.
-  bool odt = false;
-  bool lloyd = false;
+  // Global optimisation before the sliver removal: passes of optimal
+  // Delaunay triangulation smoothing (ODT; Alliez, Cohen-Steiner, Yvinec &
+  // Desbrun, SIGGRAPH 2005) or of Lloyd smoothing, which move the vertices,
+  // those on surfaces along them, towards better-shaped tetrahedra. Each pass
+  // costs about as much as the refinement; 0: none. A fixed count, not a
+  // time limit, so the result does not depend on the machine (the time
+  // limit above still applies as a safeguard). Two ODT passes lift the
+  // synthetic atlas's worst angles, the ones between surface vertices that
+  // perturbation and exudation cannot reach (docs/atlas.md).
+  int odt_iterations = 0;
+  int lloyd_iterations = 0;
   // Region of interest (off when radius_mm is 0): within radius_mm of
   // centre_mm cells and facets are at most roi_size_mm; beyond it the bound
   // grows linearly with the distance from the sphere, reaching cell_size_mm
@@ -80,6 +86,18 @@ struct LabelMeshOptions {
   double roi_radius_mm = 0;
   double roi_size_mm = 0;
   double roi_transition_mm = 0;
+  // Per region (empty, or one entry per region name): an upper bound on the
+  // facet size [mm] of the region's surfaces and interfaces, 0 for none. An
+  // interface takes the smaller bound of its two regions, and its facet
+  // distance bound shrinks in the same proportion as its facet size. Small
+  // structures need smaller triangles than the bulk to keep their shape.
+  std::vector<double> region_facet_size_mm;
+  // Points known to lie inside a region [mm], e.g. one per connected piece
+  // of each region: the surfaces around each are seeded where the label
+  // first changes along the six axis directions from it, so that a region
+  // smaller than the seeding grid (see MeshLabels) is not missed. Points
+  // outside every region (label 0) are ignored.
+  std::vector<Eigen::Vector3d> interior_points_mm;
   // Seed of CGAL's random surface sampling, used only when the grid seeding
   // (see MeshLabels) finds too few points; the same inputs and seed give the
   // same mesh (unless a time limit is reached).
@@ -102,8 +120,9 @@ struct LabelMeshOptions {
 // Every surface is seeded where the label changes between the points of a
 // grid of spacing about the facet size over the box (CGAL's own random
 // seeding can miss a surface hidden behind another, and refinement never
-// finds a surface without a seed). A region missed by that grid, thinner
-// than the facet size, may therefore be missing from the mesh.
+// finds a surface without a seed), and from the interior points given. A
+// region missed by that grid, thinner than the facet size, with no interior
+// point, may therefore be missing from the mesh.
 //
 // Errors: InvalidArgument naming the field for bad options (sizes <= 0, an
 // empty or inverted box, no region names, a facet angle outside (0, 30], a

@@ -48,6 +48,10 @@ QualityStats Gather(std::vector<ElementQuality> elements) {
         std::max_element(elements.begin(), elements.begin() + mid, by_aspect)->aspect_ratio;
     s.median_aspect_ratio = 0.5 * (s.median_aspect_ratio + below);
   }
+  const std::size_t p99 =
+      static_cast<std::size_t>(std::ceil(0.99 * static_cast<double>(elements.size()))) - 1;
+  std::nth_element(elements.begin(), elements.begin() + p99, elements.end(), by_aspect);
+  s.p99_aspect_ratio = elements[p99].aspect_ratio;
   return s;
 }
 

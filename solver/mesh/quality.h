@@ -39,9 +39,12 @@ double Tet10MaxJacobianRatio(const Tet10Nodes& x);
 // The measures of one set of elements (a region or the whole mesh).
 struct QualityStats {
   int count = 0;  // elements
-  // Aspect ratio (TetAspectRatio) of the corners: smallest, median, largest.
+  // Aspect ratio (TetAspectRatio) of the corners: smallest, median, 99th
+  // percentile (the value 99 % of the elements do not exceed: the smallest
+  // A with at least ceil(0.99 count) elements at or below it), largest.
   double min_aspect_ratio = 0;
   double median_aspect_ratio = 0;
+  double p99_aspect_ratio = 0;
   double max_aspect_ratio = 0;
   // Dihedral angles of the corners' tetrahedra over all elements [degrees].
   double min_dihedral_deg = 0;

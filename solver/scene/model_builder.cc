@@ -133,6 +133,10 @@ Status BuildAtlasMesh(const SceneSpec& scene, Mesh* mesh, std::string* descripti
   options.synthetic_voxel_mm = options.loft_voxel_mm = a.voxel_size_mm > 0 ? a.voxel_size_mm : 1.5;
   options.cell_size_mm = h;
   options.facet_size_mm = a.facet_size_mm > 0 ? a.facet_size_mm : h / 2;
+  // The scene's sizes everywhere: a structure too small for them is named in
+  // the note, not refined (pba-atlas refines small structures and smooths).
+  options.facets_per_section = 0;
+  options.odt_iterations = 0;
   options.structures = a.structures;
   options.merge_rest = a.merge_rest;
   options.roi_centre_mm =

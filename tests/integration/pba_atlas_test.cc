@@ -57,7 +57,11 @@ void ExpectQualityReport(const fs::path& dir, size_t structures) {
 class PbaAtlasTest : public ::testing::Test {
  protected:
   // The synthetic atlas at 2 mm voxels, coarse tetrahedra: a few seconds.
-  static std::vector<std::string> Coarse() { return {"--cell-mm", "8", "--facet-mm", "4"}; }
+  // Coarse and quick: the global sizes everywhere (no finer facets on small
+  // structures), no ODT smoothing.
+  static std::vector<std::string> Coarse() {
+    return {"--cell-mm", "8", "--facet-mm", "4", "--facets-per-section", "0", "--odt", "0"};
+  }
   TempDir dir_;
 };
 

@@ -111,5 +111,28 @@ TEST(QualityTest, SummariseGathersPerRegionAndOverall) {
   EXPECT_NEAR(q.overall.volume, s.overall.volume, 1e-12);
 }
 
+// The 99th percentile: the aspect ratio 99 % of the elements do not exceed.
+// 100 elements: with one flat one it is still the regular elements' 1; with
+// two flat ones, the better of the two.
+TEST(QualityTest, NinetyNinthPercentileOfTheAspectRatio) {
+  Mesh mesh;
+  const Eigen::Matrix<double, 4, 3> x = Regular();
+  mesh.nodes.resize(6, 3);
+  mesh.nodes.topRows<4>() = x;
+  const Eigen::RowVector3d centroid = (x.row(1) + x.row(2) + x.row(3)) / 3;
+  mesh.nodes.row(4) = centroid + 0.05 * (centroid - x.row(0));  // flat (1, 2, 3, 4)
+  mesh.nodes.row(5) = centroid + 0.10 * (centroid - x.row(0));  // less flat (1, 2, 3, 5)
+  mesh.tets.assign(99, {0, 1, 2, 3});
+  mesh.tets.push_back({1, 2, 3, 4});
+  EXPECT_NEAR(Summarise(mesh).overall.p99_aspect_ratio, 1, 1e-12);
+  mesh.tets[0] = {1, 2, 3, 5};
+  const QualitySummary s = Summarise(mesh);
+  const double flat = TetAspectRatio(TetCorners(mesh, 99));
+  const double less_flat = TetAspectRatio(TetCorners(mesh, 0));
+  ASSERT_GT(flat, less_flat);
+  EXPECT_EQ(s.overall.p99_aspect_ratio, less_flat);
+  EXPECT_EQ(s.overall.max_aspect_ratio, flat);
+}
+
 }  // namespace
 }  // namespace pba
