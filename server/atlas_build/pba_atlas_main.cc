@@ -11,11 +11,14 @@
 // be meshed as given; 4 I/O error; 1 internal error.
 
 #include <CLI/CLI.hpp>
+#include <chrono>
 #include <cstdio>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "atlas/atlas_build.h"
+#include "atlas/atlas_pictures.h"
 #include "atlas/label_volume_io.h"
 #include "atlas/synthetic_atlas.h"
 #include "core/atomic_write.h"
@@ -71,7 +74,14 @@ int RunPlates(const std::string& out_dir, double voxel_mm) {
   return kExitOk;
 }
 
-int RunBuild(AtlasBuildOptions options, const std::string& out_dir, TableFormat format) {
+// What to draw into pictures/ (atlas_pictures.h); nullopt: nothing.
+using Pictures = std::optional<AtlasPictureOptions>;
+
+int RunBuild(AtlasBuildOptions options, const Pictures& pictures, const std::string& out_dir,
+             TableFormat format) {
+  if (pictures) {
+    if (Status s = pictures->Validate(); !s.ok()) return Fail(s);
+  }
   StagingDir staging;
   if (Status s = StagingDir::Create(out_dir, &staging); !s.ok()) return Fail(s);
   if (options.source == AtlasBuildOptions::Source::kSynthetic) {
@@ -101,6 +111,14 @@ int RunBuild(AtlasBuildOptions options, const std::string& out_dir, TableFormat 
     validation = ValidationReportTable(*result.validation);
     if (Status s = WriteReport(staging.path(), "validation", *validation); !s.ok()) return Fail(s);
   }
+  double pictures_s = 0;
+  if (pictures) {
+    const auto start = std::chrono::steady_clock::now();
+    if (Status s = WriteAtlasPictures(result, staging.path() / "pictures", *pictures); !s.ok()) {
+      return Fail(s);
+    }
+    pictures_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  }
   if (Status s = staging.Commit(); !s.ok()) return Fail(s);
 
   std::printf("%s", FormatReportTable(quality, format).c_str());
@@ -116,10 +134,10 @@ int RunBuild(AtlasBuildOptions options, const std::string& out_dir, TableFormat 
     const AtlasBuildTimes& t = result.times;
     std::printf(
         "\n%d structures, %d tetrahedra, %d nodes%s; source %.2f s, loft %.2f s, mesh %.2f s, "
-        "quality %.2f s, validation %.2f s\nwrote %s\n",
+        "quality %.2f s, validation %.2f s, pictures %.2f s\nwrote %s\n",
         static_cast<int>(result.region_labels.size()), result.mesh.num_elements(),
         result.mesh.num_nodes(), result.mesh.quadratic() ? " (10-node)" : "", t.source_s, t.loft_s,
-        t.mesh_s + t.quadratic_s, t.quality_s, t.validation_s, out_dir.c_str());
+        t.mesh_s + t.quadratic_s, t.quality_s, t.validation_s, pictures_s, out_dir.c_str());
   }
   return kExitOk;
 }
@@ -149,8 +167,8 @@ int main(int argc, char** argv) {
   CLI::App* build = app.add_subcommand(
       "build",
       "Mesh an atlas: the synthetic one (default), a plate directory or a label volume; writes "
-      "atlas.{vtu,xdmf,msh,inp}, labels.nii.gz, quality.{txt,csv,json} and, from plates, "
-      "validation.{txt,csv,json}");
+      "atlas.{vtu,xdmf,msh,inp}, labels.nii.gz, quality.{txt,csv,json}, pictures/ (PNG cuts "
+      "through the mesh) and, from plates, validation.{txt,csv,json}");
   build
       ->add_option("-o,--out", out_dir,
                    "Output directory (created; an older result there is replaced)")
@@ -200,6 +218,26 @@ int main(int argc, char** argv) {
   build->add_flag("--merge-rest", build_options.merge_rest,
                   "With --structure: mesh every other structure as one region, \"Surrounding "
                   "tissue\", instead of dropping it");
+  bool no_pictures = false;
+  pba::AtlasPictureOptions picture_options;
+  auto* no_pictures_flag = build->add_flag(
+      "--no-pictures", no_pictures,
+      "Do not write pictures/ (the plates' contact sheet and cuts through the mesh)");
+  build
+      ->add_option("--cut-z", picture_options.axial_z_mm,
+                   "Axial cut at this z [mm] into pictures/ (repeatable; any --cut-* replaces "
+                   "the default cuts)")
+      ->excludes(no_pictures_flag);
+  build
+      ->add_option("--cut-y", picture_options.coronal_y_mm,
+                   "Coronal cut at this y [mm] (repeatable)")
+      ->excludes(no_pictures_flag);
+  build
+      ->add_option("--cut-x", picture_options.sagittal_x_mm,
+                   "Sagittal cut at this x [mm] (repeatable)")
+      ->excludes(no_pictures_flag);
+  build->add_option("--picture-mm", picture_options.pixel_mm, "Pixel edge of the cuts [mm]")
+      ->excludes(no_pictures_flag);
   build->add_option("--format", format_name, "Report form on stdout")
       ->check(CLI::IsMember({"text", "csv", "json"}));
 
@@ -229,7 +267,9 @@ int main(int argc, char** argv) {
     const pba::TableFormat format = format_name == "csv"    ? pba::TableFormat::kCsv
                                     : format_name == "json" ? pba::TableFormat::kJson
                                                             : pba::TableFormat::kText;
-    return pba::RunBuild(build_options, out_dir, format);
+    pba::Pictures pictures;
+    if (!no_pictures) pictures = picture_options;
+    return pba::RunBuild(build_options, pictures, out_dir, format);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "pba-atlas: internal error: %s\n", e.what());
     return pba::kExitInternal;

@@ -1,7 +1,7 @@
 // pba-atlas as users call it: the synthetic atlas's plates out of the box,
 // an atlas mesh built from them, from the label volume and from the
-// synthetic source directly, each with its reports; bad input exits 2
-// naming what is wrong and leaves nothing behind.
+// synthetic source directly, each with its reports and pictures; bad input
+// exits 2 naming what is wrong and leaves nothing behind.
 
 #include <gtest/gtest.h>
 #include <yaml-cpp/yaml.h>
@@ -12,6 +12,8 @@
 #include <sstream>
 #include <string>
 
+#include "atlas/colour_table.h"
+#include "atlas/png_io.h"
 #include "integration/subprocess.h"
 
 namespace pba::testing {
@@ -52,6 +54,39 @@ void ExpectQualityReport(const fs::path& dir, size_t structures) {
   for (const char* mesh : {"atlas.vtu", "atlas.xdmf", "atlas.h5", "atlas.msh", "atlas.inp"}) {
     EXPECT_TRUE(fs::exists(dir / mesh)) << mesh;
   }
+}
+
+std::set<std::string> Pictures(const fs::path& dir) {
+  std::set<std::string> files;
+  if (!fs::exists(dir / "pictures")) return files;
+  for (const auto& entry : fs::directory_iterator(dir / "pictures")) {
+    files.insert(entry.path().filename().string());
+  }
+  return files;
+}
+
+// Pixels of a picture by colour.
+struct PixelCounts {
+  int structure = 0, white = 0, black = 0;
+  bool notice = false;
+};
+
+PixelCounts CountPixels(const fs::path& png, AtlasLabel structure) {
+  RgbImage image;
+  const Status s = ReadRgbPng(png, &image);
+  EXPECT_TRUE(s.ok()) << s.ToString();
+  const ColourEntry& colour = *ColourTable::Builtin().FindByLabel(structure);
+  PixelCounts counts;
+  for (size_t i = 0; i < image.rgb.size(); i += 3) {
+    const uint8_t r = image.rgb[i], g = image.rgb[i + 1], b = image.rgb[i + 2];
+    counts.structure += r == colour.r && g == colour.g && b == colour.b;
+    counts.white += r == 255 && g == 255 && b == 255;
+    counts.black += r == 0 && g == 0 && b == 0;
+  }
+  for (const auto& [key, text] : image.text) {
+    counts.notice = counts.notice || (key == "Comment" && text == kSyntheticAtlasNotice);
+  }
+  return counts;
 }
 
 class PbaAtlasTest : public ::testing::Test {
@@ -106,7 +141,9 @@ TEST_F(PbaAtlasTest, PlatesThenMeshFromThemAndFromTheLabelVolume) {
           "--structure", "Nucleus caudatus",
           "--format",    "json",
           "--roi",       "-24,-5,6,12",
-          "--roi-mm",    "2"};
+          "--roi-mm",    "2",
+          "--cut-z",     "6",
+          "--cut-x",     "-24"};
   for (const std::string& a : Coarse()) args.push_back(a);
   run = RunProcess(args);
   ASSERT_EQ(run.exit_code, 0) << run.err;
@@ -114,6 +151,15 @@ TEST_F(PbaAtlasTest, PlatesThenMeshFromThemAndFromTheLabelVolume) {
   // No plates, no validation; stdout is the report as JSON.
   EXPECT_FALSE(fs::exists(from_labels / "validation.json"));
   EXPECT_EQ(YAML::Load(run.out)["rows"].size(), 2u);
+  // Only the cuts asked for, no contact sheet (no plates); the left
+  // putamen in its colour, the source's contours in white.
+  EXPECT_EQ(Pictures(from_labels),
+            (std::set<std::string>{"cut_axial_z+006.0mm.png", "cut_sagittal_x-024.0mm.png"}));
+  const PixelCounts sagittal =
+      CountPixels(from_labels / "pictures" / "cut_sagittal_x-024.0mm.png", kPutamen);
+  EXPECT_GT(sagittal.structure, 200);
+  EXPECT_GT(sagittal.white, 50);
+  EXPECT_FALSE(sagittal.notice);  // a label volume of the user's
   // The region of interest around the left putamen refines it: more
   // elements than the 8 mm mesh from the plates gave it.
   const auto putamen_elements = [](const fs::path& dir) {
@@ -143,6 +189,34 @@ TEST_F(PbaAtlasTest, SyntheticBuildKeepsItsPlates) {
   }
   // 10-node elements in every form: VTK_QUADRATIC_TETRA, Gmsh type 11, C3D10.
   EXPECT_NE(ReadFile(out / "atlas.inp").find("C3D10"), std::string::npos);
+  // The pictures: the contact sheet, axial cuts at plates 5, 14 and 23 of
+  // 27 (z = -28, 2, 33 mm), a coronal cut through the thalamus and a
+  // sagittal one through the right hemisphere.
+  const std::set<std::string> pictures = Pictures(out);
+  for (const char* name : {"plates.png", "cut_axial_z-028.0mm.png", "cut_axial_z+002.0mm.png",
+                           "cut_axial_z+033.0mm.png"}) {
+    EXPECT_EQ(pictures.count(name), 1u) << name;
+  }
+  int coronal = 0, sagittal = 0;
+  for (const std::string& name : pictures) {
+    coronal += name.rfind("cut_coronal_y-0", 0) == 0;
+    sagittal += name.rfind("cut_sagittal_x+0", 0) == 0;
+  }
+  EXPECT_EQ(coronal, 1);
+  EXPECT_EQ(sagittal, 1);
+  EXPECT_EQ(pictures.size(), 6u);
+  EXPECT_NE(run.out.find("pictures "), std::string::npos) << run.out;
+  // Through the basal ganglia: both putamina in their colour, the plate's
+  // contours in white, black outside the brain, the notice.
+  const PixelCounts axial = CountPixels(out / "pictures" / "cut_axial_z+002.0mm.png", kPutamen);
+  EXPECT_GT(axial.structure, 400);
+  EXPECT_GT(axial.white, 500);
+  EXPECT_GT(axial.black, 1000);
+  EXPECT_TRUE(axial.notice);
+  const PixelCounts sheet = CountPixels(out / "pictures" / "plates.png", kPutamen);
+  EXPECT_GT(sheet.structure, 1000);
+  EXPECT_EQ(sheet.white, 0);
+  EXPECT_TRUE(sheet.notice);
 }
 
 // Two structures kept, the rest merged into one region around them; the
@@ -161,7 +235,8 @@ TEST_F(PbaAtlasTest, MergedRestIsOneRegionAndOnlyKeptStructuresAreJudged) {
                                    "Putamen",
                                    "--structure",
                                    "Thalamus: pulvinar",
-                                   "--merge-rest"};
+                                   "--merge-rest",
+                                   "--no-pictures"};
   for (const std::string& a : Coarse()) args.push_back(a);
   const RunResult run = RunProcess(args);
   ASSERT_EQ(run.exit_code, 0) << run.err;
@@ -173,6 +248,7 @@ TEST_F(PbaAtlasTest, MergedRestIsOneRegionAndOnlyKeptStructuresAreJudged) {
     judged.insert(row["structure"].as<std::string>());
   }
   EXPECT_EQ(judged, (std::set<std::string>{"Putamen", "Thalamus: pulvinar"}));
+  EXPECT_FALSE(fs::exists(out / "pictures"));
 }
 
 TEST_F(PbaAtlasTest, BadInputExitsTwoNamingItAndWritesNothing) {
@@ -187,6 +263,15 @@ TEST_F(PbaAtlasTest, BadInputExitsTwoNamingItAndWritesNothing) {
   run = RunProcess({PBA_ATLAS_BIN, "build", "-o", out.string(), "--cell-mm", "-1"});
   EXPECT_EQ(run.exit_code, 2);
   EXPECT_NE(run.err.find("cell_size_mm"), std::string::npos) << run.err;
+  EXPECT_FALSE(fs::exists(out));
+
+  run = RunProcess({PBA_ATLAS_BIN, "build", "-o", out.string(), "--picture-mm", "0"});
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_NE(run.err.find("pixel_mm"), std::string::npos) << run.err;
+  EXPECT_FALSE(fs::exists(out));
+
+  run = RunProcess({PBA_ATLAS_BIN, "build", "-o", out.string(), "--no-pictures", "--cut-z", "5"});
+  EXPECT_EQ(run.exit_code, 2);
   EXPECT_FALSE(fs::exists(out));
 
   run = RunProcess({PBA_ATLAS_BIN, "build", "-o", out.string(), "--labels",
