@@ -132,12 +132,22 @@ int RunBuild(AtlasBuildOptions options, const Pictures& pictures, const std::str
       std::printf("\n%zu structures dropped (not asked for)\n", result.dropped.size());
     }
     const AtlasBuildTimes& t = result.times;
+    const LabelMeshReport& m = result.mesher;
     std::printf(
-        "\n%d structures, %d tetrahedra, %d nodes%s; source %.2f s, loft %.2f s, mesh %.2f s, "
-        "quality %.2f s, validation %.2f s, pictures %.2f s\nwrote %s\n",
+        "\n%d structures, %d tetrahedra, %d nodes%s; source %.2f s, loft %.2f s, mesh %.2f s "
+        "(seeds %.2f, refinement %.2f, ODT %.2f, perturbation %.2f, exudation %.2f), "
+        "quality %.2f s, validation %.2f s, pictures %.2f s\n",
         static_cast<int>(result.region_labels.size()), result.mesh.num_elements(),
         result.mesh.num_nodes(), result.mesh.quadratic() ? " (10-node)" : "", t.source_s, t.loft_s,
-        t.mesh_s + t.quadratic_s, t.quality_s, t.validation_s, pictures_s, out_dir.c_str());
+        t.mesh_s + t.quadratic_s, m.seed_s, m.refine_s, m.odt_s, m.perturb_s, m.exude_s,
+        t.quality_s, t.validation_s, pictures_s);
+    for (const std::string& step : m.time_limit_reached) {
+      std::printf(
+          "note: the mesher's %s step stopped at its time limit; the mesh depends on "
+          "this machine's speed and load\n",
+          step.c_str());
+    }
+    std::printf("wrote %s\n", out_dir.c_str());
   }
   return kExitOk;
 }

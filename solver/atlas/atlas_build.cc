@@ -167,7 +167,8 @@ std::vector<Eigen::Vector3d> PieceInteriorPoints(const LabelVolume& volume,
 // `labels` are the regions kept; label 0 among them (merge_rest) stands for
 // every other label of the volume.
 Status MeshVolume(const AtlasBuildOptions& options, const LabelVolume& volume,
-                  const ColourTable& colours, const std::vector<uint16_t>& labels, Mesh* mesh) {
+                  const ColourTable& colours, const std::vector<uint16_t>& labels, Mesh* mesh,
+                  LabelMeshReport* report) {
   // Region index + 1 of each label, 0 for the labels left out.
   std::vector<int> region_of(65536, 0);
   std::vector<std::string> names;
@@ -200,11 +201,12 @@ Status MeshVolume(const AtlasBuildOptions& options, const LabelVolume& volume,
   mesh_options.roi_size_mm = options.roi_size_mm;
   mesh_options.region_facet_size_mm = StructureFacetSizes(options, volume, labels);
   mesh_options.odt_iterations = options.odt_iterations;
+  mesh_options.optimisation_time_limit_s = options.optimisation_time_limit_s;
   mesh_options.interior_points_mm = PieceInteriorPoints(volume, region_of);
   const LabelFunction label = [&](const Eigen::Vector3d& x_mm) {
     return region_of[volume.SampleNearest(x_mm)];
   };
-  return MeshLabels(label, names, mesh_options, mesh);
+  return MeshLabels(label, names, mesh_options, mesh, report);
 }
 
 }  // namespace
@@ -229,6 +231,9 @@ Status AtlasBuildOptions::Validate() const {
                                    "must be 0 (the facet size everywhere) or positive");
   }
   if (odt_iterations < 0) return Status::InvalidArgument("odt_iterations", "must be >= 0");
+  if (!(optimisation_time_limit_s >= 0)) {
+    return Status::InvalidArgument("optimisation_time_limit_s", "must be >= 0 (0: no limit)");
+  }
   if (!std::isfinite(facet_distance_mm) || facet_distance_mm < 0) {
     return Status::InvalidArgument("facet_distance_mm",
                                    "must be 0 (a quarter of the facet size) or positive");
@@ -288,7 +293,7 @@ Status BuildAtlas(const AtlasBuildOptions& options, AtlasBuildResult* result) {
   }
   start = Clock::now();
   if (Status s = MeshVolume(options, result->volume, result->colours, result->region_labels,
-                            &result->mesh);
+                            &result->mesh, &result->mesher);
       !s.ok()) {
     return s;
   }

@@ -65,6 +65,11 @@ struct AtlasBuildOptions {
   // Passes of ODT smoothing before sliver removal (LabelMeshOptions::
   // odt_iterations); 0: none.
   int odt_iterations = 2;
+  // Bound on each of the mesher's optimisation steps [s]
+  // (LabelMeshOptions::optimisation_time_limit_s): a safeguard, generous so
+  // that the iteration count and the sliver bound end them, not the
+  // machine's load; a step that reaches it is named in `mesher`.
+  double optimisation_time_limit_s = 120;
   // Region of interest (radius 0: none): elements of at most roi_size_mm
   // within roi_radius_mm of roi_centre_mm, growing to the sizes above over
   // one radius outside it (LabelMeshOptions).
@@ -103,6 +108,7 @@ struct AtlasBuildResult {
   QualitySummary quality;
   std::optional<GeometricValidation> validation;
   AtlasBuildTimes times;
+  LabelMeshReport mesher;  // the mesher's steps: their times, and any cut short by its time limit
 };
 
 Status BuildAtlas(const AtlasBuildOptions& options, AtlasBuildResult* result);

@@ -6,12 +6,17 @@
 #include <CGAL/Mesh_criteria_3.h>
 #include <CGAL/Mesh_triangulation_3.h>
 #include <CGAL/Random.h>
+#include <CGAL/exude_mesh_3.h>
+#include <CGAL/lloyd_optimize_mesh_3.h>
 #include <CGAL/make_mesh_3.h>
+#include <CGAL/odt_optimize_mesh_3.h>
+#include <CGAL/perturb_mesh_3.h>
 #include <CGAL/refine_mesh_3.h>
 
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <exception>
 #include <map>
@@ -30,6 +35,12 @@ using CellHandle = Triangulation::Cell_handle;
 using VertexHandle = Triangulation::Vertex_handle;
 
 constexpr double kMetresPerMm = 1e-3;
+
+using Clock = std::chrono::steady_clock;
+
+double SecondsSince(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
 
 constexpr const char* kNoRegionMessage =
     "no region found inside the box: the labelling function is 0 everywhere the mesher "
@@ -366,7 +377,7 @@ struct SizeField {
 }  // namespace
 
 Status MeshLabels(const LabelFunction& label, const std::vector<std::string>& region_names,
-                  const LabelMeshOptions& options, Mesh* mesh) {
+                  const LabelMeshOptions& options, Mesh* mesh, LabelMeshReport* report) {
   if (!label) return Status::InvalidArgument("label", "no labelling function given");
   PBA_RETURN_IF_ERROR(ValidateOptions(region_names, options));
   const double facet_size =
@@ -406,26 +417,15 @@ Status MeshLabels(const LabelFunction& label, const std::vector<std::string>& re
                             params::cell_size = cell_size);
     // An explicit time limit: CGAL's default (the refinement's own running
     // time) would make every result depend on the machine's load. The
-    // sliver bound usually ends both steps well before it.
+    // sliver bound and the iteration counts usually end each step well
+    // before it. The steps run one by one, in make_mesh_3's order, so each
+    // is timed and its outcome known.
     const double bound = options.sliver_bound_deg;
     const double limit = options.optimisation_time_limit_s;
-    const auto perturb =
-        options.perturb ? params::perturb(params::time_limit = limit, params::sliver_bound = bound)
-                        : params::no_perturb();
-    const auto exude = options.exude
-                           ? params::exude(params::time_limit = limit, params::sliver_bound = bound)
-                           : params::no_exude();
-    // CGAL stops a pass early when fewer than `freeze_bound` of the vertices
-    // move (relative to their edges), and the whole step when the moves get
-    // below `convergence`; both at CGAL's defaults.
-    const auto odt = options.odt_iterations > 0
-                         ? params::odt(params::time_limit = limit,
-                                       params::max_iteration_number = options.odt_iterations)
-                         : params::no_odt();
-    const auto lloyd = options.lloyd_iterations > 0
-                           ? params::lloyd(params::time_limit = limit,
-                                           params::max_iteration_number = options.lloyd_iterations)
-                           : params::no_lloyd();
+    LabelMeshReport local_report;
+    LabelMeshReport& r = report != nullptr ? *report : local_report;
+    r = LabelMeshReport();
+    Clock::time_point start = Clock::now();
     Complex c3t3;
     if (InsertSurfaceSeeds(domain, function, options, facet_size, &c3t3) == 0)
       return Status::FailedPrecondition(kNoRegionMessage);
@@ -433,8 +433,42 @@ Status MeshLabels(const LabelFunction& label, const std::vector<std::string>& re
     // across): add CGAL's random surface points, as make_mesh_3 would.
     if (c3t3.triangulation().dimension() != 3)
       CGAL::Mesh_3::internal::init_c3t3(c3t3, domain, criteria, 20);
-    CGAL::refine_mesh_3(c3t3, domain, criteria, odt, lloyd, perturb, exude,
-                        params::no_reset_c3t3());
+    r.seed_s = SecondsSince(start);
+    start = Clock::now();
+    CGAL::refine_mesh_3(c3t3, domain, criteria, params::no_odt(), params::no_lloyd(),
+                        params::no_perturb(), params::no_exude(), params::no_reset_c3t3());
+    r.refine_s = SecondsSince(start);
+    const auto note = [&](const char* step, CGAL::Mesh_optimization_return_code code) {
+      if (code == CGAL::TIME_LIMIT_REACHED) r.time_limit_reached.push_back(step);
+    };
+    // CGAL stops ODT and Lloyd early when fewer than `freeze_bound` of the
+    // vertices move (relative to their edges), or when the moves get below
+    // `convergence`; both at CGAL's defaults.
+    if (options.odt_iterations > 0) {
+      start = Clock::now();
+      note("odt", CGAL::odt_optimize_mesh_3(c3t3, domain, params::time_limit = limit,
+                                            params::max_iteration_number = options.odt_iterations));
+      r.odt_s = SecondsSince(start);
+    }
+    if (options.lloyd_iterations > 0) {
+      start = Clock::now();
+      note("lloyd",
+           CGAL::lloyd_optimize_mesh_3(c3t3, domain, params::time_limit = limit,
+                                       params::max_iteration_number = options.lloyd_iterations));
+      r.lloyd_s = SecondsSince(start);
+    }
+    if (options.perturb) {
+      start = Clock::now();
+      note("perturb", CGAL::perturb_mesh_3(c3t3, domain, params::time_limit = limit,
+                                           params::sliver_bound = bound));
+      r.perturb_s = SecondsSince(start);
+    }
+    if (options.exude) {
+      start = Clock::now();
+      note("exude",
+           CGAL::exude_mesh_3(c3t3, params::time_limit = limit, params::sliver_bound = bound));
+      r.exude_s = SecondsSince(start);
+    }
     return ConvertComplex(c3t3, region_names, mesh);
   } catch (const std::exception& e) {
     return Status::Internal(std::string("CGAL meshing failed: ") + e.what());

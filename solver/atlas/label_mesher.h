@@ -104,6 +104,14 @@ struct LabelMeshOptions {
   unsigned seed = 0;
 };
 
+// What MeshLabels did: the time of each step [s] and the optimisation
+// steps that stopped at optimisation_time_limit_s (their result depends on
+// the machine's speed and load, so the mesh is not reproducible).
+struct LabelMeshReport {
+  double seed_s = 0, refine_s = 0, odt_s = 0, lloyd_s = 0, perturb_s = 0, exude_s = 0;
+  std::vector<std::string> time_limit_reached;  // "odt", "lloyd", "perturb", "exude"
+};
+
 // Meshes the regions of `label` inside the box. On success `mesh` holds:
 //   nodes   the vertices of the tetrahedra, in metres (input is in mm);
 //           vertices of the refinement used by no tetrahedron are dropped;
@@ -137,6 +145,6 @@ struct LabelMeshOptions {
 // thread; the result is deterministic for a deterministic function.
 //
 Status MeshLabels(const LabelFunction& label, const std::vector<std::string>& region_names,
-                  const LabelMeshOptions& options, Mesh* mesh);
+                  const LabelMeshOptions& options, Mesh* mesh, LabelMeshReport* report = nullptr);
 
 }  // namespace pba

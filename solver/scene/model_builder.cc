@@ -137,6 +137,7 @@ Status BuildAtlasMesh(const SceneSpec& scene, Mesh* mesh, std::string* descripti
   // the note, not refined (pba-atlas refines small structures and smooths).
   options.facets_per_section = 0;
   options.odt_iterations = 0;
+  options.optimisation_time_limit_s = 20;
   options.structures = a.structures;
   options.merge_rest = a.merge_rest;
   options.roi_centre_mm =
@@ -174,6 +175,12 @@ Status BuildAtlasMesh(const SceneSpec& scene, Mesh* mesh, std::string* descripti
       Format("; CGAL Mesh_3 from %.3g mm voxels, %.3g mm elements, %.3g mm on "
              "surfaces",
              options.loft_voxel_mm, options.cell_size_mm, options.facet_size_mm));
+  for (const std::string& step : result.mesher.time_limit_reached) {
+    description->append(
+        Format(" (its %s step stopped at its time limit: the mesh depends on the "
+               "machine's load)",
+               step.c_str()));
+  }
   if (a.roi_radius_mm > 0) {
     description->append(Format(", %.3g mm within %.3g mm of (%g, %g, %g) mm", options.roi_size_mm,
                                a.roi_radius_mm, a.roi_centre_mm[0], a.roi_centre_mm[1],
