@@ -76,9 +76,19 @@ Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec) {
   for (int i = 0; i < geometry.patches_size(); ++i) {
     const v1::Patch& p = geometry.patches(i);
     PatchSpec& out = spec->geometry.patches.emplace_back();
-    PBA_RETURN_IF_ERROR(CopyThree(p.centre_mm(),
-                                  "geometry.patches[" + std::to_string(i) + "].centre_mm",
-                                  "coordinates (x, y, z) in mm", &out.centre_mm));
+    const std::string path = "geometry.patches[" + std::to_string(i) + "]";
+    out.ball = p.centre_mm_size() > 0 || p.radius_mm() != 0;
+    if (out.ball) {
+      PBA_RETURN_IF_ERROR(CopyThree(p.centre_mm(), path + ".centre_mm",
+                                    "coordinates (x, y, z) in mm", &out.centre_mm));
+    }
+    out.half_space = p.plane_point_mm_size() > 0 || p.plane_normal_size() > 0;
+    if (out.half_space) {
+      PBA_RETURN_IF_ERROR(CopyThree(p.plane_point_mm(), path + ".plane_point_mm",
+                                    "coordinates (x, y, z) in mm", &out.plane_point_mm));
+      PBA_RETURN_IF_ERROR(CopyThree(p.plane_normal(), path + ".plane_normal",
+                                    "components (x, y, z)", &out.plane_normal));
+    }
     out.name = p.name();
     out.set = p.set();
     out.radius_mm = p.radius_mm();

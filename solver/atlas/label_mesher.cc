@@ -309,6 +309,7 @@ Status ConvertComplex(const Complex& c3t3, const std::vector<std::string>& regio
   // interface, anticlockwise seen from outside that element.
   FaceSet surface;
   std::map<std::pair<int, int>, FaceSet> interfaces;
+  std::vector<FaceSet> region_surfaces(region_names.size());
   for (int e = 0; e < static_cast<int>(cells.size()); ++e) {
     const CellHandle cell = cells[e];
     const std::array<int, 4>& tet = out.tets[e];
@@ -320,16 +321,24 @@ Status ConvertComplex(const Complex& c3t3, const std::vector<std::string>& regio
       const std::array<int, 3> face{tet[kTetFaces[local][0]], tet[kTetFaces[local][1]],
                                     tet[kTetFaces[local][2]]};
       const auto other = element_of.find(&*neighbour);
+      const int mine = out.element_region[e];
       if (other == element_of.end()) {
         surface.triangles.push_back(face);
+        region_surfaces[mine].triangles.push_back(face);
         continue;
       }
-      const int mine = out.element_region[e], theirs = out.element_region[other->second];
+      const int theirs = out.element_region[other->second];
+      if (mine != theirs) region_surfaces[mine].triangles.push_back(face);
       if (mine < theirs) interfaces[{mine, theirs}].triangles.push_back(face);
     }
   }
   CollectFaceSetNodes(&surface);
   out.face_sets["surface"] = std::move(surface);
+  for (std::size_t r = 0; r < region_surfaces.size(); ++r) {
+    if (region_surfaces[r].triangles.empty()) continue;  // a region that got no element
+    CollectFaceSetNodes(&region_surfaces[r]);
+    out.face_sets["surface:" + region_names[r]] = std::move(region_surfaces[r]);
+  }
   for (auto& [pair, set] : interfaces) {
     CollectFaceSetNodes(&set);
     out.face_sets["interface:" + region_names[pair.first] + "|" + region_names[pair.second]] =

@@ -123,7 +123,11 @@ struct LabelMeshReport {
 //                              outside the body;
 //     "interface:<a>|<b>"      the triangles between regions a and b
 //                              (names, a's label < b's), anticlockwise seen
-//                              from b, i.e. the normal points from a into b.
+//                              from b, i.e. the normal points from a into b;
+//     "surface:<a>"            the whole boundary of region a (against the
+//                              outside and against other regions),
+//                              anticlockwise seen from outside a; absent
+//                              for a region that got no tetrahedron.
 //
 // Every surface is seeded where the label changes between the points of a
 // grid of spacing about the facet size over the box (CGAL's own random

@@ -134,25 +134,29 @@ void CollectFaceSetNodes(FaceSet* set) {
   nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
 }
 
-FaceSet FacesWithin(const Mesh& mesh, const FaceSet& set, const Eigen::Vector3d& centre,
-                    double radius) {
-  const auto inside = [&](int node) {
-    return (mesh.nodes.row(node).transpose() - centre).norm() <= radius;
-  };
-  const auto all_inside = [&](const auto& face) {
-    return std::all_of(face.begin(), face.end(), inside);
+FaceSet FacesWhere(const Mesh& mesh, const FaceSet& set,
+                   const std::function<bool(const Eigen::Vector3d& x)>& keep) {
+  const auto kept = [&](const auto& face) {
+    return std::all_of(face.begin(), face.end(),
+                       [&](int node) { return keep(mesh.nodes.row(node).transpose()); });
   };
   FaceSet patch;
   for (std::size_t t = 0; t < set.triangles.size(); ++t) {
-    if (!all_inside(set.triangles[t])) continue;
+    if (!kept(set.triangles[t])) continue;
     patch.triangles.push_back(set.triangles[t]);
     if (!set.triangle_midside.empty()) patch.triangle_midside.push_back(set.triangle_midside[t]);
   }
   for (const auto& q : set.quads) {
-    if (all_inside(q)) patch.quads.push_back(q);
+    if (kept(q)) patch.quads.push_back(q);
   }
   CollectFaceSetNodes(&patch);
   return patch;
+}
+
+FaceSet FacesWithin(const Mesh& mesh, const FaceSet& set, const Eigen::Vector3d& centre,
+                    double radius) {
+  return FacesWhere(mesh, set,
+                    [&](const Eigen::Vector3d& x) { return (x - centre).norm() <= radius; });
 }
 
 }  // namespace pba

@@ -6,6 +6,7 @@
 #include <Eigen/Core>
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <string>
 #include <vector>
@@ -74,6 +75,12 @@ double FaceSetArea(const Mesh& mesh, const FaceSet& set);
 // Sets `set->nodes` to the nodes its faces touch (triangle corners, their
 // mid-edge nodes, quad corners), sorted and unique.
 void CollectFaceSetNodes(FaceSet* set);
+
+// The faces of `set` all of whose corners `keep` accepts (given the node's
+// position [m]), with their mid-edge nodes on a quadratic mesh; `nodes`
+// lists what they touch.
+FaceSet FacesWhere(const Mesh& mesh, const FaceSet& set,
+                   const std::function<bool(const Eigen::Vector3d& x)>& keep);
 
 // The faces of `set` whose corners all lie within `radius` of `centre` [m]
 // (a patch of it, e.g. where a punch presses), with their mid-edge nodes

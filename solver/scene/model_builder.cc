@@ -62,34 +62,119 @@ MidsideProjection WithPatches(const GeometrySpec& g, MidsideProjection project) 
 }
 
 // Cuts the geometry's patches out of their sets; a patch that holds no
-// face is an error naming it and the radius that would hold one.
+// face is an error naming it and, for a ball, the radius that would hold
+// one.
 Status CutPatches(const GeometrySpec& g, Mesh* mesh) {
   constexpr double kMm = 1e-3;
   for (std::size_t i = 0; i < g.patches.size(); ++i) {
     const PatchSpec& p = g.patches[i];
-    const FaceSet& parent = mesh->face_sets.at(p.set);
+    const std::string path = "geometry.patches[" + std::to_string(i) + "]";
+    const auto parent_it = mesh->face_sets.find(p.set);
+    if (parent_it == mesh->face_sets.end()) {
+      return Status::InvalidArgument(path + ".set", "the mesh has no face set '" + p.set + "'");
+    }
+    const FaceSet& parent = parent_it->second;
     const Eigen::Vector3d centre =
         Eigen::Vector3d(p.centre_mm[0], p.centre_mm[1], p.centre_mm[2]) * kMm;
-    FaceSet patch = FacesWithin(*mesh, parent, centre, p.radius_mm * kMm);
-    if (patch.triangles.empty() && patch.quads.empty()) {
-      // The smallest radius about this centre that would hold a face.
-      double needed = INFINITY;
-      const auto reach = [&](const auto& face) {
-        double r = 0;
-        for (int node : face) r = std::max(r, (mesh->nodes.row(node).transpose() - centre).norm());
-        needed = std::min(needed, r);
-      };
-      for (const auto& t : parent.triangles) reach(t);
-      for (const auto& q : parent.quads) reach(q);
-      return Status::InvalidArgument(
-          "geometry.patches[" + std::to_string(i) + "].radius_mm",
-          Format("patch '%s' holds no face of '%s': no face has all its nodes within %g mm of "
-                 "(%g, %g, %g) mm; about this centre the radius must be at least %.3g mm at "
-                 "this element size (or move the centre onto the surface)",
-                 p.name.c_str(), p.set.c_str(), p.radius_mm, p.centre_mm[0], p.centre_mm[1],
-                 p.centre_mm[2], needed / kMm));
+    const Eigen::Vector3d point =
+        Eigen::Vector3d(p.plane_point_mm[0], p.plane_point_mm[1], p.plane_point_mm[2]) * kMm;
+    const Eigen::Vector3d normal(p.plane_normal[0], p.plane_normal[1], p.plane_normal[2]);
+    // A node within a nanometre of the plane counts as on the kept side.
+    const double on_plane = 1e-9 * normal.norm();
+    FaceSet patch = FacesWhere(*mesh, parent, [&](const Eigen::Vector3d& x) {
+      return (!p.ball || (x - centre).norm() <= p.radius_mm * kMm) &&
+             (!p.half_space || (x - point).dot(normal) >= -on_plane);
+    });
+    if (!patch.triangles.empty() || !patch.quads.empty()) {
+      mesh->face_sets[p.name] = std::move(patch);
+      continue;
     }
-    mesh->face_sets[p.name] = std::move(patch);
+    if (!p.ball) {
+      return Status::InvalidArgument(
+          path + ".plane_point_mm",
+          Format("patch '%s' holds no face of '%s': no face has all its nodes on the side of the "
+                 "plane through (%g, %g, %g) mm that (%g, %g, %g) points to",
+                 p.name.c_str(), p.set.c_str(), p.plane_point_mm[0], p.plane_point_mm[1],
+                 p.plane_point_mm[2], p.plane_normal[0], p.plane_normal[1], p.plane_normal[2]));
+    }
+    // The smallest radius about this centre that would hold a face.
+    double needed = INFINITY;
+    const auto reach = [&](const auto& face) {
+      double r = 0;
+      for (int node : face) r = std::max(r, (mesh->nodes.row(node).transpose() - centre).norm());
+      needed = std::min(needed, r);
+    };
+    for (const auto& t : parent.triangles) reach(t);
+    for (const auto& q : parent.quads) reach(q);
+    return Status::InvalidArgument(
+        path + ".radius_mm",
+        Format("patch '%s' holds no face of '%s': no face has all its nodes within %g mm of "
+               "(%g, %g, %g) mm%s; about this centre the radius must be at least %.3g mm at "
+               "this element size (or move the centre onto the surface)",
+               p.name.c_str(), p.set.c_str(), p.radius_mm, p.centre_mm[0], p.centre_mm[1],
+               p.centre_mm[2], p.half_space ? " and on the kept side of its plane" : "",
+               needed / kMm));
+  }
+  return Status::Ok();
+}
+
+// The atlas face sets the scene names ("surface:<structure>",
+// "interface:<a>|<b>", validated in form by ValidateScene) must exist in
+// the mesh built. An interface named in the other order than the mesh's
+// (lower label first) is made from it, its triangles turned over so that
+// the normal points from the first structure named into the second. A
+// missing one is an error naming the scene field and the structure's sets
+// the mesh has.
+Status ProvideAtlasSets(const SceneSpec& scene, Mesh* mesh) {
+  std::vector<std::pair<std::string, std::string>> wanted;  // (field, set)
+  for (std::size_t i = 0; i < scene.geometry.patches.size(); ++i) {
+    wanted.emplace_back("geometry.patches[" + std::to_string(i) + "].set",
+                        scene.geometry.patches[i].set);
+  }
+  for (std::size_t i = 0; i < scene.boundary_conditions.size(); ++i) {
+    wanted.emplace_back("boundary_conditions[" + std::to_string(i) + "].set",
+                        scene.boundary_conditions[i].set);
+  }
+  for (std::size_t i = 0; i < scene.outputs.reaction_sets.size(); ++i) {
+    wanted.emplace_back("outputs.reaction_sets[" + std::to_string(i) + "]",
+                        scene.outputs.reaction_sets[i]);
+  }
+  for (const auto& [field, name] : wanted) {
+    if (mesh->face_sets.count(name) != 0) continue;
+    const bool surface = name.rfind("surface:", 0) == 0;
+    if (!surface && name.rfind("interface:", 0) != 0) continue;  // a patch, made later
+    std::string first = name.substr(surface ? 8 : 10), second;
+    if (!surface) {
+      const std::size_t bar = first.find('|');
+      second = first.substr(bar + 1);
+      first.resize(bar);
+      const auto reversed = mesh->face_sets.find("interface:" + second + "|" + first);
+      if (reversed != mesh->face_sets.end()) {
+        FaceSet turned = reversed->second;
+        for (auto& t : turned.triangles) std::swap(t[1], t[2]);
+        for (auto& m : turned.triangle_midside) std::swap(m[0], m[2]);
+        mesh->face_sets[name] = std::move(turned);
+        continue;
+      }
+    }
+    // What the mesh has for the structure(s) named.
+    std::vector<std::string> related;
+    for (const auto& [set_name, set] : mesh->face_sets) {
+      const bool names_first = set_name.find(":" + first) != std::string::npos ||
+                               set_name.find("|" + first) != std::string::npos;
+      const bool names_second =
+          !second.empty() && (set_name.find(":" + second) != std::string::npos ||
+                              set_name.find("|" + second) != std::string::npos);
+      if (names_first || names_second) related.push_back("'" + set_name + "'");
+    }
+    std::string listed;
+    for (const std::string& r : related) listed += (listed.empty() ? "" : ", ") + r;
+    return Status::InvalidArgument(
+        field, Format("the atlas mesh has no face set '%s'%s; %s", name.c_str(),
+                      surface ? " (the structure got no elements at this size)"
+                              : " (the two structures do not touch in this mesh)",
+                      related.empty() ? "it has none for these structures"
+                                      : ("it has " + listed).c_str()));
   }
   return Status::Ok();
 }
@@ -214,6 +299,7 @@ Status BuildModel(const SceneSpec& scene, Model* out) {
   MeshStats stats;
   if (scene.geometry.kind == GeometrySpec::Kind::kAtlas) {
     PBA_RETURN_IF_ERROR(BuildAtlasMesh(scene, &model.mesh, &model.mesh_description));
+    PBA_RETURN_IF_ERROR(ProvideAtlasSets(scene, &model.mesh));
   } else {
     model.mesh = BuildPrimitiveMesh(scene.geometry, scene.mesh, &stats);
     model.mesh_description = stats.description;

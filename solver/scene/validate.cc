@@ -4,6 +4,8 @@
 #include <cstdio>
 #include <string>
 
+#include "atlas/atlas_build.h"
+#include "atlas/colour_table.h"
 #include "material/factory.h"
 #include "mesh/primitive_mesher.h"
 #include "pba/scene.h"
@@ -124,6 +126,58 @@ Status ValidateGeometry(const GeometrySpec& geometry) {
   return Status::Internal("unhandled geometry kind");
 }
 
+// A face set an atlas mesh will have, named before it exists:
+// "surface:<structure>" (the whole boundary of a structure) or
+// "interface:<a>|<b>" (between two structures). Which structures touch is
+// known only after meshing (model_builder.cc checks it there); here the
+// form, and for the synthetic atlas the structure names, against the
+// built-in colour table and the scene's own list of structures.
+bool IsAtlasSetName(const GeometrySpec& geometry, const std::string& name) {
+  return geometry.kind == GeometrySpec::Kind::kAtlas &&
+         (name.rfind("surface:", 0) == 0 || name.rfind("interface:", 0) == 0);
+}
+
+Status CheckAtlasSetName(const GeometrySpec& geometry, const std::string& name,
+                         const std::string& path) {
+  const AtlasSpec& a = geometry.atlas;
+  const bool synthetic = a.source.empty() || a.source == "synthetic";
+  const auto check_structure = [&](const std::string& structure) -> Status {
+    if (structure.empty()) {
+      return Status::InvalidArgument(path, "'" + name + "' names no structure");
+    }
+    if (structure == kSurroundingTissue) {
+      if (a.merge_rest) return Status::Ok();
+      return Status::InvalidArgument(path,
+                                     "'" + name + "': \"" + kSurroundingTissue +
+                                         "\" exists only with geometry.atlas.merge_rest: true");
+    }
+    if (!a.structures.empty() &&
+        std::find(a.structures.begin(), a.structures.end(), structure) == a.structures.end()) {
+      return Status::InvalidArgument(
+          path, "'" + name + "': \"" + structure +
+                    "\" is not among geometry.atlas.structures, so the mesh will not have it");
+    }
+    if (synthetic && ColourTable::Builtin().FindByName(structure) == nullptr) {
+      return Status::InvalidArgument(
+          path, "'" + name + "': the synthetic atlas has no structure \"" + structure + "\"");
+    }
+    return Status::Ok();
+  };
+  if (name.rfind("surface:", 0) == 0) return check_structure(name.substr(8));
+  const std::string pair = name.substr(10);
+  const std::size_t bar = pair.find('|');
+  if (bar == std::string::npos) {
+    return Status::InvalidArgument(
+        path, "'" + name + "' is not of the form interface:<structure>|<structure>");
+  }
+  const std::string first = pair.substr(0, bar), second = pair.substr(bar + 1);
+  if (first == second) {
+    return Status::InvalidArgument(path, "'" + name + "' names the same structure twice");
+  }
+  PBA_RETURN_IF_ERROR(check_structure(first));
+  return check_structure(second);
+}
+
 // Names unique and new, parents among the geometry's own sets, a ball that
 // can hold a face. Whether it does is known only after meshing (BuildModel).
 Status ValidatePatches(const GeometrySpec& geometry) {
@@ -139,21 +193,50 @@ Status ValidatePatches(const GeometrySpec& geometry) {
       return Status::InvalidArgument(path + ".name",
                                      "'" + p.name + "' is already a face set of this geometry");
     }
-    if (std::find(own.begin(), own.end(), p.set) == own.end()) {
+    if (IsAtlasSetName(geometry, p.set)) {
+      PBA_RETURN_IF_ERROR(CheckAtlasSetName(geometry, p.set, path + ".set"));
+    } else if (std::find(own.begin(), own.end(), p.set) == own.end()) {
       return Status::InvalidArgument(
           path + ".set",
           "unknown face set '" + p.set + "'; a patch is cut from one of: " + JoinNames(own));
     }
-    for (int c = 0; c < 3; ++c) {
-      if (!std::isfinite(p.centre_mm[c])) {
+    if (!p.ball && !p.half_space) {
+      return Status::InvalidArgument(
+          path,
+          "a patch needs a ball (centre_mm, radius_mm), a half-space (plane_point_mm, "
+          "plane_normal), or both");
+    }
+    if (p.ball) {
+      for (int c = 0; c < 3; ++c) {
+        if (!std::isfinite(p.centre_mm[c])) {
+          return Status::InvalidArgument(
+              path + ".centre_mm[" + std::to_string(c) + "]",
+              "must be a finite number of mm, got " + Number(p.centre_mm[c]));
+        }
+      }
+      if (!PositiveFinite(p.radius_mm)) {
         return Status::InvalidArgument(
-            path + ".centre_mm[" + std::to_string(c) + "]",
-            "must be a finite number of mm, got " + Number(p.centre_mm[c]));
+            path + ".radius_mm", "must be a positive number of mm, got " + Number(p.radius_mm));
       }
     }
-    if (!PositiveFinite(p.radius_mm)) {
-      return Status::InvalidArgument(path + ".radius_mm",
-                                     "must be a positive number of mm, got " + Number(p.radius_mm));
+    if (p.half_space) {
+      double length = 0;
+      for (int c = 0; c < 3; ++c) {
+        if (!std::isfinite(p.plane_point_mm[c])) {
+          return Status::InvalidArgument(
+              path + ".plane_point_mm[" + std::to_string(c) + "]",
+              "must be a finite number of mm, got " + Number(p.plane_point_mm[c]));
+        }
+        if (!std::isfinite(p.plane_normal[c])) {
+          return Status::InvalidArgument(path + ".plane_normal[" + std::to_string(c) + "]",
+                                         "must be finite, got " + Number(p.plane_normal[c]));
+        }
+        length += p.plane_normal[c] * p.plane_normal[c];
+      }
+      if (!(length > 0)) {
+        return Status::InvalidArgument(path + ".plane_normal",
+                                       "must not be zero: it points to the side kept");
+      }
     }
     names.push_back(p.name);
   }
@@ -315,7 +398,9 @@ Status ValidateScene(const SceneSpec& scene) {
   for (std::size_t i = 0; i < scene.boundary_conditions.size(); ++i) {
     const BoundaryConditionSpec& bc = scene.boundary_conditions[i];
     const std::string path = "boundary_conditions[" + std::to_string(i) + "]";
-    if (std::find(sets.begin(), sets.end(), bc.set) == sets.end()) {
+    if (IsAtlasSetName(scene.geometry, bc.set)) {
+      PBA_RETURN_IF_ERROR(CheckAtlasSetName(scene.geometry, bc.set, path + ".set"));
+    } else if (std::find(sets.begin(), sets.end(), bc.set) == sets.end()) {
       return Status::InvalidArgument(path + ".set", "unknown face set '" + bc.set +
                                                         "'; this geometry has: " + JoinNames(sets));
     }
@@ -404,10 +489,12 @@ Status ValidateScene(const SceneSpec& scene) {
   }
   for (std::size_t i = 0; i < scene.outputs.reaction_sets.size(); ++i) {
     const std::string& name = scene.outputs.reaction_sets[i];
-    if (std::find(sets.begin(), sets.end(), name) == sets.end()) {
+    const std::string path = "outputs.reaction_sets[" + std::to_string(i) + "]";
+    if (IsAtlasSetName(scene.geometry, name)) {
+      PBA_RETURN_IF_ERROR(CheckAtlasSetName(scene.geometry, name, path));
+    } else if (std::find(sets.begin(), sets.end(), name) == sets.end()) {
       return Status::InvalidArgument(
-          "outputs.reaction_sets[" + std::to_string(i) + "]",
-          "unknown face set '" + name + "'; this geometry has: " + JoinNames(sets));
+          path, "unknown face set '" + name + "'; this geometry has: " + JoinNames(sets));
     }
   }
   return Status::Ok();

@@ -144,7 +144,7 @@ INSTANTIATE_TEST_SUITE_P(
         // tell, and the message says what radius would do.
         BadCase{"patch_smaller_than_an_element",
                 [](SceneSpec* s) {
-                  s->geometry.patches = {{"pad", "top", {5, 5, 10}, 2}};
+                  s->geometry.patches = {PatchSpec::Ball("pad", "top", {5, 5, 10}, 2)};
                   s->boundary_conditions[1].set = "pad";
                 },
                 kInvalid, "geometry.patches[0].radius_mm", "at least 5"},

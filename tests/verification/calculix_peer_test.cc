@@ -174,7 +174,8 @@ std::vector<SceneSpec> Cases() {
   GeometrySpec brain;
   brain.kind = GeometrySpec::Kind::kEllipsoid;
   brain.ellipsoid.semi_axes_mm = {70, 60, 50};
-  brain.patches = {{"punch", "surface", {0, 0, 50}, 15}, {"base", "surface", {0, 0, -50}, 30}};
+  brain.patches = {PatchSpec::Ball("punch", "surface", {0, 0, 50}, 15),
+                   PatchSpec::Ball("base", "surface", {0, 0, -50}, 30)};
   SceneSpec indented =
       Scene("ellipsoidal brain, base held, crown patch pressed 5 mm (nonlinear)", brain, 10,
             {Condition("base", K::kFixed), Condition("punch", K::kDisplacement, {0.0, 0.0, -5.0})});

@@ -7,6 +7,7 @@
 #include <array>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "pba/status.h"
@@ -59,13 +60,41 @@ struct AtlasSpec {
 };
 
 // A face set cut out of another: the faces of `set` whose nodes all lie
-// within `radius_mm` of `centre_mm`, e.g. the patch a punch presses on.
-// It names a region of a curved face for a condition of its own.
+// within `radius_mm` of `centre_mm` (a ball, e.g. the patch a punch presses
+// on), or on the side of a plane its normal points to (a half-space, e.g.
+// the base of a brain below z = -40 mm), or both. It names a region of a
+// curved face for a condition of its own.
 struct PatchSpec {
-  std::string name;                          // new face set; not a name the geometry has
-  std::string set;                           // one of the geometry's own face sets
+  std::string name;  // new face set; not a name the geometry has
+  std::string set;   // one of the geometry's own face sets
+  bool ball = false;
   std::array<double, 3> centre_mm{0, 0, 0};  // [mm]
   double radius_mm = 0;                      // [mm], > 0
+  bool half_space = false;
+  std::array<double, 3> plane_point_mm{0, 0, 0};  // a point of the plane [mm]
+  std::array<double, 3> plane_normal{0, 0, 0};    // towards the kept side; any length, non-zero
+
+  static PatchSpec Ball(std::string name, std::string set, std::array<double, 3> centre_mm,
+                        double radius_mm) {
+    PatchSpec p;
+    p.name = std::move(name);
+    p.set = std::move(set);
+    p.ball = true;
+    p.centre_mm = centre_mm;
+    p.radius_mm = radius_mm;
+    return p;
+  }
+  static PatchSpec HalfSpace(std::string name, std::string set,
+                             std::array<double, 3> plane_point_mm,
+                             std::array<double, 3> plane_normal) {
+    PatchSpec p;
+    p.name = std::move(name);
+    p.set = std::move(set);
+    p.half_space = true;
+    p.plane_point_mm = plane_point_mm;
+    p.plane_normal = plane_normal;
+    return p;
+  }
 };
 
 struct GeometrySpec {

@@ -148,7 +148,7 @@ TEST(LabelMesherTest, NestedSpheresGiveAConformingTwoRegionMesh) {
         mesh.element_region[elements[0]] != mesh.element_region[elements[1]])
       interface.insert(face);
   }
-  ASSERT_EQ(mesh.face_sets.size(), 2u);
+  ASSERT_EQ(mesh.face_sets.size(), 4u);
   const FaceSet& surface = mesh.face_sets.at("surface");
   const FaceSet& between = mesh.face_sets.at("interface:shell|core");
   EXPECT_EQ(SortedTriangles(surface), boundary);
@@ -156,6 +156,22 @@ TEST(LabelMesherTest, NestedSpheresGiveAConformingTwoRegionMesh) {
   EXPECT_EQ(SortedTriangles(between), interface);
   EXPECT_EQ(between.triangles.size(), interface.size());
   EXPECT_FALSE(surface.nodes.empty());
+  // Each region's whole boundary: the core's is the interface, turned to
+  // face out of the core; the shell's is the outer surface and the
+  // interface.
+  const FaceSet& core = mesh.face_sets.at("surface:core");
+  const FaceSet& shell = mesh.face_sets.at("surface:shell");
+  EXPECT_EQ(SortedTriangles(core), interface);
+  std::set<Triangle> both = boundary;
+  both.insert(interface.begin(), interface.end());
+  EXPECT_EQ(SortedTriangles(shell), both);
+  EXPECT_EQ(shell.triangles.size(), both.size());
+  for (const Triangle& t : core.triangles) {
+    const Eigen::Vector3d p0 = mesh.nodes.row(t[0]).transpose();
+    const Eigen::Vector3d normal =
+        (mesh.nodes.row(t[1]).transpose() - p0).cross(mesh.nodes.row(t[2]).transpose() - p0);
+    ASSERT_GT(normal.dot(p0), 0) << "out of the core";
+  }
 
   // Surface triangles face outwards, interface ones from the shell into the
   // core (inwards).
@@ -308,6 +324,8 @@ TEST(LabelMesherTest, QuadraticUpgradeProjectsMidEdgeNodesOntoTheSpheres) {
   ASSERT_TRUE(MeshLabels(TwoSpheres, kNames, SphereOptions(), &linear).ok());
   const Mesh quadratic =
       MakeQuadratic(linear, [](const Eigen::Vector3d& x, const std::string& set) {
+        // A region's whole surface is made of the other two; left to them.
+        if (set.rfind("surface:", 0) == 0) return x;
         const double r = set == "surface" ? kShellRadius : kCoreRadius;
         return Eigen::Vector3d(x.normalized() * r * 1e-3);
       });

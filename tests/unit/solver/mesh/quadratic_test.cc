@@ -226,7 +226,7 @@ TEST(MakeQuadratic, EllipsoidAndItsPatchOnTheTrueSurface) {
   SceneSpec scene;
   scene.geometry.kind = GeometrySpec::Kind::kEllipsoid;
   scene.geometry.ellipsoid.semi_axes_mm = {40, 30, 20};
-  scene.geometry.patches = {{"crown", "surface", {0, 0, 20}, 10}};
+  scene.geometry.patches = {PatchSpec::Ball("crown", "surface", {0, 0, 20}, 10)};
   scene.mesh.element = ElementType::kTet10;
   scene.mesh.element_size_mm = 6;
   Model model;

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "common/scene_builders.h"
+#include "mesh/mesh.h"
 
 namespace pba {
 namespace {
@@ -44,6 +45,64 @@ TEST(ModelBuilderAtlas, KeepsTheStructuresAskedForAndSaysSo) {
   int prescribed = 0;
   for (int dof = 0; dof < model.dofs.num_dofs(); ++dof) prescribed += model.dofs.prescribed(dof);
   EXPECT_EQ(prescribed, 3 * static_cast<int>(model.mesh.face_sets.at("surface").nodes.size()));
+}
+
+// Face sets from the atlas's geometry as condition targets: a structure's
+// whole surface, an interface named in either order (the normal from the
+// first structure into the second), a half-space of the outer surface.
+TEST(ModelBuilderAtlas, StructureSurfacesInterfacesAndHalfSpacesAreTargets) {
+  SceneSpec s = AtlasScene({"Putamen", "Globus pallidus lateralis"});
+  s.geometry.patches = {PatchSpec::HalfSpace("low", "surface", {0, 0, -2}, {0, 0, -1})};
+  s.boundary_conditions = {
+      testing::Condition("low", BoundaryConditionSpec::Kind::kFixed),
+      testing::Condition("surface:Putamen", BoundaryConditionSpec::Kind::kFixed),
+      testing::Condition("interface:Putamen|Globus pallidus lateralis",
+                         BoundaryConditionSpec::Kind::kFixed)};
+  Model model;
+  const Status status = BuildModel(s, &model);
+  ASSERT_TRUE(status.ok()) << status.ToString();
+  const Mesh& mesh = model.mesh;
+  // Every node of the low patch lies at or below z = -2 mm, and it holds
+  // every surface face that does.
+  const FaceSet& low = mesh.face_sets.at("low");
+  ASSERT_FALSE(low.triangles.empty());
+  // (A node within a nanometre of the plane counts as on it.)
+  const double plane = -2e-3 + 1e-9;
+  for (int n : low.nodes) EXPECT_LE(mesh.nodes(n, 2), plane);
+  int below = 0;
+  for (const auto& t : mesh.face_sets.at("surface").triangles) {
+    below += mesh.nodes(t[0], 2) <= plane && mesh.nodes(t[1], 2) <= plane &&
+             mesh.nodes(t[2], 2) <= plane;
+  }
+  EXPECT_EQ(static_cast<int>(low.triangles.size()), below);
+  // The reversed interface: the same triangles, turned over.
+  const FaceSet& forward = mesh.face_sets.at("interface:Globus pallidus lateralis|Putamen");
+  const FaceSet& reversed = mesh.face_sets.at("interface:Putamen|Globus pallidus lateralis");
+  ASSERT_EQ(forward.triangles.size(), reversed.triangles.size());
+  for (std::size_t t = 0; t < forward.triangles.size(); ++t) {
+    const auto& f = forward.triangles[t];
+    EXPECT_EQ(reversed.triangles[t], (std::array<int, 3>{f[0], f[2], f[1]}));
+  }
+  EXPECT_EQ(forward.nodes, reversed.nodes);
+  // The putamen's surface: its outer part and its interface with the
+  // pallidus, so its area is theirs.
+  const double putamen = FaceSetArea(mesh, mesh.face_sets.at("surface:Putamen"));
+  const double pallidus = FaceSetArea(mesh, mesh.face_sets.at("surface:Globus pallidus lateralis"));
+  const double outer = FaceSetArea(mesh, mesh.face_sets.at("surface"));
+  const double between = FaceSetArea(mesh, forward);
+  EXPECT_NEAR(putamen + pallidus, outer + 2 * between, 1e-9 * outer);
+}
+
+TEST(ModelBuilderAtlas, AnInterfaceBetweenStructuresThatDoNotTouchIsNamed) {
+  SceneSpec s = AtlasScene({"Putamen", "Thalamus: pulvinar"});
+  s.boundary_conditions.push_back(testing::Condition("interface:Putamen|Thalamus: pulvinar",
+                                                     BoundaryConditionSpec::Kind::kFixed));
+  Model model;
+  const Status status = BuildModel(s, &model);
+  EXPECT_EQ(status.code(), Status::Code::kInvalidArgument);
+  EXPECT_EQ(status.field(), "boundary_conditions[1].set");
+  EXPECT_NE(status.message().find("do not touch"), std::string::npos) << status.message();
+  EXPECT_NE(status.message().find("'surface:Putamen'"), std::string::npos) << status.message();
 }
 
 TEST(ModelBuilderAtlas, AnUnknownStructureIsNamed) {

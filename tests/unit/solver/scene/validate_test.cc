@@ -83,6 +83,40 @@ INSTANTIATE_TEST_SUITE_P(
                s->geometry.atlas.roi_radius_mm = 10;
              },
              "geometry.atlas.roi_element_size_mm", "region of interest"},
+        Case{"atlas_surface_of_unknown_structure",
+             [](SceneSpec* s) {
+               s->geometry.kind = GeometrySpec::Kind::kAtlas;
+               s->boundary_conditions[0].set = "surface:Putamn";
+             },
+             "boundary_conditions[0].set", "no structure \"Putamn\""},
+        Case{"atlas_interface_without_bar",
+             [](SceneSpec* s) {
+               s->geometry.kind = GeometrySpec::Kind::kAtlas;
+               s->boundary_conditions[0].set = "interface:Putamen";
+             },
+             "boundary_conditions[0].set", "interface:<structure>|<structure>"},
+        Case{"atlas_interface_with_itself",
+             [](SceneSpec* s) {
+               s->geometry.kind = GeometrySpec::Kind::kAtlas;
+               s->boundary_conditions[0].set = "interface:Putamen|Putamen";
+             },
+             "boundary_conditions[0].set", "same structure twice"},
+        Case{"atlas_set_of_a_structure_not_kept",
+             [](SceneSpec* s) {
+               s->geometry.kind = GeometrySpec::Kind::kAtlas;
+               s->geometry.atlas.structures = {"Putamen"};
+               s->geometry.patches = {
+                   PatchSpec::HalfSpace("low", "surface:Nucleus caudatus", {0, 0, 0}, {0, 0, -1})};
+             },
+             "geometry.patches[0].set", "not among geometry.atlas.structures"},
+        Case{"atlas_surrounding_tissue_without_merge",
+             [](SceneSpec* s) {
+               s->geometry.kind = GeometrySpec::Kind::kAtlas;
+               s->geometry.atlas.structures = {"Putamen"};
+               for (auto& bc : s->boundary_conditions) bc.set = "surface";
+               s->outputs.reaction_sets = {"interface:Putamen|Surrounding tissue"};
+             },
+             "outputs.reaction_sets[0]", "merge_rest"},
         Case{"atlas_empty_structure",
              [](SceneSpec* s) {
                s->geometry.kind = GeometrySpec::Kind::kAtlas;
@@ -151,44 +185,65 @@ INSTANTIATE_TEST_SUITE_P(
              "geometry.ellipsoid.semi_axes_mm[1]", "positive"},
         Case{"patch_without_name",
              [](SceneSpec* s) {
-               s->geometry.patches = {{"", "top", {5, 5, 20}, 3}};
+               s->geometry.patches = {PatchSpec::Ball("", "top", {5, 5, 20}, 3)};
              },
              "geometry.patches[0].name", "needs a name"},
         Case{"patch_named_like_a_set",
              [](SceneSpec* s) {
-               s->geometry.patches = {{"top", "top", {5, 5, 20}, 3}};
+               s->geometry.patches = {PatchSpec::Ball("top", "top", {5, 5, 20}, 3)};
              },
              "geometry.patches[0].name", "already a face set"},
         Case{"patch_named_twice",
              [](SceneSpec* s) {
-               s->geometry.patches = {{"pad", "top", {5, 5, 20}, 3}, {"pad", "top", {5, 5, 20}, 4}};
+               s->geometry.patches = {PatchSpec::Ball("pad", "top", {5, 5, 20}, 3),
+                                      PatchSpec::Ball("pad", "top", {5, 5, 20}, 4)};
              },
              "geometry.patches[1].name", "already a face set"},
         Case{"patch_of_unknown_set",
              [](SceneSpec* s) {
-               s->geometry.patches = {{"pad", "lid", {5, 5, 20}, 3}};
+               s->geometry.patches = {PatchSpec::Ball("pad", "lid", {5, 5, 20}, 3)};
              },
              "geometry.patches[0].set", "x_min"},
         Case{"patch_of_a_patch",
              [](SceneSpec* s) {
-               s->geometry.patches = {{"pad", "top", {5, 5, 20}, 3}, {"dot", "pad", {5, 5, 20}, 1}};
+               s->geometry.patches = {PatchSpec::Ball("pad", "top", {5, 5, 20}, 3),
+                                      PatchSpec::Ball("dot", "pad", {5, 5, 20}, 1)};
              },
              "geometry.patches[1].set", "unknown face set 'pad'"},
         Case{"patch_centre_nan",
              [](SceneSpec* s) {
-               s->geometry.patches = {{"pad", "top", {5, NAN, 20}, 3}};
+               s->geometry.patches = {PatchSpec::Ball("pad", "top", {5, NAN, 20}, 3)};
              },
              "geometry.patches[0].centre_mm[1]", "finite"},
+        Case{"patch_with_neither_ball_nor_half_space",
+             [](SceneSpec* s) {
+               PatchSpec p;
+               p.name = "pad";
+               p.set = "top";
+               s->geometry.patches = {p};
+             },
+             "geometry.patches[0]", "a ball (centre_mm, radius_mm), a half-space"},
+        Case{"patch_plane_normal_zero",
+             [](SceneSpec* s) {
+               s->geometry.patches = {PatchSpec::HalfSpace("pad", "top", {0, 0, 5}, {0, 0, 0})};
+             },
+             "geometry.patches[0].plane_normal", "not be zero"},
+        Case{"patch_plane_point_infinite",
+             [](SceneSpec* s) {
+               s->geometry.patches = {
+                   PatchSpec::HalfSpace("pad", "top", {0, INFINITY, 5}, {0, 0, 1})};
+             },
+             "geometry.patches[0].plane_point_mm[1]", "finite"},
         Case{"patch_radius_zero",
              [](SceneSpec* s) {
-               s->geometry.patches = {{"pad", "top", {5, 5, 20}, 0}};
+               s->geometry.patches = {PatchSpec::Ball("pad", "top", {5, 5, 20}, 0)};
              },
              "geometry.patches[0].radius_mm", "positive"},
         Case{"symmetry_on_curved_patch",
              [](SceneSpec* s) {
                s->geometry.kind = GeometrySpec::Kind::kCylinder;
                s->geometry.cylinder = {5, 20};
-               s->geometry.patches = {{"pad", "side", {5, 0, 10}, 3}};
+               s->geometry.patches = {PatchSpec::Ball("pad", "side", {5, 0, 10}, 3)};
                s->boundary_conditions[1].set = "pad";
                s->boundary_conditions[1].kind = BoundaryConditionSpec::Kind::kSymmetry;
              },
@@ -214,7 +269,7 @@ TEST(FaceSetNamesTest, PerGeometry) {
 // and it is as planar as the set it is cut from.
 TEST(FaceSetNamesTest, PatchesFollowTheGeometrysSets) {
   SceneSpec s = GoodScene();
-  s.geometry.patches = {{"pad", "top", {5, 5, 20}, 3}};
+  s.geometry.patches = {PatchSpec::Ball("pad", "top", {5, 5, 20}, 3)};
   EXPECT_EQ(FaceSetNames(s.geometry).back(), "pad");
   EXPECT_EQ(PlaneNormalAxis(s.geometry, "pad"), 2);
   s.boundary_conditions[1].set = "pad";
