@@ -131,6 +131,14 @@ int RunBuild(AtlasBuildOptions options, const Pictures& pictures, const std::str
     if (!result.dropped.empty()) {
       std::printf("\n%zu structures dropped (not asked for)\n", result.dropped.size());
     }
+    if (!result.absent.empty()) {
+      std::string names;
+      for (const std::string& n : result.absent) names += (names.empty() ? "" : ", ") + n;
+      std::printf("\nnote: %zu structure%s of the colour table %s not in the %s: %s\n",
+                  result.absent.size(), result.absent.size() == 1 ? "" : "s",
+                  result.absent.size() == 1 ? "is" : "are",
+                  result.plates ? "volume lofted from the plates" : "label volume", names.c_str());
+    }
     const AtlasBuildTimes& t = result.times;
     const LabelMeshReport& m = result.mesher;
     std::printf(

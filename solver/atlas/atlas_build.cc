@@ -9,6 +9,7 @@
 #include "atlas/label_volume_io.h"
 #include "atlas/loft.h"
 #include "atlas/synthetic_atlas.h"
+#include "core/format.h"
 #include "mesh/quadratic.h"
 
 namespace pba {
@@ -37,7 +38,7 @@ Status ReadLabelVolume(const std::filesystem::path& file, LabelVolume* volume) {
 // and, when the options name structures, among them.
 Status ChooseLabels(const AtlasBuildOptions& options, const ColourTable& colours,
                     const LabelVolume& volume, std::vector<uint16_t>* labels,
-                    std::vector<std::string>* left_out) {
+                    std::vector<std::string>* left_out, std::vector<std::string>* absent) {
   const std::vector<int64_t> counts = CountLabels(volume);
   std::vector<bool> wanted(counts.size(), options.structures.empty());
   for (size_t i = 0; i < options.structures.size(); ++i) {
@@ -56,6 +57,10 @@ Status ChooseLabels(const AtlasBuildOptions& options, const ColourTable& colours
   }
   labels->clear();
   left_out->clear();
+  absent->clear();
+  for (const ColourEntry& e : colours.entries()) {
+    if (counts[e.label] == 0) absent->push_back(e.name);
+  }
   for (size_t label = 1; label < counts.size(); ++label) {
     if (counts[label] == 0) continue;
     const ColourEntry* entry = colours.FindByLabel(static_cast<uint16_t>(label));
@@ -164,6 +169,24 @@ std::vector<Eigen::Vector3d> PieceInteriorPoints(const LabelVolume& volume,
   return points;
 }
 
+// An atlas spans millimetres to decimetres (a mouse brain about 10 mm, a
+// human one about 170 mm); a largest extent outside [kMinExtentMm,
+// kMaxExtentMm] means a wrong pixel or voxel size (metres for millimetres,
+// say), which would otherwise surface as an empty mesh or a grid too large
+// to loft.
+constexpr double kMinExtentMm = 5, kMaxExtentMm = 1000;
+
+Status CheckExtent(const Eigen::Vector3d& extent_mm, const std::string& field,
+                   const std::string& what, const std::string& size) {
+  const double largest = extent_mm.maxCoeff();
+  if (largest >= kMinExtentMm && largest <= kMaxExtentMm) return Status::Ok();
+  return Status::InvalidArgument(
+      field, Format("%s spans %.3g x %.3g x %.3g mm with %s: an atlas spans %g to %g mm; check "
+                    "that the size is in millimetres",
+                    what.c_str(), extent_mm.x(), extent_mm.y(), extent_mm.z(), size.c_str(),
+                    kMinExtentMm, kMaxExtentMm));
+}
+
 // `labels` are the regions kept; label 0 among them (merge_rest) stands for
 // every other label of the volume.
 Status MeshVolume(const AtlasBuildOptions& options, const LabelVolume& volume,
@@ -263,6 +286,12 @@ Status BuildAtlas(const AtlasBuildOptions& options, AtlasBuildResult* result) {
   }
   if (options.source == AtlasBuildOptions::Source::kLabelVolume) {
     if (Status s = ReadLabelVolume(options.input, &result->volume); !s.ok()) return s;
+    const LabelVolume& v = result->volume;
+    PBA_RETURN_IF_ERROR(
+        CheckExtent(Eigen::Vector3d(v.nx(), v.ny(), v.nz()).cwiseProduct(v.spacing_mm()), "input",
+                    options.input.string(),
+                    Format("voxels of %g x %g x %g mm", v.spacing_mm().x(), v.spacing_mm().y(),
+                           v.spacing_mm().z())));
     if (options.colour_table.empty()) {
       result->colours = ColourTable::Builtin();
     } else if (Status s = ReadColourTableCsv(options.colour_table, &result->colours); !s.ok()) {
@@ -272,6 +301,11 @@ Status BuildAtlas(const AtlasBuildOptions& options, AtlasBuildResult* result) {
   } else {
     PlateStack stack;
     if (Status s = ReadPlates(plates_dir, &stack); !s.ok()) return s;
+    PBA_RETURN_IF_ERROR(CheckExtent(
+        Eigen::Vector3d(stack.width * stack.pixel_size_mm, stack.height * stack.pixel_size_mm,
+                        stack.z_mm.back() - stack.z_mm.front()),
+        "pixel_size_mm", (plates_dir / "plates.json").string(),
+        Format("%d x %d pixels of %g mm", stack.width, stack.height, stack.pixel_size_mm)));
     result->times.source_s = SecondsSince(start);
     start = Clock::now();
     LoftOptions loft;
@@ -283,8 +317,8 @@ Status BuildAtlas(const AtlasBuildOptions& options, AtlasBuildResult* result) {
   }
 
   std::vector<std::string> left_out;
-  PBA_RETURN_IF_ERROR(
-      ChooseLabels(options, result->colours, result->volume, &result->region_labels, &left_out));
+  PBA_RETURN_IF_ERROR(ChooseLabels(options, result->colours, result->volume, &result->region_labels,
+                                   &left_out, &result->absent));
   if (options.merge_rest && !left_out.empty()) {
     result->region_labels.push_back(0);
     result->merged = std::move(left_out);

@@ -105,6 +105,10 @@ struct AtlasBuildResult {
   // Colour-table names of the structures merged into kSurroundingTissue
   // and of those dropped.
   std::vector<std::string> merged, dropped;
+  // Colour-table names with no voxel in the volume (a table may list more
+  // structures than an atlas has): reported, not an error, unless asked for
+  // in `structures`.
+  std::vector<std::string> absent;
   QualitySummary quality;
   std::optional<GeometricValidation> validation;
   AtlasBuildTimes times;

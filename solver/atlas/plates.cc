@@ -3,6 +3,7 @@
 #include <stdlib.h>
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <array>
 #include <charconv>
 #include <cmath>
@@ -270,16 +271,48 @@ Status ReadPlates(const fs::path& dir, PlateStack* stack) {
                        kIndexFile, read.width, read.height));
     }
     std::vector<uint16_t> labels(static_cast<size_t>(read.width) * read.height);
+    // Colours not in the table, in order of appearance: first pixel, count.
+    std::vector<std::pair<uint32_t, std::pair<size_t, int64_t>>> unknown;
     for (size_t i = 0; i < labels.size(); ++i) {
       const uint8_t* px = &image.rgb[3 * i];
-      const auto it = label_of.find((uint32_t{px[0]} << 16) | (uint32_t{px[1]} << 8) | px[2]);
-      if (it == label_of.end()) {
-        const int column = static_cast<int>(i % read.width), row = static_cast<int>(i / read.width);
-        return Status::InvalidArgument(
-            file, Format("pixel (column %d, row %d) has colour RGB %d %d %d, not in %s", column,
-                         row, px[0], px[1], px[2], colour_file.c_str()));
+      const uint32_t rgb = (uint32_t{px[0]} << 16) | (uint32_t{px[1]} << 8) | px[2];
+      const auto it = label_of.find(rgb);
+      if (it != label_of.end()) {
+        labels[i] = it->second;
+        continue;
       }
-      labels[i] = it->second;
+      const auto seen = std::find_if(unknown.begin(), unknown.end(),
+                                     [rgb](const auto& u) { return u.first == rgb; });
+      if (seen == unknown.end()) {
+        unknown.push_back({rgb, {i, 1}});
+      } else {
+        ++seen->second.second;
+      }
+    }
+    if (!unknown.empty()) {
+      // Every colour is listed (up to kListed), none is matched to a near
+      // one: an anti-aliased or recoloured plate must be fixed at its source.
+      constexpr std::size_t kListed = 8;
+      std::string listed;
+      for (std::size_t u = 0; u < std::min(unknown.size(), kListed); ++u) {
+        const uint32_t rgb = unknown[u].first;
+        const size_t first = unknown[u].second.first;
+        listed +=
+            Format("%sRGB %d %d %d (%lld pixel%s, first at column %d, row %d)", u == 0 ? "" : "; ",
+                   static_cast<int>(rgb >> 16), static_cast<int>((rgb >> 8) & 255),
+                   static_cast<int>(rgb & 255), static_cast<long long>(unknown[u].second.second),
+                   unknown[u].second.second == 1 ? "" : "s", static_cast<int>(first % read.width),
+                   static_cast<int>(first / read.width));
+      }
+      if (unknown.size() > kListed) {
+        listed += Format("; and %d more", static_cast<int>(unknown.size() - kListed));
+      }
+      return Status::InvalidArgument(
+          file, Format("%d colour%s not in %s: %s. Colours must match the table exactly; none "
+                       "is matched to a nearby one (an anti-aliased or resampled plate needs "
+                       "its colours restored)",
+                       static_cast<int>(unknown.size()), unknown.size() == 1 ? "" : "s",
+                       colour_file.c_str(), listed.c_str()));
     }
     read.labels.push_back(std::move(labels));
   }

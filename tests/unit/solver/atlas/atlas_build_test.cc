@@ -3,12 +3,16 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <string>
 
 #include "atlas/label_volume_io.h"
+#include "atlas/plates.h"
 
 namespace pba {
 namespace {
@@ -120,6 +124,62 @@ TEST_F(AtlasBuildTest, SmallStructuresGetSmallerFacets) {
   // triangles: the mesher's choices inside shift its refinement slightly).
   EXPECT_NEAR(static_cast<double>(refined.surface_triangles),
               static_cast<double>(global.surface_triangles), 0.1 * global.surface_triangles);
+}
+
+// A colour table lists more structures than the volume has: reported as
+// absent, not an error.
+TEST_F(AtlasBuildTest, TableEntriesAbsentFromTheVolumeAreListed) {
+  const fs::path file = dir_ / "ball.nii.gz";
+  ASSERT_TRUE(WriteNifti(CubeWithASmallBall(), file).ok());
+  AtlasBuildOptions options;
+  options.source = AtlasBuildOptions::Source::kLabelVolume;
+  options.input = file;
+  options.cell_size_mm = options.facet_size_mm = 8;
+  options.odt_iterations = 0;
+  AtlasBuildResult result;
+  ASSERT_TRUE(BuildAtlas(options, &result).ok());
+  EXPECT_EQ(result.region_labels, (std::vector<uint16_t>{31, 44}));
+  EXPECT_EQ(result.absent.size(), 42u);
+  EXPECT_NE(std::find(result.absent.begin(), result.absent.end(), "Putamen"), result.absent.end());
+  EXPECT_EQ(std::find(result.absent.begin(), result.absent.end(), "Substantia nigra"),
+            result.absent.end());
+}
+
+// Voxels or pixels in the wrong unit: the atlas would be 40 um or 40 m
+// across. Refused naming the size, before anything is meshed.
+TEST_F(AtlasBuildTest, AbsurdVoxelAndPixelSizesAreRefused) {
+  LabelVolume tiny = CubeWithASmallBall();
+  tiny = LabelVolume(tiny.dims(), tiny.origin_mm() * 1e-3, tiny.spacing_mm() * 1e-3);
+  tiny.mutable_labels() = CubeWithASmallBall().labels();
+  const fs::path file = dir_ / "tiny.nii.gz";
+  ASSERT_TRUE(WriteNifti(tiny, file).ok());
+  AtlasBuildOptions options;
+  options.source = AtlasBuildOptions::Source::kLabelVolume;
+  options.input = file;
+  AtlasBuildResult result;
+  Status s = BuildAtlas(options, &result);
+  EXPECT_EQ(s.code(), Status::Code::kInvalidArgument);
+  EXPECT_EQ(s.field(), "input");
+  EXPECT_NE(s.message().find("voxels of 0.0005 x 0.0005 x 0.0005 mm"), std::string::npos)
+      << s.message();
+  EXPECT_NE(s.message().find("millimetres"), std::string::npos) << s.message();
+
+  // Plates whose pixel size says metres' worth.
+  const fs::path plates = dir_ / "plates";
+  ASSERT_TRUE(
+      WritePlates(CubeWithASmallBall(), ColourTable::Builtin(), PlateOptions(), plates).ok());
+  std::ifstream in(plates / "plates.json");
+  std::string json((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::size_t at = json.find("\"pixel_size_mm\": 0.5");
+  ASSERT_NE(at, std::string::npos) << json;
+  json.replace(at, std::string("\"pixel_size_mm\": 0.5").size(), "\"pixel_size_mm\": 500");
+  std::ofstream(plates / "plates.json") << json;
+  options.source = AtlasBuildOptions::Source::kPlates;
+  options.input = plates;
+  s = BuildAtlas(options, &result);
+  EXPECT_EQ(s.code(), Status::Code::kInvalidArgument);
+  EXPECT_EQ(s.field(), "pixel_size_mm");
+  EXPECT_NE(s.message().find("pixels of 500 mm"), std::string::npos) << s.message();
 }
 
 TEST_F(AtlasBuildTest, BadSizingOptionsAreNamed) {

@@ -131,6 +131,39 @@ TEST_F(PlatesTest, AnUnknownColourIsRejectedWithFilePixelAndRgb) {
   EXPECT_NE(s.message().find("RGB 1 2 3"), std::string::npos) << s.message();
 }
 
+// Every stray colour of a plate is listed, with its count and first pixel;
+// none is guessed from a nearby table colour.
+TEST_F(PlatesTest, EveryUnknownColourIsListed) {
+  ASSERT_TRUE(written_.ok());
+  const fs::path dir = Copy("bad_colours");
+  RgbImage image;
+  ASSERT_TRUE(ReadRgbPng(dir / "plate_07.png", &image).ok());
+  const auto paint = [&](int column, int row, uint8_t r, uint8_t g, uint8_t b) {
+    uint8_t* px = &image.rgb[(static_cast<size_t>(row) * image.width + column) * 3];
+    px[0] = r, px[1] = g, px[2] = b;
+  };
+  paint(1, 1, 1, 2, 3);
+  paint(5, 1, 9, 9, 9);
+  paint(6, 1, 1, 2, 3);
+  // One unit off a table colour is refused too.
+  const ColourEntry& first = ColourTable::Builtin().entries().front();
+  paint(7, 1, first.r, first.g, static_cast<uint8_t>(first.b ^ 1));
+  ASSERT_TRUE(WriteRgbPng(dir / "plate_07.png", image).ok());
+  PlateStack stack;
+  const Status s = ReadPlates(dir, &stack);
+  ASSERT_FALSE(s.ok());
+  EXPECT_EQ(s.field(), "plate_07.png");
+  EXPECT_NE(s.message().find("3 colours not in colour_table.csv"), std::string::npos)
+      << s.message();
+  EXPECT_NE(s.message().find("RGB 1 2 3 (2 pixels, first at column 1, row 1)"), std::string::npos)
+      << s.message();
+  EXPECT_NE(s.message().find("RGB 9 9 9 (1 pixel, first at column 5, row 1)"), std::string::npos)
+      << s.message();
+  EXPECT_NE(s.message().find(Format("RGB %d %d %d", first.r, first.g, first.b ^ 1)),
+            std::string::npos)
+      << s.message();
+}
+
 TEST_F(PlatesTest, ASmallHandMadePlateWithAStrayColourIsRejected) {
   ASSERT_TRUE(written_.ok());
   const fs::path dir = Copy("small");
@@ -151,7 +184,7 @@ TEST_F(PlatesTest, ASmallHandMadePlateWithAStrayColourIsRejected) {
   ASSERT_TRUE(WriteRgbPng(dir / "one.png", image).ok());
   const Status s = ReadPlates(dir, &stack);
   EXPECT_EQ(s.field(), "one.png");
-  EXPECT_NE(s.message().find("(column 1, row 2) has colour RGB 0 135 92"), std::string::npos)
+  EXPECT_NE(s.message().find("RGB 0 135 92 (1 pixel, first at column 1, row 2)"), std::string::npos)
       << s.message();
 }
 
