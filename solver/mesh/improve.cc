@@ -1,0 +1,539 @@
+#include "mesh/improve.h"
+
+#include <Eigen/Core>
+#include <algorithm>
+#include <array>
+#include <cstdint>
+#include <numbers>
+#include <set>
+#include <string>
+#include <unordered_set>
+#include <utility>
+#include <vector>
+
+#include "mesh/tet_angles.h"
+#include "mesh/tet_topology.h"
+
+namespace pba {
+namespace {
+
+using Vec3 = Eigen::Vector3d;
+using Tet = TetTopology::Tet;
+using Triangle = std::array<int, 3>;
+
+constexpr double kRadiansPerDegree = std::numbers::pi / 180;
+constexpr int kLargestRing = 10;
+constexpr std::size_t kCompositeTrials = 3;
+
+// The faces of a tetrahedron opposite its corners 0..3, each anticlockwise
+// seen from outside a positively oriented one (as label_mesher.cc).
+constexpr int kTetFaces[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+
+Triangle SortedTriangle(int a, int b, int c) {
+  Triangle t{a, b, c};
+  std::sort(t.begin(), t.end());
+  return t;
+}
+
+struct TriangleHash {
+  std::size_t operator()(const Triangle& t) const {
+    std::uint64_t h = static_cast<std::uint32_t>(t[0]);
+    h = h * 0x9E3779B97F4A7C15ull + static_cast<std::uint32_t>(t[1]);
+    h = h * 0x9E3779B97F4A7C15ull + static_cast<std::uint32_t>(t[2]);
+    return static_cast<std::size_t>(h ^ (h >> 29));
+  }
+};
+
+bool Contains(const Tet& t, int n) { return t[0] == n || t[1] == n || t[2] == n || t[3] == n; }
+
+// A replacement of some tetrahedra by others filling the same space.
+struct Plan {
+  enum class Kind { kNone, kFlip23, kEdgeRemoval };
+  Kind kind = Kind::kNone;
+  double old_quality = 0;  // smallest angle of `old_tets` [rad]
+  double quality = kInvalidTet;
+  std::vector<int> old_tets;
+  std::vector<Tet> new_tets;
+  // Smallest angle of each new tetrahedron [rad].
+  std::vector<double> new_quality;
+};
+
+class Improver {
+ public:
+  Improver(const ImproveOptions& options, Mesh* mesh)
+      : options_(options),
+        mesh_(*mesh),
+        topology_(mesh),
+        target_(options.target_min_dihedral_deg * kRadiansPerDegree) {}
+
+  // Checks the mesh, builds the adjacency and finds the nodes that stay;
+  // on error the mesh is untouched.
+  Status Prepare();
+  void Run(ImproveStats* stats);
+
+ private:
+  using Journal = TetTopology::Journal;
+
+  // Works on tetrahedron e while its smallest angle is below `target`
+  // [rad]; true when something changed.
+  bool ImproveTet(int e, double target);
+  // For a tetrahedron that ImproveTet left below the target: improves the
+  // tetrahedra sharing an edge with it towards twice the target, which can
+  // open a flip or a move for it, then tries it again.
+  bool ImproveAround(int e);
+  // Moves node v to raise the smallest angle of its tetrahedra; false when
+  // it may not move or nothing helps.
+  bool SmoothNode(int v, Journal* journal);
+  // Plans for removing edge (a, b) and for the 2-3 flip across the face of
+  // e opposite `corner`; with `improve`, only a plan better than what it
+  // replaces, else the best valid one.
+  void PlanEdgeRemoval(int a, int b, bool improve, Plan* plan) const;
+  void PlanFlip23(int e, int corner, bool improve, Plan* plan) const;
+  void Apply(const Plan& plan, Journal* journal);
+  void Count(const Plan& plan);
+  // Applies `plan` and smooths the free corners of its new tetrahedra;
+  // true when the smallest angle over the tetrahedra that changed has
+  // risen, else everything is undone.
+  bool ApplyAndSmooth(const Plan& plan);
+  bool Protected(int a, int b, int c) const {
+    return protected_faces_.count(SortedTriangle(a, b, c)) != 0;
+  }
+
+  const ImproveOptions& options_;
+  const Mesh& mesh_;
+  TetTopology topology_;
+  const double target_;                                         // [rad]
+  std::vector<char> fixed_;                                     // node may not move
+  std::unordered_set<Triangle, TriangleHash> protected_faces_;  // face set triangles, sorted
+  // When each node last failed to move (TetTopology's clock): smoothing it
+  // again before anything around it changes would fail again.
+  std::vector<long> failed_at_;
+  // The slivers whose neighbours ImproveAround has worked on (sorted corners).
+  std::set<Tet> surrounded_;
+  ImproveStats stats_;
+};
+
+Status Improver::Prepare() {
+  // Nodes that stay: on a boundary face (one tetrahedron), on a face set, or
+  // between regions.
+  PBA_RETURN_IF_ERROR(topology_.Build(&fixed_));
+  const int num_nodes = mesh_.num_nodes();
+  for (const auto& [name, set] : mesh_.face_sets) {
+    for (const Triangle& t : set.triangles) {
+      for (int n : t) {
+        if (n < 0 || n >= num_nodes) {
+          return Status::InvalidArgument(
+              "mesh.face_sets",
+              "set \"" + name + "\" has node " + std::to_string(n) + ", out of range");
+        }
+        fixed_[n] = 1;
+      }
+      protected_faces_.insert(SortedTriangle(t[0], t[1], t[2]));
+    }
+  }
+  for (int n = 0; n < num_nodes; ++n) {
+    const std::vector<int>& around = topology_.around(n);
+    for (int e : around) {
+      if (topology_.region(e) != topology_.region(around.front())) fixed_[n] = 1;
+    }
+  }
+  failed_at_.assign(num_nodes, -1);
+  return Status::Ok();
+}
+
+// Edge removal (Shewchuk 2002): the tetrahedra around the edge
+// (a, b) are (a, b, r_i, r_i+1) for the ring r_0 .. r_m-1, each positively
+// oriented, so the ring runs anticlockwise seen from b. A triangulation of
+// the ring's polygon gives, for each triangle (r_i, r_k, r_j), i < k < j, the
+// tetrahedra (r_i, r_k, r_j, b) and (r_i, r_j, r_k, a). Q[i][j], the best
+// smallest angle over the sub-polygon r_i .. r_j, is the maximum over k of
+// min(Q[i][k], Q[k][j], quality of the two tetrahedra on (r_i, r_k, r_j)).
+void Improver::PlanEdgeRemoval(int a, int b, bool improve, Plan* plan) const {
+  plan->kind = Plan::Kind::kNone;
+  int ring_tets[kLargestRing];
+  int m = 0;
+  for (int e : topology_.around(a)) {
+    if (!Contains(topology_.tet(e), b)) continue;
+    if (m == options_.max_ring_size) return;
+    ring_tets[m++] = e;
+  }
+  if (m < 3) return;
+  const int region = topology_.region(ring_tets[0]);
+  // (x, y) of each tetrahedron with (a, b, x, y) an even permutation of it.
+  int from[kLargestRing], to[kLargestRing];
+  double old_quality = kPi;
+  for (int i = 0; i < m; ++i) {
+    const Tet& t = topology_.tet(ring_tets[i]);
+    if (topology_.region(ring_tets[i]) != region) return;
+    old_quality = std::min(old_quality, topology_.quality(ring_tets[i]));
+    int order[4], rest = 2;
+    for (int p = 0; p < 4; ++p) {
+      if (t[p] == a) {
+        order[0] = p;
+      } else if (t[p] == b) {
+        order[1] = p;
+      } else {
+        order[rest++] = p;
+      }
+    }
+    int inversions = 0;
+    for (int p = 0; p < 4; ++p) {
+      for (int q = p + 1; q < 4; ++q) inversions += order[p] > order[q];
+    }
+    from[i] = t[order[inversions % 2 == 0 ? 2 : 3]];
+    to[i] = t[order[inversions % 2 == 0 ? 3 : 2]];
+  }
+  // Chain the ring; an open one (a boundary edge) is left alone.
+  const auto successor = [&](int r) { return to[std::find(from, from + m, r) - from]; };
+  int ring[kLargestRing];
+  ring[0] = from[0];
+  for (int i = 1; i < m; ++i) {
+    ring[i] = successor(ring[i - 1]);
+    if (std::find(from, from + m, ring[i]) == from + m) return;
+  }
+  if (successor(ring[m - 1]) != ring[0]) return;
+  for (int i = 0; i < m; ++i) {
+    if (std::count(ring, ring + m, ring[i]) != 1) return;  // not a simple ring
+    if (Protected(a, b, ring[i])) return;
+  }
+
+  // A diagonal of the polygon may not already be an edge of the mesh (it
+  // would be, geometrically, only if the new tetrahedra overlapped others).
+  bool diagonal_ok[kLargestRing][kLargestRing];
+  for (int i = 0; i < m; ++i) {
+    for (int j = i + 1; j < m; ++j) {
+      const bool side = j == i + 1 || (i == 0 && j == m - 1);
+      diagonal_ok[i][j] = side || !topology_.EdgeExists(ring[i], ring[j]);
+    }
+  }
+  const double floor = improve ? old_quality : kInvalidTet;
+  const Vec3 xa = topology_.node(a), xb = topology_.node(b);
+  Vec3 x[kLargestRing];
+  for (int i = 0; i < m; ++i) x[i] = topology_.node(ring[i]);
+  double best[kLargestRing][kLargestRing];
+  int split[kLargestRing][kLargestRing];
+  for (int i = 0; i + 1 < m; ++i) best[i][i + 1] = kPi;
+  for (int length = 2; length < m; ++length) {
+    for (int i = 0; i + length < m; ++i) {
+      const int j = i + length;
+      best[i][j] = kInvalidTet;
+      split[i][j] = -1;
+      if (!diagonal_ok[i][j]) continue;
+      for (int k = i + 1; k < j; ++k) {
+        double q = std::min(best[i][k], best[k][j]);
+        if (q <= best[i][j] || q <= floor) continue;
+        q = std::min(q, TetQuality(x[i], x[k], x[j], xb));
+        if (q <= best[i][j] || q <= floor) continue;
+        q = std::min(q, TetQuality(x[i], x[j], x[k], xa));
+        if (q > best[i][j]) {
+          best[i][j] = q;
+          split[i][j] = k;
+        }
+      }
+    }
+  }
+  if (!(best[0][m - 1] > floor)) return;
+  plan->kind = Plan::Kind::kEdgeRemoval;
+  plan->old_quality = old_quality;
+  plan->quality = best[0][m - 1];
+  plan->old_tets.assign(ring_tets, ring_tets + m);
+  plan->new_tets.clear();
+  plan->new_quality.clear();
+  std::pair<int, int> stack[2 * kLargestRing];
+  int depth = 0;
+  stack[depth++] = {0, m - 1};
+  while (depth > 0) {
+    const auto [i, j] = stack[--depth];
+    if (j - i < 2) continue;
+    const int k = split[i][j];
+    plan->new_tets.push_back({ring[i], ring[k], ring[j], b});
+    plan->new_tets.push_back({ring[i], ring[j], ring[k], a});
+    plan->new_quality.push_back(TetQuality(x[i], x[k], x[j], xb));
+    plan->new_quality.push_back(TetQuality(x[i], x[j], x[k], xa));
+    stack[depth++] = {i, k};
+    stack[depth++] = {k, j};
+  }
+}
+
+// The 2-3 flip across the face (p, q, r) of `e` opposite its corner a: with
+// b the other tetrahedron's far corner, the three tetrahedra around the new
+// edge (a, b), all positively oriented exactly when it crosses the face.
+void Improver::PlanFlip23(int e, int corner, bool improve, Plan* plan) const {
+  plan->kind = Plan::Kind::kNone;
+  const Tet& t = topology_.tet(e);
+  const int a = t[corner];
+  // Anticlockwise seen from outside e, that is from b's side.
+  const int p = t[kTetFaces[corner][0]], q = t[kTetFaces[corner][1]], r = t[kTetFaces[corner][2]];
+  const int other = topology_.TetAcross(e, p, q, r);
+  if (other < 0 || topology_.region(other) != topology_.region(e) || Protected(p, q, r)) return;
+  int b = -1;
+  for (int n : topology_.tet(other)) {
+    if (n != p && n != q && n != r) b = n;
+  }
+  if (topology_.EdgeExists(a, b)) return;
+  const double old_quality = std::min(topology_.quality(e), topology_.quality(other));
+  const double floor = improve ? old_quality : kInvalidTet;
+  const Tet news[3] = {{a, b, p, q}, {a, b, q, r}, {a, b, r, p}};
+  double quality[3];
+  for (int i = 0; i < 3; ++i) {
+    quality[i] = topology_.Quality(news[i]);
+    if (!(quality[i] > floor)) return;
+  }
+  plan->kind = Plan::Kind::kFlip23;
+  plan->old_quality = old_quality;
+  plan->quality = std::min({quality[0], quality[1], quality[2]});
+  plan->old_tets = {e, other};
+  plan->new_tets.assign(news, news + 3);
+  plan->new_quality.assign(quality, quality + 3);
+}
+
+void Improver::Apply(const Plan& plan, Journal* journal) {
+  const int region = topology_.region(plan.old_tets.front());
+  for (int e : plan.old_tets) topology_.Remove(e, journal);
+  for (std::size_t i = 0; i < plan.new_tets.size(); ++i)
+    topology_.Add(plan.new_tets[i], region, plan.new_quality[i], journal);
+}
+
+void Improver::Count(const Plan& plan) {
+  if (plan.kind == Plan::Kind::kFlip23) {
+    ++stats_.flips_23;
+  } else if (plan.old_tets.size() == 3) {
+    ++stats_.flips_32;
+  } else if (plan.old_tets.size() == 4) {
+    ++stats_.flips_44;
+  } else {
+    ++stats_.edge_removals;
+  }
+}
+
+bool Improver::ApplyAndSmooth(const Plan& plan) {
+  std::vector<int> free_nodes;
+  for (const Tet& t : plan.new_tets) {
+    for (int n : t) {
+      if (!fixed_[n] && std::find(free_nodes.begin(), free_nodes.end(), n) == free_nodes.end())
+        free_nodes.push_back(n);
+    }
+  }
+  if (free_nodes.empty()) return false;
+  // The smallest angle around each free node before: its tetrahedra change
+  // if it moves.
+  std::vector<double> star_before(free_nodes.size(), kPi);
+  for (std::size_t i = 0; i < free_nodes.size(); ++i) {
+    for (int e : topology_.around(free_nodes[i]))
+      star_before[i] = std::min(star_before[i], topology_.quality(e));
+  }
+  Journal journal;
+  Apply(plan, &journal);
+  for (int round = 0; round < 2; ++round) {
+    for (int v : free_nodes) SmoothNode(v, &journal);
+  }
+  // The smallest angle over what changed: the replaced tetrahedra and the
+  // stars of the nodes that moved, before and after.
+  double before = plan.old_quality, after = kPi;
+  for (int e : journal.added) after = std::min(after, topology_.quality(e));
+  for (std::size_t i = 0; i < free_nodes.size(); ++i) {
+    const int v = free_nodes[i];
+    if (std::none_of(journal.moved.begin(), journal.moved.end(),
+                     [v](const auto& moved) { return moved.first == v; }))
+      continue;
+    before = std::min(before, star_before[i]);
+    for (int e : topology_.around(v)) after = std::min(after, topology_.quality(e));
+  }
+  if (!(after > before)) {
+    topology_.Undo(journal);
+    return false;
+  }
+  Count(plan);
+  ++stats_.smoothed_flips;
+  stats_.smoothed_nodes += static_cast<int>(journal.moved.size());
+  return true;
+}
+
+bool Improver::SmoothNode(int v, Journal* journal) {
+  if (fixed_[v]) return false;
+  // Nothing around it has changed since it last failed to move.
+  if (failed_at_[v] >= topology_.changed_at(v)) return false;
+  const std::vector<int>& around = topology_.around(v);
+  if (around.empty()) return false;
+  // The star: each tetrahedron with v put first by an even permutation (the
+  // orientation kept), as the positions of its other corners.
+  std::vector<std::array<Vec3, 3>> star(around.size());
+  double old_quality = kPi;
+  Vec3 centroid = Vec3::Zero();
+  for (std::size_t s = 0; s < around.size(); ++s) {
+    static constexpr int kEven[4][4] = {{0, 1, 2, 3}, {1, 0, 3, 2}, {2, 3, 0, 1}, {3, 2, 1, 0}};
+    const Tet& t = topology_.tet(around[s]);
+    const int p = static_cast<int>(std::find(t.begin(), t.end(), v) - t.begin());
+    for (int c = 0; c < 3; ++c) star[s][c] = topology_.node(t[kEven[p][c + 1]]);
+    old_quality = std::min(old_quality, topology_.quality(around[s]));
+    centroid += (star[s][0] + star[s][1] + star[s][2]) / 3;
+  }
+  centroid /= static_cast<double>(around.size());
+  const StarObjective objective(star);
+  Vec3 best_x = topology_.node(v);
+  double best = old_quality;
+  if (const double q = objective.Value(centroid, best); q > best) {
+    best = q;
+    best_x = centroid;
+  }
+  if (best > 0) best = objective.Ascend(&best_x, best);
+  if (!(best > old_quality)) {
+    failed_at_[v] = topology_.clock();
+    return false;
+  }
+  topology_.MoveNode(v, best_x, journal);
+  if (journal == nullptr) ++stats_.smoothed_nodes;
+  return true;
+}
+
+bool Improver::ImproveTet(int e, double target) {
+  bool changed = false;
+  if (options_.smooth) {
+    const Tet t = topology_.tet(e);
+    for (int v : t) {
+      if (topology_.quality(e) >= target) break;
+      changed |= SmoothNode(v, nullptr);
+    }
+  }
+  if (!options_.flip || topology_.quality(e) >= target) return changed;
+  // The best flip that improves on its own; failing that, flips that may
+  // make things worse until the free corners of their new tetrahedra have
+  // moved, best first.
+  static constexpr int kEdges[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
+  const Tet t = topology_.tet(e);
+  for (const bool improve : {true, false}) {
+    if (!improve && !options_.smooth) break;
+    std::vector<Plan> plans;
+    Plan plan;
+    for (const auto& edge : kEdges) {
+      PlanEdgeRemoval(t[edge[0]], t[edge[1]], improve, &plan);
+      if (plan.kind != Plan::Kind::kNone) plans.push_back(plan);
+    }
+    for (int corner = 0; corner < 4; ++corner) {
+      PlanFlip23(e, corner, improve, &plan);
+      if (plan.kind != Plan::Kind::kNone) plans.push_back(plan);
+    }
+    std::stable_sort(plans.begin(), plans.end(),
+                     [](const Plan& x, const Plan& y) { return x.quality > y.quality; });
+    if (improve && !plans.empty()) {
+      Apply(plans.front(), nullptr);
+      Count(plans.front());
+      return true;
+    }
+    // Each trial costs a few smoothings: only the most promising.
+    for (std::size_t i = 0; i < plans.size() && i < kCompositeTrials; ++i) {
+      if (ApplyAndSmooth(plans[i])) return true;
+    }
+  }
+  return changed;
+}
+
+bool Improver::ImproveAround(int e) {
+  const Tet t = topology_.tet(e);
+  // Once for each sliver (by its corners): the neighbours, if they could
+  // be improved, now have been.
+  Tet key = t;
+  std::sort(key.begin(), key.end());
+  if (!surrounded_.insert(key).second) return false;
+  // The tetrahedra sharing an edge with it.
+  std::vector<int> near;
+  for (int i = 0; i < 4; ++i) {
+    for (int other : topology_.around(t[i])) {
+      if (other == e || std::find(near.begin(), near.end(), other) != near.end()) continue;
+      const Tet& o = topology_.tet(other);
+      int shared = 0;
+      for (int n : t) shared += Contains(o, n);
+      if (shared >= 2) near.push_back(other);
+    }
+  }
+  bool changed = false;
+  for (int other : near) {
+    // Slots can be freed and reused meanwhile: whatever lives there now is
+    // near (or was made from what was), and gets the same treatment.
+    if (topology_.alive(other)) changed |= ImproveTet(other, 2 * target_);
+  }
+  if (changed && topology_.alive(e) && topology_.tet(e) == t) ImproveTet(e, target_);
+  return changed;
+}
+
+void Improver::Run(ImproveStats* stats) {
+  const auto measure = [&](double* smallest, int* below) {
+    *smallest = kPi;
+    *below = 0;
+    for (int e = 0; e < topology_.num_slots(); ++e) {
+      if (!topology_.alive(e)) continue;
+      *smallest = std::min(*smallest, topology_.quality(e));
+      *below += topology_.quality(e) < target_;
+    }
+    *smallest = std::max(*smallest, 0.0) / kRadiansPerDegree;
+  };
+  measure(&stats_.min_dihedral_before_deg, &stats_.below_target_before);
+  // Worst first: the order in which the slivers' neighbourhoods are taken.
+  // A pass that leaves as many tetrahedra below the target as it found is
+  // followed by one over the neighbours of those left (ImproveAround);
+  // passes end when one of those changes nothing.
+  const auto below = [&](std::vector<std::pair<double, int>>* work) {
+    work->clear();
+    for (int e = 0; e < topology_.num_slots(); ++e) {
+      if (topology_.alive(e) && topology_.quality(e) < target_)
+        work->emplace_back(topology_.quality(e), e);
+    }
+    std::sort(work->begin(), work->end());
+  };
+  std::vector<std::pair<double, int>> work;
+  below(&work);
+  bool around = false;
+  for (int pass = 0; pass < options_.max_passes && !work.empty(); ++pass) {
+    ++stats_.passes;
+    const std::size_t found = work.size();
+    bool changed = false;
+    for (const auto& [quality, e] : work) {
+      // A slot may have been freed, or reused by a newer tetrahedron.
+      if (!topology_.alive(e) || topology_.quality(e) >= target_) continue;
+      changed |= around ? ImproveAround(e) : ImproveTet(e, target_);
+    }
+    below(&work);
+    if (around && !changed) break;
+    around = !around && work.size() >= found;
+  }
+  measure(&stats_.min_dihedral_after_deg, &stats_.below_target_after);
+  topology_.Compact();
+  if (stats != nullptr) *stats = stats_;
+}
+
+Status ValidateOptions(const ImproveOptions& o) {
+  if (!(o.target_min_dihedral_deg > 0 && o.target_min_dihedral_deg < 70.5)) {
+    return Status::InvalidArgument("target_min_dihedral_deg",
+                                   "must lie in (0, 70.5): a regular tetrahedron's is 70.53");
+  }
+  if (o.max_passes < 0) return Status::InvalidArgument("max_passes", "must be >= 0");
+  if (o.max_ring_size < 3 || o.max_ring_size > kLargestRing) {
+    return Status::InvalidArgument("max_ring_size",
+                                   "must lie in 3.." + std::to_string(kLargestRing));
+  }
+  return Status::Ok();
+}
+
+}  // namespace
+
+Status ImproveTetMesh(const ImproveOptions& options, Mesh* mesh, ImproveStats* stats) {
+  if (mesh == nullptr) return Status::InvalidArgument("mesh", "no mesh given");
+  if (mesh->hexahedral()) {
+    return Status::InvalidArgument("mesh",
+                                   "a hexahedral mesh cannot be improved: only linear "
+                                   "tetrahedra");
+  }
+  if (mesh->quadratic()) {
+    return Status::InvalidArgument("mesh",
+                                   "a quadratic mesh cannot be improved: improve the "
+                                   "linear mesh, then make it quadratic");
+  }
+  PBA_RETURN_IF_ERROR(ValidateOptions(options));
+  // Prepare only reads the mesh: a refused mesh stays as it was.
+  Improver improver(options, mesh);
+  PBA_RETURN_IF_ERROR(improver.Prepare());
+  improver.Run(stats);
+  return Status::Ok();
+}
+
+}  // namespace pba

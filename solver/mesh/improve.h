@@ -1,0 +1,128 @@
+// Improvement of a linear tetrahedral mesh after it has been generated:
+// edge removal, 2-3 flips and smoothing of interior nodes, aimed at the
+// slivers (nearly flat tetrahedra, smallest dihedral angle a few degrees)
+// that Delaunay refinement leaves between the surfaces of a multi-material
+// mesh, where sliver perturbation and exudation cannot move the vertices.
+//
+// The quality of a tetrahedron is its smallest dihedral angle (as in
+// TetDihedralRangeDegrees, mesh/quality.h). Only the tetrahedra below
+// ImproveOptions::target_min_dihedral_deg are worked on, worst first (a
+// worklist, so a mesh of a few hundred thousand tetrahedra with a few
+// hundred slivers takes a fraction of a second, most of it building the
+// adjacency). For each, the schedule of Klingner & Shewchuk ("Aggressive
+// tetrahedral mesh improvement", 16th International Meshing Roundtable,
+// 2007) without vertex insertion, which would add nodes:
+//   1. smoothing: each node of the tetrahedron that may move tries the
+//      mean of the centroids of the faces opposite it in its tetrahedra,
+//      then a few steps of the non-smooth steepest ascent of the smallest
+//      dihedral angle among them (the active angles' gradients combined
+//      into the shortest vector of their convex hull, a step to where a
+//      further angle is predicted to become the smallest, halved until it
+//      helps; Freitag & Ollivier-Gooch, "Tetrahedral mesh improvement using
+//      swapping and smoothing", IJNME 40 (1997) 3979-4002; see
+//      StarObjective in mesh/tet_angles.h);
+//   2. the best of these flips:
+//      - edge removal on each of its six edges: the ring of m = 3 ..
+//        max_ring_size tetrahedra around an interior edge (a, b) is
+//        replaced by the 2 (m - 2) tetrahedra joining a and b to a
+//        triangulation of the ring's polygon, the triangulation that
+//        maximises the smallest angle being found by dynamic programming
+//        over the polygon's sub-chains (Shewchuk, "Two discrete optimization
+//        algorithms for the topological improvement of tetrahedral meshes",
+//        2002). A ring of three is the 3-2 flip, of four the 4-4 flip;
+//      - the 2-3 flip across each of its four faces: the tetrahedron and
+//        its neighbour become three tetrahedra around the edge joining
+//        their far corners, which must cross the shared triangle;
+//   3. when no flip improves on its own (typically because the polygon's
+//      triangulation makes a new flat tetrahedron with a free node), the
+//      three best flips in turn, each followed by smoothing the free
+//      corners of its new tetrahedra (twice round), kept only if the
+//      result is better, else undone;
+//   4. after a pass that leaves as many tetrahedra below the target as it
+//      found, a pass over their neighbours (the tetrahedra sharing an edge
+//      with each, once for each): 1-3 for them towards twice the target,
+//      then 1-3 for the one below it again (a neighbour's flip or move can
+//      open one for it).
+// An operation is taken only when it strictly raises the smallest dihedral
+// angle of the tetrahedra it replaces or reshapes (the worst new one better
+// than the worst old one) and every new tetrahedron is positively oriented
+// (6 V > 1e-12 l^3, l its longest edge): the mesh's smallest angle never
+// falls. Passes stop when none is left below the target, when a pass of
+// the fourth kind changes nothing, or after max_passes.
+//
+// What never changes, so that every region keeps its geometry and every
+// face set its triangles:
+//   - a flip stays inside one region (all tetrahedra it replaces in the
+//     same element_region), on an interior edge or face, and never removes
+//     a face of a face set: the replaced tetrahedra's outer faces are
+//     exactly the new tetrahedra's, so each region is the same point set;
+//   - a node moves only when it touches no face set triangle and no
+//     boundary face and all its tetrahedra lie in one region (within the
+//     polyhedron they fill, which stays filled);
+//   - node indices and the node count (Mesh::nodes is only written at the
+//     moving nodes), face sets (triangles, orientation, nodes) and region
+//     names.
+// Element indices do change: tetrahedra are removed and added, new ones
+// taking the places of removed ones or following the survivors, which keep
+// their order.
+//
+// What it cannot do: a sliver whose smallest angle lies between two faces
+// that are both face set triangles (or boundary faces, or faces against
+// another region) is the whole of its region's wedge at that edge, and no
+// conforming mesh of the same face sets does better there; a sliver with all
+// four corners held whose every flip would cross a face set or another
+// region, or make a flat tetrahedron no free node can lift, also stays (no
+// search over sequences of flips is made).
+#pragma once
+
+#include "mesh/mesh.h"
+#include "pba/status.h"
+
+namespace pba {
+
+struct ImproveOptions {
+  // A tetrahedron is worked on while its smallest dihedral angle is below
+  // this [degrees], in (0, 70.5) (a regular tetrahedron's is 70.53).
+  double target_min_dihedral_deg = 10;
+  // Passes over the tetrahedra below the target; >= 0 (0: only measure).
+  int max_passes = 5;
+  // Largest ring of tetrahedra around an edge that edge removal replaces,
+  // 3..10; the dynamic programme costs O(m^3) quality evaluations.
+  int max_ring_size = 7;
+  // Move nodes that no face set, boundary face or region interface holds
+  // (steps 1 and 3 above).
+  bool smooth = true;
+  // Try flips (steps 2 and 3).
+  bool flip = true;
+};
+
+struct ImproveStats {
+  int flips_23 = 0;
+  int flips_32 = 0;        // edge removal, ring of 3
+  int flips_44 = 0;        // edge removal, ring of 4
+  int edge_removals = 0;   // edge removal, ring of 5 or more
+  int smoothed_nodes = 0;  // node moves kept (a node may move more than once)
+  // Flips (counted above too) taken only together with moving the free
+  // corners of their new tetrahedra, having made things worse on their own.
+  int smoothed_flips = 0;
+  int passes = 0;  // passes made (each over the tetrahedra then below the target)
+  // Smallest dihedral angle over all tetrahedra [degrees], and how many
+  // tetrahedra lie below the target, before and after.
+  double min_dihedral_before_deg = 0;
+  double min_dihedral_after_deg = 0;
+  int below_target_before = 0;
+  int below_target_after = 0;
+};
+
+// Improves `mesh` in place (see above); `stats` may be null. A mesh with no
+// tetrahedron below the target comes back unchanged.
+//
+// Errors (the mesh is then untouched): InvalidArgument "mesh" for a null
+// mesh or a quadratic or hexahedral one; "mesh.tets" for a node index out
+// of range, an inverted tetrahedron (negative volume) or a face shared by
+// more than two tetrahedra; "mesh.face_sets" for a face set node out of
+// range; "mesh.element_region" when it is neither empty nor one entry per
+// tetrahedron; the option's name for a bad option.
+Status ImproveTetMesh(const ImproveOptions& options, Mesh* mesh, ImproveStats* stats);
+
+}  // namespace pba

@@ -1,0 +1,74 @@
+// Dihedral angles of tetrahedra as the objective of mesh improvement
+// (mesh/improve.h): the smallest angle of a tetrahedron, the gradients of
+// its six angles with respect to a corner, and the non-smooth ascent of
+// the smallest angle over the tetrahedra around a node as that node moves.
+// Coordinates in any length unit (metres in the solver); angles in radians.
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <numbers>
+#include <vector>
+
+namespace pba {
+
+// The quality of a tetrahedron that is inverted or flat to rounding.
+inline constexpr double kInvalidTet = -1;
+inline constexpr double kPi = std::numbers::pi;
+
+// Smallest of the six interior dihedral angles of the tetrahedron
+// (p0, p1, p2, p3) [rad], the same measure as TetDihedralRangeDegrees
+// (mesh/quality.h); kInvalidTet unless it is positively oriented with
+// 6 V > 1e-12 l^3, l its longest edge.
+double TetQuality(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1, const Eigen::Vector3d& p2,
+                  const Eigen::Vector3d& p3);
+
+// The six dihedral angles [rad] of the tetrahedron (x, p[0], p[1], p[2]),
+// along its edges (0,1), (0,2), (0,3), (1,2), (1,3), (2,3), and their
+// gradients with respect to the corner x [rad per length]. For the angle
+// theta along edge (i, j) between the faces (i, j, k) and (i, j, l), with
+// h_k the distance from corner k to the edge's line, m_k the unit normal of
+// face (i, j, k) pointing away from l, and s_k the position of k's
+// projection along the edge (0 at i, 1 at j):
+//   d theta / d x_k = m_k / h_k,
+//   d theta / d x_i = -((1 - s_k) m_k / h_k + (1 - s_l) m_l / h_l),
+//   d theta / d x_j = -(s_k m_k / h_k + s_l m_l / h_l)
+// (moving k away from the tetrahedron opens the angle at the rate 1 / h_k;
+// the gradients sum to zero, as a rigid translation leaves the angle
+// unchanged, and are normal to the edge, as sliding i along the edge's line
+// does too).
+void DihedralAnglesAndGradients(const Eigen::Vector3d& x, const std::array<Eigen::Vector3d, 3>& p,
+                                std::array<double, 6>* angle,
+                                std::array<Eigen::Vector3d, 6>* gradient);
+
+// The smallest dihedral angle over the star of a node, the tetrahedra
+// (x, p[0], p[1], p[2]) that share the corner x, each positively oriented
+// for the right x, as a function of x.
+class StarObjective {
+ public:
+  // `star` is borrowed and must outlive the objective.
+  explicit StarObjective(const std::vector<std::array<Eigen::Vector3d, 3>>& star) : star_(star) {}
+
+  // The smallest TetQuality over the star with the node at x [rad]
+  // (kInvalidTet if a tetrahedron is inverted or flat). Gives up as soon
+  // as one tetrahedron is at or below `bar`, returning that one's quality:
+  // the value then only tells that x is no better than `bar`.
+  double Value(const Eigen::Vector3d& x, double bar = kInvalidTet) const;
+
+  // Non-smooth steepest ascent from *x, where the value is `value` > 0
+  // (Freitag & Ollivier-Gooch, IJNME 40 (1997) 3979-4002): the direction is
+  // the shortest vector in the convex hull of the gradients of the active
+  // angles (those within 1e-3 rad of the smallest), along which all of them
+  // grow; the step goes to where the linearised growth of the active angles
+  // meets the first inactive one (of the tetrahedra within 20 degrees of
+  // the smallest), no further than half the shortest edge at x, and is
+  // halved, up to 8 times, until the value grows. At most `max_steps`
+  // steps; a step gaining less than 1e-4 rad ends the ascent. Returns the
+  // value at the new *x, at least `value`.
+  double Ascend(Eigen::Vector3d* x, double value, int max_steps = 10) const;
+
+ private:
+  const std::vector<std::array<Eigen::Vector3d, 3>>& star_;
+};
+
+}  // namespace pba
