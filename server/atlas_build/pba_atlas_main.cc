@@ -144,11 +144,21 @@ int RunBuild(AtlasBuildOptions options, const Pictures& pictures, const std::str
     std::printf(
         "\n%d structures, %d tetrahedra, %d nodes%s; source %.2f s, loft %.2f s, mesh %.2f s "
         "(seeds %.2f, refinement %.2f, ODT %.2f, perturbation %.2f, exudation %.2f), "
-        "quality %.2f s, validation %.2f s, pictures %.2f s\n",
+        "improvement %.2f s, quality %.2f s, validation %.2f s, pictures %.2f s\n",
         static_cast<int>(result.region_labels.size()), result.mesh.num_elements(),
         result.mesh.num_nodes(), result.mesh.quadratic() ? " (10-node)" : "", t.source_s, t.loft_s,
         t.mesh_s + t.quadratic_s, m.seed_s, m.refine_s, m.odt_s, m.perturb_s, m.exude_s,
-        t.quality_s, t.validation_s, pictures_s);
+        t.improve_s, t.quality_s, t.validation_s, pictures_s);
+    const ImproveStats& i = result.improvement;
+    if (i.min_dihedral_before_deg > 0) {
+      std::printf(
+          "improvement: smallest dihedral angle %.2f -> %.2f deg, %d -> %d tetrahedra "
+          "below the target; %d edge removals, %d 2-3 flips, %d node moves, %d "
+          "slivers moved across an interface (%.3g mm^3)\n",
+          i.min_dihedral_before_deg, i.min_dihedral_after_deg, i.below_target_before,
+          i.below_target_after, i.flips_32 + i.flips_44 + i.edge_removals, i.flips_23,
+          i.smoothed_nodes, result.relabelled.tetrahedra, result.relabelled.volume_m3 * 1e9);
+    }
     for (const std::string& step : m.time_limit_reached) {
       std::printf(
           "note: the mesher's %s step stopped at its time limit; the mesh depends on "
@@ -213,6 +223,11 @@ int main(int argc, char** argv) {
       ->add_option("--facets-per-section", build_options.facets_per_section,
                    "Smaller facets on small structures: at most a structure's mean section "
                    "perimeter over this [-]; 0: --facet-mm everywhere")
+      ->capture_default_str();
+  build
+      ->add_option("--improve-deg", build_options.improve_target_deg,
+                   "Flips and smoothing on tetrahedra whose smallest dihedral angle is below "
+                   "this [deg]; 0: none")
       ->capture_default_str();
   build
       ->add_option("--odt", build_options.odt_iterations,

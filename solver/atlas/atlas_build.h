@@ -26,8 +26,10 @@
 #include "atlas/label_volume.h"
 #include "atlas/plates.h"
 #include "atlas/report_format.h"
+#include "mesh/improve.h"
 #include "mesh/mesh.h"
 #include "mesh/quality.h"
+#include "mesh/region_faces.h"
 #include "pba/status.h"
 
 namespace pba {
@@ -65,6 +67,11 @@ struct AtlasBuildOptions {
   // Passes of ODT smoothing before sliver removal (LabelMeshOptions::
   // odt_iterations); 0: none.
   int odt_iterations = 2;
+  // After meshing, flips and smoothing of interior nodes
+  // (mesh/improve.h) work on every tetrahedron whose smallest dihedral
+  // angle is below this [degrees], without changing any structure's
+  // geometry; 0: none.
+  double improve_target_deg = 15;
   // Bound on each of the mesher's optimisation steps [s]
   // (LabelMeshOptions::optimisation_time_limit_s): a safeguard, generous so
   // that the iteration count and the sliver bound end them, not the
@@ -92,7 +99,8 @@ struct AtlasBuildOptions {
 inline constexpr char kSurroundingTissue[] = "Surrounding tissue";
 
 struct AtlasBuildTimes {
-  double source_s = 0, loft_s = 0, mesh_s = 0, quadratic_s = 0, quality_s = 0, validation_s = 0;
+  double source_s = 0, loft_s = 0, mesh_s = 0, improve_s = 0, quadratic_s = 0, quality_s = 0,
+         validation_s = 0;
 };
 
 struct AtlasBuildResult {
@@ -112,7 +120,9 @@ struct AtlasBuildResult {
   QualitySummary quality;
   std::optional<GeometricValidation> validation;
   AtlasBuildTimes times;
-  LabelMeshReport mesher;  // the mesher's steps: their times, and any cut short by its time limit
+  ImproveStats improvement;  // the improvement pass (all zero without it)
+  RelabelStats relabelled;   // slivers moved across an interface by it
+  LabelMeshReport mesher;    // the mesher's steps: their times, and any cut short by its time limit
 };
 
 Status BuildAtlas(const AtlasBuildOptions& options, AtlasBuildResult* result);

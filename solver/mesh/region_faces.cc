@@ -1,0 +1,156 @@
+#include "mesh/region_faces.h"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <array>
+#include <map>
+#include <unordered_map>
+#include <vector>
+
+#include "mesh/quality.h"
+
+namespace pba {
+namespace {
+
+// The faces of a positively oriented tetrahedron opposite its nodes 0..3,
+// each anticlockwise seen from outside it.
+constexpr int kTetFaces[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+
+struct FaceKey {
+  std::array<int, 3> sorted;
+  bool operator==(const FaceKey& o) const { return sorted == o.sorted; }
+};
+struct FaceKeyHash {
+  std::size_t operator()(const FaceKey& k) const {
+    std::size_t h = 0;
+    for (int v : k.sorted) h = h * 1000003u ^ static_cast<std::size_t>(v);
+    return h;
+  }
+};
+
+std::array<int, 3> Face(const Mesh& mesh, int e, int f) {
+  const std::array<int, 4>& t = mesh.tets[e];
+  return {t[kTetFaces[f][0]], t[kTetFaces[f][1]], t[kTetFaces[f][2]]};
+}
+
+FaceKey Key(std::array<int, 3> face) {
+  std::sort(face.begin(), face.end());
+  return {face};
+}
+
+// neighbour[4 e + f]: the tetrahedron across face f of tetrahedron e, -1 on
+// the boundary.
+std::vector<int> FaceNeighbours(const Mesh& mesh) {
+  const int n = static_cast<int>(mesh.tets.size());
+  std::vector<int> neighbour(4 * static_cast<std::size_t>(n), -1);
+  std::unordered_map<FaceKey, int, FaceKeyHash> open;  // face -> 4 e + f
+  open.reserve(2 * static_cast<std::size_t>(n));
+  for (int e = 0; e < n; ++e) {
+    for (int f = 0; f < 4; ++f) {
+      const FaceKey key = Key(Face(mesh, e, f));
+      const auto [it, added] = open.emplace(key, 4 * e + f);
+      if (added) continue;
+      neighbour[4 * e + f] = it->second / 4;
+      neighbour[it->second] = e;
+      open.erase(it);
+    }
+  }
+  return neighbour;
+}
+
+}  // namespace
+
+void RebuildRegionFaceSets(Mesh* mesh) {
+  for (auto it = mesh->face_sets.begin(); it != mesh->face_sets.end();) {
+    const std::string& name = it->first;
+    const bool derived =
+        name == "surface" || name.rfind("surface:", 0) == 0 || name.rfind("interface:", 0) == 0;
+    it = derived ? mesh->face_sets.erase(it) : std::next(it);
+  }
+  const std::vector<int> neighbour = FaceNeighbours(*mesh);
+  const bool regions = !mesh->element_region.empty();
+  FaceSet surface;
+  std::vector<FaceSet> region_surfaces(regions ? mesh->region_names.size() : 0);
+  std::map<std::pair<int, int>, FaceSet> interfaces;
+  for (int e = 0; e < static_cast<int>(mesh->tets.size()); ++e) {
+    const int mine = regions ? mesh->element_region[e] : 0;
+    for (int f = 0; f < 4; ++f) {
+      const int other = neighbour[4 * e + f];
+      const std::array<int, 3> face = Face(*mesh, e, f);
+      if (other < 0) {
+        surface.triangles.push_back(face);
+        if (regions) region_surfaces[mine].triangles.push_back(face);
+        continue;
+      }
+      if (!regions) continue;
+      const int theirs = mesh->element_region[other];
+      if (mine == theirs) continue;
+      region_surfaces[mine].triangles.push_back(face);
+      if (mine < theirs) interfaces[{mine, theirs}].triangles.push_back(face);
+    }
+  }
+  CollectFaceSetNodes(&surface);
+  mesh->face_sets["surface"] = std::move(surface);
+  for (std::size_t r = 0; r < region_surfaces.size(); ++r) {
+    if (region_surfaces[r].triangles.empty()) continue;
+    CollectFaceSetNodes(&region_surfaces[r]);
+    mesh->face_sets["surface:" + mesh->region_names[r]] = std::move(region_surfaces[r]);
+  }
+  for (auto& [pair, set] : interfaces) {
+    CollectFaceSetNodes(&set);
+    mesh->face_sets["interface:" + mesh->region_names[pair.first] + "|" +
+                    mesh->region_names[pair.second]] = std::move(set);
+  }
+}
+
+RelabelStats RelabelInterfaceSlivers(double target_deg, Mesh* mesh) {
+  RelabelStats stats;
+  if (mesh->element_region.empty() || mesh->quadratic() || mesh->hexahedral()) return stats;
+  const std::vector<int> neighbour = FaceNeighbours(*mesh);
+  std::vector<int> count(mesh->region_names.size(), 0);
+  for (int r : mesh->element_region) ++count[r];
+  // Candidates: (faces shared with the other region, element, that region).
+  std::vector<std::array<int, 3>> moves;
+  for (int e = 0; e < static_cast<int>(mesh->tets.size()); ++e) {
+    const Eigen::Matrix<double, 4, 3> x = TetCorners(*mesh, e);
+    if (TetDihedralRangeDegrees(x)[0] >= target_deg) continue;
+    std::map<int, int> against;  // other region -> faces
+    for (int f = 0; f < 4; ++f) {
+      const int other = neighbour[4 * e + f];
+      if (other >= 0 && mesh->element_region[other] != mesh->element_region[e]) {
+        ++against[mesh->element_region[other]];
+      }
+    }
+    int best = -1, faces = 1;
+    for (const auto& [region, n] : against) {
+      if (n > faces) best = region, faces = n;
+    }
+    if (best >= 0) moves.push_back({faces, e, best});
+  }
+  std::sort(moves.begin(), moves.end(),
+            [](const auto& a, const auto& b) { return a[0] != b[0] ? a[0] > b[0] : a[1] < b[1]; });
+  std::vector<bool> moved(mesh->tets.size(), false);
+  for (const auto& [faces, e, to] : moves) {
+    // Each decided on the regions as they were: skip one whose neighbour
+    // moved meanwhile, and never empty a region.
+    bool neighbour_moved = false;
+    for (int f = 0; f < 4; ++f) {
+      const int other = neighbour[4 * e + f];
+      neighbour_moved |= other >= 0 && moved[other];
+    }
+    int& own = count[mesh->element_region[e]];
+    if (neighbour_moved || own <= 1) continue;
+    --own;
+    ++count[to];
+    mesh->element_region[e] = to;
+    moved[e] = true;
+    ++stats.tetrahedra;
+    const Eigen::Matrix<double, 4, 3> x = TetCorners(*mesh, e);
+    stats.volume_m3 +=
+        (x.row(1) - x.row(0)).cross(x.row(2) - x.row(0)).dot(x.row(3) - x.row(0)) / 6;
+  }
+  if (stats.tetrahedra > 0) RebuildRegionFaceSets(mesh);
+  return stats;
+}
+
+}  // namespace pba
