@@ -438,7 +438,7 @@ LabelMeshOptions SphereOptions(bool remove_slivers) {
 TEST(ImproveTest, NestedSpheresWithoutSliverRemoval) {
   Mesh before;
   ASSERT_TRUE(MeshLabels(TwoSpheres, {"shell", "core"}, SphereOptions(false), &before).ok());
-  ASSERT_EQ(before.face_sets.size(), 2u);
+  ASSERT_EQ(before.face_sets.size(), 4u);  // surface, interface, each region's surface
   for (const double target : {10.0, 20.0}) {
     for (const bool smooth : {true, false}) {
       SCOPED_TRACE("target " + std::to_string(target) + (smooth ? "" : ", no smoothing"));
