@@ -44,18 +44,33 @@ Status ChooseLabels(const AtlasBuildOptions& options, const ColourTable& colours
   const std::vector<int64_t> counts = CountLabels(volume);
   std::vector<bool> wanted(counts.size(), options.structures.empty());
   for (size_t i = 0; i < options.structures.size(); ++i) {
-    const ColourEntry* entry = colours.FindByName(options.structures[i]);
-    if (entry == nullptr) {
+    const std::string& name = options.structures[i];
+    // A structure, or a group: "Thalamus" for every "Thalamus: ..." entry.
+    std::vector<const ColourEntry*> entries;
+    if (const ColourEntry* entry = colours.FindByName(name)) {
+      entries.push_back(entry);
+    } else {
+      for (const ColourEntry& e : colours.entries()) {
+        if (e.name.size() > name.size() + 1 && e.name.compare(0, name.size(), name) == 0 &&
+            e.name[name.size()] == ':') {
+          entries.push_back(&e);
+        }
+      }
+    }
+    if (entries.empty()) {
       return Status::InvalidArgument(
           "structures[" + std::to_string(i) + "]",
-          "no structure \"" + options.structures[i] + "\" in the colour table");
+          "no structure \"" + name + "\" in the colour table (nor any \"" + name + ": ...\")");
     }
-    if (counts[entry->label] == 0) {
-      return Status::InvalidArgument(
-          "structures[" + std::to_string(i) + "]",
-          "\"" + options.structures[i] + "\" is not in the label volume");
+    bool present = false;
+    for (const ColourEntry* e : entries) {
+      present |= counts[e->label] > 0;
+      wanted[e->label] = true;
     }
-    wanted[entry->label] = true;
+    if (!present) {
+      return Status::InvalidArgument("structures[" + std::to_string(i) + "]",
+                                     "\"" + name + "\" is not in the label volume");
+    }
   }
   labels->clear();
   left_out->clear();

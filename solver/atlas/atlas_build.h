@@ -86,7 +86,9 @@ struct AtlasBuildOptions {
   // 10-node tetrahedra (mid-edge nodes at the midpoints of the straight
   // edges).
   bool quadratic = false;
-  // Keep only these structures (colour-table names); empty: all. The
+  // Keep only these structures (colour-table names; a name that is not one
+  // but prefixes some as "<name>: ..." stands for all of them, e.g.
+  // "Thalamus" for the thalamic nuclei); empty: all. The
   // others are dropped, or with `merge_rest` meshed as one region,
   // kSurroundingTissue (region label 0: it is on no plate).
   std::vector<std::string> structures;

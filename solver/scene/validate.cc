@@ -151,8 +151,12 @@ Status CheckAtlasSetName(const GeometrySpec& geometry, const std::string& name,
                                      "'" + name + "': \"" + kSurroundingTissue +
                                          "\" exists only with geometry.atlas.merge_rest: true");
     }
-    if (!a.structures.empty() &&
-        std::find(a.structures.begin(), a.structures.end(), structure) == a.structures.end()) {
+    const auto kept = [&](const std::string& asked) {  // by name, or as a group ("Thalamus")
+      return asked == structure ||
+             (structure.size() > asked.size() + 1 &&
+              structure.compare(0, asked.size(), asked) == 0 && structure[asked.size()] == ':');
+    };
+    if (!a.structures.empty() && std::none_of(a.structures.begin(), a.structures.end(), kept)) {
       return Status::InvalidArgument(
           path, "'" + name + "': \"" + structure +
                     "\" is not among geometry.atlas.structures, so the mesh will not have it");

@@ -105,6 +105,25 @@ TEST(ModelBuilderAtlas, AnInterfaceBetweenStructuresThatDoNotTouchIsNamed) {
   EXPECT_NE(status.message().find("'surface:Putamen'"), std::string::npos) << status.message();
 }
 
+// Model only what a scene needs: the thalamus (a group: its eleven
+// nuclei) and the putamen alone, at the whole brain's element size, take
+// at least five times fewer elements than the whole brain.
+TEST(ModelBuilderAtlas, ThalamusAndPutamenTakeFiveTimesFewerElementsThanTheBrain) {
+  SceneSpec part = AtlasScene({"Thalamus", "Putamen"});
+  SceneSpec whole = AtlasScene({});
+  part.mesh.element_size_mm = whole.mesh.element_size_mm = 6;
+  Model model_part, model_whole;
+  ASSERT_TRUE(BuildModel(part, &model_part).ok());
+  ASSERT_TRUE(BuildModel(whole, &model_whole).ok());
+  EXPECT_EQ(model_part.mesh.region_names.size(), 12u);
+  EXPECT_TRUE(model_part.mesh.face_sets.count("surface:Thalamus: pulvinar"));
+  const int part_elements = model_part.mesh.num_elements();
+  const int whole_elements = model_whole.mesh.num_elements();
+  std::printf("thalamus and putamen: %d elements; whole brain: %d (%.1fx)\n", part_elements,
+              whole_elements, static_cast<double>(whole_elements) / part_elements);
+  EXPECT_GE(whole_elements, 5 * part_elements);
+}
+
 TEST(ModelBuilderAtlas, AnUnknownStructureIsNamed) {
   Model model;
   const Status status = BuildModel(AtlasScene({"Putamen", "Claustrum"}), &model);
