@@ -7,6 +7,7 @@
 #include <set>
 
 #include "atlas/bitmap_font.h"
+#include "atlas/geometric_validation.h"
 #include "core/atomic_write.h"
 #include "core/format.h"
 
@@ -219,26 +220,8 @@ namespace {
 
 Status ValidateMesh(const Mesh& mesh, const std::vector<uint16_t>& region_labels,
                     const ColourTable& colours) {
-  if (mesh.hexahedral()) {
-    return Status::InvalidArgument("mesh", "a hexahedral mesh; the cuts are of tetrahedra");
-  }
-  if (mesh.tets.empty()) return Status::InvalidArgument("mesh", "no elements");
-  if (!mesh.element_region.empty() && mesh.element_region.size() != mesh.tets.size()) {
-    return Status::InvalidArgument(
-        "mesh.element_region",
-        Format("%zu entries for %zu elements", mesh.element_region.size(), mesh.tets.size()));
-  }
+  PBA_RETURN_IF_ERROR(ValidateLabelledTetMesh(mesh, region_labels, "region_labels", "picture"));
   const size_t regions = std::max<size_t>(1, mesh.region_names.size());
-  if (region_labels.size() != regions) {
-    return Status::InvalidArgument(
-        "region_labels", Format("%zu labels for %zu regions", region_labels.size(), regions));
-  }
-  for (size_t e = 0; e < mesh.element_region.size(); ++e) {
-    if (mesh.element_region[e] < 0 || static_cast<size_t>(mesh.element_region[e]) >= regions) {
-      return Status::InvalidArgument(Format("mesh.element_region[%zu]", e),
-                                     Format("region %d of %zu", mesh.element_region[e], regions));
-    }
-  }
   for (size_t r = 0; r < regions; ++r) {
     if (region_labels[r] != 0 && colours.FindByLabel(region_labels[r]) == nullptr) {
       return Status::InvalidArgument(

@@ -19,26 +19,7 @@ using Box = PixelBox;
 
 Status ValidateInputs(const Mesh& mesh, const std::vector<uint16_t>& region_label,
                       const PlateStack& plates) {
-  if (mesh.hexahedral()) {
-    return Status::InvalidArgument("mesh", "a hexahedral mesh; the validation cuts tetrahedra");
-  }
-  if (mesh.tets.empty()) return Status::InvalidArgument("mesh", "no elements");
-  if (!mesh.element_region.empty() && mesh.element_region.size() != mesh.tets.size()) {
-    return Status::InvalidArgument(
-        "mesh.element_region",
-        Format("%zu entries for %zu elements", mesh.element_region.size(), mesh.tets.size()));
-  }
-  const size_t regions = std::max<size_t>(1, mesh.region_names.size());
-  if (region_label.size() != regions) {
-    return Status::InvalidArgument(
-        "region_label", Format("%zu labels for %zu regions", region_label.size(), regions));
-  }
-  for (size_t e = 0; e < mesh.element_region.size(); ++e) {
-    if (mesh.element_region[e] < 0 || static_cast<size_t>(mesh.element_region[e]) >= regions) {
-      return Status::InvalidArgument(Format("mesh.element_region[%zu]", e),
-                                     Format("region %d of %zu", mesh.element_region[e], regions));
-    }
-  }
+  PBA_RETURN_IF_ERROR(ValidateLabelledTetMesh(mesh, region_label, "region_label", "validation"));
   return ValidatePlateStack(plates, "plates", 1);
 }
 
@@ -256,6 +237,31 @@ Status RegionLabelsFromNames(const Mesh& mesh, const ColourTable& colours,
     labels.push_back(entry->label);
   }
   *region_label = std::move(labels);
+  return Status::Ok();
+}
+
+Status ValidateLabelledTetMesh(const Mesh& mesh, const std::vector<uint16_t>& labels,
+                               const std::string& labels_field, const std::string& what) {
+  if (mesh.hexahedral()) {
+    return Status::InvalidArgument("mesh", "a hexahedral mesh; the " + what + " cuts tetrahedra");
+  }
+  if (mesh.tets.empty()) return Status::InvalidArgument("mesh", "no elements");
+  if (!mesh.element_region.empty() && mesh.element_region.size() != mesh.tets.size()) {
+    return Status::InvalidArgument(
+        "mesh.element_region",
+        Format("%zu entries for %zu elements", mesh.element_region.size(), mesh.tets.size()));
+  }
+  const size_t regions = std::max<size_t>(1, mesh.region_names.size());
+  if (labels.size() != regions) {
+    return Status::InvalidArgument(labels_field,
+                                   Format("%zu labels for %zu regions", labels.size(), regions));
+  }
+  for (size_t e = 0; e < mesh.element_region.size(); ++e) {
+    if (mesh.element_region[e] < 0 || static_cast<size_t>(mesh.element_region[e]) >= regions) {
+      return Status::InvalidArgument(Format("mesh.element_region[%zu]", e),
+                                     Format("region %d of %zu", mesh.element_region[e], regions));
+    }
+  }
   return Status::Ok();
 }
 

@@ -116,6 +116,13 @@ struct GeometricValidation {
 Status RegionLabelsFromNames(const Mesh& mesh, const ColourTable& colours,
                              std::vector<uint16_t>* region_label);
 
+// Checks a region-labelled tetrahedral mesh before it is cut: tetrahedra
+// (else "mesh", saying that `what` cuts tetrahedra), at least one,
+// element_region empty or one in range per element, one label per region
+// (field `labels_field`). Shared by the validation and the pictures.
+Status ValidateLabelledTetMesh(const Mesh& mesh, const std::vector<uint16_t>& labels,
+                               const std::string& labels_field, const std::string& what);
+
 // Validates `mesh` against `plates` as described above. region_label[r] is
 // the colour-table label of region r (for a one-region mesh, with no
 // region_names, region_label[0]); label 0 makes a region invisible (as if
