@@ -145,6 +145,30 @@ TEST_F(AtlasBuildTest, TableEntriesAbsentFromTheVolumeAreListed) {
             result.absent.end());
 }
 
+// A structure asked for that the volume does not hold (an empty one), by
+// name or by group, is refused naming it; so is a name in no table.
+TEST_F(AtlasBuildTest, AStructureAskedForButAbsentIsNamed) {
+  const fs::path file = dir_ / "ball.nii.gz";
+  ASSERT_TRUE(WriteNifti(CubeWithASmallBall(), file).ok());
+  AtlasBuildOptions options;
+  options.source = AtlasBuildOptions::Source::kLabelVolume;
+  options.input = file;
+  AtlasBuildResult result;
+  for (const std::string name : {"Putamen", "Thalamus"}) {
+    options.structures = {"Substantia nigra", name};
+    const Status s = BuildAtlas(options, &result);
+    EXPECT_EQ(s.code(), Status::Code::kInvalidArgument) << name;
+    EXPECT_EQ(s.field(), "structures[1]") << name;
+    EXPECT_NE(s.message().find("\"" + name + "\" is not in the label volume"), std::string::npos)
+        << s.message();
+  }
+  options.structures = {"Claustrum"};
+  const Status s = BuildAtlas(options, &result);
+  EXPECT_EQ(s.field(), "structures[0]");
+  EXPECT_NE(s.message().find("no structure \"Claustrum\" in the colour table"), std::string::npos)
+      << s.message();
+}
+
 // Voxels or pixels in the wrong unit: the atlas would be 40 um or 40 m
 // across. Refused naming the size, before anything is meshed.
 TEST_F(AtlasBuildTest, AbsurdVoxelAndPixelSizesAreRefused) {
