@@ -51,10 +51,7 @@ Status ChooseLabels(const AtlasBuildOptions& options, const ColourTable& colours
       entries.push_back(entry);
     } else {
       for (const ColourEntry& e : colours.entries()) {
-        if (e.name.size() > name.size() + 1 && e.name.compare(0, name.size(), name) == 0 &&
-            e.name[name.size()] == ':') {
-          entries.push_back(&e);
-        }
+        if (InStructureGroup(e.name, name)) entries.push_back(&e);
       }
     }
     if (entries.empty()) {
@@ -366,15 +363,7 @@ Status BuildAtlas(const AtlasBuildOptions& options, AtlasBuildResult* result) {
     if (result->relabelled.tetrahedra > 0) {
       ImproveStats second;
       PBA_RETURN_IF_ERROR(ImproveTetMesh(improve, &result->mesh, &second));
-      result->improvement.flips_23 += second.flips_23;
-      result->improvement.flips_32 += second.flips_32;
-      result->improvement.flips_44 += second.flips_44;
-      result->improvement.edge_removals += second.edge_removals;
-      result->improvement.smoothed_nodes += second.smoothed_nodes;
-      result->improvement.smoothed_flips += second.smoothed_flips;
-      result->improvement.passes += second.passes;
-      result->improvement.min_dihedral_after_deg = second.min_dihedral_after_deg;
-      result->improvement.below_target_after = second.below_target_after;
+      AddLaterPass(second, &result->improvement);
     }
     result->times.improve_s = SecondsSince(start);
   }

@@ -154,6 +154,11 @@ const ColourEntry* ColourTable::FindByLabel(uint16_t label) const {
   return it != entries_.end() && it->label == label ? &*it : nullptr;
 }
 
+bool InStructureGroup(std::string_view name, std::string_view group) {
+  return name.size() > group.size() + 1 && name.substr(0, group.size()) == group &&
+         name[group.size()] == ':';
+}
+
 const ColourEntry* ColourTable::FindByName(std::string_view name) const {
   for (const ColourEntry& e : entries_) {
     if (e.name == name) return &e;

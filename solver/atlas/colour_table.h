@@ -87,6 +87,10 @@ struct ColourEntry {
   uint8_t r = 0, g = 0, b = 0;
 };
 
+// Whether `name` belongs to the group `group`: names "<group>: ...", as
+// the thalamic nuclei "Thalamus: anterior" ... belong to "Thalamus".
+bool InStructureGroup(std::string_view name, std::string_view group);
+
 class ColourTable {
  public:
   ColourTable() = default;

@@ -23,6 +23,8 @@
 #include <unordered_map>
 #include <utility>
 
+#include "mesh/region_faces.h"
+
 namespace pba {
 namespace {
 
@@ -31,7 +33,6 @@ using Domain = CGAL::Labeled_mesh_domain_3<Kernel>;
 using Triangulation = CGAL::Mesh_triangulation_3<Domain, CGAL::Default, CGAL::Sequential_tag>::type;
 using Complex = CGAL::Mesh_complex_3_in_triangulation_3<Triangulation>;
 using Criteria = CGAL::Mesh_criteria_3<Triangulation>;
-using CellHandle = Triangulation::Cell_handle;
 using VertexHandle = Triangulation::Vertex_handle;
 
 constexpr double kMetresPerMm = 1e-3;
@@ -45,11 +46,6 @@ double SecondsSince(Clock::time_point start) {
 constexpr const char* kNoRegionMessage =
     "no region found inside the box: the labelling function is 0 everywhere the mesher "
     "sampled it (check the box, and that regions are not thinner than the facet size)";
-
-// The faces of a tetrahedron opposite its nodes 0..3, each anticlockwise
-// seen from outside a positively oriented one (as primitive_mesher.cc lists
-// them).
-constexpr int kTetFaces[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
 
 // Seeds the triangulation with points on every surface and interface: the
 // label is sampled on a grid of spacing about `spacing` [mm] over the box,
@@ -258,8 +254,6 @@ Status ConvertComplex(const Complex& c3t3, const std::vector<std::string>& regio
   const int num_regions = static_cast<int>(region_names.size());
   std::unordered_map<const void*, int> node_of;  // vertex address -> node
   std::vector<Eigen::Vector3d> points;
-  std::vector<CellHandle> cells;                    // element -> cell
-  std::unordered_map<const void*, int> element_of;  // cell address -> element
   Mesh out;
   for (auto c = c3t3.cells_in_complex_begin(); c != c3t3.cells_in_complex_end(); ++c) {
     const int label = c3t3.subdomain_index(c);
@@ -288,8 +282,6 @@ Status ConvertComplex(const Complex& c3t3, const std::vector<std::string>& regio
     const Eigen::Vector3d b = points[tet[2]] - points[tet[0]];
     const Eigen::Vector3d d = points[tet[3]] - points[tet[0]];
     if (a.dot(b.cross(d)) < 0) std::swap(tet[2], tet[3]);
-    element_of.emplace(&*c, static_cast<int>(out.tets.size()));
-    cells.push_back(c);
     out.tets.push_back(tet);
     out.element_region.push_back(label - 1);
   }
@@ -302,48 +294,9 @@ Status ConvertComplex(const Complex& c3t3, const std::vector<std::string>& regio
     out.nodes.row(static_cast<int>(i)) = kMetresPerMm * points[i].transpose();
   out.region_names = region_names;
 
-  // Boundary and interface triangles, from the tetrahedra themselves (a face
-  // whose neighbour is outside the complex, or in another region), so that
-  // the sets always match the elements. Each is taken from the element on
-  // its outer side for "surface" and on the lower label's side for an
-  // interface, anticlockwise seen from outside that element.
-  FaceSet surface;
-  std::map<std::pair<int, int>, FaceSet> interfaces;
-  std::vector<FaceSet> region_surfaces(region_names.size());
-  for (int e = 0; e < static_cast<int>(cells.size()); ++e) {
-    const CellHandle cell = cells[e];
-    const std::array<int, 4>& tet = out.tets[e];
-    for (int i = 0; i < 4; ++i) {
-      const CellHandle neighbour = cell->neighbor(i);
-      const VertexHandle opposite = cell->vertex(i);
-      const int local =
-          static_cast<int>(std::find(tet.begin(), tet.end(), node_of.at(&*opposite)) - tet.begin());
-      const std::array<int, 3> face{tet[kTetFaces[local][0]], tet[kTetFaces[local][1]],
-                                    tet[kTetFaces[local][2]]};
-      const auto other = element_of.find(&*neighbour);
-      const int mine = out.element_region[e];
-      if (other == element_of.end()) {
-        surface.triangles.push_back(face);
-        region_surfaces[mine].triangles.push_back(face);
-        continue;
-      }
-      const int theirs = out.element_region[other->second];
-      if (mine != theirs) region_surfaces[mine].triangles.push_back(face);
-      if (mine < theirs) interfaces[{mine, theirs}].triangles.push_back(face);
-    }
-  }
-  CollectFaceSetNodes(&surface);
-  out.face_sets["surface"] = std::move(surface);
-  for (std::size_t r = 0; r < region_surfaces.size(); ++r) {
-    if (region_surfaces[r].triangles.empty()) continue;  // a region that got no element
-    CollectFaceSetNodes(&region_surfaces[r]);
-    out.face_sets["surface:" + region_names[r]] = std::move(region_surfaces[r]);
-  }
-  for (auto& [pair, set] : interfaces) {
-    CollectFaceSetNodes(&set);
-    out.face_sets["interface:" + region_names[pair.first] + "|" + region_names[pair.second]] =
-        std::move(set);
-  }
+  // Boundary and interface triangles, from the tetrahedra themselves, so
+  // that the sets always match the elements (mesh/region_faces.h).
+  RebuildRegionFaceSets(&out);
   *mesh = std::move(out);
   return Status::Ok();
 }

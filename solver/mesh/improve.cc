@@ -536,4 +536,16 @@ Status ImproveTetMesh(const ImproveOptions& options, Mesh* mesh, ImproveStats* s
   return Status::Ok();
 }
 
+void AddLaterPass(const ImproveStats& later, ImproveStats* total) {
+  total->flips_23 += later.flips_23;
+  total->flips_32 += later.flips_32;
+  total->flips_44 += later.flips_44;
+  total->edge_removals += later.edge_removals;
+  total->smoothed_nodes += later.smoothed_nodes;
+  total->smoothed_flips += later.smoothed_flips;
+  total->passes += later.passes;
+  total->min_dihedral_after_deg = later.min_dihedral_after_deg;
+  total->below_target_after = later.below_target_after;
+}
+
 }  // namespace pba

@@ -114,6 +114,10 @@ struct ImproveStats {
   int below_target_after = 0;
 };
 
+// Adds a later pass's counts to `total`, whose "after" figures become the
+// later pass's (its "before" ones stay those of the first pass).
+void AddLaterPass(const ImproveStats& later, ImproveStats* total);
+
 // Improves `mesh` in place (see above); `stats` may be null. A mesh with no
 // tetrahedron below the target comes back unchanged.
 //

@@ -60,6 +60,28 @@ std::vector<int> FaceNeighbours(const Mesh& mesh) {
 
 }  // namespace
 
+std::string RegionSurfaceSetName(const std::string& region) { return "surface:" + region; }
+
+std::string InterfaceSetName(const std::string& first, const std::string& second) {
+  return "interface:" + first + "|" + second;
+}
+
+std::optional<RegionSetName> ParseRegionSetName(const std::string& name) {
+  RegionSetName parsed;
+  if (name.rfind("surface:", 0) == 0) {
+    parsed.first = name.substr(8);
+    return parsed;
+  }
+  if (name.rfind("interface:", 0) != 0) return std::nullopt;
+  const std::string pair = name.substr(10);
+  const std::size_t bar = pair.find('|');
+  if (bar == std::string::npos) return std::nullopt;
+  parsed.interface = true;
+  parsed.first = pair.substr(0, bar);
+  parsed.second = pair.substr(bar + 1);
+  return parsed;
+}
+
 void RebuildRegionFaceSets(Mesh* mesh) {
   for (auto it = mesh->face_sets.begin(); it != mesh->face_sets.end();) {
     const std::string& name = it->first;
@@ -94,12 +116,12 @@ void RebuildRegionFaceSets(Mesh* mesh) {
   for (std::size_t r = 0; r < region_surfaces.size(); ++r) {
     if (region_surfaces[r].triangles.empty()) continue;
     CollectFaceSetNodes(&region_surfaces[r]);
-    mesh->face_sets["surface:" + mesh->region_names[r]] = std::move(region_surfaces[r]);
+    mesh->face_sets[RegionSurfaceSetName(mesh->region_names[r])] = std::move(region_surfaces[r]);
   }
   for (auto& [pair, set] : interfaces) {
     CollectFaceSetNodes(&set);
-    mesh->face_sets["interface:" + mesh->region_names[pair.first] + "|" +
-                    mesh->region_names[pair.second]] = std::move(set);
+    mesh->face_sets[InterfaceSetName(mesh->region_names[pair.first],
+                                     mesh->region_names[pair.second])] = std::move(set);
   }
 }
 

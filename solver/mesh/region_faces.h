@@ -4,6 +4,9 @@
 // lying against an interface, whose two faces on it meet at a few degrees.
 #pragma once
 
+#include <optional>
+#include <string>
+
 #include "mesh/mesh.h"
 
 namespace pba {
@@ -20,6 +23,19 @@ namespace pba {
 // Names are Mesh::region_names; a mesh without regions gets "surface" only.
 // The conventions are those of MeshLabels (atlas/label_mesher.h).
 void RebuildRegionFaceSets(Mesh* mesh);
+
+// The names of the region-derived face sets (see RebuildRegionFaceSets).
+std::string RegionSurfaceSetName(const std::string& region);
+std::string InterfaceSetName(const std::string& first, const std::string& second);
+
+// A region-derived face set's name taken apart: "surface:<first>", or
+// "interface:<first>|<second>" (split at the first '|'). Empty for any
+// other name, an "interface:" one without '|' among them.
+struct RegionSetName {
+  bool interface = false;
+  std::string first, second;  // second: empty for a region's surface
+};
+std::optional<RegionSetName> ParseRegionSetName(const std::string& name);
 
 struct RelabelStats {
   int tetrahedra = 0;    // moved to another region

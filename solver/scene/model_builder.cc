@@ -6,11 +6,14 @@
 #include <cmath>
 #include <filesystem>
 #include <map>
+#include <optional>
+#include <string>
 
 #include "atlas/atlas_build.h"
 #include "core/format.h"
 #include "mesh/primitive_mesher.h"
 #include "mesh/quadratic.h"
+#include "mesh/region_faces.h"
 
 namespace pba {
 
@@ -141,14 +144,13 @@ Status ProvideAtlasSets(const SceneSpec& scene, Mesh* mesh) {
   }
   for (const auto& [field, name] : wanted) {
     if (mesh->face_sets.count(name) != 0) continue;
-    const bool surface = name.rfind("surface:", 0) == 0;
-    if (!surface && name.rfind("interface:", 0) != 0) continue;  // a patch, made later
-    std::string first = name.substr(surface ? 8 : 10), second;
+    const std::optional<RegionSetName> wanted_set = ParseRegionSetName(name);
+    if (!wanted_set) continue;  // a patch, made later
+    const bool surface = !wanted_set->interface;
+    const std::string& first = wanted_set->first;
+    const std::string& second = wanted_set->second;
     if (!surface) {
-      const std::size_t bar = first.find('|');
-      second = first.substr(bar + 1);
-      first.resize(bar);
-      const auto reversed = mesh->face_sets.find("interface:" + second + "|" + first);
+      const auto reversed = mesh->face_sets.find(InterfaceSetName(second, first));
       if (reversed != mesh->face_sets.end()) {
         FaceSet turned = reversed->second;
         for (auto& t : turned.triangles) std::swap(t[1], t[2]);
@@ -160,12 +162,12 @@ Status ProvideAtlasSets(const SceneSpec& scene, Mesh* mesh) {
     // What the mesh has for the structure(s) named.
     std::vector<std::string> related;
     for (const auto& [set_name, set] : mesh->face_sets) {
-      const bool names_first = set_name.find(":" + first) != std::string::npos ||
-                               set_name.find("|" + first) != std::string::npos;
-      const bool names_second =
-          !second.empty() && (set_name.find(":" + second) != std::string::npos ||
-                              set_name.find("|" + second) != std::string::npos);
-      if (names_first || names_second) related.push_back("'" + set_name + "'");
+      const std::optional<RegionSetName> has = ParseRegionSetName(set_name);
+      if (!has) continue;
+      const auto names = [&](const std::string& structure) {
+        return !structure.empty() && (has->first == structure || has->second == structure);
+      };
+      if (names(first) || names(second)) related.push_back("'" + set_name + "'");
     }
     std::string listed;
     for (const std::string& r : related) listed += (listed.empty() ? "" : ", ") + r;

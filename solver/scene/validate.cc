@@ -2,12 +2,14 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 #include <string>
 
 #include "atlas/atlas_build.h"
 #include "atlas/colour_table.h"
 #include "material/factory.h"
 #include "mesh/primitive_mesher.h"
+#include "mesh/region_faces.h"
 #include "pba/scene.h"
 
 namespace pba {
@@ -152,9 +154,7 @@ Status CheckAtlasSetName(const GeometrySpec& geometry, const std::string& name,
                                          "\" exists only with geometry.atlas.merge_rest: true");
     }
     const auto kept = [&](const std::string& asked) {  // by name, or as a group ("Thalamus")
-      return asked == structure ||
-             (structure.size() > asked.size() + 1 &&
-              structure.compare(0, asked.size(), asked) == 0 && structure[asked.size()] == ':');
+      return asked == structure || InStructureGroup(structure, asked);
     };
     if (!a.structures.empty() && std::none_of(a.structures.begin(), a.structures.end(), kept)) {
       return Status::InvalidArgument(
@@ -167,14 +167,14 @@ Status CheckAtlasSetName(const GeometrySpec& geometry, const std::string& name,
     }
     return Status::Ok();
   };
-  if (name.rfind("surface:", 0) == 0) return check_structure(name.substr(8));
-  const std::string pair = name.substr(10);
-  const std::size_t bar = pair.find('|');
-  if (bar == std::string::npos) {
+  const std::optional<RegionSetName> parsed = ParseRegionSetName(name);
+  if (!parsed) {
     return Status::InvalidArgument(
         path, "'" + name + "' is not of the form interface:<structure>|<structure>");
   }
-  const std::string first = pair.substr(0, bar), second = pair.substr(bar + 1);
+  if (!parsed->interface) return check_structure(parsed->first);
+  const std::string& first = parsed->first;
+  const std::string& second = parsed->second;
   if (first == second) {
     return Status::InvalidArgument(path, "'" + name + "' names the same structure twice");
   }
