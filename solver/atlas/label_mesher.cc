@@ -224,18 +224,21 @@ Status ValidateOptions(const std::vector<std::string>& region_names, const Label
     return Status::InvalidArgument("sliver_bound_deg",
                                    "must lie in (0, 70.5): a regular tetrahedron's is 70.53");
   }
-  if (!o.region_facet_size_mm.empty() && o.region_facet_size_mm.size() != region_names.size()) {
-    return Status::InvalidArgument("region_facet_size_mm",
-                                   "has " + std::to_string(o.region_facet_size_mm.size()) +
-                                       " entries for " + std::to_string(region_names.size()) +
-                                       " regions: give one per region, or none");
-  }
-  for (std::size_t r = 0; r < o.region_facet_size_mm.size(); ++r) {
-    const double size = o.region_facet_size_mm[r];
-    if (!(size >= 0) || !std::isfinite(size)) {
+  for (const auto& [name, sizes] : {std::pair<const char*, const std::vector<double>*>{
+                                        "region_facet_size_mm", &o.region_facet_size_mm},
+                                    {"region_cell_size_mm", &o.region_cell_size_mm}}) {
+    if (!sizes->empty() && sizes->size() != region_names.size()) {
       return Status::InvalidArgument(
-          "region_facet_size_mm[" + std::to_string(r) + "]",
-          "must be 0 (the global facet size) or positive, not " + std::to_string(size));
+          name, "has " + std::to_string(sizes->size()) + " entries for " +
+                    std::to_string(region_names.size()) + " regions: give one per region, or none");
+    }
+    for (std::size_t r = 0; r < sizes->size(); ++r) {
+      const double size = (*sizes)[r];
+      if (!(size >= 0) || !std::isfinite(size)) {
+        return Status::InvalidArgument(
+            std::string(name) + "[" + std::to_string(r) + "]",
+            "must be 0 (the global size) or positive, not " + std::to_string(size));
+      }
     }
   }
   for (std::size_t i = 0; i < o.interior_points_mm.size(); ++i) {
@@ -305,14 +308,15 @@ Status ConvertComplex(const Complex& c3t3, const std::vector<std::string>& regio
 // options.roi_size_mm (or `coarse` if smaller) inside it, linear between
 // (see LabelMeshOptions); on a surface patch (dimension 2) at most the
 // regions' own facet bound, scaled by `scale` (1 for the facet size, facet
-// distance / facet size for the distance).
+// distance / facet size for the distance); for the cell size (scale 0)
+// inside a region (dimension 3) at most the region's own cell bound.
 struct SizeField {
   using FT = Kernel::FT;  // CGAL's MeshDomainField_3
   using Point_3 = Kernel::Point_3;
   using Index = Domain::Index;
   const LabelMeshOptions& options;
   double coarse;
-  double scale = 0;  // 0: no per-region bound (the cell size field)
+  double scale = 0;  // 0: the cell size field
   double operator()(const Kernel::Point_3& p, int dimension, const Domain::Index& index) const {
     double bound = coarse;
     if (scale > 0 && dimension == 2 && !options.region_facet_size_mm.empty()) {
@@ -322,6 +326,14 @@ struct SizeField {
             continue;
           const double own = options.region_facet_size_mm[region - 1];
           if (own > 0) bound = std::min(bound, scale * own);
+        }
+      }
+    }
+    if (scale == 0 && dimension == 3 && !options.region_cell_size_mm.empty()) {
+      if (const auto* region = boost::get<Domain::Subdomain_index>(&index)) {
+        if (*region >= 1 && *region <= static_cast<int>(options.region_cell_size_mm.size())) {
+          const double own = options.region_cell_size_mm[*region - 1];
+          if (own > 0) bound = std::min(bound, own);
         }
       }
     }

@@ -92,6 +92,11 @@ struct LabelMeshOptions {
   // distance bound shrinks in the same proportion as its facet size. Small
   // structures need smaller triangles than the bulk to keep their shape.
   std::vector<double> region_facet_size_mm;
+  // Per region (empty, or one entry per region name): an upper bound on the
+  // cell size [mm] inside the region, 0 for none. A small structure meshed
+  // with small facets but the global cells gets tetrahedra stretched
+  // between the two sizes; bounding its cells as well keeps them shaped.
+  std::vector<double> region_cell_size_mm;
   // Points known to lie inside a region [mm], e.g. one per connected piece
   // of each region: the surfaces around each are seeded where the label
   // first changes along the six axis directions from it, so that a region
@@ -140,7 +145,8 @@ struct LabelMeshReport {
 // empty or inverted box, no region names, a facet angle outside (0, 30], a
 // radius-edge ratio below 2, a sliver bound outside (0, 70.5), a region of
 // interest with a negative radius or transition, or a size not in
-// (0, cell size]);
+// (0, cell size], a region size list of the wrong length or with an entry
+// negative or not finite);
 // InvalidArgument "region_names" for a label the function returns that has
 // no name, "label" for a negative label or no function; FailedPrecondition
 // when no region is found (the function is 0 at every grid point, or no

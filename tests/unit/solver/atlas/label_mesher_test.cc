@@ -256,6 +256,14 @@ TEST(LabelMesherTest, BadOptionsNameTheField) {
   EXPECT_EQ(field_of(o), "roi_size_mm");
   o.roi_radius_mm = -1;
   EXPECT_EQ(field_of(o), "roi_radius_mm");
+  o = SphereOptions();
+  o.region_cell_size_mm = {1};
+  EXPECT_EQ(field_of(o), "region_cell_size_mm");
+  o.region_cell_size_mm = {1, -1};
+  EXPECT_EQ(field_of(o), "region_cell_size_mm[1]");
+  o = SphereOptions();
+  o.region_facet_size_mm = {1, 2, 3};
+  EXPECT_EQ(field_of(o), "region_facet_size_mm");
   EXPECT_EQ(field_of(SphereOptions(), {}), "region_names");
   Mesh mesh;
   EXPECT_EQ(MeshLabels(LabelFunction(), kNames, SphereOptions(), &mesh).field(), "label");
@@ -300,6 +308,39 @@ TEST(LabelMesherTest, RegionOfInterestRefinesOnlyThere) {
   EXPECT_LT(refined_near, plain_near / 3);
   EXPECT_NEAR(refined_far, plain_far, 0.35 * plain_far);
   EXPECT_GT(refined.num_elements(), plain.num_elements());
+}
+
+// A cell bound on the core only: its tetrahedra shrink (about 8 times
+// fewer per volume at half the size), the shell's stay as they were away
+// from it.
+TEST(LabelMesherTest, RegionCellSizeBoundsOnlyItsRegion) {
+  const auto mean_volume = [](const Mesh& mesh, int region) {
+    double volume = 0;
+    int count = 0;
+    for (int e = 0; e < mesh.num_elements(); ++e) {
+      if (mesh.element_region[e] != region) continue;
+      const Eigen::Matrix<double, 4, 3> x = TetCorners(mesh, e) * 1e3;  // mm
+      const Eigen::Vector3d centroid = x.colwise().mean().transpose();
+      if (region == 0 && centroid.norm() < 15) continue;  // the shell away from the core
+      const Eigen::Matrix3d edges = (x.bottomRows<3>().rowwise() - x.row(0)).transpose();
+      volume += edges.determinant() / 6;
+      ++count;
+    }
+    EXPECT_GT(count, 0);
+    return volume / count;
+  };
+  LabelMeshOptions options = SphereOptions();
+  Mesh plain, refined;
+  ASSERT_TRUE(MeshLabels(TwoSpheres, kNames, options, &plain).ok());
+  options.region_cell_size_mm = {0, 1.5};
+  ASSERT_TRUE(MeshLabels(TwoSpheres, kNames, options, &refined).ok());
+  std::printf(
+      "core cells at most 1.5 mm: mean core tetrahedron %.3f mm^3 against %.3f, shell %.3f "
+      "against %.3f\n",
+      mean_volume(refined, 1), mean_volume(plain, 1), mean_volume(refined, 0),
+      mean_volume(plain, 0));
+  EXPECT_LT(mean_volume(refined, 1), mean_volume(plain, 1) / 3);
+  EXPECT_NEAR(mean_volume(refined, 0), mean_volume(plain, 0), 0.25 * mean_volume(plain, 0));
 }
 
 TEST(LabelMesherTest, EmptyBodyAndUnnamedLabelAreReported) {
