@@ -23,6 +23,7 @@
 #include <unordered_map>
 #include <utility>
 
+#include "mesh/quality.h"
 #include "mesh/region_faces.h"
 
 namespace pba {
@@ -438,9 +439,43 @@ Status MeshLabels(const LabelFunction& label, const std::vector<std::string>& re
       r.perturb_s = SecondsSince(start);
     }
     if (options.exude) {
+      // In slices of a second, stopped when one does not improve the mesh:
+      // CGAL 5.5's exuder can go on pumping weights without raising any
+      // angle until its time limit (two structures of the synthetic atlas
+      // at 4 mm, 5,813 tetrahedra: the same mesh after 1 s, 20 s and
+      // 120 s). Improvement: a larger smallest dihedral angle, or fewer
+      // tetrahedra below the sliver bound.
       start = Clock::now();
-      note("exude",
-           CGAL::exude_mesh_3(c3t3, params::time_limit = limit, params::sliver_bound = bound));
+      const auto state = [&c3t3, bound] {
+        double smallest = 180;
+        int64_t slivers = 0;
+        for (auto c = c3t3.cells_in_complex_begin(); c != c3t3.cells_in_complex_end(); ++c) {
+          Eigen::Matrix<double, 4, 3> x;
+          for (int i = 0; i < 4; ++i) {
+            const auto& p = c->vertex(i)->point();
+            x.row(i) << CGAL::to_double(p.x()), CGAL::to_double(p.y()), CGAL::to_double(p.z());
+          }
+          const double angle = TetDihedralRangeDegrees(x)[0];
+          smallest = std::min(smallest, angle);
+          slivers += angle < bound;
+        }
+        return std::make_pair(smallest, slivers);
+      };
+      constexpr double kSliceS = 1;
+      auto before = state();
+      for (;;) {
+        const double left = limit > 0 ? limit - SecondsSince(start) : kSliceS;
+        if (left <= 0) {
+          r.time_limit_reached.push_back("exude");
+          break;
+        }
+        const CGAL::Mesh_optimization_return_code code = CGAL::exude_mesh_3(
+            c3t3, params::time_limit = std::min(kSliceS, left), params::sliver_bound = bound);
+        if (code != CGAL::TIME_LIMIT_REACHED) break;
+        const auto after = state();
+        if (!(after.first > before.first || after.second < before.second)) break;
+        before = after;
+      }
       r.exude_s = SecondsSince(start);
     }
     return ConvertComplex(c3t3, region_names, mesh);
