@@ -159,6 +159,23 @@ int RunBuild(AtlasBuildOptions options, const Pictures& pictures, const std::str
           i.below_target_after, i.flips_32 + i.flips_44 + i.edge_removals, i.flips_23,
           i.smoothed_nodes, result.relabelled.tetrahedra, result.relabelled.volume_m3 * 1e9);
     }
+    if (const std::optional<MidsideProjectionReport>& p = result.projection) {
+      std::printf(
+          "10-node: of %lld mid-edge nodes on surfaces and interfaces, %lld moved onto the "
+          "loft's surfaces and %lld part of the way (largest move %.3f mm, mean %.3f mm), %lld "
+          "put back at their midpoints (Jacobian ratio over %g or inverted), %lld left there "
+          "(no convergence within a quarter of the edge); distance from the surfaces: median "
+          "%.3f mm, 90th percentile %.3f mm (at the midpoints %.3f and %.3f mm); %.2f s\n",
+          static_cast<long long>(p->boundary_nodes), static_cast<long long>(p->projected),
+          static_cast<long long>(p->shortened), p->max_move_mm, p->mean_move_mm,
+          static_cast<long long>(p->reset), MidsideProjectionOptions().max_jacobian_ratio,
+          static_cast<long long>(p->unprojected), p->gap_mm.median_mm, p->gap_mm.p90_mm,
+          p->gap_midpoints_mm.median_mm, p->gap_midpoints_mm.p90_mm, t.quadratic_s);
+    } else if (result.mesh.quadratic()) {
+      std::printf(
+          "10-node: every mid-edge node at its edge's midpoint (a label volume gives no smooth "
+          "surface to move them to)\n");
+    }
     for (const std::string& step : m.time_limit_reached) {
       std::printf(
           "note: the mesher's %s step stopped at its time limit; the mesh depends on "

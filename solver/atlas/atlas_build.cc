@@ -3,11 +3,13 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <memory>
 #include <numbers>
 #include <string>
 
 #include "atlas/label_volume_io.h"
 #include "atlas/loft.h"
+#include "atlas/midside_projection.h"
 #include "atlas/synthetic_atlas.h"
 #include "core/format.h"
 #include "mesh/improve.h"
@@ -246,7 +248,34 @@ Status MeshVolume(const AtlasBuildOptions& options, const LabelVolume& volume,
   return MeshLabels(label, names, mesh_options, mesh, report);
 }
 
+// The loft labels each region stands for: its own, or for the merged
+// region (label 0) every label of the loft not kept.
+std::vector<std::vector<int>> RegionLabelSets(const LoftField& loft,
+                                              const std::vector<uint16_t>& region_labels) {
+  std::vector<char> kept(65536, 0);
+  for (uint16_t label : region_labels) kept[label] = 1;
+  std::vector<std::vector<int>> sets;
+  for (uint16_t label : region_labels) {
+    sets.emplace_back();
+    if (label != 0) {
+      sets.back().push_back(label);
+      continue;
+    }
+    for (int l : loft.labels()) {
+      if (!kept[l]) sets.back().push_back(l);
+    }
+  }
+  return sets;
+}
+
 }  // namespace
+
+std::optional<MidsideProjectionReport> CurveAtlasMidsideNodes(const AtlasBuildResult& result,
+                                                              Mesh* mesh) {
+  if (!result.loft) return std::nullopt;
+  return ProjectMidsideNodes(*result.loft, RegionLabelSets(*result.loft, result.region_labels),
+                             MidsideProjectionOptions(), mesh);
+}
 
 Status AtlasBuildOptions::Validate() const {
   const auto positive = [](double v) { return std::isfinite(v) && v > 0; };
@@ -326,9 +355,12 @@ Status BuildAtlas(const AtlasBuildOptions& options, AtlasBuildResult* result) {
         Format("%d x %d pixels of %g mm", stack.width, stack.height, stack.pixel_size_mm)));
     result->times.source_s = SecondsSince(start);
     start = Clock::now();
-    LoftOptions loft;
-    loft.voxel_size_mm = options.loft_voxel_mm;
-    if (Status s = LoftPlates(stack, loft, &result->volume); !s.ok()) return s;
+    LoftOptions loft_options;
+    loft_options.voxel_size_mm = options.loft_voxel_mm;
+    auto loft = std::make_shared<LoftField>();
+    if (Status s = loft->Build(stack, loft_options); !s.ok()) return s;
+    result->volume = loft->volume();
+    result->loft = std::move(loft);
     result->colours = stack.colours;
     result->plates = std::move(stack);
     result->times.loft_s = SecondsSince(start);
@@ -370,6 +402,7 @@ Status BuildAtlas(const AtlasBuildOptions& options, AtlasBuildResult* result) {
   if (options.quadratic) {
     start = Clock::now();
     result->mesh = MakeQuadratic(result->mesh);
+    result->projection = CurveAtlasMidsideNodes(*result, &result->mesh);
     result->times.quadratic_s = SecondsSince(start);
   }
   start = Clock::now();

@@ -200,7 +200,10 @@ class TempPlatesDir {
 
 // The atlas of the scene, meshed (BuildAtlas), and a description of what
 // was kept, merged or dropped and at what size, for the summary.
-Status BuildAtlasMesh(const SceneSpec& scene, Mesh* mesh, std::string* description) {
+// `built` keeps what a 10-node pass needs later (the loft, the regions'
+// labels); its mesh is moved into `mesh`.
+Status BuildAtlasMesh(const SceneSpec& scene, Mesh* mesh, std::string* description,
+                      AtlasBuildResult* built) {
   const AtlasSpec& a = scene.geometry.atlas;
   AtlasBuildOptions options;
   TempPlatesDir temp;
@@ -231,7 +234,7 @@ Status BuildAtlasMesh(const SceneSpec& scene, Mesh* mesh, std::string* descripti
       Eigen::Vector3d(a.roi_centre_mm[0], a.roi_centre_mm[1], a.roi_centre_mm[2]);
   options.roi_radius_mm = a.roi_radius_mm;
   options.roi_size_mm = std::min(a.roi_element_size_mm, h);
-  AtlasBuildResult result;
+  AtlasBuildResult& result = *built;
   if (Status s = BuildAtlas(options, &result); !s.ok()) {
     // The build's fields, as the scene names them.
     const std::string field = s.field() == "structures" || s.field().rfind("structures[", 0) == 0
@@ -299,8 +302,9 @@ Status BuildModel(const SceneSpec& scene, Model* out) {
   Model& model = *out;
   model = Model();
   MeshStats stats;
+  AtlasBuildResult atlas;
   if (scene.geometry.kind == GeometrySpec::Kind::kAtlas) {
-    PBA_RETURN_IF_ERROR(BuildAtlasMesh(scene, &model.mesh, &model.mesh_description));
+    PBA_RETURN_IF_ERROR(BuildAtlasMesh(scene, &model.mesh, &model.mesh_description, &atlas));
     PBA_RETURN_IF_ERROR(ProvideAtlasSets(scene, &model.mesh));
   } else {
     model.mesh = BuildPrimitiveMesh(scene.geometry, scene.mesh, &stats);
@@ -310,10 +314,24 @@ Status BuildModel(const SceneSpec& scene, Model* out) {
   if (IsQuadratic(scene.mesh.element)) {
     model.mesh =
         MakeQuadratic(model.mesh, WithPatches(scene.geometry, CurvedSurfaces(scene.geometry)));
-    model.mesh_description += scene.geometry.kind == GeometrySpec::Kind::kAtlas
-                                  ? "; 10-node: a node at the middle of every edge"
-                                  : "; 10-node: a node on every edge, on the true surface of "
-                                    "curved faces";
+    if (scene.geometry.kind != GeometrySpec::Kind::kAtlas) {
+      model.mesh_description +=
+          "; 10-node: a node on every edge, on the true surface of curved faces";
+    } else if (const std::optional<MidsideProjectionReport> p =
+                   CurveAtlasMidsideNodes(atlas, &model.mesh)) {
+      model.mesh_description += Format(
+          "; 10-node: %lld of %lld mid-edge nodes on surfaces and interfaces moved onto the "
+          "loft's smooth surfaces (%lld of them part of the way, to keep the Jacobian ratio "
+          "within %g), median distance from them %.2g mm (%.2g mm at the edges' midpoints)",
+          static_cast<long long>(p->projected + p->shortened),
+          static_cast<long long>(p->boundary_nodes), static_cast<long long>(p->shortened),
+          MidsideProjectionOptions().max_jacobian_ratio, p->gap_mm.median_mm,
+          p->gap_midpoints_mm.median_mm);
+    } else {
+      model.mesh_description +=
+          "; 10-node: a node at the middle of every edge (a label volume has no smooth surface "
+          "to move them to)";
+    }
   }
   model.dofs = DofMap(model.mesh.num_nodes());
   for (const BoundaryConditionSpec& bc : scene.boundary_conditions) {

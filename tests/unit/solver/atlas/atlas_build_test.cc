@@ -206,6 +206,126 @@ TEST_F(AtlasBuildTest, AbsurdVoxelAndPixelSizesAreRefused) {
   EXPECT_NE(s.message().find("pixels of 500 mm"), std::string::npos) << s.message();
 }
 
+// A ball of white matter (label 44), radius `radius` mm, centred on the
+// origin, painted on a grid of `xy` mm in x and y (voxel faces on the
+// axes) and `z` mm in z (voxel centres at multiples of z, the plates'
+// heights).
+LabelVolume Ball(double radius, double xy, double z) {
+  const double half = radius + 2;
+  const int n = static_cast<int>(std::lround(2 * half / xy));
+  const int nz = static_cast<int>(std::lround(2 * half / z)) + 1;
+  LabelVolume volume({n, n, nz}, Eigen::Vector3d(-half + xy / 2, -half + xy / 2, -half),
+                     Eigen::Vector3d(xy, xy, z));
+  for (int k = 0; k < nz; ++k) {
+    for (int j = 0; j < n; ++j) {
+      for (int i = 0; i < n; ++i) {
+        volume.set(i, j, k, volume.VoxelCentreMm(i, j, k).norm() <= radius ? 44 : 0);
+      }
+    }
+  }
+  return volume;
+}
+
+// How far the mid-edge nodes of the surface triangles lie from the sphere
+// |x| = radius [mm], away from its poles (|z| < 0.75 radius, where the
+// loft's end caps are not a sphere): the mean of | |x| - radius | at the
+// nodes, at the midpoints of their straight edges and at the corners.
+struct SurfaceGap {
+  double nodes_mm = 0, midpoints_mm = 0, corners_mm = 0;
+  double max_move = 0;  // largest distance of a node from its midpoint, over the edge length
+  int count = 0;
+};
+
+SurfaceGap MidsideGapToSphere(const Mesh& mesh, double radius) {
+  SurfaceGap gap;
+  const FaceSet& surface = mesh.face_sets.at("surface");
+  for (size_t t = 0; t < surface.triangles.size(); ++t) {
+    for (int k = 0; k < 3; ++k) {
+      const Eigen::Vector3d a = 1e3 * mesh.nodes.row(surface.triangles[t][k]).transpose();
+      const Eigen::Vector3d b = 1e3 * mesh.nodes.row(surface.triangles[t][(k + 1) % 3]).transpose();
+      const Eigen::Vector3d m = 1e3 * mesh.nodes.row(surface.triangle_midside[t][k]).transpose();
+      gap.max_move = std::max(gap.max_move, (m - 0.5 * (a + b)).norm() / (b - a).norm());
+      if (std::abs(m.z()) > 0.75 * radius) continue;
+      gap.corners_mm += std::abs(a.norm() - radius);
+      gap.nodes_mm += std::abs(m.norm() - radius);
+      gap.midpoints_mm += std::abs((0.5 * (a + b)).norm() - radius);
+      ++gap.count;
+    }
+  }
+  gap.nodes_mm /= gap.count;
+  gap.midpoints_mm /= gap.count;
+  gap.corners_mm /= gap.count;
+  return gap;
+}
+
+// A ball drawn on plates 0.5 mm apart (0.1 mm pixels), meshed with 4 mm
+// facets (corners on the loft's 0.5 mm voxelisation): with --quadratic the
+// mid-edge nodes of the surface go onto the loft's smooth surface, far closer to the sphere than
+// the straight edges' midpoints; the elements curve (Jacobian ratio above
+// 1) within the bound.
+TEST_F(AtlasBuildTest, QuadraticMeshFromPlatesHasItsMidEdgeNodesOnTheSurface) {
+  const double radius = 8;
+  PlateOptions plates;
+  plates.pixel_size_mm = 0.1;
+  plates.z_mm.clear();
+  for (double z = -8; z <= 8; z += 0.5) plates.z_mm.push_back(z);
+  ASSERT_TRUE(
+      WritePlates(Ball(radius, 0.1, 0.5), ColourTable::Builtin(), plates, dir_ / "ball").ok());
+  AtlasBuildOptions options;
+  options.source = AtlasBuildOptions::Source::kPlates;
+  options.input = dir_ / "ball";
+  options.loft_voxel_mm = 0.5;
+  options.cell_size_mm = options.facet_size_mm = 4;
+  options.facets_per_section = 0;
+  options.odt_iterations = 0;
+  options.quadratic = true;
+  AtlasBuildResult result;
+  const Status s = BuildAtlas(options, &result);
+  ASSERT_TRUE(s.ok()) << s.ToString();
+  ASSERT_TRUE(result.projection.has_value());
+  const MidsideProjectionReport& p = *result.projection;
+  const SurfaceGap gap = MidsideGapToSphere(result.mesh, radius);
+  std::printf(
+      "ball from plates: %d surface mid-edge nodes, mean distance to the sphere %.4f mm (%.4f "
+      "mm at the midpoints, %.4f mm at the corners); %lld of %lld projected, %lld part of the way, "
+      "%lld reset, %lld "
+      "left; largest move %.3f mm; Jacobian ratio up to %.3f\n",
+      gap.count, gap.nodes_mm, gap.midpoints_mm, gap.corners_mm,
+      static_cast<long long>(p.projected), static_cast<long long>(p.boundary_nodes),
+      static_cast<long long>(p.shortened), static_cast<long long>(p.reset),
+      static_cast<long long>(p.unprojected), p.max_move_mm,
+      result.quality.overall.max_jacobian_ratio);
+  EXPECT_GT(gap.count, 100);
+  EXPECT_LT(10 * gap.nodes_mm, gap.midpoints_mm);
+  EXPECT_GT(p.projected, p.boundary_nodes / 2);
+  EXPECT_GT(result.quality.overall.max_jacobian_ratio, 1.01);
+  EXPECT_LE(result.quality.overall.max_jacobian_ratio,
+            MidsideProjectionOptions().max_jacobian_ratio);
+  EXPECT_LE(gap.max_move, MidsideProjectionOptions().max_move_fraction + 1e-9);
+}
+
+// From a label volume there is no smooth surface: every mid-edge node stays
+// at its midpoint, and the Jacobian ratio is 1.
+TEST_F(AtlasBuildTest, QuadraticMeshFromALabelVolumeKeepsItsMidpoints) {
+  const fs::path file = dir_ / "ball.nii.gz";
+  ASSERT_TRUE(WriteNifti(Ball(8, 0.5, 0.5), file).ok());
+  AtlasBuildOptions options;
+  options.source = AtlasBuildOptions::Source::kLabelVolume;
+  options.input = file;
+  options.cell_size_mm = options.facet_size_mm = 4;
+  options.facets_per_section = 0;
+  options.odt_iterations = 0;
+  options.quadratic = true;
+  AtlasBuildResult result;
+  const Status s = BuildAtlas(options, &result);
+  ASSERT_TRUE(s.ok()) << s.ToString();
+  EXPECT_FALSE(result.projection.has_value());
+  EXPECT_TRUE(result.mesh.quadratic());
+  EXPECT_NEAR(result.quality.overall.max_jacobian_ratio, 1, 1e-9);
+  const SurfaceGap gap = MidsideGapToSphere(result.mesh, 8);
+  EXPECT_NEAR(gap.nodes_mm, gap.midpoints_mm, 1e-9);
+}
+
 TEST_F(AtlasBuildTest, BadSizingOptionsAreNamed) {
   AtlasBuildOptions options;
   options.plates_dir = dir_ / "plates";

@@ -5,10 +5,15 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <map>
 #include <string>
 
 #include "common/scene_builders.h"
 #include "mesh/mesh.h"
+#include "mesh/quadratic.h"
+#include "mesh/quality.h"
+#include "pba/solve.h"
 
 namespace pba {
 namespace {
@@ -122,6 +127,67 @@ TEST(ModelBuilderAtlas, ThalamusAndPutamenTakeFiveTimesFewerElementsThanTheBrain
   std::printf("thalamus and putamen: %d elements; whole brain: %d (%.1fx)\n", part_elements,
               whole_elements, static_cast<double>(whole_elements) / part_elements);
   EXPECT_GE(whole_elements, 5 * part_elements);
+}
+
+// 10-node tetrahedra on the atlas: the mid-edge nodes of the surfaces and
+// interfaces go onto the loft's smooth surfaces (over a third of them off their
+// edges' midpoints), a patch cut before the upgrade shares them, every
+// element stays within the Jacobian ratio bound, and the model solves.
+TEST(ModelBuilderAtlas, TenNodeAtlasHasItsMidEdgeNodesOnTheLoftsSurfaces) {
+  SceneSpec s = AtlasScene({"Putamen", "Globus pallidus lateralis"});
+  s.mesh.element = ElementType::kTet10;
+  s.geometry.patches = {PatchSpec::HalfSpace("low", "surface", {0, 0, -2}, {0, 0, -1})};
+  BoundaryConditionSpec push =
+      testing::Condition("surface:Putamen", BoundaryConditionSpec::Kind::kPressure);
+  push.pressure_pa = 100;
+  s.boundary_conditions = {testing::Condition("low", BoundaryConditionSpec::Kind::kFixed), push};
+  Model model;
+  const Status status = BuildModel(s, &model);
+  ASSERT_TRUE(status.ok()) << status.ToString();
+  const Mesh& mesh = model.mesh;
+  ASSERT_TRUE(mesh.quadratic());
+  const std::string& note = model.mesh_description;
+  std::printf("%s\n", note.c_str());
+  EXPECT_NE(note.find("moved onto the loft's smooth surfaces"), std::string::npos) << note;
+  // Mid-edge nodes of the outer surface off the middle of their edges.
+  const FaceSet& surface = mesh.face_sets.at("surface");
+  int off = 0, total = 0;
+  for (std::size_t t = 0; t < surface.triangles.size(); ++t) {
+    for (int k = 0; k < 3; ++k) {
+      const Eigen::Vector3d a = mesh.nodes.row(surface.triangles[t][k]).transpose();
+      const Eigen::Vector3d b = mesh.nodes.row(surface.triangles[t][(k + 1) % 3]).transpose();
+      const Eigen::Vector3d m = mesh.nodes.row(surface.triangle_midside[t][k]).transpose();
+      off += (m - 0.5 * (a + b)).norm() > 1e-3 * (b - a).norm();
+      ++total;
+    }
+  }
+  EXPECT_GT(3 * off, total) << off << " of " << total;
+  // The patch's mid-edge nodes are the surface's own.
+  const FaceSet& low = mesh.face_sets.at("low");
+  ASSERT_FALSE(low.triangles.empty());
+  std::map<std::array<int, 2>, int> surface_midside;
+  for (std::size_t t = 0; t < surface.triangles.size(); ++t) {
+    for (int k = 0; k < 3; ++k) {
+      const int a = surface.triangles[t][k], b = surface.triangles[t][(k + 1) % 3];
+      surface_midside[{std::min(a, b), std::max(a, b)}] = surface.triangle_midside[t][k];
+    }
+  }
+  for (std::size_t t = 0; t < low.triangles.size(); ++t) {
+    for (int k = 0; k < 3; ++k) {
+      const int a = low.triangles[t][k], b = low.triangles[t][(k + 1) % 3];
+      EXPECT_EQ(low.triangle_midside[t][k], surface_midside.at({std::min(a, b), std::max(a, b)}));
+    }
+  }
+  double worst = 1;
+  for (int e = 0; e < mesh.num_elements(); ++e) {
+    worst = std::max(worst, Tet10MaxJacobianRatio(Tet10Coordinates(mesh, e)));
+  }
+  EXPECT_GT(worst, 1.01);
+  EXPECT_LE(worst, 40);
+  Solution solution;
+  const Status solved = SolveScene(s, SolveOptions(), &solution);
+  ASSERT_TRUE(solved.ok()) << solved.ToString();
+  EXPECT_GT(solution.summary.max_displacement_mm, 0);
 }
 
 TEST(ModelBuilderAtlas, AnUnknownStructureIsNamed) {
