@@ -1,11 +1,10 @@
 #include "store/atlas_store.h"
 
 #include <chrono>
-#include <cstdio>
-#include <ctime>
 #include <set>
 #include <system_error>
 
+#include "store/atlas_store_internal.h"
 #include "store/migrations.h"
 #include "store/page_token.h"
 #include "store/sha256.h"
@@ -14,10 +13,13 @@
 namespace pba {
 namespace {
 
+using atlas_internal::Describe;
+using atlas_internal::ProjectTarget;
+using atlas_internal::Quoted;
+using atlas_internal::StructureTarget;
+
 // 32 random bytes: guessing a token is as hard as guessing an AES-256 key.
 constexpr int kTokenBytes = 32;
-// Lock ids are bearer secrets too, but only for the lease's lifetime.
-constexpr int kLockIdBytes = 16;
 
 int64_t SystemMicros() {
   return std::chrono::duration_cast<std::chrono::microseconds>(
@@ -25,41 +27,9 @@ int64_t SystemMicros() {
       .count();
 }
 
-// ISO 8601 UTC with microseconds, as messages and audit details show times.
-std::string FormatTime(int64_t us) {
-  const std::time_t seconds = static_cast<std::time_t>(us / 1000000);
-  std::tm tm{};
-  gmtime_r(&seconds, &tm);
-  char date[32];
-  std::strftime(date, sizeof(date), "%Y-%m-%dT%H:%M:%S", &tm);
-  char buffer[48];
-  std::snprintf(buffer, sizeof(buffer), "%s.%06lldZ", date, static_cast<long long>(us % 1000000));
-  return buffer;
-}
-
-std::string Quoted(const std::string& name) { return "'" + name + "'"; }
-
-std::string ProjectTarget(const std::string& project) { return "projects/" + project; }
-
-std::string StructureTarget(const StructureRef& ref) {
-  return ProjectTarget(ref.project) + "/structures/" + ref.structure;
-}
-
-std::string Describe(const StructureRef& ref) {
-  return "structure " + Quoted(ref.structure) + " of project " + Quoted(ref.project);
-}
-
 // The metadata etag names the revision that last changed the metadata. It is
 // opaque to clients; the "m" keeps it from being mistaken for a head number.
 std::string MetadataEtag(int64_t revision_number) { return "m" + std::to_string(revision_number); }
-
-bool AllDigits(const std::string& text) {
-  if (text.empty()) return false;
-  for (char c : text) {
-    if (c < '0' || c > '9') return false;
-  }
-  return true;
-}
 
 Status CheckGeometry(std::string_view geometry) {
   if (geometry.empty()) return Status::InvalidArgument("geometry", "must not be empty");
@@ -96,40 +66,6 @@ void ReadRevisionRow(const Statement& stmt, const StructureRef& ref, Revision* r
                                static_cast<int>(stmt.ColumnInt(11)),
                                static_cast<int>(stmt.ColumnInt(12))};
   revision->metadata.group_path = stmt.ColumnText(13);
-}
-
-// The lock `lock_id` with its structure and project, for Renew and Release.
-struct HeldLock {
-  int64_t structure = 0;
-  int64_t owner = 0;
-  int64_t project = 0;
-  int64_t acquired_us = 0;
-  int64_t lease_expiry_us = 0;
-  StructureRef ref;
-};
-
-Status FindLockById(Database& db, const std::string& lock_id, HeldLock* held) {
-  if (lock_id.empty()) return Status::InvalidArgument("lock_id", "must not be empty");
-  Statement stmt;
-  PBA_RETURN_IF_ERROR(db.Prepare(
-      "SELECT l.structure, l.owner, s.project, l.acquired_us, l.lease_expiry_us, s.name, p.name "
-      "FROM locks l JOIN structures s ON s.id = l.structure JOIN projects p ON p.id = s.project "
-      "WHERE l.lock_id = ?",
-      &stmt));
-  bool row = false;
-  PBA_RETURN_IF_ERROR(stmt.Bind(1, lock_id).Step(&row));
-  if (!row) {
-    return Status::FailedPrecondition(
-        "that lock is no longer held: it was released, broken by an admin, or taken over after "
-        "its lease lapsed");
-  }
-  held->structure = stmt.ColumnInt(0);
-  held->owner = stmt.ColumnInt(1);
-  held->project = stmt.ColumnInt(2);
-  held->acquired_us = stmt.ColumnInt(3);
-  held->lease_expiry_us = stmt.ColumnInt(4);
-  held->ref = {stmt.ColumnText(6), stmt.ColumnText(5)};
-  return Status::Ok();
 }
 
 }  // namespace
@@ -226,52 +162,6 @@ Status AtlasStore::FindStructure(const Caller& caller, const StructureRef& ref,
   return Status::Ok();
 }
 
-Status AtlasStore::FindLock(int64_t structure, LockRow* lock, bool* found) {
-  Statement stmt;
-  PBA_RETURN_IF_ERROR(db_->Prepare(
-      "SELECT l.owner, u.name, l.lock_id, l.acquired_us, l.lease_expiry_us FROM locks l "
-      "JOIN users u ON u.id = l.owner WHERE l.structure = ?",
-      &stmt));
-  PBA_RETURN_IF_ERROR(stmt.Bind(1, structure).Step(found));
-  if (*found) {
-    lock->owner = stmt.ColumnInt(0);
-    lock->owner_name = stmt.ColumnText(1);
-    lock->lock_id = stmt.ColumnText(2);
-    lock->acquired_us = stmt.ColumnInt(3);
-    lock->lease_expiry_us = stmt.ColumnInt(4);
-  }
-  return Status::Ok();
-}
-
-Status AtlasStore::CheckLockForWrite(const Caller& caller, const StructureRef& ref,
-                                     int64_t structure, const std::string& lock_id) {
-  LockRow lock;
-  bool found = false;
-  PBA_RETURN_IF_ERROR(FindLock(structure, &lock, &found));
-  const int64_t now = clock_();
-  if (!found) {
-    return Status::FailedPrecondition(Describe(ref) +
-                                      " is not locked; acquire its lock before changing it");
-  }
-  if (lock.owner != caller.user) {
-    const bool lapsed = now >= lock.lease_expiry_us;
-    return Status::FailedPrecondition(Describe(ref) + " is locked by " + Quoted(lock.owner_name) +
-                                      (lapsed ? ", whose lease lapsed at " : " until ") +
-                                      FormatTime(lock.lease_expiry_us) +
-                                      (lapsed ? "; acquire the lock to take it over" : ""));
-  }
-  if (lock.lock_id != lock_id) {
-    return Status::FailedPrecondition("the lock id given is not your current lock on " +
-                                      Describe(ref) + " (a newer lock of yours replaced it)");
-  }
-  if (now >= lock.lease_expiry_us) {
-    return Status::FailedPrecondition("your lease on " + Describe(ref) + " lapsed at " +
-                                      FormatTime(lock.lease_expiry_us) +
-                                      "; acquire the lock again");
-  }
-  return Status::Ok();
-}
-
 Status AtlasStore::ReadRevision(const StructureRef& ref, int64_t structure, int64_t number,
                                 Revision* revision, bool* found) {
   Statement stmt;
@@ -331,16 +221,6 @@ Status AtlasStore::AppendRevision(const Caller& caller, const StructureRef& ref,
   bool found = false;
   PBA_RETURN_IF_ERROR(ReadRevision(ref, structure.id, number, revision, &found));
   if (!found) return Status::Internal("the revision just written cannot be read back");
-  return Status::Ok();
-}
-
-Status AtlasStore::CheckLease(int64_t lease_us) const {
-  if (lease_us <= 0) return Status::InvalidArgument("lease", "must be positive");
-  if (lease_us > kMaxLeaseMicros) {
-    return Status::InvalidArgument("lease", "is longer than the " +
-                                                std::to_string(kMaxLeaseMicros / 1000000) +
-                                                " s limit; renew the lock instead");
-  }
   return Status::Ok();
 }
 
@@ -590,149 +470,6 @@ Status AtlasStore::GetStructure(const std::string& user, const StructureRef& ref
   return Status::Ok();
 }
 
-// --- locks ---------------------------------------------------------------
-
-Status AtlasStore::AcquireLock(const std::string& user, const StructureRef& ref, int64_t lease_us,
-                               LockInfo* info) {
-  PBA_RETURN_IF_ERROR(CheckName("structure", ref.structure));
-  PBA_RETURN_IF_ERROR(CheckLease(lease_us));
-  std::lock_guard lock(mutex_);
-  Transaction transaction(*db_);
-  PBA_RETURN_IF_ERROR(transaction.status());
-  Caller caller;
-  PBA_RETURN_IF_ERROR(Enter(user, ref.project, Role::kEditor, &caller));
-  StructureRow structure;
-  PBA_RETURN_IF_ERROR(FindStructure(caller, ref, &structure));
-  const int64_t now = clock_();
-  LockRow held;
-  bool found = false;
-  PBA_RETURN_IF_ERROR(FindLock(structure.id, &held, &found));
-  std::string detail;
-  Statement stmt;
-  *info = LockInfo();
-  if (found) {
-    if (now < held.lease_expiry_us) {
-      return Status::FailedPrecondition(
-          Describe(ref) + " is locked by " + Quoted(held.owner_name) +
-          (held.owner == caller.user ? " (you, in another session)" : "") + " until " +
-          FormatTime(held.lease_expiry_us));
-    }
-    info->took_over_from = held.owner_name;
-    detail = "took over from " + held.owner_name + ", whose lease lapsed at " +
-             FormatTime(held.lease_expiry_us) + "; ";
-    PBA_RETURN_IF_ERROR(db_->Prepare("DELETE FROM locks WHERE structure = ?", &stmt));
-    PBA_RETURN_IF_ERROR(stmt.Bind(1, structure.id).Run());
-  }
-  std::string lock_id;
-  PBA_RETURN_IF_ERROR(RandomHex(kLockIdBytes, &lock_id));
-  PBA_RETURN_IF_ERROR(
-      db_->Prepare("INSERT INTO locks (structure, owner, lock_id, acquired_us, lease_expiry_us) "
-                   "VALUES (?, ?, ?, ?, ?)",
-                   &stmt));
-  PBA_RETURN_IF_ERROR(stmt.Bind(1, structure.id)
-                          .Bind(2, caller.user)
-                          .Bind(3, lock_id)
-                          .Bind(4, now)
-                          .Bind(5, now + lease_us)
-                          .Run());
-  stmt = Statement();
-  PBA_RETURN_IF_ERROR(Audit(caller.user, caller.project, found ? "lock.takeover" : "lock.acquire",
-                            StructureTarget(ref), std::nullopt,
-                            detail + "lease until " + FormatTime(now + lease_us)));
-  PBA_RETURN_IF_ERROR(transaction.Commit());
-  info->lock_id = std::move(lock_id);
-  info->owner = user;
-  info->acquired_us = now;
-  info->lease_expiry_us = now + lease_us;
-  return Status::Ok();
-}
-
-Status AtlasStore::RenewLock(const std::string& user, const std::string& lock_id, int64_t lease_us,
-                             LockInfo* info) {
-  PBA_RETURN_IF_ERROR(CheckLease(lease_us));
-  std::lock_guard lock(mutex_);
-  Transaction transaction(*db_);
-  PBA_RETURN_IF_ERROR(transaction.status());
-  HeldLock held;
-  PBA_RETURN_IF_ERROR(FindLockById(*db_, lock_id, &held));
-  Caller caller;
-  PBA_RETURN_IF_ERROR(Enter(user, held.ref.project, Role::kEditor, &caller));
-  if (held.owner != caller.user) {
-    return Status::FailedPrecondition("that lock on " + Describe(held.ref) +
-                                      " belongs to another user");
-  }
-  const int64_t now = clock_();
-  if (now >= held.lease_expiry_us) {
-    return Status::FailedPrecondition("your lease on " + Describe(held.ref) + " lapsed at " +
-                                      FormatTime(held.lease_expiry_us) +
-                                      "; acquire the lock again");
-  }
-  Statement stmt;
-  PBA_RETURN_IF_ERROR(
-      db_->Prepare("UPDATE locks SET lease_expiry_us = ? WHERE structure = ?", &stmt));
-  PBA_RETURN_IF_ERROR(stmt.Bind(1, now + lease_us).Bind(2, held.structure).Run());
-  stmt = Statement();
-  PBA_RETURN_IF_ERROR(Audit(caller.user, caller.project, "lock.renew", StructureTarget(held.ref),
-                            std::nullopt, "lease until " + FormatTime(now + lease_us)));
-  PBA_RETURN_IF_ERROR(transaction.Commit());
-  *info = LockInfo();
-  info->lock_id = lock_id;
-  info->owner = user;
-  info->acquired_us = held.acquired_us;
-  info->lease_expiry_us = now + lease_us;
-  return Status::Ok();
-}
-
-Status AtlasStore::ReleaseLock(const std::string& user, const std::string& lock_id) {
-  std::lock_guard lock(mutex_);
-  Transaction transaction(*db_);
-  PBA_RETURN_IF_ERROR(transaction.status());
-  HeldLock held;
-  PBA_RETURN_IF_ERROR(FindLockById(*db_, lock_id, &held));
-  int64_t user_id = 0;
-  PBA_RETURN_IF_ERROR(ActingUser(user, &user_id));
-  if (held.owner != user_id) {
-    return Status::FailedPrecondition("that lock on " + Describe(held.ref) +
-                                      " belongs to another user");
-  }
-  Statement stmt;
-  PBA_RETURN_IF_ERROR(db_->Prepare("DELETE FROM locks WHERE structure = ?", &stmt));
-  PBA_RETURN_IF_ERROR(stmt.Bind(1, held.structure).Run());
-  stmt = Statement();
-  PBA_RETURN_IF_ERROR(
-      Audit(user_id, held.project, "lock.release", StructureTarget(held.ref), std::nullopt, ""));
-  return transaction.Commit();
-}
-
-Status AtlasStore::BreakLock(const std::string& admin, const StructureRef& ref,
-                             const std::string& reason) {
-  PBA_RETURN_IF_ERROR(CheckName("structure", ref.structure));
-  if (reason.empty()) {
-    return Status::InvalidArgument("reason", "must say why the lock is broken (it is audited)");
-  }
-  PBA_RETURN_IF_ERROR(CheckMessage("reason", reason));
-  std::lock_guard lock(mutex_);
-  Transaction transaction(*db_);
-  PBA_RETURN_IF_ERROR(transaction.status());
-  Caller caller;
-  PBA_RETURN_IF_ERROR(Enter(admin, ref.project, Role::kAdmin, &caller));
-  StructureRow structure;
-  PBA_RETURN_IF_ERROR(FindStructure(caller, ref, &structure));
-  LockRow held;
-  bool found = false;
-  PBA_RETURN_IF_ERROR(FindLock(structure.id, &held, &found));
-  if (!found) return Status::FailedPrecondition(Describe(ref) + " is not locked");
-  Statement stmt;
-  PBA_RETURN_IF_ERROR(db_->Prepare("DELETE FROM locks WHERE structure = ?", &stmt));
-  PBA_RETURN_IF_ERROR(stmt.Bind(1, structure.id).Run());
-  stmt = Statement();
-  PBA_RETURN_IF_ERROR(Audit(caller.user, caller.project, "lock.break", StructureTarget(ref),
-                            std::nullopt,
-                            "lock of " + held.owner_name + " (lease until " +
-                                FormatTime(held.lease_expiry_us) + ") broken: " + reason));
-  return transaction.Commit();
-}
-
 // --- revisions -----------------------------------------------------------
 
 Status AtlasStore::Commit(const std::string& user, const CommitRequest& request,
@@ -930,230 +667,7 @@ Status AtlasStore::Revert(const std::string& user, const StructureRef& ref,
   return transaction.Commit();
 }
 
-// --- snapshots -----------------------------------------------------------
-
-Status AtlasStore::LoadSnapshot(const std::string& project, int64_t project_id, int64_t id,
-                                bool with_members, SnapshotInfo* snapshot, bool* found) {
-  Statement stmt;
-  PBA_RETURN_IF_ERROR(
-      db_->Prepare("SELECT s.name, u.name, s.created_us FROM snapshots s "
-                   "JOIN users u ON u.id = s.author WHERE s.id = ? AND s.project = ?",
-                   &stmt));
-  PBA_RETURN_IF_ERROR(stmt.Bind(1, id).Bind(2, project_id).Step(found));
-  if (!*found) return Status::Ok();
-  *snapshot = SnapshotInfo();
-  snapshot->id = id;
-  snapshot->project = project;
-  snapshot->name = stmt.ColumnText(0);
-  snapshot->author = stmt.ColumnText(1);
-  snapshot->created_us = stmt.ColumnInt(2);
-  PBA_RETURN_IF_ERROR(
-      db_->Prepare("SELECT tag FROM snapshot_tags WHERE snapshot = ? ORDER BY tag", &stmt));
-  stmt.Bind(1, id);
-  while (true) {
-    bool row = false;
-    PBA_RETURN_IF_ERROR(stmt.Step(&row));
-    if (!row) break;
-    snapshot->tags.push_back(stmt.ColumnText(0));
-  }
-  if (!with_members) return Status::Ok();
-  PBA_RETURN_IF_ERROR(
-      db_->Prepare("SELECT st.name, r.number FROM snapshot_members m "
-                   "JOIN structures st ON st.id = m.structure "
-                   "JOIN structure_revisions r ON r.id = m.revision WHERE m.snapshot = ?",
-                   &stmt));
-  stmt.Bind(1, id);
-  while (true) {
-    bool row = false;
-    PBA_RETURN_IF_ERROR(stmt.Step(&row));
-    if (!row) break;
-    snapshot->revisions[stmt.ColumnText(0)] = stmt.ColumnInt(1);
-  }
-  return Status::Ok();
-}
-
-Status AtlasStore::CreateSnapshot(const std::string& user, const std::string& project,
-                                  const std::string& name, SnapshotInfo* snapshot) {
-  PBA_RETURN_IF_ERROR(CheckName("name", name));
-  std::lock_guard lock(mutex_);
-  Transaction transaction(*db_);
-  PBA_RETURN_IF_ERROR(transaction.status());
-  Caller caller;
-  PBA_RETURN_IF_ERROR(Enter(user, project, Role::kEditor, &caller));
-  Statement stmt;
-  PBA_RETURN_IF_ERROR(db_->Prepare(
-      "INSERT INTO snapshots (project, name, created_us, author) VALUES (?, ?, ?, ?) RETURNING id",
-      &stmt));
-  bool row = false;
-  PBA_RETURN_IF_ERROR(
-      stmt.Bind(1, caller.project).Bind(2, name).Bind(3, clock_()).Bind(4, caller.user).Step(&row));
-  const int64_t id = stmt.ColumnInt(0);
-  stmt = Statement();
-  // One statement inside the transaction: every head is read at the same instant.
-  PBA_RETURN_IF_ERROR(
-      db_->Prepare("INSERT INTO snapshot_members (snapshot, structure, revision) "
-                   "SELECT ?, id, head_revision FROM structures WHERE project = ?",
-                   &stmt));
-  PBA_RETURN_IF_ERROR(stmt.Bind(1, id).Bind(2, caller.project).Run());
-  const int pinned = db_->Changes();
-  stmt = Statement();
-  PBA_RETURN_IF_ERROR(Audit(caller.user, caller.project, "snapshot.create",
-                            ProjectTarget(project) + "/snapshots/" + std::to_string(id),
-                            std::nullopt, name + ": " + std::to_string(pinned) + " structures"));
-  bool found = false;
-  PBA_RETURN_IF_ERROR(LoadSnapshot(project, caller.project, id, true, snapshot, &found));
-  return transaction.Commit();
-}
-
-Status AtlasStore::Tag(const std::string& user, const std::string& project, int64_t snapshot_id,
-                       const std::string& tag) {
-  PBA_RETURN_IF_ERROR(CheckName("tag", tag));
-  if (AllDigits(tag)) {
-    return Status::InvalidArgument("tag", "must not be all digits: it would read as a snapshot id");
-  }
-  std::lock_guard lock(mutex_);
-  Transaction transaction(*db_);
-  PBA_RETURN_IF_ERROR(transaction.status());
-  Caller caller;
-  PBA_RETURN_IF_ERROR(Enter(user, project, Role::kEditor, &caller));
-  Statement stmt;
-  PBA_RETURN_IF_ERROR(db_->Prepare("SELECT 1 FROM snapshots WHERE id = ? AND project = ?", &stmt));
-  bool row = false;
-  PBA_RETURN_IF_ERROR(stmt.Bind(1, snapshot_id).Bind(2, caller.project).Step(&row));
-  if (!row) {
-    return Status::NotFound("project " + Quoted(project) + " has no snapshot " +
-                            std::to_string(snapshot_id));
-  }
-  PBA_RETURN_IF_ERROR(
-      db_->Prepare("SELECT snapshot FROM snapshot_tags WHERE project = ? AND tag = ?", &stmt));
-  PBA_RETURN_IF_ERROR(stmt.Bind(1, caller.project).Bind(2, tag).Step(&row));
-  if (row) {
-    return Status::AlreadyExists("tag " + Quoted(tag) + " already names snapshot " +
-                                 std::to_string(stmt.ColumnInt(0)) + " of project " +
-                                 Quoted(project));
-  }
-  PBA_RETURN_IF_ERROR(
-      db_->Prepare("INSERT INTO snapshot_tags (project, tag, snapshot) VALUES (?, ?, ?)", &stmt));
-  PBA_RETURN_IF_ERROR(stmt.Bind(1, caller.project).Bind(2, tag).Bind(3, snapshot_id).Run());
-  stmt = Statement();
-  PBA_RETURN_IF_ERROR(Audit(caller.user, caller.project, "snapshot.tag",
-                            ProjectTarget(project) + "/snapshots/" + std::to_string(snapshot_id),
-                            std::nullopt, tag));
-  return transaction.Commit();
-}
-
-Status AtlasStore::ListSnapshots(const std::string& user, const std::string& project, int page_size,
-                                 const std::string& page_token,
-                                 std::vector<SnapshotInfo>* snapshots,
-                                 std::string* next_page_token) {
-  PBA_RETURN_IF_ERROR(NormalisePageSize(page_size, &page_size));
-  snapshots->clear();
-  // Copied first: a caller may pass the same string as token in and out.
-  const std::string token = page_token;
-  next_page_token->clear();
-  std::lock_guard lock(mutex_);
-  Caller caller;
-  PBA_RETURN_IF_ERROR(Enter(user, project, Role::kViewer, &caller));
-  int64_t before = INT64_MAX;
-  if (!token.empty()) {
-    PBA_RETURN_IF_ERROR(DecodePageToken(token, "snapshots", caller.project, &before));
-  }
-  Statement stmt;
-  PBA_RETURN_IF_ERROR(db_->Prepare(
-      "SELECT id FROM snapshots WHERE project = ? AND id < ? ORDER BY id DESC LIMIT ?", &stmt));
-  stmt.Bind(1, caller.project).Bind(2, before).Bind(3, int64_t{page_size} + 1);
-  std::vector<int64_t> ids;
-  while (true) {
-    bool row = false;
-    PBA_RETURN_IF_ERROR(stmt.Step(&row));
-    if (!row) break;
-    ids.push_back(stmt.ColumnInt(0));
-  }
-  stmt = Statement();
-  if (static_cast<int>(ids.size()) > page_size) {
-    ids.pop_back();
-    *next_page_token = EncodePageToken("snapshots", caller.project, ids.back());
-  }
-  for (int64_t id : ids) {
-    bool found = false;
-    PBA_RETURN_IF_ERROR(
-        LoadSnapshot(project, caller.project, id, false, &snapshots->emplace_back(), &found));
-  }
-  return Status::Ok();
-}
-
-Status AtlasStore::ResolveSnapshot(const std::string& user, const std::string& project,
-                                   const std::string& tag_or_id, SnapshotInfo* snapshot) {
-  PBA_RETURN_IF_ERROR(CheckName("snapshot", tag_or_id));
-  std::lock_guard lock(mutex_);
-  Caller caller;
-  PBA_RETURN_IF_ERROR(Enter(user, project, Role::kViewer, &caller));
-  int64_t id = 0;
-  if (AllDigits(tag_or_id)) {
-    // Tags are never all digits, so this cannot shadow a tag.
-    if (tag_or_id.size() <= 18) id = std::stoll(tag_or_id);
-  } else {
-    Statement stmt;
-    PBA_RETURN_IF_ERROR(
-        db_->Prepare("SELECT snapshot FROM snapshot_tags WHERE project = ? AND tag = ?", &stmt));
-    bool row = false;
-    PBA_RETURN_IF_ERROR(stmt.Bind(1, caller.project).Bind(2, tag_or_id).Step(&row));
-    if (row) id = stmt.ColumnInt(0);
-  }
-  bool found = false;
-  if (id > 0)
-    PBA_RETURN_IF_ERROR(LoadSnapshot(project, caller.project, id, true, snapshot, &found));
-  if (!found) {
-    return Status::NotFound("project " + Quoted(project) + " has no snapshot tagged or numbered " +
-                            Quoted(tag_or_id));
-  }
-  return Status::Ok();
-}
-
-// --- audit and maintenance -----------------------------------------------
-
-Status AtlasStore::ListAudit(const std::string& user, const std::string& project, int page_size,
-                             const std::string& page_token, std::vector<AuditEntry>* entries,
-                             std::string* next_page_token) {
-  PBA_RETURN_IF_ERROR(NormalisePageSize(page_size, &page_size));
-  entries->clear();
-  // Copied first: a caller may pass the same string as token in and out.
-  const std::string token = page_token;
-  next_page_token->clear();
-  std::lock_guard lock(mutex_);
-  Caller caller;
-  PBA_RETURN_IF_ERROR(Enter(user, project, Role::kViewer, &caller));
-  int64_t before = INT64_MAX;
-  if (!token.empty()) {
-    PBA_RETURN_IF_ERROR(DecodePageToken(token, "audit", caller.project, &before));
-  }
-  Statement stmt;
-  PBA_RETURN_IF_ERROR(db_->Prepare(
-      "SELECT a.seq, a.time_us, COALESCE(u.name, ''), a.action, a.target, COALESCE(r.number, 0), "
-      "a.detail FROM audit_log a LEFT JOIN users u ON u.id = a.user "
-      "LEFT JOIN structure_revisions r ON r.id = a.revision "
-      "WHERE a.project = ? AND a.seq < ? ORDER BY a.seq DESC LIMIT ?",
-      &stmt));
-  stmt.Bind(1, caller.project).Bind(2, before).Bind(3, int64_t{page_size} + 1);
-  while (true) {
-    bool row = false;
-    PBA_RETURN_IF_ERROR(stmt.Step(&row));
-    if (!row) break;
-    AuditEntry& entry = entries->emplace_back();
-    entry.seq = stmt.ColumnInt(0);
-    entry.time_us = stmt.ColumnInt(1);
-    entry.user = stmt.ColumnText(2);
-    entry.action = stmt.ColumnText(3);
-    entry.target = stmt.ColumnText(4);
-    entry.revision = stmt.ColumnInt(5);
-    entry.detail = stmt.ColumnText(6);
-  }
-  if (static_cast<int>(entries->size()) > page_size) {
-    entries->pop_back();
-    *next_page_token = EncodePageToken("audit", caller.project, entries->back().seq);
-  }
-  return Status::Ok();
-}
+// --- maintenance ---------------------------------------------------------
 
 Status AtlasStore::SweepBlobs(BlobSweepReport* report) {
   // Under mutex_: every Put happens under it too, so no blob of an

@@ -34,6 +34,10 @@
 // written before its row, inside the same critical section, so a crash leaves
 // at worst an unreferenced blob (SweepBlobs removes it), never a row naming a
 // missing blob.
+//
+// Implemented in three files: atlas_store.cc (users, projects, structures,
+// revisions), atlas_store_locks.cc and atlas_store_snapshots.cc (snapshots,
+// tags, the audit listing).
 #pragma once
 
 #include <cstdint>

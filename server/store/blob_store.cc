@@ -113,37 +113,45 @@ Status BlobStore::Has(const std::string& hash, bool* has) {
 Status BlobStore::Sweep(const std::set<std::string>& referenced, BlobSweepReport* report) {
   *report = BlobSweepReport();
   std::lock_guard lock(mutex_);
-  std::error_code ec;
   std::vector<fs::path> doomed_blobs;
   std::vector<fs::path> doomed_temps;
-  for (const fs::directory_entry& dir : fs::directory_iterator(root_, ec)) {
-    const std::string dir_name = dir.path().filename().string();
-    if (!dir.is_directory() || !IsFanOutName(dir_name)) {
-      if (IsTempName(dir_name)) doomed_temps.push_back(dir.path());
-      continue;  // not ours: leave it for a person to look at
+  std::error_code ec;
+  fs::directory_iterator dirs(root_, ec);
+  for (; !ec && dirs != fs::directory_iterator(); dirs.increment(ec)) {
+    const fs::path& dir = dirs->path();
+    const std::string dir_name = dir.filename().string();
+    std::error_code type_ec;
+    if (!fs::is_directory(dir, type_ec) || !IsFanOutName(dir_name)) {
+      // Anything else that is not a temporary file is not ours: it is left
+      // for a person to look at.
+      if (IsTempName(dir_name)) doomed_temps.push_back(dir);
+      continue;
     }
-    for (const fs::directory_entry& file : fs::directory_iterator(dir.path(), ec)) {
-      const std::string name = file.path().filename().string();
+    std::error_code files_ec;
+    fs::directory_iterator files(dir, files_ec);
+    for (; !files_ec && files != fs::directory_iterator(); files.increment(files_ec)) {
+      const std::string name = files->path().filename().string();
       if (IsTempName(name)) {
-        doomed_temps.push_back(file.path());
+        doomed_temps.push_back(files->path());
       } else if (IsSha256Hex(dir_name + name)) {
         if (referenced.count(dir_name + name) > 0) {
           ++report->kept_blobs;
         } else {
-          doomed_blobs.push_back(file.path());
+          doomed_blobs.push_back(files->path());
         }
       }
     }
-    if (ec) break;
+    if (files_ec) return Status::Io("cannot list " + dir.string() + ": " + files_ec.message());
   }
   if (ec) return Status::Io("cannot list " + root_.string() + ": " + ec.message());
   for (const fs::path& path : doomed_blobs) {
-    const auto size = fs::file_size(path, ec);
+    std::error_code size_ec;
+    const uintmax_t size = fs::file_size(path, size_ec);
     if (!fs::remove(path, ec) || ec) {
       return Status::Io("cannot remove " + path.string() + ": " + ec.message());
     }
     ++report->removed_blobs;
-    report->removed_bytes += static_cast<int64_t>(size);
+    if (!size_ec) report->removed_bytes += static_cast<int64_t>(size);
   }
   for (const fs::path& path : doomed_temps) {
     if (!fs::remove(path, ec) || ec) {

@@ -172,6 +172,10 @@ CREATE TRIGGER snapshots_no_update BEFORE UPDATE ON snapshots
 BEGIN
   SELECT RAISE(ABORT, 'snapshots are immutable');
 END;
+CREATE TRIGGER snapshots_no_delete BEFORE DELETE ON snapshots
+BEGIN
+  SELECT RAISE(ABORT, 'snapshots are immutable');
+END;
 CREATE TRIGGER snapshot_members_no_update BEFORE UPDATE ON snapshot_members
 BEGIN
   SELECT RAISE(ABORT, 'snapshots are immutable');

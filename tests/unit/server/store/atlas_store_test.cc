@@ -734,6 +734,7 @@ TEST_F(AtlasStoreTest, HistoryCannotBeRewrittenUnderneath) {
            "DELETE FROM audit_log",
            "UPDATE snapshots SET name = 'x'",
            "DELETE FROM snapshot_members",
+           "DELETE FROM snapshots",
        }) {
     EXPECT_FALSE(db->Exec(sql).ok()) << sql;
   }
