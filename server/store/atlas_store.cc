@@ -112,8 +112,9 @@ Status AtlasStore::ActingUser(const std::string& name, int64_t* id) {
   bool row = false;
   PBA_RETURN_IF_ERROR(stmt.Bind(1, name).Step(&row));
   if (!row) return Status::Unauthenticated("unknown user " + Quoted(name));
-  if (stmt.ColumnInt(1) != 0)
+  if (stmt.ColumnInt(1) != 0) {
     return Status::Unauthenticated("user " + Quoted(name) + " is disabled");
+  }
   *id = stmt.ColumnInt(0);
   return Status::Ok();
 }
@@ -348,8 +349,9 @@ Status AtlasStore::RoleOf(const std::string& project, const std::string& user, R
       &stmt));
   bool row = false;
   PBA_RETURN_IF_ERROR(stmt.Bind(1, project).Bind(2, user).Step(&row));
-  if (stmt.ColumnIsNull(0))
+  if (stmt.ColumnIsNull(0)) {
     return Status::NotFound("project " + Quoted(project) + " does not exist");
+  }
   if (stmt.ColumnIsNull(1)) return Status::NotFound("user " + Quoted(user) + " does not exist");
   const int64_t project_id = stmt.ColumnInt(0);
   const int64_t user_id = stmt.ColumnInt(1);

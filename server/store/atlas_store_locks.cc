@@ -92,7 +92,8 @@ Status AtlasStore::CheckLockForWrite(const Caller& caller, const StructureRef& r
   }
   if (lock.lock_id != lock_id) {
     return Status::FailedPrecondition("the lock id given is not your current lock on " +
-                                      Describe(ref) + " (a newer lock of yours replaced it)");
+                                      Describe(ref) +
+                                      " (it may have been replaced by a newer one)");
   }
   if (now >= lock.lease_expiry_us) {
     return Status::FailedPrecondition("your lease on " + Describe(ref) + " lapsed at " +

@@ -184,8 +184,9 @@ Status AtlasStore::ResolveSnapshot(const std::string& user, const std::string& p
     if (row) id = stmt.ColumnInt(0);
   }
   bool found = false;
-  if (id > 0)
+  if (id > 0) {
     PBA_RETURN_IF_ERROR(LoadSnapshot(project, caller.project, id, true, snapshot, &found));
+  }
   if (!found) {
     return Status::NotFound("project " + Quoted(project) + " has no snapshot tagged or numbered " +
                             Quoted(tag_or_id));

@@ -272,8 +272,9 @@ Status CheckMaterialJson(std::string_view field, std::string_view json) {
         std::string(field), "is larger than " + std::to_string(kMaxMaterialJsonBytes) + " bytes");
   }
   const std::string error = JsonChecker(json).CheckObjectDocument();
-  if (!error.empty())
+  if (!error.empty()) {
     return Status::InvalidArgument(std::string(field), "not a JSON object: " + error);
+  }
   return Status::Ok();
 }
 

@@ -623,6 +623,54 @@ TEST_F(AtlasStoreTest, SnapshotsPinHeadsAndTagsAreUniquePerProject) {
   EXPECT_EQ(counts.at("snapshot.tag"), 1);
 }
 
+TEST_F(AtlasStoreTest, TheAuditLogNamesWhoDidWhatToWhichRevisionNewestFirst) {
+  const LockInfo lock = Lock("bob");
+  now_ += kSecond;
+  ASSERT_OK(Commit("bob", lock.lock_id, 1, "v2"));
+  ASSERT_OK(store_->ReleaseLock("bob", lock.lock_id));
+
+  const std::vector<AuditEntry> audit = FullAudit();
+  // SetUp: project.create, two member.set_role, structure.create; then three here.
+  ASSERT_EQ(audit.size(), 7u);
+  const std::vector<std::string> actions = {
+      "lock.release",    "revision.commit", "lock.acquire",  "structure.create",
+      "member.set_role", "member.set_role", "project.create"};
+  for (size_t i = 0; i < audit.size(); ++i) {
+    EXPECT_EQ(audit[i].action, actions[i]) << i;
+    if (i > 0) {
+      EXPECT_LT(audit[i].seq, audit[i - 1].seq);
+    }
+  }
+  EXPECT_EQ(audit[1].user, "bob");
+  EXPECT_EQ(audit[1].target, "projects/atlas/structures/hippocampus");
+  EXPECT_EQ(audit[1].revision, 2);
+  EXPECT_EQ(audit[1].time_us, kStart + kSecond);
+  EXPECT_EQ(audit[3].revision, 1);
+  EXPECT_EQ(audit[2].revision, 0);
+  EXPECT_EQ(audit[6].user, "alice");
+  EXPECT_EQ(audit[6].target, "projects/atlas");
+
+  // Pages of 3 walk the same rows.
+  std::vector<AuditEntry> paged;
+  std::string token;
+  int pages = 0;
+  do {
+    std::vector<AuditEntry> page;
+    ASSERT_OK(store_->ListAudit("carol", "atlas", 3, token, &page, &token));
+    paged.insert(paged.end(), page.begin(), page.end());
+    ++pages;
+  } while (!token.empty());
+  EXPECT_EQ(pages, 3);
+  ASSERT_EQ(paged.size(), audit.size());
+  for (size_t i = 0; i < paged.size(); ++i) EXPECT_EQ(paged[i].seq, audit[i].seq);
+
+  std::vector<AuditEntry> page;
+  EXPECT_STATUS(store_->ListAudit("dave", "atlas", 3, "", &page, &token),
+                Status::Code::kPermissionDenied, "not a member");
+  EXPECT_STATUS(store_->ListAudit("carol", "atlas", -1, "", &page, &token),
+                Status::Code::kInvalidArgument, "page_size");
+}
+
 TEST_F(AtlasStoreTest, HostileNamesAreRefusedAndNothingIsWritten) {
   const LockInfo lock = Lock("bob");
   SnapshotInfo snapshot;
