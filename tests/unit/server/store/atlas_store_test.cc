@@ -9,6 +9,7 @@
 #include <thread>
 
 #include "store/database.h"
+#include "store/migrations.h"
 #include "store/sha256.h"
 #include "unit/server/temp_dir.h"
 
@@ -944,6 +945,44 @@ TEST_F(AtlasStoreTest, RacingCommitsFormOneChain) {
   EXPECT_EQ(counts.count("lock.takeover"), 0u);
   auto db = RawDatabase();
   EXPECT_EQ(QueryInt(*db, "SELECT COUNT(*) FROM locks"), 0);
+}
+
+// A pba.db written before the atlas store existed (schema version 1, jobs
+// only) gains the atlas tables on open and keeps its rows.
+TEST(AtlasStoreUpgrade, AVersionOneDatabaseIsMigratedInPlace) {
+  TempDir dir;
+  {
+    std::unique_ptr<Database> db;
+    ASSERT_OK(Database::Open(dir.path() / "pba.db", &db));
+    ASSERT_OK(db->Exec(
+        "CREATE TABLE schema_version (version INTEGER PRIMARY KEY, description TEXT NOT NULL, "
+        "applied_time_us INTEGER NOT NULL);"
+        "INSERT INTO schema_version VALUES (1, 'jobs, job events and result files', 0);"
+        "CREATE TABLE jobs (number INTEGER PRIMARY KEY AUTOINCREMENT, id TEXT NOT NULL UNIQUE);"
+        "INSERT INTO jobs (id) VALUES ('j0000000001');"));
+  }
+  std::unique_ptr<AtlasStore> store;
+  ASSERT_OK(AtlasStore::Open(dir.path(), &store));
+  std::string token;
+  ASSERT_OK(store->CreateUser("alice", &token));
+  ASSERT_OK(store->CreateProject("alice", "atlas"));
+  store.reset();
+
+  std::unique_ptr<Database> db;
+  ASSERT_OK(Database::Open(dir.path() / "pba.db", &db));
+  int version = 0;
+  ASSERT_OK(ReadSchemaVersion(*db, &version));
+  EXPECT_EQ(version, 2);
+  Statement stmt;
+  ASSERT_OK(db->Prepare("SELECT id FROM jobs", &stmt));
+  bool row = false;
+  ASSERT_OK(stmt.Step(&row));
+  ASSERT_TRUE(row);
+  EXPECT_EQ(stmt.ColumnText(0), "j0000000001");
+  stmt = Statement();
+  ASSERT_OK(db->Prepare("SELECT COUNT(*) FROM projects", &stmt));
+  ASSERT_OK(stmt.Step(&row));
+  EXPECT_EQ(stmt.ColumnInt(0), 1);
 }
 
 }  // namespace
