@@ -3,9 +3,9 @@
 // with leases, snapshots with tags, and an audit log) in pba.db, with the
 // geometry in a BlobStore under <data>/blobs.
 //
-// Every operation is one SQLite transaction that includes its audit_log row,
-// so the log has a row for exactly the changes that happened. A refused
-// operation changes nothing and logs nothing.
+// Every change is one SQLite transaction that includes its audit_log row, so
+// the log has a row for exactly the changes that happened. A refused
+// operation changes nothing and logs nothing; reads log nothing.
 //
 // The acting user comes first in every call; it is the name Authenticate()
 // returned for the caller's token. Rights are checked per project:
@@ -179,7 +179,9 @@ class AtlasStore {
   Status ListAudit(const std::string& user, const std::string& project, int page_size,
                    const std::string& page_token, std::vector<AuditEntry>* entries,
                    std::string* next_page_token);
-  // Removes blobs no revision references, and leftover temporary files.
+  // Removes blobs no revision references, and leftover temporary files. It
+  // knows only the atlas store's references: anything else kept under
+  // <data>/blobs must add its own before this runs (nothing does yet).
   Status SweepBlobs(BlobSweepReport* report);
 
  private:
