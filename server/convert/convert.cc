@@ -401,6 +401,16 @@ grpc::Status ToGrpcStatus(const Status& status) {
       return grpc::Status(grpc::StatusCode::FAILED_PRECONDITION, status.ToString());
     case Status::Code::kCancelled:
       return grpc::Status(grpc::StatusCode::CANCELLED, status.ToString());
+    case Status::Code::kNotFound:
+      return grpc::Status(grpc::StatusCode::NOT_FOUND, status.ToString());
+    case Status::Code::kAlreadyExists:
+      return grpc::Status(grpc::StatusCode::ALREADY_EXISTS, status.ToString());
+    case Status::Code::kAborted:
+      return grpc::Status(grpc::StatusCode::ABORTED, status.ToString());
+    case Status::Code::kPermissionDenied:
+      return grpc::Status(grpc::StatusCode::PERMISSION_DENIED, status.ToString());
+    case Status::Code::kUnauthenticated:
+      return grpc::Status(grpc::StatusCode::UNAUTHENTICATED, status.ToString());
     default:
       return grpc::Status(grpc::StatusCode::INTERNAL, status.ToString());
   }

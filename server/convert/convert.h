@@ -25,8 +25,10 @@ Status ValidateSceneProto(const v1::Scene& scene);
 v1::Summary SummaryToProto(const Summary& summary);
 
 // A Status as a gRPC status: kInvalidArgument -> INVALID_ARGUMENT with
-// "field: message", kFailedPrecondition -> FAILED_PRECONDITION, kCancelled ->
-// CANCELLED, everything else -> INTERNAL.
+// "field: message"; kFailedPrecondition, kCancelled, kNotFound,
+// kAlreadyExists, kAborted, kPermissionDenied and kUnauthenticated -> the
+// gRPC code of the same name; everything else (kNumerical, kIo, kInternal)
+// -> INTERNAL.
 grpc::Status ToGrpcStatus(const Status& status);
 
 }  // namespace pba

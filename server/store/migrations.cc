@@ -56,6 +56,156 @@ CREATE TABLE result_files (
   PRIMARY KEY (job_id, name)
 ) WITHOUT ROWID;
 )sql"},
+      // The atlas store. Rows are keyed by integer ids; names are unique where
+      // clients address by them. Revisions, snapshots and the audit log are
+      // append-only (triggers refuse UPDATE and DELETE), so history cannot be
+      // rewritten even by a buggy caller. Metadata (colour, group, material)
+      // is versioned in the revisions beside the geometry, so a snapshot pins
+      // the material a job used; structures keep only the head pointer and the
+      // metadata etag. The composite foreign keys tie a revision to its own
+      // structure wherever a (revision, structure) pair is stored.
+      {2, "atlas store: users, projects, members, structures, revisions, locks, snapshots, audit",
+       R"sql(
+CREATE TABLE users (
+  id INTEGER PRIMARY KEY,
+  name TEXT NOT NULL UNIQUE,
+  token_sha256 TEXT NOT NULL UNIQUE CHECK (length(token_sha256) = 64),
+  created_us INTEGER NOT NULL,
+  disabled INTEGER NOT NULL DEFAULT 0 CHECK (disabled IN (0, 1))
+);
+CREATE TABLE projects (
+  id INTEGER PRIMARY KEY,
+  name TEXT NOT NULL UNIQUE,
+  created_us INTEGER NOT NULL,
+  created_by INTEGER NOT NULL REFERENCES users (id)
+);
+CREATE TABLE members (
+  project INTEGER NOT NULL REFERENCES projects (id),
+  user INTEGER NOT NULL REFERENCES users (id),
+  role TEXT NOT NULL CHECK (role IN ('viewer', 'editor', 'admin')),
+  PRIMARY KEY (project, user)
+) WITHOUT ROWID;
+CREATE INDEX members_by_user ON members (user, project);
+CREATE TABLE structures (
+  id INTEGER PRIMARY KEY,
+  project INTEGER NOT NULL REFERENCES projects (id),
+  name TEXT NOT NULL,
+  -- NULL only inside the transaction that creates the structure.
+  head_revision INTEGER,
+  metadata_etag TEXT NOT NULL,
+  created_us INTEGER NOT NULL,
+  created_by INTEGER NOT NULL REFERENCES users (id),
+  UNIQUE (project, name),
+  FOREIGN KEY (head_revision, id) REFERENCES structure_revisions (id, structure)
+);
+CREATE TABLE structure_revisions (
+  id INTEGER PRIMARY KEY,
+  structure INTEGER NOT NULL REFERENCES structures (id),
+  number INTEGER NOT NULL CHECK (number >= 1),
+  parent INTEGER,
+  author INTEGER NOT NULL REFERENCES users (id),
+  time_us INTEGER NOT NULL,
+  kind TEXT NOT NULL CHECK (kind IN ('create', 'commit', 'metadata', 'revert')),
+  message TEXT NOT NULL,
+  content_sha256 TEXT NOT NULL CHECK (length(content_sha256) = 64),
+  geometry_format TEXT NOT NULL
+    CHECK (geometry_format IN ('contours_json', 'nifti', 'stl', 'obj', 'vtk')),
+  size_bytes INTEGER NOT NULL CHECK (size_bytes >= 0),
+  material_json TEXT NOT NULL,
+  colour_r INTEGER NOT NULL CHECK (colour_r BETWEEN 0 AND 255),
+  colour_g INTEGER NOT NULL CHECK (colour_g BETWEEN 0 AND 255),
+  colour_b INTEGER NOT NULL CHECK (colour_b BETWEEN 0 AND 255),
+  group_path TEXT NOT NULL,
+  UNIQUE (structure, number),
+  UNIQUE (id, structure),
+  CHECK ((number = 1) = (parent IS NULL)),
+  FOREIGN KEY (parent, structure) REFERENCES structure_revisions (id, structure)
+);
+CREATE INDEX structure_revisions_by_hash ON structure_revisions (content_sha256);
+-- A revision's parent is the previous revision of the same structure, so the
+-- history of a structure is one chain numbered 1, 2, 3, ...
+CREATE TRIGGER structure_revisions_chain BEFORE INSERT ON structure_revisions
+WHEN NEW.parent IS NOT NULL AND
+     (SELECT number FROM structure_revisions WHERE id = NEW.parent) IS NOT NEW.number - 1
+BEGIN
+  SELECT RAISE(ABORT, 'a revision''s parent must be the previous revision of its structure');
+END;
+CREATE TRIGGER structure_revisions_no_update BEFORE UPDATE ON structure_revisions
+BEGIN
+  SELECT RAISE(ABORT, 'structure revisions are immutable');
+END;
+CREATE TRIGGER structure_revisions_no_delete BEFORE DELETE ON structure_revisions
+BEGIN
+  SELECT RAISE(ABORT, 'structure revisions are never deleted');
+END;
+CREATE TABLE locks (
+  structure INTEGER PRIMARY KEY REFERENCES structures (id),
+  owner INTEGER NOT NULL REFERENCES users (id),
+  lock_id TEXT NOT NULL UNIQUE,
+  acquired_us INTEGER NOT NULL,
+  lease_expiry_us INTEGER NOT NULL
+);
+CREATE TABLE snapshots (
+  id INTEGER PRIMARY KEY,
+  project INTEGER NOT NULL REFERENCES projects (id),
+  name TEXT NOT NULL,
+  created_us INTEGER NOT NULL,
+  author INTEGER NOT NULL REFERENCES users (id),
+  UNIQUE (id, project)
+);
+CREATE INDEX snapshots_by_project ON snapshots (project, id);
+CREATE TABLE snapshot_members (
+  snapshot INTEGER NOT NULL REFERENCES snapshots (id),
+  structure INTEGER NOT NULL REFERENCES structures (id),
+  revision INTEGER NOT NULL,
+  PRIMARY KEY (snapshot, structure),
+  FOREIGN KEY (revision, structure) REFERENCES structure_revisions (id, structure)
+) WITHOUT ROWID;
+CREATE TABLE snapshot_tags (
+  project INTEGER NOT NULL REFERENCES projects (id),
+  tag TEXT NOT NULL,
+  snapshot INTEGER NOT NULL,
+  PRIMARY KEY (project, tag),
+  FOREIGN KEY (snapshot, project) REFERENCES snapshots (id, project)
+) WITHOUT ROWID;
+CREATE TRIGGER snapshots_no_update BEFORE UPDATE ON snapshots
+BEGIN
+  SELECT RAISE(ABORT, 'snapshots are immutable');
+END;
+CREATE TRIGGER snapshots_no_delete BEFORE DELETE ON snapshots
+BEGIN
+  SELECT RAISE(ABORT, 'snapshots are immutable');
+END;
+CREATE TRIGGER snapshot_members_no_update BEFORE UPDATE ON snapshot_members
+BEGIN
+  SELECT RAISE(ABORT, 'snapshots are immutable');
+END;
+CREATE TRIGGER snapshot_members_no_delete BEFORE DELETE ON snapshot_members
+BEGIN
+  SELECT RAISE(ABORT, 'snapshots are immutable');
+END;
+-- project is NULL for changes outside any project (a new user); user is NULL
+-- for changes made by the server itself rather than by a user.
+CREATE TABLE audit_log (
+  seq INTEGER PRIMARY KEY AUTOINCREMENT,
+  time_us INTEGER NOT NULL,
+  user INTEGER REFERENCES users (id),
+  project INTEGER REFERENCES projects (id),
+  action TEXT NOT NULL,
+  target TEXT NOT NULL,
+  revision INTEGER REFERENCES structure_revisions (id),
+  detail TEXT NOT NULL DEFAULT ''
+);
+CREATE INDEX audit_log_by_project ON audit_log (project, seq);
+CREATE TRIGGER audit_log_no_update BEFORE UPDATE ON audit_log
+BEGIN
+  SELECT RAISE(ABORT, 'the audit log is append-only');
+END;
+CREATE TRIGGER audit_log_no_delete BEFORE DELETE ON audit_log
+BEGIN
+  SELECT RAISE(ABORT, 'the audit log is append-only');
+END;
+)sql"},
   };
   return kMigrations;
 }

@@ -17,6 +17,13 @@ class Status {
     kIo,                  // reading or writing a file failed
     kCancelled,           // the caller asked to stop
     kInternal,            // a bug
+    // The codes below come from the shared atlas store (server/store), where
+    // the caller needs to tell these refusals apart to react to them.
+    kNotFound,          // the named resource does not exist
+    kAlreadyExists,     // a create would duplicate a unique name
+    kAborted,           // a concurrent change won (stale etag or base revision); re-read, retry
+    kPermissionDenied,  // the caller's role does not allow the operation
+    kUnauthenticated,   // no valid credentials
   };
 
   Status() = default;
@@ -36,6 +43,19 @@ class Status {
   }
   static Status Internal(std::string message) {
     return Status(Code::kInternal, std::move(message));
+  }
+  static Status NotFound(std::string message) {
+    return Status(Code::kNotFound, std::move(message));
+  }
+  static Status AlreadyExists(std::string message) {
+    return Status(Code::kAlreadyExists, std::move(message));
+  }
+  static Status Aborted(std::string message) { return Status(Code::kAborted, std::move(message)); }
+  static Status PermissionDenied(std::string message) {
+    return Status(Code::kPermissionDenied, std::move(message));
+  }
+  static Status Unauthenticated(std::string message) {
+    return Status(Code::kUnauthenticated, std::move(message));
   }
 
   bool ok() const { return code_ == Code::kOk; }

@@ -1,4 +1,4 @@
-// Helpers shared by the pba-server tests: a temporary directory and a fake
+// Helpers shared by the pba-server tests: a temporary directory (temp_dir.h) and a fake
 // pba-solve (a shell script) whose behaviour is chosen by the scene's name.
 #pragma once
 
@@ -14,27 +14,9 @@
 #include <thread>
 
 #include "pba/v1/scene.pb.h"
+#include "unit/server/temp_dir.h"
 
 namespace pba::testing {
-
-// A fresh directory under the system temp dir, removed with its content.
-class TempDir {
- public:
-  TempDir() {
-    std::random_device random;
-    path_ = std::filesystem::temp_directory_path() /
-            ("pba-server-test-" + std::to_string(::getpid()) + "-" + std::to_string(random()));
-    std::filesystem::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    std::filesystem::remove_all(path_, ec);
-  }
-  const std::filesystem::path& path() const { return path_; }
-
- private:
-  std::filesystem::path path_;
-};
 
 // The content of result.h5 written by the fake solver for a scene named
 // "big": 2.5 MiB, so downloads need several chunks.

@@ -4,6 +4,7 @@
 
 #include <set>
 
+#include "store/atlas_store.h"
 #include "store/database.h"
 #include "store/job_id.h"
 #include "store/migrations.h"
@@ -353,6 +354,26 @@ TEST(JobIdTest, ShortUniqueAndWellFormed) {
   EXPECT_FALSE(IsWellFormedJobId("j123"));
   EXPECT_FALSE(IsWellFormedJobId("../../etc"));
   EXPECT_FALSE(IsWellFormedJobId("jABCDEF0123"));
+}
+
+// The atlas store opens its own connection to the same pba.db; the
+// migrations are shared, so either store may open the file first.
+TEST_F(JobStoreTest, SharesTheDatabaseWithTheAtlasStore) {
+  const v1::Job job = Create("cube");
+  std::unique_ptr<AtlasStore> atlas;
+  ASSERT_TRUE(AtlasStore::Open(db_path().parent_path(), &atlas).ok());
+  std::string token;
+  ASSERT_TRUE(atlas->CreateUser("alice", &token).ok());
+  ASSERT_TRUE(atlas->CreateProject("alice", "atlas").ok());
+  Create("sphere");
+  EXPECT_EQ(Get(job.id()).name(), "cube");
+  std::vector<v1::Job> jobs;
+  std::string next;
+  ASSERT_TRUE(store_->ListJobs(0, "", &jobs, &next).ok());
+  EXPECT_EQ(jobs.size(), 2u);
+  std::string user;
+  ASSERT_TRUE(atlas->Authenticate(token, &user).ok());
+  EXPECT_EQ(user, "alice");
 }
 
 }  // namespace

@@ -1,0 +1,248 @@
+// AtlasStore: the shared, versioned repository of atlas structures (users,
+// projects and roles, structures and their immutable revisions, edit locks
+// with leases, snapshots with tags, and an audit log) in pba.db, with the
+// geometry in a BlobStore under <data>/blobs.
+//
+// Every change is one SQLite transaction that includes its audit_log row, so
+// the log has a row for exactly the changes that happened. A refused
+// operation changes nothing and logs nothing; reads log nothing.
+//
+// The acting user comes first in every call; it is the name Authenticate()
+// returned for the caller's token. Rights are checked per project:
+//   viewer  reads (structures, history, revisions, snapshots, audit)
+//   editor  also creates structures, locks, commits, edits metadata,
+//           reverts, snapshots and tags
+//   admin   also sets roles and breaks locks
+// The creator of a project is its first admin.
+//
+// Editing rules (docs ARCHITECTURE "Collaboration rules"):
+// - Geometry changes (Commit, Revert) need the structure's lock, held with an
+//   unexpired lease, and a base revision equal to the head. A stale base is
+//   kAborted naming the head; a missing, foreign or lapsed lock is
+//   kFailedPrecondition naming why (and the holder).
+// - Metadata changes (UpdateMetadata) need no lock but the current metadata
+//   etag (optimistic concurrency). They are versioned like geometry: each one
+//   is a new revision that keeps the head's geometry. We chose this over
+//   unversioned metadata on the structure row because jobs run against
+//   snapshots, and a snapshot must pin the material parameters a result was
+//   computed with, not just the shape. The price: a metadata edit moves the
+//   head, so a lock holder's next commit is refused (kAborted, head named)
+//   and must be rebased on the new head, which also keeps a commit from
+//   silently overwriting the metadata edit.
+//
+// Thread-safe: one connection behind a mutex. The blob of a new revision is
+// written before its row, inside the same critical section, so a crash leaves
+// at worst an unreferenced blob (SweepBlobs removes it), never a row naming a
+// missing blob.
+//
+// Implemented in three files: atlas_store.cc (users, projects, structures,
+// revisions), atlas_store_locks.cc and atlas_store_snapshots.cc (snapshots,
+// tags, the audit listing).
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "pba/status.h"
+#include "store/atlas_types.h"
+#include "store/blob_store.h"
+#include "store/database.h"
+
+namespace pba {
+
+// The wall clock in microseconds since the Unix epoch; tests inject their own.
+using MicrosClock = std::function<int64_t()>;
+
+// Commit() arguments. `geometry` is borrowed for the call.
+struct CommitRequest {
+  StructureRef structure;
+  std::string lock_id;
+  int64_t base_revision = 0;
+  GeometryFormat format = GeometryFormat::kContoursJson;
+  std::string_view geometry;
+  // Set to change the material with the geometry; otherwise the head's is kept.
+  std::optional<std::string> material_json;
+  std::string message;
+};
+
+// UpdateMetadata() arguments: the fields to change (at least one).
+struct MetadataUpdate {
+  std::optional<Colour> colour;
+  std::optional<std::string> group_path;
+  std::optional<std::string> material_json;
+};
+
+class AtlasStore {
+ public:
+  // Leases longer than this are refused: a vanished client must not keep a
+  // structure locked for long. Clients renew instead.
+  static constexpr int64_t kMaxLeaseMicros = 3600LL * 1000 * 1000;
+  static constexpr size_t kMaxGeometryBytes = size_t{1} << 30;
+
+  // Opens (creating if absent) <data_dir>/pba.db, migrating it, and
+  // <data_dir>/blobs. `clock` defaults to the system clock.
+  static Status Open(const std::filesystem::path& data_dir, std::unique_ptr<AtlasStore>* out,
+                     MicrosClock clock = nullptr);
+
+  // --- users and rights ---------------------------------------------------
+  // Creates a user and sets *token to its access token (64 hex characters).
+  // The token is returned only here: the store keeps only its SHA-256.
+  Status CreateUser(const std::string& name, std::string* token);
+  // The user a token belongs to; kUnauthenticated for an unknown token or a
+  // disabled user (the message never echoes the token).
+  Status Authenticate(const std::string& token, std::string* user);
+  // Creates a project with `user` as its admin.
+  Status CreateProject(const std::string& user, const std::string& project);
+  // Sets `member`'s role in `project`; `admin` must be an admin there. The
+  // last admin cannot be demoted (the project would have no one to manage it).
+  Status SetRole(const std::string& admin, const std::string& project, const std::string& member,
+                 Role role);
+  // `user`'s role in `project`; *is_member false (and *role untouched) if none.
+  Status RoleOf(const std::string& project, const std::string& user, Role* role, bool* is_member);
+  // The projects `user` is a member of, by creation. Paging as JobStore:
+  // page_size 0 -> 50, capped at 1000, negative kInvalidArgument.
+  // `page_token` and `*next_page_token` may be the same string.
+  Status ListProjects(const std::string& user, int page_size, const std::string& page_token,
+                      std::vector<ProjectInfo>* projects, std::string* next_page_token);
+
+  // --- structures ---------------------------------------------------------
+  // Creates a structure with revision 1 holding `geometry`.
+  Status CreateStructure(const std::string& user, const StructureRef& ref,
+                         const StructureMetadata& metadata, GeometryFormat format,
+                         std::string_view geometry, Revision* revision);
+  Status GetStructure(const std::string& user, const StructureRef& ref, StructureInfo* info);
+
+  // --- locks --------------------------------------------------------------
+  // Locks `ref` for `user` for `lease_us` microseconds from now. A lock whose
+  // lease has lapsed is taken over (info->took_over_from names the old
+  // holder, and the audit log says so); an unexpired one, even the caller's
+  // own, is kFailedPrecondition naming the holder and the expiry.
+  Status AcquireLock(const std::string& user, const StructureRef& ref, int64_t lease_us,
+                     LockInfo* info);
+  // Extends an unexpired lease to now + lease_us. A lapsed lease cannot be
+  // renewed (someone may have read it as free): acquire again.
+  Status RenewLock(const std::string& user, const std::string& lock_id, int64_t lease_us,
+                   LockInfo* info);
+  // Releases the caller's lock (lapsed or not, as long as no one took it over).
+  Status ReleaseLock(const std::string& user, const std::string& lock_id);
+  // Removes whoever's lock is on `ref`; project admins only. `reason` is
+  // audited.
+  Status BreakLock(const std::string& admin, const StructureRef& ref, const std::string& reason);
+
+  // --- revisions ----------------------------------------------------------
+  // Stores a new revision with the given geometry (and material, if set);
+  // colour and group are kept from the head. See the editing rules above.
+  Status Commit(const std::string& user, const CommitRequest& request, Revision* revision);
+  // Changes metadata if `etag` is the structure's current metadata etag
+  // (else kAborted naming the current one). *new_etag is the etag after.
+  Status UpdateMetadata(const std::string& user, const StructureRef& ref, const std::string& etag,
+                        const MetadataUpdate& update, const std::string& message,
+                        Revision* revision, std::string* new_etag);
+  // Newest first; paging as ListProjects.
+  Status History(const std::string& user, const StructureRef& ref, int page_size,
+                 const std::string& page_token, std::vector<Revision>* revisions,
+                 std::string* next_page_token);
+  // Revision `number`; with `geometry` non-null also its verified blob.
+  Status GetRevision(const std::string& user, const StructureRef& ref, int64_t number,
+                     Revision* revision, std::string* geometry);
+  // A new revision with the geometry and metadata of `to_revision`, under the
+  // same rules as Commit. History is never rewritten.
+  Status Revert(const std::string& user, const StructureRef& ref, const std::string& lock_id,
+                int64_t base_revision, int64_t to_revision, const std::string& message,
+                Revision* revision);
+
+  // --- snapshots ----------------------------------------------------------
+  // Pins the head revision of every structure in `project` at one instant.
+  Status CreateSnapshot(const std::string& user, const std::string& project,
+                        const std::string& name, SnapshotInfo* snapshot);
+  // Names snapshot `snapshot_id` by `tag`, unique within the project
+  // (kAlreadyExists otherwise). Tags are never all digits: those read as ids.
+  Status Tag(const std::string& user, const std::string& project, int64_t snapshot_id,
+             const std::string& tag);
+  // Newest first; members are not loaded (revisions left empty).
+  Status ListSnapshots(const std::string& user, const std::string& project, int page_size,
+                       const std::string& page_token, std::vector<SnapshotInfo>* snapshots,
+                       std::string* next_page_token);
+  // `tag_or_id` is a tag or a decimal snapshot id; members are loaded.
+  Status ResolveSnapshot(const std::string& user, const std::string& project,
+                         const std::string& tag_or_id, SnapshotInfo* snapshot);
+
+  // --- audit and maintenance ----------------------------------------------
+  // The project's audit rows, newest first; paging as ListProjects.
+  Status ListAudit(const std::string& user, const std::string& project, int page_size,
+                   const std::string& page_token, std::vector<AuditEntry>* entries,
+                   std::string* next_page_token);
+  // Removes blobs no revision references, and leftover temporary files. It
+  // knows only the atlas store's references: anything else kept under
+  // <data>/blobs must add its own before this runs (nothing does yet).
+  Status SweepBlobs(BlobSweepReport* report);
+
+ private:
+  // What an operation knows about its caller once checked.
+  struct Caller {
+    int64_t user = 0;
+    int64_t project = 0;
+    Role role = Role::kViewer;
+  };
+  struct StructureRow {
+    int64_t id = 0;
+    int64_t head_id = 0;
+    int64_t head_number = 0;
+    std::string etag;
+  };
+  struct LockRow {
+    int64_t owner = 0;
+    std::string owner_name;
+    std::string lock_id;
+    int64_t acquired_us = 0;
+    int64_t lease_expiry_us = 0;
+  };
+  // A revision's stored content, for building the next one.
+  struct Content {
+    std::string sha256;
+    GeometryFormat format = GeometryFormat::kContoursJson;
+    int64_t size_bytes = 0;
+    StructureMetadata metadata;
+  };
+
+  AtlasStore(std::unique_ptr<Database> db, std::unique_ptr<BlobStore> blobs, MicrosClock clock)
+      : db_(std::move(db)), blobs_(std::move(blobs)), clock_(std::move(clock)) {}
+
+  // The id of the enabled user `name`; kUnauthenticated otherwise.
+  Status ActingUser(const std::string& name, int64_t* id);
+  // Checks `user`'s role in `project` is at least `minimum`.
+  Status Enter(const std::string& user, const std::string& project, Role minimum, Caller* caller);
+  Status FindStructure(const Caller& caller, const StructureRef& ref, StructureRow* row);
+  Status FindLock(int64_t structure, LockRow* lock, bool* found);
+  // The lock rules of Commit and Revert.
+  Status CheckLockForWrite(const Caller& caller, const StructureRef& ref, int64_t structure,
+                           const std::string& lock_id);
+  // Appends revision head + 1 of `kind`, moves the head (and the metadata
+  // etag when `metadata_changed`) and audits it as `action`.
+  Status AppendRevision(const Caller& caller, const StructureRef& ref, const StructureRow& row,
+                        const std::string& kind, const std::string& action,
+                        const std::string& message, const Content& content, bool metadata_changed,
+                        Revision* revision);
+  Status ReadRevision(const StructureRef& ref, int64_t structure, int64_t number,
+                      Revision* revision, bool* found);
+  Status LoadSnapshot(const std::string& project, int64_t project_id, int64_t id, bool with_members,
+                      SnapshotInfo* snapshot, bool* found);
+  Status Audit(std::optional<int64_t> user, std::optional<int64_t> project,
+               const std::string& action, const std::string& target,
+               std::optional<int64_t> revision, const std::string& detail);
+  Status CheckLease(int64_t lease_us) const;
+
+  std::mutex mutex_;
+  std::unique_ptr<Database> db_;
+  std::unique_ptr<BlobStore> blobs_;
+  MicrosClock clock_;
+};
+
+}  // namespace pba

@@ -1,0 +1,989 @@
+#include "store/atlas_store.h"
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <fstream>
+#include <map>
+#include <set>
+#include <thread>
+
+#include "store/database.h"
+#include "store/migrations.h"
+#include "store/sha256.h"
+#include "unit/server/temp_dir.h"
+
+namespace pba {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::TempDir;
+
+constexpr int64_t kSecond = 1000 * 1000;
+// 2026-01-01T00:00:00Z: the injected clock starts here.
+constexpr int64_t kStart = 1767225600LL * kSecond;
+
+std::string Hash(const std::string& bytes) {
+  std::string hash;
+  EXPECT_TRUE(Sha256Hex(bytes, &hash).ok());
+  return hash;
+}
+
+bool Contains(const std::string& text, const std::string& fragment) {
+  return text.find(fragment) != std::string::npos;
+}
+
+#define EXPECT_STATUS(expr, expected_code, fragment)                  \
+  do {                                                                \
+    const ::pba::Status status_ = (expr);                             \
+    EXPECT_EQ(status_.code(), (expected_code)) << status_.ToString(); \
+    EXPECT_TRUE(Contains(status_.ToString(), (fragment)))             \
+        << "'" << (fragment) << "' not in: " << status_.ToString();   \
+  } while (false)
+
+#define ASSERT_OK(expr)                              \
+  do {                                               \
+    const ::pba::Status status_ = (expr);            \
+    ASSERT_TRUE(status_.ok()) << status_.ToString(); \
+  } while (false)
+
+class AtlasStoreTest : public ::testing::Test {
+ protected:
+  // alice creates project "atlas" (admin); bob is an editor, carol a viewer,
+  // dave a user outside the project. "hippocampus" exists at revision 1.
+  void SetUp() override {
+    Open();
+    for (const char* name : {"alice", "bob", "carol", "dave"}) {
+      ASSERT_OK(store_->CreateUser(name, &tokens_[name]));
+    }
+    ASSERT_OK(store_->CreateProject("alice", "atlas"));
+    ASSERT_OK(store_->SetRole("alice", "atlas", "bob", Role::kEditor));
+    ASSERT_OK(store_->SetRole("alice", "atlas", "carol", Role::kViewer));
+    Revision first;
+    ASSERT_OK(store_->CreateStructure("bob", kHippocampus, Metadata(),
+                                      GeometryFormat::kContoursJson, "contours v1", &first));
+  }
+
+  void Open() {
+    ASSERT_OK(AtlasStore::Open(dir_.path(), &store_, [this] { return now_.load(); }));
+  }
+  void Reopen() {
+    store_.reset();
+    Open();
+  }
+
+  static StructureMetadata Metadata() {
+    StructureMetadata metadata;
+    metadata.colour = {220, 180, 40};
+    metadata.group_path = "cerebrum/limbic system";
+    metadata.material_json = R"({"model": "neo_hookean", "mu_pa": 1000})";
+    return metadata;
+  }
+
+  LockInfo Lock(const std::string& user, const StructureRef& ref = kHippocampus,
+                int64_t lease = 60 * kSecond) {
+    LockInfo info;
+    const Status status = store_->AcquireLock(user, ref, lease, &info);
+    EXPECT_TRUE(status.ok()) << status.ToString();
+    return info;
+  }
+
+  Status Commit(const std::string& user, const std::string& lock_id, int64_t base,
+                const std::string& geometry, Revision* revision = nullptr,
+                std::optional<std::string> material = std::nullopt) {
+    CommitRequest request;
+    request.structure = kHippocampus;
+    request.lock_id = lock_id;
+    request.base_revision = base;
+    request.geometry = geometry;
+    request.material_json = std::move(material);
+    request.message = "edit by " + user;
+    Revision ignored;
+    return store_->Commit(user, request, revision != nullptr ? revision : &ignored);
+  }
+
+  StructureInfo Structure(const StructureRef& ref = kHippocampus) {
+    StructureInfo info;
+    const Status status = store_->GetStructure("alice", ref, &info);
+    EXPECT_TRUE(status.ok()) << status.ToString();
+    return info;
+  }
+
+  std::vector<Revision> FullHistory(const StructureRef& ref = kHippocampus, int page_size = 7) {
+    std::vector<Revision> all;
+    std::string token;
+    do {
+      std::vector<Revision> page;
+      const Status status = store_->History("carol", ref, page_size, token, &page, &token);
+      EXPECT_TRUE(status.ok()) << status.ToString();
+      if (!status.ok()) break;
+      all.insert(all.end(), page.begin(), page.end());
+    } while (!token.empty());
+    return all;
+  }
+
+  std::vector<AuditEntry> FullAudit(const std::string& project = "atlas") {
+    std::vector<AuditEntry> all;
+    std::string token;
+    do {
+      std::vector<AuditEntry> page;
+      const Status status = store_->ListAudit("carol", project, 1000, token, &page, &token);
+      EXPECT_TRUE(status.ok()) << status.ToString();
+      if (!status.ok()) break;
+      all.insert(all.end(), page.begin(), page.end());
+    } while (!token.empty());
+    return all;
+  }
+
+  std::map<std::string, int> AuditCounts() {
+    std::map<std::string, int> counts;
+    for (const AuditEntry& entry : FullAudit()) ++counts[entry.action];
+    return counts;
+  }
+
+  // A second connection to pba.db, for looking underneath the store.
+  std::unique_ptr<Database> RawDatabase() {
+    std::unique_ptr<Database> db;
+    EXPECT_TRUE(Database::Open(dir_.path() / "pba.db", &db).ok());
+    return db;
+  }
+
+  int64_t QueryInt(Database& db, const std::string& sql) {
+    Statement stmt;
+    EXPECT_TRUE(db.Prepare(sql, &stmt).ok()) << sql;
+    bool row = false;
+    EXPECT_TRUE(stmt.Step(&row).ok()) << sql;
+    return row ? stmt.ColumnInt(0) : -1;
+  }
+
+  std::map<std::string, int64_t> RowCounts() {
+    auto db = RawDatabase();
+    std::map<std::string, int64_t> counts;
+    for (const char* table :
+         {"users", "projects", "members", "structures", "structure_revisions", "locks", "snapshots",
+          "snapshot_members", "snapshot_tags", "audit_log"}) {
+      counts[table] = QueryInt(*db, std::string("SELECT COUNT(*) FROM ") + table);
+    }
+    return counts;
+  }
+
+  static inline const StructureRef kHippocampus{"atlas", "hippocampus"};
+
+  TempDir dir_;
+  std::atomic<int64_t> now_{kStart};
+  std::map<std::string, std::string> tokens_;
+  std::unique_ptr<AtlasStore> store_;
+};
+
+TEST_F(AtlasStoreTest, TokensAuthenticateAndOnlyTheirHashIsStored) {
+  const std::string& token = tokens_["bob"];
+  ASSERT_EQ(token.size(), 64u);
+  EXPECT_TRUE(IsSha256Hex(token)) << token;
+  EXPECT_NE(tokens_["alice"], token);
+  std::string user;
+  ASSERT_OK(store_->Authenticate(token, &user));
+  EXPECT_EQ(user, "bob");
+
+  std::string wrong = token;
+  wrong[0] = wrong[0] == 'a' ? 'b' : 'a';
+  EXPECT_STATUS(store_->Authenticate(wrong, &user), Status::Code::kUnauthenticated, "unknown");
+  EXPECT_STATUS(store_->Authenticate("not a token", &user), Status::Code::kUnauthenticated,
+                "malformed");
+  const Status refused = store_->Authenticate(wrong, &user);
+  EXPECT_FALSE(Contains(refused.ToString(), wrong)) << "the message echoes the token";
+
+  auto db = RawDatabase();
+  Statement stmt;
+  ASSERT_OK(db->Prepare("SELECT token_sha256 FROM users WHERE name = 'bob'", &stmt));
+  bool row = false;
+  ASSERT_OK(stmt.Step(&row));
+  ASSERT_TRUE(row);
+  EXPECT_EQ(stmt.ColumnText(0), Hash(token));
+  stmt = Statement();
+  EXPECT_EQ(QueryInt(*db, "SELECT COUNT(*) FROM users WHERE token_sha256 = '" + token + "'"), 0);
+
+  std::string again;
+  EXPECT_STATUS(store_->CreateUser("bob", &again), Status::Code::kAlreadyExists, "bob");
+
+  // A disabled user is refused even with the right token.
+  ASSERT_OK(db->Exec("UPDATE users SET disabled = 1 WHERE name = 'bob'"));
+  EXPECT_STATUS(store_->Authenticate(token, &user), Status::Code::kUnauthenticated, "disabled");
+  LockInfo lock;
+  EXPECT_STATUS(store_->AcquireLock("bob", kHippocampus, kSecond, &lock),
+                Status::Code::kUnauthenticated, "disabled");
+}
+
+TEST_F(AtlasStoreTest, RolesAreSetByAdminsAndTheLastAdminStays) {
+  Role role = Role::kViewer;
+  bool member = false;
+  ASSERT_OK(store_->RoleOf("atlas", "alice", &role, &member));
+  EXPECT_TRUE(member);
+  EXPECT_EQ(role, Role::kAdmin);
+  ASSERT_OK(store_->RoleOf("atlas", "bob", &role, &member));
+  EXPECT_EQ(role, Role::kEditor);
+  ASSERT_OK(store_->RoleOf("atlas", "dave", &role, &member));
+  EXPECT_FALSE(member);
+  EXPECT_STATUS(store_->RoleOf("nowhere", "dave", &role, &member), Status::Code::kNotFound,
+                "nowhere");
+
+  EXPECT_STATUS(store_->SetRole("bob", "atlas", "dave", Role::kEditor),
+                Status::Code::kPermissionDenied, "needs admin");
+  EXPECT_STATUS(store_->SetRole("dave", "atlas", "dave", Role::kAdmin),
+                Status::Code::kPermissionDenied, "not a member");
+  EXPECT_STATUS(store_->SetRole("alice", "atlas", "erin", Role::kEditor), Status::Code::kNotFound,
+                "erin");
+  EXPECT_STATUS(store_->SetRole("alice", "atlas", "alice", Role::kEditor),
+                Status::Code::kFailedPrecondition, "last admin");
+  ASSERT_OK(store_->SetRole("alice", "atlas", "bob", Role::kAdmin));
+  ASSERT_OK(store_->SetRole("bob", "atlas", "alice", Role::kViewer));
+  ASSERT_OK(store_->RoleOf("atlas", "alice", &role, &member));
+  EXPECT_EQ(role, Role::kViewer);
+
+  const std::map<std::string, int> counts = AuditCounts();
+  EXPECT_EQ(counts.at("member.set_role"), 4);  // SetUp's two and the two above
+}
+
+TEST_F(AtlasStoreTest, ListProjectsPagesThroughTheCallersProjects) {
+  for (int i = 0; i < 6; ++i) ASSERT_OK(store_->CreateProject("dave", "p" + std::to_string(i)));
+  std::vector<ProjectInfo> page;
+  std::string token;
+  ASSERT_OK(store_->ListProjects("dave", 4, "", &page, &token));
+  ASSERT_EQ(page.size(), 4u);
+  EXPECT_EQ(page[0].name, "p0");
+  EXPECT_EQ(page[0].role, Role::kAdmin);
+  EXPECT_EQ(page[0].created_by, "dave");
+  ASSERT_FALSE(token.empty());
+  const std::string dave_token = token;
+  ASSERT_OK(store_->ListProjects("dave", 4, token, &page, &token));
+  ASSERT_EQ(page.size(), 2u);
+  EXPECT_EQ(page[1].name, "p5");
+  EXPECT_TRUE(token.empty());
+
+  // Only projects the user is a member of.
+  ASSERT_OK(store_->ListProjects("carol", 0, "", &page, &token));
+  ASSERT_EQ(page.size(), 1u);
+  EXPECT_EQ(page[0].name, "atlas");
+  EXPECT_EQ(page[0].role, Role::kViewer);
+
+  EXPECT_STATUS(store_->ListProjects("dave", -1, "", &page, &token), Status::Code::kInvalidArgument,
+                "page_size");
+  EXPECT_STATUS(store_->ListProjects("dave", 2, "garbage", &page, &token),
+                Status::Code::kInvalidArgument, "page_token");
+  // Another user's token pages another listing.
+  EXPECT_STATUS(store_->ListProjects("carol", 2, dave_token, &page, &token),
+                Status::Code::kInvalidArgument, "page_token");
+  EXPECT_STATUS(store_->CreateProject("dave", "p0"), Status::Code::kAlreadyExists, "p0");
+}
+
+TEST_F(AtlasStoreTest, CreateStructureStoresRevisionOneAndItsBlob) {
+  Revision revision;
+  std::string geometry;
+  ASSERT_OK(store_->GetRevision("carol", kHippocampus, 1, &revision, &geometry));
+  EXPECT_EQ(revision.number, 1);
+  EXPECT_EQ(revision.parent, 0);
+  EXPECT_EQ(revision.author, "bob");
+  EXPECT_EQ(revision.kind, "create");
+  EXPECT_EQ(revision.time_us, kStart);
+  EXPECT_EQ(revision.content_sha256, Hash("contours v1"));
+  EXPECT_EQ(revision.size_bytes, 11);
+  EXPECT_EQ(revision.format, GeometryFormat::kContoursJson);
+  EXPECT_EQ(revision.metadata, Metadata());
+  EXPECT_EQ(geometry, "contours v1");
+  EXPECT_TRUE(fs::exists(dir_.path() / "blobs" / revision.content_sha256.substr(0, 2) /
+                         revision.content_sha256.substr(2)));
+  const StructureInfo info = Structure();
+  EXPECT_EQ(info.head, 1);
+  EXPECT_EQ(info.metadata, Metadata());
+  EXPECT_FALSE(info.metadata_etag.empty());
+
+  Revision other;
+  EXPECT_STATUS(
+      store_->CreateStructure("alice", kHippocampus, Metadata(), GeometryFormat::kStl, "x", &other),
+      Status::Code::kAlreadyExists, "hippocampus");
+  EXPECT_STATUS(store_->CreateStructure("carol", {"atlas", "amygdala"}, Metadata(),
+                                        GeometryFormat::kStl, "x", &other),
+                Status::Code::kPermissionDenied, "carol");
+  EXPECT_STATUS(store_->CreateStructure("dave", {"atlas", "amygdala"}, Metadata(),
+                                        GeometryFormat::kStl, "x", &other),
+                Status::Code::kPermissionDenied, "not a member");
+  EXPECT_STATUS(store_->CreateStructure("bob", {"nowhere", "amygdala"}, Metadata(),
+                                        GeometryFormat::kStl, "x", &other),
+                Status::Code::kNotFound, "nowhere");
+  EXPECT_STATUS(store_->CreateStructure("bob", {"atlas", "amygdala"}, Metadata(),
+                                        GeometryFormat::kStl, "", &other),
+                Status::Code::kInvalidArgument, "geometry");
+  StructureMetadata bad = Metadata();
+  bad.material_json = "{\"mu\": }";
+  EXPECT_STATUS(
+      store_->CreateStructure("bob", {"atlas", "amygdala"}, bad, GeometryFormat::kStl, "x", &other),
+      Status::Code::kInvalidArgument, "material_json");
+  EXPECT_STATUS(store_->GetRevision("carol", kHippocampus, 2, &revision, nullptr),
+                Status::Code::kNotFound, "head is revision 1");
+  StructureInfo scratch;
+  EXPECT_STATUS(store_->GetStructure("carol", {"atlas", "amygdala"}, &scratch),
+                Status::Code::kNotFound, "amygdala");
+  EXPECT_STATUS(store_->GetStructure("dave", kHippocampus, &scratch),
+                Status::Code::kPermissionDenied, "dave");
+}
+
+TEST_F(AtlasStoreTest, ALockHeldByAnotherIsRefusedNamingHolderAndExpiry) {
+  const LockInfo lock = Lock("bob", kHippocampus, 90 * kSecond);
+  EXPECT_EQ(lock.lock_id.size(), 32u);
+  EXPECT_EQ(lock.owner, "bob");
+  EXPECT_EQ(lock.acquired_us, kStart);
+  EXPECT_EQ(lock.lease_expiry_us, kStart + 90 * kSecond);
+  EXPECT_TRUE(lock.took_over_from.empty());
+
+  LockInfo other;
+  EXPECT_STATUS(store_->AcquireLock("alice", kHippocampus, kSecond, &other),
+                Status::Code::kFailedPrecondition, "locked by 'bob' until 2026-01-01T00:01:30");
+  EXPECT_STATUS(store_->AcquireLock("bob", kHippocampus, kSecond, &other),
+                Status::Code::kFailedPrecondition, "you, in another session");
+  EXPECT_STATUS(store_->AcquireLock("carol", kHippocampus, kSecond, &other),
+                Status::Code::kPermissionDenied, "needs editor");
+  EXPECT_STATUS(store_->AcquireLock("bob", kHippocampus, 0, &other), Status::Code::kInvalidArgument,
+                "lease");
+  EXPECT_STATUS(store_->AcquireLock("bob", kHippocampus, AtlasStore::kMaxLeaseMicros + 1, &other),
+                Status::Code::kInvalidArgument, "lease");
+  EXPECT_STATUS(store_->AcquireLock("bob", {"atlas", "cortex"}, kSecond, &other),
+                Status::Code::kNotFound, "cortex");
+
+  // alice can neither commit under nor release bob's lock.
+  EXPECT_STATUS(Commit("alice", lock.lock_id, 1, "alice's shape"),
+                Status::Code::kFailedPrecondition, "locked by 'bob'");
+  EXPECT_STATUS(Commit("alice", "", 1, "alice's shape"), Status::Code::kFailedPrecondition,
+                "locked by 'bob'");
+  EXPECT_STATUS(store_->ReleaseLock("alice", lock.lock_id), Status::Code::kFailedPrecondition,
+                "another user");
+  EXPECT_STATUS(store_->RenewLock("alice", lock.lock_id, kSecond, &other),
+                Status::Code::kFailedPrecondition, "another user");
+
+  ASSERT_OK(store_->ReleaseLock("bob", lock.lock_id));
+  EXPECT_STATUS(store_->ReleaseLock("bob", lock.lock_id), Status::Code::kFailedPrecondition,
+                "no longer held");
+  EXPECT_EQ(Lock("alice").owner, "alice");
+
+  const std::map<std::string, int> counts = AuditCounts();
+  EXPECT_EQ(counts.at("lock.acquire"), 2);
+  EXPECT_EQ(counts.at("lock.release"), 1);
+}
+
+TEST_F(AtlasStoreTest, CommitNeedsTheLockAndTheHeadAsBase) {
+  EXPECT_STATUS(Commit("bob", "", 1, "v2"), Status::Code::kFailedPrecondition, "not locked");
+  const LockInfo lock = Lock("bob");
+  Revision revision;
+  ASSERT_OK(Commit("bob", lock.lock_id, 1, "v2", &revision));
+  EXPECT_EQ(revision.number, 2);
+  EXPECT_EQ(revision.parent, 1);
+  EXPECT_EQ(revision.kind, "commit");
+  EXPECT_EQ(revision.message, "edit by bob");
+  EXPECT_EQ(revision.content_sha256, Hash("v2"));
+  EXPECT_EQ(revision.metadata, Metadata()) << "metadata is carried over from the head";
+
+  EXPECT_STATUS(Commit("bob", lock.lock_id, 1, "v2 again"), Status::Code::kAborted,
+                "the head is revision 2");
+  EXPECT_STATUS(Commit("bob", lock.lock_id, 7, "v2 again"), Status::Code::kAborted,
+                "base revision 7");
+  EXPECT_STATUS(Commit("bob", "0123456789abcdef0123456789abcdef", 2, "v3"),
+                Status::Code::kFailedPrecondition, "not your current lock");
+  ASSERT_OK(store_->SetRole("alice", "atlas", "bob", Role::kViewer));
+  EXPECT_STATUS(Commit("bob", lock.lock_id, 2, "v3"), Status::Code::kPermissionDenied, "viewer");
+  ASSERT_OK(store_->SetRole("alice", "atlas", "bob", Role::kEditor));
+  ASSERT_OK(Commit("bob", lock.lock_id, 2, "v3", &revision));
+  EXPECT_EQ(revision.number, 3);
+
+  EXPECT_EQ(Structure().head, 3);
+  EXPECT_EQ(AuditCounts().at("revision.commit"), 2);
+}
+
+TEST_F(AtlasStoreTest, ALapsedLeaseCannotCommitOrRenewAndMayBeTakenOver) {
+  const LockInfo bobs = Lock("bob", kHippocampus, 10 * kSecond);
+  now_ += 9 * kSecond;
+  LockInfo renewed;
+  ASSERT_OK(store_->RenewLock("bob", bobs.lock_id, 10 * kSecond, &renewed));
+  EXPECT_EQ(renewed.lease_expiry_us, kStart + 19 * kSecond);
+  now_ += 9 * kSecond;  // 18 s: alive only thanks to the renewal
+  ASSERT_OK(Commit("bob", bobs.lock_id, 1, "v2"));
+
+  now_ += 1 * kSecond;  // 19 s: the lease has just lapsed
+  EXPECT_STATUS(Commit("bob", bobs.lock_id, 2, "v3"), Status::Code::kFailedPrecondition,
+                "lapsed at 2026-01-01T00:00:19");
+  EXPECT_STATUS(store_->RenewLock("bob", bobs.lock_id, 10 * kSecond, &renewed),
+                Status::Code::kFailedPrecondition, "lapsed");
+  // Another user sees the lapse too.
+  EXPECT_STATUS(Commit("alice", "", 2, "v3"), Status::Code::kFailedPrecondition,
+                "whose lease lapsed");
+
+  LockInfo alices;
+  ASSERT_OK(store_->AcquireLock("alice", kHippocampus, 10 * kSecond, &alices));
+  EXPECT_EQ(alices.took_over_from, "bob");
+  EXPECT_NE(alices.lock_id, bobs.lock_id);
+  EXPECT_STATUS(Commit("bob", bobs.lock_id, 2, "v3"), Status::Code::kFailedPrecondition,
+                "locked by 'alice'");
+  EXPECT_STATUS(store_->ReleaseLock("bob", bobs.lock_id), Status::Code::kFailedPrecondition,
+                "no longer held");
+  ASSERT_OK(Commit("alice", alices.lock_id, 2, "v3"));
+
+  const std::vector<AuditEntry> audit = FullAudit();
+  const auto takeover = std::find_if(audit.begin(), audit.end(), [](const AuditEntry& entry) {
+    return entry.action == "lock.takeover";
+  });
+  ASSERT_NE(takeover, audit.end());
+  EXPECT_EQ(takeover->user, "alice");
+  EXPECT_TRUE(Contains(takeover->detail, "bob")) << takeover->detail;
+  EXPECT_TRUE(Contains(takeover->detail, "lapsed")) << takeover->detail;
+  EXPECT_EQ(AuditCounts().at("lock.renew"), 1);
+}
+
+TEST_F(AtlasStoreTest, OnlyAdminsBreakLocksAndItIsAudited) {
+  const LockInfo lock = Lock("bob");
+  ASSERT_OK(store_->SetRole("alice", "atlas", "dave", Role::kEditor));
+  EXPECT_STATUS(store_->BreakLock("dave", kHippocampus, "stuck"), Status::Code::kPermissionDenied,
+                "needs admin");
+  EXPECT_STATUS(store_->BreakLock("alice", kHippocampus, ""), Status::Code::kInvalidArgument,
+                "reason");
+  ASSERT_OK(store_->BreakLock("alice", kHippocampus, "bob is on holiday"));
+  EXPECT_STATUS(store_->BreakLock("alice", kHippocampus, "again"),
+                Status::Code::kFailedPrecondition, "not locked");
+  EXPECT_STATUS(Commit("bob", lock.lock_id, 1, "v2"), Status::Code::kFailedPrecondition,
+                "not locked");
+
+  const std::vector<AuditEntry> audit = FullAudit();
+  ASSERT_FALSE(audit.empty());
+  EXPECT_EQ(audit.front().action, "lock.break");
+  EXPECT_EQ(audit.front().user, "alice");
+  EXPECT_EQ(audit.front().target, "projects/atlas/structures/hippocampus");
+  EXPECT_TRUE(Contains(audit.front().detail, "bob is on holiday")) << audit.front().detail;
+  EXPECT_TRUE(Contains(audit.front().detail, "lock of bob")) << audit.front().detail;
+}
+
+TEST_F(AtlasStoreTest, MetadataEditsAreOptimisticAndVersioned) {
+  const StructureInfo before = Structure();
+  MetadataUpdate update;
+  update.colour = Colour{10, 20, 30};
+  Revision revision;
+  std::string etag;
+  ASSERT_OK(store_->UpdateMetadata("bob", kHippocampus, before.metadata_etag, update, "recolour",
+                                   &revision, &etag));
+  EXPECT_EQ(revision.number, 2);
+  EXPECT_EQ(revision.kind, "metadata");
+  EXPECT_EQ(revision.content_sha256, Hash("contours v1")) << "geometry kept";
+  EXPECT_EQ(revision.metadata.colour, (Colour{10, 20, 30}));
+  EXPECT_EQ(revision.metadata.group_path, Metadata().group_path);
+  EXPECT_NE(etag, before.metadata_etag);
+  EXPECT_EQ(Structure().metadata_etag, etag);
+
+  // A stale etag is refused with the current one named.
+  update.colour = Colour{1, 2, 3};
+  EXPECT_STATUS(store_->UpdateMetadata("alice", kHippocampus, before.metadata_etag, update, "",
+                                       &revision, &etag),
+                Status::Code::kAborted, "the current etag is '" + Structure().metadata_etag + "'");
+  EXPECT_STATUS(store_->UpdateMetadata("carol", kHippocampus, etag, update, "", &revision, &etag),
+                Status::Code::kPermissionDenied, "carol");
+  update.colour = Colour{1, 256, 3};
+  EXPECT_STATUS(store_->UpdateMetadata("bob", kHippocampus, etag, update, "", &revision, &etag),
+                Status::Code::kInvalidArgument, "colour.g");
+  EXPECT_STATUS(
+      store_->UpdateMetadata("bob", kHippocampus, etag, MetadataUpdate(), "", &revision, &etag),
+      Status::Code::kInvalidArgument, "update");
+
+  // A geometry-only commit keeps the etag; one that changes the material does not.
+  const LockInfo lock = Lock("bob");
+  ASSERT_OK(Commit("bob", lock.lock_id, 2, "v3"));
+  EXPECT_EQ(Structure().metadata_etag, etag);
+  ASSERT_OK(Commit("bob", lock.lock_id, 3, "v4", &revision, R"({"model": "linear_elastic"})"));
+  EXPECT_EQ(revision.metadata.material_json, R"({"model": "linear_elastic"})");
+  EXPECT_EQ(revision.metadata.colour, (Colour{10, 20, 30}));
+  EXPECT_NE(Structure().metadata_etag, etag);
+
+  // A metadata edit needs no lock, and moves the head under the lock holder.
+  etag = Structure().metadata_etag;
+  update = MetadataUpdate();
+  update.group_path = "cerebrum";
+  ASSERT_OK(store_->UpdateMetadata("alice", kHippocampus, etag, update, "", &revision, &etag));
+  EXPECT_EQ(revision.number, 5);
+  EXPECT_STATUS(Commit("bob", lock.lock_id, 4, "v5"), Status::Code::kAborted,
+                "the head is revision 5");
+
+  // No change, no revision.
+  ASSERT_OK(store_->UpdateMetadata("alice", kHippocampus, etag, update, "", &revision, &etag));
+  EXPECT_EQ(revision.number, 5);
+  EXPECT_EQ(Structure().head, 5);
+  EXPECT_EQ(AuditCounts().at("revision.metadata"), 2);
+}
+
+TEST_F(AtlasStoreTest, HistoryIsNewestFirstAndRevertAddsARevision) {
+  const LockInfo lock = Lock("bob");
+  for (int i = 2; i <= 5; ++i)
+    ASSERT_OK(Commit("bob", lock.lock_id, i - 1, "v" + std::to_string(i)));
+  const std::vector<Revision> history = FullHistory(kHippocampus, 2);
+  ASSERT_EQ(history.size(), 5u);
+  for (size_t i = 0; i < history.size(); ++i) {
+    EXPECT_EQ(history[i].number, 5 - static_cast<int64_t>(i));
+    EXPECT_EQ(history[i].parent, history[i].number - 1);
+  }
+  EXPECT_EQ(history.back().content_sha256, Hash("contours v1"));
+
+  std::vector<Revision> page;
+  std::string token;
+  ASSERT_OK(store_->History("carol", kHippocampus, 2, "", &page, &token));
+  std::string next;
+  EXPECT_STATUS(store_->History("carol", {"atlas", "hippocampus"}, -3, token, &page, &next),
+                Status::Code::kInvalidArgument, "page_size");
+
+  Revision reverted;
+  EXPECT_STATUS(store_->Revert("bob", kHippocampus, lock.lock_id, 4, 1, "", &reverted),
+                Status::Code::kAborted, "the head is revision 5");
+  EXPECT_STATUS(store_->Revert("bob", kHippocampus, lock.lock_id, 5, 9, "", &reverted),
+                Status::Code::kNotFound, "no revision 9");
+  EXPECT_STATUS(store_->Revert("alice", kHippocampus, "", 5, 1, "", &reverted),
+                Status::Code::kFailedPrecondition, "locked by 'bob'");
+  ASSERT_OK(store_->Revert("bob", kHippocampus, lock.lock_id, 5, 1, "", &reverted));
+  EXPECT_EQ(reverted.number, 6);
+  EXPECT_EQ(reverted.parent, 5);
+  EXPECT_EQ(reverted.kind, "revert");
+  EXPECT_EQ(reverted.message, "revert to revision 1");
+  EXPECT_EQ(reverted.content_sha256, Hash("contours v1"));
+  std::string geometry;
+  Revision got;
+  ASSERT_OK(store_->GetRevision("carol", kHippocampus, 6, &got, &geometry));
+  EXPECT_EQ(geometry, "contours v1");
+  // Revision 5 is untouched.
+  ASSERT_OK(store_->GetRevision("carol", kHippocampus, 5, &got, &geometry));
+  EXPECT_EQ(geometry, "v5");
+  EXPECT_EQ(AuditCounts().at("revision.revert"), 1);
+}
+
+TEST_F(AtlasStoreTest, SnapshotsPinHeadsAndTagsAreUniquePerProject) {
+  Revision revision;
+  const StructureRef amygdala{"atlas", "amygdala"};
+  ASSERT_OK(store_->CreateStructure("bob", amygdala, Metadata(), GeometryFormat::kNifti, "labels",
+                                    &revision));
+  const LockInfo lock = Lock("bob");
+  ASSERT_OK(Commit("bob", lock.lock_id, 1, "v2"));
+
+  SnapshotInfo snapshot;
+  ASSERT_OK(store_->CreateSnapshot("bob", "atlas", "before smoothing", &snapshot));
+  EXPECT_GT(snapshot.id, 0);
+  EXPECT_EQ(snapshot.author, "bob");
+  EXPECT_EQ(snapshot.revisions,
+            (std::map<std::string, int64_t>{{"amygdala", 1}, {"hippocampus", 2}}));
+  // Later commits do not move the snapshot.
+  ASSERT_OK(Commit("bob", lock.lock_id, 2, "v3"));
+  ASSERT_OK(store_->Tag("bob", "atlas", snapshot.id, "paper-2026"));
+  EXPECT_STATUS(store_->Tag("alice", "atlas", snapshot.id, "paper-2026"),
+                Status::Code::kAlreadyExists, "already names snapshot");
+  EXPECT_STATUS(store_->Tag("bob", "atlas", snapshot.id, "2026"), Status::Code::kInvalidArgument,
+                "all digits");
+  EXPECT_STATUS(store_->Tag("bob", "atlas", snapshot.id + 100, "later"), Status::Code::kNotFound,
+                "no snapshot");
+  EXPECT_STATUS(store_->Tag("carol", "atlas", snapshot.id, "mine"), Status::Code::kPermissionDenied,
+                "carol");
+
+  SnapshotInfo resolved;
+  ASSERT_OK(store_->ResolveSnapshot("carol", "atlas", "paper-2026", &resolved));
+  EXPECT_EQ(resolved.id, snapshot.id);
+  EXPECT_EQ(resolved.revisions, snapshot.revisions);
+  EXPECT_EQ(resolved.tags, std::vector<std::string>{"paper-2026"});
+  ASSERT_OK(store_->ResolveSnapshot("carol", "atlas", std::to_string(snapshot.id), &resolved));
+  EXPECT_EQ(resolved.name, "before smoothing");
+  EXPECT_STATUS(store_->ResolveSnapshot("carol", "atlas", "nope", &resolved),
+                Status::Code::kNotFound, "nope");
+  EXPECT_STATUS(store_->ResolveSnapshot("carol", "atlas", "999999999999999999999", &resolved),
+                Status::Code::kNotFound, "999");
+
+  // A tag is unique per project, not globally.
+  ASSERT_OK(store_->CreateProject("dave", "other"));
+  SnapshotInfo elsewhere;
+  ASSERT_OK(store_->CreateSnapshot("dave", "other", "empty", &elsewhere));
+  EXPECT_TRUE(elsewhere.revisions.empty());
+  ASSERT_OK(store_->Tag("dave", "other", elsewhere.id, "paper-2026"));
+  // ... and a snapshot of another project cannot be tagged or resolved here.
+  EXPECT_STATUS(store_->Tag("bob", "atlas", elsewhere.id, "foreign"), Status::Code::kNotFound,
+                "no snapshot");
+  EXPECT_STATUS(store_->ResolveSnapshot("bob", "atlas", std::to_string(elsewhere.id), &resolved),
+                Status::Code::kNotFound, "no snapshot");
+
+  SnapshotInfo second;
+  ASSERT_OK(store_->CreateSnapshot("bob", "atlas", "after smoothing", &second));
+  EXPECT_EQ(second.revisions.at("hippocampus"), 3);
+  std::vector<SnapshotInfo> listed;
+  std::string token;
+  ASSERT_OK(store_->ListSnapshots("carol", "atlas", 1, "", &listed, &token));
+  ASSERT_EQ(listed.size(), 1u);
+  EXPECT_EQ(listed[0].id, second.id);
+  ASSERT_FALSE(token.empty());
+  ASSERT_OK(store_->ListSnapshots("carol", "atlas", 1, token, &listed, &token));
+  ASSERT_EQ(listed.size(), 1u);
+  EXPECT_EQ(listed[0].id, snapshot.id);
+  EXPECT_EQ(listed[0].tags, std::vector<std::string>{"paper-2026"});
+  EXPECT_TRUE(token.empty());
+
+  const std::map<std::string, int> counts = AuditCounts();
+  EXPECT_EQ(counts.at("snapshot.create"), 2);
+  EXPECT_EQ(counts.at("snapshot.tag"), 1);
+}
+
+TEST_F(AtlasStoreTest, TheAuditLogNamesWhoDidWhatToWhichRevisionNewestFirst) {
+  const LockInfo lock = Lock("bob");
+  now_ += kSecond;
+  ASSERT_OK(Commit("bob", lock.lock_id, 1, "v2"));
+  ASSERT_OK(store_->ReleaseLock("bob", lock.lock_id));
+
+  const std::vector<AuditEntry> audit = FullAudit();
+  // SetUp: project.create, two member.set_role, structure.create; then three here.
+  ASSERT_EQ(audit.size(), 7u);
+  const std::vector<std::string> actions = {
+      "lock.release",    "revision.commit", "lock.acquire",  "structure.create",
+      "member.set_role", "member.set_role", "project.create"};
+  for (size_t i = 0; i < audit.size(); ++i) {
+    EXPECT_EQ(audit[i].action, actions[i]) << i;
+    if (i > 0) {
+      EXPECT_LT(audit[i].seq, audit[i - 1].seq);
+    }
+  }
+  EXPECT_EQ(audit[1].user, "bob");
+  EXPECT_EQ(audit[1].target, "projects/atlas/structures/hippocampus");
+  EXPECT_EQ(audit[1].revision, 2);
+  EXPECT_EQ(audit[1].time_us, kStart + kSecond);
+  EXPECT_EQ(audit[3].revision, 1);
+  EXPECT_EQ(audit[2].revision, 0);
+  EXPECT_EQ(audit[6].user, "alice");
+  EXPECT_EQ(audit[6].target, "projects/atlas");
+
+  // Pages of 3 walk the same rows.
+  std::vector<AuditEntry> paged;
+  std::string token;
+  int pages = 0;
+  do {
+    std::vector<AuditEntry> page;
+    ASSERT_OK(store_->ListAudit("carol", "atlas", 3, token, &page, &token));
+    paged.insert(paged.end(), page.begin(), page.end());
+    ++pages;
+  } while (!token.empty());
+  EXPECT_EQ(pages, 3);
+  ASSERT_EQ(paged.size(), audit.size());
+  for (size_t i = 0; i < paged.size(); ++i) EXPECT_EQ(paged[i].seq, audit[i].seq);
+
+  std::vector<AuditEntry> page;
+  EXPECT_STATUS(store_->ListAudit("dave", "atlas", 3, "", &page, &token),
+                Status::Code::kPermissionDenied, "not a member");
+  EXPECT_STATUS(store_->ListAudit("carol", "atlas", -1, "", &page, &token),
+                Status::Code::kInvalidArgument, "page_size");
+}
+
+TEST_F(AtlasStoreTest, HostileNamesAreRefusedAndNothingIsWritten) {
+  const LockInfo lock = Lock("bob");
+  SnapshotInfo snapshot;
+  ASSERT_OK(store_->CreateSnapshot("bob", "atlas", "base", &snapshot));
+  const std::map<std::string, int64_t> before = RowCounts();
+  const std::vector<std::pair<std::string, std::string>> hostile = {
+      {"a/b", "'/'"},
+      {"a\\b", "'\\'"},
+      {"o'brien", "'''"},
+      {"say \"hi\"", "'\"'"},
+      {"'; DROP TABLE structures; --", "'''"},
+      {"x; DELETE FROM audit_log", "';'"},
+      {std::string("nul\0byte", 8), "\\x00"},
+      {"line\nbreak", "\\x0a"},
+      {"", "empty"},
+  };
+  for (const auto& [name, shown] : hostile) {
+    SCOPED_TRACE(name);
+    std::string token;
+    EXPECT_STATUS(store_->CreateUser(name, &token), Status::Code::kInvalidArgument, "user: ");
+    EXPECT_STATUS(store_->CreateUser(name, &token), Status::Code::kInvalidArgument, shown);
+    EXPECT_STATUS(store_->CreateProject("alice", name), Status::Code::kInvalidArgument,
+                  "project: ");
+    Revision revision;
+    EXPECT_STATUS(store_->CreateStructure("bob", {"atlas", name}, Metadata(), GeometryFormat::kStl,
+                                          "solid", &revision),
+                  Status::Code::kInvalidArgument, "structure: ");
+    EXPECT_STATUS(store_->CreateStructure("bob", {name, "ok"}, Metadata(), GeometryFormat::kStl,
+                                          "solid", &revision),
+                  Status::Code::kInvalidArgument, "project: ");
+    EXPECT_STATUS(store_->Tag("bob", "atlas", snapshot.id, name), Status::Code::kInvalidArgument,
+                  "tag: ");
+    SnapshotInfo other;
+    EXPECT_STATUS(store_->CreateSnapshot("bob", "atlas", name, &other),
+                  Status::Code::kInvalidArgument, "name: ");
+    EXPECT_STATUS(store_->SetRole("alice", "atlas", name, Role::kEditor),
+                  Status::Code::kInvalidArgument, "member: ");
+    LockInfo info;
+    EXPECT_STATUS(store_->AcquireLock(name, kHippocampus, kSecond, &info),
+                  Status::Code::kInvalidArgument, "user: ");
+    if (!name.empty() && name.find('/') == std::string::npos) {  // "cerebrum/a/b" is a path
+      StructureMetadata metadata = Metadata();
+      metadata.group_path = "cerebrum/" + name;
+      EXPECT_STATUS(store_->CreateStructure("bob", {"atlas", "ok"}, metadata, GeometryFormat::kStl,
+                                            "solid", &revision),
+                    Status::Code::kInvalidArgument, "group_path: ");
+    }
+  }
+  EXPECT_EQ(RowCounts(), before);
+  auto db = RawDatabase();
+  EXPECT_EQ(QueryInt(*db, "SELECT COUNT(*) FROM sqlite_master WHERE name = 'structures'"), 1);
+  EXPECT_EQ(Structure().head, 1);
+  ASSERT_OK(Commit("bob", lock.lock_id, 1, "still works"));
+}
+
+TEST_F(AtlasStoreTest, ReopeningKeepsEverythingAndTheFileIsSound) {
+  const LockInfo lock = Lock("bob");
+  ASSERT_OK(Commit("bob", lock.lock_id, 1, "v2"));
+  SnapshotInfo snapshot;
+  ASSERT_OK(store_->CreateSnapshot("bob", "atlas", "s", &snapshot));
+  ASSERT_OK(store_->Tag("bob", "atlas", snapshot.id, "release"));
+  const std::vector<AuditEntry> audit = FullAudit();
+  const std::string etag = Structure().metadata_etag;
+
+  Reopen();
+  std::string user;
+  ASSERT_OK(store_->Authenticate(tokens_["bob"], &user));
+  EXPECT_EQ(user, "bob");
+  const std::vector<Revision> history = FullHistory();
+  ASSERT_EQ(history.size(), 2u);
+  EXPECT_EQ(history[0].content_sha256, Hash("v2"));
+  EXPECT_EQ(Structure().metadata_etag, etag);
+  // The lock and its lease survive a restart: the holder keeps working.
+  LockInfo other;
+  EXPECT_STATUS(store_->AcquireLock("alice", kHippocampus, kSecond, &other),
+                Status::Code::kFailedPrecondition, "locked by 'bob'");
+  ASSERT_OK(Commit("bob", lock.lock_id, 2, "v3"));
+  SnapshotInfo resolved;
+  ASSERT_OK(store_->ResolveSnapshot("carol", "atlas", "release", &resolved));
+  EXPECT_EQ(resolved.revisions.at("hippocampus"), 2);
+  const std::vector<AuditEntry> reopened = FullAudit();
+  ASSERT_EQ(reopened.size(), audit.size() + 1);
+  EXPECT_EQ(reopened[1].seq, audit[0].seq);
+  EXPECT_EQ(reopened[1].action, audit[0].action);
+
+  store_.reset();
+  auto db = RawDatabase();
+  Statement stmt;
+  ASSERT_OK(db->Prepare("PRAGMA integrity_check", &stmt));
+  bool row = false;
+  ASSERT_OK(stmt.Step(&row));
+  ASSERT_TRUE(row);
+  EXPECT_EQ(stmt.ColumnText(0), "ok");
+  ASSERT_OK(db->Prepare("PRAGMA foreign_key_check", &stmt));
+  ASSERT_OK(stmt.Step(&row));
+  EXPECT_FALSE(row) << "a foreign key is dangling in " << stmt.ColumnText(0);
+  stmt = Statement();
+  EXPECT_EQ(QueryInt(*db, "SELECT MAX(version) FROM schema_version"), 2);
+}
+
+TEST_F(AtlasStoreTest, HistoryCannotBeRewrittenUnderneath) {
+  SnapshotInfo snapshot;
+  ASSERT_OK(store_->CreateSnapshot("bob", "atlas", "s", &snapshot));
+  auto db = RawDatabase();
+  for (const char* sql : {
+           "UPDATE structure_revisions SET message = 'rewritten'",
+           "DELETE FROM structure_revisions",
+           "UPDATE audit_log SET detail = ''",
+           "DELETE FROM audit_log",
+           "UPDATE snapshots SET name = 'x'",
+           "DELETE FROM snapshot_members",
+           "DELETE FROM snapshots",
+       }) {
+    EXPECT_FALSE(db->Exec(sql).ok()) << sql;
+  }
+  // A revision whose parent is not its predecessor would break the chain.
+  const Status status = db->Exec(
+      "INSERT INTO structure_revisions (structure, number, parent, author, time_us, kind, "
+      "message, content_sha256, geometry_format, size_bytes, material_json, colour_r, colour_g, "
+      "colour_b, group_path) SELECT structure, 3, id, author, 0, 'commit', '', content_sha256, "
+      "geometry_format, size_bytes, material_json, 0, 0, 0, '' FROM structure_revisions");
+  EXPECT_FALSE(status.ok());
+  EXPECT_TRUE(Contains(status.message(), "previous revision")) << status.message();
+  const std::vector<Revision> history = FullHistory();
+  ASSERT_EQ(history.size(), 1u);
+  EXPECT_EQ(history[0].message, "created");
+}
+
+TEST_F(AtlasStoreTest, ACorruptedBlobIsAnErrorNamingItsHash) {
+  Revision revision;
+  ASSERT_OK(store_->GetRevision("carol", kHippocampus, 1, &revision, nullptr));
+  const std::string hash = revision.content_sha256;
+  const fs::path path = dir_.path() / "blobs" / hash.substr(0, 2) / hash.substr(2);
+  {
+    std::ofstream out(path, std::ios::binary | std::ios::trunc);
+    out << "contours v2";  // same length, different bytes
+  }
+  std::string geometry;
+  EXPECT_STATUS(store_->GetRevision("carol", kHippocampus, 1, &revision, &geometry),
+                Status::Code::kIo, hash);
+  EXPECT_TRUE(geometry.empty());
+  // The row itself is still readable without the blob.
+  ASSERT_OK(store_->GetRevision("carol", kHippocampus, 1, &revision, nullptr));
+}
+
+TEST_F(AtlasStoreTest, SweepRemovesOrphanBlobsButNotReferencedOnes) {
+  const LockInfo lock = Lock("bob");
+  ASSERT_OK(Commit("bob", lock.lock_id, 1, "v2"));
+  // What a crash between the blob write and the row insert leaves behind.
+  std::unique_ptr<BlobStore> blobs;
+  ASSERT_OK(BlobStore::Open(dir_.path() / "blobs", &blobs));
+  std::string orphan;
+  ASSERT_OK(blobs->Put("never committed", &orphan));
+  // A commit refused before the write leaves no blob at all.
+  EXPECT_STATUS(Commit("bob", lock.lock_id, 1, "refused geometry"), Status::Code::kAborted,
+                "head is revision 2");
+  bool has = true;
+  ASSERT_OK(blobs->Has(Hash("refused geometry"), &has));
+  EXPECT_FALSE(has);
+
+  BlobSweepReport report;
+  ASSERT_OK(store_->SweepBlobs(&report));
+  EXPECT_EQ(report.removed_blobs, 1);
+  EXPECT_EQ(report.kept_blobs, 2);
+  ASSERT_OK(blobs->Has(orphan, &has));
+  EXPECT_FALSE(has);
+  std::string geometry;
+  Revision revision;
+  for (int number : {1, 2}) {
+    ASSERT_OK(store_->GetRevision("carol", kHippocampus, number, &revision, &geometry));
+  }
+  EXPECT_EQ(geometry, "v2");
+}
+
+// 16 editors race to commit to one structure, 25 attempts each: read the
+// head, try the lock, commit on the head read, release. Whatever the
+// interleaving, each attempt either lands or is refused for a stated reason,
+// and the history is one unbroken chain with one audit row per change.
+TEST_F(AtlasStoreTest, RacingCommitsFormOneChain) {
+  constexpr int kThreads = 16;
+  constexpr int kAttempts = 25;
+  for (int t = 0; t < kThreads; ++t) {
+    std::string token;
+    const std::string name = "editor" + std::to_string(t);
+    ASSERT_OK(store_->CreateUser(name, &token));
+    ASSERT_OK(store_->SetRole("alice", "atlas", name, Role::kEditor));
+  }
+  std::atomic<int> landed{0};
+  std::atomic<int> stale{0};
+  std::atomic<int> locked_out{0};
+  std::atomic<int> unexpected{0};
+  std::mutex mutex;
+  std::set<std::string> landed_geometry;
+  std::vector<std::string> problems;
+  auto report = [&](const std::string& problem) {
+    std::lock_guard guard(mutex);
+    ++unexpected;
+    if (problems.size() < 10) problems.push_back(problem);
+  };
+  std::vector<std::thread> threads;
+  for (int t = 0; t < kThreads; ++t) {
+    threads.emplace_back([&, t] {
+      const std::string user = "editor" + std::to_string(t);
+      for (int i = 0; i < kAttempts; ++i) {
+        StructureInfo info;
+        Status status = store_->GetStructure(user, kHippocampus, &info);
+        if (!status.ok()) return report(status.ToString());
+        const int64_t believed = info.head;
+        std::this_thread::yield();  // let others move the head in between
+        LockInfo lock;
+        status = store_->AcquireLock(user, kHippocampus, 60 * kSecond, &lock);
+        if (status.code() == Status::Code::kFailedPrecondition &&
+            Contains(status.message(), "is locked by 'editor")) {
+          ++locked_out;
+          continue;
+        }
+        if (!status.ok()) {
+          report("acquire: " + status.ToString());
+          continue;
+        }
+        const std::string geometry = user + " attempt " + std::to_string(i);
+        Revision revision;
+        status = Commit(user, lock.lock_id, believed, geometry, &revision);
+        if (status.ok()) {
+          ++landed;
+          std::lock_guard guard(mutex);
+          landed_geometry.insert(Hash(geometry));
+        } else if (status.code() == Status::Code::kAborted) {
+          ++stale;
+          // Under the lock the head cannot move, so the head named is the head.
+          StructureInfo current;
+          const Status read = store_->GetStructure(user, kHippocampus, &current);
+          if (!read.ok() || !Contains(status.message(), "the head is revision " +
+                                                            std::to_string(current.head) + ";")) {
+            report("stale commit named the wrong head: " + status.ToString());
+          }
+        } else {
+          report("commit: " + status.ToString());
+        }
+        if (status.ok() && revision.number != believed + 1) report("landed off its base");
+        status = store_->ReleaseLock(user, lock.lock_id);
+        if (!status.ok()) report("release: " + status.ToString());
+      }
+    });
+  }
+  for (std::thread& thread : threads) thread.join();
+
+  EXPECT_EQ(unexpected.load(), 0) << (problems.empty() ? "" : problems.front());
+  EXPECT_EQ(landed + stale + locked_out + unexpected, kThreads * kAttempts);
+  EXPECT_GT(landed.load(), 0);
+  std::printf("landed %d, stale base %d, locked out %d\n", landed.load(), stale.load(),
+              locked_out.load());
+
+  const std::vector<Revision> history = FullHistory(kHippocampus, 37);
+  ASSERT_EQ(static_cast<int>(history.size()), 1 + landed.load());
+  std::set<std::string> chained_geometry;
+  for (size_t i = 0; i < history.size(); ++i) {
+    const Revision& revision = history[i];
+    EXPECT_EQ(revision.number, static_cast<int64_t>(history.size() - i));
+    EXPECT_EQ(revision.parent, revision.number - 1);
+    if (revision.number > 1) chained_geometry.insert(revision.content_sha256);
+  }
+  EXPECT_EQ(chained_geometry, landed_geometry);
+  EXPECT_EQ(Structure().head, 1 + landed.load());
+
+  const std::map<std::string, int> counts = AuditCounts();
+  const int acquired = landed.load() + stale.load();
+  EXPECT_EQ(counts.at("revision.commit"), landed.load());
+  EXPECT_EQ(counts.at("lock.acquire"), acquired);
+  EXPECT_EQ(counts.at("lock.release"), acquired);
+  EXPECT_EQ(counts.count("lock.takeover"), 0u);
+  auto db = RawDatabase();
+  EXPECT_EQ(QueryInt(*db, "SELECT COUNT(*) FROM locks"), 0);
+}
+
+// A pba.db written before the atlas store existed (schema version 1, jobs
+// only) gains the atlas tables on open and keeps its rows.
+TEST(AtlasStoreUpgrade, AVersionOneDatabaseIsMigratedInPlace) {
+  TempDir dir;
+  {
+    std::unique_ptr<Database> db;
+    ASSERT_OK(Database::Open(dir.path() / "pba.db", &db));
+    ASSERT_OK(db->Exec(
+        "CREATE TABLE schema_version (version INTEGER PRIMARY KEY, description TEXT NOT NULL, "
+        "applied_time_us INTEGER NOT NULL);"
+        "INSERT INTO schema_version VALUES (1, 'jobs, job events and result files', 0);"
+        "CREATE TABLE jobs (number INTEGER PRIMARY KEY AUTOINCREMENT, id TEXT NOT NULL UNIQUE);"
+        "INSERT INTO jobs (id) VALUES ('j0000000001');"));
+  }
+  std::unique_ptr<AtlasStore> store;
+  ASSERT_OK(AtlasStore::Open(dir.path(), &store));
+  std::string token;
+  ASSERT_OK(store->CreateUser("alice", &token));
+  ASSERT_OK(store->CreateProject("alice", "atlas"));
+  store.reset();
+
+  std::unique_ptr<Database> db;
+  ASSERT_OK(Database::Open(dir.path() / "pba.db", &db));
+  int version = 0;
+  ASSERT_OK(ReadSchemaVersion(*db, &version));
+  EXPECT_EQ(version, 2);
+  Statement stmt;
+  ASSERT_OK(db->Prepare("SELECT id FROM jobs", &stmt));
+  bool row = false;
+  ASSERT_OK(stmt.Step(&row));
+  ASSERT_TRUE(row);
+  EXPECT_EQ(stmt.ColumnText(0), "j0000000001");
+  stmt = Statement();
+  ASSERT_OK(db->Prepare("SELECT COUNT(*) FROM projects", &stmt));
+  ASSERT_OK(stmt.Step(&row));
+  EXPECT_EQ(stmt.ColumnInt(0), 1);
+}
+
+}  // namespace
+}  // namespace pba
