@@ -13,10 +13,12 @@ Connection::Connection(const GlobalOptions& options) : options_(options) {
   args.SetInt(GRPC_ARG_MAX_RECONNECT_BACKOFF_MS, 2000);
   channel_ = grpc::CreateCustomChannel(options_.server, grpc::InsecureChannelCredentials(), args);
   jobs_ = v1::JobService::NewStub(channel_);
+  atlas_ = v1::AtlasService::NewStub(channel_);
 }
 
 std::unique_ptr<grpc::ClientContext> Connection::UnaryContext() const {
   auto context = std::make_unique<grpc::ClientContext>();
+  if (!options_.token.empty()) context->AddMetadata("authorization", "Bearer " + options_.token);
   context->set_deadline(std::chrono::system_clock::now() +
                         std::chrono::milliseconds(static_cast<int64_t>(options_.timeout_s * 1000)));
   return context;
@@ -24,11 +26,13 @@ std::unique_ptr<grpc::ClientContext> Connection::UnaryContext() const {
 
 std::unique_ptr<grpc::ClientContext> Connection::StreamContext() const {
   auto context = std::make_unique<grpc::ClientContext>();
+  if (!options_.token.empty()) context->AddMetadata("authorization", "Bearer " + options_.token);
   context->set_wait_for_ready(false);
   return context;
 }
 
-int Connection::Fail(const std::string& what, const grpc::Status& status) const {
+int Connection::Fail(const std::string& what, const grpc::Status& status,
+                     int failed_precondition) const {
   switch (status.error_code()) {
     case grpc::StatusCode::UNAVAILABLE:
       std::fprintf(stderr,
@@ -49,7 +53,20 @@ int Connection::Fail(const std::string& what, const grpc::Status& status) const 
       return kExitInvalid;
     case grpc::StatusCode::FAILED_PRECONDITION:
       std::fprintf(stderr, "pba: %s: %s\n", what.c_str(), status.error_message().c_str());
-      return kExitNotReady;
+      return failed_precondition;
+    case grpc::StatusCode::ABORTED:
+    case grpc::StatusCode::ALREADY_EXISTS:
+      std::fprintf(stderr, "pba: %s: %s\n", what.c_str(), status.error_message().c_str());
+      return kExitConflict;
+    case grpc::StatusCode::UNAUTHENTICATED:
+      std::fprintf(stderr,
+                   "pba: %s: %s. Log in with `pba login --token TOKEN` (an admin creates "
+                   "users with `pba-server admin create-user`), or set PBA_TOKEN.\n",
+                   what.c_str(), status.error_message().c_str());
+      return kExitDenied;
+    case grpc::StatusCode::PERMISSION_DENIED:
+      std::fprintf(stderr, "pba: %s: %s\n", what.c_str(), status.error_message().c_str());
+      return kExitDenied;
     default:
       std::fprintf(stderr, "pba: %s: %s (%d)\n", what.c_str(), status.error_message().c_str(),
                    static_cast<int>(status.error_code()));

@@ -13,6 +13,9 @@ enum ExitCode : int {
   kExitJobFailed = 6,     // the job ended FAILED
   kExitJobCancelled = 7,  // the job ended CANCELLED
   kExitNotReady = 8,      // the job has no result yet (still queued or running)
+  kExitConflict = 9,      // someone else's change came first: stale base or etag, lock held,
+                          // name taken
+  kExitDenied = 10,       // not logged in, or no right to do this in the project
 };
 
 }  // namespace pba::cli

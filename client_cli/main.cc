@@ -5,13 +5,17 @@
 #include <cstdlib>
 #include <string>
 
+#include "commands/atlas_commands.h"
 #include "commands/job_commands.h"
 #include "connection.h"
+#include "credentials.h"
 #include "exit_codes.h"
 
 int main(int argc, char** argv) {
   using namespace pba::cli;
-  CLI::App app{"pba: submit brain-biomechanics jobs to pba-server, follow them, fetch results"};
+  CLI::App app{
+      "pba: submit brain-biomechanics jobs to pba-server, follow them, fetch results; share and "
+      "edit atlas structures"};
   app.set_version_flag("--version", "pba 0.1.0");
   app.require_subcommand(1);
 
@@ -56,6 +60,159 @@ int main(int argc, char** argv) {
   fetch_cmd->add_option("id", fetch.id, "Job id")->required();
   fetch_cmd->add_option("-o,--out", fetch.out_dir, "Directory to write into (created)")->required();
 
+  // --- identity ---
+  LoginArgs login;
+  CLI::App* login_cmd =
+      app.add_subcommand("login", "Check a token with the server and keep it for later commands");
+  login_cmd->add_option("--token", login.token, "The access token");
+  login_cmd
+      ->add_option("--token-file", login.token_file,
+                   "Read the token from a file (the server's DATA/admin.token, say)")
+      ->check(CLI::ExistingFile);
+  CLI::App* logout_cmd = app.add_subcommand("logout", "Forget the token kept for the server");
+  CLI::App* whoami_cmd = app.add_subcommand("whoami", "The user the kept token belongs to");
+
+  // --- projects ---
+  std::string project_env;
+  if (const char* env = std::getenv("PBA_PROJECT"); env != nullptr) project_env = env;
+  const auto add_project = [&project_env](CLI::App* cmd, std::string* project) {
+    *project = project_env;
+    auto* opt = cmd->add_option("-p,--project", *project, "Project (env PBA_PROJECT)");
+    if (project_env.empty()) opt->required();
+  };
+  PageArgs page;
+  const auto add_paging = [&page](CLI::App* cmd) {
+    cmd->add_option("--page-size", page.page_size, "Entries per page")->check(CLI::Range(1, 1000));
+    cmd->add_option("--page-token", page.page_token, "Continue from a previous page");
+    cmd->add_flag("--all", page.all, "Fetch every page");
+  };
+  CLI::App* project = app.add_subcommand("project", "Create and list projects, set roles");
+  project->require_subcommand(1);
+  std::string name, user, role;
+  CLI::App* project_create =
+      project->add_subcommand("create", "Create a project (you are its admin)");
+  project_create->add_option("name", name, "Project name")->required();
+  CLI::App* project_list = project->add_subcommand("list", "Projects you are a member of");
+  add_paging(project_list);
+  std::string project_name;
+  CLI::App* project_role =
+      project->add_subcommand("role", "Give a user a role in a project (admins only)");
+  project_role->add_option("project", project_name, "Project")->required();
+  project_role->add_option("user", user, "User")->required();
+  project_role->add_option("role", role, "viewer, editor or admin")->required();
+
+  // --- atlas ---
+  CLI::App* atlas = app.add_subcommand("atlas", "Share and edit atlas structures");
+  atlas->require_subcommand(1);
+  StructureArgs target;
+  const auto add_target = [&](CLI::App* cmd) {
+    add_project(cmd, &target.project);
+    cmd->add_option("structure", target.structure, "Structure name")->required();
+  };
+  CLI::App* atlas_list = atlas->add_subcommand("list", "The structures of a project");
+  add_project(atlas_list, &target.project);
+  add_paging(atlas_list);
+  CLI::App* atlas_show = atlas->add_subcommand("show", "One structure: head, metadata, lock");
+  add_target(atlas_show);
+  CLI::App* atlas_history =
+      atlas->add_subcommand("history", "A structure's revisions, newest first");
+  add_target(atlas_history);
+  add_paging(atlas_history);
+  CreateStructureArgs create;
+  CLI::App* atlas_create =
+      atlas->add_subcommand("create", "Add a structure from a geometry file (revision 1)");
+  add_project(atlas_create, &create.target.project);
+  atlas_create->add_option("structure", create.target.structure, "Structure name")->required();
+  atlas_create
+      ->add_option("file", create.file, "Geometry: contours .json, .nii(.gz), .stl, .obj, .vtk")
+      ->required()
+      ->check(CLI::ExistingFile);
+  atlas_create->add_option("--format", create.format,
+                           "contours_json, nifti, stl, obj or vtk (default: from the extension)");
+  atlas_create->add_option("--colour", create.colour, "Display colour R,G,B (0..255)");
+  atlas_create->add_option("--group", create.group, "Group path, e.g. cerebrum/basal ganglia");
+  atlas_create->add_option("--material", create.material, "Material parameters: JSON or @FILE");
+  atlas_create->add_option("-m,--message", create.message, "Why");
+  CheckoutArgs checkout;
+  CLI::App* atlas_checkout = atlas->add_subcommand(
+      "checkout", "Lock a structure and download its head for editing (writes FILE.pba-checkout)");
+  add_project(atlas_checkout, &checkout.target.project);
+  atlas_checkout->add_option("structure", checkout.target.structure, "Structure name")->required();
+  atlas_checkout->add_option("-o,--out", checkout.out, "File to write (default NAME.<format>)");
+  atlas_checkout->add_option("--lease", checkout.lease_s, "Lease in seconds (renew with --hold)")
+      ->check(CLI::Range(1, 3600))
+      ->capture_default_str();
+  atlas_checkout->add_flag("--hold", checkout.hold,
+                           "Stay running and keep the lease alive until Ctrl-C, then unlock");
+  CommitArgs commit;
+  CLI::App* atlas_commit =
+      atlas->add_subcommand("commit", "Commit a checked-out file as a new revision, then unlock");
+  atlas_commit->add_option("file", commit.file, "The checked-out file")
+      ->required()
+      ->check(CLI::ExistingFile);
+  atlas_commit->add_option("-m,--message", commit.message, "Why")->required();
+  atlas_commit->add_option("--material", commit.material,
+                           "New material parameters with it: JSON or @FILE");
+  atlas_commit->add_flag("--keep-lock", commit.keep_lock, "Keep the lock to commit again");
+  std::string unlock_what;
+  CLI::App* atlas_unlock = atlas->add_subcommand("unlock", "Release a lock without committing");
+  atlas_unlock->add_option("what", unlock_what, "The checked-out file, or a lock id")->required();
+  std::string reason;
+  CLI::App* atlas_break =
+      atlas->add_subcommand("break", "Break someone's lock (project admins; audited)");
+  add_target(atlas_break);
+  atlas_break->add_option("--reason", reason, "Why (recorded in the audit log)")->required();
+  RevertArgs revert;
+  CLI::App* atlas_revert = atlas->add_subcommand(
+      "revert", "A new revision with the content of an older one (history is kept)");
+  add_project(atlas_revert, &revert.target.project);
+  atlas_revert->add_option("structure", revert.target.structure, "Structure name")->required();
+  atlas_revert->add_option("--to", revert.to, "The revision to go back to")->required();
+  atlas_revert->add_option("-m,--message", revert.message, "Why");
+  MetadataArgs metadata;
+  CLI::App* atlas_set = atlas->add_subcommand(
+      "set", "Change a structure's colour, group or material (no lock needed)");
+  add_project(atlas_set, &metadata.target.project);
+  atlas_set->add_option("structure", metadata.target.structure, "Structure name")->required();
+  atlas_set->add_option("--colour", metadata.colour, "R,G,B (0..255)");
+  atlas_set->add_option("--group", metadata.group, "Group path");
+  atlas_set->add_option("--material", metadata.material, "Material parameters: JSON or @FILE");
+  atlas_set->add_option("-m,--message", metadata.message, "Why");
+  DownloadArgs download;
+  CLI::App* atlas_download =
+      atlas->add_subcommand("download", "Download a revision's geometry (no lock)");
+  add_project(atlas_download, &download.target.project);
+  atlas_download->add_option("structure", download.target.structure, "Structure name")->required();
+  atlas_download->add_option("-r,--revision", download.revision, "Revision (default the head)");
+  atlas_download->add_option("-o,--out", download.out, "File to write (default NAME.<format>)");
+  CLI::App* atlas_snapshot = atlas->add_subcommand("snapshot", "Pin, list and show snapshots");
+  atlas_snapshot->require_subcommand(1);
+  std::string snapshot_project, snapshot_which;
+  CLI::App* snapshot_create =
+      atlas_snapshot->add_subcommand("create", "Pin the head of every structure of a project");
+  add_project(snapshot_create, &snapshot_project);
+  snapshot_create->add_option("--name", name, "A name for it");
+  CLI::App* snapshot_list = atlas_snapshot->add_subcommand("list", "Snapshots, newest first");
+  add_project(snapshot_list, &snapshot_project);
+  add_paging(snapshot_list);
+  CLI::App* snapshot_show = atlas_snapshot->add_subcommand("show", "A snapshot's revisions");
+  add_project(snapshot_show, &snapshot_project);
+  snapshot_show->add_option("snapshot", snapshot_which, "Id or tag")->required();
+  int64_t snapshot_id = 0;
+  std::string tag;
+  CLI::App* atlas_tag = atlas->add_subcommand("tag", "Name a snapshot by a tag");
+  add_project(atlas_tag, &snapshot_project);
+  atlas_tag->add_option("id", snapshot_id, "Snapshot id")->required();
+  atlas_tag->add_option("tag", tag, "Tag (not all digits)")->required();
+  CLI::App* atlas_audit = atlas->add_subcommand("audit", "Who changed what, newest first");
+  add_project(atlas_audit, &snapshot_project);
+  add_paging(atlas_audit);
+  int watch_count = 0;
+  CLI::App* atlas_watch =
+      atlas->add_subcommand("watch", "Print a project's changes as they happen (Ctrl-C stops)");
+  add_project(atlas_watch, &snapshot_project);
+  atlas_watch->add_option("--count", watch_count, "Stop after this many changes");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -63,7 +220,31 @@ int main(int argc, char** argv) {
     return code == 0 ? kExitOk : kExitUsage;
   }
 
+  global.token = FindToken(global.server);
   Connection connection(global);
+  if (*login_cmd) return Login(connection, login);
+  if (*logout_cmd) return Logout(connection);
+  if (*whoami_cmd) return WhoAmI(connection);
+  if (*project_create) return CreateProject(connection, name);
+  if (*project_list) return ListProjects(connection, page);
+  if (*project_role) return SetRole(connection, project_name, user, role);
+  if (*atlas_list) return ListStructures(connection, target.project, page);
+  if (*atlas_show) return ShowStructure(connection, target);
+  if (*atlas_history) return History(connection, target, page);
+  if (*atlas_create) return CreateStructure(connection, create);
+  if (*atlas_checkout) return Checkout(connection, checkout);
+  if (*atlas_commit) return Commit(connection, commit);
+  if (*atlas_unlock) return Unlock(connection, unlock_what);
+  if (*atlas_break) return BreakLock(connection, target, reason);
+  if (*atlas_revert) return Revert(connection, revert);
+  if (*atlas_set) return SetMetadata(connection, metadata);
+  if (*atlas_download) return Download(connection, download);
+  if (*snapshot_create) return CreateSnapshot(connection, snapshot_project, name);
+  if (*snapshot_list) return ListSnapshots(connection, snapshot_project, page);
+  if (*snapshot_show) return ShowSnapshot(connection, snapshot_project, snapshot_which);
+  if (*atlas_tag) return TagSnapshot(connection, snapshot_project, snapshot_id, tag);
+  if (*atlas_audit) return Audit(connection, snapshot_project, page);
+  if (*atlas_watch) return Watch(connection, snapshot_project, watch_count);
   if (*submit_cmd) return SubmitJob(connection, submit);
   if (*list_cmd) return ListJobs(connection, list);
   if (*status_cmd) return ShowJob(connection, id);

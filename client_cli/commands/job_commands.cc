@@ -1,6 +1,5 @@
 #include "commands/job_commands.h"
 
-#include <openssl/evp.h>
 #include <unistd.h>
 
 #include <cstdio>
@@ -11,6 +10,7 @@
 #include "codec/summary_text.h"
 #include "codec/yaml_codec.h"
 #include "exit_codes.h"
+#include "files.h"
 #include "output.h"
 
 namespace pba::cli {
@@ -124,29 +124,6 @@ int ReportEnd(Connection& connection, const std::string& id) {
       std::fprintf(stderr, "Job %s is %s.\n", job.id().c_str(), StateName(job.state()).c_str());
   }
   return ExitForState(job.state());
-}
-
-std::string Sha256File(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return "";
-  EVP_MD_CTX* ctx = EVP_MD_CTX_new();
-  EVP_DigestInit_ex(ctx, EVP_sha256(), nullptr);
-  std::vector<char> buffer(1 << 16);
-  while (in) {
-    in.read(buffer.data(), static_cast<std::streamsize>(buffer.size()));
-    if (in.gcount() > 0) EVP_DigestUpdate(ctx, buffer.data(), static_cast<size_t>(in.gcount()));
-  }
-  unsigned char digest[EVP_MAX_MD_SIZE];
-  unsigned int length = 0;
-  EVP_DigestFinal_ex(ctx, digest, &length);
-  EVP_MD_CTX_free(ctx);
-  std::string hex;
-  char byte[3];
-  for (unsigned int i = 0; i < length; ++i) {
-    std::snprintf(byte, sizeof byte, "%02x", digest[i]);
-    hex += byte;
-  }
-  return hex;
 }
 
 // Downloads one file into dir/name via dir/name.part, resuming a .part left

@@ -1,0 +1,1110 @@
+#include "commands/atlas_commands.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <csignal>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <thread>
+
+#include "codec/yaml_codec.h"
+#include "credentials.h"
+#include "exit_codes.h"
+#include "files.h"
+#include "output.h"
+
+namespace pba::cli {
+namespace fs = std::filesystem;
+namespace {
+
+constexpr int64_t kChunkBytes = 1 << 20;  // the API's largest chunk
+
+// --- small helpers ------------------------------------------------------------
+
+std::string RoleText(v1::Role role) {
+  switch (role) {
+    case v1::VIEWER:
+      return "viewer";
+    case v1::EDITOR:
+      return "editor";
+    case v1::ADMIN:
+      return "admin";
+    default:
+      return "-";
+  }
+}
+
+std::string FormatText(v1::GeometryFormat format) {
+  switch (format) {
+    case v1::CONTOURS_JSON:
+      return "contours_json";
+    case v1::NIFTI:
+      return "nifti";
+    case v1::STL:
+      return "stl";
+    case v1::OBJ:
+      return "obj";
+    case v1::VTK:
+      return "vtk";
+    default:
+      return "-";
+  }
+}
+
+std::string Extension(v1::GeometryFormat format) {
+  switch (format) {
+    case v1::CONTOURS_JSON:
+      return ".json";
+    case v1::NIFTI:
+      return ".nii.gz";
+    case v1::STL:
+      return ".stl";
+    case v1::OBJ:
+      return ".obj";
+    case v1::VTK:
+      return ".vtk";
+    default:
+      return ".bin";
+  }
+}
+
+// The format named (`format`), else the one the file's extension says.
+bool ParseFormat(const std::string& format, const std::string& file, v1::GeometryFormat* out) {
+  std::string name = format;
+  if (name.empty()) {
+    const std::string f = fs::path(file).filename().string();
+    const auto ends = [&f](const std::string& suffix) {
+      return f.size() >= suffix.size() &&
+             f.compare(f.size() - suffix.size(), suffix.size(), suffix) == 0;
+    };
+    if (ends(".json")) name = "contours_json";
+    if (ends(".nii") || ends(".nii.gz")) name = "nifti";
+    if (ends(".stl")) name = "stl";
+    if (ends(".obj")) name = "obj";
+    if (ends(".vtk")) name = "vtk";
+  }
+  static const std::map<std::string, v1::GeometryFormat> kFormats = {
+      {"contours_json", v1::CONTOURS_JSON},
+      {"nifti", v1::NIFTI},
+      {"stl", v1::STL},
+      {"obj", v1::OBJ},
+      {"vtk", v1::VTK}};
+  const auto it = kFormats.find(name);
+  if (it == kFormats.end()) return false;
+  *out = it->second;
+  return true;
+}
+
+bool ParseRoleText(const std::string& text, v1::Role* role) {
+  if (text == "viewer")
+    *role = v1::VIEWER;
+  else if (text == "editor")
+    *role = v1::EDITOR;
+  else if (text == "admin")
+    *role = v1::ADMIN;
+  else
+    return false;
+  return true;
+}
+
+bool ParseColour(const std::string& text, v1::Colour* colour) {
+  int r = 0, g = 0, b = 0;
+  char c1 = 0, c2 = 0;
+  std::istringstream in(text);
+  if (!(in >> r >> c1 >> g >> c2 >> b) || c1 != ',' || c2 != ',' || !in.eof()) return false;
+  for (int v : {r, g, b}) {
+    if (v < 0 || v > 255) return false;
+  }
+  colour->set_r(r);
+  colour->set_g(g);
+  colour->set_b(b);
+  return true;
+}
+
+// Material JSON given inline or as @FILE; false (message printed) on a
+// file that cannot be read.
+bool ReadMaterial(const std::string& arg, std::string* json) {
+  if (arg.empty() || arg[0] != '@') {
+    *json = arg;
+    return true;
+  }
+  std::ifstream in(arg.substr(1));
+  if (!in) {
+    std::fprintf(stderr, "pba: cannot read material file %s\n", arg.substr(1).c_str());
+    return false;
+  }
+  std::stringstream buffer;
+  buffer << in.rdbuf();
+  *json = buffer.str();
+  return true;
+}
+
+std::string ColourText(const v1::Colour& c) {
+  return std::to_string(c.r()) + "," + std::to_string(c.g()) + "," + std::to_string(c.b());
+}
+
+// Fetches every page (with --all) or one; `call` fills a page and returns the
+// next token.
+template <typename Call>
+int Paged(const PageArgs& page, Call call) {
+  std::string token = page.page_token;
+  do {
+    std::string next;
+    if (int code = call(token, &next); code != kExitOk) return code;
+    token = next;
+  } while (page.all && !token.empty());
+  return kExitOk;
+}
+
+void MoreHint(const std::string& next, const std::string& command) {
+  if (!next.empty()) std::printf("More: %s --page-token %s\n", command.c_str(), next.c_str());
+}
+
+void PrintRevisions(const std::vector<v1::Revision>& revisions) {
+  std::vector<std::vector<std::string>> rows = {
+      {"REV", "KIND", "AUTHOR", "TIME (UTC)", "FORMAT", "BYTES", "SHA-256", "MESSAGE"}};
+  for (const v1::Revision& r : revisions) {
+    rows.push_back({std::to_string(r.number()), r.kind(), r.author(), FormatTime(r.time()),
+                    FormatText(r.format()), std::to_string(r.size_bytes()),
+                    r.content_sha256().substr(0, 12), r.message()});
+  }
+  PrintTable(rows);
+}
+
+// --- the checkout file ----------------------------------------------------------
+
+struct CheckoutState {
+  std::string server, project, structure, lock_id;
+  int64_t base_revision = 0;
+  std::string format;
+};
+
+fs::path CheckoutPath(const std::string& file) { return file + ".pba-checkout"; }
+
+bool WriteCheckout(const std::string& file, const CheckoutState& s) {
+  std::ostringstream out;
+  out << "# pba atlas checkout of " << s.project << "/" << s.structure
+      << "; `pba atlas commit` reads it\n"
+      << "server=" << s.server << "\nproject=" << s.project << "\nstructure=" << s.structure
+      << "\nlock_id=" << s.lock_id << "\nbase_revision=" << s.base_revision
+      << "\nformat=" << s.format << "\n";
+  return WriteFileAtomically(CheckoutPath(file), out.str(), 0600);
+}
+
+bool ReadCheckout(const std::string& file, CheckoutState* s) {
+  std::ifstream in(CheckoutPath(file));
+  if (!in) return false;
+  std::map<std::string, std::string> values;
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    const auto eq = line.find('=');
+    if (eq != std::string::npos) values[line.substr(0, eq)] = line.substr(eq + 1);
+  }
+  s->server = values["server"];
+  s->project = values["project"];
+  s->structure = values["structure"];
+  s->lock_id = values["lock_id"];
+  s->format = values["format"];
+  try {
+    s->base_revision = std::stoll(values["base_revision"]);
+  } catch (...) {
+    return false;
+  }
+  return !s->project.empty() && !s->structure.empty() && !s->lock_id.empty();
+}
+
+// --- transfers ------------------------------------------------------------------
+
+// Shows a transfer's progress on a terminal (stderr), nothing otherwise.
+class Progress {
+ public:
+  Progress(std::string what, int64_t total)
+      : what_(std::move(what)), total_(total), shown_(::isatty(STDERR_FILENO) != 0) {}
+  void Update(int64_t done) {
+    if (!shown_ || total_ <= 0) return;
+    std::fprintf(stderr, "\r\033[K%s: %3d %%", what_.c_str(),
+                 static_cast<int>(100.0 * static_cast<double>(done) / total_ + 0.5));
+  }
+  ~Progress() {
+    if (shown_ && total_ > 0) std::fputc('\n', stderr);
+  }
+
+ private:
+  std::string what_;
+  int64_t total_;
+  bool shown_;
+};
+
+// Uploads `file` (BeginUpload, then WriteUpload from where the server says
+// it is, retried up to three times); *upload_id names the complete upload.
+int UploadFile(Connection& connection, const std::string& file, std::string* upload_id) {
+  std::error_code ec;
+  const auto size = static_cast<int64_t>(fs::file_size(file, ec));
+  if (ec) {
+    std::fprintf(stderr, "pba: cannot read %s: %s\n", file.c_str(), ec.message().c_str());
+    return kExitError;
+  }
+  v1::BeginUploadRequest begin;
+  begin.set_size_bytes(size);
+  begin.set_sha256(Sha256File(file));
+  v1::Upload upload;
+  {
+    auto context = connection.UnaryContext();
+    grpc::Status status = connection.atlas().BeginUpload(context.get(), begin, &upload);
+    if (!status.ok()) return connection.Fail("uploading " + file, status, kExitConflict);
+  }
+  Progress progress("uploading " + file, size);
+  std::ifstream in(file, std::ios::binary);
+  std::string buffer(static_cast<size_t>(std::min(kChunkBytes, std::max<int64_t>(size, 1))), '\0');
+  grpc::Status last;
+  for (int attempt = 0; attempt < 3 && upload.received_bytes() < size; ++attempt) {
+    if (attempt > 0) {
+      // Where the server is: the next chunk starts there.
+      v1::GetUploadRequest get;
+      get.set_upload_id(upload.id());
+      auto context = connection.UnaryContext();
+      grpc::Status status = connection.atlas().GetUpload(context.get(), get, &upload);
+      if (!status.ok()) return connection.Fail("resuming the upload of " + file, status);
+    }
+    in.clear();
+    in.seekg(upload.received_bytes());
+    auto context = connection.StreamContext();
+    v1::Upload result;
+    auto writer = connection.atlas().WriteUpload(context.get(), &result);
+    int64_t offset = upload.received_bytes();
+    while (offset < size) {
+      const auto n = static_cast<std::streamsize>(std::min<int64_t>(kChunkBytes, size - offset));
+      in.read(buffer.data(), n);
+      if (in.gcount() != n) {
+        std::fprintf(stderr, "pba: %s changed while it was being uploaded\n", file.c_str());
+        return kExitError;
+      }
+      v1::UploadChunk chunk;
+      chunk.set_upload_id(upload.id());
+      chunk.set_offset(offset);
+      chunk.set_data(buffer.data(), static_cast<size_t>(n));
+      if (!writer->Write(chunk)) break;
+      offset += n;
+      progress.Update(offset);
+    }
+    writer->WritesDone();
+    last = writer->Finish();
+    if (last.ok()) upload = result;
+  }
+  if (upload.received_bytes() < size) {
+    return connection.Fail("uploading " + file,
+                           last.ok() ? grpc::Status(grpc::UNKNOWN, "incomplete") : last);
+  }
+  *upload_id = upload.id();
+  return kExitOk;
+}
+
+// Downloads a revision's geometry into `out` via out.part (resumed if a
+// .part is there), checked against the revision's SHA-256.
+int DownloadRevision(Connection& connection, const v1::Revision& revision, const fs::path& out) {
+  const fs::path part = out.string() + ".part";
+  std::error_code ec;
+  int64_t offset = fs::exists(part) ? static_cast<int64_t>(fs::file_size(part, ec)) : 0;
+  if (ec || offset > revision.size_bytes()) offset = 0;
+  std::ofstream file(part, std::ios::binary | (offset > 0 ? std::ios::app : std::ios::trunc));
+  if (!file) {
+    std::fprintf(stderr, "pba: cannot write %s\n", part.c_str());
+    return kExitError;
+  }
+  v1::DownloadGeometryRequest request;
+  request.set_project(revision.project());
+  request.set_structure(revision.structure());
+  request.set_revision(revision.number());
+  request.set_offset(offset);
+  Progress progress("downloading " + out.string(), revision.size_bytes());
+  auto context = connection.StreamContext();
+  auto reader = connection.atlas().DownloadGeometry(context.get(), request);
+  v1::DataChunk chunk;
+  while (reader->Read(&chunk)) {
+    if (chunk.offset() != offset) {
+      std::fprintf(stderr, "pba: %s: chunk at byte %lld, expected %lld\n", out.c_str(),
+                   static_cast<long long>(chunk.offset()), static_cast<long long>(offset));
+      return kExitError;
+    }
+    file.write(chunk.data().data(), static_cast<std::streamsize>(chunk.data().size()));
+    offset += static_cast<int64_t>(chunk.data().size());
+    progress.Update(offset);
+  }
+  file.close();
+  grpc::Status status = reader->Finish();
+  const std::string what = "downloading " + revision.project() + "/" + revision.structure() +
+                           " revision " + std::to_string(revision.number());
+  if (!status.ok()) return connection.Fail(what, status);
+  if (!file) {
+    std::fprintf(stderr, "pba: writing %s failed (disk full?)\n", part.c_str());
+    return kExitError;
+  }
+  if (Sha256File(part) != revision.content_sha256()) {
+    fs::remove(part, ec);
+    std::fprintf(stderr, "pba: %s arrived damaged (checksum mismatch); run it again\n",
+                 out.c_str());
+    return kExitError;
+  }
+  fs::rename(part, out, ec);
+  if (ec) {
+    std::fprintf(stderr, "pba: cannot move %s into place: %s\n", out.c_str(), ec.message().c_str());
+    return kExitError;
+  }
+  return kExitOk;
+}
+
+int GetHead(Connection& connection, const StructureArgs& target, int64_t number,
+            v1::Revision* revision) {
+  v1::GetRevisionRequest request;
+  request.set_project(target.project);
+  request.set_structure(target.structure);
+  request.set_revision(number);
+  auto context = connection.UnaryContext();
+  grpc::Status status = connection.atlas().GetRevision(context.get(), request, revision);
+  if (!status.ok()) return connection.Fail(target.project + "/" + target.structure, status);
+  return kExitOk;
+}
+
+int ReleaseLockId(Connection& connection, const std::string& lock_id, const std::string& what) {
+  v1::ReleaseLockRequest request;
+  request.set_lock_id(lock_id);
+  v1::ReleaseLockResponse response;
+  auto context = connection.UnaryContext();
+  grpc::Status status = connection.atlas().ReleaseLock(context.get(), request, &response);
+  if (!status.ok()) return connection.Fail("unlocking " + what, status, kExitConflict);
+  return kExitOk;
+}
+
+volatile std::sig_atomic_t g_stop = 0;
+extern "C" void OnStopSignal(int) { g_stop = 1; }
+
+// Renews the lease every third of it until SIGINT or SIGTERM.
+int HoldLock(Connection& connection, const std::string& lock_id, int lease_s,
+             const std::string& what) {
+  std::signal(SIGINT, OnStopSignal);
+  std::signal(SIGTERM, OnStopSignal);
+  const auto period = std::chrono::seconds(std::max(1, lease_s / 3));
+  auto next = std::chrono::steady_clock::now() + period;
+  while (g_stop == 0) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    if (std::chrono::steady_clock::now() < next) continue;
+    v1::RenewLockRequest request;
+    request.set_lock_id(lock_id);
+    request.set_lease_seconds(lease_s);
+    v1::Lock lock;
+    auto context = connection.UnaryContext();
+    grpc::Status status = connection.atlas().RenewLock(context.get(), request, &lock);
+    if (!status.ok()) return connection.Fail("keeping the lock on " + what, status, kExitConflict);
+    next = std::chrono::steady_clock::now() + period;
+  }
+  return kExitOk;
+}
+
+}  // namespace
+
+// --- identity and projects -----------------------------------------------------
+
+int Login(Connection& connection, const LoginArgs& args) {
+  std::string token = args.token;
+  if (!args.token_file.empty()) {
+    std::ifstream in(args.token_file);
+    if (!(in >> token)) {
+      std::fprintf(stderr, "pba: cannot read a token from %s\n", args.token_file.c_str());
+      return kExitError;
+    }
+  }
+  if (token.empty()) {
+    std::fprintf(stderr, "pba: login needs --token TOKEN or --token-file FILE\n");
+    return kExitUsage;
+  }
+  GlobalOptions options = connection.options();
+  options.token = token;
+  Connection with_token(options);
+  v1::User user;
+  auto context = with_token.UnaryContext();
+  grpc::Status status = with_token.atlas().WhoAmI(context.get(), v1::WhoAmIRequest(), &user);
+  if (!status.ok()) return with_token.Fail("logging in to " + options.server, status);
+  std::string error;
+  if (!StoreToken(options.server, token, &error)) {
+    std::fprintf(stderr, "pba: %s\n", error.c_str());
+    return kExitError;
+  }
+  if (connection.options().json) {
+    PrintJson(user);
+  } else {
+    std::printf("Logged in to %s as %s (token kept in %s)\n", options.server.c_str(),
+                user.name().c_str(), CredentialsPath().c_str());
+  }
+  return kExitOk;
+}
+
+int Logout(Connection& connection) {
+  std::string error;
+  const bool had = ForgetToken(connection.options().server, &error);
+  if (!error.empty()) {
+    std::fprintf(stderr, "pba: %s\n", error.c_str());
+    return kExitError;
+  }
+  std::printf(had ? "Logged out of %s\n" : "No token was kept for %s\n",
+              connection.options().server.c_str());
+  return kExitOk;
+}
+
+int WhoAmI(Connection& connection) {
+  v1::User user;
+  auto context = connection.UnaryContext();
+  grpc::Status status = connection.atlas().WhoAmI(context.get(), v1::WhoAmIRequest(), &user);
+  if (!status.ok()) return connection.Fail("who am I", status);
+  if (connection.options().json) {
+    PrintJson(user);
+  } else {
+    std::printf("%s on %s\n", user.name().c_str(), connection.options().server.c_str());
+  }
+  return kExitOk;
+}
+
+int CreateProject(Connection& connection, const std::string& name) {
+  v1::CreateProjectRequest request;
+  request.set_name(name);
+  v1::Project project;
+  auto context = connection.UnaryContext();
+  grpc::Status status = connection.atlas().CreateProject(context.get(), request, &project);
+  if (!status.ok()) return connection.Fail("creating project " + name, status);
+  if (connection.options().json) {
+    PrintJson(project);
+  } else {
+    std::printf("Created project %s; you are its admin\n", project.name().c_str());
+  }
+  return kExitOk;
+}
+
+int ListProjects(Connection& connection, const PageArgs& page) {
+  v1::ListProjectsResponse all;
+  int code = Paged(page, [&](const std::string& token, std::string* next) -> int {
+    v1::ListProjectsRequest request;
+    request.set_page_size(page.page_size);
+    request.set_page_token(token);
+    v1::ListProjectsResponse response;
+    auto context = connection.UnaryContext();
+    grpc::Status status = connection.atlas().ListProjects(context.get(), request, &response);
+    if (!status.ok()) return connection.Fail("listing projects", status);
+    for (auto& p : *response.mutable_projects()) *all.add_projects() = std::move(p);
+    *next = response.next_page_token();
+    all.set_next_page_token(*next);
+    return kExitOk;
+  });
+  if (code != kExitOk) return code;
+  if (connection.options().json) {
+    PrintJson(all);
+    return kExitOk;
+  }
+  if (all.projects().empty()) {
+    std::puts("No projects. Create one with: pba project create NAME");
+    return kExitOk;
+  }
+  std::vector<std::vector<std::string>> rows = {{"PROJECT", "YOUR ROLE", "CREATED (UTC)", "BY"}};
+  for (const auto& p : all.projects()) {
+    rows.push_back({p.name(), RoleText(p.role()), FormatTime(p.create_time()), p.created_by()});
+  }
+  PrintTable(rows);
+  MoreHint(all.next_page_token(), "pba project list");
+  return kExitOk;
+}
+
+int SetRole(Connection& connection, const std::string& project, const std::string& user,
+            const std::string& role) {
+  v1::SetRoleRequest request;
+  v1::Role parsed;
+  if (!ParseRoleText(role, &parsed)) {
+    std::fprintf(stderr, "pba: role must be viewer, editor or admin, not '%s'\n", role.c_str());
+    return kExitUsage;
+  }
+  request.set_project(project);
+  request.set_user(user);
+  request.set_role(parsed);
+  v1::Member member;
+  auto context = connection.UnaryContext();
+  grpc::Status status = connection.atlas().SetRole(context.get(), request, &member);
+  if (!status.ok()) return connection.Fail("setting " + user + "'s role", status, kExitConflict);
+  if (connection.options().json) {
+    PrintJson(member);
+  } else {
+    std::printf("%s is %s in %s\n", member.user().c_str(), RoleText(member.role()).c_str(),
+                member.project().c_str());
+  }
+  return kExitOk;
+}
+
+// --- structures -----------------------------------------------------------------
+
+int ListStructures(Connection& connection, const std::string& project, const PageArgs& page) {
+  v1::ListStructuresResponse all;
+  int code = Paged(page, [&](const std::string& token, std::string* next) -> int {
+    v1::ListStructuresRequest request;
+    request.set_project(project);
+    request.set_page_size(page.page_size);
+    request.set_page_token(token);
+    v1::ListStructuresResponse response;
+    auto context = connection.UnaryContext();
+    grpc::Status status = connection.atlas().ListStructures(context.get(), request, &response);
+    if (!status.ok()) return connection.Fail("listing the structures of " + project, status);
+    for (auto& s : *response.mutable_structures()) *all.add_structures() = std::move(s);
+    *next = response.next_page_token();
+    all.set_next_page_token(*next);
+    return kExitOk;
+  });
+  if (code != kExitOk) return code;
+  if (connection.options().json) {
+    PrintJson(all);
+    return kExitOk;
+  }
+  if (all.structures().empty()) {
+    std::printf("No structures in %s.\n", project.c_str());
+    return kExitOk;
+  }
+  std::vector<std::vector<std::string>> rows = {
+      {"STRUCTURE", "HEAD", "COLOUR", "GROUP", "LOCKED BY", "LEASE ENDS (UTC)"}};
+  for (const auto& s : all.structures()) {
+    rows.push_back({s.name(), std::to_string(s.head()), ColourText(s.metadata().colour()),
+                    s.metadata().group_path().empty() ? "-" : s.metadata().group_path(),
+                    s.has_lock() ? s.lock().holder() : "-",
+                    s.has_lock() ? FormatTime(s.lock().expire_time()) : "-"});
+  }
+  PrintTable(rows);
+  MoreHint(all.next_page_token(), "pba atlas list -p " + project);
+  return kExitOk;
+}
+
+int ShowStructure(Connection& connection, const StructureArgs& target) {
+  v1::GetStructureRequest request;
+  request.set_project(target.project);
+  request.set_structure(target.structure);
+  v1::Structure s;
+  auto context = connection.UnaryContext();
+  grpc::Status status = connection.atlas().GetStructure(context.get(), request, &s);
+  if (!status.ok()) return connection.Fail(target.project + "/" + target.structure, status);
+  if (connection.options().json) {
+    PrintJson(s);
+    return kExitOk;
+  }
+  v1::Revision head;
+  if (int code = GetHead(connection, target, s.head(), &head); code != kExitOk) return code;
+  PrintTable({{"Structure", s.project() + "/" + s.name()},
+              {"Head", std::to_string(s.head()) + " (" + head.kind() + " by " + head.author() +
+                           ", " + FormatTime(head.time()) + " UTC)"},
+              {"Geometry", FormatText(head.format()) + ", " + std::to_string(head.size_bytes()) +
+                               " bytes, sha256 " + head.content_sha256()},
+              {"Colour", ColourText(s.metadata().colour())},
+              {"Group", s.metadata().group_path().empty() ? "-" : s.metadata().group_path()},
+              {"Material", s.metadata().material_json()},
+              {"Metadata etag", s.metadata_etag()},
+              {"Lock", s.has_lock() ? s.lock().holder() + " until " +
+                                          FormatTime(s.lock().expire_time()) + " UTC"
+                                    : "none"}});
+  return kExitOk;
+}
+
+int History(Connection& connection, const StructureArgs& target, const PageArgs& page) {
+  v1::ListRevisionsResponse all;
+  int code = Paged(page, [&](const std::string& token, std::string* next) -> int {
+    v1::ListRevisionsRequest request;
+    request.set_project(target.project);
+    request.set_structure(target.structure);
+    request.set_page_size(page.page_size);
+    request.set_page_token(token);
+    v1::ListRevisionsResponse response;
+    auto context = connection.UnaryContext();
+    grpc::Status status = connection.atlas().ListRevisions(context.get(), request, &response);
+    if (!status.ok()) return connection.Fail(target.project + "/" + target.structure, status);
+    for (auto& r : *response.mutable_revisions()) *all.add_revisions() = std::move(r);
+    *next = response.next_page_token();
+    all.set_next_page_token(*next);
+    return kExitOk;
+  });
+  if (code != kExitOk) return code;
+  if (connection.options().json) {
+    PrintJson(all);
+    return kExitOk;
+  }
+  PrintRevisions({all.revisions().begin(), all.revisions().end()});
+  MoreHint(all.next_page_token(),
+           "pba atlas history -p " + target.project + " '" + target.structure + "'");
+  return kExitOk;
+}
+
+int CreateStructure(Connection& connection, const CreateStructureArgs& args) {
+  v1::CreateStructureRequest request;
+  request.set_project(args.target.project);
+  request.set_name(args.target.structure);
+  v1::GeometryFormat format;
+  if (!ParseFormat(args.format, args.file, &format)) {
+    std::fprintf(stderr,
+                 "pba: cannot tell the geometry format of %s: name it with --format "
+                 "(contours_json, nifti, stl, obj or vtk)\n",
+                 args.file.c_str());
+    return kExitUsage;
+  }
+  request.set_format(format);
+  if (!args.colour.empty() &&
+      !ParseColour(args.colour, request.mutable_metadata()->mutable_colour())) {
+    std::fprintf(stderr, "pba: --colour must be R,G,B with components 0..255, not '%s'\n",
+                 args.colour.c_str());
+    return kExitUsage;
+  }
+  request.mutable_metadata()->set_group_path(args.group);
+  std::string material = "{}";
+  if (!args.material.empty() && !ReadMaterial(args.material, &material)) return kExitError;
+  request.mutable_metadata()->set_material_json(material);
+  request.set_message(args.message);
+  std::string upload_id;
+  if (int code = UploadFile(connection, args.file, &upload_id); code != kExitOk) return code;
+  request.set_upload_id(upload_id);
+  v1::Revision revision;
+  auto context = connection.UnaryContext();
+  grpc::Status status = connection.atlas().CreateStructure(context.get(), request, &revision);
+  if (!status.ok()) {
+    return connection.Fail("creating " + args.target.project + "/" + args.target.structure, status,
+                           kExitConflict);
+  }
+  if (connection.options().json) {
+    PrintJson(revision);
+  } else {
+    std::printf("Created %s/%s, revision 1 (%lld bytes of %s)\n", revision.project().c_str(),
+                revision.structure().c_str(), static_cast<long long>(revision.size_bytes()),
+                FormatText(revision.format()).c_str());
+  }
+  return kExitOk;
+}
+
+int Checkout(Connection& connection, const CheckoutArgs& args) {
+  const std::string what = args.target.project + "/" + args.target.structure;
+  v1::AcquireLockRequest request;
+  request.set_project(args.target.project);
+  request.set_structure(args.target.structure);
+  request.set_lease_seconds(args.lease_s);
+  v1::Lock lock;
+  {
+    auto context = connection.UnaryContext();
+    grpc::Status status = connection.atlas().AcquireLock(context.get(), request, &lock);
+    if (!status.ok()) return connection.Fail("locking " + what, status, kExitConflict);
+  }
+  // From here on a failure gives the lock back: nothing is left held.
+  const auto give_back = [&](int code) {
+    ReleaseLockId(connection, lock.lock_id(), what);
+    return code;
+  };
+  v1::Revision head;
+  if (int code = GetHead(connection, args.target, 0, &head); code != kExitOk)
+    return give_back(code);
+  const std::string out =
+      args.out.empty() ? args.target.structure + Extension(head.format()) : args.out;
+  if (int code = DownloadRevision(connection, head, out); code != kExitOk) return give_back(code);
+  CheckoutState state{connection.options().server,
+                      args.target.project,
+                      args.target.structure,
+                      lock.lock_id(),
+                      head.number(),
+                      FormatText(head.format())};
+  if (!WriteCheckout(out, state)) {
+    std::fprintf(stderr, "pba: cannot write %s\n", CheckoutPath(out).c_str());
+    return give_back(kExitError);
+  }
+  if (connection.options().json) {
+    PrintJson(lock);
+  } else {
+    std::printf(
+        "Locked %s until %s UTC%s; revision %lld is in %s\n", what.c_str(),
+        FormatTime(lock.expire_time()).c_str(),
+        lock.took_over_from().empty()
+            ? ""
+            : (" (taken over from " + lock.took_over_from() + ", whose lease had lapsed)").c_str(),
+        static_cast<long long>(head.number()), out.c_str());
+    std::printf("Edit it, then: pba atlas commit %s -m \"...\"\n", out.c_str());
+  }
+  if (!args.hold) return kExitOk;
+  std::fflush(stdout);
+  if (!connection.options().json) {
+    std::printf("Keeping the lock alive until Ctrl-C (then it is released)...\n");
+    std::fflush(stdout);
+  }
+  const int held = HoldLock(connection, lock.lock_id(), args.lease_s, what);
+  if (held != kExitOk) return held;
+  // A commit made meanwhile may already have released it and removed the
+  // checkout file; releasing again is then refused, which is fine.
+  if (fs::exists(CheckoutPath(out))) {
+    const int code = ReleaseLockId(connection, lock.lock_id(), what);
+    std::error_code ec;
+    fs::remove(CheckoutPath(out), ec);
+    if (code != kExitOk) return code;
+    std::printf("Released the lock on %s\n", what.c_str());
+  }
+  return kExitOk;
+}
+
+int Commit(Connection& connection, const CommitArgs& args) {
+  CheckoutState state;
+  if (!ReadCheckout(args.file, &state)) {
+    std::fprintf(stderr,
+                 "pba: %s is not a checkout (no readable %s): check the structure out first with "
+                 "`pba atlas checkout -p PROJECT NAME -o %s`\n",
+                 args.file.c_str(), CheckoutPath(args.file).c_str(), args.file.c_str());
+    return kExitUsage;
+  }
+  if (!state.server.empty() && state.server != connection.options().server) {
+    std::fprintf(stderr, "pba: %s was checked out from %s, not %s; pass --server %s\n",
+                 args.file.c_str(), state.server.c_str(), connection.options().server.c_str(),
+                 state.server.c_str());
+    return kExitUsage;
+  }
+  const std::string what = state.project + "/" + state.structure;
+  v1::CommitStructureRequest request;
+  request.set_project(state.project);
+  request.set_structure(state.structure);
+  request.set_lock_id(state.lock_id);
+  request.set_base_revision(state.base_revision);
+  v1::GeometryFormat format;
+  if (!ParseFormat(state.format, args.file, &format)) {
+    std::fprintf(stderr, "pba: %s names no known format\n", CheckoutPath(args.file).c_str());
+    return kExitError;
+  }
+  request.set_format(format);
+  request.set_message(args.message);
+  if (!args.material.empty()) {
+    std::string material;
+    if (!ReadMaterial(args.material, &material)) return kExitError;
+    request.set_material_json(material);
+  }
+  std::string upload_id;
+  if (int code = UploadFile(connection, args.file, &upload_id); code != kExitOk) return code;
+  request.set_upload_id(upload_id);
+  v1::Revision revision;
+  {
+    auto context = connection.UnaryContext();
+    grpc::Status status = connection.atlas().CommitStructure(context.get(), request, &revision);
+    if (!status.ok()) return connection.Fail("committing " + what, status, kExitConflict);
+  }
+  if (args.keep_lock) {
+    state.base_revision = revision.number();
+    WriteCheckout(args.file, state);
+  } else {
+    if (int code = ReleaseLockId(connection, state.lock_id, what); code != kExitOk) return code;
+    std::error_code ec;
+    fs::remove(CheckoutPath(args.file), ec);
+  }
+  if (connection.options().json) {
+    PrintJson(revision);
+  } else {
+    std::printf("Committed %s revision %lld%s\n", what.c_str(),
+                static_cast<long long>(revision.number()),
+                args.keep_lock ? " (still locked: commit again, or `pba atlas unlock FILE`)"
+                               : "; unlocked");
+  }
+  return kExitOk;
+}
+
+int Unlock(Connection& connection, const std::string& what) {
+  CheckoutState state;
+  const bool file = ReadCheckout(what, &state);
+  const std::string lock_id = file ? state.lock_id : what;
+  const std::string name = file ? state.project + "/" + state.structure : "lock " + what;
+  if (int code = ReleaseLockId(connection, lock_id, name); code != kExitOk) return code;
+  if (file) {
+    std::error_code ec;
+    fs::remove(CheckoutPath(what), ec);
+  }
+  if (!connection.options().json) std::printf("Released the lock on %s\n", name.c_str());
+  return kExitOk;
+}
+
+int BreakLock(Connection& connection, const StructureArgs& target, const std::string& reason) {
+  v1::BreakLockRequest request;
+  request.set_project(target.project);
+  request.set_structure(target.structure);
+  request.set_reason(reason);
+  v1::BreakLockResponse response;
+  auto context = connection.UnaryContext();
+  grpc::Status status = connection.atlas().BreakLock(context.get(), request, &response);
+  const std::string what = target.project + "/" + target.structure;
+  if (!status.ok()) return connection.Fail("breaking the lock on " + what, status, kExitConflict);
+  if (connection.options().json) {
+    PrintJson(response);
+  } else {
+    std::printf("Broke %s's lock on %s (audited)\n", response.holder().c_str(), what.c_str());
+  }
+  return kExitOk;
+}
+
+int Revert(Connection& connection, const RevertArgs& args) {
+  const std::string what = args.target.project + "/" + args.target.structure;
+  v1::AcquireLockRequest lock_request;
+  lock_request.set_project(args.target.project);
+  lock_request.set_structure(args.target.structure);
+  lock_request.set_lease_seconds(60);
+  v1::Lock lock;
+  {
+    auto context = connection.UnaryContext();
+    grpc::Status status = connection.atlas().AcquireLock(context.get(), lock_request, &lock);
+    if (!status.ok()) return connection.Fail("locking " + what, status, kExitConflict);
+  }
+  v1::Revision head;
+  int code = GetHead(connection, args.target, 0, &head);
+  v1::Revision revision;
+  if (code == kExitOk) {
+    v1::RevertStructureRequest request;
+    request.set_project(args.target.project);
+    request.set_structure(args.target.structure);
+    request.set_lock_id(lock.lock_id());
+    request.set_base_revision(head.number());
+    request.set_to_revision(args.to);
+    request.set_message(args.message);
+    auto context = connection.UnaryContext();
+    grpc::Status status = connection.atlas().RevertStructure(context.get(), request, &revision);
+    if (!status.ok()) code = connection.Fail("reverting " + what, status, kExitConflict);
+  }
+  const int released = ReleaseLockId(connection, lock.lock_id(), what);
+  if (code != kExitOk) return code;
+  if (released != kExitOk) return released;
+  if (connection.options().json) {
+    PrintJson(revision);
+  } else {
+    std::printf("Reverted %s to revision %lld: new revision %lld\n", what.c_str(),
+                static_cast<long long>(args.to), static_cast<long long>(revision.number()));
+  }
+  return kExitOk;
+}
+
+int SetMetadata(Connection& connection, const MetadataArgs& args) {
+  const std::string what = args.target.project + "/" + args.target.structure;
+  v1::UpdateMetadataRequest request;
+  request.set_project(args.target.project);
+  request.set_structure(args.target.structure);
+  request.set_message(args.message);
+  if (args.colour && !ParseColour(*args.colour, request.mutable_colour())) {
+    std::fprintf(stderr, "pba: --colour must be R,G,B with components 0..255, not '%s'\n",
+                 args.colour->c_str());
+    return kExitUsage;
+  }
+  if (args.group) request.set_group_path(*args.group);
+  if (args.material) {
+    std::string material;
+    if (!ReadMaterial(*args.material, &material)) return kExitError;
+    request.set_material_json(material);
+  }
+  if (!args.colour && !args.group && !args.material) {
+    std::fprintf(stderr, "pba: nothing to change: give --colour, --group or --material\n");
+    return kExitUsage;
+  }
+  // The etag of what this command read: a change landing in between is
+  // refused (exit 9), not overwritten.
+  v1::GetStructureRequest get;
+  get.set_project(args.target.project);
+  get.set_structure(args.target.structure);
+  v1::Structure current;
+  {
+    auto context = connection.UnaryContext();
+    grpc::Status status = connection.atlas().GetStructure(context.get(), get, &current);
+    if (!status.ok()) return connection.Fail(what, status);
+  }
+  request.set_etag(current.metadata_etag());
+  v1::UpdateMetadataResponse response;
+  auto context = connection.UnaryContext();
+  grpc::Status status = connection.atlas().UpdateMetadata(context.get(), request, &response);
+  if (!status.ok()) return connection.Fail("changing " + what, status, kExitConflict);
+  if (connection.options().json) {
+    PrintJson(response);
+  } else {
+    std::printf("Changed %s: revision %lld\n", what.c_str(),
+                static_cast<long long>(response.revision().number()));
+  }
+  return kExitOk;
+}
+
+int Download(Connection& connection, const DownloadArgs& args) {
+  v1::Revision revision;
+  if (int code = GetHead(connection, args.target, args.revision, &revision); code != kExitOk)
+    return code;
+  const std::string out =
+      args.out.empty() ? args.target.structure + Extension(revision.format()) : args.out;
+  if (int code = DownloadRevision(connection, revision, out); code != kExitOk) return code;
+  if (connection.options().json) {
+    PrintJson(revision);
+  } else {
+    std::printf("Wrote %s/%s revision %lld to %s (%lld bytes)\n", revision.project().c_str(),
+                revision.structure().c_str(), static_cast<long long>(revision.number()),
+                out.c_str(), static_cast<long long>(revision.size_bytes()));
+  }
+  return kExitOk;
+}
+
+// --- snapshots, audit, watch -------------------------------------------------------
+
+int CreateSnapshot(Connection& connection, const std::string& project, const std::string& name) {
+  v1::CreateSnapshotRequest request;
+  request.set_project(project);
+  request.set_name(name);
+  v1::Snapshot snapshot;
+  auto context = connection.UnaryContext();
+  grpc::Status status = connection.atlas().CreateSnapshot(context.get(), request, &snapshot);
+  if (!status.ok()) return connection.Fail("snapshotting " + project, status);
+  if (connection.options().json) {
+    PrintJson(snapshot);
+  } else {
+    std::printf(
+        "Snapshot %lld of %s pins %d structures; tag it with: pba atlas tag -p %s %lld TAG\n",
+        static_cast<long long>(snapshot.id()), project.c_str(), snapshot.members_size(),
+        project.c_str(), static_cast<long long>(snapshot.id()));
+  }
+  return kExitOk;
+}
+
+int TagSnapshot(Connection& connection, const std::string& project, int64_t id,
+                const std::string& tag) {
+  v1::TagSnapshotRequest request;
+  request.set_project(project);
+  request.set_snapshot_id(id);
+  request.set_tag(tag);
+  v1::Snapshot snapshot;
+  auto context = connection.UnaryContext();
+  grpc::Status status = connection.atlas().TagSnapshot(context.get(), request, &snapshot);
+  if (!status.ok()) return connection.Fail("tagging snapshot " + std::to_string(id), status);
+  if (connection.options().json) {
+    PrintJson(snapshot);
+  } else {
+    std::printf("Snapshot %lld of %s is tagged %s\n", static_cast<long long>(id), project.c_str(),
+                tag.c_str());
+  }
+  return kExitOk;
+}
+
+int ShowSnapshot(Connection& connection, const std::string& project, const std::string& which) {
+  v1::GetSnapshotRequest request;
+  request.set_project(project);
+  request.set_snapshot(which);
+  v1::Snapshot s;
+  auto context = connection.UnaryContext();
+  grpc::Status status = connection.atlas().GetSnapshot(context.get(), request, &s);
+  if (!status.ok()) return connection.Fail("snapshot " + which + " of " + project, status);
+  if (connection.options().json) {
+    PrintJson(s);
+    return kExitOk;
+  }
+  std::string tags;
+  for (const auto& t : s.tags()) tags += (tags.empty() ? "" : ", ") + t;
+  std::printf("Snapshot %lld of %s: %s, by %s at %s UTC; tags: %s\n",
+              static_cast<long long>(s.id()), s.project().c_str(),
+              s.name().empty() ? "(unnamed)" : s.name().c_str(), s.author().c_str(),
+              FormatTime(s.create_time()).c_str(), tags.empty() ? "none" : tags.c_str());
+  std::vector<std::vector<std::string>> rows = {{"STRUCTURE", "REVISION"}};
+  for (const auto& m : s.members()) rows.push_back({m.structure(), std::to_string(m.revision())});
+  PrintTable(rows);
+  return kExitOk;
+}
+
+int ListSnapshots(Connection& connection, const std::string& project, const PageArgs& page) {
+  v1::ListSnapshotsResponse all;
+  int code = Paged(page, [&](const std::string& token, std::string* next) -> int {
+    v1::ListSnapshotsRequest request;
+    request.set_project(project);
+    request.set_page_size(page.page_size);
+    request.set_page_token(token);
+    v1::ListSnapshotsResponse response;
+    auto context = connection.UnaryContext();
+    grpc::Status status = connection.atlas().ListSnapshots(context.get(), request, &response);
+    if (!status.ok()) return connection.Fail("listing the snapshots of " + project, status);
+    for (auto& s : *response.mutable_snapshots()) *all.add_snapshots() = std::move(s);
+    *next = response.next_page_token();
+    all.set_next_page_token(*next);
+    return kExitOk;
+  });
+  if (code != kExitOk) return code;
+  if (connection.options().json) {
+    PrintJson(all);
+    return kExitOk;
+  }
+  std::vector<std::vector<std::string>> rows = {{"ID", "NAME", "TAGS", "AUTHOR", "CREATED (UTC)"}};
+  for (const auto& s : all.snapshots()) {
+    std::string tags;
+    for (const auto& t : s.tags()) tags += (tags.empty() ? "" : ",") + t;
+    rows.push_back({std::to_string(s.id()), s.name(), tags.empty() ? "-" : tags, s.author(),
+                    FormatTime(s.create_time())});
+  }
+  PrintTable(rows);
+  MoreHint(all.next_page_token(), "pba atlas snapshots -p " + project);
+  return kExitOk;
+}
+
+int Audit(Connection& connection, const std::string& project, const PageArgs& page) {
+  v1::ListAuditResponse all;
+  int code = Paged(page, [&](const std::string& token, std::string* next) -> int {
+    v1::ListAuditRequest request;
+    request.set_project(project);
+    request.set_page_size(page.page_size);
+    request.set_page_token(token);
+    v1::ListAuditResponse response;
+    auto context = connection.UnaryContext();
+    grpc::Status status = connection.atlas().ListAudit(context.get(), request, &response);
+    if (!status.ok()) return connection.Fail("the audit log of " + project, status);
+    for (auto& e : *response.mutable_entries()) *all.add_entries() = std::move(e);
+    *next = response.next_page_token();
+    all.set_next_page_token(*next);
+    return kExitOk;
+  });
+  if (code != kExitOk) return code;
+  if (connection.options().json) {
+    PrintJson(all);
+    return kExitOk;
+  }
+  std::vector<std::vector<std::string>> rows = {
+      {"SEQ", "TIME (UTC)", "USER", "ACTION", "TARGET", "REV", "DETAIL"}};
+  for (const auto& e : all.entries()) {
+    rows.push_back({std::to_string(e.sequence()), FormatTime(e.time()), e.user(), e.action(),
+                    e.target(), e.revision() > 0 ? std::to_string(e.revision()) : "-", e.detail()});
+  }
+  PrintTable(rows);
+  MoreHint(all.next_page_token(), "pba atlas audit -p " + project);
+  return kExitOk;
+}
+
+int Watch(Connection& connection, const std::string& project, int count) {
+  v1::WatchRequest request;
+  request.set_project(project);
+  auto context = connection.StreamContext();
+  auto reader = connection.atlas().Watch(context.get(), request);
+  v1::AtlasEvent event;
+  int seen = 0;
+  while (reader->Read(&event)) {
+    if (connection.options().json) {
+      std::puts(codec::ToJsonLine(event).c_str());
+    } else if (event.kind() == v1::AtlasEvent::READY) {
+      std::printf("Watching %s (Ctrl-C to stop)\n", project.c_str());
+    } else {
+      std::string kind = v1::AtlasEvent::Kind_Name(event.kind());
+      std::transform(kind.begin(), kind.end(), kind.begin(),
+                     [](unsigned char c) { return c == '_' ? ' ' : std::tolower(c); });
+      std::string target = event.structure();
+      if (event.revision() > 0) target += " r" + std::to_string(event.revision());
+      if (event.snapshot() > 0) target += "snapshot " + std::to_string(event.snapshot());
+      std::printf("%s  %-10s %-18s %s%s%s\n", FormatTime(event.time()).c_str(),
+                  event.user().c_str(), kind.c_str(), target.c_str(),
+                  event.detail().empty() ? "" : ": ", event.detail().c_str());
+    }
+    std::fflush(stdout);
+    if (event.kind() != v1::AtlasEvent::READY && count > 0 && ++seen >= count) {
+      context->TryCancel();
+      break;
+    }
+  }
+  grpc::Status status = reader->Finish();
+  if (!status.ok() && status.error_code() != grpc::StatusCode::CANCELLED) {
+    return connection.Fail("watching " + project, status);
+  }
+  return kExitOk;
+}
+
+}  // namespace pba::cli

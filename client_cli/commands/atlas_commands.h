@@ -1,0 +1,113 @@
+// The `pba login`, `pba project ...` and `pba atlas ...` commands: the shared
+// atlas repository (pba.v1.AtlasService). Each returns the process exit code
+// (exit_codes.h) and prints human text, or JSON with --json.
+//
+// Editing a structure:
+//   pba atlas checkout -p P NAME [-o FILE] [--hold]   lock it, download its head
+//   (edit FILE)
+//   pba atlas commit FILE -m "why"                     upload, commit, unlock
+// checkout writes FILE.pba-checkout beside FILE (server, project, structure,
+// lock id, base revision, format); commit reads it, so the commit is made on
+// the revision that was checked out and is refused (exit 9, head named) if
+// someone else's landed first. --hold keeps the lease alive until Ctrl-C,
+// then unlocks.
+#pragma once
+
+#include <optional>
+#include <string>
+
+#include "connection.h"
+
+namespace pba::cli {
+
+struct PageArgs {
+  int page_size = 50;
+  std::string page_token;
+  bool all = false;
+};
+
+struct LoginArgs {
+  std::string token;
+  std::string token_file;  // e.g. the server's DATA/admin.token
+};
+
+struct StructureArgs {
+  std::string project;
+  std::string structure;
+};
+
+struct CreateStructureArgs {
+  StructureArgs target;
+  std::string file;
+  std::string format;  // contours_json, nifti, stl, obj, vtk; default from the extension
+  std::string colour;  // "R,G,B"
+  std::string group;
+  std::string material;  // JSON, or @FILE
+  std::string message;
+};
+
+struct CheckoutArgs {
+  StructureArgs target;
+  std::string out;  // default NAME.<extension of its format>
+  int lease_s = 300;
+  bool hold = false;
+};
+
+struct CommitArgs {
+  std::string file;
+  std::string message;
+  std::string material;  // JSON or @FILE; empty keeps the head's
+  bool keep_lock = false;
+};
+
+struct RevertArgs {
+  StructureArgs target;
+  int64_t to = 0;
+  std::string message;
+};
+
+struct MetadataArgs {
+  StructureArgs target;
+  std::optional<std::string> colour, group, material;
+  std::string message;
+};
+
+struct DownloadArgs {
+  StructureArgs target;
+  int64_t revision = 0;  // 0: head
+  std::string out;
+};
+
+int Login(Connection& connection, const LoginArgs& args);
+int Logout(Connection& connection);
+int WhoAmI(Connection& connection);
+
+int CreateProject(Connection& connection, const std::string& name);
+int ListProjects(Connection& connection, const PageArgs& page);
+int SetRole(Connection& connection, const std::string& project, const std::string& user,
+            const std::string& role);
+
+int ListStructures(Connection& connection, const std::string& project, const PageArgs& page);
+int ShowStructure(Connection& connection, const StructureArgs& target);
+int History(Connection& connection, const StructureArgs& target, const PageArgs& page);
+int CreateStructure(Connection& connection, const CreateStructureArgs& args);
+int Checkout(Connection& connection, const CheckoutArgs& args);
+int Commit(Connection& connection, const CommitArgs& args);
+// `what` is a checked-out file (its .pba-checkout names the lock) or a lock id.
+int Unlock(Connection& connection, const std::string& what);
+int BreakLock(Connection& connection, const StructureArgs& target, const std::string& reason);
+int Revert(Connection& connection, const RevertArgs& args);
+int SetMetadata(Connection& connection, const MetadataArgs& args);
+int Download(Connection& connection, const DownloadArgs& args);
+
+int CreateSnapshot(Connection& connection, const std::string& project, const std::string& name);
+int TagSnapshot(Connection& connection, const std::string& project, int64_t id,
+                const std::string& tag);
+int ShowSnapshot(Connection& connection, const std::string& project, const std::string& snapshot);
+int ListSnapshots(Connection& connection, const std::string& project, const PageArgs& page);
+int Audit(Connection& connection, const std::string& project, const PageArgs& page);
+// Prints the project's events until interrupted, or after `count` events
+// (0: no limit) not counting the READY one.
+int Watch(Connection& connection, const std::string& project, int count);
+
+}  // namespace pba::cli
