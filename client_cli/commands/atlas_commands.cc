@@ -148,16 +148,25 @@ std::string ColourText(const v1::Colour& c) {
   return std::to_string(c.r()) + "," + std::to_string(c.g()) + "," + std::to_string(c.b());
 }
 
-// Fetches every page (with --all) or one; `call` fills a page and returns the
-// next token.
-template <typename Call>
-int Paged(const PageArgs& page, Call call) {
+// Fetches one page of a list RPC, or with --all every page, into *all.
+template <typename Request, typename Response, typename Item>
+int FetchPages(Connection& connection, const PageArgs& page, Request request,
+               grpc::Status (v1::AtlasService::Stub::*rpc)(grpc::ClientContext*, const Request&,
+                                                           Response*),
+               google::protobuf::RepeatedPtrField<Item>* (Response::*items)(),
+               const std::string& what, Response* all) {
+  request.set_page_size(page.page_size);
   std::string token = page.page_token;
   do {
-    std::string next;
-    if (int code = call(token, &next); code != kExitOk) return code;
-    token = next;
+    request.set_page_token(token);
+    Response response;
+    auto context = connection.UnaryContext();
+    grpc::Status status = (connection.atlas().*rpc)(context.get(), request, &response);
+    if (!status.ok()) return connection.Fail(what, status);
+    for (Item& item : *(response.*items)()) *(all->*items)()->Add() = std::move(item);
+    token = response.next_page_token();
   } while (page.all && !token.empty());
+  all->set_next_page_token(token);
   return kExitOk;
 }
 
@@ -486,19 +495,9 @@ int CreateProject(Connection& connection, const std::string& name) {
 
 int ListProjects(Connection& connection, const PageArgs& page) {
   v1::ListProjectsResponse all;
-  int code = Paged(page, [&](const std::string& token, std::string* next) -> int {
-    v1::ListProjectsRequest request;
-    request.set_page_size(page.page_size);
-    request.set_page_token(token);
-    v1::ListProjectsResponse response;
-    auto context = connection.UnaryContext();
-    grpc::Status status = connection.atlas().ListProjects(context.get(), request, &response);
-    if (!status.ok()) return connection.Fail("listing projects", status);
-    for (auto& p : *response.mutable_projects()) *all.add_projects() = std::move(p);
-    *next = response.next_page_token();
-    all.set_next_page_token(*next);
-    return kExitOk;
-  });
+  v1::ListProjectsRequest request;
+  int code = FetchPages(connection, page, request, &v1::AtlasService::Stub::ListProjects,
+                        &v1::ListProjectsResponse::mutable_projects, "listing projects", &all);
   if (code != kExitOk) return code;
   if (connection.options().json) {
     PrintJson(all);
@@ -545,20 +544,11 @@ int SetRole(Connection& connection, const std::string& project, const std::strin
 
 int ListStructures(Connection& connection, const std::string& project, const PageArgs& page) {
   v1::ListStructuresResponse all;
-  int code = Paged(page, [&](const std::string& token, std::string* next) -> int {
-    v1::ListStructuresRequest request;
-    request.set_project(project);
-    request.set_page_size(page.page_size);
-    request.set_page_token(token);
-    v1::ListStructuresResponse response;
-    auto context = connection.UnaryContext();
-    grpc::Status status = connection.atlas().ListStructures(context.get(), request, &response);
-    if (!status.ok()) return connection.Fail("listing the structures of " + project, status);
-    for (auto& s : *response.mutable_structures()) *all.add_structures() = std::move(s);
-    *next = response.next_page_token();
-    all.set_next_page_token(*next);
-    return kExitOk;
-  });
+  v1::ListStructuresRequest request;
+  request.set_project(project);
+  int code = FetchPages(connection, page, request, &v1::AtlasService::Stub::ListStructures,
+                        &v1::ListStructuresResponse::mutable_structures,
+                        "listing the structures of " + project, &all);
   if (code != kExitOk) return code;
   if (connection.options().json) {
     PrintJson(all);
@@ -612,21 +602,12 @@ int ShowStructure(Connection& connection, const StructureArgs& target) {
 
 int History(Connection& connection, const StructureArgs& target, const PageArgs& page) {
   v1::ListRevisionsResponse all;
-  int code = Paged(page, [&](const std::string& token, std::string* next) -> int {
-    v1::ListRevisionsRequest request;
-    request.set_project(target.project);
-    request.set_structure(target.structure);
-    request.set_page_size(page.page_size);
-    request.set_page_token(token);
-    v1::ListRevisionsResponse response;
-    auto context = connection.UnaryContext();
-    grpc::Status status = connection.atlas().ListRevisions(context.get(), request, &response);
-    if (!status.ok()) return connection.Fail(target.project + "/" + target.structure, status);
-    for (auto& r : *response.mutable_revisions()) *all.add_revisions() = std::move(r);
-    *next = response.next_page_token();
-    all.set_next_page_token(*next);
-    return kExitOk;
-  });
+  v1::ListRevisionsRequest request;
+  request.set_project(target.project);
+  request.set_structure(target.structure);
+  int code = FetchPages(connection, page, request, &v1::AtlasService::Stub::ListRevisions,
+                        &v1::ListRevisionsResponse::mutable_revisions,
+                        target.project + "/" + target.structure, &all);
   if (code != kExitOk) return code;
   if (connection.options().json) {
     PrintJson(all);
@@ -1008,20 +989,11 @@ int ShowSnapshot(Connection& connection, const std::string& project, const std::
 
 int ListSnapshots(Connection& connection, const std::string& project, const PageArgs& page) {
   v1::ListSnapshotsResponse all;
-  int code = Paged(page, [&](const std::string& token, std::string* next) -> int {
-    v1::ListSnapshotsRequest request;
-    request.set_project(project);
-    request.set_page_size(page.page_size);
-    request.set_page_token(token);
-    v1::ListSnapshotsResponse response;
-    auto context = connection.UnaryContext();
-    grpc::Status status = connection.atlas().ListSnapshots(context.get(), request, &response);
-    if (!status.ok()) return connection.Fail("listing the snapshots of " + project, status);
-    for (auto& s : *response.mutable_snapshots()) *all.add_snapshots() = std::move(s);
-    *next = response.next_page_token();
-    all.set_next_page_token(*next);
-    return kExitOk;
-  });
+  v1::ListSnapshotsRequest request;
+  request.set_project(project);
+  int code = FetchPages(connection, page, request, &v1::AtlasService::Stub::ListSnapshots,
+                        &v1::ListSnapshotsResponse::mutable_snapshots,
+                        "listing the snapshots of " + project, &all);
   if (code != kExitOk) return code;
   if (connection.options().json) {
     PrintJson(all);
@@ -1041,20 +1013,11 @@ int ListSnapshots(Connection& connection, const std::string& project, const Page
 
 int Audit(Connection& connection, const std::string& project, const PageArgs& page) {
   v1::ListAuditResponse all;
-  int code = Paged(page, [&](const std::string& token, std::string* next) -> int {
-    v1::ListAuditRequest request;
-    request.set_project(project);
-    request.set_page_size(page.page_size);
-    request.set_page_token(token);
-    v1::ListAuditResponse response;
-    auto context = connection.UnaryContext();
-    grpc::Status status = connection.atlas().ListAudit(context.get(), request, &response);
-    if (!status.ok()) return connection.Fail("the audit log of " + project, status);
-    for (auto& e : *response.mutable_entries()) *all.add_entries() = std::move(e);
-    *next = response.next_page_token();
-    all.set_next_page_token(*next);
-    return kExitOk;
-  });
+  v1::ListAuditRequest request;
+  request.set_project(project);
+  int code =
+      FetchPages(connection, page, request, &v1::AtlasService::Stub::ListAudit,
+                 &v1::ListAuditResponse::mutable_entries, "the audit log of " + project, &all);
   if (code != kExitOk) return code;
   if (connection.options().json) {
     PrintJson(all);

@@ -1,0 +1,268 @@
+// End to end: two people sharing atlas structures through the real
+// pba-server on a loopback port and the real pba client, each with their own
+// credentials file.
+
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+
+#include <atomic>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <sstream>
+#include <string>
+#include <thread>
+
+#include "integration/subprocess.h"
+
+namespace pba::testing {
+namespace {
+namespace fs = std::filesystem;
+using std::chrono::seconds;
+
+// Exit codes of pba (client_cli/exit_codes.h, docs/cli.md).
+constexpr int kInvalid = 5;
+constexpr int kConflict = 9;
+constexpr int kDenied = 10;
+
+std::string ReadFile(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+// Plate contours of a small structure, as the atlas store keeps them.
+std::string Contours(double half_width_mm) {
+  std::ostringstream out;
+  out << R"({"plates": [{"z_mm": 0, "polygons": [[[0, 0], [)" << half_width_mm << R"(, 0], [)"
+      << half_width_mm << ", " << half_width_mm << R"(], [0, )" << half_width_mm << "]]]}]}";
+  return out.str();
+}
+
+class CliAtlasTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    data_ = dir_.path() / "data";
+    server_ = std::make_unique<ServerProcess>(PBA_SERVER_BIN, data_);
+    std::string log;
+    ASSERT_TRUE(server_->Start(&log)) << "pba-server did not start:\n" << log;
+    fs::create_directories(dir_.path() / "admin");
+    fs::create_directories(dir_.path() / "alice");
+    fs::create_directories(dir_.path() / "nobody");
+  }
+
+  void TearDown() override {
+    if (HasFailure()) std::cerr << "server log:\n" << ReadFile(server_->log_path());
+  }
+
+  // Runs pba as `who`: their own config directory, so their own token.
+  RunResult PbaAs(const std::string& who, std::vector<std::string> args,
+                  seconds timeout = seconds(60)) {
+    ::setenv("XDG_CONFIG_HOME", (dir_.path() / who).c_str(), 1);
+    ::unsetenv("PBA_TOKEN");
+    ::unsetenv("PBA_PROJECT");
+    args.insert(args.begin(), {PBA_CLI_BIN, "--server", server_->address()});
+    return RunProcess(args, timeout);
+  }
+
+  fs::path Write(const std::string& name, const std::string& content) {
+    const fs::path path = dir_.path() / name;
+    std::ofstream(path, std::ios::binary) << content;
+    return path;
+  }
+
+  // Logs admin in with the token the first start wrote, creates alice and
+  // logs her in, creates project "demo" with alice as an editor.
+  void SetUpPeople() {
+    const RunResult login =
+        PbaAs("admin", {"login", "--token-file", (data_ / "admin.token").string()});
+    ASSERT_EQ(login.exit_code, 0) << login.out << login.err;
+    const RunResult created = RunProcess(
+        {PBA_SERVER_BIN, "admin", "create-user", "alice", "--data", data_.string()}, seconds(30));
+    ASSERT_EQ(created.exit_code, 0) << created.out << created.err;
+    std::smatch token;
+    ASSERT_TRUE(std::regex_search(created.out, token, std::regex("[0-9a-f]{64}"))) << created.out;
+    const RunResult alice = PbaAs("alice", {"login", "--token", token.str()});
+    ASSERT_EQ(alice.exit_code, 0) << alice.out << alice.err;
+    ASSERT_EQ(PbaAs("admin", {"project", "create", "demo"}).exit_code, 0);
+    const RunResult role = PbaAs("admin", {"project", "role", "demo", "alice", "editor"});
+    ASSERT_EQ(role.exit_code, 0) << role.out << role.err;
+  }
+
+  TempDir dir_;
+  fs::path data_;
+  std::unique_ptr<ServerProcess> server_;
+};
+
+TEST_F(CliAtlasTest, FirstStartTokenLogsInAndIsKeptPrivately) {
+  struct stat st {};
+  ASSERT_EQ(::stat((data_ / "admin.token").c_str(), &st), 0);
+  EXPECT_EQ(st.st_mode & 0777, 0600u);
+  const RunResult login =
+      PbaAs("admin", {"login", "--token-file", (data_ / "admin.token").string()});
+  ASSERT_EQ(login.exit_code, 0) << login.out << login.err;
+  const fs::path credentials = dir_.path() / "admin" / "pba" / "credentials";
+  ASSERT_EQ(::stat(credentials.c_str(), &st), 0);
+  EXPECT_EQ(st.st_mode & 0777, 0600u);
+  const RunResult who = PbaAs("admin", {"whoami"});
+  EXPECT_EQ(who.exit_code, 0) << who.err;
+  EXPECT_NE(who.out.find("admin"), std::string::npos) << who.out;
+
+  // No token: refused, with the way in named. A wrong token is not kept.
+  const RunResult anonymous = PbaAs("nobody", {"project", "list"});
+  EXPECT_EQ(anonymous.exit_code, kDenied) << anonymous.out << anonymous.err;
+  EXPECT_NE(anonymous.err.find("pba login"), std::string::npos) << anonymous.err;
+  const RunResult wrong = PbaAs("nobody", {"login", "--token", std::string(64, 'a')});
+  EXPECT_EQ(wrong.exit_code, kDenied) << wrong.err;
+  EXPECT_FALSE(fs::exists(dir_.path() / "nobody" / "pba" / "credentials"));
+}
+
+// The whole editing round: create, check out, a competing lock refused with
+// the holder named, commit, a commit on a stale base refused with the head
+// named, history, download of an old revision, revert, snapshot and tag,
+// audit.
+TEST_F(CliAtlasTest, TwoPeopleEditOneStructureWithoutLosingAChange) {
+  SetUpPeople();
+  const fs::path first = Write("putamen.json", Contours(5));
+  const RunResult create =
+      PbaAs("admin", {"atlas", "create", "-p", "demo", "Putamen", first.string(), "--colour",
+                      "233,189,125", "--group", "basal ganglia", "-m", "first outline"});
+  ASSERT_EQ(create.exit_code, 0) << create.out << create.err;
+
+  // Alice checks it out; admin cannot lock it meanwhile.
+  const fs::path alice_file = dir_.path() / "alice.json";
+  const RunResult checkout =
+      PbaAs("alice", {"atlas", "checkout", "-p", "demo", "Putamen", "-o", alice_file.string()});
+  ASSERT_EQ(checkout.exit_code, 0) << checkout.out << checkout.err;
+  EXPECT_EQ(ReadFile(alice_file), ReadFile(first));
+  const fs::path admin_file = dir_.path() / "admin.json";
+  const RunResult blocked =
+      PbaAs("admin", {"atlas", "checkout", "-p", "demo", "Putamen", "-o", admin_file.string()});
+  EXPECT_EQ(blocked.exit_code, kConflict) << blocked.out << blocked.err;
+  EXPECT_NE(blocked.err.find("alice"), std::string::npos) << blocked.err;
+  EXPECT_FALSE(fs::exists(admin_file));
+
+  // Alice commits revision 2 and the lock is given back.
+  std::ofstream(alice_file, std::ios::trunc) << Contours(6);
+  const RunResult commit =
+      PbaAs("alice", {"atlas", "commit", alice_file.string(), "-m", "wider by 1 mm"});
+  ASSERT_EQ(commit.exit_code, 0) << commit.out << commit.err;
+  EXPECT_NE(commit.out.find("revision 2"), std::string::npos) << commit.out;
+  EXPECT_FALSE(fs::exists(alice_file.string() + ".pba-checkout"));
+
+  // Admin checks out revision 2; alice changes the colour meanwhile (no lock
+  // needed), which makes revision 3: admin's commit on 2 is refused, with
+  // the head named, and nothing is overwritten.
+  ASSERT_EQ(
+      PbaAs("admin", {"atlas", "checkout", "-p", "demo", "Putamen", "-o", admin_file.string()})
+          .exit_code,
+      0);
+  const RunResult recolour = PbaAs("alice", {"atlas", "set", "-p", "demo", "Putamen", "--colour",
+                                             "200,150,100", "-m", "darker"});
+  ASSERT_EQ(recolour.exit_code, 0) << recolour.out << recolour.err;
+  std::ofstream(admin_file, std::ios::trunc) << Contours(7);
+  const RunResult stale =
+      PbaAs("admin", {"atlas", "commit", admin_file.string(), "-m", "even wider"});
+  EXPECT_EQ(stale.exit_code, kConflict) << stale.out << stale.err;
+  EXPECT_NE(stale.err.find("3"), std::string::npos) << stale.err;
+  ASSERT_EQ(PbaAs("admin", {"atlas", "unlock", admin_file.string()}).exit_code, 0);
+
+  const RunResult history = PbaAs("alice", {"--json", "atlas", "history", "-p", "demo", "Putamen"});
+  ASSERT_EQ(history.exit_code, 0) << history.err;
+  EXPECT_NE(history.out.find("\"number\": \"3\""), std::string::npos) << history.out;
+  EXPECT_EQ(history.out.find("\"number\": \"4\""), std::string::npos) << history.out;
+  EXPECT_NE(history.out.find("wider by 1 mm"), std::string::npos) << history.out;
+
+  // Revision 1 comes back byte for byte, and a revert to it makes revision 4
+  // with that content.
+  const fs::path old = dir_.path() / "old.json";
+  ASSERT_EQ(
+      PbaAs("alice", {"atlas", "download", "-p", "demo", "Putamen", "-r", "1", "-o", old.string()})
+          .exit_code,
+      0);
+  EXPECT_EQ(ReadFile(old), ReadFile(first));
+  const RunResult revert =
+      PbaAs("alice", {"atlas", "revert", "-p", "demo", "Putamen", "--to", "1", "-m", "back"});
+  ASSERT_EQ(revert.exit_code, 0) << revert.out << revert.err;
+  const fs::path head = dir_.path() / "head.json";
+  ASSERT_EQ(
+      PbaAs("admin", {"atlas", "download", "-p", "demo", "Putamen", "-o", head.string()}).exit_code,
+      0);
+  EXPECT_EQ(ReadFile(head), ReadFile(first));
+
+  // A snapshot pins revision 4; found again by its tag.
+  const RunResult snapshot =
+      PbaAs("admin", {"--json", "atlas", "snapshot", "create", "-p", "demo"});
+  ASSERT_EQ(snapshot.exit_code, 0) << snapshot.err;
+  std::smatch id;
+  ASSERT_TRUE(std::regex_search(snapshot.out, id, std::regex("\"id\": \"(\\d+)\"")))
+      << snapshot.out;
+  ASSERT_EQ(PbaAs("admin", {"atlas", "tag", "-p", "demo", id[1].str(), "reviewed"}).exit_code, 0);
+  const RunResult shown = PbaAs("alice", {"atlas", "snapshot", "show", "-p", "demo", "reviewed"});
+  ASSERT_EQ(shown.exit_code, 0) << shown.err;
+  EXPECT_TRUE(std::regex_search(shown.out, std::regex("Putamen\\s+4"))) << shown.out;
+
+  const RunResult audit = PbaAs("admin", {"atlas", "audit", "-p", "demo", "--all"});
+  ASSERT_EQ(audit.exit_code, 0) << audit.err;
+  for (const char* who : {"admin", "alice"}) {
+    EXPECT_NE(audit.out.find(who), std::string::npos) << audit.out;
+  }
+}
+
+// A watcher sees another person's changes as they happen.
+TEST_F(CliAtlasTest, WatchShowsAnotherPersonsChanges) {
+  SetUpPeople();
+  ASSERT_EQ(PbaAs("admin", {"atlas", "create", "-p", "demo", "Caudate",
+                            Write("caudate.json", Contours(4)).string()})
+                .exit_code,
+            0);
+  // The watcher stops after two events; changes are made until it has.
+  ::setenv("XDG_CONFIG_HOME", (dir_.path() / "admin").c_str(), 1);
+  RunResult watched;
+  std::atomic<bool> done{false};
+  std::thread watcher([&] {
+    watched = RunProcess({PBA_CLI_BIN, "--server", server_->address(), "--json", "atlas", "watch",
+                          "-p", "demo", "--count", "2"},
+                         seconds(60));
+    done = true;
+  });
+  const auto deadline = std::chrono::steady_clock::now() + seconds(50);
+  for (int i = 0; std::chrono::steady_clock::now() < deadline; ++i) {
+    // The watcher's exit is what ends this loop; a finished watcher makes
+    // the next `set` the last one.
+    const RunResult set = PbaAs("alice", {"atlas", "set", "-p", "demo", "Caudate", "--group",
+                                          "g" + std::to_string(i), "-m", "regroup"});
+    EXPECT_EQ(set.exit_code, 0) << set.err;
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    if (done) break;
+  }
+  watcher.join();
+  EXPECT_EQ(watched.exit_code, 0) << watched.err;
+  EXPECT_NE(watched.out.find("METADATA_UPDATED"), std::string::npos) << watched.out;
+  EXPECT_NE(watched.out.find("alice"), std::string::npos) << watched.out;
+}
+
+TEST_F(CliAtlasTest, BadNamesAndViewersAreRefusedAndNothingIsWritten) {
+  SetUpPeople();
+  const RunResult slash = PbaAs("admin", {"project", "create", "a/b"});
+  EXPECT_EQ(slash.exit_code, kInvalid) << slash.err;
+  const RunResult quote = PbaAs("admin", {"project", "create", "x'; DROP TABLE projects; --"});
+  EXPECT_EQ(quote.exit_code, kInvalid) << quote.err;
+  const RunResult list = PbaAs("admin", {"--json", "project", "list"});
+  ASSERT_EQ(list.exit_code, 0) << list.err;
+  EXPECT_EQ(list.out.find("a/b"), std::string::npos) << list.out;
+  EXPECT_NE(list.out.find("demo"), std::string::npos) << list.out;
+
+  ASSERT_EQ(PbaAs("admin", {"project", "role", "demo", "alice", "viewer"}).exit_code, 0);
+  const RunResult viewer = PbaAs("alice", {"atlas", "create", "-p", "demo", "Thalamus",
+                                           Write("t.json", Contours(3)).string()});
+  EXPECT_EQ(viewer.exit_code, kDenied) << viewer.out << viewer.err;
+  const RunResult none = PbaAs("alice", {"--json", "atlas", "list", "-p", "demo"});
+  ASSERT_EQ(none.exit_code, 0) << none.err;
+  EXPECT_EQ(none.out.find("Thalamus"), std::string::npos) << none.out;
+}
+
+}  // namespace
+}  // namespace pba::testing
