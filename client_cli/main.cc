@@ -6,6 +6,7 @@
 #include <string>
 
 #include "commands/atlas_commands.h"
+#include "commands/batch_commands.h"
 #include "commands/job_commands.h"
 #include "connection.h"
 #include "credentials.h"
@@ -213,6 +214,20 @@ int main(int argc, char** argv) {
   add_project(atlas_watch, &snapshot_project);
   atlas_watch->add_option("--count", watch_count, "Stop after this many changes");
 
+  // --- batches ---
+  CLI::App* batch = app.add_subcommand("batch", "Scripted batches of jobs");
+  batch->require_subcommand(1);
+  BatchArgs batch_args;
+  CLI::App* batch_run = batch->add_subcommand(
+      "run", "Run a base scene over parameter sweeps; one table of outputs per member");
+  batch_run->add_option("file", batch_args.file, "Batch file (YAML)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  batch_run->add_option("-o,--out", batch_args.out, "CSV table (default FILE's name .csv)");
+  batch_run->add_flag("--retry-failed", batch_args.retry_failed,
+                      "Resubmit members whose earlier job failed or was cancelled");
+  batch_run->add_flag("--dry-run", batch_args.dry_run, "Check the members, submit nothing");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -222,6 +237,7 @@ int main(int argc, char** argv) {
 
   global.token = FindToken(global.server);
   Connection connection(global);
+  if (*batch_run) return RunBatch(connection, batch_args);
   if (*login_cmd) return Login(connection, login);
   if (*logout_cmd) return Logout(connection);
   if (*whoami_cmd) return WhoAmI(connection);

@@ -5,8 +5,10 @@
 #include <hdf5.h>
 #include <signal.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <regex>
 #include <sstream>
 #include <string>
@@ -101,8 +103,9 @@ class CliServerTest : public ::testing::Test {
 // A finite-strain job travels the same way and its summary shows the Newton
 // path and the nonlinear fields.
 TEST_F(CliServerTest, NonlinearJobReportsItsNewtonPath) {
-  const RunResult submitted = Pba(
-      {"job", "submit", std::string(PBA_EXAMPLES_DIR) + "/brain_sample_compression.yaml", "--wait"});
+  const RunResult submitted =
+      Pba({"job", "submit", std::string(PBA_EXAMPLES_DIR) + "/brain_sample_compression.yaml",
+           "--wait"});
   ASSERT_EQ(submitted.exit_code, 0) << submitted.out << submitted.err;
   EXPECT_NE(submitted.out.find("SUCCEEDED"), std::string::npos) << submitted.out;
   EXPECT_NE(submitted.out.find("Ogden"), std::string::npos) << submitted.out;
@@ -235,6 +238,105 @@ TEST_F(CliServerTest, BadScenesAreRejectedAndNothingIsStored) {
   ASSERT_EQ(list.exit_code, 0) << list.err;
   EXPECT_EQ(list.out.find("\"id\""), std::string::npos) << "a rejected scene was stored:\n"
                                                         << list.out;
+}
+
+// A scripted batch: a base scene over a sweep, two jobs at a time, one table
+// of outputs per member; a rerun submits nothing, and even without its state
+// file the members' request ids find the jobs already made.
+TEST_F(CliServerTest, BatchRunsASweepOnceAndResumes) {
+  const fs::path base = WriteScene("base.yaml", R"(
+name: batch-block
+geometry: {box: {size_mm: [10, 10, 10]}}
+mesh: {element_size_mm: 5}
+material: {linear_elastic: {youngs_modulus_pa: 3000, poissons_ratio: 0.45}}
+boundary_conditions:
+  - {set: bottom, fixed: {}}
+  - {set: top, displacement: {x_mm: 0, y_mm: 0, z_mm: -1}}
+)");
+  const fs::path batch = WriteScene("sweep.yaml", R"(
+name: stiffness
+scene: base.yaml
+parallel: 2
+sweep:
+  material.linear_elastic.youngs_modulus_pa: [3000, 6000]
+  material.linear_elastic.poissons_ratio: [0.3, 0.45]
+outputs:
+  - results.reactions[1].force_n[2]
+  - results.max_displacement_mm
+)");
+  const RunResult run = Pba({"batch", "run", batch.string()});
+  ASSERT_EQ(run.exit_code, 0) << run.out << run.err;
+  const std::string csv = ReadFile(dir_.path() / "sweep.csv");
+  std::vector<std::string> lines;
+  std::stringstream stream(csv);
+  for (std::string line; std::getline(stream, line);) lines.push_back(line);
+  ASSERT_EQ(lines.size(), 5u) << csv;
+  EXPECT_EQ(lines[0],
+            "member,material.linear_elastic.youngs_modulus_pa,"
+            "material.linear_elastic.poissons_ratio,job,state,results.reactions[1].force_n[2],"
+            "results.max_displacement_mm");
+  // The reaction on the top (the second set) is linear in the modulus.
+  std::map<std::string, double> force;
+  for (size_t i = 1; i < lines.size(); ++i) {
+    EXPECT_NE(lines[i].find("SUCCEEDED"), std::string::npos) << lines[i];
+    std::vector<std::string> cells;
+    std::string cell;
+    std::stringstream row(lines[i].substr(lines[i].rfind('"') + 2));
+    while (std::getline(row, cell, ',')) cells.push_back(cell);
+    ASSERT_EQ(cells.size(), 6u) << lines[i];
+    force[cells[0] + "/" + cells[1]] = std::stod(cells[4]);
+  }
+  EXPECT_NEAR(force["6000/0.3"], 2 * force["3000/0.3"], 1e-9 * std::abs(force["3000/0.3"]));
+  EXPECT_NEAR(force["6000/0.45"], 2 * force["3000/0.45"], 1e-9 * std::abs(force["3000/0.45"]));
+  EXPECT_NE(force["3000/0.3"], force["3000/0.45"]);
+
+  const RunResult again = Pba({"batch", "run", batch.string()});
+  ASSERT_EQ(again.exit_code, 0) << again.err;
+  EXPECT_NE(again.out.find("4 from an earlier run, 0 to submit"), std::string::npos) << again.out;
+  fs::remove(batch.string() + ".pba-batch");
+  const RunResult lost = Pba({"batch", "run", batch.string()});
+  ASSERT_EQ(lost.exit_code, 0) << lost.err;
+  EXPECT_EQ(ReadFile(dir_.path() / "sweep.csv"), csv);
+  const RunResult list = Pba({"--json", "job", "list", "--all"});
+  size_t jobs = 0;
+  for (size_t at = list.out.find("\"id\""); at != std::string::npos;
+       at = list.out.find("\"id\"", at + 1))
+    ++jobs;
+  EXPECT_EQ(jobs, 4u) << list.out;
+}
+
+// The example batch runs as shipped (copied with its base scene, so that its
+// state file is written in the test's directory).
+TEST_F(CliServerTest, ExampleBatchRuns) {
+  fs::create_directories(dir_.path() / "batches");
+  fs::copy_file(std::string(PBA_EXAMPLES_DIR) + "/quickstart.yaml",
+                dir_.path() / "quickstart.yaml");
+  const fs::path batch = dir_.path() / "batches" / "quickstart_sweep.yaml";
+  fs::copy_file(std::string(PBA_EXAMPLES_DIR) + "/batches/quickstart_sweep.yaml", batch);
+  const RunResult run = Pba({"batch", "run", batch.string()});
+  ASSERT_EQ(run.exit_code, 0) << run.out << run.err;
+  const std::string csv = ReadFile(dir_.path() / "batches" / "quickstart_sweep.csv");
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 7) << csv;
+  EXPECT_EQ(csv.find("FAILED"), std::string::npos) << csv;
+}
+
+// A member whose change does not fit the scene is named, with the field,
+// before anything is submitted.
+TEST_F(CliServerTest, BatchWithABadMemberSubmitsNothing) {
+  WriteScene("base.yaml", kLongScene);
+  const fs::path batch = WriteScene("bad.yaml", R"(
+scene: base.yaml
+members:
+  - {name: soft, set: {material.linear_elastic.youngs_modulus_pa: 1000}}
+  - {name: typo, set: {material.linear_elastic.youngs_modulus: 2000}}
+)");
+  const RunResult run = Pba({"batch", "run", batch.string()});
+  EXPECT_EQ(run.exit_code, kInvalid) << run.out << run.err;
+  EXPECT_NE(run.err.find("member 'typo'"), std::string::npos) << run.err;
+  EXPECT_NE(run.err.find("youngs_modulus"), std::string::npos) << run.err;
+  const RunResult list = Pba({"job", "list"});
+  EXPECT_NE(list.out.find("No jobs."), std::string::npos) << list.out;
+  EXPECT_FALSE(fs::exists(batch.string() + ".pba-batch"));
 }
 
 TEST_F(CliServerTest, UnknownJobIsNotFound) {
