@@ -17,6 +17,7 @@
 #include "exit_codes.h"
 #include "files.h"
 #include "output.h"
+#include "transfer.h"
 
 namespace pba::cli {
 namespace fs = std::filesystem;
@@ -230,26 +231,6 @@ bool ReadCheckout(const std::string& file, CheckoutState* s) {
 
 // --- transfers ------------------------------------------------------------------
 
-// Shows a transfer's progress on a terminal (stderr), nothing otherwise.
-class Progress {
- public:
-  Progress(std::string what, int64_t total)
-      : what_(std::move(what)), total_(total), shown_(::isatty(STDERR_FILENO) != 0) {}
-  void Update(int64_t done) {
-    if (!shown_ || total_ <= 0) return;
-    std::fprintf(stderr, "\r\033[K%s: %3d %%", what_.c_str(),
-                 static_cast<int>(100.0 * static_cast<double>(done) / total_ + 0.5));
-  }
-  ~Progress() {
-    if (shown_ && total_ > 0) std::fputc('\n', stderr);
-  }
-
- private:
-  std::string what_;
-  int64_t total_;
-  bool shown_;
-};
-
 // Uploads `file` (BeginUpload, then WriteUpload from where the server says
 // it is, retried up to three times); *upload_id names the complete upload.
 int UploadFile(Connection& connection, const std::string& file, std::string* upload_id) {
@@ -314,58 +295,20 @@ int UploadFile(Connection& connection, const std::string& file, std::string* upl
   return kExitOk;
 }
 
-// Downloads a revision's geometry into `out` via out.part (resumed if a
-// .part is there), checked against the revision's SHA-256.
+// Downloads a revision's geometry into `out` (transfer.h: resumed, checked
+// against the revision's SHA-256).
 int DownloadRevision(Connection& connection, const v1::Revision& revision, const fs::path& out) {
-  const fs::path part = out.string() + ".part";
-  std::error_code ec;
-  int64_t offset = fs::exists(part) ? static_cast<int64_t>(fs::file_size(part, ec)) : 0;
-  if (ec || offset > revision.size_bytes()) offset = 0;
-  std::ofstream file(part, std::ios::binary | (offset > 0 ? std::ios::app : std::ios::trunc));
-  if (!file) {
-    std::fprintf(stderr, "pba: cannot write %s\n", part.c_str());
-    return kExitError;
-  }
-  v1::DownloadGeometryRequest request;
-  request.set_project(revision.project());
-  request.set_structure(revision.structure());
-  request.set_revision(revision.number());
-  request.set_offset(offset);
-  Progress progress("downloading " + out.string(), revision.size_bytes());
-  auto context = connection.StreamContext();
-  auto reader = connection.atlas().DownloadGeometry(context.get(), request);
-  v1::DataChunk chunk;
-  while (reader->Read(&chunk)) {
-    if (chunk.offset() != offset) {
-      std::fprintf(stderr, "pba: %s: chunk at byte %lld, expected %lld\n", out.c_str(),
-                   static_cast<long long>(chunk.offset()), static_cast<long long>(offset));
-      return kExitError;
-    }
-    file.write(chunk.data().data(), static_cast<std::streamsize>(chunk.data().size()));
-    offset += static_cast<int64_t>(chunk.data().size());
-    progress.Update(offset);
-  }
-  file.close();
-  grpc::Status status = reader->Finish();
-  const std::string what = "downloading " + revision.project() + "/" + revision.structure() +
-                           " revision " + std::to_string(revision.number());
-  if (!status.ok()) return connection.Fail(what, status);
-  if (!file) {
-    std::fprintf(stderr, "pba: writing %s failed (disk full?)\n", part.c_str());
-    return kExitError;
-  }
-  if (Sha256File(part) != revision.content_sha256()) {
-    fs::remove(part, ec);
-    std::fprintf(stderr, "pba: %s arrived damaged (checksum mismatch); run it again\n",
-                 out.c_str());
-    return kExitError;
-  }
-  fs::rename(part, out, ec);
-  if (ec) {
-    std::fprintf(stderr, "pba: cannot move %s into place: %s\n", out.c_str(), ec.message().c_str());
-    return kExitError;
-  }
-  return kExitOk;
+  return DownloadTo(connection, out, revision.size_bytes(), revision.content_sha256(),
+                    revision.project() + "/" + revision.structure() + " revision " +
+                        std::to_string(revision.number()),
+                    [&](grpc::ClientContext* context, int64_t offset) {
+                      v1::DownloadGeometryRequest request;
+                      request.set_project(revision.project());
+                      request.set_structure(revision.structure());
+                      request.set_revision(revision.number());
+                      request.set_offset(offset);
+                      return connection.atlas().DownloadGeometry(context, request);
+                    });
 }
 
 int GetHead(Connection& connection, const StructureArgs& target, int64_t number,

@@ -1,7 +1,6 @@
 #include "commands/batch_commands.h"
 
 #include <google/protobuf/struct.pb.h>
-#include <openssl/evp.h>
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
@@ -132,19 +131,6 @@ std::string GetPath(const YAML::Node& root, const std::string& path) {
   YAML::Emitter out;
   out << YAML::Flow << node;
   return out.c_str();
-}
-
-std::string Sha256Hex(const std::string& text) {
-  unsigned char digest[EVP_MAX_MD_SIZE];
-  unsigned int length = 0;
-  EVP_Digest(text.data(), text.size(), digest, &length, EVP_sha256(), nullptr);
-  std::string hex;
-  char byte[3];
-  for (unsigned int i = 0; i < length; ++i) {
-    std::snprintf(byte, sizeof byte, "%02x", digest[i]);
-    hex += byte;
-  }
-  return hex;
 }
 
 std::string Scalar(const YAML::Node& value) {
@@ -304,7 +290,7 @@ bool LoadBatch(const std::string& file, Batch* batch, std::string* error) {
     }
     // The same member of the same batch gets the same request id, so a
     // submit repeated after an interruption returns the job already made.
-    member.request_id = Sha256Hex(batch->name + "\n" + out.c_str()).substr(0, 32);
+    member.request_id = Sha256Text(batch->name + "\n" + out.c_str()).substr(0, 32);
     batch->members.push_back(std::move(member));
   }
   return true;
@@ -377,7 +363,7 @@ int RunBatch(Connection& connection, const BatchArgs& args) {
         m.job_id = it->second;
         continue;
       }
-      if (failed) m.request_id = Sha256Hex(m.request_id + it->second).substr(0, 32);
+      if (failed) m.request_id = Sha256Text(m.request_id + it->second).substr(0, 32);
     }
     to_submit.push_back(i);
   }

@@ -10,8 +10,8 @@
 #include "codec/summary_text.h"
 #include "codec/yaml_codec.h"
 #include "exit_codes.h"
-#include "files.h"
 #include "output.h"
+#include "transfer.h"
 
 namespace pba::cli {
 namespace fs = std::filesystem;
@@ -126,57 +126,18 @@ int ReportEnd(Connection& connection, const std::string& id) {
   return ExitForState(job.state());
 }
 
-// Downloads one file into dir/name via dir/name.part, resuming a .part left
-// by an interrupted fetch; the final name appears only once the checksum matches.
+// Downloads one result file into dir/name (transfer.h: resumed, checked).
 int DownloadFile(Connection& connection, const std::string& id, const v1::ResultFile& file,
                  const fs::path& dir) {
-  const fs::path target = dir / file.name();
-  const fs::path part = dir / (file.name() + ".part");
-  std::error_code ec;
-  int64_t offset = fs::exists(part) ? static_cast<int64_t>(fs::file_size(part, ec)) : 0;
-  if (ec || offset > file.size_bytes()) offset = 0;
-
-  std::ofstream out(part, std::ios::binary | (offset > 0 ? std::ios::app : std::ios::trunc));
-  if (!out) {
-    std::fprintf(stderr, "pba: cannot write %s\n", part.c_str());
-    return kExitError;
-  }
-  v1::DownloadResultRequest request;
-  request.set_job_id(id);
-  request.set_file(file.name());
-  request.set_offset(offset);
-  auto context = connection.StreamContext();
-  auto reader = connection.jobs().DownloadResult(context.get(), request);
-  v1::DataChunk chunk;
-  while (reader->Read(&chunk)) {
-    if (chunk.offset() != offset) {
-      std::fprintf(stderr, "pba: %s: chunk at byte %lld, expected %lld\n", file.name().c_str(),
-                   static_cast<long long>(chunk.offset()), static_cast<long long>(offset));
-      return kExitError;
-    }
-    out.write(chunk.data().data(), static_cast<std::streamsize>(chunk.data().size()));
-    offset += static_cast<int64_t>(chunk.data().size());
-  }
-  out.close();
-  grpc::Status status = reader->Finish();
-  if (!status.ok()) return connection.Fail("downloading " + file.name() + " of job " + id, status);
-  if (!out) {
-    std::fprintf(stderr, "pba: writing %s failed (disk full?)\n", part.c_str());
-    return kExitError;
-  }
-  if (!file.sha256().empty() && Sha256File(part) != file.sha256()) {
-    fs::remove(part, ec);
-    std::fprintf(stderr, "pba: %s arrived damaged (checksum mismatch); run the fetch again\n",
-                 file.name().c_str());
-    return kExitError;
-  }
-  fs::rename(part, target, ec);
-  if (ec) {
-    std::fprintf(stderr, "pba: cannot move %s into place: %s\n", target.c_str(),
-                 ec.message().c_str());
-    return kExitError;
-  }
-  return kExitOk;
+  return DownloadTo(connection, dir / file.name(), file.size_bytes(), file.sha256(),
+                    file.name() + " of job " + id,
+                    [&](grpc::ClientContext* context, int64_t offset) {
+                      v1::DownloadResultRequest request;
+                      request.set_job_id(id);
+                      request.set_file(file.name());
+                      request.set_offset(offset);
+                      return connection.jobs().DownloadResult(context, request);
+                    });
 }
 
 }  // namespace
