@@ -10,6 +10,7 @@
 
 #include <atomic>
 #include <fstream>
+#include <iostream>
 #include <map>
 #include <set>
 #include <sstream>
@@ -829,6 +830,7 @@ TEST_F(AtlasServiceTest, RacingClientsBuildOneChain) {
     });
   }
   for (std::thread& client : clients) client.join();
+  std::cout << landed << " commits landed, " << stale << " refused as stale\n";
   EXPECT_EQ(unexpected.load(), 0);
   EXPECT_EQ(landed + stale, kClients * kRounds);
   EXPECT_GE(landed.load(), 1);
@@ -849,6 +851,34 @@ TEST_F(AtlasServiceTest, RacingClientsBuildOneChain) {
     contents.insert(history.revisions(i).content_sha256());
   }
   EXPECT_EQ(static_cast<int>(contents.size()), history.revisions_size());
+}
+
+TEST(CreateFirstAdminTest, OnlyWithoutUsersAndAStaleTokenFileIsReplaced) {
+  TempDir dir;
+  std::unique_ptr<AtlasStore> store;
+  ASSERT_TRUE(AtlasStore::Open(dir.path(), &store).ok());
+  const fs::path file = dir.path() / "admin.token";
+  std::ofstream(file) << "a token of a database that is gone\n";
+  bool created = false;
+  ASSERT_TRUE(CreateFirstAdmin(*store, "admin", file, &created).ok());
+  EXPECT_TRUE(created);
+  std::ifstream in(file);
+  std::string token;
+  std::getline(in, token);
+  std::string user;
+  ASSERT_TRUE(store->Authenticate(token, &user).ok());
+  EXPECT_EQ(user, "admin");
+  struct stat info {};
+  ASSERT_EQ(::stat(file.c_str(), &info), 0);
+  EXPECT_EQ(info.st_mode & 0777, 0600u);
+
+  // Users exist now: nothing happens, the file stays.
+  ASSERT_TRUE(CreateFirstAdmin(*store, "admin2", file, &created).ok());
+  EXPECT_FALSE(created);
+  std::ifstream again(file);
+  std::string same;
+  std::getline(again, same);
+  EXPECT_EQ(same, token);
 }
 
 }  // namespace
