@@ -178,23 +178,31 @@ Status UploadStore::Get(const std::string& user, const std::string& id, UploadIn
 }
 
 Status UploadStore::Take(const std::string& user, const std::string& id, std::string* content) {
-  std::lock_guard lock(mutex_);
   UploadInfo info;
-  PBA_RETURN_IF_ERROR(Load(user, id, &info));
+  {
+    std::lock_guard lock(mutex_);
+    PBA_RETURN_IF_ERROR(Load(user, id, &info));
+  }
   if (info.received_bytes != info.size_bytes) {
     return Status::FailedPrecondition("upload " + id +
                                       " is incomplete: " + std::to_string(info.received_bytes) +
                                       " of " + std::to_string(info.size_bytes) + " bytes received");
   }
+  // Read and hashed without the mutex (up to 1 GiB: seconds), so other
+  // uploads go on meanwhile. A complete upload takes no more writes.
   std::ifstream in(root_ / id, std::ios::binary);
   content->assign(static_cast<size_t>(info.size_bytes), '\0');
   if (!in.read(content->data(), info.size_bytes)) {
+    content->clear();
     return Status::Io("cannot read upload " + id);
   }
   std::string hash;
   PBA_RETURN_IF_ERROR(Sha256Hex(*content, &hash));
   if (hash != info.sha256) {
-    RemoveFiles(id);
+    {
+      std::lock_guard lock(mutex_);
+      RemoveFiles(id);
+    }
     content->clear();
     return Status::InvalidArgument("sha256", "the content of upload " + id + " hashes to " + hash +
                                                  ", not the announced " + info.sha256 +

@@ -24,8 +24,9 @@
 // content whose hash is not the announced one kInvalidArgument (field
 // "sha256"), after which the upload is removed (it can never succeed).
 //
-// Thread-safe: one mutex around every file operation. Writes of different
-// uploads therefore take turns; a chunk is at most kMaxChunkBytes.
+// Thread-safe: one mutex around every file operation but Take()'s reading
+// and hashing. Writes of different uploads therefore take turns; a chunk is
+// at most kMaxChunkBytes.
 #pragma once
 
 #include <chrono>
