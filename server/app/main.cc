@@ -2,6 +2,12 @@
 //
 //   pba-server --data DIR [--listen HOST:PORT] [--solver PATH] [--max-running N]
 //              [--log-level LEVEL]
+//   pba-server admin create-user NAME --data DIR
+//
+// The second form creates an atlas user offline (the server may be running)
+// and prints its token once on stdout; only its hash is kept. On the first
+// start the server creates the user "admin" itself, with the token in
+// DIR/admin.token.
 //
 // Prints "pba-server listening on HOST:PORT" once it accepts calls and writes
 // DIR/server.json ({"address": ..., "pid": ...}) for scripts; SIGTERM or
@@ -21,11 +27,29 @@
 
 #include "app/pba_server.h"
 #include "jobs/solver_process.h"
+#include "store/atlas_store.h"
 #include "store/atomic_file.h"
 
 namespace {
 
 namespace fs = std::filesystem;
+
+int CreateUser(const std::string& data_dir, const std::string& name) {
+  std::unique_ptr<pba::AtlasStore> store;
+  pba::Status status = pba::AtlasStore::Open(data_dir, &store);
+  std::string token;
+  if (status.ok()) status = store->CreateUser(name, &token);
+  if (!status.ok()) {
+    std::cerr << "pba-server admin create-user: " << status.ToString() << std::endl;
+    return 1;
+  }
+  std::cerr << "created atlas user '" << name
+            << "'; its token follows (shown only now; send it as "
+               "'authorization: Bearer <token>')"
+            << std::endl;
+  std::cout << token << std::endl;
+  return 0;
+}
 
 fs::path DefaultSolver() {
   std::error_code ec;
@@ -42,8 +66,7 @@ int main(int argc, char** argv) {
   std::string solver;
   int max_running = 1;
   std::string log_level = "info";
-  app.add_option("--data", data_dir, "Data directory (pba.db, jobs/); created if absent")
-      ->required();
+  app.add_option("--data", data_dir, "Data directory (pba.db, jobs/); created if absent");
   app.add_option("--listen", listen, "HOST:PORT to listen on; port 0 picks a free port")
       ->capture_default_str();
   app.add_option("--solver", solver, "pba-solve executable (default: next to pba-server)");
@@ -53,7 +76,20 @@ int main(int argc, char** argv) {
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error, critical or off")
       ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "critical", "off"}))
       ->capture_default_str();
+  CLI::App* admin = app.add_subcommand("admin", "Offline administration of the data directory");
+  admin->require_subcommand(1);
+  CLI::App* create_user =
+      admin->add_subcommand("create-user", "Create an atlas user and print its token once");
+  std::string new_user;
+  std::string admin_data_dir;
+  create_user->add_option("name", new_user, "The user's name")->required();
+  create_user->add_option("--data", admin_data_dir, "Data directory")->required();
   CLI11_PARSE(app, argc, argv);
+  if (create_user->parsed()) return CreateUser(admin_data_dir, new_user);
+  if (data_dir.empty()) {
+    std::cerr << "--data is required\n" << app.help() << std::flush;
+    return 2;
+  }
 
   spdlog::set_default_logger(spdlog::stderr_color_mt("pba-server"));
   spdlog::set_level(spdlog::level::from_str(log_level));

@@ -1,11 +1,14 @@
 #include "app/pba_server.h"
 
+#include <fcntl.h>
 #include <grpcpp/ext/proto_server_reflection_plugin.h>
 #include <grpcpp/grpcpp.h>
 #include <grpcpp/health_check_service_interface.h>
 #include <spdlog/spdlog.h>
 #include <unistd.h>
 
+#include <cerrno>
+#include <cstring>
 #include <system_error>
 #include <vector>
 
@@ -21,6 +24,47 @@ Status CheckSolver(const fs::path& solver) {
   if (::access(solver.c_str(), X_OK) != 0) {
     return Status::FailedPrecondition("the solver " + solver.string() + " is not executable");
   }
+  return Status::Ok();
+}
+
+Status CreateFirstAdmin(AtlasStore& store, const std::string& user, const fs::path& token_file,
+                        bool* created) {
+  *created = false;
+  int64_t users = 0;
+  PBA_RETURN_IF_ERROR(store.CountUsers(&users));
+  if (users > 0) return Status::Ok();
+  std::error_code ec;
+  if (fs::exists(token_file, ec)) {
+    // Its token belonged to a database that is gone: useless, and in the way.
+    spdlog::warn("replacing {}: the atlas store has no users", token_file.string());
+    fs::remove(token_file, ec);
+  }
+  // The file first, so a token is never issued that cannot be written down.
+  const int fd = ::open(token_file.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
+  if (fd < 0) {
+    return Status::Io("cannot create " + token_file.string() + ": " + std::strerror(errno));
+  }
+  std::string token;
+  Status status = store.CreateUser(user, &token);
+  if (status.ok()) {
+    const std::string line = token + "\n";
+    size_t done = 0;
+    while (done < line.size()) {
+      const ssize_t n = ::write(fd, line.data() + done, line.size() - done);
+      if (n < 0 && errno == EINTR) continue;
+      if (n <= 0) break;
+      done += static_cast<size_t>(n);
+    }
+    if (done != line.size() || ::fsync(fd) != 0) {
+      status = Status::Io("cannot write " + token_file.string() + ": " + std::strerror(errno));
+    }
+  }
+  ::close(fd);
+  if (!status.ok()) {
+    fs::remove(token_file, ec);
+    return status;
+  }
+  *created = true;
   return Status::Ok();
 }
 
@@ -41,6 +85,20 @@ Status PbaServer::Start(const ServerOptions& options, std::unique_ptr<PbaServer>
     spdlog::info("job {} QUEUED: {}", event.job_id(), event.message());
   }
 
+  PBA_RETURN_IF_ERROR(AtlasStore::Open(data_dir, &server->atlas_store_));
+  PBA_RETURN_IF_ERROR(UploadStore::Open(data_dir / "uploads", &server->uploads_));
+  int swept = 0;
+  PBA_RETURN_IF_ERROR(server->uploads_->Sweep(&swept));
+  if (swept > 0) spdlog::info("removed {} expired or stray upload files", swept);
+  bool created = false;
+  const fs::path token_file = data_dir / kAdminTokenFile;
+  PBA_RETURN_IF_ERROR(CreateFirstAdmin(*server->atlas_store_, kAdminUser, token_file, &created));
+  if (created) {
+    server->admin_token_file_ = token_file;
+    spdlog::info("first start: created the atlas user '{}'; its token is in {} (mode 0600)",
+                 kAdminUser, token_file.string());
+  }
+
   ExecutorOptions executor_options;
   executor_options.data_dir = data_dir;
   executor_options.solver = fs::absolute(options.solver);
@@ -58,6 +116,9 @@ Status PbaServer::Start(const ServerOptions& options, std::unique_ptr<PbaServer>
   int port = 0;
   builder.AddListeningPort(options.listen, grpc::InsecureServerCredentials(), &port);
   builder.RegisterService(server->service_.get());
+  server->atlas_service_ = std::make_unique<AtlasServiceImpl>(
+      *server->atlas_store_, *server->uploads_, server->atlas_hub_);
+  builder.RegisterService(server->atlas_service_.get());
   server->server_ = builder.BuildAndStart();
   if (server->server_ == nullptr || port == 0) {
     server->server_.reset();
@@ -78,6 +139,7 @@ void PbaServer::Shutdown() {
   // Watch streams end first (they would otherwise hold the drain to its
   // deadline), then unary calls get their drain time.
   hub_.Shutdown();
+  atlas_hub_.Shutdown();
   if (server_ != nullptr) {
     if (auto* health = server_->GetHealthCheckService()) health->Shutdown();
     server_->Shutdown(std::chrono::system_clock::now() + options_.drain);
@@ -86,8 +148,11 @@ void PbaServer::Shutdown() {
   if (executor_ != nullptr) executor_->Stop();
   server_.reset();
   service_.reset();
+  atlas_service_.reset();
   executor_.reset();
   store_.reset();
+  uploads_.reset();
+  atlas_store_.reset();
 }
 
 }  // namespace pba

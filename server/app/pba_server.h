@@ -1,6 +1,12 @@
 // PbaServer: everything pba-server runs, wired together: the job store, the
-// executor, the gRPC services (jobs, health, reflection). main() adds the
-// command line, signals and server.json; tests start it in-process.
+// executor, the atlas store with its uploads, the gRPC services (jobs, atlas,
+// health, reflection). main() adds the command line, signals and
+// server.json; tests start it in-process.
+//
+// First start: when the atlas store has no user, Start() creates the user
+// "admin" and writes its token to <data>/admin.token (mode 0600, created
+// exclusively, fsynced) and logs where it is. Only the atlas service asks
+// for tokens; the job service does not (yet).
 #pragma once
 
 #include <grpcpp/server.h>
@@ -13,8 +19,12 @@
 #include "jobs/job_event_hub.h"
 #include "jobs/job_executor.h"
 #include "pba/status.h"
+#include "service/atlas_event_hub.h"
+#include "service/atlas_service.h"
 #include "service/job_service.h"
+#include "store/atlas_store.h"
 #include "store/job_store.h"
+#include "store/upload_store.h"
 
 namespace pba {
 
@@ -37,6 +47,8 @@ class PbaServer {
  public:
   static constexpr char kRequeueAtStart[] =
       "re-queued: the server stopped while this job was running";
+  static constexpr char kAdminUser[] = "admin";
+  static constexpr char kAdminTokenFile[] = "admin.token";
 
   // Opens the store, re-queues jobs a previous server left RUNNING, starts
   // listening and then the executor.
@@ -48,6 +60,9 @@ class PbaServer {
 
   // HOST:PORT actually listened on (the real port when 0 was asked for).
   const std::string& address() const { return address_; }
+
+  // <data>/admin.token if this start created the first admin, else empty.
+  const std::filesystem::path& admin_token_file() const { return admin_token_file_; }
 
   // Ends watch streams, drains RPCs (up to options.drain), stops running
   // solves (their jobs are re-queued) and closes the store. Idempotent.
@@ -61,6 +76,11 @@ class PbaServer {
   JobEventHub hub_;
   std::unique_ptr<JobExecutor> executor_;
   std::unique_ptr<JobServiceImpl> service_;
+  std::unique_ptr<AtlasStore> atlas_store_;
+  std::unique_ptr<UploadStore> uploads_;
+  AtlasEventHub atlas_hub_;
+  std::unique_ptr<AtlasServiceImpl> atlas_service_;
+  std::filesystem::path admin_token_file_;
   std::unique_ptr<grpc::Server> server_;
   std::string address_;
   bool shut_down_ = false;
@@ -68,5 +88,12 @@ class PbaServer {
 
 // Checks that `solver` is an executable regular file.
 Status CheckSolver(const std::filesystem::path& solver);
+
+// If `store` has no user, creates `user` and writes its token (and a
+// newline) to `token_file`, created with O_CREAT | O_EXCL and mode 0600 and
+// fsynced; *created says whether it did. A token file left from an earlier
+// database that has no users is replaced.
+Status CreateFirstAdmin(AtlasStore& store, const std::string& user,
+                        const std::filesystem::path& token_file, bool* created);
 
 }  // namespace pba

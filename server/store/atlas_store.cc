@@ -271,6 +271,16 @@ Status AtlasStore::Authenticate(const std::string& token, std::string* user) {
   return Status::Ok();
 }
 
+Status AtlasStore::CountUsers(int64_t* count) {
+  std::lock_guard lock(mutex_);
+  Statement stmt;
+  PBA_RETURN_IF_ERROR(db_->Prepare("SELECT COUNT(*) FROM users", &stmt));
+  bool row = false;
+  PBA_RETURN_IF_ERROR(stmt.Step(&row));
+  *count = stmt.ColumnInt(0);
+  return Status::Ok();
+}
+
 Status AtlasStore::CreateProject(const std::string& user, const std::string& project) {
   PBA_RETURN_IF_ERROR(CheckName("project", project));
   std::lock_guard lock(mutex_);
@@ -469,6 +479,68 @@ Status AtlasStore::GetStructure(const std::string& user, const StructureRef& ref
   info->metadata_etag = structure.etag;
   info->metadata = head.metadata;
   info->created_us = stmt.ColumnInt(0);
+  stmt = Statement();
+  return PublicLock(ref, structure.id, &info->lock);
+}
+
+Status AtlasStore::ListStructures(const std::string& user, const std::string& project,
+                                  int page_size, const std::string& page_token,
+                                  std::vector<StructureInfo>* structures,
+                                  std::string* next_page_token) {
+  PBA_RETURN_IF_ERROR(NormalisePageSize(page_size, &page_size));
+  structures->clear();
+  // Copied first: a caller may pass the same string as token in and out.
+  const std::string token = page_token;
+  next_page_token->clear();
+  std::lock_guard lock(mutex_);
+  Caller caller;
+  PBA_RETURN_IF_ERROR(Enter(user, project, Role::kViewer, &caller));
+  // The token carries the id of the last structure listed; structures are
+  // never deleted or renamed, so the id names the same name for good.
+  int64_t after_id = 0;
+  if (!token.empty()) {
+    PBA_RETURN_IF_ERROR(DecodePageToken(token, "structures", caller.project, &after_id));
+  }
+  Statement stmt;
+  PBA_RETURN_IF_ERROR(db_->Prepare(
+      "SELECT s.id, s.name, r.number, s.metadata_etag, s.created_us, r.material_json, "
+      "r.colour_r, r.colour_g, r.colour_b, r.group_path FROM structures s "
+      "JOIN structure_revisions r ON r.id = s.head_revision "
+      "WHERE s.project = ? AND s.name > COALESCE((SELECT name FROM structures WHERE id = ? AND "
+      "project = ?), '') ORDER BY s.name LIMIT ?",
+      &stmt));
+  stmt.Bind(1, caller.project)
+      .Bind(2, after_id)
+      .Bind(3, caller.project)
+      .Bind(4, int64_t{page_size} + 1);
+  std::vector<int64_t> ids;
+  while (true) {
+    bool row = false;
+    PBA_RETURN_IF_ERROR(stmt.Step(&row));
+    if (!row) break;
+    StructureInfo& info = structures->emplace_back();
+    ids.push_back(stmt.ColumnInt(0));
+    info.project = project;
+    info.name = stmt.ColumnText(1);
+    info.head = stmt.ColumnInt(2);
+    info.metadata_etag = stmt.ColumnText(3);
+    info.created_us = stmt.ColumnInt(4);
+    info.metadata.material_json = stmt.ColumnText(5);
+    info.metadata.colour = {static_cast<int>(stmt.ColumnInt(6)),
+                            static_cast<int>(stmt.ColumnInt(7)),
+                            static_cast<int>(stmt.ColumnInt(8))};
+    info.metadata.group_path = stmt.ColumnText(9);
+  }
+  stmt = Statement();
+  if (static_cast<int>(structures->size()) > page_size) {
+    structures->pop_back();
+    ids.pop_back();
+    *next_page_token = EncodePageToken("structures", caller.project, ids.back());
+  }
+  for (size_t i = 0; i < structures->size(); ++i) {
+    StructureInfo& info = (*structures)[i];
+    PBA_RETURN_IF_ERROR(PublicLock({project, info.name}, ids[i], &info.lock));
+  }
   return Status::Ok();
 }
 

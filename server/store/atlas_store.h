@@ -98,6 +98,9 @@ class AtlasStore {
   // The user a token belongs to; kUnauthenticated for an unknown token or a
   // disabled user (the message never echoes the token).
   Status Authenticate(const std::string& token, std::string* user);
+  // How many users exist (disabled ones included): the server creates its
+  // first admin when there are none.
+  Status CountUsers(int64_t* count);
   // Creates a project with `user` as its admin.
   Status CreateProject(const std::string& user, const std::string& project);
   // Sets `member`'s role in `project`; `admin` must be an admin there. The
@@ -118,6 +121,11 @@ class AtlasStore {
                          const StructureMetadata& metadata, GeometryFormat format,
                          std::string_view geometry, Revision* revision);
   Status GetStructure(const std::string& user, const StructureRef& ref, StructureInfo* info);
+  // The project's structures by name (byte order); viewers may list. Paging
+  // as ListProjects.
+  Status ListStructures(const std::string& user, const std::string& project, int page_size,
+                        const std::string& page_token, std::vector<StructureInfo>* structures,
+                        std::string* next_page_token);
 
   // --- locks --------------------------------------------------------------
   // Locks `ref` for `user` for `lease_us` microseconds from now. A lock whose
@@ -131,10 +139,13 @@ class AtlasStore {
   Status RenewLock(const std::string& user, const std::string& lock_id, int64_t lease_us,
                    LockInfo* info);
   // Releases the caller's lock (lapsed or not, as long as no one took it over).
-  Status ReleaseLock(const std::string& user, const std::string& lock_id);
+  // With `released` non-null, sets it to the structure that was locked.
+  Status ReleaseLock(const std::string& user, const std::string& lock_id,
+                     StructureRef* released = nullptr);
   // Removes whoever's lock is on `ref`; project admins only. `reason` is
-  // audited.
-  Status BreakLock(const std::string& admin, const StructureRef& ref, const std::string& reason);
+  // audited. With `holder` non-null, sets it to the user whose lock it was.
+  Status BreakLock(const std::string& admin, const StructureRef& ref, const std::string& reason,
+                   std::string* holder = nullptr);
 
   // --- revisions ----------------------------------------------------------
   // Stores a new revision with the given geometry (and material, if set);
@@ -232,6 +243,8 @@ class AtlasStore {
                         Revision* revision);
   Status ReadRevision(const StructureRef& ref, int64_t structure, int64_t number,
                       Revision* revision, bool* found);
+  // The lock on `structure`, without its id, if any.
+  Status PublicLock(const StructureRef& ref, int64_t structure, std::optional<LockInfo>* lock);
   Status LoadSnapshot(const std::string& project, int64_t project_id, int64_t id, bool with_members,
                       SnapshotInfo* snapshot, bool* found);
   Status Audit(std::optional<int64_t> user, std::optional<int64_t> project,

@@ -73,6 +73,21 @@ Status AtlasStore::FindLock(int64_t structure, LockRow* lock, bool* found) {
   return Status::Ok();
 }
 
+Status AtlasStore::PublicLock(const StructureRef& ref, int64_t structure,
+                              std::optional<LockInfo>* lock) {
+  LockRow row;
+  bool found = false;
+  PBA_RETURN_IF_ERROR(FindLock(structure, &row, &found));
+  lock->reset();
+  if (!found) return Status::Ok();
+  LockInfo& info = lock->emplace();
+  info.owner = row.owner_name;
+  info.acquired_us = row.acquired_us;
+  info.lease_expiry_us = row.lease_expiry_us;
+  info.structure = ref;
+  return Status::Ok();
+}
+
 Status AtlasStore::CheckLockForWrite(const Caller& caller, const StructureRef& ref,
                                      int64_t structure, const std::string& lock_id) {
   LockRow lock;
@@ -165,6 +180,7 @@ Status AtlasStore::AcquireLock(const std::string& user, const StructureRef& ref,
   info->owner = user;
   info->acquired_us = now;
   info->lease_expiry_us = now + lease_us;
+  info->structure = ref;
   return Status::Ok();
 }
 
@@ -201,10 +217,12 @@ Status AtlasStore::RenewLock(const std::string& user, const std::string& lock_id
   info->owner = user;
   info->acquired_us = held.acquired_us;
   info->lease_expiry_us = now + lease_us;
+  info->structure = held.ref;
   return Status::Ok();
 }
 
-Status AtlasStore::ReleaseLock(const std::string& user, const std::string& lock_id) {
+Status AtlasStore::ReleaseLock(const std::string& user, const std::string& lock_id,
+                               StructureRef* released) {
   std::lock_guard lock(mutex_);
   Transaction transaction(*db_);
   PBA_RETURN_IF_ERROR(transaction.status());
@@ -222,11 +240,13 @@ Status AtlasStore::ReleaseLock(const std::string& user, const std::string& lock_
   stmt = Statement();
   PBA_RETURN_IF_ERROR(
       Audit(user_id, held.project, "lock.release", StructureTarget(held.ref), std::nullopt, ""));
-  return transaction.Commit();
+  PBA_RETURN_IF_ERROR(transaction.Commit());
+  if (released != nullptr) *released = held.ref;
+  return Status::Ok();
 }
 
 Status AtlasStore::BreakLock(const std::string& admin, const StructureRef& ref,
-                             const std::string& reason) {
+                             const std::string& reason, std::string* holder) {
   PBA_RETURN_IF_ERROR(CheckName("structure", ref.structure));
   if (reason.empty()) {
     return Status::InvalidArgument("reason", "must say why the lock is broken (it is audited)");
@@ -251,7 +271,9 @@ Status AtlasStore::BreakLock(const std::string& admin, const StructureRef& ref,
                             std::nullopt,
                             "lock of " + held.owner_name + " (lease until " +
                                 FormatTime(held.lease_expiry_us) + ") broken: " + reason));
-  return transaction.Commit();
+  PBA_RETURN_IF_ERROR(transaction.Commit());
+  if (holder != nullptr) *holder = held.owner_name;
+  return Status::Ok();
 }
 
 }  // namespace pba

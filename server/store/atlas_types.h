@@ -69,6 +69,18 @@ struct Revision {
   StructureMetadata metadata;
 };
 
+struct LockInfo {
+  std::string lock_id;  // a secret of the holder: renew, release and commit name it
+  std::string owner;
+  int64_t acquired_us = 0;
+  int64_t lease_expiry_us = 0;
+  // AcquireLock only: the structure was locked by someone whose lease had lapsed.
+  std::string took_over_from;
+  // The structure locked (AcquireLock, RenewLock, and the lock of a
+  // StructureInfo).
+  StructureRef structure;
+};
+
 struct StructureInfo {
   std::string project;
   std::string name;
@@ -78,15 +90,9 @@ struct StructureInfo {
   std::string metadata_etag;
   StructureMetadata metadata;  // the head's
   int64_t created_us = 0;
-};
-
-struct LockInfo {
-  std::string lock_id;  // a secret of the holder: renew, release and commit name it
-  std::string owner;
-  int64_t acquired_us = 0;
-  int64_t lease_expiry_us = 0;
-  // AcquireLock only: the structure was locked by someone whose lease had lapsed.
-  std::string took_over_from;
+  // The lock on the structure, lapsed or not, if any; its lock_id is always
+  // empty here (only the holder knows it).
+  std::optional<LockInfo> lock;
 };
 
 struct ProjectInfo {

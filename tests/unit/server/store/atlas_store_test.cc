@@ -275,6 +275,97 @@ TEST_F(AtlasStoreTest, ListProjectsPagesThroughTheCallersProjects) {
   EXPECT_STATUS(store_->CreateProject("dave", "p0"), Status::Code::kAlreadyExists, "p0");
 }
 
+TEST_F(AtlasStoreTest, ListStructuresPagesByNameForViewers) {
+  // Created out of name order: the listing sorts by name, not by creation.
+  for (const char* name : {"thalamus", "amygdala", "pons", "cerebellum", "insula"}) {
+    Revision revision;
+    ASSERT_OK(store_->CreateStructure("bob", {"atlas", name}, Metadata(), GeometryFormat::kStl,
+                                      "solid", &revision));
+  }
+  const LockInfo lock = Lock("bob", {"atlas", "insula"});
+  std::vector<std::string> names;
+  std::vector<StructureInfo> page;
+  std::string token;
+  int pages = 0;
+  do {
+    ASSERT_OK(store_->ListStructures("carol", "atlas", 4, token, &page, &token));
+    ++pages;
+    for (const StructureInfo& info : page) {
+      names.push_back(info.name);
+      EXPECT_EQ(info.project, "atlas");
+      EXPECT_EQ(info.head, 1);
+      EXPECT_EQ(info.metadata, Metadata());
+      EXPECT_FALSE(info.metadata_etag.empty());
+      EXPECT_EQ(info.created_us, kStart);
+      if (info.name == "insula") {
+        ASSERT_TRUE(info.lock.has_value());
+        EXPECT_EQ(info.lock->owner, "bob");
+        EXPECT_TRUE(info.lock->lock_id.empty()) << "only the holder knows the lock id";
+        EXPECT_EQ(info.lock->lease_expiry_us, lock.lease_expiry_us);
+      } else {
+        EXPECT_FALSE(info.lock.has_value()) << info.name;
+      }
+    }
+  } while (!token.empty());
+  EXPECT_EQ(pages, 2);
+  EXPECT_EQ(names, (std::vector<std::string>{"amygdala", "cerebellum", "hippocampus", "insula",
+                                             "pons", "thalamus"}));
+
+  // GetStructure shows the lock the same way.
+  const StructureInfo insula = Structure({"atlas", "insula"});
+  ASSERT_TRUE(insula.lock.has_value());
+  EXPECT_EQ(insula.lock->owner, "bob");
+  EXPECT_TRUE(insula.lock->lock_id.empty());
+  EXPECT_FALSE(Structure().lock.has_value());
+
+  ASSERT_OK(store_->ListStructures("carol", "atlas", 0, "", &page, &token));
+  EXPECT_EQ(page.size(), 6u);
+  EXPECT_TRUE(token.empty());
+  EXPECT_STATUS(store_->ListStructures("dave", "atlas", 0, "", &page, &token),
+                Status::Code::kPermissionDenied, "not a member");
+  EXPECT_STATUS(store_->ListStructures("carol", "nowhere", 0, "", &page, &token),
+                Status::Code::kNotFound, "nowhere");
+  EXPECT_STATUS(store_->ListStructures("carol", "atlas", -1, "", &page, &token),
+                Status::Code::kInvalidArgument, "page_size");
+  // A token of another listing is refused.
+  std::vector<Revision> history;
+  std::string history_token;
+  for (int i = 0; i < 2; ++i) {
+    Revision revision;
+    std::string etag;
+    ASSERT_OK(store_->UpdateMetadata("bob", kHippocampus, Structure().metadata_etag,
+                                     {Colour{i, 0, 0}, std::nullopt, std::nullopt}, "", &revision,
+                                     &etag));
+  }
+  ASSERT_OK(store_->History("carol", kHippocampus, 1, "", &history, &history_token));
+  ASSERT_FALSE(history_token.empty());
+  EXPECT_STATUS(store_->ListStructures("carol", "atlas", 2, history_token, &page, &token),
+                Status::Code::kInvalidArgument, "page_token");
+}
+
+TEST_F(AtlasStoreTest, CountUsersCountsEveryUser) {
+  int64_t count = 0;
+  ASSERT_OK(store_->CountUsers(&count));
+  EXPECT_EQ(count, 4);
+}
+
+TEST_F(AtlasStoreTest, ReleaseAndBreakNameWhatTheyRemoved) {
+  LockInfo lock = Lock("bob");
+  EXPECT_EQ(lock.structure.project, "atlas");
+  EXPECT_EQ(lock.structure.structure, "hippocampus");
+  LockInfo renewed;
+  ASSERT_OK(store_->RenewLock("bob", lock.lock_id, 60 * kSecond, &renewed));
+  EXPECT_EQ(renewed.structure.structure, "hippocampus");
+  StructureRef released;
+  ASSERT_OK(store_->ReleaseLock("bob", lock.lock_id, &released));
+  EXPECT_EQ(released.project, "atlas");
+  EXPECT_EQ(released.structure, "hippocampus");
+  Lock("bob");
+  std::string holder;
+  ASSERT_OK(store_->BreakLock("alice", kHippocampus, "bob is on leave", &holder));
+  EXPECT_EQ(holder, "bob");
+}
+
 TEST_F(AtlasStoreTest, CreateStructureStoresRevisionOneAndItsBlob) {
   Revision revision;
   std::string geometry;

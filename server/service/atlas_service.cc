@@ -1,0 +1,723 @@
+#include "service/atlas_service.h"
+
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+#include <string_view>
+#include <vector>
+
+#include "convert/convert.h"
+#include "service/atlas_messages.h"
+#include "service/geometry_check.h"
+#include "store/page_token.h"
+
+namespace pba {
+namespace {
+
+constexpr std::string_view kBearer = "bearer ";
+
+// The auth scheme is case-insensitive (RFC 7235 section 2.1).
+bool StartsWithBearer(std::string_view value) {
+  if (value.size() < kBearer.size()) return false;
+  for (size_t i = 0; i < kBearer.size(); ++i) {
+    const char c = value[i];
+    if ((c >= 'A' && c <= 'Z' ? static_cast<char>(c - 'A' + 'a') : c) != kBearer[i]) return false;
+  }
+  return true;
+}
+
+// Every refused call goes through here: one log line each (never a token:
+// no message below contains one).
+grpc::Status Fail(const char* rpc, const Status& status) {
+  grpc::Status result = ToGrpcStatus(status);
+  // pba::Status has no OUT_OF_RANGE; UploadStore marks an out-of-order chunk
+  // by the field "offset" (upload_store.h).
+  if (status.code() == Status::Code::kInvalidArgument && status.field() == "offset") {
+    result = grpc::Status(grpc::StatusCode::OUT_OF_RANGE, status.ToString());
+  }
+  spdlog::warn("{}: code {} {}", rpc, static_cast<int>(result.error_code()),
+               result.error_message());
+  return result;
+}
+
+grpc::Status Fail(const char* rpc, grpc::StatusCode code, const std::string& message) {
+  spdlog::warn("{}: code {} {}", rpc, static_cast<int>(code), message);
+  return grpc::Status(code, message);
+}
+
+int64_t NowMicros() {
+  return std::chrono::duration_cast<std::chrono::microseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+Status LeaseMicros(int64_t lease_seconds, int64_t* micros) {
+  if (lease_seconds == 0) lease_seconds = AtlasServiceImpl::kDefaultLeaseSeconds;
+  if (lease_seconds < 1 || lease_seconds > AtlasServiceImpl::kMaxLeaseSeconds) {
+    return Status::InvalidArgument(
+        "lease_seconds", "must be 1 to " + std::to_string(AtlasServiceImpl::kMaxLeaseSeconds) +
+                             " (0: " + std::to_string(AtlasServiceImpl::kDefaultLeaseSeconds) +
+                             "), not " + std::to_string(lease_seconds));
+  }
+  *micros = lease_seconds * 1000 * 1000;
+  return Status::Ok();
+}
+
+}  // namespace
+
+AtlasServiceImpl::AtlasServiceImpl(AtlasStore& store, UploadStore& uploads, AtlasEventHub& hub)
+    : store_(store), uploads_(uploads), hub_(hub) {}
+
+grpc::Status AtlasServiceImpl::Authenticate(const char* rpc, grpc::ServerContext* context,
+                                            std::string* user) {
+  const auto& metadata = context->client_metadata();
+  const auto it = metadata.find("authorization");
+  if (it == metadata.end()) {
+    return Fail(rpc, grpc::StatusCode::UNAUTHENTICATED,
+                "no credentials: send the metadata 'authorization: Bearer <token>'");
+  }
+  const std::string_view value(it->second.data(), it->second.size());
+  if (!StartsWithBearer(value)) {
+    return Fail(rpc, grpc::StatusCode::UNAUTHENTICATED,
+                "the authorization metadata must be 'Bearer <token>'");
+  }
+  const Status status = store_.Authenticate(std::string(value.substr(kBearer.size())), user);
+  if (!status.ok()) return Fail(rpc, status);
+  return grpc::Status::OK;
+}
+
+void AtlasServiceImpl::Publish(v1::AtlasEvent::Kind kind, const std::string& project,
+                               const std::string& structure, int64_t revision, int64_t snapshot,
+                               const std::string& user, const std::string& detail) {
+  v1::AtlasEvent event;
+  event.set_kind(kind);
+  event.set_project(project);
+  event.set_structure(structure);
+  event.set_revision(revision);
+  event.set_snapshot(snapshot);
+  event.set_user(user);
+  SetTime(NowMicros(), event.mutable_time());
+  event.set_detail(detail);
+  hub_.Publish(event);
+}
+
+Status AtlasServiceImpl::TakeUpload(const std::string& user, const std::string& upload_id,
+                                    GeometryFormat format, std::string* content) {
+  if (upload_id.empty()) return Status::InvalidArgument("upload_id", "required");
+  PBA_RETURN_IF_ERROR(uploads_.Take(user, upload_id, content));
+  return CheckGeometryContent("upload_id", format, *content);
+}
+
+// --- users and projects ----------------------------------------------------
+
+grpc::Status AtlasServiceImpl::WhoAmI(grpc::ServerContext* context, const v1::WhoAmIRequest*,
+                                      v1::User* response) {
+  std::string user;
+  grpc::Status auth = Authenticate("WhoAmI", context, &user);
+  if (!auth.ok()) return auth;
+  response->set_name(user);
+  return grpc::Status::OK;
+}
+
+grpc::Status AtlasServiceImpl::CreateProject(grpc::ServerContext* context,
+                                             const v1::CreateProjectRequest* request,
+                                             v1::Project* response) {
+  constexpr char kRpc[] = "CreateProject";
+  std::string user;
+  grpc::Status auth = Authenticate(kRpc, context, &user);
+  if (!auth.ok()) return auth;
+  const Status status = store_.CreateProject(user, request->name());
+  if (!status.ok()) return Fail(kRpc, status);
+  // The project as the caller's listing shows it (creation time included).
+  std::vector<ProjectInfo> projects;
+  std::string token;
+  do {
+    const Status listed = store_.ListProjects(user, kMaxPageSize, token, &projects, &token);
+    if (!listed.ok()) return Fail(kRpc, listed);
+    for (const ProjectInfo& project : projects) {
+      if (project.name != request->name()) continue;
+      response->set_name(project.name);
+      SetTime(project.created_us, response->mutable_create_time());
+      response->set_created_by(project.created_by);
+      response->set_role(RoleToProto(project.role));
+      return grpc::Status::OK;
+    }
+  } while (!token.empty());
+  return Fail(kRpc, grpc::StatusCode::INTERNAL, "the project just created cannot be listed");
+}
+
+grpc::Status AtlasServiceImpl::ListProjects(grpc::ServerContext* context,
+                                            const v1::ListProjectsRequest* request,
+                                            v1::ListProjectsResponse* response) {
+  constexpr char kRpc[] = "ListProjects";
+  std::string user;
+  grpc::Status auth = Authenticate(kRpc, context, &user);
+  if (!auth.ok()) return auth;
+  std::vector<ProjectInfo> projects;
+  std::string next;
+  const Status status =
+      store_.ListProjects(user, request->page_size(), request->page_token(), &projects, &next);
+  if (!status.ok()) return Fail(kRpc, status);
+  for (const ProjectInfo& project : projects) {
+    v1::Project* out = response->add_projects();
+    out->set_name(project.name);
+    SetTime(project.created_us, out->mutable_create_time());
+    out->set_created_by(project.created_by);
+    out->set_role(RoleToProto(project.role));
+  }
+  response->set_next_page_token(next);
+  return grpc::Status::OK;
+}
+
+grpc::Status AtlasServiceImpl::SetRole(grpc::ServerContext* context,
+                                       const v1::SetRoleRequest* request, v1::Member* response) {
+  constexpr char kRpc[] = "SetRole";
+  std::string user;
+  grpc::Status auth = Authenticate(kRpc, context, &user);
+  if (!auth.ok()) return auth;
+  Role role = Role::kViewer;
+  Status status = RoleFromProto(request->role(), &role);
+  if (status.ok()) status = store_.SetRole(user, request->project(), request->user(), role);
+  if (!status.ok()) return Fail(kRpc, status);
+  response->set_project(request->project());
+  response->set_user(request->user());
+  response->set_role(request->role());
+  return grpc::Status::OK;
+}
+
+// --- uploads ---------------------------------------------------------------
+
+grpc::Status AtlasServiceImpl::BeginUpload(grpc::ServerContext* context,
+                                           const v1::BeginUploadRequest* request,
+                                           v1::Upload* response) {
+  constexpr char kRpc[] = "BeginUpload";
+  std::string user;
+  grpc::Status auth = Authenticate(kRpc, context, &user);
+  if (!auth.ok()) return auth;
+  UploadInfo info;
+  const Status status = uploads_.Begin(user, request->size_bytes(), request->sha256(), &info);
+  if (!status.ok()) return Fail(kRpc, status);
+  UploadToProto(info, response);
+  return grpc::Status::OK;
+}
+
+grpc::Status AtlasServiceImpl::WriteUpload(grpc::ServerContext* context,
+                                           grpc::ServerReader<v1::UploadChunk>* reader,
+                                           v1::Upload* response) {
+  constexpr char kRpc[] = "WriteUpload";
+  std::string user;
+  grpc::Status auth = Authenticate(kRpc, context, &user);
+  if (!auth.ok()) return auth;
+  v1::UploadChunk chunk;
+  std::string upload_id;
+  UploadInfo info;
+  bool any = false;
+  while (reader->Read(&chunk)) {
+    if (!any) {
+      upload_id = chunk.upload_id();
+      any = true;
+    } else if (chunk.upload_id() != upload_id) {
+      return Fail(kRpc, Status::InvalidArgument(
+                            "upload_id", "every chunk of a stream must name the same upload"));
+    }
+    const Status status = uploads_.Write(user, upload_id, chunk.offset(), chunk.data(), &info);
+    if (!status.ok()) return Fail(kRpc, status);
+  }
+  if (!any) return Fail(kRpc, Status::InvalidArgument("upload_id", "the stream held no chunk"));
+  UploadToProto(info, response);
+  return grpc::Status::OK;
+}
+
+grpc::Status AtlasServiceImpl::GetUpload(grpc::ServerContext* context,
+                                         const v1::GetUploadRequest* request,
+                                         v1::Upload* response) {
+  constexpr char kRpc[] = "GetUpload";
+  std::string user;
+  grpc::Status auth = Authenticate(kRpc, context, &user);
+  if (!auth.ok()) return auth;
+  UploadInfo info;
+  const Status status = uploads_.Get(user, request->upload_id(), &info);
+  if (!status.ok()) return Fail(kRpc, status);
+  UploadToProto(info, response);
+  return grpc::Status::OK;
+}
+
+// --- structures ------------------------------------------------------------
+
+grpc::Status AtlasServiceImpl::CreateStructure(grpc::ServerContext* context,
+                                               const v1::CreateStructureRequest* request,
+                                               v1::Revision* response) {
+  constexpr char kRpc[] = "CreateStructure";
+  std::string user;
+  grpc::Status auth = Authenticate(kRpc, context, &user);
+  if (!auth.ok()) return auth;
+  const StructureRef ref{request->project(), request->name()};
+  // Cheap checks before the upload is read.
+  GeometryFormat format = GeometryFormat::kContoursJson;
+  Status status = CheckName("project", ref.project);
+  if (status.ok()) status = CheckName("name", ref.structure);
+  if (status.ok()) status = FormatFromProto(request->format(), &format);
+  const StructureMetadata metadata = MetadataFromProto(request->metadata());
+  if (status.ok()) status = CheckMetadata(metadata);
+  if (status.ok()) status = CheckMessage("message", request->message());
+  std::string content;
+  if (status.ok()) status = TakeUpload(user, request->upload_id(), format, &content);
+  if (!status.ok()) return Fail(kRpc, status);
+  Revision revision;
+  {
+    std::lock_guard lock(change_mutex_);
+    status = store_.CreateStructure(user, ref, metadata, format, content, &revision);
+    if (!status.ok()) return Fail(kRpc, status);
+    Publish(v1::AtlasEvent::STRUCTURE_CREATED, ref.project, ref.structure, revision.number, 0, user,
+            request->message());
+  }
+  const Status removed = uploads_.Remove(user, request->upload_id());
+  if (!removed.ok()) spdlog::warn("{}: {}", kRpc, removed.ToString());
+  RevisionToProto(revision, response);
+  return grpc::Status::OK;
+}
+
+grpc::Status AtlasServiceImpl::GetStructure(grpc::ServerContext* context,
+                                            const v1::GetStructureRequest* request,
+                                            v1::Structure* response) {
+  constexpr char kRpc[] = "GetStructure";
+  std::string user;
+  grpc::Status auth = Authenticate(kRpc, context, &user);
+  if (!auth.ok()) return auth;
+  StructureInfo info;
+  const Status status =
+      store_.GetStructure(user, {request->project(), request->structure()}, &info);
+  if (!status.ok()) return Fail(kRpc, status);
+  StructureToProto(info, response);
+  return grpc::Status::OK;
+}
+
+grpc::Status AtlasServiceImpl::ListStructures(grpc::ServerContext* context,
+                                              const v1::ListStructuresRequest* request,
+                                              v1::ListStructuresResponse* response) {
+  constexpr char kRpc[] = "ListStructures";
+  std::string user;
+  grpc::Status auth = Authenticate(kRpc, context, &user);
+  if (!auth.ok()) return auth;
+  std::vector<StructureInfo> structures;
+  std::string next;
+  const Status status = store_.ListStructures(user, request->project(), request->page_size(),
+                                              request->page_token(), &structures, &next);
+  if (!status.ok()) return Fail(kRpc, status);
+  for (const StructureInfo& info : structures) StructureToProto(info, response->add_structures());
+  response->set_next_page_token(next);
+  return grpc::Status::OK;
+}
+
+// --- locks -----------------------------------------------------------------
+
+grpc::Status AtlasServiceImpl::AcquireLock(grpc::ServerContext* context,
+                                           const v1::AcquireLockRequest* request,
+                                           v1::Lock* response) {
+  constexpr char kRpc[] = "AcquireLock";
+  std::string user;
+  grpc::Status auth = Authenticate(kRpc, context, &user);
+  if (!auth.ok()) return auth;
+  int64_t lease_us = 0;
+  Status status = LeaseMicros(request->lease_seconds(), &lease_us);
+  if (!status.ok()) return Fail(kRpc, status);
+  LockInfo info;
+  {
+    std::lock_guard lock(change_mutex_);
+    status = store_.AcquireLock(user, {request->project(), request->structure()}, lease_us, &info);
+    if (!status.ok()) return Fail(kRpc, status);
+    Publish(v1::AtlasEvent::LOCK_ACQUIRED, request->project(), request->structure(), 0, 0, user,
+            info.took_over_from.empty() ? "" : "took over from " + info.took_over_from);
+  }
+  LockToProto(info, response);  // the one response that carries lock_id
+  return grpc::Status::OK;
+}
+
+grpc::Status AtlasServiceImpl::RenewLock(grpc::ServerContext* context,
+                                         const v1::RenewLockRequest* request, v1::Lock* response) {
+  constexpr char kRpc[] = "RenewLock";
+  std::string user;
+  grpc::Status auth = Authenticate(kRpc, context, &user);
+  if (!auth.ok()) return auth;
+  int64_t lease_us = 0;
+  Status status = LeaseMicros(request->lease_seconds(), &lease_us);
+  if (!status.ok()) return Fail(kRpc, status);
+  LockInfo info;
+  {
+    std::lock_guard lock(change_mutex_);
+    status = store_.RenewLock(user, request->lock_id(), lease_us, &info);
+    if (!status.ok()) return Fail(kRpc, status);
+    Publish(v1::AtlasEvent::LOCK_RENEWED, info.structure.project, info.structure.structure, 0, 0,
+            user, "");
+  }
+  LockToProto(info, response);
+  response->clear_lock_id();
+  return grpc::Status::OK;
+}
+
+grpc::Status AtlasServiceImpl::ReleaseLock(grpc::ServerContext* context,
+                                           const v1::ReleaseLockRequest* request,
+                                           v1::ReleaseLockResponse*) {
+  constexpr char kRpc[] = "ReleaseLock";
+  std::string user;
+  grpc::Status auth = Authenticate(kRpc, context, &user);
+  if (!auth.ok()) return auth;
+  std::lock_guard lock(change_mutex_);
+  StructureRef released;
+  const Status status = store_.ReleaseLock(user, request->lock_id(), &released);
+  if (!status.ok()) return Fail(kRpc, status);
+  Publish(v1::AtlasEvent::LOCK_RELEASED, released.project, released.structure, 0, 0, user, "");
+  return grpc::Status::OK;
+}
+
+grpc::Status AtlasServiceImpl::BreakLock(grpc::ServerContext* context,
+                                         const v1::BreakLockRequest* request,
+                                         v1::BreakLockResponse* response) {
+  constexpr char kRpc[] = "BreakLock";
+  std::string user;
+  grpc::Status auth = Authenticate(kRpc, context, &user);
+  if (!auth.ok()) return auth;
+  std::lock_guard lock(change_mutex_);
+  std::string holder;
+  const Status status = store_.BreakLock(user, {request->project(), request->structure()},
+                                         request->reason(), &holder);
+  if (!status.ok()) return Fail(kRpc, status);
+  Publish(v1::AtlasEvent::LOCK_BROKEN, request->project(), request->structure(), 0, 0, user,
+          "lock of " + holder + " broken: " + request->reason());
+  response->set_holder(holder);
+  return grpc::Status::OK;
+}
+
+// --- revisions -------------------------------------------------------------
+
+grpc::Status AtlasServiceImpl::CommitStructure(grpc::ServerContext* context,
+                                               const v1::CommitStructureRequest* request,
+                                               v1::Revision* response) {
+  constexpr char kRpc[] = "CommitStructure";
+  std::string user;
+  grpc::Status auth = Authenticate(kRpc, context, &user);
+  if (!auth.ok()) return auth;
+  CommitRequest commit;
+  commit.structure = {request->project(), request->structure()};
+  commit.lock_id = request->lock_id();
+  commit.base_revision = request->base_revision();
+  if (request->has_material_json()) commit.material_json = request->material_json();
+  commit.message = request->message();
+  Status status = CheckName("project", commit.structure.project);
+  if (status.ok()) status = CheckName("structure", commit.structure.structure);
+  if (status.ok()) status = FormatFromProto(request->format(), &commit.format);
+  if (status.ok()) status = CheckMessage("message", commit.message);
+  if (status.ok() && commit.lock_id.empty()) {
+    status = Status::InvalidArgument("lock_id", "required: acquire the structure's lock first");
+  }
+  std::string content;
+  if (status.ok()) status = TakeUpload(user, request->upload_id(), commit.format, &content);
+  if (!status.ok()) return Fail(kRpc, status);
+  commit.geometry = content;
+  Revision revision;
+  {
+    std::lock_guard lock(change_mutex_);
+    status = store_.Commit(user, commit, &revision);
+    if (!status.ok()) return Fail(kRpc, status);
+    Publish(v1::AtlasEvent::COMMITTED, commit.structure.project, commit.structure.structure,
+            revision.number, 0, user, commit.message);
+  }
+  const Status removed = uploads_.Remove(user, request->upload_id());
+  if (!removed.ok()) spdlog::warn("{}: {}", kRpc, removed.ToString());
+  RevisionToProto(revision, response);
+  return grpc::Status::OK;
+}
+
+grpc::Status AtlasServiceImpl::UpdateMetadata(grpc::ServerContext* context,
+                                              const v1::UpdateMetadataRequest* request,
+                                              v1::UpdateMetadataResponse* response) {
+  constexpr char kRpc[] = "UpdateMetadata";
+  std::string user;
+  grpc::Status auth = Authenticate(kRpc, context, &user);
+  if (!auth.ok()) return auth;
+  MetadataUpdate update;
+  if (request->has_colour()) {
+    update.colour = Colour{request->colour().r(), request->colour().g(), request->colour().b()};
+  }
+  if (request->has_group_path()) update.group_path = request->group_path();
+  if (request->has_material_json()) update.material_json = request->material_json();
+  Revision revision;
+  std::string etag;
+  std::lock_guard lock(change_mutex_);
+  const Status status =
+      store_.UpdateMetadata(user, {request->project(), request->structure()}, request->etag(),
+                            update, request->message(), &revision, &etag);
+  if (!status.ok()) return Fail(kRpc, status);
+  // An update that changes nothing records nothing (the etag stays).
+  if (etag != request->etag()) {
+    Publish(v1::AtlasEvent::METADATA_UPDATED, request->project(), request->structure(),
+            revision.number, 0, user, revision.message);
+  }
+  RevisionToProto(revision, response->mutable_revision());
+  response->set_etag(etag);
+  return grpc::Status::OK;
+}
+
+grpc::Status AtlasServiceImpl::RevertStructure(grpc::ServerContext* context,
+                                               const v1::RevertStructureRequest* request,
+                                               v1::Revision* response) {
+  constexpr char kRpc[] = "RevertStructure";
+  std::string user;
+  grpc::Status auth = Authenticate(kRpc, context, &user);
+  if (!auth.ok()) return auth;
+  Revision revision;
+  std::lock_guard lock(change_mutex_);
+  const Status status = store_.Revert(user, {request->project(), request->structure()},
+                                      request->lock_id(), request->base_revision(),
+                                      request->to_revision(), request->message(), &revision);
+  if (!status.ok()) return Fail(kRpc, status);
+  Publish(v1::AtlasEvent::REVERTED, request->project(), request->structure(), revision.number, 0,
+          user, revision.message);
+  RevisionToProto(revision, response);
+  return grpc::Status::OK;
+}
+
+grpc::Status AtlasServiceImpl::ListRevisions(grpc::ServerContext* context,
+                                             const v1::ListRevisionsRequest* request,
+                                             v1::ListRevisionsResponse* response) {
+  constexpr char kRpc[] = "ListRevisions";
+  std::string user;
+  grpc::Status auth = Authenticate(kRpc, context, &user);
+  if (!auth.ok()) return auth;
+  std::vector<Revision> revisions;
+  std::string next;
+  const Status status =
+      store_.History(user, {request->project(), request->structure()}, request->page_size(),
+                     request->page_token(), &revisions, &next);
+  if (!status.ok()) return Fail(kRpc, status);
+  for (const Revision& revision : revisions) RevisionToProto(revision, response->add_revisions());
+  response->set_next_page_token(next);
+  return grpc::Status::OK;
+}
+
+grpc::Status AtlasServiceImpl::GetRevision(grpc::ServerContext* context,
+                                           const v1::GetRevisionRequest* request,
+                                           v1::Revision* response) {
+  constexpr char kRpc[] = "GetRevision";
+  std::string user;
+  grpc::Status auth = Authenticate(kRpc, context, &user);
+  if (!auth.ok()) return auth;
+  const StructureRef ref{request->project(), request->structure()};
+  int64_t number = request->revision();
+  Status status;
+  if (number < 0) status = Status::InvalidArgument("revision", "must be 0 (the head) or more");
+  if (status.ok() && number == 0) {
+    StructureInfo info;
+    status = store_.GetStructure(user, ref, &info);
+    number = info.head;
+  }
+  Revision revision;
+  if (status.ok()) status = store_.GetRevision(user, ref, number, &revision, nullptr);
+  if (!status.ok()) return Fail(kRpc, status);
+  RevisionToProto(revision, response);
+  return grpc::Status::OK;
+}
+
+grpc::Status AtlasServiceImpl::DownloadGeometry(grpc::ServerContext* context,
+                                                const v1::DownloadGeometryRequest* request,
+                                                grpc::ServerWriter<v1::DataChunk>* writer) {
+  constexpr char kRpc[] = "DownloadGeometry";
+  std::string user;
+  grpc::Status auth = Authenticate(kRpc, context, &user);
+  if (!auth.ok()) return auth;
+  const StructureRef ref{request->project(), request->structure()};
+  int64_t number = request->revision();
+  Status status;
+  if (number < 0) status = Status::InvalidArgument("revision", "must be 0 (the head) or more");
+  if (status.ok() && request->offset() < 0) {
+    status = Status::InvalidArgument("offset", "must not be negative");
+  }
+  if (status.ok() && number == 0) {
+    StructureInfo info;
+    status = store_.GetStructure(user, ref, &info);
+    number = info.head;
+  }
+  // The whole blob, verified against its hash, before the first byte is sent.
+  Revision revision;
+  std::string geometry;
+  if (status.ok()) status = store_.GetRevision(user, ref, number, &revision, &geometry);
+  if (!status.ok()) {
+    // A blob that no longer matches its hash is lost data, not a bug.
+    if (status.code() == Status::Code::kIo) {
+      return Fail(kRpc, grpc::StatusCode::DATA_LOSS, status.ToString());
+    }
+    return Fail(kRpc, status);
+  }
+  const int64_t size = static_cast<int64_t>(geometry.size());
+  int64_t offset = request->offset();
+  if (offset > size) {
+    return Fail(kRpc, grpc::StatusCode::OUT_OF_RANGE,
+                "offset " + std::to_string(offset) + " is past the end of revision " +
+                    std::to_string(number) + " of structure '" + ref.structure + "' (" +
+                    std::to_string(size) + " bytes)");
+  }
+  v1::DataChunk chunk;
+  chunk.set_total_size(size);
+  // One chunk even at the end, so the client learns total_size.
+  do {
+    if (context->IsCancelled()) return grpc::Status(grpc::StatusCode::CANCELLED, "cancelled");
+    const int64_t want = std::min<int64_t>(kChunkBytes, size - offset);
+    chunk.set_offset(offset);
+    chunk.set_data(geometry.data() + offset, static_cast<size_t>(want));
+    if (!writer->Write(chunk)) {
+      return grpc::Status(grpc::StatusCode::CANCELLED, "the client went away");
+    }
+    offset += want;
+  } while (offset < size);
+  return grpc::Status::OK;
+}
+
+// --- snapshots and audit ---------------------------------------------------
+
+grpc::Status AtlasServiceImpl::CreateSnapshot(grpc::ServerContext* context,
+                                              const v1::CreateSnapshotRequest* request,
+                                              v1::Snapshot* response) {
+  constexpr char kRpc[] = "CreateSnapshot";
+  std::string user;
+  grpc::Status auth = Authenticate(kRpc, context, &user);
+  if (!auth.ok()) return auth;
+  SnapshotInfo snapshot;
+  std::lock_guard lock(change_mutex_);
+  const Status status = store_.CreateSnapshot(user, request->project(), request->name(), &snapshot);
+  if (!status.ok()) return Fail(kRpc, status);
+  Publish(v1::AtlasEvent::SNAPSHOT_CREATED, request->project(), "", 0, snapshot.id, user,
+          snapshot.name);
+  SnapshotToProto(snapshot, response);
+  return grpc::Status::OK;
+}
+
+grpc::Status AtlasServiceImpl::TagSnapshot(grpc::ServerContext* context,
+                                           const v1::TagSnapshotRequest* request,
+                                           v1::Snapshot* response) {
+  constexpr char kRpc[] = "TagSnapshot";
+  std::string user;
+  grpc::Status auth = Authenticate(kRpc, context, &user);
+  if (!auth.ok()) return auth;
+  SnapshotInfo snapshot;
+  {
+    std::lock_guard lock(change_mutex_);
+    Status status = store_.Tag(user, request->project(), request->snapshot_id(), request->tag());
+    if (!status.ok()) return Fail(kRpc, status);
+    Publish(v1::AtlasEvent::SNAPSHOT_TAGGED, request->project(), "", 0, request->snapshot_id(),
+            user, request->tag());
+  }
+  const Status status = store_.ResolveSnapshot(user, request->project(),
+                                               std::to_string(request->snapshot_id()), &snapshot);
+  if (!status.ok()) return Fail(kRpc, status);
+  SnapshotToProto(snapshot, response);
+  return grpc::Status::OK;
+}
+
+grpc::Status AtlasServiceImpl::GetSnapshot(grpc::ServerContext* context,
+                                           const v1::GetSnapshotRequest* request,
+                                           v1::Snapshot* response) {
+  constexpr char kRpc[] = "GetSnapshot";
+  std::string user;
+  grpc::Status auth = Authenticate(kRpc, context, &user);
+  if (!auth.ok()) return auth;
+  SnapshotInfo snapshot;
+  const Status status =
+      store_.ResolveSnapshot(user, request->project(), request->snapshot(), &snapshot);
+  if (!status.ok()) return Fail(kRpc, status);
+  SnapshotToProto(snapshot, response);
+  return grpc::Status::OK;
+}
+
+grpc::Status AtlasServiceImpl::ListSnapshots(grpc::ServerContext* context,
+                                             const v1::ListSnapshotsRequest* request,
+                                             v1::ListSnapshotsResponse* response) {
+  constexpr char kRpc[] = "ListSnapshots";
+  std::string user;
+  grpc::Status auth = Authenticate(kRpc, context, &user);
+  if (!auth.ok()) return auth;
+  std::vector<SnapshotInfo> snapshots;
+  std::string next;
+  const Status status = store_.ListSnapshots(user, request->project(), request->page_size(),
+                                             request->page_token(), &snapshots, &next);
+  if (!status.ok()) return Fail(kRpc, status);
+  for (const SnapshotInfo& snapshot : snapshots) {
+    SnapshotToProto(snapshot, response->add_snapshots());
+  }
+  response->set_next_page_token(next);
+  return grpc::Status::OK;
+}
+
+grpc::Status AtlasServiceImpl::ListAudit(grpc::ServerContext* context,
+                                         const v1::ListAuditRequest* request,
+                                         v1::ListAuditResponse* response) {
+  constexpr char kRpc[] = "ListAudit";
+  std::string user;
+  grpc::Status auth = Authenticate(kRpc, context, &user);
+  if (!auth.ok()) return auth;
+  std::vector<AuditEntry> entries;
+  std::string next;
+  const Status status = store_.ListAudit(user, request->project(), request->page_size(),
+                                         request->page_token(), &entries, &next);
+  if (!status.ok()) return Fail(kRpc, status);
+  for (const AuditEntry& entry : entries) {
+    v1::AuditEntry* out = response->add_entries();
+    out->set_sequence(entry.seq);
+    SetTime(entry.time_us, out->mutable_time());
+    out->set_user(entry.user);
+    out->set_action(entry.action);
+    out->set_target(entry.target);
+    out->set_revision(entry.revision);
+    out->set_detail(entry.detail);
+  }
+  response->set_next_page_token(next);
+  return grpc::Status::OK;
+}
+
+// --- watch -----------------------------------------------------------------
+
+grpc::Status AtlasServiceImpl::Watch(grpc::ServerContext* context, const v1::WatchRequest* request,
+                                     grpc::ServerWriter<v1::AtlasEvent>* writer) {
+  constexpr char kRpc[] = "Watch";
+  std::string user;
+  grpc::Status auth = Authenticate(kRpc, context, &user);
+  if (!auth.ok()) return auth;
+  const std::string& project = request->project();
+  Role role = Role::kViewer;
+  bool member = false;
+  const Status status = store_.RoleOf(project, user, &role, &member);
+  if (!status.ok()) return Fail(kRpc, status);
+  if (!member) {
+    return Fail(
+        kRpc, grpc::StatusCode::PERMISSION_DENIED,
+        "user '" + user + "' is not a member of project '" + project + "'; watching needs viewer");
+  }
+  // Subscribed before READY goes out: nothing published after READY is missed.
+  const std::unique_ptr<AtlasEventHub::Subscription> subscription = hub_.Subscribe(project);
+  v1::AtlasEvent ready;
+  ready.set_kind(v1::AtlasEvent::READY);
+  ready.set_project(project);
+  ready.set_user(user);
+  SetTime(NowMicros(), ready.mutable_time());
+  if (!writer->Write(ready))
+    return grpc::Status(grpc::StatusCode::CANCELLED, "the client went away");
+  std::vector<v1::AtlasEvent> events;
+  while (true) {
+    if (context->IsCancelled()) return grpc::Status(grpc::StatusCode::CANCELLED, "watch cancelled");
+    bool overrun = false;
+    if (!subscription->Next(kWatchPoll, &events, &overrun)) {
+      if (overrun) {
+        return Fail(kRpc, grpc::StatusCode::RESOURCE_EXHAUSTED,
+                    "the watcher fell more than " + std::to_string(AtlasEventHub::kMaxQueued) +
+                        " events behind; watch again and read the audit log for the gap");
+      }
+      return grpc::Status(grpc::StatusCode::UNAVAILABLE, "the server is shutting down");
+    }
+    for (const v1::AtlasEvent& event : events) {
+      if (!writer->Write(event)) {
+        return grpc::Status(grpc::StatusCode::CANCELLED, "the client went away");
+      }
+    }
+  }
+}
+
+}  // namespace pba

@@ -1,0 +1,128 @@
+// AtlasServiceImpl: the pba.v1.AtlasService handlers over AtlasStore (the
+// repository), UploadStore (resumable uploads) and AtlasEventHub (Watch).
+// Each handler authenticates the caller, validates and translates the
+// request, calls the store and returns; rights, locks and etags are the
+// store's (atlas_store.h).
+//
+// Authentication: every call carries the metadata
+// `authorization: Bearer <token>`; a missing, malformed or unknown token is
+// UNAUTHENTICATED and the token is never echoed or logged.
+//
+// Events: every change that succeeds publishes one AtlasEvent for its
+// project. Changes and their publication happen under one mutex, so watchers
+// see events in the order the store applied them (the store serialises its
+// writes anyway, so this costs no concurrency the store had).
+//
+// Uploads are consumed by CreateStructure and CommitStructure: the complete
+// content is checked (size, SHA-256, then the format's minimal check of
+// geometry_check.h), stored as the new revision's blob, and the upload is
+// removed. A refused create or commit (stale base, lock) keeps the upload,
+// so the client can retry with it.
+#pragma once
+
+#include <chrono>
+#include <mutex>
+#include <string>
+
+#include "pba/v1/atlas.grpc.pb.h"
+#include "service/atlas_event_hub.h"
+#include "store/atlas_store.h"
+#include "store/upload_store.h"
+
+namespace pba {
+
+class AtlasServiceImpl final : public v1::AtlasService::Service {
+ public:
+  static constexpr std::chrono::milliseconds kWatchPoll{250};
+  static constexpr size_t kChunkBytes = 1 << 20;
+  static constexpr int64_t kDefaultLeaseSeconds = 300;
+  static constexpr int64_t kMaxLeaseSeconds = 3600;
+
+  AtlasServiceImpl(AtlasStore& store, UploadStore& uploads, AtlasEventHub& hub);
+
+  grpc::Status WhoAmI(grpc::ServerContext* context, const v1::WhoAmIRequest* request,
+                      v1::User* response) override;
+  grpc::Status CreateProject(grpc::ServerContext* context, const v1::CreateProjectRequest* request,
+                             v1::Project* response) override;
+  grpc::Status ListProjects(grpc::ServerContext* context, const v1::ListProjectsRequest* request,
+                            v1::ListProjectsResponse* response) override;
+  grpc::Status SetRole(grpc::ServerContext* context, const v1::SetRoleRequest* request,
+                       v1::Member* response) override;
+
+  grpc::Status BeginUpload(grpc::ServerContext* context, const v1::BeginUploadRequest* request,
+                           v1::Upload* response) override;
+  grpc::Status WriteUpload(grpc::ServerContext* context,
+                           grpc::ServerReader<v1::UploadChunk>* reader,
+                           v1::Upload* response) override;
+  grpc::Status GetUpload(grpc::ServerContext* context, const v1::GetUploadRequest* request,
+                         v1::Upload* response) override;
+
+  grpc::Status CreateStructure(grpc::ServerContext* context,
+                               const v1::CreateStructureRequest* request,
+                               v1::Revision* response) override;
+  grpc::Status GetStructure(grpc::ServerContext* context, const v1::GetStructureRequest* request,
+                            v1::Structure* response) override;
+  grpc::Status ListStructures(grpc::ServerContext* context,
+                              const v1::ListStructuresRequest* request,
+                              v1::ListStructuresResponse* response) override;
+
+  grpc::Status AcquireLock(grpc::ServerContext* context, const v1::AcquireLockRequest* request,
+                           v1::Lock* response) override;
+  grpc::Status RenewLock(grpc::ServerContext* context, const v1::RenewLockRequest* request,
+                         v1::Lock* response) override;
+  grpc::Status ReleaseLock(grpc::ServerContext* context, const v1::ReleaseLockRequest* request,
+                           v1::ReleaseLockResponse* response) override;
+  grpc::Status BreakLock(grpc::ServerContext* context, const v1::BreakLockRequest* request,
+                         v1::BreakLockResponse* response) override;
+
+  grpc::Status CommitStructure(grpc::ServerContext* context,
+                               const v1::CommitStructureRequest* request,
+                               v1::Revision* response) override;
+  grpc::Status UpdateMetadata(grpc::ServerContext* context,
+                              const v1::UpdateMetadataRequest* request,
+                              v1::UpdateMetadataResponse* response) override;
+  grpc::Status RevertStructure(grpc::ServerContext* context,
+                               const v1::RevertStructureRequest* request,
+                               v1::Revision* response) override;
+  grpc::Status ListRevisions(grpc::ServerContext* context, const v1::ListRevisionsRequest* request,
+                             v1::ListRevisionsResponse* response) override;
+  grpc::Status GetRevision(grpc::ServerContext* context, const v1::GetRevisionRequest* request,
+                           v1::Revision* response) override;
+  grpc::Status DownloadGeometry(grpc::ServerContext* context,
+                                const v1::DownloadGeometryRequest* request,
+                                grpc::ServerWriter<v1::DataChunk>* writer) override;
+
+  grpc::Status CreateSnapshot(grpc::ServerContext* context,
+                              const v1::CreateSnapshotRequest* request,
+                              v1::Snapshot* response) override;
+  grpc::Status TagSnapshot(grpc::ServerContext* context, const v1::TagSnapshotRequest* request,
+                           v1::Snapshot* response) override;
+  grpc::Status GetSnapshot(grpc::ServerContext* context, const v1::GetSnapshotRequest* request,
+                           v1::Snapshot* response) override;
+  grpc::Status ListSnapshots(grpc::ServerContext* context, const v1::ListSnapshotsRequest* request,
+                             v1::ListSnapshotsResponse* response) override;
+
+  grpc::Status ListAudit(grpc::ServerContext* context, const v1::ListAuditRequest* request,
+                         v1::ListAuditResponse* response) override;
+
+  grpc::Status Watch(grpc::ServerContext* context, const v1::WatchRequest* request,
+                     grpc::ServerWriter<v1::AtlasEvent>* writer) override;
+
+ private:
+  // The caller's user name from the bearer token; UNAUTHENTICATED otherwise.
+  grpc::Status Authenticate(const char* rpc, grpc::ServerContext* context, std::string* user);
+  // The verified, format-checked content of `user`'s complete upload.
+  Status TakeUpload(const std::string& user, const std::string& upload_id, GeometryFormat format,
+                    std::string* content);
+  void Publish(v1::AtlasEvent::Kind kind, const std::string& project, const std::string& structure,
+               int64_t revision, int64_t snapshot, const std::string& user,
+               const std::string& detail);
+
+  AtlasStore& store_;
+  UploadStore& uploads_;
+  AtlasEventHub& hub_;
+  // Held from a change in the store until its event is published.
+  std::mutex change_mutex_;
+};
+
+}  // namespace pba
