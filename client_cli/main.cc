@@ -192,7 +192,7 @@ int main(int argc, char** argv) {
   CLI::App* snapshot_create =
       atlas_snapshot->add_subcommand("create", "Pin the head of every structure of a project");
   add_project(snapshot_create, &snapshot_project);
-  snapshot_create->add_option("--name", name, "A name for it");
+  snapshot_create->add_option("--name", name, "A name for it (default: its UTC time)");
   CLI::App* snapshot_list = atlas_snapshot->add_subcommand("list", "Snapshots, newest first");
   add_project(snapshot_list, &snapshot_project);
   add_paging(snapshot_list);

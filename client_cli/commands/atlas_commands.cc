@@ -6,6 +6,7 @@
 #include <chrono>
 #include <csignal>
 #include <cstdio>
+#include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -871,7 +872,17 @@ int Download(Connection& connection, const DownloadArgs& args) {
 int CreateSnapshot(Connection& connection, const std::string& project, const std::string& name) {
   v1::CreateSnapshotRequest request;
   request.set_project(project);
-  request.set_name(name);
+  // Unnamed: named by its time, which is how people tell snapshots apart.
+  std::string named = name;
+  if (named.empty()) {
+    const std::time_t now = std::time(nullptr);
+    std::tm tm{};
+    gmtime_r(&now, &tm);
+    char buffer[48];
+    std::strftime(buffer, sizeof buffer, "snapshot %Y-%m-%d %H.%M.%S UTC", &tm);
+    named = buffer;
+  }
+  request.set_name(named);
   v1::Snapshot snapshot;
   auto context = connection.UnaryContext();
   grpc::Status status = connection.atlas().CreateSnapshot(context.get(), request, &snapshot);
@@ -880,9 +891,10 @@ int CreateSnapshot(Connection& connection, const std::string& project, const std
     PrintJson(snapshot);
   } else {
     std::printf(
-        "Snapshot %lld of %s pins %d structures; tag it with: pba atlas tag -p %s %lld TAG\n",
+        "Snapshot %lld of %s pins %d structure%s; tag it with: pba atlas tag -p %s %lld TAG\n",
         static_cast<long long>(snapshot.id()), project.c_str(), snapshot.members_size(),
-        project.c_str(), static_cast<long long>(snapshot.id()));
+        snapshot.members_size() == 1 ? "" : "s", project.c_str(),
+        static_cast<long long>(snapshot.id()));
   }
   return kExitOk;
 }

@@ -266,7 +266,8 @@ grpc::Status AtlasServiceImpl::CreateStructure(grpc::ServerContext* context,
   Revision revision;
   {
     std::lock_guard lock(change_mutex_);
-    status = store_.CreateStructure(user, ref, metadata, format, content, &revision);
+    status =
+        store_.CreateStructure(user, ref, metadata, format, content, &revision, request->message());
     if (!status.ok()) return Fail(kRpc, status);
     Publish(v1::AtlasEvent::STRUCTURE_CREATED, ref.project, ref.structure, revision.number, 0, user,
             request->message());

@@ -418,8 +418,10 @@ Status AtlasStore::ListProjects(const std::string& user, int page_size,
 
 Status AtlasStore::CreateStructure(const std::string& user, const StructureRef& ref,
                                    const StructureMetadata& metadata, GeometryFormat format,
-                                   std::string_view geometry, Revision* revision) {
+                                   std::string_view geometry, Revision* revision,
+                                   const std::string& message) {
   PBA_RETURN_IF_ERROR(CheckName("structure", ref.structure));
+  PBA_RETURN_IF_ERROR(CheckMessage("message", message));
   PBA_RETURN_IF_ERROR(CheckMetadata(metadata));
   PBA_RETURN_IF_ERROR(CheckGeometry(geometry));
   std::lock_guard lock(mutex_);
@@ -455,7 +457,8 @@ Status AtlasStore::CreateStructure(const std::string& user, const StructureRef& 
   structure.id = stmt.ColumnInt(0);
   stmt = Statement();
   PBA_RETURN_IF_ERROR(AppendRevision(caller, ref, structure, "create", "structure.create",
-                                     "created", content, true, revision));
+                                     message.empty() ? "created" : message, content, true,
+                                     revision));
   return transaction.Commit();
 }
 

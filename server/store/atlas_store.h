@@ -116,10 +116,12 @@ class AtlasStore {
                       std::vector<ProjectInfo>* projects, std::string* next_page_token);
 
   // --- structures ---------------------------------------------------------
-  // Creates a structure with revision 1 holding `geometry`.
+  // Creates a structure with revision 1 holding `geometry`; `message` is the
+  // revision's ("created" when empty).
   Status CreateStructure(const std::string& user, const StructureRef& ref,
                          const StructureMetadata& metadata, GeometryFormat format,
-                         std::string_view geometry, Revision* revision);
+                         std::string_view geometry, Revision* revision,
+                         const std::string& message = "");
   Status GetStructure(const std::string& user, const StructureRef& ref, StructureInfo* info);
   // The project's structures by name (byte order); viewers may list. Paging
   // as ListProjects.

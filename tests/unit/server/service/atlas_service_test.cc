@@ -38,16 +38,17 @@ bool Contains(const std::string& text, const std::string& fragment) {
   return text.find(fragment) != std::string::npos;
 }
 
-// Contours JSON of about `bytes` bytes: one plate with many points.
+// Contours JSON of about `bytes` bytes: one plate with one polygon of many
+// points (within the 500 mm the check allows).
 std::string Contours(size_t bytes, int seed) {
   std::string json = "{\"seed\": " + std::to_string(seed) + ", \"plates\": [{\"z_mm\": 1.5, ";
-  json += "\"polygon\": [";
+  json += "\"polygons\": [[";
   for (int i = 0; json.size() < bytes; ++i) {
     if (i > 0) json += ", ";
-    json += "[" + std::to_string(i % 997) + "." + std::to_string(seed % 10) + ", " +
-            std::to_string((i * 31) % 1009) + ".25]";
+    json += "[" + std::to_string(i % 397) + "." + std::to_string(seed % 10) + ", " +
+            std::to_string((i * i * 31) % 409) + ".25]";
   }
-  json += "]}]}";
+  json += "]]}]}";
   return json;
 }
 
@@ -419,15 +420,32 @@ TEST_F(AtlasServiceTest, AWrongHashOrBadGeometryIsRefusedAndNothingIsWritten) {
   v1::Revision revision;
   EXPECT_CODE(Call("bob", &v1::AtlasService::Stub::CreateStructure, create, &revision),
               grpc::StatusCode::INVALID_ARGUMENT, "sha256");
-  // Not JSON, an empty object, a NIfTI without its header.
-  for (const auto& [format, bad] : std::vector<std::pair<v1::GeometryFormat, std::string>>{
-           {v1::CONTOURS_JSON, "{\"plates\": [1, 2"},
-           {v1::CONTOURS_JSON, "{}"},
-           {v1::NIFTI, std::string(400, '\0')}}) {
+  // Not JSON, contours that are no shape (each named by where it fails), a
+  // NIfTI without its header.
+  const std::string square = "[[0, 0], [5, 0], [5, 5], [0, 5]]";
+  for (const auto& [format, bad, where] :
+       std::vector<std::tuple<v1::GeometryFormat, std::string, std::string>>{
+           {v1::CONTOURS_JSON, "{\"plates\": [1, 2", "valid JSON"},
+           {v1::CONTOURS_JSON, "{}", "plates"},
+           {v1::CONTOURS_JSON, "{\"plates\": []}", "plates"},
+           {v1::CONTOURS_JSON, "{\"plates\": [{\"z_mm\": 0, \"polygons\": []}]}",
+            "plates[0].polygons"},
+           {v1::CONTOURS_JSON, "{\"plates\": [{\"z_mm\": 0, \"polygons\": [[[0, 0], [1, 1]]]}]}",
+            "plates[0].polygons[0]"},
+           {v1::CONTOURS_JSON,
+            "{\"plates\": [{\"z_mm\": 0, \"polygons\": [[[0, 0], [1, 1], [2, 2]]]}]}", "no area"},
+           {v1::CONTOURS_JSON,
+            "{\"plates\": [{\"z_mm\": 0, \"polygons\": [[[0, 0], [0.05, 0], [0, 7000]]]}]}",
+            "plates[0].polygons[0][2]"},
+           {v1::CONTOURS_JSON,
+            "{\"plates\": [{\"z_mm\": 1, \"polygons\": [" + square +
+                "]}, {\"z_mm\": 1, \"polygons\": [" + square + "]}]}",
+            "plates[1].z_mm"},
+           {v1::NIFTI, std::string(400, '\0'), "NIfTI"}}) {
     create.set_format(format);
     create.set_upload_id(Upload("bob", bad));
     EXPECT_CODE(Call("bob", &v1::AtlasService::Stub::CreateStructure, create, &revision),
-                grpc::StatusCode::INVALID_ARGUMENT, "upload_id");
+                grpc::StatusCode::INVALID_ARGUMENT, where);
   }
   v1::GetStructureRequest get;
   get.set_project("atlas");
