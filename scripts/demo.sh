@@ -49,6 +49,11 @@ for _ in $(seq 1 100); do
 done
 [ -n "$address" ] || { echo "pba-server did not report its address in 10 s" >&2; exit 1; }
 echo "   listening on $address"
+# The first start made the user 'admin' and wrote its token there; `pba login
+# --token-file` would keep it, PBA_TOKEN lends it to these commands only.
+PBA_TOKEN=$(cat "$data/server/admin.token")
+export PBA_TOKEN
+echo "   signed in as admin (token in $data/server/admin.token)"
 pba=("$bin/pba" --server "$address")
 
 echo "== submitting $(basename "$scene")"

@@ -95,7 +95,7 @@ Status PbaServer::Start(const ServerOptions& options, std::unique_ptr<PbaServer>
   PBA_RETURN_IF_ERROR(CreateFirstAdmin(*server->atlas_store_, kAdminUser, token_file, &created));
   if (created) {
     server->admin_token_file_ = token_file;
-    spdlog::info("first start: created the atlas user '{}'; its token is in {} (mode 0600)",
+    spdlog::info("first start: created the user '{}'; its token is in {} (mode 0600)",
                  kAdminUser, token_file.string());
   }
 
@@ -108,7 +108,8 @@ Status PbaServer::Start(const ServerOptions& options, std::unique_ptr<PbaServer>
   server->executor_ =
       std::make_unique<JobExecutor>(*server->store_, server->hub_, std::move(executor_options));
   server->service_ =
-      std::make_unique<JobServiceImpl>(*server->store_, *server->executor_, server->hub_, data_dir);
+      std::make_unique<JobServiceImpl>(*server->store_, *server->executor_, server->hub_,
+                                       *server->atlas_store_, data_dir);
 
   grpc::EnableDefaultHealthCheckService(true);
   grpc::reflection::InitProtoReflectionServerBuilderPlugin();

@@ -8,23 +8,12 @@
 
 #include "convert/convert.h"
 #include "service/atlas_messages.h"
+#include "service/call_auth.h"
 #include "service/geometry_check.h"
 #include "store/page_token.h"
 
 namespace pba {
 namespace {
-
-constexpr std::string_view kBearer = "bearer ";
-
-// The auth scheme is case-insensitive (RFC 7235 section 2.1).
-bool StartsWithBearer(std::string_view value) {
-  if (value.size() < kBearer.size()) return false;
-  for (size_t i = 0; i < kBearer.size(); ++i) {
-    const char c = value[i];
-    if ((c >= 'A' && c <= 'Z' ? static_cast<char>(c - 'A' + 'a') : c) != kBearer[i]) return false;
-  }
-  return true;
-}
 
 // Every refused call goes through here: one log line each (never a token:
 // no message below contains one).
@@ -70,18 +59,7 @@ AtlasServiceImpl::AtlasServiceImpl(AtlasStore& store, UploadStore& uploads, Atla
 
 grpc::Status AtlasServiceImpl::Authenticate(const char* rpc, grpc::ServerContext* context,
                                             std::string* user) {
-  const auto& metadata = context->client_metadata();
-  const auto it = metadata.find("authorization");
-  if (it == metadata.end()) {
-    return Fail(rpc, grpc::StatusCode::UNAUTHENTICATED,
-                "no credentials: send the metadata 'authorization: Bearer <token>'");
-  }
-  const std::string_view value(it->second.data(), it->second.size());
-  if (!StartsWithBearer(value)) {
-    return Fail(rpc, grpc::StatusCode::UNAUTHENTICATED,
-                "the authorization metadata must be 'Bearer <token>'");
-  }
-  const Status status = store_.Authenticate(std::string(value.substr(kBearer.size())), user);
+  const Status status = CallUser(store_, *context, user);
   if (!status.ok()) return Fail(rpc, status);
   return grpc::Status::OK;
 }

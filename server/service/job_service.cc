@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "convert/convert.h"
+#include "service/call_auth.h"
 #include "store/job_id.h"
 
 namespace pba {
@@ -28,6 +29,12 @@ const char* CodeName(grpc::StatusCode code) {
       return "INVALID_ARGUMENT";
     case grpc::StatusCode::NOT_FOUND:
       return "NOT_FOUND";
+    case grpc::StatusCode::ALREADY_EXISTS:
+      return "ALREADY_EXISTS";
+    case grpc::StatusCode::PERMISSION_DENIED:
+      return "PERMISSION_DENIED";
+    case grpc::StatusCode::UNAUTHENTICATED:
+      return "UNAUTHENTICATED";
     case grpc::StatusCode::FAILED_PRECONDITION:
       return "FAILED_PRECONDITION";
     case grpc::StatusCode::OUT_OF_RANGE:
@@ -53,12 +60,10 @@ grpc::Status Error(const char* rpc, grpc::StatusCode code, const std::string& me
   return Error(rpc, grpc::Status(code, message));
 }
 
-// A store failure is the server's problem unless it blames an argument.
+// A store failure is the server's problem (INTERNAL) unless it blames an
+// argument or a name (ToGrpcStatus).
 grpc::Status StoreError(const char* rpc, const Status& status) {
-  if (status.code() == Status::Code::kInvalidArgument) {
-    return Error(rpc, grpc::StatusCode::INVALID_ARGUMENT, status.ToString());
-  }
-  return Error(rpc, grpc::StatusCode::INTERNAL, status.ToString());
+  return Error(rpc, ToGrpcStatus(status));
 }
 
 bool IsTerminal(v1::Job::State state) {
@@ -72,8 +77,19 @@ grpc::Status JobNotFound(const char* rpc, const std::string& id) {
 }  // namespace
 
 JobServiceImpl::JobServiceImpl(JobStore& store, JobExecutor& executor, JobEventHub& hub,
-                               fs::path data_dir)
-    : store_(store), executor_(executor), hub_(hub), data_dir_(std::move(data_dir)) {}
+                               AtlasStore& users, fs::path data_dir)
+    : store_(store),
+      executor_(executor),
+      hub_(hub),
+      users_(users),
+      data_dir_(std::move(data_dir)) {}
+
+grpc::Status JobServiceImpl::Authenticate(const char* rpc, const grpc::ServerContext& context,
+                                          std::string* user) {
+  const Status status = CallUser(users_, context, user);
+  if (!status.ok()) return Error(rpc, ToGrpcStatus(status));
+  return grpc::Status::OK;
+}
 
 void JobServiceImpl::OverlayLive(v1::Job* job) const {
   if (job->state() != v1::Job::RUNNING) return;
@@ -85,9 +101,11 @@ void JobServiceImpl::OverlayLive(v1::Job* job) const {
   }
 }
 
-grpc::Status JobServiceImpl::SubmitJob(grpc::ServerContext*, const v1::SubmitJobRequest* request,
-                                       v1::Job* response) {
+grpc::Status JobServiceImpl::SubmitJob(grpc::ServerContext* context,
+                                       const v1::SubmitJobRequest* request, v1::Job* response) {
   constexpr char kRpc[] = "SubmitJob";
+  std::string user;
+  if (grpc::Status auth = Authenticate(kRpc, *context, &user); !auth.ok()) return auth;
   if (request->request_id().size() > kMaxRequestIdLength) {
     return Error(kRpc, grpc::StatusCode::INVALID_ARGUMENT,
                  "request_id: at most " + std::to_string(kMaxRequestIdLength) + " characters");
@@ -100,19 +118,21 @@ grpc::Status JobServiceImpl::SubmitJob(grpc::ServerContext*, const v1::SubmitJob
 
   bool created = false;
   const Status stored =
-      store_.CreateJob(request->scene(), request->request_id(), response, &created);
+      store_.CreateJob(request->scene(), request->request_id(), user, response, &created);
   if (!stored.ok()) return StoreError(kRpc, stored);
   if (created) {
-    spdlog::info("job {} QUEUED: {} submitted", response->id(), response->name());
+    spdlog::info("job {} QUEUED: {} submitted by {}", response->id(), response->name(), user);
     executor_.Wake();
   }
   OverlayLive(response);
   return grpc::Status::OK;
 }
 
-grpc::Status JobServiceImpl::GetJob(grpc::ServerContext*, const v1::GetJobRequest* request,
+grpc::Status JobServiceImpl::GetJob(grpc::ServerContext* context, const v1::GetJobRequest* request,
                                     v1::Job* response) {
   constexpr char kRpc[] = "GetJob";
+  std::string user;
+  if (grpc::Status auth = Authenticate(kRpc, *context, &user); !auth.ok()) return auth;
   if (request->id().empty()) return Error(kRpc, grpc::StatusCode::INVALID_ARGUMENT, "id: required");
   bool found = false;
   const Status status = store_.GetJob(request->id(), JobView::kFull, response, &found);
@@ -122,8 +142,11 @@ grpc::Status JobServiceImpl::GetJob(grpc::ServerContext*, const v1::GetJobReques
   return grpc::Status::OK;
 }
 
-grpc::Status JobServiceImpl::ListJobs(grpc::ServerContext*, const v1::ListJobsRequest* request,
+grpc::Status JobServiceImpl::ListJobs(grpc::ServerContext* context,
+                                      const v1::ListJobsRequest* request,
                                       v1::ListJobsResponse* response) {
+  std::string user;
+  if (grpc::Status auth = Authenticate("ListJobs", *context, &user); !auth.ok()) return auth;
   std::vector<v1::Job> jobs;
   std::string next_page_token;
   const Status status =
@@ -137,11 +160,25 @@ grpc::Status JobServiceImpl::ListJobs(grpc::ServerContext*, const v1::ListJobsRe
   return grpc::Status::OK;
 }
 
-grpc::Status JobServiceImpl::CancelJob(grpc::ServerContext*, const v1::CancelJobRequest* request,
-                                       v1::Job* response) {
+grpc::Status JobServiceImpl::CancelJob(grpc::ServerContext* context,
+                                       const v1::CancelJobRequest* request, v1::Job* response) {
   constexpr char kRpc[] = "CancelJob";
+  std::string user;
+  if (grpc::Status auth = Authenticate(kRpc, *context, &user); !auth.ok()) return auth;
   if (request->id().empty()) return Error(kRpc, grpc::StatusCode::INVALID_ARGUMENT, "id: required");
   bool found = false;
+  {
+    // Only the owner cancels (jobs stored before owners were kept have none).
+    v1::Job job;
+    const Status loaded = store_.GetJob(request->id(), JobView::kBasic, &job, &found);
+    if (!loaded.ok()) return StoreError(kRpc, loaded);
+    if (!found) return JobNotFound(kRpc, request->id());
+    if (!job.owner().empty() && job.owner() != user) {
+      return Error(kRpc, grpc::StatusCode::PERMISSION_DENIED,
+                   "job " + request->id() + " was submitted by " + job.owner() +
+                       "; only they can cancel it");
+    }
+  }
   const Status status = executor_.Cancel(request->id(), response, &found);
   if (!status.ok()) return StoreError(kRpc, status);
   if (!found) return JobNotFound(kRpc, request->id());
@@ -153,6 +190,8 @@ grpc::Status JobServiceImpl::WatchJob(grpc::ServerContext* context,
                                       const v1::WatchJobRequest* request,
                                       grpc::ServerWriter<v1::JobEvent>* writer) {
   constexpr char kRpc[] = "WatchJob";
+  std::string user;
+  if (grpc::Status auth = Authenticate(kRpc, *context, &user); !auth.ok()) return auth;
   const std::string& id = request->id();
   if (id.empty()) return Error(kRpc, grpc::StatusCode::INVALID_ARGUMENT, "id: required");
   if (request->after_sequence() < 0) {
@@ -198,6 +237,8 @@ grpc::Status JobServiceImpl::DownloadResult(grpc::ServerContext* context,
                                             const v1::DownloadResultRequest* request,
                                             grpc::ServerWriter<v1::DataChunk>* writer) {
   constexpr char kRpc[] = "DownloadResult";
+  std::string user;
+  if (grpc::Status auth = Authenticate(kRpc, *context, &user); !auth.ok()) return auth;
   const std::string& id = request->job_id();
   if (id.empty()) return Error(kRpc, grpc::StatusCode::INVALID_ARGUMENT, "job_id: required");
   if (request->offset() < 0) {

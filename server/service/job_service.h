@@ -2,6 +2,9 @@
 // request, translates it into a JobStore / JobExecutor call and returns; the
 // work itself happens in the executor's workers.
 //
+// Every call is authenticated (call_auth.h); every user sees every job, and
+// only a job's owner (the user who submitted it) may cancel it.
+//
 // WatchJob sends the stored events after `after_sequence`, then events as they
 // are published (including live progress that is not stored: see
 // job_event_hub.h for how sequences work), and ends after the event that makes
@@ -15,6 +18,7 @@
 #include "jobs/job_event_hub.h"
 #include "jobs/job_executor.h"
 #include "pba/v1/job.grpc.pb.h"
+#include "store/atlas_store.h"
 #include "store/job_store.h"
 
 namespace pba {
@@ -25,7 +29,8 @@ class JobServiceImpl final : public v1::JobService::Service {
   static constexpr size_t kChunkBytes = 1 << 20;
   static constexpr char kDefaultResultFile[] = "result.h5";
 
-  JobServiceImpl(JobStore& store, JobExecutor& executor, JobEventHub& hub,
+  // `users` authenticates every call (call_auth.h).
+  JobServiceImpl(JobStore& store, JobExecutor& executor, JobEventHub& hub, AtlasStore& users,
                  std::filesystem::path data_dir);
 
   grpc::Status SubmitJob(grpc::ServerContext* context, const v1::SubmitJobRequest* request,
@@ -45,10 +50,13 @@ class JobServiceImpl final : public v1::JobService::Service {
  private:
   // Replaces the stored phase/progress of a running job by the live one.
   void OverlayLive(v1::Job* job) const;
+  // The caller, or UNAUTHENTICATED (logged).
+  grpc::Status Authenticate(const char* rpc, const grpc::ServerContext& context, std::string* user);
 
   JobStore& store_;
   JobExecutor& executor_;
   JobEventHub& hub_;
+  AtlasStore& users_;
   const std::filesystem::path data_dir_;
 };
 

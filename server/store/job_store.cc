@@ -22,7 +22,7 @@ constexpr int kIdAttempts = 8;
 constexpr char kPageTokenPrefix[] = "jobs.v1:";
 constexpr char kJobColumns[] =
     "id, name, state, create_time_us, start_time_us, end_time_us, phase, progress, error, "
-    "attempts, scene, summary";
+    "attempts, scene, summary, owner";
 
 int64_t NowMicros() {
   return std::chrono::duration_cast<std::chrono::microseconds>(
@@ -115,6 +115,7 @@ void ReadJobRow(const Statement& stmt, JobView view, v1::Job* job) {
     job->mutable_scene()->ParseFromString(stmt.ColumnBlob(10));
     if (!stmt.ColumnIsNull(11)) job->mutable_summary()->ParseFromString(stmt.ColumnBlob(11));
   }
+  job->set_owner(stmt.ColumnText(12));
 }
 
 }  // namespace
@@ -132,20 +133,26 @@ Status JobStore::SchemaVersion(int* version) {
   return ReadSchemaVersion(*db_, version);
 }
 
-Status JobStore::CreateJob(const v1::Scene& scene, const std::string& request_id, v1::Job* job,
-                           bool* created) {
+Status JobStore::CreateJob(const v1::Scene& scene, const std::string& request_id,
+                           const std::string& owner, v1::Job* job, bool* created) {
   std::lock_guard lock(mutex_);
   *created = false;
   Transaction transaction(*db_);
   PBA_RETURN_IF_ERROR(transaction.status());
   Statement stmt;
   if (!request_id.empty()) {
-    PBA_RETURN_IF_ERROR(db_->Prepare("SELECT id FROM jobs WHERE request_id = ?", &stmt));
+    PBA_RETURN_IF_ERROR(db_->Prepare("SELECT id, owner FROM jobs WHERE request_id = ?", &stmt));
     bool row = false;
     PBA_RETURN_IF_ERROR(stmt.Bind(1, request_id).Step(&row));
     if (row) {
       const std::string id = stmt.ColumnText(0);
+      const std::string earlier_owner = stmt.ColumnText(1);
       stmt = Statement();
+      // A request id names one user's submit; another's is not theirs to see.
+      if (earlier_owner != owner) {
+        return Status::AlreadyExists(
+            "request_id: another user's job was submitted with this request id");
+      }
       bool found = false;
       return LoadJob(id, JobView::kFull, job, &found);
     }
@@ -162,8 +169,8 @@ Status JobStore::CreateJob(const v1::Scene& scene, const std::string& request_id
 
   const std::string name = scene.name().empty() ? "unnamed" : scene.name();
   PBA_RETURN_IF_ERROR(
-      db_->Prepare("INSERT INTO jobs (id, request_id, name, state, scene, create_time_us) "
-                   "VALUES (?, ?, ?, ?, ?, ?)",
+      db_->Prepare("INSERT INTO jobs (id, request_id, name, state, scene, create_time_us, owner) "
+                   "VALUES (?, ?, ?, ?, ?, ?, ?)",
                    &stmt));
   stmt.Bind(1, id);
   if (request_id.empty()) {
@@ -175,6 +182,7 @@ Status JobStore::CreateJob(const v1::Scene& scene, const std::string& request_id
                           .Bind(4, StateName(v1::Job::QUEUED))
                           .BindBlob(5, scene.SerializeAsString())
                           .Bind(6, NowMicros())
+                          .Bind(7, owner)
                           .Run());
   stmt = Statement();
   PBA_RETURN_IF_ERROR(InsertEvent(MakeEvent(id, 1, v1::Job::QUEUED, "", 0, "queued")));
@@ -249,7 +257,7 @@ Status JobStore::ListJobs(int page_size, const std::string& page_token, std::vec
     v1::Job job;
     ReadJobRow(stmt, JobView::kBasic, &job);
     jobs->push_back(std::move(job));
-    numbers.push_back(stmt.ColumnInt(12));
+    numbers.push_back(stmt.ColumnInt(13));
   }
   stmt = Statement();
   if (static_cast<int>(jobs->size()) > page_size) {

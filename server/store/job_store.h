@@ -48,12 +48,12 @@ class JobStore {
 
   Status SchemaVersion(int* version);
 
-  // Stores a QUEUED job for `scene` with its first event. With a non-empty
-  // `request_id` that was seen before, returns the job created then and sets
-  // *created to false. The scene must already be validated.
-  Status CreateJob(const v1::Scene& scene, const std::string& request_id, v1::Job* job,
-                   bool* created);
-
+  // Stores a QUEUED job for `scene`, submitted by `owner`, with its first
+  // event. With a non-empty `request_id` that `owner` used before, returns
+  // the job created then and sets *created to false; another owner's
+  // request_id is kAlreadyExists. The scene must already be validated.
+  Status CreateJob(const v1::Scene& scene, const std::string& request_id,
+                   const std::string& owner, v1::Job* job, bool* created);
   Status GetJob(const std::string& id, JobView view, v1::Job* job, bool* found);
 
   // Newest first. `page_size` 0 means kDefaultPageSize; larger than

@@ -206,6 +206,11 @@ BEGIN
   SELECT RAISE(ABORT, 'the audit log is append-only');
 END;
 )sql"},
+      // Jobs carry the user who submitted them: only they may cancel one.
+      // Jobs stored before have no owner ('').
+      {3, "jobs: the submitting user", R"sql(
+ALTER TABLE jobs ADD COLUMN owner TEXT NOT NULL DEFAULT '';
+)sql"},
   };
   return kMigrations;
 }

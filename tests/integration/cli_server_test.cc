@@ -53,6 +53,11 @@ class CliServerTest : public ::testing::Test {
     server_ = std::make_unique<ServerProcess>(PBA_SERVER_BIN, dir_.path() / "data");
     std::string log;
     ASSERT_TRUE(server_->Start(&log)) << "pba-server did not start:\n" << log;
+    // Jobs need a user: the admin the first start created.
+    std::ifstream token(dir_.path() / "data" / "admin.token");
+    std::string admin;
+    ASSERT_TRUE(token >> admin);
+    ::setenv("PBA_TOKEN", admin.c_str(), 1);
   }
 
   void TearDown() override {

@@ -36,7 +36,7 @@ class JobExecutorTest : public ::testing::Test {
   std::string Submit(const std::string& scene_name) {
     v1::Job job;
     bool created = false;
-    EXPECT_TRUE(store_->CreateJob(ValidScene(scene_name), "", &job, &created).ok());
+    EXPECT_TRUE(store_->CreateJob(ValidScene(scene_name), "", "alice", &job, &created).ok());
     if (executor_) executor_->Wake();
     return job.id();
   }

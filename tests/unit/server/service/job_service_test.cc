@@ -6,9 +6,11 @@
 #include <grpcpp/grpcpp.h>
 #include <gtest/gtest.h>
 
+#include <fstream>
 #include <thread>
 
 #include "app/pba_server.h"
+#include "store/atlas_store.h"
 #include "unit/server/server_test_support.h"
 
 namespace pba {
@@ -38,10 +40,18 @@ class JobServiceTest : public ::testing::Test {
     ASSERT_NE(server_->address(), "127.0.0.1:0");
     channel_ = grpc::CreateChannel(server_->address(), grpc::InsecureChannelCredentials());
     stub_ = v1::JobService::NewStub(channel_);
+    std::ifstream token(options_.data_dir / "admin.token");
+    token >> token_;
+  }
+
+  // Every call carries the admin's token (written at the first start).
+  void Authorize(grpc::ClientContext* context) const {
+    context->AddMetadata("authorization", "Bearer " + token_);
   }
 
   grpc::Status Submit(const v1::Scene& scene, v1::Job* job, const std::string& request_id = "") {
     grpc::ClientContext context;
+    Authorize(&context);
     v1::SubmitJobRequest request;
     *request.mutable_scene() = scene;
     request.set_request_id(request_id);
@@ -50,6 +60,7 @@ class JobServiceTest : public ::testing::Test {
 
   grpc::Status Get(const std::string& id, v1::Job* job) {
     grpc::ClientContext context;
+    Authorize(&context);
     v1::GetJobRequest request;
     request.set_id(id);
     return stub_->GetJob(&context, request, job);
@@ -63,6 +74,7 @@ class JobServiceTest : public ::testing::Test {
 
   grpc::Status Cancel(const std::string& id, v1::Job* job) {
     grpc::ClientContext context;
+    Authorize(&context);
     v1::CancelJobRequest request;
     request.set_id(id);
     return stub_->CancelJob(&context, request, job);
@@ -76,6 +88,7 @@ class JobServiceTest : public ::testing::Test {
 
   grpc::Status Watch(const std::string& id, int64_t after, std::vector<v1::JobEvent>* events) {
     grpc::ClientContext context;
+    Authorize(&context);
     context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(30));
     v1::WatchJobRequest request;
     request.set_id(id);
@@ -89,6 +102,7 @@ class JobServiceTest : public ::testing::Test {
   grpc::Status Download(const std::string& id, const std::string& file, int64_t offset,
                         std::string* data, int* chunks = nullptr, int64_t* total = nullptr) {
     grpc::ClientContext context;
+    Authorize(&context);
     v1::DownloadResultRequest request;
     request.set_job_id(id);
     request.set_file(file);
@@ -112,6 +126,7 @@ class JobServiceTest : public ::testing::Test {
   std::unique_ptr<PbaServer> server_;
   std::shared_ptr<grpc::Channel> channel_;
   std::unique_ptr<v1::JobService::Stub> stub_;
+  std::string token_;
 };
 
 TEST_F(JobServiceTest, SubmitGetAndWatchToTheEnd) {
@@ -159,11 +174,66 @@ TEST_F(JobServiceTest, InvalidSceneIsRejectedAndNothingStored) {
       << status.error_message();
 
   grpc::ClientContext context;
+  Authorize(&context);
   v1::ListJobsResponse response;
   ASSERT_TRUE(stub_->ListJobs(&context, v1::ListJobsRequest(), &response).ok());
   EXPECT_EQ(response.jobs_size(), 0);
   // No job folder either.
   EXPECT_TRUE(fs::is_empty(options_.data_dir / "jobs"));
+}
+
+// Every call needs a token; a job is its submitter's to cancel.
+TEST_F(JobServiceTest, CallsAreAuthenticatedAndOnlyTheOwnerCancels) {
+  {
+    grpc::ClientContext context;
+    v1::SubmitJobRequest request;
+    *request.mutable_scene() = ValidScene("anonymous");
+    v1::Job job;
+    EXPECT_EQ(stub_->SubmitJob(&context, request, &job).error_code(),
+              grpc::StatusCode::UNAUTHENTICATED);
+    grpc::ClientContext listing;
+    listing.AddMetadata("authorization", "Bearer " + std::string(64, '0'));
+    v1::ListJobsResponse response;
+    EXPECT_EQ(stub_->ListJobs(&listing, v1::ListJobsRequest(), &response).error_code(),
+              grpc::StatusCode::UNAUTHENTICATED);
+  }
+  v1::Job job;
+  ASSERT_TRUE(Submit(ValidScene("slow"), &job).ok());
+  EXPECT_EQ(job.owner(), "admin");
+  // Bob, a second user, sees the job but cannot cancel it.
+  std::string bob;
+  {
+    std::unique_ptr<AtlasStore> users;
+    ASSERT_TRUE(AtlasStore::Open(options_.data_dir, &users).ok());
+    ASSERT_TRUE(users->CreateUser("bob", &bob).ok());
+  }
+  grpc::ClientContext get;
+  get.AddMetadata("authorization", "Bearer " + bob);
+  v1::GetJobRequest get_request;
+  get_request.set_id(job.id());
+  v1::Job seen;
+  ASSERT_TRUE(stub_->GetJob(&get, get_request, &seen).ok());
+  grpc::ClientContext cancel;
+  cancel.AddMetadata("authorization", "Bearer " + bob);
+  v1::CancelJobRequest cancel_request;
+  cancel_request.set_id(job.id());
+  v1::Job after;
+  const grpc::Status refused = stub_->CancelJob(&cancel, cancel_request, &after);
+  EXPECT_EQ(refused.error_code(), grpc::StatusCode::PERMISSION_DENIED);
+  EXPECT_NE(refused.error_message().find("admin"), std::string::npos) << refused.error_message();
+  EXPECT_NE(Get(job.id()).state(), v1::Job::CANCELLED);
+  // A request id another user chose is not bob's to reuse.
+  v1::Job keyed;
+  ASSERT_TRUE(Submit(ValidScene("ok"), &keyed, "shared-key").ok());
+  grpc::ClientContext reuse;
+  reuse.AddMetadata("authorization", "Bearer " + bob);
+  v1::SubmitJobRequest again;
+  *again.mutable_scene() = ValidScene("ok");
+  again.set_request_id("shared-key");
+  EXPECT_EQ(stub_->SubmitJob(&reuse, again, &after).error_code(), grpc::StatusCode::ALREADY_EXISTS);
+  // The owner can.
+  ASSERT_TRUE(Cancel(job.id(), &after).ok());
+  EXPECT_EQ(WaitForState(job.id(), v1::Job::CANCELLED).state(), v1::Job::CANCELLED);
 }
 
 TEST_F(JobServiceTest, RepeatedRequestIdIsIdempotent) {
@@ -197,6 +267,7 @@ TEST_F(JobServiceTest, ListPaginatesNewestFirst) {
   int pages = 0;
   do {
     grpc::ClientContext context;
+    Authorize(&context);
     v1::ListJobsRequest request;
     request.set_page_size(2);
     request.set_page_token(token);
@@ -214,6 +285,7 @@ TEST_F(JobServiceTest, ListPaginatesNewestFirst) {
   EXPECT_EQ(listed, std::vector<std::string>(ids.rbegin(), ids.rend()));
 
   grpc::ClientContext context;
+  Authorize(&context);
   v1::ListJobsRequest request;
   request.set_page_token("not-a-token");
   v1::ListJobsResponse response;
@@ -335,6 +407,7 @@ TEST_F(JobServiceTest, ShutdownEndsWatchesAndRequeuesRunningJobs) {
 
 TEST_F(JobServiceTest, HealthServiceIsOn) {
   grpc::ClientContext context;
+  Authorize(&context);
   // grpc.health.v1.Health/Check with an empty HealthCheckRequest (zero bytes).
   grpc::Slice empty("", 0);
   grpc::ByteBuffer request(&empty, 1);

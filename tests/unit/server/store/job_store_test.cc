@@ -24,7 +24,7 @@ class JobStoreTest : public ::testing::Test {
   v1::Job Create(const std::string& name, const std::string& request_id = "") {
     v1::Job job;
     bool created = false;
-    EXPECT_TRUE(store_->CreateJob(ValidScene(name), request_id, &job, &created).ok());
+    EXPECT_TRUE(store_->CreateJob(ValidScene(name), request_id, "alice", &job, &created).ok());
     return job;
   }
 
@@ -74,13 +74,19 @@ TEST_F(JobStoreTest, EmptyNameBecomesUnnamed) { EXPECT_EQ(Create("").name(), "un
 TEST_F(JobStoreTest, RepeatedRequestIdReturnsTheSameJob) {
   v1::Job first;
   bool created = false;
-  ASSERT_TRUE(store_->CreateJob(ValidScene("a"), "req-1", &first, &created).ok());
+  ASSERT_TRUE(store_->CreateJob(ValidScene("a"), "req-1", "alice", &first, &created).ok());
   EXPECT_TRUE(created);
   v1::Job second;
-  ASSERT_TRUE(store_->CreateJob(ValidScene("b"), "req-1", &second, &created).ok());
+  ASSERT_TRUE(store_->CreateJob(ValidScene("b"), "req-1", "alice", &second, &created).ok());
   EXPECT_FALSE(created);
   EXPECT_EQ(second.id(), first.id());
   EXPECT_EQ(second.name(), "a");
+  EXPECT_EQ(second.owner(), "alice");
+  // Another user's request id is not theirs: refused, nothing stored.
+  v1::Job other;
+  const Status refused = store_->CreateJob(ValidScene("e"), "req-1", "bob", &other, &created);
+  EXPECT_EQ(refused.code(), Status::Code::kAlreadyExists) << refused.ToString();
+  EXPECT_FALSE(created);
 
   std::vector<v1::Job> jobs;
   std::string token;
