@@ -1,6 +1,8 @@
 #include "connection.h"
 
 #include <cstdio>
+#include <fstream>
+#include <sstream>
 
 #include "exit_codes.h"
 
@@ -11,7 +13,18 @@ Connection::Connection(const GlobalOptions& options) : options_(options) {
   // Fail quickly, not after the default 20 s of reconnect back-off.
   args.SetInt(GRPC_ARG_INITIAL_RECONNECT_BACKOFF_MS, 500);
   args.SetInt(GRPC_ARG_MAX_RECONNECT_BACKOFF_MS, 2000);
-  channel_ = grpc::CreateCustomChannel(options_.server, grpc::InsecureChannelCredentials(), args);
+  std::shared_ptr<grpc::ChannelCredentials> credentials = grpc::InsecureChannelCredentials();
+  if (options_.tls || !options_.tls_ca.empty()) {
+    grpc::SslCredentialsOptions ssl;
+    if (!options_.tls_ca.empty()) {
+      std::ifstream in(options_.tls_ca);
+      std::stringstream pem;
+      pem << in.rdbuf();
+      ssl.pem_root_certs = pem.str();
+    }
+    credentials = grpc::SslCredentials(ssl);
+  }
+  channel_ = grpc::CreateCustomChannel(options_.server, credentials, args);
   jobs_ = v1::JobService::NewStub(channel_);
   atlas_ = v1::AtlasService::NewStub(channel_);
 }

@@ -21,6 +21,11 @@ struct GlobalOptions {
   // Access token sent as `authorization: Bearer <token>`; by default the
   // one `pba login` stored for the server, or PBA_TOKEN (credentials.h).
   std::string token;
+  // TLS: the PEM certificate of the authority that signed the server's (or
+  // the server's own, self-signed); `tls` alone uses the system's roots.
+  // Default from PBA_TLS_CA.
+  std::string tls_ca;
+  bool tls = false;
 };
 
 class Connection {

@@ -26,6 +26,11 @@ int main(int argc, char** argv) {
   app.add_option("--server", global.server, "pba-server address HOST:PORT (env PBA_SERVER)")
       ->capture_default_str();
   app.add_flag("--json", global.json, "Print machine-readable JSON instead of tables");
+  if (const char* env = std::getenv("PBA_TLS_CA"); env != nullptr) global.tls_ca = env;
+  app.add_option("--tls-ca", global.tls_ca,
+                 "Connect with TLS, trusting this PEM certificate (env PBA_TLS_CA)")
+      ->check(CLI::ExistingFile);
+  app.add_flag("--tls", global.tls, "Connect with TLS, trusting the system's certificates");
   app.add_option("--timeout", global.timeout_s, "Deadline of each request in seconds")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();

@@ -15,6 +15,7 @@ packages=(
   calculix-ccx
   libssl-dev
   gnuplot-nox
+  openssl
 )
 
 missing=()

@@ -66,6 +66,7 @@ int main(int argc, char** argv) {
   std::string solver;
   int max_running = 1;
   std::string log_level = "info";
+  std::string tls_cert, tls_key;
   app.add_option("--data", data_dir, "Data directory (pba.db, jobs/); created if absent");
   app.add_option("--listen", listen, "HOST:PORT to listen on; port 0 picks a free port")
       ->capture_default_str();
@@ -76,6 +77,9 @@ int main(int argc, char** argv) {
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error, critical or off")
       ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "critical", "off"}))
       ->capture_default_str();
+  app.add_option("--tls-cert", tls_cert,
+                 "PEM certificate (chain) to serve TLS with; needs --tls-key");
+  app.add_option("--tls-key", tls_key, "PEM private key of --tls-cert");
   CLI::App* admin = app.add_subcommand("admin", "Offline administration of the data directory");
   admin->require_subcommand(1);
   CLI::App* create_user =
@@ -110,6 +114,8 @@ int main(int argc, char** argv) {
   options.listen = listen;
   options.solver = solver.empty() ? DefaultSolver() : fs::path(solver);
   options.max_running = max_running;
+  options.tls_cert = tls_cert;
+  options.tls_key = tls_key;
   // Parallel solves share the cores rather than each taking all of them.
   if (max_running > 1) {
     options.solver_threads =
@@ -129,6 +135,7 @@ int main(int argc, char** argv) {
   const pba::Status written = pba::WriteFileAtomically(server_json, info);
   if (!written.ok()) spdlog::warn("cannot write server.json: {}", written.ToString());
   std::cout << "pba-server listening on " << server->address() << std::endl;
+  if (!tls_cert.empty()) spdlog::info("TLS with the certificate {}", tls_cert);
   spdlog::info("serving jobs from {} with solver {}", fs::absolute(data_dir).string(),
                options.solver.string());
 

@@ -9,6 +9,8 @@
 
 #include <cerrno>
 #include <cstring>
+#include <fstream>
+#include <sstream>
 #include <system_error>
 #include <vector>
 
@@ -68,6 +70,25 @@ Status CreateFirstAdmin(AtlasStore& store, const std::string& user, const fs::pa
   return Status::Ok();
 }
 
+namespace {
+
+// A PEM file's text; kInvalidArgument naming `field` when it cannot be read
+// or holds no "-----BEGIN ...<kind>-----" block.
+Status ReadPem(const fs::path& path, const char* field, const char* kind, std::string* pem) {
+  std::ifstream in(path);
+  if (!in) return Status::InvalidArgument(field, "cannot read " + path.string());
+  std::stringstream text;
+  text << in.rdbuf();
+  *pem = text.str();
+  if (pem->find("-----BEGIN") == std::string::npos || pem->find(kind) == std::string::npos) {
+    return Status::InvalidArgument(field,
+                                   path.string() + " holds no PEM " + std::string(kind) + " block");
+  }
+  return Status::Ok();
+}
+
+}  // namespace
+
 Status PbaServer::Start(const ServerOptions& options, std::unique_ptr<PbaServer>* out) {
   std::unique_ptr<PbaServer> server(new PbaServer());
   server->options_ = options;
@@ -77,6 +98,17 @@ Status PbaServer::Start(const ServerOptions& options, std::unique_ptr<PbaServer>
   fs::create_directories(data_dir / "jobs", ec);
   if (ec) return Status::Io("cannot create " + (data_dir / "jobs").string() + ": " + ec.message());
   PBA_RETURN_IF_ERROR(CheckSolver(options.solver));
+  // TLS material is read before anything is opened: a bad path is named at
+  // once, not after the stores are up.
+  std::string cert_pem, key_pem;
+  if (options.tls_cert.empty() != options.tls_key.empty()) {
+    return Status::InvalidArgument(options.tls_cert.empty() ? "tls_cert" : "tls_key",
+                                   "TLS needs both a certificate and its key");
+  }
+  if (!options.tls_cert.empty()) {
+    PBA_RETURN_IF_ERROR(ReadPem(options.tls_cert, "tls_cert", "CERTIFICATE", &cert_pem));
+    PBA_RETURN_IF_ERROR(ReadPem(options.tls_key, "tls_key", "PRIVATE KEY", &key_pem));
+  }
 
   PBA_RETURN_IF_ERROR(JobStore::Open(data_dir / "pba.db", &server->store_));
   std::vector<v1::JobEvent> requeued;
@@ -95,8 +127,8 @@ Status PbaServer::Start(const ServerOptions& options, std::unique_ptr<PbaServer>
   PBA_RETURN_IF_ERROR(CreateFirstAdmin(*server->atlas_store_, kAdminUser, token_file, &created));
   if (created) {
     server->admin_token_file_ = token_file;
-    spdlog::info("first start: created the user '{}'; its token is in {} (mode 0600)",
-                 kAdminUser, token_file.string());
+    spdlog::info("first start: created the user '{}'; its token is in {} (mode 0600)", kAdminUser,
+                 token_file.string());
   }
 
   ExecutorOptions executor_options;
@@ -107,15 +139,20 @@ Status PbaServer::Start(const ServerOptions& options, std::unique_ptr<PbaServer>
   executor_options.kill_grace = options.kill_grace;
   server->executor_ =
       std::make_unique<JobExecutor>(*server->store_, server->hub_, std::move(executor_options));
-  server->service_ =
-      std::make_unique<JobServiceImpl>(*server->store_, *server->executor_, server->hub_,
-                                       *server->atlas_store_, data_dir);
+  server->service_ = std::make_unique<JobServiceImpl>(
+      *server->store_, *server->executor_, server->hub_, *server->atlas_store_, data_dir);
 
   grpc::EnableDefaultHealthCheckService(true);
   grpc::reflection::InitProtoReflectionServerBuilderPlugin();
   grpc::ServerBuilder builder;
   int port = 0;
-  builder.AddListeningPort(options.listen, grpc::InsecureServerCredentials(), &port);
+  std::shared_ptr<grpc::ServerCredentials> credentials = grpc::InsecureServerCredentials();
+  if (!options.tls_cert.empty()) {
+    grpc::SslServerCredentialsOptions ssl;
+    ssl.pem_key_cert_pairs.push_back({key_pem, cert_pem});
+    credentials = grpc::SslServerCredentials(ssl);
+  }
+  builder.AddListeningPort(options.listen, credentials, &port);
   builder.RegisterService(server->service_.get());
   server->atlas_service_ = std::make_unique<AtlasServiceImpl>(
       *server->atlas_store_, *server->uploads_, server->atlas_hub_);

@@ -41,6 +41,9 @@ struct ServerOptions {
   std::chrono::milliseconds kill_grace{10000};
   // How long in-flight RPCs may take to finish at shutdown.
   std::chrono::milliseconds drain{5000};
+  // TLS: PEM certificate chain and private key. Both set: the server speaks
+  // only TLS; both empty: plaintext (fine on loopback); one alone is an error.
+  std::filesystem::path tls_cert, tls_key;
 };
 
 class PbaServer {
