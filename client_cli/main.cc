@@ -191,6 +191,12 @@ int main(int argc, char** argv) {
   atlas_download->add_option("structure", download.target.structure, "Structure name")->required();
   atlas_download->add_option("-r,--revision", download.revision, "Revision (default the head)");
   atlas_download->add_option("-o,--out", download.out, "File to write (default NAME.<format>)");
+  int64_t diff_from = 0, diff_to = 0;
+  CLI::App* atlas_diff = atlas->add_subcommand(
+      "diff", "What changed between two revisions: material, colour, group, shape");
+  add_target(atlas_diff);
+  atlas_diff->add_option("--from", diff_from, "Older revision (default the head's parent)");
+  atlas_diff->add_option("--to", diff_to, "Newer revision (default the head)");
   CLI::App* atlas_snapshot = atlas->add_subcommand("snapshot", "Pin, list and show snapshots");
   atlas_snapshot->require_subcommand(1);
   std::string snapshot_project, snapshot_which;
@@ -260,6 +266,7 @@ int main(int argc, char** argv) {
   if (*atlas_revert) return Revert(connection, revert);
   if (*atlas_set) return SetMetadata(connection, metadata);
   if (*atlas_download) return Download(connection, download);
+  if (*atlas_diff) return Diff(connection, target, diff_from, diff_to);
   if (*snapshot_create) return CreateSnapshot(connection, snapshot_project, name);
   if (*snapshot_list) return ListSnapshots(connection, snapshot_project, page);
   if (*snapshot_show) return ShowSnapshot(connection, snapshot_project, snapshot_which);

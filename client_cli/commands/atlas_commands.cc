@@ -867,6 +867,67 @@ int Download(Connection& connection, const DownloadArgs& args) {
   return kExitOk;
 }
 
+int Diff(Connection& connection, const StructureArgs& target, int64_t from, int64_t to) {
+  v1::DiffRevisionsRequest request;
+  request.set_project(target.project);
+  request.set_structure(target.structure);
+  request.set_from_revision(from);
+  request.set_to_revision(to);
+  v1::RevisionDiff diff;
+  auto context = connection.UnaryContext();
+  grpc::Status status = connection.atlas().DiffRevisions(context.get(), request, &diff);
+  if (!status.ok()) return connection.Fail(target.project + "/" + target.structure, status);
+  if (connection.options().json) {
+    PrintJson(diff);
+    return kExitOk;
+  }
+  std::printf("%s/%s, revision %lld -> %lld\n", diff.project().c_str(), diff.structure().c_str(),
+              static_cast<long long>(diff.from_revision()),
+              static_cast<long long>(diff.to_revision()));
+  std::vector<std::vector<std::string>> rows = {{"WHAT", "FROM", "TO"}};
+  for (const auto& change : diff.material_changes()) {
+    rows.push_back({"material " + change.parameter(), change.from().empty() ? "-" : change.from(),
+                    change.to().empty() ? "-" : change.to()});
+  }
+  if (ColourText(diff.from_colour()) != ColourText(diff.to_colour())) {
+    rows.push_back({"colour", ColourText(diff.from_colour()), ColourText(diff.to_colour())});
+  }
+  if (diff.from_group() != diff.to_group()) {
+    rows.push_back({"group", diff.from_group(), diff.to_group()});
+  }
+  if (diff.has_contours()) {
+    const v1::ContoursDiff& c = diff.contours();
+    char from_volume[32], to_volume[32];
+    std::snprintf(from_volume, sizeof from_volume, "%.1f mm^3", c.from_volume_mm3());
+    std::snprintf(to_volume, sizeof to_volume, "%.1f mm^3", c.to_volume_mm3());
+    rows.push_back({"volume", from_volume, to_volume});
+  }
+  if (rows.size() > 1) PrintTable(rows);
+  if (!diff.geometry_changed()) {
+    std::puts("Geometry: unchanged.");
+  } else if (diff.has_contours()) {
+    const v1::ContoursDiff& c = diff.contours();
+    std::printf(
+        "Geometry: over %d plate%s at shared heights the contours are at most %.3f mm apart "
+        "(Hausdorff), %.3f mm on average",
+        c.plates_compared(), c.plates_compared() == 1 ? "" : "s", c.hausdorff_mm(),
+        c.mean_distance_mm());
+    const auto heights = [](const google::protobuf::RepeatedField<double>& z) {
+      std::string out;
+      for (double h : z) out += (out.empty() ? "" : ", ") + std::to_string(h).substr(0, 6);
+      return out;
+    };
+    if (!c.only_in_from_z_mm().empty())
+      std::printf("; plates removed at z = %s mm", heights(c.only_in_from_z_mm()).c_str());
+    if (!c.only_in_to_z_mm().empty())
+      std::printf("; plates added at z = %s mm", heights(c.only_in_to_z_mm()).c_str());
+    std::puts(".");
+  } else {
+    std::puts("Geometry: changed (distances are measured between plate contours only).");
+  }
+  return kExitOk;
+}
+
 // --- snapshots, audit, watch -------------------------------------------------------
 
 int CreateSnapshot(Connection& connection, const std::string& project, const std::string& name) {

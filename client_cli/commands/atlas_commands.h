@@ -99,6 +99,9 @@ int BreakLock(Connection& connection, const StructureArgs& target, const std::st
 int Revert(Connection& connection, const RevertArgs& args);
 int SetMetadata(Connection& connection, const MetadataArgs& args);
 int Download(Connection& connection, const DownloadArgs& args);
+// What changed from revision `from` to `to` (0, 0: the head's parent to the
+// head).
+int Diff(Connection& connection, const StructureArgs& target, int64_t from, int64_t to);
 
 int CreateSnapshot(Connection& connection, const std::string& project, const std::string& name);
 int TagSnapshot(Connection& connection, const std::string& project, int64_t id,

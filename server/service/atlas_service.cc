@@ -1,8 +1,12 @@
 #include "service/atlas_service.h"
 
+#include <google/protobuf/struct.pb.h>
+#include <google/protobuf/util/json_util.h>
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <chrono>
+#include <map>
 #include <string_view>
 #include <vector>
 
@@ -10,6 +14,7 @@
 #include "service/atlas_messages.h"
 #include "service/call_auth.h"
 #include "service/geometry_check.h"
+#include "service/geometry_diff.h"
 #include "store/page_token.h"
 
 namespace pba {
@@ -494,6 +499,91 @@ grpc::Status AtlasServiceImpl::GetRevision(grpc::ServerContext* context,
   if (status.ok()) status = store_.GetRevision(user, ref, number, &revision, nullptr);
   if (!status.ok()) return Fail(kRpc, status);
   RevisionToProto(revision, response);
+  return grpc::Status::OK;
+}
+
+namespace {
+
+// The top-level parameters of two material JSON objects that differ.
+void DiffMaterials(const std::string& from, const std::string& to, v1::RevisionDiff* diff) {
+  google::protobuf::Struct a, b;
+  // Stored material is a JSON object (atlas_types.h checks it on the way in).
+  (void)google::protobuf::util::JsonStringToMessage(from, &a);
+  (void)google::protobuf::util::JsonStringToMessage(to, &b);
+  const auto text = [](const google::protobuf::Value& v) {
+    std::string out;
+    (void)google::protobuf::util::MessageToJsonString(v, &out);
+    return out;
+  };
+  std::map<std::string, std::pair<std::string, std::string>> changes;
+  for (const auto& [key, value] : a.fields()) changes[key].first = text(value);
+  for (const auto& [key, value] : b.fields()) changes[key].second = text(value);
+  for (const auto& [key, values] : changes) {
+    if (values.first == values.second) continue;
+    auto* change = diff->add_material_changes();
+    change->set_parameter(key);
+    change->set_from(values.first);
+    change->set_to(values.second);
+  }
+}
+
+}  // namespace
+
+grpc::Status AtlasServiceImpl::DiffRevisions(grpc::ServerContext* context,
+                                             const v1::DiffRevisionsRequest* request,
+                                             v1::RevisionDiff* response) {
+  constexpr char kRpc[] = "DiffRevisions";
+  std::string user;
+  grpc::Status auth = Authenticate(kRpc, context, &user);
+  if (!auth.ok()) return auth;
+  const StructureRef ref{request->project(), request->structure()};
+  int64_t to = request->to_revision(), from = request->from_revision();
+  Status status;
+  if (to < 0 || from < 0) {
+    status = Status::InvalidArgument(to < 0 ? "to_revision" : "from_revision",
+                                     "must be 0 (the default) or more");
+  }
+  if (status.ok() && (to == 0 || from == 0)) {
+    StructureInfo info;
+    status = store_.GetStructure(user, ref, &info);
+    if (to == 0) to = info.head;
+    if (from == 0) from = std::max<int64_t>(1, to - 1);
+  }
+  Revision a, b;
+  std::string geometry_a, geometry_b;
+  if (status.ok()) status = store_.GetRevision(user, ref, from, &a, &geometry_a);
+  if (status.ok()) status = store_.GetRevision(user, ref, to, &b, &geometry_b);
+  if (!status.ok()) return Fail(kRpc, status);
+  response->set_project(ref.project);
+  response->set_structure(ref.structure);
+  response->set_from_revision(from);
+  response->set_to_revision(to);
+  DiffMaterials(a.metadata.material_json, b.metadata.material_json, response);
+  const auto colour = [](const Colour& c, v1::Colour* out) {
+    out->set_r(c.r);
+    out->set_g(c.g);
+    out->set_b(c.b);
+  };
+  colour(a.metadata.colour, response->mutable_from_colour());
+  colour(b.metadata.colour, response->mutable_to_colour());
+  response->set_from_group(a.metadata.group_path);
+  response->set_to_group(b.metadata.group_path);
+  response->set_geometry_changed(a.content_sha256 != b.content_sha256);
+  if (a.format == GeometryFormat::kContoursJson && b.format == GeometryFormat::kContoursJson) {
+    std::vector<ContourPlate> plates_a, plates_b;
+    status = ParseContours(geometry_a, &plates_a);
+    if (status.ok()) status = ParseContours(geometry_b, &plates_b);
+    if (!status.ok()) return Fail(kRpc, status);
+    v1::ContoursDiff* contours = response->mutable_contours();
+    contours->set_from_volume_mm3(ContoursVolume(plates_a));
+    contours->set_to_volume_mm3(ContoursVolume(plates_b));
+    const ContoursDistance distance = DistanceBetween(plates_a, plates_b);
+    contours->set_hausdorff_mm(distance.hausdorff_mm);
+    contours->set_mean_distance_mm(distance.mean_mm);
+    contours->set_plates_compared(distance.plates_compared);
+    for (double z : distance.only_in_a_z_mm) contours->add_only_in_from_z_mm(z);
+    for (double z : distance.only_in_b_z_mm) contours->add_only_in_to_z_mm(z);
+  }
   return grpc::Status::OK;
 }
 

@@ -91,6 +91,8 @@ class AtlasServiceImpl final : public v1::AtlasService::Service {
   grpc::Status DownloadGeometry(grpc::ServerContext* context,
                                 const v1::DownloadGeometryRequest* request,
                                 grpc::ServerWriter<v1::DataChunk>* writer) override;
+  grpc::Status DiffRevisions(grpc::ServerContext* context, const v1::DiffRevisionsRequest* request,
+                             v1::RevisionDiff* response) override;
 
   grpc::Status CreateSnapshot(grpc::ServerContext* context,
                               const v1::CreateSnapshotRequest* request,

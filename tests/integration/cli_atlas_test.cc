@@ -6,6 +6,7 @@
 #include <sys/stat.h>
 
 #include <atomic>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -169,6 +170,21 @@ TEST_F(CliAtlasTest, TwoPeopleEditOneStructureWithoutLosingAChange) {
   EXPECT_NE(stale.err.find("3"), std::string::npos) << stale.err;
   ASSERT_EQ(PbaAs("admin", {"atlas", "unlock", admin_file.string()}).exit_code, 0);
 
+  // What changed: revision 2 grew the square from 5 to 6 mm (its far corner
+  // moved sqrt(2) mm), revision 3 only the colour.
+  const RunResult grown = PbaAs(
+      "admin", {"--json", "atlas", "diff", "-p", "demo", "Putamen", "--from", "1", "--to", "2"});
+  ASSERT_EQ(grown.exit_code, 0) << grown.err;
+  std::smatch hausdorff;
+  ASSERT_TRUE(std::regex_search(grown.out, hausdorff, std::regex("\"hausdorff_mm\": ([0-9.]+)")))
+      << grown.out;
+  EXPECT_NEAR(std::stod(hausdorff[1].str()), std::sqrt(2.0), 1e-9);
+  const RunResult recoloured = PbaAs("admin", {"atlas", "diff", "-p", "demo", "Putamen"});
+  ASSERT_EQ(recoloured.exit_code, 0) << recoloured.err;
+  EXPECT_NE(recoloured.out.find("Geometry: unchanged."), std::string::npos) << recoloured.out;
+  EXPECT_TRUE(std::regex_search(recoloured.out, std::regex("colour\\s+233,189,125\\s+200,150,100")))
+      << recoloured.out;
+
   const RunResult history = PbaAs("alice", {"--json", "atlas", "history", "-p", "demo", "Putamen"});
   ASSERT_EQ(history.exit_code, 0) << history.err;
   EXPECT_NE(history.out.find("\"number\": \"3\""), std::string::npos) << history.out;
@@ -192,7 +208,18 @@ TEST_F(CliAtlasTest, TwoPeopleEditOneStructureWithoutLosingAChange) {
       0);
   EXPECT_EQ(ReadFile(head), ReadFile(first));
 
-  // A snapshot pins revision 4; found again by its tag.
+  // A material parameter set, and the diff names it (revision 5).
+  ASSERT_EQ(PbaAs("alice", {"atlas", "set", "-p", "demo", "Putamen", "--material",
+                            R"({"mu_pa": 842, "alpha": -4.7})", "-m", "Ogden"})
+                .exit_code,
+            0);
+  const RunResult material = PbaAs("alice", {"atlas", "diff", "-p", "demo", "Putamen"});
+  ASSERT_EQ(material.exit_code, 0) << material.err;
+  EXPECT_TRUE(std::regex_search(material.out, std::regex("material mu_pa\\s+-\\s+842")))
+      << material.out;
+  ASSERT_EQ(PbaAs("alice", {"atlas", "revert", "-p", "demo", "Putamen", "--to", "4"}).exit_code, 0);
+
+  // A snapshot pins revision 6 (the content of 4); found again by its tag.
   const RunResult snapshot =
       PbaAs("admin", {"--json", "atlas", "snapshot", "create", "-p", "demo"});
   ASSERT_EQ(snapshot.exit_code, 0) << snapshot.err;
@@ -202,7 +229,7 @@ TEST_F(CliAtlasTest, TwoPeopleEditOneStructureWithoutLosingAChange) {
   ASSERT_EQ(PbaAs("admin", {"atlas", "tag", "-p", "demo", id[1].str(), "reviewed"}).exit_code, 0);
   const RunResult shown = PbaAs("alice", {"atlas", "snapshot", "show", "-p", "demo", "reviewed"});
   ASSERT_EQ(shown.exit_code, 0) << shown.err;
-  EXPECT_TRUE(std::regex_search(shown.out, std::regex("Putamen\\s+4"))) << shown.out;
+  EXPECT_TRUE(std::regex_search(shown.out, std::regex("Putamen\\s+6"))) << shown.out;
 
   const RunResult audit = PbaAs("admin", {"atlas", "audit", "-p", "demo", "--all"});
   ASSERT_EQ(audit.exit_code, 0) << audit.err;
