@@ -4,9 +4,12 @@
 #include <google/protobuf/util/json_util.h>
 #include <zlib.h>
 
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <map>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -151,6 +154,228 @@ Status CheckContoursJson(std::string_view field, std::string_view content) {
   return Status::Ok();
 }
 
+// A closed triangulated surface read from STL, OBJ or legacy VTK: welded
+// points and triangles by point index.
+struct Surface {
+  std::vector<std::array<double, 3>> points;
+  std::vector<std::array<int64_t, 3>> triangles;
+};
+
+// Welds points by their exact coordinates (STL repeats them per triangle).
+class Welder {
+ public:
+  explicit Welder(Surface* surface) : surface_(surface) {}
+  int64_t Add(const std::array<double, 3>& p) {
+    const auto [it, added] = index_.emplace(p, static_cast<int64_t>(surface_->points.size()));
+    if (added) surface_->points.push_back(p);
+    return it->second;
+  }
+
+ private:
+  Surface* surface_;
+  std::map<std::array<double, 3>, int64_t> index_;
+};
+
+Status ReadStl(const std::string& f, std::string_view content, Surface* surface) {
+  Welder welder(surface);
+  // Binary: an 80-byte header, a triangle count, 50 bytes per triangle.
+  if (content.size() >= 84) {
+    uint32_t count = 0;
+    std::memcpy(&count, content.data() + 80, 4);
+    if (content.size() == 84 + 50 * static_cast<size_t>(count)) {
+      for (uint32_t t = 0; t < count; ++t) {
+        const char* facet = content.data() + 84 + 50 * static_cast<size_t>(t) + 12;
+        std::array<int64_t, 3> triangle{};
+        for (int k = 0; k < 3; ++k) {
+          float xyz[3];
+          std::memcpy(xyz, facet + 12 * k, 12);
+          triangle[k] = welder.Add({xyz[0], xyz[1], xyz[2]});
+        }
+        surface->triangles.push_back(triangle);
+      }
+      return Status::Ok();
+    }
+  }
+  // ASCII: "vertex x y z" three at a time.
+  std::istringstream in{std::string(content)};
+  std::string word;
+  std::array<int64_t, 3> triangle{};
+  int corner = 0;
+  while (in >> word) {
+    if (word != "vertex") continue;
+    std::array<double, 3> p{};
+    if (!(in >> p[0] >> p[1] >> p[2])) {
+      return Status::InvalidArgument(f, "STL: a vertex without three numbers");
+    }
+    triangle[corner++] = welder.Add(p);
+    if (corner == 3) {
+      surface->triangles.push_back(triangle);
+      corner = 0;
+    }
+  }
+  if (surface->triangles.empty()) {
+    return Status::InvalidArgument(
+        f, "is neither binary STL (84 + 50 bytes per triangle) nor ASCII STL with vertices");
+  }
+  return Status::Ok();
+}
+
+Status ReadObj(const std::string& f, std::string_view content, Surface* surface) {
+  std::istringstream in{std::string(content)};
+  std::string line;
+  int line_number = 0;
+  while (std::getline(in, line)) {
+    ++line_number;
+    std::istringstream words(line);
+    std::string kind;
+    words >> kind;
+    if (kind == "v") {
+      std::array<double, 3> p{};
+      if (!(words >> p[0] >> p[1] >> p[2])) {
+        return Status::InvalidArgument(
+            f, "OBJ line " + std::to_string(line_number) + ": a vertex needs x y z");
+      }
+      surface->points.push_back(p);
+    } else if (kind == "f") {
+      std::vector<int64_t> face;
+      std::string item;
+      while (words >> item) {
+        // "i", "i/t", "i//n" or "i/t/n"; negative counts back from the end.
+        int64_t index = 0;
+        try {
+          index = std::stoll(item.substr(0, item.find('/')));
+        } catch (...) {
+          index = 0;
+        }
+        if (index < 0) index += static_cast<int64_t>(surface->points.size()) + 1;
+        if (index < 1 || index > static_cast<int64_t>(surface->points.size())) {
+          return Status::InvalidArgument(f, "OBJ line " + std::to_string(line_number) +
+                                                ": face index '" + item + "' names no vertex");
+        }
+        face.push_back(index - 1);
+      }
+      if (face.size() < 3) {
+        return Status::InvalidArgument(
+            f, "OBJ line " + std::to_string(line_number) + ": a face needs three vertices");
+      }
+      for (size_t k = 1; k + 1 < face.size(); ++k) {
+        surface->triangles.push_back({face[0], face[k], face[k + 1]});
+      }
+    }
+  }
+  return Status::Ok();
+}
+
+// Legacy VTK, ASCII POLYDATA with POINTS and POLYGONS.
+Status ReadVtk(const std::string& f, std::string_view content, Surface* surface) {
+  std::istringstream in{std::string(content)};
+  std::string line;
+  std::getline(in, line);
+  if (line.rfind("# vtk DataFile", 0) != 0) {
+    return Status::InvalidArgument(f, "VTK: not a legacy VTK file (no '# vtk DataFile' line)");
+  }
+  std::getline(in, line);  // title
+  std::string format, word;
+  in >> format;
+  if (format != "ASCII") {
+    return Status::InvalidArgument(f, "VTK: only ASCII legacy files are read, not " + format);
+  }
+  while (in >> word) {
+    if (word == "POINTS") {
+      int64_t n = 0;
+      std::string type;
+      in >> n >> type;
+      for (int64_t i = 0; i < n; ++i) {
+        std::array<double, 3> p{};
+        if (!(in >> p[0] >> p[1] >> p[2])) {
+          return Status::InvalidArgument(f, "VTK: fewer POINTS than announced");
+        }
+        surface->points.push_back(p);
+      }
+    } else if (word == "POLYGONS") {
+      int64_t n = 0, size = 0;
+      in >> n >> size;
+      for (int64_t i = 0; i < n; ++i) {
+        int64_t k = 0;
+        if (!(in >> k) || k < 3) {
+          return Status::InvalidArgument(f, "VTK: a polygon needs three or more points");
+        }
+        std::vector<int64_t> face(static_cast<size_t>(k));
+        for (int64_t& index : face) {
+          if (!(in >> index) || index < 0 ||
+              index >= static_cast<int64_t>(surface->points.size())) {
+            return Status::InvalidArgument(f, "VTK: a polygon names a point that does not exist");
+          }
+        }
+        for (size_t j = 1; j + 1 < face.size(); ++j) {
+          surface->triangles.push_back({face[0], face[j], face[j + 1]});
+        }
+      }
+    }
+  }
+  return Status::Ok();
+}
+
+// A surface a structure can be: at least four triangles, every point within
+// kMaxCoordinateMm of the origin, every edge shared by exactly two triangles
+// (closed and manifold), and a non-zero enclosed volume.
+Status CheckClosedSurface(const std::string& f, const char* format, const Surface& surface) {
+  const std::string what = std::string(format) + ": ";
+  if (surface.triangles.size() < 4) {
+    return Status::InvalidArgument(f, what +
+                                          "a closed surface needs at least four triangles, not " +
+                                          std::to_string(surface.triangles.size()));
+  }
+  for (const auto& p : surface.points) {
+    for (double c : p) {
+      if (!std::isfinite(c) || std::abs(c) > kMaxCoordinateMm) {
+        return Status::InvalidArgument(
+            f, what + "a point lies farther than 500 mm from the origin (or is not a number)");
+      }
+    }
+  }
+  std::map<std::pair<int64_t, int64_t>, int> edges;
+  for (const auto& t : surface.triangles) {
+    for (int k = 0; k < 3; ++k) {
+      const int64_t a = t[k], b = t[(k + 1) % 3];
+      ++edges[{std::min(a, b), std::max(a, b)}];
+    }
+  }
+  int64_t open = 0, shared = 0;
+  for (const auto& [edge, count] : edges) {
+    open += count == 1;
+    shared += count > 2;
+  }
+  if (open > 0 || shared > 0) {
+    return Status::InvalidArgument(f, what + "not a closed surface: " + std::to_string(open) +
+                                          " edges belong to one triangle only and " +
+                                          std::to_string(shared) + " to more than two");
+  }
+  double six_volume = 0;
+  for (const auto& t : surface.triangles) {
+    const auto& a = surface.points[t[0]];
+    const auto& b = surface.points[t[1]];
+    const auto& c = surface.points[t[2]];
+    six_volume += a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) +
+                  a[2] * (b[0] * c[1] - b[1] * c[0]);
+  }
+  if (six_volume == 0) return Status::InvalidArgument(f, what + "encloses no volume");
+  return Status::Ok();
+}
+
+Status CheckSurface(std::string_view field, GeometryFormat format, std::string_view content) {
+  const std::string f(field);
+  Surface surface;
+  const char* name = format == GeometryFormat::kStl   ? "STL"
+                     : format == GeometryFormat::kObj ? "OBJ"
+                                                      : "VTK";
+  const Status read = format == GeometryFormat::kStl   ? ReadStl(f, content, &surface)
+                      : format == GeometryFormat::kObj ? ReadObj(f, content, &surface)
+                                                       : ReadVtk(f, content, &surface);
+  if (!read.ok()) return read;
+  return CheckClosedSurface(f, name, surface);
+}
+
 }  // namespace
 
 Status CheckGeometryContent(std::string_view field, GeometryFormat format,
@@ -164,7 +389,7 @@ Status CheckGeometryContent(std::string_view field, GeometryFormat format,
     case GeometryFormat::kStl:
     case GeometryFormat::kObj:
     case GeometryFormat::kVtk:
-      return Status::Ok();
+      return CheckSurface(field, format, content);
   }
   return Status::InvalidArgument(std::string(field), "unknown geometry format");
 }

@@ -7,11 +7,15 @@
 //   nifti          a NIfTI-1 header: sizeof_hdr 348 (either byte order) and
 //                  magic "n+1" or "ni1"; gzip-compressed files (.nii.gz) are
 //                  inflated just far enough to read the header
-//   stl, obj, vtk  non-empty (the store refuses empty geometry anyway)
-// What is not checked yet (future work): self-intersecting polygons, the
-// NIfTI data block and its labels, that a surface is closed and manifold,
-// that it lies within the atlas bounds, and that the new shape does not
-// overlap neighbouring structures that others hold locked.
+//   stl, obj, vtk  a closed surface: binary or ASCII STL, OBJ (v and f),
+//                  ASCII legacy VTK POLYDATA; points welded by coordinates;
+//                  at least four triangles, every edge shared by exactly
+//                  two, a non-zero enclosed volume, points within 500 mm
+//                  of the origin
+// What is not checked yet (future work): self-intersecting polygons and
+// surfaces, the NIfTI data block and its labels, that a shape lies within
+// the atlas's own bounds, and that it does not overlap neighbouring
+// structures that others hold locked.
 #pragma once
 
 #include <string_view>

@@ -1,0 +1,108 @@
+// The checks of uploaded surfaces: closed, in bounds, with a volume; in
+// each format a structure's surface travels in.
+#include "service/geometry_check.h"
+
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <string>
+
+namespace pba {
+namespace {
+
+// A tetrahedron with corners 0, x, y, z (scaled by `s`), faces outwards.
+constexpr double kCorners[4][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+constexpr int kFaces[4][3] = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+
+std::string Obj(double s, int faces = 4) {
+  std::string obj = "# a tetrahedron\n";
+  for (const auto& c : kCorners) {
+    obj += "v " + std::to_string(s * c[0]) + " " + std::to_string(s * c[1]) + " " +
+           std::to_string(s * c[2]) + "\n";
+  }
+  for (int f = 0; f < faces; ++f) {
+    obj += "f " + std::to_string(kFaces[f][0] + 1) + "/1 " + std::to_string(kFaces[f][1] + 1) +
+           " " + std::to_string(kFaces[f][2] + 1) + "\n";
+  }
+  return obj;
+}
+
+std::string AsciiStl(double s) {
+  std::string stl = "solid tet\n";
+  for (const auto& f : kFaces) {
+    stl += " facet normal 0 0 0\n  outer loop\n";
+    for (int k : f) {
+      stl += "   vertex " + std::to_string(s * kCorners[k][0]) + " " +
+             std::to_string(s * kCorners[k][1]) + " " + std::to_string(s * kCorners[k][2]) + "\n";
+    }
+    stl += "  endloop\n endfacet\n";
+  }
+  return stl + "endsolid tet\n";
+}
+
+std::string BinaryStl(double s) {
+  std::string stl(80, ' ');
+  const uint32_t count = 4;
+  stl.append(reinterpret_cast<const char*>(&count), 4);
+  for (const auto& f : kFaces) {
+    float record[12] = {};
+    for (int k = 0; k < 3; ++k) {
+      for (int c = 0; c < 3; ++c) record[3 + 3 * k + c] = static_cast<float>(s * kCorners[f[k]][c]);
+    }
+    stl.append(reinterpret_cast<const char*>(record), sizeof record);
+    stl.append(2, '\0');
+  }
+  return stl;
+}
+
+std::string Vtk(const std::string& format = "ASCII") {
+  std::string vtk =
+      "# vtk DataFile Version 3.0\ntetrahedron\n" + format + "\nDATASET POLYDATA\nPOINTS 4 float\n";
+  for (const auto& c : kCorners) {
+    vtk += std::to_string(10 * c[0]) + " " + std::to_string(10 * c[1]) + " " +
+           std::to_string(10 * c[2]) + "\n";
+  }
+  vtk += "POLYGONS 4 16\n";
+  for (const auto& f : kFaces) {
+    vtk += "3 " + std::to_string(f[0]) + " " + std::to_string(f[1]) + " " + std::to_string(f[2]) +
+           "\n";
+  }
+  return vtk;
+}
+
+std::string Message(const Status& s) { return s.ToString(); }
+
+TEST(GeometryCheckTest, ClosedSurfacesPassInEveryFormat) {
+  EXPECT_TRUE(CheckGeometryContent("upload_id", GeometryFormat::kObj, Obj(10)).ok());
+  EXPECT_TRUE(CheckGeometryContent("upload_id", GeometryFormat::kStl, AsciiStl(10)).ok());
+  const Status binary = CheckGeometryContent("upload_id", GeometryFormat::kStl, BinaryStl(10));
+  EXPECT_TRUE(binary.ok()) << Message(binary);
+  const Status vtk = CheckGeometryContent("upload_id", GeometryFormat::kVtk, Vtk());
+  EXPECT_TRUE(vtk.ok()) << Message(vtk);
+}
+
+TEST(GeometryCheckTest, OpenFlatFarOrUnreadableSurfacesAreNamed) {
+  const Status open =
+      CheckGeometryContent("upload_id", GeometryFormat::kObj, Obj(10, 3) + "f 1 2 3\n");
+  EXPECT_NE(Message(open).find("not a closed surface"), std::string::npos) << Message(open);
+  const Status few = CheckGeometryContent("upload_id", GeometryFormat::kObj, Obj(10, 3));
+  EXPECT_NE(Message(few).find("at least four triangles"), std::string::npos) << Message(few);
+  const Status flat = CheckGeometryContent("upload_id", GeometryFormat::kObj, Obj(0));
+  EXPECT_NE(Message(flat).find("no volume"), std::string::npos) << Message(flat);
+  const Status far = CheckGeometryContent("upload_id", GeometryFormat::kStl, AsciiStl(1000));
+  EXPECT_NE(Message(far).find("500 mm"), std::string::npos) << Message(far);
+  const Status index =
+      CheckGeometryContent("upload_id", GeometryFormat::kObj, "v 0 0 0\nf 1 2 3\n");
+  EXPECT_NE(Message(index).find("line 2"), std::string::npos) << Message(index);
+  const Status binary_vtk = CheckGeometryContent("upload_id", GeometryFormat::kVtk, Vtk("BINARY"));
+  EXPECT_NE(Message(binary_vtk).find("only ASCII"), std::string::npos) << Message(binary_vtk);
+  const Status noise = CheckGeometryContent("upload_id", GeometryFormat::kStl, "not a mesh at all");
+  EXPECT_NE(Message(noise).find("neither binary STL"), std::string::npos) << Message(noise);
+  for (const Status& s : {open, few, flat, far, index, binary_vtk, noise}) {
+    EXPECT_EQ(s.code(), Status::Code::kInvalidArgument);
+    EXPECT_EQ(s.field(), "upload_id");
+  }
+}
+
+}  // namespace
+}  // namespace pba
