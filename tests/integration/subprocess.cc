@@ -91,7 +91,7 @@ ServerProcess::ServerProcess(fs::path binary, fs::path data_dir)
 
 ServerProcess::~ServerProcess() { Kill(); }
 
-bool ServerProcess::Start(std::string* log) {
+bool ServerProcess::Start(std::string* log, const std::vector<std::string>& extra_args) {
   fs::create_directories(data_dir_);
   const fs::path out_path = data_dir_ / "server-test.out";
   fs::remove(out_path);
@@ -101,8 +101,9 @@ bool ServerProcess::Start(std::string* log) {
     const int err = ::open(log_path().c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
     ::dup2(out, STDOUT_FILENO);
     ::dup2(err, STDERR_FILENO);
-    const std::vector<std::string> argv = {binary_.string(), "--data", data_dir_.string(),
-                                           "--listen", "127.0.0.1:0"};
+    std::vector<std::string> argv = {binary_.string(), "--data", data_dir_.string(), "--listen",
+                                     "127.0.0.1:0"};
+    argv.insert(argv.end(), extra_args.begin(), extra_args.end());
     auto args = CArgs(argv);
     ::execv(args[0], args.data());
     std::_Exit(127);

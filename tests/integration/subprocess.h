@@ -29,9 +29,10 @@ class ServerProcess {
   ServerProcess(const ServerProcess&) = delete;
   ServerProcess& operator=(const ServerProcess&) = delete;
 
-  // Starts the server on a free port; false (with the log) if it did not
-  // report its address within 20 s.
-  bool Start(std::string* log);
+  // Starts the server on a free port, with `extra_args` after --data and
+  // --listen (e.g. {"--max-running", "2"}); false (with the log) if it did
+  // not report its address within 20 s.
+  bool Start(std::string* log, const std::vector<std::string>& extra_args = {});
   // SIGTERM and wait; returns the exit code (-signal if killed).
   int Stop(std::chrono::seconds timeout = std::chrono::seconds(30));
   // SIGKILL and reap, like a crash.
