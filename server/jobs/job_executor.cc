@@ -27,6 +27,15 @@ constexpr std::chrono::milliseconds kPollInterval{100};
 constexpr char kRequeueShutdown[] = "re-queued: server shut down";
 constexpr char kCancelledByRequest[] = "cancelled by request";
 
+// The wall clock to the microsecond, as the store stamps the events it makes.
+// (TimeUtil::GetCurrentTime() of protobuf 3.21 has whole seconds only, which
+// put progress events up to a second before the events stored ahead of them.)
+google::protobuf::Timestamp Now() {
+  return TimeUtil::MicrosecondsToTimestamp(std::chrono::duration_cast<std::chrono::microseconds>(
+                                               std::chrono::system_clock::now().time_since_epoch())
+                                               .count());
+}
+
 void LogStateChange(const v1::JobEvent& event) {
   spdlog::info("job {} {}: {}", event.job_id(), v1::Job::State_Name(event.state()),
                event.message());
@@ -60,8 +69,7 @@ Status PrepareFolder(const v1::Job& job, const fs::path& dir) {
   PBA_RETURN_IF_ERROR(WriteFileAtomically(dir / "scene.json", json));
 
   std::ofstream log(dir / "solve.log", std::ios::app);
-  log << "=== attempt " << job.attempts() << ", " << TimeUtil::ToString(TimeUtil::GetCurrentTime())
-      << " ===\n";
+  log << "=== attempt " << job.attempts() << ", " << TimeUtil::ToString(Now()) << " ===\n";
   return Status::Ok();
 }
 
@@ -321,7 +329,7 @@ void JobExecutor::Execute(const v1::Job& job, const v1::JobEvent& started, Run& 
     v1::JobEvent event;
     event.set_job_id(id);
     event.set_sequence(++sequence);
-    *event.mutable_time() = TimeUtil::GetCurrentTime();
+    *event.mutable_time() = Now();
     event.set_state(v1::Job::RUNNING);
     event.set_phase(solve_event.phase());
     event.set_progress(std::clamp(solve_event.progress(), 0.0, 1.0));

@@ -1,5 +1,6 @@
 #include "jobs/job_executor.h"
 
+#include <google/protobuf/util/time_util.h>
 #include <gtest/gtest.h>
 
 #include <fstream>
@@ -105,8 +106,14 @@ TEST_F(JobExecutorTest, SuccessRecordsSummaryFilesAndEvents) {
   EXPECT_EQ(events.front().state(), v1::Job::QUEUED);
   EXPECT_EQ(events[1].state(), v1::Job::RUNNING);
   EXPECT_EQ(events.back().state(), v1::Job::SUCCEEDED);
+  // Numbered in the order they happened: the progress events the executor
+  // stamps and the state changes the store stamps share one clock.
+  using google::protobuf::util::TimeUtil;
   for (size_t i = 1; i < events.size(); ++i) {
     EXPECT_GT(events[i].sequence(), events[i - 1].sequence());
+    EXPECT_GE(TimeUtil::TimestampToMicroseconds(events[i].time()),
+              TimeUtil::TimestampToMicroseconds(events[i - 1].time()))
+        << "event " << events[i].sequence() << " is older than the one before it";
   }
   // Each phase change is stored: mesh, solve, write.
   std::vector<std::string> phases;
