@@ -118,6 +118,16 @@ Status PbaServer::Start(const ServerOptions& options, std::unique_ptr<PbaServer>
   }
 
   PBA_RETURN_IF_ERROR(AtlasStore::Open(data_dir, &server->atlas_store_));
+  // A blob is written before its revision's row, so a crash between the two
+  // leaves a blob nothing names; nothing else writes blobs before the server
+  // listens, so this is the moment to remove them.
+  BlobSweepReport swept_blobs;
+  PBA_RETURN_IF_ERROR(server->atlas_store_->SweepBlobs(&swept_blobs));
+  if (swept_blobs.removed_blobs + swept_blobs.removed_temp_files > 0) {
+    spdlog::info("removed {} blob(s) no revision names and {} temporary file(s), {} bytes",
+                 swept_blobs.removed_blobs, swept_blobs.removed_temp_files,
+                 swept_blobs.removed_bytes);
+  }
   PBA_RETURN_IF_ERROR(UploadStore::Open(data_dir / "uploads", &server->uploads_));
   int swept = 0;
   PBA_RETURN_IF_ERROR(server->uploads_->Sweep(&swept));

@@ -391,13 +391,13 @@ TEST_F(CrashTest, KilledDuringCommitsTheStoreStaysWholeAndKeepsAcknowledgedCommi
       log.landed_unacknowledged = unknown;
     }
     // A blob written just before the server died, for a revision that never
-    // committed, may stay on disk as an orphan: the blob goes first so that
-    // no row can name a missing blob. pba-server does not sweep blobs at
-    // start (AtlasStore::SweepBlobs has no caller there), so orphans are
-    // counted, not refused.
+    // committed, is an orphan (the blob goes first so that no row can name a
+    // missing blob); the server sweeps them at start, and nothing commits
+    // while this looks.
     const BlobCensus census = CheckRevisionBlobs(data_);
     // Both revisions 1 have the same content.
     EXPECT_EQ(census.referenced, revisions - 1) << "each commit has content of its own";
+    EXPECT_EQ(census.orphans, 0) << "after kill " << kill + 1;
     max_orphans = std::max(max_orphans, census.orphans);
 
     // A killed session's lock is still there with its five-minute lease: an
