@@ -11,7 +11,7 @@ export CCACHE_BASEDIR=$root
 "$root/scripts/deps.sh"
 cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build "$build" -j "${PBA_JOBS:-2}" --target linear_static_bench nonlinear_static_bench element_bench \
-  peer_bench scaling_bench
+  peer_bench scaling_bench server_bench
 echo "machine: $(nproc) cores, $(awk '/MemTotal/ {printf "%.0f GB", $2 / 1048576}' /proc/meminfo), $(uname -m)"
 "$build/bin/linear_static_bench" --benchmark_counters_tabular=true "$@"
 "$build/bin/nonlinear_static_bench" --benchmark_counters_tabular=true "$@"
@@ -23,3 +23,6 @@ for row in cells:10/tet10:0 cells:20/tet10:0 cells:30/tet10:0 cells:5/tet10:1 ce
   cells:15/tet10:1; do
   "$build/bin/scaling_bench" --benchmark_counters_tabular=true --benchmark_filter="$row/" "$@"
 done
+# pba-server in-process on loopback (its jobs run the real pba-solve); its
+# data directories go under the system temp dir, so that disk's fsync shows.
+"$build/bin/server_bench" --benchmark_counters_tabular=true "$@"
