@@ -4,6 +4,7 @@
 #include <google/protobuf/util/json_util.h>
 #include <zlib.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -11,6 +12,7 @@
 #include <map>
 #include <sstream>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 namespace pba {
@@ -166,14 +168,24 @@ class Welder {
  public:
   explicit Welder(Surface* surface) : surface_(surface) {}
   int64_t Add(const std::array<double, 3>& p) {
-    const auto [it, added] = index_.emplace(p, static_cast<int64_t>(surface_->points.size()));
+    Key key;
+    std::memcpy(key.data(), p.data(), sizeof key);
+    const auto [it, added] = index_.emplace(key, static_cast<int64_t>(surface_->points.size()));
     if (added) surface_->points.push_back(p);
     return it->second;
   }
 
  private:
+  using Key = std::array<uint64_t, 3>;  // the coordinates' bits
+  struct Hash {
+    size_t operator()(const Key& k) const {
+      uint64_t h = 1469598103934665603ull;
+      for (uint64_t v : k) h = (h ^ v) * 1099511628211ull;
+      return static_cast<size_t>(h);
+    }
+  };
   Surface* surface_;
-  std::map<std::array<double, 3>, int64_t> index_;
+  std::unordered_map<Key, int64_t, Hash> index_;
 };
 
 Status ReadStl(const std::string& f, std::string_view content, Surface* surface) {
@@ -334,22 +346,30 @@ Status CheckClosedSurface(const std::string& f, const char* format, const Surfac
       }
     }
   }
-  std::map<std::pair<int64_t, int64_t>, int> edges;
+  // Each edge as (smaller, larger) point index; sorted, a closed manifold
+  // surface has every edge exactly twice.
+  std::vector<std::pair<int64_t, int64_t>> edges;
+  edges.reserve(3 * surface.triangles.size());
   for (const auto& t : surface.triangles) {
     for (int k = 0; k < 3; ++k) {
       const int64_t a = t[k], b = t[(k + 1) % 3];
-      ++edges[{std::min(a, b), std::max(a, b)}];
+      edges.emplace_back(std::min(a, b), std::max(a, b));
     }
   }
+  std::sort(edges.begin(), edges.end());
   int64_t open = 0, shared = 0;
-  for (const auto& [edge, count] : edges) {
-    open += count == 1;
-    shared += count > 2;
+  for (size_t i = 0; i < edges.size();) {
+    size_t j = i;
+    while (j < edges.size() && edges[j] == edges[i]) ++j;
+    open += j - i == 1;
+    shared += j - i > 2;
+    i = j;
   }
   if (open > 0 || shared > 0) {
-    return Status::InvalidArgument(f, what + "not a closed surface: " + std::to_string(open) +
-                                          " edges belong to one triangle only and " +
-                                          std::to_string(shared) + " to more than two");
+    return Status::InvalidArgument(
+        f, what + "not a closed surface: " + std::to_string(open) +
+               " edges belong to one triangle only and " + std::to_string(shared) +
+               " to more than two");
   }
   double six_volume = 0;
   for (const auto& t : surface.triangles) {

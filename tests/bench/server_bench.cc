@@ -240,21 +240,38 @@ BENCHMARK(BM_UnaryLatency)
 
 constexpr size_t kGeometryBytes = 50 * kMiB;
 
-// A binary STL of `bytes` bytes: an 80-byte header, the triangle count and
-// 50-byte triangles whose values vary with `seed` (so every revision is a
-// new blob). The server checks only that an STL is non-empty.
+// A closed binary STL of about `bytes` bytes (the server checks that a
+// surface is closed): a sphere of radius 50 mm + `seed` micrometres (so
+// every revision is a new blob), 1024 meridians and as many parallels as
+// the size asks, fans at the poles.
 std::string LargeStl(size_t bytes, uint32_t seed) {
-  std::string stl(bytes, '\0');
+  constexpr int kMeridians = 1024;
+  const int parallels =
+      std::max<int>(3, static_cast<int>((bytes - 84) / 50 / (2 * kMeridians)) + 1);
+  const double radius = 50 + 1e-3 * seed;
+  const auto point = [&](int i, int j) -> std::array<float, 3> {
+    if (i == 0) return {0, 0, static_cast<float>(radius)};
+    if (i == parallels) return {0, 0, static_cast<float>(-radius)};
+    const double theta = M_PI * i / parallels, phi = 2 * M_PI * (j % kMeridians) / kMeridians;
+    return {static_cast<float>(radius * std::sin(theta) * std::cos(phi)),
+            static_cast<float>(radius * std::sin(theta) * std::sin(phi)),
+            static_cast<float>(radius * std::cos(theta))};
+  };
+  std::vector<std::array<std::array<float, 3>, 3>> triangles;
+  for (int i = 0; i < parallels; ++i) {
+    for (int j = 0; j < kMeridians; ++j) {
+      if (i > 0) triangles.push_back({point(i, j), point(i + 1, j), point(i, j + 1)});
+      if (i + 1 < parallels)
+        triangles.push_back({point(i, j + 1), point(i + 1, j), point(i + 1, j + 1)});
+    }
+  }
+  std::string stl(84 + 50 * triangles.size(), '\0');
   const std::string header = "pba server_bench " + std::to_string(seed);
   std::copy(header.begin(), header.end(), stl.begin());
-  const uint32_t triangles = static_cast<uint32_t>((bytes - 84) / 50);
-  std::memcpy(stl.data() + 80, &triangles, 4);
-  uint32_t x = seed * 2654435761u + 1;
-  for (size_t i = 84; i + 4 <= bytes; i += 4) {
-    x ^= x << 13;
-    x ^= x >> 17;
-    x ^= x << 5;
-    std::memcpy(stl.data() + i, &x, 4);
+  const auto count = static_cast<uint32_t>(triangles.size());
+  std::memcpy(stl.data() + 80, &count, 4);
+  for (size_t t = 0; t < triangles.size(); ++t) {
+    std::memcpy(stl.data() + 84 + 50 * t + 12, triangles[t].data(), 36);
   }
   return stl;
 }
@@ -291,7 +308,8 @@ void BM_Geometry50MiB(benchmark::State& state) {
   }
   if (!setup.ok()) return state.SkipWithError(ErrorText("setup", setup).c_str());
 
-  const double mib = static_cast<double>(kGeometryBytes) / kMiB;
+  // The sphere's size, about kGeometryBytes (a whole number of triangles).
+  const double mib = static_cast<double>(LargeStl(kGeometryBytes, 0).size()) / kMiB;
   double upload_s = 0, commit_s = 0, download_s = 0, first_chunk_s = 0, hash_s = 0;
   int64_t head = 1;
   uint32_t seed = 1;
