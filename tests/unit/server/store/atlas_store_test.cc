@@ -860,7 +860,7 @@ TEST_F(AtlasStoreTest, ReopeningKeepsEverythingAndTheFileIsSound) {
   ASSERT_OK(stmt.Step(&row));
   EXPECT_FALSE(row) << "a foreign key is dangling in " << stmt.ColumnText(0);
   stmt = Statement();
-  EXPECT_EQ(QueryInt(*db, "SELECT MAX(version) FROM schema_version"), 2);
+  EXPECT_EQ(QueryInt(*db, "SELECT MAX(version) FROM schema_version"), LatestSchemaVersion());
 }
 
 TEST_F(AtlasStoreTest, HistoryCannotBeRewrittenUnderneath) {
@@ -1063,7 +1063,7 @@ TEST(AtlasStoreUpgrade, AVersionOneDatabaseIsMigratedInPlace) {
   ASSERT_OK(Database::Open(dir.path() / "pba.db", &db));
   int version = 0;
   ASSERT_OK(ReadSchemaVersion(*db, &version));
-  EXPECT_EQ(version, 2);
+  EXPECT_EQ(version, LatestSchemaVersion());
   Statement stmt;
   ASSERT_OK(db->Prepare("SELECT id FROM jobs", &stmt));
   bool row = false;
