@@ -705,6 +705,11 @@ int Commit(Connection& connection, const CommitArgs& args) {
     if (!ReadMaterial(args.material, &material)) return kExitError;
     request.set_material_json(material);
   }
+  // The same checkout and the same file make the same key: a commit rerun
+  // after a lost reply gets the revision it made, not a refusal.
+  request.set_request_id(Sha256Text(state.lock_id + "\n" + std::to_string(state.base_revision) +
+                                    "\n" + Sha256File(args.file))
+                             .substr(0, 32));
   std::string upload_id;
   if (int code = UploadFile(connection, args.file, &upload_id); code != kExitOk) return code;
   request.set_upload_id(upload_id);

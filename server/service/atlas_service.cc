@@ -387,6 +387,7 @@ grpc::Status AtlasServiceImpl::CommitStructure(grpc::ServerContext* context,
   commit.base_revision = request->base_revision();
   if (request->has_material_json()) commit.material_json = request->material_json();
   commit.message = request->message();
+  commit.request_id = request->request_id();
   Status status = CheckName("project", commit.structure.project);
   if (status.ok()) status = CheckName("structure", commit.structure.structure);
   if (status.ok()) status = FormatFromProto(request->format(), &commit.format);
@@ -401,10 +402,13 @@ grpc::Status AtlasServiceImpl::CommitStructure(grpc::ServerContext* context,
   Revision revision;
   {
     std::lock_guard lock(change_mutex_);
-    status = store_.Commit(user, commit, &revision);
+    bool replayed = false;
+    status = store_.Commit(user, commit, &revision, &replayed);
     if (!status.ok()) return Fail(kRpc, status);
-    Publish(v1::AtlasEvent::COMMITTED, commit.structure.project, commit.structure.structure,
-            revision.number, 0, user, commit.message);
+    if (!replayed) {
+      Publish(v1::AtlasEvent::COMMITTED, commit.structure.project, commit.structure.structure,
+              revision.number, 0, user, commit.message);
+    }
   }
   const Status removed = uploads_.Remove(user, request->upload_id());
   if (!removed.ok()) spdlog::warn("{}: {}", kRpc, removed.ToString());

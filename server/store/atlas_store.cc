@@ -177,14 +177,15 @@ Status AtlasStore::ReadRevision(const StructureRef& ref, int64_t structure, int6
 Status AtlasStore::AppendRevision(const Caller& caller, const StructureRef& ref,
                                   const StructureRow& structure, const std::string& kind,
                                   const std::string& action, const std::string& message,
-                                  const Content& content, bool metadata_changed,
-                                  Revision* revision) {
+                                  const Content& content, bool metadata_changed, Revision* revision,
+                                  const std::string& request_id) {
   const int64_t number = structure.head_number + 1;
   Statement stmt;
   PBA_RETURN_IF_ERROR(db_->Prepare(
       "INSERT INTO structure_revisions (structure, number, parent, author, time_us, kind, "
       "message, content_sha256, geometry_format, size_bytes, material_json, colour_r, colour_g, "
-      "colour_b, group_path) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?) RETURNING id",
+      "colour_b, group_path, request_id) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?) "
+      "RETURNING id",
       &stmt));
   stmt.Bind(1, structure.id).Bind(2, number);
   if (structure.head_id == 0) {
@@ -199,6 +200,11 @@ Status AtlasStore::AppendRevision(const Caller& caller, const StructureRef& ref,
       .Bind(13, int64_t{content.metadata.colour.g})
       .Bind(14, int64_t{content.metadata.colour.b})
       .Bind(15, content.metadata.group_path);
+  if (request_id.empty()) {
+    stmt.BindNull(16);
+  } else {
+    stmt.Bind(16, request_id);
+  }
   bool row = false;
   PBA_RETURN_IF_ERROR(stmt.Step(&row));
   if (!row) return Status::Internal("INSERT ... RETURNING gave no row");
@@ -549,8 +555,9 @@ Status AtlasStore::ListStructures(const std::string& user, const std::string& pr
 
 // --- revisions -----------------------------------------------------------
 
-Status AtlasStore::Commit(const std::string& user, const CommitRequest& request,
-                          Revision* revision) {
+Status AtlasStore::Commit(const std::string& user, const CommitRequest& request, Revision* revision,
+                          bool* replayed) {
+  if (replayed != nullptr) *replayed = false;
   const StructureRef& ref = request.structure;
   PBA_RETURN_IF_ERROR(CheckName("structure", ref.structure));
   PBA_RETURN_IF_ERROR(CheckGeometry(request.geometry));
@@ -558,6 +565,9 @@ Status AtlasStore::Commit(const std::string& user, const CommitRequest& request,
     PBA_RETURN_IF_ERROR(CheckMaterialJson("material_json", *request.material_json));
   }
   PBA_RETURN_IF_ERROR(CheckMessage("message", request.message));
+  if (request.request_id.size() > 200) {
+    return Status::InvalidArgument("request_id", "at most 200 characters");
+  }
   std::lock_guard lock(mutex_);
   Transaction transaction(*db_);
   PBA_RETURN_IF_ERROR(transaction.status());
@@ -565,6 +575,27 @@ Status AtlasStore::Commit(const std::string& user, const CommitRequest& request,
   PBA_RETURN_IF_ERROR(Enter(user, ref.project, Role::kEditor, &caller));
   StructureRow structure;
   PBA_RETURN_IF_ERROR(FindStructure(caller, ref, &structure));
+  if (!request.request_id.empty()) {
+    // A retry of a commit that landed: its revision, nothing written.
+    Statement stmt;
+    PBA_RETURN_IF_ERROR(db_->Prepare(
+        "SELECT number, author FROM structure_revisions WHERE structure = ? AND request_id = ?",
+        &stmt));
+    bool row = false;
+    PBA_RETURN_IF_ERROR(stmt.Bind(1, structure.id).Bind(2, request.request_id).Step(&row));
+    if (row) {
+      const int64_t number = stmt.ColumnInt(0);
+      const int64_t author = stmt.ColumnInt(1);
+      stmt = Statement();
+      if (author != caller.user) {
+        return Status::AlreadyExists("request_id: another user's commit of " + Describe(ref) +
+                                     " carried this request id");
+      }
+      bool found = false;
+      if (replayed != nullptr) *replayed = true;
+      return ReadRevision(ref, structure.id, number, revision, &found);
+    }
+  }
   PBA_RETURN_IF_ERROR(CheckLockForWrite(caller, ref, structure.id, request.lock_id));
   if (request.base_revision != structure.head_number) {
     return Status::Aborted("base revision " + std::to_string(request.base_revision) + " of " +
@@ -586,7 +617,8 @@ Status AtlasStore::Commit(const std::string& user, const CommitRequest& request,
   content.format = request.format;
   content.size_bytes = static_cast<int64_t>(request.geometry.size());
   PBA_RETURN_IF_ERROR(AppendRevision(caller, ref, structure, "commit", "revision.commit",
-                                     request.message, content, metadata_changed, revision));
+                                     request.message, content, metadata_changed, revision,
+                                     request.request_id));
   return transaction.Commit();
 }
 

@@ -70,6 +70,11 @@ struct CommitRequest {
   // Set to change the material with the geometry; otherwise the head's is kept.
   std::optional<std::string> material_json;
   std::string message;
+  // The client's key for this commit (at most 200 characters; empty: none).
+  // A commit whose request_id this user already used on this structure
+  // returns the revision it made then, whatever the lock and head are now;
+  // another user's is kAlreadyExists.
+  std::string request_id;
 };
 
 // UpdateMetadata() arguments: the fields to change (at least one).
@@ -152,7 +157,10 @@ class AtlasStore {
   // --- revisions ----------------------------------------------------------
   // Stores a new revision with the given geometry (and material, if set);
   // colour and group are kept from the head. See the editing rules above.
-  Status Commit(const std::string& user, const CommitRequest& request, Revision* revision);
+  // *replayed (when given) says whether the revision is an earlier one
+  // returned for a repeated request_id (nothing was written).
+  Status Commit(const std::string& user, const CommitRequest& request, Revision* revision,
+                bool* replayed = nullptr);
   // Changes metadata if `etag` is the structure's current metadata etag
   // (else kAborted naming the current one). *new_etag is the etag after.
   Status UpdateMetadata(const std::string& user, const StructureRef& ref, const std::string& etag,
@@ -242,7 +250,7 @@ class AtlasStore {
   Status AppendRevision(const Caller& caller, const StructureRef& ref, const StructureRow& row,
                         const std::string& kind, const std::string& action,
                         const std::string& message, const Content& content, bool metadata_changed,
-                        Revision* revision);
+                        Revision* revision, const std::string& request_id = "");
   Status ReadRevision(const StructureRef& ref, int64_t structure, int64_t number,
                       Revision* revision, bool* found);
   // The lock on `structure`, without its id, if any.

@@ -211,6 +211,14 @@ END;
       {3, "jobs: the submitting user", R"sql(
 ALTER TABLE jobs ADD COLUMN owner TEXT NOT NULL DEFAULT '';
 )sql"},
+      // A commit may carry the client's request id, so that a commit retried
+      // after a lost reply finds the revision it made instead of failing on
+      // the moved head (per structure; NULL for revisions without one).
+      {4, "structure revisions: the committing request's id", R"sql(
+ALTER TABLE structure_revisions ADD COLUMN request_id TEXT;
+CREATE UNIQUE INDEX structure_revisions_by_request
+  ON structure_revisions (structure, request_id) WHERE request_id IS NOT NULL;
+)sql"},
   };
   return kMigrations;
 }

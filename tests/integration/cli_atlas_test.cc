@@ -238,6 +238,38 @@ TEST_F(CliAtlasTest, TwoPeopleEditOneStructureWithoutLosingAChange) {
   }
 }
 
+// A commit whose reply was lost is run again from the same checkout: it gets
+// the revision it made, not a refusal for a stale base, and nothing is
+// committed twice. (The lost reply is played by keeping the lock and putting
+// the checkout file back as it was.)
+TEST_F(CliAtlasTest, ACommitRerunAfterALostReplyGetsTheSameRevision) {
+  SetUpPeople();
+  ASSERT_EQ(PbaAs("admin", {"atlas", "create", "-p", "demo", "Thalamus",
+                            Write("thalamus.json", Contours(4)).string()})
+                .exit_code,
+            0);
+  const fs::path file = dir_.path() / "t.json";
+  ASSERT_EQ(PbaAs("alice", {"atlas", "checkout", "-p", "demo", "Thalamus", "-o", file.string()})
+                .exit_code,
+            0);
+  const std::string checkout = ReadFile(file.string() + ".pba-checkout");
+  std::ofstream(file, std::ios::trunc) << Contours(5);
+  const RunResult first =
+      PbaAs("alice", {"atlas", "commit", file.string(), "-m", "grown", "--keep-lock"});
+  ASSERT_EQ(first.exit_code, 0) << first.out << first.err;
+  std::ofstream(file.string() + ".pba-checkout", std::ios::trunc) << checkout;
+  const RunResult again = PbaAs("alice", {"atlas", "commit", file.string(), "-m", "grown"});
+  EXPECT_EQ(again.exit_code, 0) << again.out << again.err;
+  EXPECT_NE(again.out.find("revision 2"), std::string::npos) << again.out;
+  const RunResult history =
+      PbaAs("alice", {"--json", "atlas", "history", "-p", "demo", "Thalamus"});
+  EXPECT_EQ(history.out.find("\"number\": \"3\""), std::string::npos) << history.out;
+  // And the lock was given back.
+  const RunResult list = PbaAs("admin", {"atlas", "list", "-p", "demo"});
+  EXPECT_TRUE(std::regex_search(list.out, std::regex("Thalamus\\s+2\\s+\\S+\\s+-\\s+-")))
+      << list.out;
+}
+
 // A watcher sees another person's changes as they happen.
 TEST_F(CliAtlasTest, WatchShowsAnotherPersonsChanges) {
   SetUpPeople();

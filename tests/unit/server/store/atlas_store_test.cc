@@ -487,6 +487,47 @@ TEST_F(AtlasStoreTest, CommitNeedsTheLockAndTheHeadAsBase) {
   EXPECT_EQ(AuditCounts().at("revision.commit"), 2);
 }
 
+// A commit retried with its request id, after it landed and the lock was
+// given back, returns the revision it made: nothing new is written or
+// audited. Another user cannot reuse the key.
+TEST_F(AtlasStoreTest, ARepeatedCommitRequestIdReturnsTheRevisionItMade) {
+  const LockInfo lock = Lock("bob");
+  CommitRequest request;
+  request.structure = kHippocampus;
+  request.lock_id = lock.lock_id;
+  request.base_revision = 1;
+  request.geometry = "contours v2";
+  request.message = "wider";
+  request.request_id = "commit-7f3a";
+  Revision first;
+  bool replayed = true;
+  ASSERT_OK(store_->Commit("bob", request, &first, &replayed));
+  EXPECT_FALSE(replayed);
+  EXPECT_EQ(first.number, 2);
+  ASSERT_OK(store_->ReleaseLock("bob", lock.lock_id));
+  const auto audit = AuditCounts();
+
+  Revision again;
+  ASSERT_OK(store_->Commit("bob", request, &again, &replayed));
+  EXPECT_TRUE(replayed);
+  EXPECT_EQ(again.number, 2);
+  EXPECT_EQ(again.content_sha256, first.content_sha256);
+  EXPECT_EQ(Structure().head, 2);
+  EXPECT_EQ(AuditCounts(), audit);
+
+  // The same key from alice (an admin, holding a fresh lock) is not hers.
+  const LockInfo hers = Lock("alice");
+  request.lock_id = hers.lock_id;
+  request.base_revision = 2;
+  EXPECT_STATUS(store_->Commit("alice", request, &again), Status::Code::kAlreadyExists,
+                "another user's commit");
+  // Without the key the same content is a new revision.
+  request.request_id.clear();
+  ASSERT_OK(store_->Commit("alice", request, &again, &replayed));
+  EXPECT_FALSE(replayed);
+  EXPECT_EQ(again.number, 3);
+}
+
 TEST_F(AtlasStoreTest, ALapsedLeaseCannotCommitOrRenewAndMayBeTakenOver) {
   const LockInfo bobs = Lock("bob", kHippocampus, 10 * kSecond);
   now_ += 9 * kSecond;
