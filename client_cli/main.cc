@@ -210,6 +210,12 @@ int main(int argc, char** argv) {
   CLI::App* snapshot_show = atlas_snapshot->add_subcommand("show", "A snapshot's revisions");
   add_project(snapshot_show, &snapshot_project);
   snapshot_show->add_option("snapshot", snapshot_which, "Id or tag")->required();
+  std::string export_dir;
+  CLI::App* snapshot_export = atlas_snapshot->add_subcommand(
+      "export", "Download every structure a snapshot pins, with a manifest");
+  add_project(snapshot_export, &snapshot_project);
+  snapshot_export->add_option("snapshot", snapshot_which, "Id or tag")->required();
+  snapshot_export->add_option("-o,--out", export_dir, "New directory to write")->required();
   int64_t snapshot_id = 0;
   std::string tag;
   CLI::App* atlas_tag = atlas->add_subcommand("tag", "Name a snapshot by a tag");
@@ -270,6 +276,9 @@ int main(int argc, char** argv) {
   if (*snapshot_create) return CreateSnapshot(connection, snapshot_project, name);
   if (*snapshot_list) return ListSnapshots(connection, snapshot_project, page);
   if (*snapshot_show) return ShowSnapshot(connection, snapshot_project, snapshot_which);
+  if (*snapshot_export) {
+    return ExportSnapshot(connection, snapshot_project, snapshot_which, export_dir);
+  }
   if (*atlas_tag) return TagSnapshot(connection, snapshot_project, snapshot_id, tag);
   if (*atlas_audit) return Audit(connection, snapshot_project, page);
   if (*atlas_watch) return Watch(connection, snapshot_project, watch_count);

@@ -1,5 +1,6 @@
 #include "commands/atlas_commands.h"
 
+#include <google/protobuf/struct.pb.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -1005,6 +1006,79 @@ int ShowSnapshot(Connection& connection, const std::string& project, const std::
   std::vector<std::vector<std::string>> rows = {{"STRUCTURE", "REVISION"}};
   for (const auto& m : s.members()) rows.push_back({m.structure(), std::to_string(m.revision())});
   PrintTable(rows);
+  return kExitOk;
+}
+
+int ExportSnapshot(Connection& connection, const std::string& project, const std::string& which,
+                   const std::string& dir) {
+  std::error_code ec;
+  if (fs::exists(dir) && !fs::is_empty(dir, ec)) {
+    std::fprintf(stderr, "pba: %s is not empty: export into a new directory\n", dir.c_str());
+    return kExitUsage;
+  }
+  v1::GetSnapshotRequest request;
+  request.set_project(project);
+  request.set_snapshot(which);
+  v1::Snapshot snapshot;
+  {
+    auto context = connection.UnaryContext();
+    grpc::Status status = connection.atlas().GetSnapshot(context.get(), request, &snapshot);
+    if (!status.ok()) return connection.Fail("snapshot " + which + " of " + project, status);
+  }
+  // Written beside the target and renamed into place: whole or absent.
+  const fs::path target = fs::absolute(dir);
+  const fs::path staging = target.string() + ".part";
+  fs::remove_all(staging, ec);
+  fs::create_directories(staging, ec);
+  if (ec) {
+    std::fprintf(stderr, "pba: cannot create %s: %s\n", staging.c_str(), ec.message().c_str());
+    return kExitError;
+  }
+  google::protobuf::ListValue manifest_structures;
+  for (const auto& member : snapshot.members()) {
+    v1::Revision revision;
+    const StructureArgs structure{project, member.structure()};
+    if (int code = GetHead(connection, structure, member.revision(), &revision); code != kExitOk) {
+      return code;
+    }
+    const std::string file = member.structure() + Extension(revision.format());
+    if (int code = DownloadRevision(connection, revision, staging / file); code != kExitOk) {
+      return code;
+    }
+    auto& entry = *manifest_structures.add_values()->mutable_struct_value()->mutable_fields();
+    entry["name"].set_string_value(member.structure());
+    entry["revision"].set_number_value(static_cast<double>(member.revision()));
+    entry["file"].set_string_value(file);
+    entry["format"].set_string_value(FormatText(revision.format()));
+    entry["sha256"].set_string_value(revision.content_sha256());
+    entry["colour"].set_string_value(ColourText(revision.metadata().colour()));
+    entry["group_path"].set_string_value(revision.metadata().group_path());
+    entry["material_json"].set_string_value(revision.metadata().material_json());
+  }
+  google::protobuf::Struct manifest;
+  auto& fields = *manifest.mutable_fields();
+  fields["project"].set_string_value(project);
+  fields["snapshot"].set_number_value(static_cast<double>(snapshot.id()));
+  fields["snapshot_name"].set_string_value(snapshot.name());
+  *fields["structures"].mutable_list_value() = manifest_structures;
+  if (!WriteFileAtomically(staging / "manifest.json", codec::ToJson(manifest))) {
+    std::fprintf(stderr, "pba: cannot write %s\n", (staging / "manifest.json").c_str());
+    return kExitError;
+  }
+  fs::remove(target, ec);  // an empty directory, if any
+  fs::rename(staging, target, ec);
+  if (ec) {
+    std::fprintf(stderr, "pba: cannot move %s into place: %s\n", target.c_str(),
+                 ec.message().c_str());
+    return kExitError;
+  }
+  if (connection.options().json) {
+    PrintJson(manifest);
+  } else {
+    std::printf("Exported snapshot %lld of %s (%d structure%s) into %s, with manifest.json\n",
+                static_cast<long long>(snapshot.id()), project.c_str(), snapshot.members_size(),
+                snapshot.members_size() == 1 ? "" : "s", target.c_str());
+  }
   return kExitOk;
 }
 

@@ -108,6 +108,12 @@ int TagSnapshot(Connection& connection, const std::string& project, int64_t id,
                 const std::string& tag);
 int ShowSnapshot(Connection& connection, const std::string& project, const std::string& snapshot);
 int ListSnapshots(Connection& connection, const std::string& project, const PageArgs& page);
+// Downloads every structure a snapshot pins into `dir` (created): one file
+// per structure named by it and its format, and manifest.json with the
+// snapshot and each structure's revision, metadata and SHA-256. `dir` must
+// not exist yet or be empty: an export is whole or absent.
+int ExportSnapshot(Connection& connection, const std::string& project, const std::string& which,
+                   const std::string& dir);
 int Audit(Connection& connection, const std::string& project, const PageArgs& page);
 // Prints the project's events until interrupted, or after `count` events
 // (0: no limit) not counting the READY one.

@@ -231,6 +231,19 @@ TEST_F(CliAtlasTest, TwoPeopleEditOneStructureWithoutLosingAChange) {
   ASSERT_EQ(shown.exit_code, 0) << shown.err;
   EXPECT_TRUE(std::regex_search(shown.out, std::regex("Putamen\\s+6"))) << shown.out;
 
+  // The snapshot exported: its file and a manifest naming the revision.
+  const fs::path exported = dir_.path() / "reviewed";
+  const RunResult export_run = PbaAs(
+      "alice", {"atlas", "snapshot", "export", "-p", "demo", "reviewed", "-o", exported.string()});
+  ASSERT_EQ(export_run.exit_code, 0) << export_run.out << export_run.err;
+  EXPECT_EQ(ReadFile(exported / "Putamen.json"), ReadFile(first));
+  const std::string manifest = ReadFile(exported / "manifest.json");
+  EXPECT_TRUE(std::regex_search(manifest, std::regex("\"revision\": 6"))) << manifest;
+  EXPECT_FALSE(fs::exists(exported.string() + ".part"));
+  const RunResult again = PbaAs(
+      "alice", {"atlas", "snapshot", "export", "-p", "demo", "reviewed", "-o", exported.string()});
+  EXPECT_EQ(again.exit_code, 2) << again.err;
+
   const RunResult audit = PbaAs("admin", {"atlas", "audit", "-p", "demo", "--all"});
   ASSERT_EQ(audit.exit_code, 0) << audit.err;
   for (const char* who : {"admin", "alice"}) {
