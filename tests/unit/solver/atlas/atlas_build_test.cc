@@ -326,6 +326,69 @@ TEST_F(AtlasBuildTest, QuadraticMeshFromALabelVolumeKeepsItsMidpoints) {
   EXPECT_NEAR(gap.nodes_mm, gap.midpoints_mm, 1e-9);
 }
 
+// A structure drawn on one plate only (a lens in the loft, tapering to
+// points half-way to the plates beside it) is meshed and judged like any
+// other; one drawn as a single pixel, too small for the loft's voxels, is
+// reported absent, not meshed into a broken region.
+TEST_F(AtlasBuildTest, AOnePlateStructureIsMeshedAndAOnePixelOneIsAbsent) {
+  LabelVolume volume = Ball(8, 0.25, 2);
+  // Substantia nigra (31): a disc of radius 2.5 mm on the plate at z = 0;
+  // red nucleus (27): one pixel on the plate at z = 2.
+  for (int j = 0; j < volume.ny(); ++j) {
+    for (int i = 0; i < volume.nx(); ++i) {
+      for (int k = 0; k < volume.nz(); ++k) {
+        const Eigen::Vector3d x = volume.VoxelCentreMm(i, j, k);
+        if (std::abs(x.z()) < 1e-9 && std::hypot(x.x() - 2, x.y()) <= 2.5) volume.set(i, j, k, 31);
+      }
+    }
+  }
+  const Eigen::Vector3d pixel(-3, 0, 2);
+  int pi = 0, pj = 0, pk = 0;
+  double best = 1e9;
+  for (int k = 0; k < volume.nz(); ++k) {
+    for (int j = 0; j < volume.ny(); ++j) {
+      for (int i = 0; i < volume.nx(); ++i) {
+        const double d = (volume.VoxelCentreMm(i, j, k) - pixel).norm();
+        if (d < best) best = d, pi = i, pj = j, pk = k;
+      }
+    }
+  }
+  volume.set(pi, pj, pk, 27);
+  PlateOptions plates;
+  plates.pixel_size_mm = 0.25;
+  plates.z_mm.clear();
+  for (double z = -8; z <= 8; z += 2) plates.z_mm.push_back(z);
+  ASSERT_TRUE(WritePlates(volume, ColourTable::Builtin(), plates, dir_ / "lens").ok());
+  AtlasBuildOptions options;
+  options.source = AtlasBuildOptions::Source::kPlates;
+  options.input = dir_ / "lens";
+  options.loft_voxel_mm = 0.5;
+  options.cell_size_mm = options.facet_size_mm = 3;
+  AtlasBuildResult result;
+  const Status s = BuildAtlas(options, &result);
+  ASSERT_TRUE(s.ok()) << s.ToString();
+  const auto& names = result.mesh.region_names;
+  const auto at = std::find(names.begin(), names.end(), "Substantia nigra");
+  ASSERT_NE(at, names.end());
+  const size_t region = static_cast<size_t>(at - names.begin());
+  EXPECT_GT(result.quality.regions[region].count, 0);
+  ASSERT_TRUE(result.validation.has_value());
+  bool judged = false;
+  for (const auto& row : result.validation->structures) {
+    if (row.name != "Substantia nigra") continue;
+    judged = true;
+    std::printf("one-plate lens: %d tetrahedra, %d section(s), %%Err %.3f\n",
+                result.quality.regions[region].count, static_cast<int>(row.sections.size()),
+                row.percentage_error);
+    EXPECT_EQ(row.sections.size(), 1u);
+    EXPECT_LT(row.percentage_error, 0.65);
+  }
+  EXPECT_TRUE(judged);
+  EXPECT_EQ(std::find(names.begin(), names.end(), "Nucleus ruber (bottom)"), names.end());
+  EXPECT_NE(std::find(result.absent.begin(), result.absent.end(), "Nucleus ruber (bottom)"),
+            result.absent.end());
+}
+
 TEST_F(AtlasBuildTest, BadSizingOptionsAreNamed) {
   AtlasBuildOptions options;
   options.plates_dir = dir_ / "plates";
