@@ -83,7 +83,7 @@ int main(int argc, char** argv) {
   CLI::App* admin = app.add_subcommand("admin", "Offline administration of the data directory");
   admin->require_subcommand(1);
   CLI::App* create_user =
-      admin->add_subcommand("create-user", "Create an atlas user and print its token once");
+      admin->add_subcommand("create-user", "Create a user and print its token once");
   std::string new_user;
   std::string admin_data_dir;
   create_user->add_option("name", new_user, "The user's name")->required();
