@@ -197,7 +197,8 @@ int main(int argc, char** argv) {
   add_target(atlas_diff);
   atlas_diff->add_option("--from", diff_from, "Older revision (default the head's parent)");
   atlas_diff->add_option("--to", diff_to, "Newer revision (default the head)");
-  CLI::App* atlas_snapshot = atlas->add_subcommand("snapshot", "Pin, list, show and export snapshots");
+  CLI::App* atlas_snapshot =
+      atlas->add_subcommand("snapshot", "Pin, list, show and export snapshots");
   atlas_snapshot->require_subcommand(1);
   std::string snapshot_project, snapshot_which;
   CLI::App* snapshot_create =
