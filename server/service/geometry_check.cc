@@ -366,10 +366,9 @@ Status CheckClosedSurface(const std::string& f, const char* format, const Surfac
     i = j;
   }
   if (open > 0 || shared > 0) {
-    return Status::InvalidArgument(
-        f, what + "not a closed surface: " + std::to_string(open) +
-               " edges belong to one triangle only and " + std::to_string(shared) +
-               " to more than two");
+    return Status::InvalidArgument(f, what + "not a closed surface: " + std::to_string(open) +
+                                          " edges belong to one triangle only and " +
+                                          std::to_string(shared) + " to more than two");
   }
   double six_volume = 0;
   for (const auto& t : surface.triangles) {

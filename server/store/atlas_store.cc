@@ -145,6 +145,24 @@ Status AtlasStore::Enter(const std::string& user, const std::string& project, Ro
   return Status::Ok();
 }
 
+Status AtlasStore::EnterStructure(const std::string& user, const StructureRef& ref, Role minimum,
+                                  Caller* caller, StructureRow* structure) {
+  PBA_RETURN_IF_ERROR(Enter(user, ref.project, minimum, caller));
+  return FindStructure(*caller, ref, structure);
+}
+
+Status AtlasStore::CheckWrite(const Caller& caller, const StructureRef& ref,
+                              const StructureRow& structure, const std::string& lock_id,
+                              int64_t base_revision) {
+  PBA_RETURN_IF_ERROR(CheckLockForWrite(caller, ref, structure.id, lock_id));
+  if (base_revision != structure.head_number) {
+    return Status::Aborted("base revision " + std::to_string(base_revision) + " of " +
+                           Describe(ref) + " is not the head: the head is revision " +
+                           std::to_string(structure.head_number) + "; rebase on it");
+  }
+  return Status::Ok();
+}
+
 Status AtlasStore::FindStructure(const Caller& caller, const StructureRef& ref,
                                  StructureRow* structure) {
   Statement stmt;
@@ -473,9 +491,8 @@ Status AtlasStore::GetStructure(const std::string& user, const StructureRef& ref
   PBA_RETURN_IF_ERROR(CheckName("structure", ref.structure));
   std::lock_guard lock(mutex_);
   Caller caller;
-  PBA_RETURN_IF_ERROR(Enter(user, ref.project, Role::kViewer, &caller));
   StructureRow structure;
-  PBA_RETURN_IF_ERROR(FindStructure(caller, ref, &structure));
+  PBA_RETURN_IF_ERROR(EnterStructure(user, ref, Role::kViewer, &caller, &structure));
   Revision head;
   bool found = false;
   PBA_RETURN_IF_ERROR(ReadRevision(ref, structure.id, structure.head_number, &head, &found));
@@ -572,9 +589,8 @@ Status AtlasStore::Commit(const std::string& user, const CommitRequest& request,
   Transaction transaction(*db_);
   PBA_RETURN_IF_ERROR(transaction.status());
   Caller caller;
-  PBA_RETURN_IF_ERROR(Enter(user, ref.project, Role::kEditor, &caller));
   StructureRow structure;
-  PBA_RETURN_IF_ERROR(FindStructure(caller, ref, &structure));
+  PBA_RETURN_IF_ERROR(EnterStructure(user, ref, Role::kEditor, &caller, &structure));
   if (!request.request_id.empty()) {
     // A retry of a commit that landed: its revision, nothing written.
     Statement stmt;
@@ -596,12 +612,7 @@ Status AtlasStore::Commit(const std::string& user, const CommitRequest& request,
       return ReadRevision(ref, structure.id, number, revision, &found);
     }
   }
-  PBA_RETURN_IF_ERROR(CheckLockForWrite(caller, ref, structure.id, request.lock_id));
-  if (request.base_revision != structure.head_number) {
-    return Status::Aborted("base revision " + std::to_string(request.base_revision) + " of " +
-                           Describe(ref) + " is not the head: the head is revision " +
-                           std::to_string(structure.head_number) + "; rebase on it");
-  }
+  PBA_RETURN_IF_ERROR(CheckWrite(caller, ref, structure, request.lock_id, request.base_revision));
   Revision head;
   bool found = false;
   PBA_RETURN_IF_ERROR(ReadRevision(ref, structure.id, structure.head_number, &head, &found));
@@ -640,9 +651,8 @@ Status AtlasStore::UpdateMetadata(const std::string& user, const StructureRef& r
   Transaction transaction(*db_);
   PBA_RETURN_IF_ERROR(transaction.status());
   Caller caller;
-  PBA_RETURN_IF_ERROR(Enter(user, ref.project, Role::kEditor, &caller));
   StructureRow structure;
-  PBA_RETURN_IF_ERROR(FindStructure(caller, ref, &structure));
+  PBA_RETURN_IF_ERROR(EnterStructure(user, ref, Role::kEditor, &caller, &structure));
   if (etag != structure.etag) {
     return Status::Aborted("metadata etag " + Quoted(etag) + " of " + Describe(ref) +
                            " is stale: the current etag is " + Quoted(structure.etag) +
@@ -684,9 +694,8 @@ Status AtlasStore::History(const std::string& user, const StructureRef& ref, int
   next_page_token->clear();
   std::lock_guard lock(mutex_);
   Caller caller;
-  PBA_RETURN_IF_ERROR(Enter(user, ref.project, Role::kViewer, &caller));
   StructureRow structure;
-  PBA_RETURN_IF_ERROR(FindStructure(caller, ref, &structure));
+  PBA_RETURN_IF_ERROR(EnterStructure(user, ref, Role::kViewer, &caller, &structure));
   int64_t before = INT64_MAX;
   if (!token.empty()) {
     PBA_RETURN_IF_ERROR(DecodePageToken(token, "history", structure.id, &before));
@@ -716,9 +725,8 @@ Status AtlasStore::GetRevision(const std::string& user, const StructureRef& ref,
   if (number <= 0) return Status::InvalidArgument("revision", "must be 1 or more");
   std::lock_guard lock(mutex_);
   Caller caller;
-  PBA_RETURN_IF_ERROR(Enter(user, ref.project, Role::kViewer, &caller));
   StructureRow structure;
-  PBA_RETURN_IF_ERROR(FindStructure(caller, ref, &structure));
+  PBA_RETURN_IF_ERROR(EnterStructure(user, ref, Role::kViewer, &caller, &structure));
   bool found = false;
   PBA_RETURN_IF_ERROR(ReadRevision(ref, structure.id, number, revision, &found));
   if (!found) {
@@ -739,15 +747,9 @@ Status AtlasStore::Revert(const std::string& user, const StructureRef& ref,
   Transaction transaction(*db_);
   PBA_RETURN_IF_ERROR(transaction.status());
   Caller caller;
-  PBA_RETURN_IF_ERROR(Enter(user, ref.project, Role::kEditor, &caller));
   StructureRow structure;
-  PBA_RETURN_IF_ERROR(FindStructure(caller, ref, &structure));
-  PBA_RETURN_IF_ERROR(CheckLockForWrite(caller, ref, structure.id, lock_id));
-  if (base_revision != structure.head_number) {
-    return Status::Aborted("base revision " + std::to_string(base_revision) + " of " +
-                           Describe(ref) + " is not the head: the head is revision " +
-                           std::to_string(structure.head_number) + "; rebase on it");
-  }
+  PBA_RETURN_IF_ERROR(EnterStructure(user, ref, Role::kEditor, &caller, &structure));
+  PBA_RETURN_IF_ERROR(CheckWrite(caller, ref, structure, lock_id, base_revision));
   Revision old;
   bool found = false;
   PBA_RETURN_IF_ERROR(ReadRevision(ref, structure.id, to_revision, &old, &found));

@@ -241,10 +241,18 @@ class AtlasStore {
   // Checks `user`'s role in `project` is at least `minimum`.
   Status Enter(const std::string& user, const std::string& project, Role minimum, Caller* caller);
   Status FindStructure(const Caller& caller, const StructureRef& ref, StructureRow* row);
+  // Enter() into ref.project, then FindStructure(): every per-structure call
+  // starts so.
+  Status EnterStructure(const std::string& user, const StructureRef& ref, Role minimum,
+                        Caller* caller, StructureRow* row);
   Status FindLock(int64_t structure, LockRow* lock, bool* found);
   // The lock rules of Commit and Revert.
   Status CheckLockForWrite(const Caller& caller, const StructureRef& ref, int64_t structure,
                            const std::string& lock_id);
+  // CheckLockForWrite, then the base revision must be the head (kAborted
+  // naming the head otherwise).
+  Status CheckWrite(const Caller& caller, const StructureRef& ref, const StructureRow& structure,
+                    const std::string& lock_id, int64_t base_revision);
   // Appends revision head + 1 of `kind`, moves the head (and the metadata
   // etag when `metadata_changed`) and audits it as `action`.
   Status AppendRevision(const Caller& caller, const StructureRef& ref, const StructureRow& row,

@@ -136,9 +136,8 @@ Status AtlasStore::AcquireLock(const std::string& user, const StructureRef& ref,
   Transaction transaction(*db_);
   PBA_RETURN_IF_ERROR(transaction.status());
   Caller caller;
-  PBA_RETURN_IF_ERROR(Enter(user, ref.project, Role::kEditor, &caller));
   StructureRow structure;
-  PBA_RETURN_IF_ERROR(FindStructure(caller, ref, &structure));
+  PBA_RETURN_IF_ERROR(EnterStructure(user, ref, Role::kEditor, &caller, &structure));
   const int64_t now = clock_();
   LockRow held;
   bool found = false;
@@ -256,9 +255,8 @@ Status AtlasStore::BreakLock(const std::string& admin, const StructureRef& ref,
   Transaction transaction(*db_);
   PBA_RETURN_IF_ERROR(transaction.status());
   Caller caller;
-  PBA_RETURN_IF_ERROR(Enter(admin, ref.project, Role::kAdmin, &caller));
   StructureRow structure;
-  PBA_RETURN_IF_ERROR(FindStructure(caller, ref, &structure));
+  PBA_RETURN_IF_ERROR(EnterStructure(admin, ref, Role::kAdmin, &caller, &structure));
   LockRow held;
   bool found = false;
   PBA_RETURN_IF_ERROR(FindLock(structure.id, &held, &found));

@@ -52,8 +52,8 @@ class JobStore {
   // event. With a non-empty `request_id` that `owner` used before, returns
   // the job created then and sets *created to false; another owner's
   // request_id is kAlreadyExists. The scene must already be validated.
-  Status CreateJob(const v1::Scene& scene, const std::string& request_id,
-                   const std::string& owner, v1::Job* job, bool* created);
+  Status CreateJob(const v1::Scene& scene, const std::string& request_id, const std::string& owner,
+                   v1::Job* job, bool* created);
   Status GetJob(const std::string& id, JobView view, v1::Job* job, bool* found);
 
   // Newest first. `page_size` 0 means kDefaultPageSize; larger than
