@@ -1,21 +1,18 @@
 #include "commands/atlas_commands.h"
 
-#include <google/protobuf/struct.pb.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
 #include <csignal>
 #include <cstdio>
-#include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <map>
 #include <sstream>
 #include <thread>
 
-#include "codec/yaml_codec.h"
-#include "credentials.h"
+#include "commands/atlas_shared.h"
 #include "exit_codes.h"
 #include "files.h"
 #include "output.h"
@@ -28,53 +25,6 @@ namespace {
 constexpr int64_t kChunkBytes = 1 << 20;  // the API's largest chunk
 
 // --- small helpers ------------------------------------------------------------
-
-std::string RoleText(v1::Role role) {
-  switch (role) {
-    case v1::VIEWER:
-      return "viewer";
-    case v1::EDITOR:
-      return "editor";
-    case v1::ADMIN:
-      return "admin";
-    default:
-      return "-";
-  }
-}
-
-std::string FormatText(v1::GeometryFormat format) {
-  switch (format) {
-    case v1::CONTOURS_JSON:
-      return "contours_json";
-    case v1::NIFTI:
-      return "nifti";
-    case v1::STL:
-      return "stl";
-    case v1::OBJ:
-      return "obj";
-    case v1::VTK:
-      return "vtk";
-    default:
-      return "-";
-  }
-}
-
-std::string Extension(v1::GeometryFormat format) {
-  switch (format) {
-    case v1::CONTOURS_JSON:
-      return ".json";
-    case v1::NIFTI:
-      return ".nii.gz";
-    case v1::STL:
-      return ".stl";
-    case v1::OBJ:
-      return ".obj";
-    case v1::VTK:
-      return ".vtk";
-    default:
-      return ".bin";
-  }
-}
 
 // The format named (`format`), else the one the file's extension says.
 bool ParseFormat(const std::string& format, const std::string& file, v1::GeometryFormat* out) {
@@ -100,18 +50,6 @@ bool ParseFormat(const std::string& format, const std::string& file, v1::Geometr
   const auto it = kFormats.find(name);
   if (it == kFormats.end()) return false;
   *out = it->second;
-  return true;
-}
-
-bool ParseRoleText(const std::string& text, v1::Role* role) {
-  if (text == "viewer")
-    *role = v1::VIEWER;
-  else if (text == "editor")
-    *role = v1::EDITOR;
-  else if (text == "admin")
-    *role = v1::ADMIN;
-  else
-    return false;
   return true;
 }
 
@@ -145,36 +83,6 @@ bool ReadMaterial(const std::string& arg, std::string* json) {
   buffer << in.rdbuf();
   *json = buffer.str();
   return true;
-}
-
-std::string ColourText(const v1::Colour& c) {
-  return std::to_string(c.r()) + "," + std::to_string(c.g()) + "," + std::to_string(c.b());
-}
-
-// Fetches one page of a list RPC, or with --all every page, into *all.
-template <typename Request, typename Response, typename Item>
-int FetchPages(Connection& connection, const PageArgs& page, Request request,
-               grpc::Status (v1::AtlasService::Stub::*rpc)(grpc::ClientContext*, const Request&,
-                                                           Response*),
-               google::protobuf::RepeatedPtrField<Item>* (Response::*items)(),
-               const std::string& what, Response* all) {
-  request.set_page_size(page.page_size);
-  std::string token = page.page_token;
-  do {
-    request.set_page_token(token);
-    Response response;
-    auto context = connection.UnaryContext();
-    grpc::Status status = (connection.atlas().*rpc)(context.get(), request, &response);
-    if (!status.ok()) return connection.Fail(what, status);
-    for (Item& item : *(response.*items)()) *(all->*items)()->Add() = std::move(item);
-    token = response.next_page_token();
-  } while (page.all && !token.empty());
-  all->set_next_page_token(token);
-  return kExitOk;
-}
-
-void MoreHint(const std::string& next, const std::string& command) {
-  if (!next.empty()) std::printf("More: %s --page-token %s\n", command.c_str(), next.c_str());
 }
 
 void PrintRevisions(const std::vector<v1::Revision>& revisions) {
@@ -297,34 +205,6 @@ int UploadFile(Connection& connection, const std::string& file, std::string* upl
   return kExitOk;
 }
 
-// Downloads a revision's geometry into `out` (transfer.h: resumed, checked
-// against the revision's SHA-256).
-int DownloadRevision(Connection& connection, const v1::Revision& revision, const fs::path& out) {
-  return DownloadTo(connection, out, revision.size_bytes(), revision.content_sha256(),
-                    revision.project() + "/" + revision.structure() + " revision " +
-                        std::to_string(revision.number()),
-                    [&](grpc::ClientContext* context, int64_t offset) {
-                      v1::DownloadGeometryRequest request;
-                      request.set_project(revision.project());
-                      request.set_structure(revision.structure());
-                      request.set_revision(revision.number());
-                      request.set_offset(offset);
-                      return connection.atlas().DownloadGeometry(context, request);
-                    });
-}
-
-int GetHead(Connection& connection, const StructureArgs& target, int64_t number,
-            v1::Revision* revision) {
-  v1::GetRevisionRequest request;
-  request.set_project(target.project);
-  request.set_structure(target.structure);
-  request.set_revision(number);
-  auto context = connection.UnaryContext();
-  grpc::Status status = connection.atlas().GetRevision(context.get(), request, revision);
-  if (!status.ok()) return connection.Fail(target.project + "/" + target.structure, status);
-  return kExitOk;
-}
-
 int ReleaseLockId(Connection& connection, const std::string& lock_id, const std::string& what) {
   v1::ReleaseLockRequest request;
   request.set_lock_id(lock_id);
@@ -361,129 +241,6 @@ int HoldLock(Connection& connection, const std::string& lock_id, int lease_s,
 }
 
 }  // namespace
-
-// --- identity and projects -----------------------------------------------------
-
-int Login(Connection& connection, const LoginArgs& args) {
-  std::string token = args.token;
-  if (!args.token_file.empty()) {
-    std::ifstream in(args.token_file);
-    if (!(in >> token)) {
-      std::fprintf(stderr, "pba: cannot read a token from %s\n", args.token_file.c_str());
-      return kExitError;
-    }
-  }
-  if (token.empty()) {
-    std::fprintf(stderr, "pba: login needs --token TOKEN or --token-file FILE\n");
-    return kExitUsage;
-  }
-  GlobalOptions options = connection.options();
-  options.token = token;
-  Connection with_token(options);
-  v1::User user;
-  auto context = with_token.UnaryContext();
-  grpc::Status status = with_token.atlas().WhoAmI(context.get(), v1::WhoAmIRequest(), &user);
-  if (!status.ok()) return with_token.Fail("logging in to " + options.server, status);
-  std::string error;
-  if (!StoreToken(options.server, token, &error)) {
-    std::fprintf(stderr, "pba: %s\n", error.c_str());
-    return kExitError;
-  }
-  if (connection.options().json) {
-    PrintJson(user);
-  } else {
-    std::printf("Logged in to %s as %s (token kept in %s)\n", options.server.c_str(),
-                user.name().c_str(), CredentialsPath().c_str());
-  }
-  return kExitOk;
-}
-
-int Logout(Connection& connection) {
-  std::string error;
-  const bool had = ForgetToken(connection.options().server, &error);
-  if (!error.empty()) {
-    std::fprintf(stderr, "pba: %s\n", error.c_str());
-    return kExitError;
-  }
-  std::printf(had ? "Logged out of %s\n" : "No token was kept for %s\n",
-              connection.options().server.c_str());
-  return kExitOk;
-}
-
-int WhoAmI(Connection& connection) {
-  v1::User user;
-  auto context = connection.UnaryContext();
-  grpc::Status status = connection.atlas().WhoAmI(context.get(), v1::WhoAmIRequest(), &user);
-  if (!status.ok()) return connection.Fail("who am I", status);
-  if (connection.options().json) {
-    PrintJson(user);
-  } else {
-    std::printf("%s on %s\n", user.name().c_str(), connection.options().server.c_str());
-  }
-  return kExitOk;
-}
-
-int CreateProject(Connection& connection, const std::string& name) {
-  v1::CreateProjectRequest request;
-  request.set_name(name);
-  v1::Project project;
-  auto context = connection.UnaryContext();
-  grpc::Status status = connection.atlas().CreateProject(context.get(), request, &project);
-  if (!status.ok()) return connection.Fail("creating project " + name, status);
-  if (connection.options().json) {
-    PrintJson(project);
-  } else {
-    std::printf("Created project %s; you are its admin\n", project.name().c_str());
-  }
-  return kExitOk;
-}
-
-int ListProjects(Connection& connection, const PageArgs& page) {
-  v1::ListProjectsResponse all;
-  v1::ListProjectsRequest request;
-  int code = FetchPages(connection, page, request, &v1::AtlasService::Stub::ListProjects,
-                        &v1::ListProjectsResponse::mutable_projects, "listing projects", &all);
-  if (code != kExitOk) return code;
-  if (connection.options().json) {
-    PrintJson(all);
-    return kExitOk;
-  }
-  if (all.projects().empty()) {
-    std::puts("No projects. Create one with: pba project create NAME");
-    return kExitOk;
-  }
-  std::vector<std::vector<std::string>> rows = {{"PROJECT", "YOUR ROLE", "CREATED (UTC)", "BY"}};
-  for (const auto& p : all.projects()) {
-    rows.push_back({p.name(), RoleText(p.role()), FormatTime(p.create_time()), p.created_by()});
-  }
-  PrintTable(rows);
-  MoreHint(all.next_page_token(), "pba project list");
-  return kExitOk;
-}
-
-int SetRole(Connection& connection, const std::string& project, const std::string& user,
-            const std::string& role) {
-  v1::SetRoleRequest request;
-  v1::Role parsed;
-  if (!ParseRoleText(role, &parsed)) {
-    std::fprintf(stderr, "pba: role must be viewer, editor or admin, not '%s'\n", role.c_str());
-    return kExitUsage;
-  }
-  request.set_project(project);
-  request.set_user(user);
-  request.set_role(parsed);
-  v1::Member member;
-  auto context = connection.UnaryContext();
-  grpc::Status status = connection.atlas().SetRole(context.get(), request, &member);
-  if (!status.ok()) return connection.Fail("setting " + user + "'s role", status, kExitConflict);
-  if (connection.options().json) {
-    PrintJson(member);
-  } else {
-    std::printf("%s is %s in %s\n", member.user().c_str(), RoleText(member.role()).c_str(),
-                member.project().c_str());
-  }
-  return kExitOk;
-}
 
 // --- structures -----------------------------------------------------------------
 
@@ -930,237 +687,6 @@ int Diff(Connection& connection, const StructureArgs& target, int64_t from, int6
     std::puts(".");
   } else {
     std::puts("Geometry: changed (distances are measured between plate contours only).");
-  }
-  return kExitOk;
-}
-
-// --- snapshots, audit, watch -------------------------------------------------------
-
-int CreateSnapshot(Connection& connection, const std::string& project, const std::string& name) {
-  v1::CreateSnapshotRequest request;
-  request.set_project(project);
-  // Unnamed: named by its time, which is how people tell snapshots apart.
-  std::string named = name;
-  if (named.empty()) {
-    const std::time_t now = std::time(nullptr);
-    std::tm tm{};
-    gmtime_r(&now, &tm);
-    char buffer[48];
-    std::strftime(buffer, sizeof buffer, "snapshot %Y-%m-%d %H.%M.%S UTC", &tm);
-    named = buffer;
-  }
-  request.set_name(named);
-  v1::Snapshot snapshot;
-  auto context = connection.UnaryContext();
-  grpc::Status status = connection.atlas().CreateSnapshot(context.get(), request, &snapshot);
-  if (!status.ok()) return connection.Fail("snapshotting " + project, status);
-  if (connection.options().json) {
-    PrintJson(snapshot);
-  } else {
-    std::printf(
-        "Snapshot %lld of %s pins %d structure%s; tag it with: pba atlas tag -p %s %lld TAG\n",
-        static_cast<long long>(snapshot.id()), project.c_str(), snapshot.members_size(),
-        snapshot.members_size() == 1 ? "" : "s", project.c_str(),
-        static_cast<long long>(snapshot.id()));
-  }
-  return kExitOk;
-}
-
-int TagSnapshot(Connection& connection, const std::string& project, int64_t id,
-                const std::string& tag) {
-  v1::TagSnapshotRequest request;
-  request.set_project(project);
-  request.set_snapshot_id(id);
-  request.set_tag(tag);
-  v1::Snapshot snapshot;
-  auto context = connection.UnaryContext();
-  grpc::Status status = connection.atlas().TagSnapshot(context.get(), request, &snapshot);
-  if (!status.ok()) return connection.Fail("tagging snapshot " + std::to_string(id), status);
-  if (connection.options().json) {
-    PrintJson(snapshot);
-  } else {
-    std::printf("Snapshot %lld of %s is tagged %s\n", static_cast<long long>(id), project.c_str(),
-                tag.c_str());
-  }
-  return kExitOk;
-}
-
-int ShowSnapshot(Connection& connection, const std::string& project, const std::string& which) {
-  v1::GetSnapshotRequest request;
-  request.set_project(project);
-  request.set_snapshot(which);
-  v1::Snapshot s;
-  auto context = connection.UnaryContext();
-  grpc::Status status = connection.atlas().GetSnapshot(context.get(), request, &s);
-  if (!status.ok()) return connection.Fail("snapshot " + which + " of " + project, status);
-  if (connection.options().json) {
-    PrintJson(s);
-    return kExitOk;
-  }
-  std::string tags;
-  for (const auto& t : s.tags()) tags += (tags.empty() ? "" : ", ") + t;
-  std::printf("Snapshot %lld of %s: %s, by %s at %s UTC; tags: %s\n",
-              static_cast<long long>(s.id()), s.project().c_str(),
-              s.name().empty() ? "(unnamed)" : s.name().c_str(), s.author().c_str(),
-              FormatTime(s.create_time()).c_str(), tags.empty() ? "none" : tags.c_str());
-  std::vector<std::vector<std::string>> rows = {{"STRUCTURE", "REVISION"}};
-  for (const auto& m : s.members()) rows.push_back({m.structure(), std::to_string(m.revision())});
-  PrintTable(rows);
-  return kExitOk;
-}
-
-int ExportSnapshot(Connection& connection, const std::string& project, const std::string& which,
-                   const std::string& dir) {
-  std::error_code ec;
-  if (fs::exists(dir) && !fs::is_empty(dir, ec)) {
-    std::fprintf(stderr, "pba: %s is not empty: export into a new directory\n", dir.c_str());
-    return kExitUsage;
-  }
-  v1::GetSnapshotRequest request;
-  request.set_project(project);
-  request.set_snapshot(which);
-  v1::Snapshot snapshot;
-  {
-    auto context = connection.UnaryContext();
-    grpc::Status status = connection.atlas().GetSnapshot(context.get(), request, &snapshot);
-    if (!status.ok()) return connection.Fail("snapshot " + which + " of " + project, status);
-  }
-  // Written beside the target and renamed into place: whole or absent.
-  const fs::path target = fs::absolute(dir);
-  const fs::path staging = target.string() + ".part";
-  fs::remove_all(staging, ec);
-  fs::create_directories(staging, ec);
-  if (ec) {
-    std::fprintf(stderr, "pba: cannot create %s: %s\n", staging.c_str(), ec.message().c_str());
-    return kExitError;
-  }
-  google::protobuf::ListValue manifest_structures;
-  for (const auto& member : snapshot.members()) {
-    v1::Revision revision;
-    const StructureArgs structure{project, member.structure()};
-    if (int code = GetHead(connection, structure, member.revision(), &revision); code != kExitOk) {
-      return code;
-    }
-    const std::string file = member.structure() + Extension(revision.format());
-    if (int code = DownloadRevision(connection, revision, staging / file); code != kExitOk) {
-      return code;
-    }
-    auto& entry = *manifest_structures.add_values()->mutable_struct_value()->mutable_fields();
-    entry["name"].set_string_value(member.structure());
-    entry["revision"].set_number_value(static_cast<double>(member.revision()));
-    entry["file"].set_string_value(file);
-    entry["format"].set_string_value(FormatText(revision.format()));
-    entry["sha256"].set_string_value(revision.content_sha256());
-    entry["colour"].set_string_value(ColourText(revision.metadata().colour()));
-    entry["group_path"].set_string_value(revision.metadata().group_path());
-    entry["material_json"].set_string_value(revision.metadata().material_json());
-  }
-  google::protobuf::Struct manifest;
-  auto& fields = *manifest.mutable_fields();
-  fields["project"].set_string_value(project);
-  fields["snapshot"].set_number_value(static_cast<double>(snapshot.id()));
-  fields["snapshot_name"].set_string_value(snapshot.name());
-  *fields["structures"].mutable_list_value() = manifest_structures;
-  if (!WriteFileAtomically(staging / "manifest.json", codec::ToJson(manifest))) {
-    std::fprintf(stderr, "pba: cannot write %s\n", (staging / "manifest.json").c_str());
-    return kExitError;
-  }
-  fs::remove(target, ec);  // an empty directory, if any
-  fs::rename(staging, target, ec);
-  if (ec) {
-    std::fprintf(stderr, "pba: cannot move %s into place: %s\n", target.c_str(),
-                 ec.message().c_str());
-    return kExitError;
-  }
-  if (connection.options().json) {
-    PrintJson(manifest);
-  } else {
-    std::printf("Exported snapshot %lld of %s (%d structure%s) into %s, with manifest.json\n",
-                static_cast<long long>(snapshot.id()), project.c_str(), snapshot.members_size(),
-                snapshot.members_size() == 1 ? "" : "s", target.c_str());
-  }
-  return kExitOk;
-}
-
-int ListSnapshots(Connection& connection, const std::string& project, const PageArgs& page) {
-  v1::ListSnapshotsResponse all;
-  v1::ListSnapshotsRequest request;
-  request.set_project(project);
-  int code = FetchPages(connection, page, request, &v1::AtlasService::Stub::ListSnapshots,
-                        &v1::ListSnapshotsResponse::mutable_snapshots,
-                        "listing the snapshots of " + project, &all);
-  if (code != kExitOk) return code;
-  if (connection.options().json) {
-    PrintJson(all);
-    return kExitOk;
-  }
-  std::vector<std::vector<std::string>> rows = {{"ID", "NAME", "TAGS", "AUTHOR", "CREATED (UTC)"}};
-  for (const auto& s : all.snapshots()) {
-    std::string tags;
-    for (const auto& t : s.tags()) tags += (tags.empty() ? "" : ",") + t;
-    rows.push_back({std::to_string(s.id()), s.name(), tags.empty() ? "-" : tags, s.author(),
-                    FormatTime(s.create_time())});
-  }
-  PrintTable(rows);
-  MoreHint(all.next_page_token(), "pba atlas snapshots -p " + project);
-  return kExitOk;
-}
-
-int Audit(Connection& connection, const std::string& project, const PageArgs& page) {
-  v1::ListAuditResponse all;
-  v1::ListAuditRequest request;
-  request.set_project(project);
-  int code =
-      FetchPages(connection, page, request, &v1::AtlasService::Stub::ListAudit,
-                 &v1::ListAuditResponse::mutable_entries, "the audit log of " + project, &all);
-  if (code != kExitOk) return code;
-  if (connection.options().json) {
-    PrintJson(all);
-    return kExitOk;
-  }
-  std::vector<std::vector<std::string>> rows = {
-      {"SEQ", "TIME (UTC)", "USER", "ACTION", "TARGET", "REV", "DETAIL"}};
-  for (const auto& e : all.entries()) {
-    rows.push_back({std::to_string(e.sequence()), FormatTime(e.time()), e.user(), e.action(),
-                    e.target(), e.revision() > 0 ? std::to_string(e.revision()) : "-", e.detail()});
-  }
-  PrintTable(rows);
-  MoreHint(all.next_page_token(), "pba atlas audit -p " + project);
-  return kExitOk;
-}
-
-int Watch(Connection& connection, const std::string& project, int count) {
-  v1::WatchRequest request;
-  request.set_project(project);
-  auto context = connection.StreamContext();
-  auto reader = connection.atlas().Watch(context.get(), request);
-  v1::AtlasEvent event;
-  int seen = 0;
-  while (reader->Read(&event)) {
-    if (connection.options().json) {
-      std::puts(codec::ToJsonLine(event).c_str());
-    } else if (event.kind() == v1::AtlasEvent::READY) {
-      std::printf("Watching %s (Ctrl-C to stop)\n", project.c_str());
-    } else {
-      std::string kind = v1::AtlasEvent::Kind_Name(event.kind());
-      std::transform(kind.begin(), kind.end(), kind.begin(),
-                     [](unsigned char c) { return c == '_' ? ' ' : std::tolower(c); });
-      std::string target = event.structure();
-      if (event.revision() > 0) target += " r" + std::to_string(event.revision());
-      if (event.snapshot() > 0) target += "snapshot " + std::to_string(event.snapshot());
-      std::printf("%s  %-10s %-18s %s%s%s\n", FormatTime(event.time()).c_str(),
-                  event.user().c_str(), kind.c_str(), target.c_str(),
-                  event.detail().empty() ? "" : ": ", event.detail().c_str());
-    }
-    std::fflush(stdout);
-    if (event.kind() != v1::AtlasEvent::READY && count > 0 && ++seen >= count) {
-      context->TryCancel();
-      break;
-    }
-  }
-  grpc::Status status = reader->Finish();
-  if (!status.ok() && status.error_code() != grpc::StatusCode::CANCELLED) {
-    return connection.Fail("watching " + project, status);
   }
   return kExitOk;
 }

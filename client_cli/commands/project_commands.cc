@@ -1,0 +1,149 @@
+// `pba login`, `logout`, `whoami` and `pba project ...` (atlas_commands.h).
+#include <cstdio>
+#include <fstream>
+
+#include "commands/atlas_commands.h"
+#include "commands/atlas_shared.h"
+#include "credentials.h"
+#include "exit_codes.h"
+#include "output.h"
+
+namespace pba::cli {
+namespace {
+
+bool ParseRoleText(const std::string& text, v1::Role* role) {
+  if (text == "viewer")
+    *role = v1::VIEWER;
+  else if (text == "editor")
+    *role = v1::EDITOR;
+  else if (text == "admin")
+    *role = v1::ADMIN;
+  else
+    return false;
+  return true;
+}
+
+}  // namespace
+
+int Login(Connection& connection, const LoginArgs& args) {
+  std::string token = args.token;
+  if (!args.token_file.empty()) {
+    std::ifstream in(args.token_file);
+    if (!(in >> token)) {
+      std::fprintf(stderr, "pba: cannot read a token from %s\n", args.token_file.c_str());
+      return kExitError;
+    }
+  }
+  if (token.empty()) {
+    std::fprintf(stderr, "pba: login needs --token TOKEN or --token-file FILE\n");
+    return kExitUsage;
+  }
+  GlobalOptions options = connection.options();
+  options.token = token;
+  Connection with_token(options);
+  v1::User user;
+  auto context = with_token.UnaryContext();
+  grpc::Status status = with_token.atlas().WhoAmI(context.get(), v1::WhoAmIRequest(), &user);
+  if (!status.ok()) return with_token.Fail("logging in to " + options.server, status);
+  std::string error;
+  if (!StoreToken(options.server, token, &error)) {
+    std::fprintf(stderr, "pba: %s\n", error.c_str());
+    return kExitError;
+  }
+  if (connection.options().json) {
+    PrintJson(user);
+  } else {
+    std::printf("Logged in to %s as %s (token kept in %s)\n", options.server.c_str(),
+                user.name().c_str(), CredentialsPath().c_str());
+  }
+  return kExitOk;
+}
+
+int Logout(Connection& connection) {
+  std::string error;
+  const bool had = ForgetToken(connection.options().server, &error);
+  if (!error.empty()) {
+    std::fprintf(stderr, "pba: %s\n", error.c_str());
+    return kExitError;
+  }
+  std::printf(had ? "Logged out of %s\n" : "No token was kept for %s\n",
+              connection.options().server.c_str());
+  return kExitOk;
+}
+
+int WhoAmI(Connection& connection) {
+  v1::User user;
+  auto context = connection.UnaryContext();
+  grpc::Status status = connection.atlas().WhoAmI(context.get(), v1::WhoAmIRequest(), &user);
+  if (!status.ok()) return connection.Fail("who am I", status);
+  if (connection.options().json) {
+    PrintJson(user);
+  } else {
+    std::printf("%s on %s\n", user.name().c_str(), connection.options().server.c_str());
+  }
+  return kExitOk;
+}
+
+int CreateProject(Connection& connection, const std::string& name) {
+  v1::CreateProjectRequest request;
+  request.set_name(name);
+  v1::Project project;
+  auto context = connection.UnaryContext();
+  grpc::Status status = connection.atlas().CreateProject(context.get(), request, &project);
+  if (!status.ok()) return connection.Fail("creating project " + name, status);
+  if (connection.options().json) {
+    PrintJson(project);
+  } else {
+    std::printf("Created project %s; you are its admin\n", project.name().c_str());
+  }
+  return kExitOk;
+}
+
+int ListProjects(Connection& connection, const PageArgs& page) {
+  v1::ListProjectsResponse all;
+  v1::ListProjectsRequest request;
+  int code = FetchPages(connection, page, request, &v1::AtlasService::Stub::ListProjects,
+                        &v1::ListProjectsResponse::mutable_projects, "listing projects", &all);
+  if (code != kExitOk) return code;
+  if (connection.options().json) {
+    PrintJson(all);
+    return kExitOk;
+  }
+  if (all.projects().empty()) {
+    std::puts("No projects. Create one with: pba project create NAME");
+    return kExitOk;
+  }
+  std::vector<std::vector<std::string>> rows = {{"PROJECT", "YOUR ROLE", "CREATED (UTC)", "BY"}};
+  for (const auto& p : all.projects()) {
+    rows.push_back({p.name(), RoleText(p.role()), FormatTime(p.create_time()), p.created_by()});
+  }
+  PrintTable(rows);
+  MoreHint(all.next_page_token(), "pba project list");
+  return kExitOk;
+}
+
+int SetRole(Connection& connection, const std::string& project, const std::string& user,
+            const std::string& role) {
+  v1::SetRoleRequest request;
+  v1::Role parsed;
+  if (!ParseRoleText(role, &parsed)) {
+    std::fprintf(stderr, "pba: role must be viewer, editor or admin, not '%s'\n", role.c_str());
+    return kExitUsage;
+  }
+  request.set_project(project);
+  request.set_user(user);
+  request.set_role(parsed);
+  v1::Member member;
+  auto context = connection.UnaryContext();
+  grpc::Status status = connection.atlas().SetRole(context.get(), request, &member);
+  if (!status.ok()) return connection.Fail("setting " + user + "'s role", status, kExitConflict);
+  if (connection.options().json) {
+    PrintJson(member);
+  } else {
+    std::printf("%s is %s in %s\n", member.user().c_str(), RoleText(member.role()).c_str(),
+                member.project().c_str());
+  }
+  return kExitOk;
+}
+
+}  // namespace pba::cli

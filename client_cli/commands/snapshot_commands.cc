@@ -1,0 +1,249 @@
+// `pba atlas snapshot ...`, `tag`, `audit` and `watch` (atlas_commands.h).
+#include <google/protobuf/struct.pb.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cstdio>
+#include <ctime>
+#include <filesystem>
+
+#include "codec/yaml_codec.h"
+#include "commands/atlas_commands.h"
+#include "commands/atlas_shared.h"
+#include "exit_codes.h"
+#include "files.h"
+#include "output.h"
+
+namespace pba::cli {
+namespace fs = std::filesystem;
+
+int CreateSnapshot(Connection& connection, const std::string& project, const std::string& name) {
+  v1::CreateSnapshotRequest request;
+  request.set_project(project);
+  // Unnamed: named by its time, which is how people tell snapshots apart.
+  std::string named = name;
+  if (named.empty()) {
+    const std::time_t now = std::time(nullptr);
+    std::tm tm{};
+    gmtime_r(&now, &tm);
+    char buffer[48];
+    std::strftime(buffer, sizeof buffer, "snapshot %Y-%m-%d %H.%M.%S UTC", &tm);
+    named = buffer;
+  }
+  request.set_name(named);
+  v1::Snapshot snapshot;
+  auto context = connection.UnaryContext();
+  grpc::Status status = connection.atlas().CreateSnapshot(context.get(), request, &snapshot);
+  if (!status.ok()) return connection.Fail("snapshotting " + project, status);
+  if (connection.options().json) {
+    PrintJson(snapshot);
+  } else {
+    std::printf(
+        "Snapshot %lld of %s pins %d structure%s; tag it with: pba atlas tag -p %s %lld TAG\n",
+        static_cast<long long>(snapshot.id()), project.c_str(), snapshot.members_size(),
+        snapshot.members_size() == 1 ? "" : "s", project.c_str(),
+        static_cast<long long>(snapshot.id()));
+  }
+  return kExitOk;
+}
+
+int TagSnapshot(Connection& connection, const std::string& project, int64_t id,
+                const std::string& tag) {
+  v1::TagSnapshotRequest request;
+  request.set_project(project);
+  request.set_snapshot_id(id);
+  request.set_tag(tag);
+  v1::Snapshot snapshot;
+  auto context = connection.UnaryContext();
+  grpc::Status status = connection.atlas().TagSnapshot(context.get(), request, &snapshot);
+  if (!status.ok()) return connection.Fail("tagging snapshot " + std::to_string(id), status);
+  if (connection.options().json) {
+    PrintJson(snapshot);
+  } else {
+    std::printf("Snapshot %lld of %s is tagged %s\n", static_cast<long long>(id), project.c_str(),
+                tag.c_str());
+  }
+  return kExitOk;
+}
+
+int ShowSnapshot(Connection& connection, const std::string& project, const std::string& which) {
+  v1::GetSnapshotRequest request;
+  request.set_project(project);
+  request.set_snapshot(which);
+  v1::Snapshot s;
+  auto context = connection.UnaryContext();
+  grpc::Status status = connection.atlas().GetSnapshot(context.get(), request, &s);
+  if (!status.ok()) return connection.Fail("snapshot " + which + " of " + project, status);
+  if (connection.options().json) {
+    PrintJson(s);
+    return kExitOk;
+  }
+  std::string tags;
+  for (const auto& t : s.tags()) tags += (tags.empty() ? "" : ", ") + t;
+  std::printf("Snapshot %lld of %s: %s, by %s at %s UTC; tags: %s\n",
+              static_cast<long long>(s.id()), s.project().c_str(),
+              s.name().empty() ? "(unnamed)" : s.name().c_str(), s.author().c_str(),
+              FormatTime(s.create_time()).c_str(), tags.empty() ? "none" : tags.c_str());
+  std::vector<std::vector<std::string>> rows = {{"STRUCTURE", "REVISION"}};
+  for (const auto& m : s.members()) rows.push_back({m.structure(), std::to_string(m.revision())});
+  PrintTable(rows);
+  return kExitOk;
+}
+
+int ExportSnapshot(Connection& connection, const std::string& project, const std::string& which,
+                   const std::string& dir) {
+  std::error_code ec;
+  if (fs::exists(dir) && !fs::is_empty(dir, ec)) {
+    std::fprintf(stderr, "pba: %s is not empty: export into a new directory\n", dir.c_str());
+    return kExitUsage;
+  }
+  v1::GetSnapshotRequest request;
+  request.set_project(project);
+  request.set_snapshot(which);
+  v1::Snapshot snapshot;
+  {
+    auto context = connection.UnaryContext();
+    grpc::Status status = connection.atlas().GetSnapshot(context.get(), request, &snapshot);
+    if (!status.ok()) return connection.Fail("snapshot " + which + " of " + project, status);
+  }
+  // Written beside the target and renamed into place: whole or absent.
+  const fs::path target = fs::absolute(dir);
+  const fs::path staging = target.string() + ".part";
+  fs::remove_all(staging, ec);
+  fs::create_directories(staging, ec);
+  if (ec) {
+    std::fprintf(stderr, "pba: cannot create %s: %s\n", staging.c_str(), ec.message().c_str());
+    return kExitError;
+  }
+  google::protobuf::ListValue manifest_structures;
+  for (const auto& member : snapshot.members()) {
+    v1::Revision revision;
+    const StructureArgs structure{project, member.structure()};
+    if (int code = GetHead(connection, structure, member.revision(), &revision); code != kExitOk) {
+      return code;
+    }
+    const std::string file = member.structure() + Extension(revision.format());
+    if (int code = DownloadRevision(connection, revision, staging / file); code != kExitOk) {
+      return code;
+    }
+    auto& entry = *manifest_structures.add_values()->mutable_struct_value()->mutable_fields();
+    entry["name"].set_string_value(member.structure());
+    entry["revision"].set_number_value(static_cast<double>(member.revision()));
+    entry["file"].set_string_value(file);
+    entry["format"].set_string_value(FormatText(revision.format()));
+    entry["sha256"].set_string_value(revision.content_sha256());
+    entry["colour"].set_string_value(ColourText(revision.metadata().colour()));
+    entry["group_path"].set_string_value(revision.metadata().group_path());
+    entry["material_json"].set_string_value(revision.metadata().material_json());
+  }
+  google::protobuf::Struct manifest;
+  auto& fields = *manifest.mutable_fields();
+  fields["project"].set_string_value(project);
+  fields["snapshot"].set_number_value(static_cast<double>(snapshot.id()));
+  fields["snapshot_name"].set_string_value(snapshot.name());
+  *fields["structures"].mutable_list_value() = manifest_structures;
+  if (!WriteFileAtomically(staging / "manifest.json", codec::ToJson(manifest))) {
+    std::fprintf(stderr, "pba: cannot write %s\n", (staging / "manifest.json").c_str());
+    return kExitError;
+  }
+  fs::remove(target, ec);  // an empty directory, if any
+  fs::rename(staging, target, ec);
+  if (ec) {
+    std::fprintf(stderr, "pba: cannot move %s into place: %s\n", target.c_str(),
+                 ec.message().c_str());
+    return kExitError;
+  }
+  if (connection.options().json) {
+    PrintJson(manifest);
+  } else {
+    std::printf("Exported snapshot %lld of %s (%d structure%s) into %s, with manifest.json\n",
+                static_cast<long long>(snapshot.id()), project.c_str(), snapshot.members_size(),
+                snapshot.members_size() == 1 ? "" : "s", target.c_str());
+  }
+  return kExitOk;
+}
+
+int ListSnapshots(Connection& connection, const std::string& project, const PageArgs& page) {
+  v1::ListSnapshotsResponse all;
+  v1::ListSnapshotsRequest request;
+  request.set_project(project);
+  int code = FetchPages(connection, page, request, &v1::AtlasService::Stub::ListSnapshots,
+                        &v1::ListSnapshotsResponse::mutable_snapshots,
+                        "listing the snapshots of " + project, &all);
+  if (code != kExitOk) return code;
+  if (connection.options().json) {
+    PrintJson(all);
+    return kExitOk;
+  }
+  std::vector<std::vector<std::string>> rows = {{"ID", "NAME", "TAGS", "AUTHOR", "CREATED (UTC)"}};
+  for (const auto& s : all.snapshots()) {
+    std::string tags;
+    for (const auto& t : s.tags()) tags += (tags.empty() ? "" : ",") + t;
+    rows.push_back({std::to_string(s.id()), s.name(), tags.empty() ? "-" : tags, s.author(),
+                    FormatTime(s.create_time())});
+  }
+  PrintTable(rows);
+  MoreHint(all.next_page_token(), "pba atlas snapshots -p " + project);
+  return kExitOk;
+}
+
+int Audit(Connection& connection, const std::string& project, const PageArgs& page) {
+  v1::ListAuditResponse all;
+  v1::ListAuditRequest request;
+  request.set_project(project);
+  int code =
+      FetchPages(connection, page, request, &v1::AtlasService::Stub::ListAudit,
+                 &v1::ListAuditResponse::mutable_entries, "the audit log of " + project, &all);
+  if (code != kExitOk) return code;
+  if (connection.options().json) {
+    PrintJson(all);
+    return kExitOk;
+  }
+  std::vector<std::vector<std::string>> rows = {
+      {"SEQ", "TIME (UTC)", "USER", "ACTION", "TARGET", "REV", "DETAIL"}};
+  for (const auto& e : all.entries()) {
+    rows.push_back({std::to_string(e.sequence()), FormatTime(e.time()), e.user(), e.action(),
+                    e.target(), e.revision() > 0 ? std::to_string(e.revision()) : "-", e.detail()});
+  }
+  PrintTable(rows);
+  MoreHint(all.next_page_token(), "pba atlas audit -p " + project);
+  return kExitOk;
+}
+
+int Watch(Connection& connection, const std::string& project, int count) {
+  v1::WatchRequest request;
+  request.set_project(project);
+  auto context = connection.StreamContext();
+  auto reader = connection.atlas().Watch(context.get(), request);
+  v1::AtlasEvent event;
+  int seen = 0;
+  while (reader->Read(&event)) {
+    if (connection.options().json) {
+      std::puts(codec::ToJsonLine(event).c_str());
+    } else if (event.kind() == v1::AtlasEvent::READY) {
+      std::printf("Watching %s (Ctrl-C to stop)\n", project.c_str());
+    } else {
+      std::string kind = v1::AtlasEvent::Kind_Name(event.kind());
+      std::transform(kind.begin(), kind.end(), kind.begin(),
+                     [](unsigned char c) { return c == '_' ? ' ' : std::tolower(c); });
+      std::string target = event.structure();
+      if (event.revision() > 0) target += " r" + std::to_string(event.revision());
+      if (event.snapshot() > 0) target += "snapshot " + std::to_string(event.snapshot());
+      std::printf("%s  %-10s %-18s %s%s%s\n", FormatTime(event.time()).c_str(),
+                  event.user().c_str(), kind.c_str(), target.c_str(),
+                  event.detail().empty() ? "" : ": ", event.detail().c_str());
+    }
+    std::fflush(stdout);
+    if (event.kind() != v1::AtlasEvent::READY && count > 0 && ++seen >= count) {
+      context->TryCancel();
+      break;
+    }
+  }
+  grpc::Status status = reader->Finish();
+  if (!status.ok() && status.error_code() != grpc::StatusCode::CANCELLED) {
+    return connection.Fail("watching " + project, status);
+  }
+  return kExitOk;
+}
+
+}  // namespace pba::cli
