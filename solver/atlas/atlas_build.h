@@ -24,8 +24,8 @@
 // plate height and sharpest where a structure ends (a structure on one
 // plate is a lens with a knife edge); on the synthetic atlas at 3 mm the
 // creases gave slivers the improvement pass could not lift above 5 degrees,
-// and geometric errors that jumped with the facet setting (nucleus
-// accumbens between 0.38 % and 0.77 %), where the voxelisation's are steady.
+// and geometric errors that moved across the 0.65 % limit with the facet
+// setting, where the voxelisation's are steady (docs/atlas.md).
 #pragma once
 
 #include <array>

@@ -442,8 +442,7 @@ Status MeshLabels(const LabelFunction& label, const std::vector<std::string>& re
       // In slices of a second, stopped when one does not improve the mesh:
       // CGAL 5.5's exuder can go on pumping weights without raising any
       // angle until its time limit (two structures of the synthetic atlas
-      // at 4 mm, 5,813 tetrahedra: the same mesh after 1 s, 20 s and
-      // 120 s). Improvement: a larger smallest dihedral angle, or fewer
+      // at 4 mm: docs/atlas.md). Improvement: a larger smallest dihedral angle, or fewer
       // tetrahedra below the sliver bound.
       start = Clock::now();
       const auto state = [&c3t3, bound] {
