@@ -1,0 +1,106 @@
+// A structure set: an atlas as separate structures, each in the form people
+// edit it with (plate contours, a label mask, a closed surface). It is the
+// form a snapshot of the atlas store takes on disk (`pba atlas snapshot
+// export`, and the server's staging of a job against a snapshot), and the
+// form an atlas import produces (structure_split.h). A scene's atlas source
+// may name such a directory; BuildAtlas composes it into plates or a label
+// volume and meshes that.
+//
+// A directory with manifest.json:
+//   {"format": "pba-structure-set", "version": 1,      (optional on input)
+//    "project": "...", "snapshot": 3, "snapshot_name": "...",   (optional)
+//    "structures": [
+//      {"name": "Putamen", "file": "Putamen.json",
+//       "format": "contours_json" | "nifti" | "stl" | "obj" | "vtk",
+//       "colour": "r,g,b", "sha256": "<hex>",          (sha256 optional)
+//       "revision": 4, "group_path": "...", "material_json": "{...}"},
+//      ...]}
+// `file` is relative to the directory, a plain file name. A nifti mask is
+// every voxel with a non-zero value; a surface must be closed (its inside
+// is where a ray crosses it an odd number of times).
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "atlas/colour_table.h"
+#include "atlas/label_volume.h"
+#include "atlas/plates.h"
+#include "pba/status.h"
+
+namespace pba {
+
+enum class StructureFormat { kContours, kNifti, kStl, kObj, kVtk };
+
+// "contours_json", "nifti", "stl", "obj", "vtk" (the manifest's words).
+const char* StructureFormatName(StructureFormat format);
+bool ParseStructureFormat(std::string_view name, StructureFormat* format);
+
+struct StructureEntry {
+  std::string name;  // non-empty; no '/', '\\', ',' or control characters
+  std::string file;  // plain file name inside the set's directory
+  StructureFormat format = StructureFormat::kContours;
+  uint8_t r = 0, g = 0, b = 0;  // not 0,0,0 (background)
+  std::string sha256;           // lowercase hex of the file; empty: not checked
+  int64_t revision = 0;         // the store's revision number; 0: none
+  std::string group_path;
+  std::string material_json;
+};
+
+struct StructureSet {
+  std::string project;
+  int64_t snapshot = 0;
+  std::string snapshot_name;
+  std::vector<StructureEntry> structures;
+};
+
+inline constexpr char kStructureSetManifest[] = "manifest.json";
+
+// Whether `dir` is a directory holding a manifest.json.
+bool IsStructureSetDir(const std::filesystem::path& dir);
+
+// Reads and checks manifest.json: at least one structure; names unique and
+// well formed; colours unique and not black; files present (and matching
+// their sha256 when given). Errors are kInvalidArgument naming the entry,
+// e.g. field "structures[3].colour", or kIo for an unreadable file.
+Status ReadStructureSet(const std::filesystem::path& dir, StructureSet* set);
+
+// Writes manifest.json into `dir` atomically (the structures' files are the
+// caller's and must be there already).
+Status WriteStructureSet(const StructureSet& set, const std::filesystem::path& dir);
+
+struct ComposeOptions {
+  // Pixel edge of the plates composed from contours [mm]; 0: the finest
+  // pixel_size_mm the contours carry, else 0.5.
+  double pixel_size_mm = 0;
+  // Voxel edge of the label volume composed when any structure is a mask
+  // or a surface [mm].
+  double voxel_size_mm = 1.0;
+};
+
+// The atlas a structure set makes, in the form BuildAtlas meshes:
+//   every structure contours -> `plates`: one plate at each height any
+//     structure has; a structure drawn at heights around one it is not
+//     drawn at gets its section there interpolated from its own plates (as
+//     the loft would), so it does not pinch at another's plate;
+//   otherwise -> `volume`: a label volume on one grid of voxel_size_mm
+//     covering every structure: masks sampled at the voxel centres (nearest
+//     voxel), surfaces by their inside, contours by their loft.
+// Labels are 1..n in byte-wise order of the names; `colours` maps them to
+// the names and colours of the manifest. Where two structures claim a
+// pixel or voxel, the one first in that order keeps it, and the overlap
+// is reported in `notes` with its area or volume.
+struct ComposedAtlas {
+  ColourTable colours;
+  std::optional<PlateStack> plates;
+  std::optional<LabelVolume> volume;
+  std::vector<std::string> notes;
+};
+
+Status ComposeStructureSet(const std::filesystem::path& dir, const StructureSet& set,
+                           const ComposeOptions& options, ComposedAtlas* atlas);
+
+}  // namespace pba

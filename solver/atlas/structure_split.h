@@ -1,0 +1,44 @@
+// Splitting an atlas into a structure set (structure_set.h): the import of
+// plates or a label volume into the atlas store, one structure at a time.
+//   plates (or the synthetic atlas, through its plates) -> each structure
+//     as its plate contours (TraceContours), one <name>.json per structure;
+//   label volume + colour table -> each structure as a label mask: a
+//     gzip-compressed NIfTI-1 file of 0/1 voxels, cropped to the
+//     structure's bounding box with one voxel of background around it,
+//     spacing and position kept (<name>.nii.gz).
+// Colours and names come from the colour table. Structures with no pixel
+// or voxel are left out and listed in `absent`.
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "atlas/atlas_build.h"
+#include "atlas/structure_set.h"
+#include "pba/status.h"
+
+namespace pba {
+
+struct SplitOptions {
+  // Which atlas: source, input, colour_table (and synthetic_voxel_mm for
+  // the synthetic atlas) as for BuildAtlas; the other fields are unused.
+  AtlasBuildOptions source;
+  // Keep only these structures (names as in AtlasBuildOptions::structures,
+  // group prefixes allowed); empty: all.
+  std::vector<std::string> structures;
+};
+
+struct SplitResult {
+  StructureSet set;                 // as written into manifest.json
+  std::vector<std::string> absent;  // colour-table names with no pixel or voxel
+};
+
+// Writes the structure set into `dir`, which must not exist or be empty:
+// every file and manifest.json, into a temporary directory beside it that
+// is renamed into place, so it appears whole or not at all. A structure
+// name that cannot be a file name is refused (kInvalidArgument naming it).
+Status SplitAtlas(const SplitOptions& options, const std::filesystem::path& dir,
+                  SplitResult* result);
+
+}  // namespace pba
