@@ -46,6 +46,14 @@ int main(int argc, char** argv) {
   submit_cmd->add_option(
       "--request-id", submit.request_id,
       "Idempotency key: a repeated submit with the same key returns the same job");
+  submit_cmd->add_option("--snapshot", submit.snapshot,
+                         "PROJECT/SNAPSHOT: build the scene's atlas from this snapshot of the "
+                         "atlas store (its id or a tag)");
+  submit_cmd->add_option("--priority", submit.priority, "Higher runs first (-100..100)")
+      ->check(CLI::Range(-100, 100));
+  submit_cmd->add_option("--timeout", submit.timeout_s,
+                         "Wall-clock limit [s] (at most the server's); 0: the server's")
+      ->check(CLI::NonNegativeNumber);
 
   ListArgs list;
   CLI::App* list_cmd = job->add_subcommand("list", "List jobs, newest first");
@@ -217,6 +225,32 @@ int main(int argc, char** argv) {
   add_project(snapshot_export, &snapshot_project);
   snapshot_export->add_option("snapshot", snapshot_which, "Id or tag")->required();
   snapshot_export->add_option("-o,--out", export_dir, "New directory to write")->required();
+  ImportArgs import_args;
+  CLI::App* atlas_import = atlas->add_subcommand(
+      "import", "Import an atlas into a project as a job: its structures and a snapshot of them");
+  add_project(atlas_import, &import_args.project);
+  atlas_import->add_flag("--synthetic", import_args.synthetic, "The built-in synthetic atlas");
+  atlas_import->add_option("--plates", import_args.plates, "A plate directory (plates.json)")
+      ->check(CLI::ExistingDirectory);
+  atlas_import->add_option("--labels", import_args.labels, "A label volume (.nii, .nii.gz, .nrrd)")
+      ->check(CLI::ExistingFile);
+  atlas_import->add_option("--colour-table", import_args.colour_table,
+                           "With --labels: its label table (CSV); default the built-in one")
+      ->check(CLI::ExistingFile);
+  atlas_import->add_option("--structure", import_args.structures,
+                           "Import only this structure (repeatable; group prefixes allowed)");
+  atlas_import->add_option("--snapshot-name", import_args.snapshot_name,
+                           "Name of the snapshot the import ends with");
+  atlas_import->add_option("-m,--message", import_args.message, "Message of the new revisions");
+  atlas_import->add_option("--request-id", import_args.request_id,
+                           "Idempotency key: a repeated import with it returns the same job");
+  bool import_no_wait = false;
+  atlas_import->add_flag("--no-wait", import_no_wait, "Submit and return; do not follow the job");
+  CLI::App* atlas_export = atlas->add_subcommand(
+      "export", "Download a snapshot as a structure set (manifest.json + one file per structure)");
+  add_project(atlas_export, &snapshot_project);
+  atlas_export->add_option("snapshot", snapshot_which, "Id or tag")->required();
+  atlas_export->add_option("-o,--out", export_dir, "New directory to write")->required();
   int64_t snapshot_id = 0;
   std::string tag;
   CLI::App* atlas_tag = atlas->add_subcommand("tag", "Name a snapshot by a tag");
@@ -280,6 +314,11 @@ int main(int argc, char** argv) {
   if (*snapshot_export) {
     return ExportSnapshot(connection, snapshot_project, snapshot_which, export_dir);
   }
+  if (*atlas_import) {
+    import_args.wait = !import_no_wait;
+    return ImportAtlas(connection, import_args);
+  }
+  if (*atlas_export) return ExportAtlas(connection, snapshot_project, snapshot_which, export_dir);
   if (*atlas_tag) return TagSnapshot(connection, snapshot_project, snapshot_id, tag);
   if (*atlas_audit) return Audit(connection, snapshot_project, page);
   if (*atlas_watch) return Watch(connection, snapshot_project, watch_count);

@@ -22,8 +22,6 @@ namespace pba::cli {
 namespace fs = std::filesystem;
 namespace {
 
-constexpr int64_t kChunkBytes = 1 << 20;  // the API's largest chunk
-
 // --- small helpers ------------------------------------------------------------
 
 // The format named (`format`), else the one the file's extension says.
@@ -140,70 +138,6 @@ bool ReadCheckout(const std::string& file, CheckoutState* s) {
 }
 
 // --- transfers ------------------------------------------------------------------
-
-// Uploads `file` (BeginUpload, then WriteUpload from where the server says
-// it is, retried up to three times); *upload_id names the complete upload.
-int UploadFile(Connection& connection, const std::string& file, std::string* upload_id) {
-  std::error_code ec;
-  const auto size = static_cast<int64_t>(fs::file_size(file, ec));
-  if (ec) {
-    std::fprintf(stderr, "pba: cannot read %s: %s\n", file.c_str(), ec.message().c_str());
-    return kExitError;
-  }
-  v1::BeginUploadRequest begin;
-  begin.set_size_bytes(size);
-  begin.set_sha256(Sha256File(file));
-  v1::Upload upload;
-  {
-    auto context = connection.UnaryContext();
-    grpc::Status status = connection.atlas().BeginUpload(context.get(), begin, &upload);
-    if (!status.ok()) return connection.Fail("uploading " + file, status, kExitConflict);
-  }
-  Progress progress("uploading " + file, size);
-  std::ifstream in(file, std::ios::binary);
-  std::string buffer(static_cast<size_t>(std::min(kChunkBytes, std::max<int64_t>(size, 1))), '\0');
-  grpc::Status last;
-  for (int attempt = 0; attempt < 3 && upload.received_bytes() < size; ++attempt) {
-    if (attempt > 0) {
-      // Where the server is: the next chunk starts there.
-      v1::GetUploadRequest get;
-      get.set_upload_id(upload.id());
-      auto context = connection.UnaryContext();
-      grpc::Status status = connection.atlas().GetUpload(context.get(), get, &upload);
-      if (!status.ok()) return connection.Fail("resuming the upload of " + file, status);
-    }
-    in.clear();
-    in.seekg(upload.received_bytes());
-    auto context = connection.StreamContext();
-    v1::Upload result;
-    auto writer = connection.atlas().WriteUpload(context.get(), &result);
-    int64_t offset = upload.received_bytes();
-    while (offset < size) {
-      const auto n = static_cast<std::streamsize>(std::min<int64_t>(kChunkBytes, size - offset));
-      in.read(buffer.data(), n);
-      if (in.gcount() != n) {
-        std::fprintf(stderr, "pba: %s changed while it was being uploaded\n", file.c_str());
-        return kExitError;
-      }
-      v1::UploadChunk chunk;
-      chunk.set_upload_id(upload.id());
-      chunk.set_offset(offset);
-      chunk.set_data(buffer.data(), static_cast<size_t>(n));
-      if (!writer->Write(chunk)) break;
-      offset += n;
-      progress.Update(offset);
-    }
-    writer->WritesDone();
-    last = writer->Finish();
-    if (last.ok()) upload = result;
-  }
-  if (upload.received_bytes() < size) {
-    return connection.Fail("uploading " + file,
-                           last.ok() ? grpc::Status(grpc::UNKNOWN, "incomplete") : last);
-  }
-  *upload_id = upload.id();
-  return kExitOk;
-}
 
 int ReleaseLockId(Connection& connection, const std::string& lock_id, const std::string& what) {
   v1::ReleaseLockRequest request;

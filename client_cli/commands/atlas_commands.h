@@ -15,6 +15,7 @@
 
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "connection.h"
 
@@ -77,6 +78,24 @@ struct DownloadArgs {
   int64_t revision = 0;  // 0: head
   std::string out;
 };
+
+// `pba atlas import` (import_commands.cc).
+struct ImportArgs {
+  std::string project;
+  bool synthetic = false;
+  std::string plates;        // a plate directory
+  std::string labels;        // a label volume
+  std::string colour_table;  // with --labels
+  std::vector<std::string> structures;
+  std::string snapshot_name;
+  std::string message;
+  std::string request_id;
+  bool wait = true;
+};
+int ImportAtlas(Connection& connection, const ImportArgs& args);
+// `pba atlas export`: ExportSnapshot under the verb people look for.
+int ExportAtlas(Connection& connection, const std::string& project, const std::string& snapshot,
+                const std::string& dir);
 
 int Login(Connection& connection, const LoginArgs& args);
 int Logout(Connection& connection);

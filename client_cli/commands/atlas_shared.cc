@@ -1,11 +1,82 @@
 #include "commands/atlas_shared.h"
 
+#include <algorithm>
 #include <cstdio>
+#include <fstream>
 
+#include "exit_codes.h"
+#include "files.h"
 #include "transfer.h"
 
 namespace pba::cli {
 namespace fs = std::filesystem;
+namespace {
+constexpr int64_t kUploadChunkBytes = 1 << 20;  // the API's largest chunk
+}  // namespace
+
+// Uploads `file` (BeginUpload, then WriteUpload from where the server says
+// it is, retried up to three times); *upload_id names the complete upload.
+int UploadFile(Connection& connection, const std::string& file, std::string* upload_id) {
+  std::error_code ec;
+  const auto size = static_cast<int64_t>(fs::file_size(file, ec));
+  if (ec) {
+    std::fprintf(stderr, "pba: cannot read %s: %s\n", file.c_str(), ec.message().c_str());
+    return kExitError;
+  }
+  v1::BeginUploadRequest begin;
+  begin.set_size_bytes(size);
+  begin.set_sha256(Sha256File(file));
+  v1::Upload upload;
+  {
+    auto context = connection.UnaryContext();
+    grpc::Status status = connection.atlas().BeginUpload(context.get(), begin, &upload);
+    if (!status.ok()) return connection.Fail("uploading " + file, status, kExitConflict);
+  }
+  Progress progress("uploading " + file, size);
+  std::ifstream in(file, std::ios::binary);
+  std::string buffer(static_cast<size_t>(std::min(kUploadChunkBytes, std::max<int64_t>(size, 1))), '\0');
+  grpc::Status last;
+  for (int attempt = 0; attempt < 3 && upload.received_bytes() < size; ++attempt) {
+    if (attempt > 0) {
+      // Where the server is: the next chunk starts there.
+      v1::GetUploadRequest get;
+      get.set_upload_id(upload.id());
+      auto context = connection.UnaryContext();
+      grpc::Status status = connection.atlas().GetUpload(context.get(), get, &upload);
+      if (!status.ok()) return connection.Fail("resuming the upload of " + file, status);
+    }
+    in.clear();
+    in.seekg(upload.received_bytes());
+    auto context = connection.StreamContext();
+    v1::Upload result;
+    auto writer = connection.atlas().WriteUpload(context.get(), &result);
+    int64_t offset = upload.received_bytes();
+    while (offset < size) {
+      const auto n = static_cast<std::streamsize>(std::min<int64_t>(kUploadChunkBytes, size - offset));
+      in.read(buffer.data(), n);
+      if (in.gcount() != n) {
+        std::fprintf(stderr, "pba: %s changed while it was being uploaded\n", file.c_str());
+        return kExitError;
+      }
+      v1::UploadChunk chunk;
+      chunk.set_upload_id(upload.id());
+      chunk.set_offset(offset);
+      chunk.set_data(buffer.data(), static_cast<size_t>(n));
+      if (!writer->Write(chunk)) break;
+      offset += n;
+      progress.Update(offset);
+    }
+    writer->WritesDone();
+    last = writer->Finish();
+    if (last.ok()) upload = result;
+  }
+  if (upload.received_bytes() < size) {
+    return connection.Fail("uploading " + file,
+                           last.ok() ? grpc::Status(grpc::UNKNOWN, "incomplete") : last);
+  }
+  *upload_id = upload.id();
+  return kExitOk;
+}
 
 std::string RoleText(v1::Role role) {
   switch (role) {

@@ -12,6 +12,10 @@
 namespace pba::cli {
 
 // "viewer", "editor", "admin"; "-" when unset.
+// Uploads `file` (BeginUpload, then WriteUpload from where the server says
+// it is, retried up to three times); *upload_id names the complete upload.
+int UploadFile(Connection& connection, const std::string& file, std::string* upload_id);
+
 std::string RoleText(v1::Role role);
 // "contours_json", "nifti", "stl", "obj", "vtk"; "-" when unset.
 std::string FormatText(v1::GeometryFormat format);

@@ -15,6 +15,7 @@
 #include <thread>
 
 #include "codec/yaml_codec.h"
+#include "commands/job_commands.h"
 #include "exit_codes.h"
 #include "files.h"
 #include "output.h"
@@ -35,6 +36,7 @@ struct Member {
 struct Batch {
   std::string name;
   fs::path scene_file;
+  v1::SnapshotRef snapshot;  // every member's atlas from it, when set
   int parallel = 2;
   std::vector<std::string> parameters;  // the paths the members set, in order
   std::vector<Member> members;
@@ -159,12 +161,13 @@ bool LoadBatch(const std::string& file, Batch* batch, std::string* error) {
     *error = file + ": a batch is a map with scene, sweep or members, and outputs";
     return false;
   }
-  static const char* kKeys[] = {"name", "scene", "parallel", "sweep", "members", "outputs"};
+  static const char* kKeys[] = {"name",  "scene",   "snapshot", "parallel",
+                                "sweep", "members", "outputs"};
   for (const auto& entry : root) {
     const std::string key = entry.first.Scalar();
     if (std::find(std::begin(kKeys), std::end(kKeys), key) == std::end(kKeys)) {
       *error = file + ": unknown key '" + key +
-               "' (a batch has name, scene, parallel, sweep or members, outputs)";
+               "' (a batch has name, scene, snapshot, parallel, sweep or members, outputs)";
       return false;
     }
   }
@@ -174,6 +177,13 @@ bool LoadBatch(const std::string& file, Batch* batch, std::string* error) {
     return false;
   }
   batch->scene_file = fs::path(file).parent_path() / root["scene"].Scalar();
+  if (root["snapshot"]) {
+    if (!root["snapshot"].IsScalar() ||
+        !ParseSnapshotRef(root["snapshot"].Scalar(), &batch->snapshot)) {
+      *error = file + ": snapshot: expected PROJECT/SNAPSHOT (an id or a tag)";
+      return false;
+    }
+  }
   if (root["parallel"]) {
     try {
       batch->parallel = root["parallel"].as<int>();
@@ -290,7 +300,12 @@ bool LoadBatch(const std::string& file, Batch* batch, std::string* error) {
     }
     // The same member of the same batch gets the same request id, so a
     // submit repeated after an interruption returns the job already made.
-    member.request_id = Sha256Text(batch->name + "\n" + out.c_str()).substr(0, 32);
+    // The key changes with the scene and with the snapshot it is built from.
+    const std::string on = batch->snapshot.project().empty()
+                               ? ""
+                               : "\nsnapshot " + batch->snapshot.project() + "/" +
+                                     batch->snapshot.snapshot();
+    member.request_id = Sha256Text(batch->name + "\n" + out.c_str() + on).substr(0, 32);
     batch->members.push_back(std::move(member));
   }
   return true;
@@ -386,6 +401,7 @@ int RunBatch(Connection& connection, const BatchArgs& args) {
       Member& m = batch.members[to_submit[next++]];
       v1::SubmitJobRequest request;
       *request.mutable_scene() = m.scene;
+      if (!batch.snapshot.project().empty()) *request.mutable_snapshot() = batch.snapshot;
       request.set_request_id(m.request_id);
       auto context = connection.UnaryContext();
       grpc::Status status = connection.jobs().SubmitJob(context.get(), request, &m.job);

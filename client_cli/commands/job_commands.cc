@@ -15,7 +15,6 @@
 
 namespace pba::cli {
 namespace fs = std::filesystem;
-namespace {
 
 std::string NewRequestId() {
   std::random_device device;
@@ -25,6 +24,8 @@ std::string NewRequestId() {
                 static_cast<unsigned long long>(engine()));
   return buffer;
 }
+
+namespace {
 
 int ExitForState(v1::Job::State state) {
   switch (state) {
@@ -51,7 +52,17 @@ void PrintJobDetails(const v1::Job& job) {
       {"Ended", FormatTime(job.end_time())},
       {"Run time", FormatDuration(job.start_time(), job.end_time())},
       {"Attempts", std::to_string(job.attempts())},
+      {"Owner", job.owner()},
   };
+  if (job.priority() != 0) rows.push_back({"Priority", std::to_string(job.priority())});
+  if (job.timeout_s() > 0) rows.push_back({"Time limit", std::to_string(job.timeout_s()) + " s"});
+  if (job.has_atlas_import()) {
+    rows.push_back({"Imports into", job.atlas_import().project()});
+  }
+  if (!job.snapshot().project().empty()) {
+    rows.push_back({job.has_atlas_import() ? "Made snapshot" : "Snapshot",
+                    job.snapshot().project() + "/" + job.snapshot().snapshot()});
+  }
   if (!job.error().empty()) rows.push_back({"Error", job.error()});
   for (const auto& file : job.result_files()) {
     rows.push_back(
@@ -142,6 +153,26 @@ int DownloadFile(Connection& connection, const std::string& id, const v1::Result
 
 }  // namespace
 
+bool ParseSnapshotRef(const std::string& text, v1::SnapshotRef* ref) {
+  const size_t slash = text.find('/');
+  if (slash == std::string::npos || slash == 0 || slash + 1 == text.size() ||
+      text.find('/', slash + 1) != std::string::npos) {
+    std::fprintf(stderr,
+                 "pba: --snapshot %s: expected PROJECT/SNAPSHOT (the snapshot's id or tag)\n",
+                 text.c_str());
+    return false;
+  }
+  ref->set_project(text.substr(0, slash));
+  ref->set_snapshot(text.substr(slash + 1));
+  return true;
+}
+
+int WaitForJob(Connection& connection, const std::string& id) {
+  v1::Job::State state;
+  if (int code = Follow(connection, id, &state); code != kExitOk) return code;
+  return ReportEnd(connection, id);
+}
+
 int SubmitJob(Connection& connection, const SubmitArgs& args) {
   v1::SubmitJobRequest request;
   codec::ParseError error;
@@ -149,6 +180,11 @@ int SubmitJob(Connection& connection, const SubmitArgs& args) {
     std::fprintf(stderr, "pba: invalid scene: %s\n", error.ToString().c_str());
     return error.field.empty() && error.line == 0 ? kExitError : kExitInvalid;
   }
+  if (!args.snapshot.empty() && !ParseSnapshotRef(args.snapshot, request.mutable_snapshot())) {
+    return kExitUsage;
+  }
+  request.set_priority(args.priority);
+  request.set_timeout_s(args.timeout_s);
   request.set_request_id(args.request_id.empty() ? NewRequestId() : args.request_id);
   v1::Job job;
   auto context = connection.UnaryContext();
@@ -161,9 +197,7 @@ int SubmitJob(Connection& connection, const SubmitArgs& args) {
     std::fflush(stdout);
   }
   if (!args.wait) return kExitOk;
-  v1::Job::State state;
-  if (int code = Follow(connection, job.id(), &state); code != kExitOk) return code;
-  return ReportEnd(connection, job.id());
+  return WaitForJob(connection, job.id());
 }
 
 int ListJobs(Connection& connection, const ListArgs& args) {

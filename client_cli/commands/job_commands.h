@@ -5,6 +5,7 @@
 #include <string>
 
 #include "connection.h"
+#include "pba/v1/job.pb.h"
 
 namespace pba::cli {
 
@@ -12,7 +13,21 @@ struct SubmitArgs {
   std::string file;
   bool wait = false;
   std::string request_id;  // generated when empty
+  std::string snapshot;    // PROJECT/SNAPSHOT (id or tag); empty: none
+  int priority = 0;
+  int timeout_s = 0;
 };
+
+// A fresh random key for an idempotent request (32 hex digits).
+std::string NewRequestId();
+
+// "PROJECT/SNAPSHOT" into a SnapshotRef; false (with a message on stderr)
+// when it is not of that form.
+bool ParseSnapshotRef(const std::string& text, v1::SnapshotRef* ref);
+
+// Follows a job until it ends and reports how (as `pba job submit --wait`),
+// returning the exit code for its outcome.
+int WaitForJob(Connection& connection, const std::string& id);
 
 struct ListArgs {
   int page_size = 20;

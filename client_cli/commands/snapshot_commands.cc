@@ -138,6 +138,8 @@ int ExportSnapshot(Connection& connection, const std::string& project, const std
   }
   google::protobuf::Struct manifest;
   auto& fields = *manifest.mutable_fields();
+  fields["format"].set_string_value("pba-structure-set");
+  fields["version"].set_number_value(1);
   fields["project"].set_string_value(project);
   fields["snapshot"].set_number_value(static_cast<double>(snapshot.id()));
   fields["snapshot_name"].set_string_value(snapshot.name());
@@ -228,7 +230,15 @@ int Watch(Connection& connection, const std::string& project, int count) {
                      [](unsigned char c) { return c == '_' ? ' ' : std::tolower(c); });
       std::string target = event.structure();
       if (event.revision() > 0) target += " r" + std::to_string(event.revision());
-      if (event.snapshot() > 0) target += "snapshot " + std::to_string(event.snapshot());
+      if (event.kind() == v1::AtlasEvent::JOB_STATE_CHANGED) {
+        kind = "job " + event.job_state();
+        std::transform(kind.begin(), kind.end(), kind.begin(),
+                       [](unsigned char c) { return std::tolower(c); });
+        target = event.job_id();
+        if (event.snapshot() > 0) target += " (snapshot " + std::to_string(event.snapshot()) + ")";
+      } else if (event.snapshot() > 0) {
+        target += "snapshot " + std::to_string(event.snapshot());
+      }
       std::printf("%s  %-10s %-18s %s%s%s\n", FormatTime(event.time()).c_str(),
                   event.user().c_str(), kind.c_str(), target.c_str(),
                   event.detail().empty() ? "" : ": ", event.detail().c_str());

@@ -147,10 +147,20 @@ Status PbaServer::Start(const ServerOptions& options, std::unique_ptr<PbaServer>
   executor_options.max_running = options.max_running;
   executor_options.solver_threads = options.solver_threads;
   executor_options.kill_grace = options.kill_grace;
+  executor_options.max_job_time = options.max_job_time;
+  executor_options.max_attempts = options.max_attempts;
+  executor_options.max_solver_memory_bytes = options.max_solver_memory_bytes;
+  server->atlas_jobs_ =
+      std::make_unique<AtlasJobs>(*server->atlas_store_, server->atlas_hub_, *server->store_);
+  executor_options.preparation = server->atlas_jobs_.get();
+  AtlasJobs* atlas_jobs = server->atlas_jobs_.get();
+  server->hub_.SetStateListener(
+      [atlas_jobs](const v1::JobEvent& event) { atlas_jobs->PublishJobEvent(event); });
   server->executor_ =
       std::make_unique<JobExecutor>(*server->store_, server->hub_, std::move(executor_options));
-  server->service_ = std::make_unique<JobServiceImpl>(
-      *server->store_, *server->executor_, server->hub_, *server->atlas_store_, data_dir);
+  server->service_ = std::make_unique<JobServiceImpl>(*server->store_, *server->executor_,
+                                                      server->hub_, *server->atlas_store_,
+                                                      *server->uploads_, data_dir);
 
   grpc::EnableDefaultHealthCheckService(true);
   grpc::reflection::InitProtoReflectionServerBuilderPlugin();
@@ -198,6 +208,7 @@ void PbaServer::Shutdown() {
   service_.reset();
   atlas_service_.reset();
   executor_.reset();
+  atlas_jobs_.reset();
   store_.reset();
   uploads_.reset();
   atlas_store_.reset();

@@ -20,6 +20,7 @@
 #include "jobs/job_executor.h"
 #include "pba/status.h"
 #include "service/atlas_event_hub.h"
+#include "service/atlas_jobs.h"
 #include "service/atlas_service.h"
 #include "service/job_service.h"
 #include "store/atlas_store.h"
@@ -44,6 +45,12 @@ struct ServerOptions {
   // TLS: PEM certificate chain and private key. Both set: the server speaks
   // only TLS; both empty: plaintext (fine on loopback); one alone is an error.
   std::filesystem::path tls_cert, tls_key;
+  // A job's wall-clock limit (ExecutorOptions::max_job_time); 0: none.
+  std::chrono::seconds max_job_time{0};
+  // Starts of a job before it is given up (ExecutorOptions::max_attempts).
+  int max_attempts = 3;
+  // Address-space limit of each pba-solve [bytes]; 0: none.
+  int64_t max_solver_memory_bytes = 0;
 };
 
 class PbaServer {
@@ -83,6 +90,7 @@ class PbaServer {
   std::unique_ptr<UploadStore> uploads_;
   AtlasEventHub atlas_hub_;
   std::unique_ptr<AtlasServiceImpl> atlas_service_;
+  std::unique_ptr<AtlasJobs> atlas_jobs_;
   std::filesystem::path admin_token_file_;
   std::unique_ptr<grpc::Server> server_;
   std::string address_;

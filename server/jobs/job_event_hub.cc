@@ -17,6 +17,8 @@ void JobEventHub::Publish(const v1::JobEvent& event) {
     }
   }
   changed_.notify_all();
+  const bool state_change = event.state() != v1::Job::RUNNING || event.phase().empty();
+  if (state_change && state_listener_) state_listener_(event);
 }
 
 std::vector<v1::JobEvent> JobEventHub::Recent(const std::string& job_id,

@@ -22,6 +22,7 @@
 #include <map>
 #include <mutex>
 #include <string>
+#include <functional>
 #include <vector>
 
 #include "pba/v1/job.pb.h"
@@ -36,6 +37,13 @@ class JobEventHub {
   // RUNNING ends the job's live data (it must be stored before it is
   // published, so no watcher can miss it).
   void Publish(const v1::JobEvent& event);
+
+  // Called (outside the hub's lock) with every published event that changes
+  // a job's state (not progress): the atlas watchers hear of jobs so. Set
+  // it before any Publish().
+  void SetStateListener(std::function<void(const v1::JobEvent&)> listener) {
+    state_listener_ = std::move(listener);
+  }
 
   // Buffered events of `job_id` with sequence > after_sequence, in order.
   std::vector<v1::JobEvent> Recent(const std::string& job_id, int64_t after_sequence) const;
@@ -55,6 +63,8 @@ class JobEventHub {
   bool shutting_down() const;
 
  private:
+  std::function<void(const v1::JobEvent&)> state_listener_;
+
   struct JobLive {
     std::deque<v1::JobEvent> recent;
     std::string phase;

@@ -43,7 +43,7 @@ void LogStateChange(const v1::JobEvent& event) {
 
 // Removes what an earlier attempt left: a complete result of a run whose end
 // was never recorded, and pba-solve's hidden staging siblings (.result.*).
-Status PrepareFolder(const v1::Job& job, const fs::path& dir) {
+Status ClearFolder(const fs::path& dir) {
   std::error_code ec;
   fs::create_directories(dir, ec);
   if (ec) return Status::Io("cannot create " + dir.string() + ": " + ec.message());
@@ -58,15 +58,29 @@ Status PrepareFolder(const v1::Job& job, const fs::path& dir) {
     }
   }
   if (ec) return Status::Io("cannot list " + dir.string() + ": " + ec.message());
+  return Status::Ok();
+}
 
-  std::string json;
-  google::protobuf::util::JsonPrintOptions options;
-  options.preserve_proto_field_names = true;
-  options.add_whitespace = true;
-  if (!google::protobuf::util::MessageToJsonString(job.scene(), &json, options).ok()) {
-    return Status::Internal("cannot write the scene as JSON");
+// The job's folder, ready for pba-solve: inputs staged (by `preparation`,
+// when there is one), scene.json written, the attempt noted in solve.log.
+// *input: pba-solve's input arguments.
+Status PrepareFolder(const v1::Job& job, const fs::path& dir, JobPreparation* preparation,
+                     std::vector<std::string>* input) {
+  PBA_RETURN_IF_ERROR(ClearFolder(dir));
+  v1::Scene scene = job.scene();
+  input->clear();
+  if (preparation != nullptr) PBA_RETURN_IF_ERROR(preparation->Stage(job, dir, &scene, input));
+  if (input->empty()) {
+    std::string json;
+    google::protobuf::util::JsonPrintOptions options;
+    options.preserve_proto_field_names = true;
+    options.add_whitespace = true;
+    if (!google::protobuf::util::MessageToJsonString(scene, &json, options).ok()) {
+      return Status::Internal("cannot write the scene as JSON");
+    }
+    PBA_RETURN_IF_ERROR(WriteFileAtomically(dir / "scene.json", json));
+    input->push_back((dir / "scene.json").string());
   }
-  PBA_RETURN_IF_ERROR(WriteFileAtomically(dir / "scene.json", json));
 
   std::ofstream log(dir / "solve.log", std::ios::app);
   log << "=== attempt " << job.attempts() << ", " << TimeUtil::ToString(Now()) << " ===\n";
@@ -267,12 +281,25 @@ void JobExecutor::Execute(const v1::Job& job, const v1::JobEvent& started, Run& 
     LogStateChange(event);
   };
 
-  const Status prepared = PrepareFolder(job, dir);
-  if (!prepared.ok()) return fail("cannot prepare the job folder: " + prepared.ToString());
+  if (job.attempts() > options_.max_attempts) {
+    return fail("started " + std::to_string(job.attempts() - 1) +
+                " times without finishing (the server stopped during each run); not started "
+                "again");
+  }
+  std::vector<std::string> input;
+  const Status prepared = PrepareFolder(job, dir, options_.preparation, &input);
+  if (!prepared.ok()) {
+    return fail(prepared.code() == Status::Code::kIo || prepared.code() == Status::Code::kInternal
+                    ? "cannot prepare the job folder: " + prepared.ToString()
+                    : prepared.ToString());
+  }
 
   SolverCommand command;
   command.program = options_.solver;
-  command.args = {(dir / "scene.json").string(), "--out", result_dir.string(), "--progress=json"};
+  command.args = input;
+  for (const char* arg : {"--out", "", "--progress=json"}) command.args.push_back(arg);
+  command.args[command.args.size() - 2] = result_dir.string();
+  command.max_address_space_bytes = options_.max_solver_memory_bytes;
   if (options_.solver_threads > 0) {
     command.args.push_back("--threads");
     command.args.push_back(std::to_string(options_.solver_threads));
@@ -293,8 +320,20 @@ void JobExecutor::Execute(const v1::Job& job, const v1::JobEvent& started, Run& 
     if (run.cancel_requested || run.stop_requested) run.Terminate(options_.kill_grace);
   }
 
+  // The job's time limit: its own when smaller than the server's.
+  std::chrono::seconds limit = options_.max_job_time;
+  if (job.timeout_s() > 0 && (limit.count() == 0 || job.timeout_s() < limit.count())) {
+    limit = std::chrono::seconds(job.timeout_s());
+  }
+  const auto started_at = std::chrono::steady_clock::now();
+  bool timed_out = false;
   auto escalate = [&] {
     std::lock_guard lock(mutex_);
+    if (limit.count() > 0 && !timed_out && std::chrono::steady_clock::now() - started_at > limit) {
+      spdlog::warn("job {}: over its time limit of {} s; stopping pba-solve", id, limit.count());
+      timed_out = true;
+      run.Terminate(options_.kill_grace);
+    }
     if (run.term_sent && !run.kill_sent && std::chrono::steady_clock::now() >= run.kill_at) {
       spdlog::warn("job {}: pba-solve ignored SIGTERM for {} ms; sending SIGKILL", id,
                    options_.kill_grace.count());
@@ -386,8 +425,17 @@ void JobExecutor::Execute(const v1::Job& job, const v1::JobEvent& started, Run& 
     RunOutcome outcome;
     const Status collected = CollectResult(result_dir, &outcome.summary, &outcome.files);
     if (!collected.ok()) return fail("pba-solve succeeded but " + collected.ToString());
+    if (options_.preparation != nullptr) {
+      const Status completed = options_.preparation->Complete(job, result_dir, &outcome);
+      if (!completed.ok()) return fail(completed.ToString());
+    }
     outcome.state = v1::Job::SUCCEEDED;
     return finish(std::move(outcome));
+  }
+  if (timed_out) {
+    std::error_code ec;
+    fs::remove_all(result_dir, ec);
+    return fail("stopped after its time limit of " + std::to_string(limit.count()) + " s");
   }
   if (stop_requested) return requeue();
   fail(FailureReason(have_error ? &error_event : nullptr, exit));

@@ -9,7 +9,15 @@
 // server start runs it again.
 //
 // Cancel and stop send SIGTERM to the child's process group; the worker sends
-// SIGKILL when the child is still there after `kill_grace`.
+// SIGKILL when the child is still there after `kill_grace`. A job over its
+// time limit is stopped the same way and FAILED, saying so; a job started
+// more than `max_attempts` times (re-queued by restarts) is FAILED without
+// running again.
+//
+// Jobs on the atlas store (a scene against a snapshot, an atlas import)
+// need more than their scene: a JobPreparation stages their inputs before
+// pba-solve runs and completes them after (an import's structures are
+// committed then).
 #pragma once
 
 #include <chrono>
@@ -29,6 +37,40 @@
 
 namespace pba {
 
+// What the server adds around a job's pba-solve run.
+class JobPreparation {
+ public:
+  virtual ~JobPreparation() = default;
+  // Before pba-solve: writes what the job reads into its folder `dir` and
+  // returns pba-solve's input arguments in *input (by default the scene
+  // file, dir/scene.json, written from *scene after this returns; a
+  // preparation may rewrite *scene, e.g. point its atlas at a staged
+  // snapshot). An error FAILS the job with it.
+  virtual Status Stage(const v1::Job& job, const std::filesystem::path& dir, v1::Scene* scene,
+                       std::vector<std::string>* input) = 0;
+  // After pba-solve succeeded, before the job is recorded SUCCEEDED: may
+  // add to the outcome (e.g. the snapshot an import made). An error FAILS
+  // the job with it.
+  virtual Status Complete(const v1::Job& job, const std::filesystem::path& result_dir,
+                          RunOutcome* outcome) = 0;
+};
+
+// The queue's runner as the job service sees it: the local one below runs
+// pba-solve children on this machine; one that hands jobs to a cluster
+// scheduler would implement the same four calls.
+class Executor {
+ public:
+  virtual ~Executor() = default;
+  virtual void Start() = 0;
+  // A job was queued: let an idle worker take it now.
+  virtual void Wake() = 0;
+  // QUEUED -> CANCELLED at once; RUNNING -> stopped, then CANCELLED;
+  // finished jobs are left alone. *job is the job after the call.
+  virtual Status Cancel(const std::string& id, v1::Job* job, bool* found) = 0;
+  // Stops taking jobs; running ones go back to the queue. Idempotent.
+  virtual void Stop() = 0;
+};
+
 struct ExecutorOptions {
   // Job folders are created in data_dir/jobs/<id>/.
   std::filesystem::path data_dir;
@@ -42,9 +84,19 @@ struct ExecutorOptions {
   // How often idle workers look at the queue without being woken (covers
   // jobs queued by anything that does not call Wake()).
   std::chrono::milliseconds idle_poll{1000};
+  // The wall-clock limit of a job: a job's own timeout_s when it is
+  // smaller; 0: none.
+  std::chrono::seconds max_job_time{0};
+  // A job is started at most this many times (a start is an attempt; a
+  // restart of the server re-queues the jobs it was running).
+  int max_attempts = 3;
+  // The address-space limit of each pba-solve [bytes]; 0: none.
+  int64_t max_solver_memory_bytes = 0;
+  // Stages and completes jobs on the atlas store; nullptr: scenes only.
+  JobPreparation* preparation = nullptr;
 };
 
-class JobExecutor {
+class JobExecutor : public Executor {
  public:
   // Progress is stored when the phase changes or it grew by this much.
   static constexpr double kStoredProgressStep = 0.05;
@@ -52,20 +104,19 @@ class JobExecutor {
   JobExecutor(JobStore& store, JobEventHub& hub, ExecutorOptions options);
   JobExecutor(const JobExecutor&) = delete;
   JobExecutor& operator=(const JobExecutor&) = delete;
-  ~JobExecutor();  // Stop()
+  ~JobExecutor() override;  // Stop()
 
-  void Start();
-  // A job was queued: let an idle worker take it now.
-  void Wake();
+  void Start() override;
+  void Wake() override;
 
   // QUEUED -> CANCELLED at once; RUNNING -> its child is signalled and the job
   // ends CANCELLED shortly after; finished jobs are left alone. *job is the
   // job after the call (a running one still shows RUNNING).
-  Status Cancel(const std::string& id, v1::Job* job, bool* found);
+  Status Cancel(const std::string& id, v1::Job* job, bool* found) override;
 
   // Stops taking jobs, stops running children (their jobs are re-queued) and
   // joins the workers. Idempotent.
-  void Stop();
+  void Stop() override;
 
  private:
   struct Run;  // one running job, defined in the .cc

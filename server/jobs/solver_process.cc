@@ -4,6 +4,7 @@
 #include <poll.h>
 #include <signal.h>
 #include <sys/prctl.h>
+#include <sys/resource.h>
 #include <sys/syscall.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -27,8 +28,15 @@ void CloseFd(int* fd) {
 // Everything between fork and exec must be async-signal-safe: the server is
 // multithreaded and another thread may have held a lock (malloc's) at fork.
 [[noreturn]] void ExecChild(const char* program, char* const argv[], int stdin_fd, int stdout_fd,
-                            int stderr_fd, int error_fd, pid_t parent) {
+                            int stderr_fd, int error_fd, pid_t parent, int64_t max_address_space) {
   ::setpgid(0, 0);
+  struct rlimit no_core = {0, 0};
+  ::setrlimit(RLIMIT_CORE, &no_core);
+  if (max_address_space > 0) {
+    struct rlimit space = {static_cast<rlim_t>(max_address_space),
+                           static_cast<rlim_t>(max_address_space)};
+    ::setrlimit(RLIMIT_AS, &space);
+  }
   ::prctl(PR_SET_PDEATHSIG, SIGKILL);
   // The parent may have died before prctl took effect.
   if (::getppid() != parent) ::_exit(127);
@@ -102,7 +110,8 @@ Status SolverProcess::Start(const SolverCommand& command) {
   const pid_t parent = ::getpid();
   const pid_t pid = ::fork();
   if (pid == 0) {
-    ExecChild(argv[0], argv.data(), null_fd, out_pipe[1], log_fd, error_pipe[1], parent);
+    ExecChild(argv[0], argv.data(), null_fd, out_pipe[1], log_fd, error_pipe[1], parent,
+              command.max_address_space_bytes);
   }
   const int fork_errno = errno;
   CloseFd(&log_fd);

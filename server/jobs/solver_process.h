@@ -14,6 +14,7 @@
 #include <sys/types.h>
 
 #include <chrono>
+#include <cstdint>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -26,6 +27,11 @@ struct SolverCommand {
   std::filesystem::path program;
   std::vector<std::string> args;  // without argv[0]
   std::filesystem::path stderr_log;
+  // Resource limits of the child (setrlimit), 0: none. Address space
+  // [bytes]: a solve that asks for more gets allocation failures and ends
+  // with an error instead of pushing the server into swap. No core files
+  // either way (a crashed solve of a large model would write gigabytes).
+  int64_t max_address_space_bytes = 0;
 };
 
 // How a child ended.

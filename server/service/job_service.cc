@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "convert/convert.h"
+#include "service/atlas_jobs.h"
 #include "service/call_auth.h"
 #include "store/job_id.h"
 
@@ -76,13 +77,71 @@ grpc::Status JobNotFound(const char* rpc, const std::string& id) {
 
 }  // namespace
 
-JobServiceImpl::JobServiceImpl(JobStore& store, JobExecutor& executor, JobEventHub& hub,
-                               AtlasStore& users, fs::path data_dir)
+JobServiceImpl::JobServiceImpl(JobStore& store, Executor& executor, JobEventHub& hub,
+                               AtlasStore& users, UploadStore& uploads, fs::path data_dir)
     : store_(store),
       executor_(executor),
       hub_(hub),
       users_(users),
+      uploads_(uploads),
       data_dir_(std::move(data_dir)) {}
+
+Status JobServiceImpl::CheckSubmit(const std::string& user, const v1::SubmitJobRequest& request,
+                                   NewJob* job) {
+  if (request.priority() < -kMaxPriority || request.priority() > kMaxPriority) {
+    return Status::InvalidArgument("priority", "must be within -100..100");
+  }
+  if (request.timeout_s() < 0) {
+    return Status::InvalidArgument("timeout_s", "must not be negative");
+  }
+  job->owner = user;
+  job->request_id = request.request_id();
+  job->priority = request.priority();
+  job->timeout_s = request.timeout_s();
+  if (request.has_atlas_import()) {
+    if (request.has_scene() || request.has_snapshot()) {
+      return Status::InvalidArgument("atlas_import",
+                                     "an import is a job of its own: send no scene or snapshot");
+    }
+    PBA_RETURN_IF_ERROR(CheckAtlasImport(request.atlas_import()));
+    Role role = Role::kViewer;
+    bool member = false;
+    PBA_RETURN_IF_ERROR(users_.RoleOf(request.atlas_import().project(), user, &role, &member));
+    if (!member || role < Role::kEditor) {
+      return Status::PermissionDenied("importing into project '" +
+                                      request.atlas_import().project() +
+                                      "' needs the editor role");
+    }
+    job->atlas_import = &request.atlas_import();
+    return Status::Ok();
+  }
+  if (!request.has_scene()) return Status::InvalidArgument("scene", "required");
+  PBA_RETURN_IF_ERROR(ValidateSceneProto(request.scene()));
+  job->scene = request.scene();
+  if (!request.has_snapshot()) return Status::Ok();
+  const v1::SnapshotRef& ref = request.snapshot();
+  if (!request.scene().geometry().has_atlas()) {
+    return Status::InvalidArgument(
+        "snapshot", "only an atlas scene (geometry.atlas) is built from a snapshot");
+  }
+  const std::string& source = request.scene().geometry().atlas().source();
+  if (!source.empty()) {
+    return Status::InvalidArgument("scene.geometry.atlas.source",
+                                   "a job against a snapshot is built from the snapshot's "
+                                   "structures: leave the source empty");
+  }
+  if (ref.project().empty()) return Status::InvalidArgument("snapshot.project", "required");
+  if (ref.snapshot().empty()) return Status::InvalidArgument("snapshot.snapshot", "required");
+  SnapshotInfo snapshot;
+  PBA_RETURN_IF_ERROR(users_.ResolveSnapshot(user, ref.project(), ref.snapshot(), &snapshot));
+  if (snapshot.revisions.empty()) {
+    return Status::FailedPrecondition("snapshot " + ref.snapshot() + " of project '" +
+                                      ref.project() + "' has no structures");
+  }
+  job->snapshot.set_project(ref.project());
+  job->snapshot.set_snapshot(std::to_string(snapshot.id));
+  return Status::Ok();
+}
 
 grpc::Status JobServiceImpl::Authenticate(const char* rpc, const grpc::ServerContext& context,
                                           std::string* user) {
@@ -110,18 +169,56 @@ grpc::Status JobServiceImpl::SubmitJob(grpc::ServerContext* context,
     return Error(kRpc, grpc::StatusCode::INVALID_ARGUMENT,
                  "request_id: at most " + std::to_string(kMaxRequestIdLength) + " characters");
   }
-  if (!request->has_scene()) {
-    return Error(kRpc, grpc::StatusCode::INVALID_ARGUMENT, "scene: required");
-  }
-  const Status valid = ValidateSceneProto(request->scene());
-  if (!valid.ok()) return Error(kRpc, ToGrpcStatus(valid));
+  NewJob job;
+  const Status checked = CheckSubmit(user, *request, &job);
+  if (!checked.ok()) return Error(kRpc, ToGrpcStatus(checked));
 
+  // A repeated import returns its job before its uploads (taken the first
+  // time) are looked for.
+  if (job.atlas_import != nullptr && !job.request_id.empty()) {
+    bool found = false;
+    const Status looked = store_.FindByRequestId(job.request_id, user, response, &found);
+    if (!looked.ok()) return StoreError(kRpc, looked);
+    if (found) {
+      OverlayLive(response);
+      return grpc::Status::OK;
+    }
+  }
+  // An import's files are taken in before the job exists (a staging
+  // directory renamed to the job's once it has an id): a job that is queued
+  // always has its source.
+  fs::path staged;
+  if (job.atlas_import != nullptr) {
+    staged = data_dir_ / "jobs" / (".import-" + NewJobId());
+    const Status taken = StageImportSource(uploads_, user, *job.atlas_import, staged);
+    if (!taken.ok()) return Error(kRpc, ToGrpcStatus(taken));
+  }
+  if (!staged.empty()) {
+    job.before_commit = [&](const std::string& id) {
+      std::error_code ec;
+      const fs::path dir = data_dir_ / "jobs" / id;
+      fs::create_directories(dir, ec);
+      if (!ec) fs::rename(staged, dir / "source", ec);
+      if (ec) return Status::Io("cannot move the import's files into place: " + ec.message());
+      return Status::Ok();
+    };
+  }
   bool created = false;
-  const Status stored =
-      store_.CreateJob(request->scene(), request->request_id(), user, response, &created);
+  const Status stored = store_.CreateJob(job, response, &created);
+  if (!staged.empty()) {
+    std::error_code ec;
+    fs::remove_all(staged, ec);  // left only when the submit failed or was a repeat
+  }
   if (!stored.ok()) return StoreError(kRpc, stored);
   if (created) {
     spdlog::info("job {} QUEUED: {} submitted by {}", response->id(), response->name(), user);
+    v1::JobEvent queued;
+    queued.set_job_id(response->id());
+    queued.set_sequence(1);
+    *queued.mutable_time() = response->create_time();
+    queued.set_state(v1::Job::QUEUED);
+    queued.set_message("queued");
+    hub_.Publish(queued);
     executor_.Wake();
   }
   OverlayLive(response);

@@ -5,6 +5,11 @@
 // Every call is authenticated (call_auth.h); every user sees every job, and
 // only a job's owner (the user who submitted it) may cancel it.
 //
+// A submit carries a scene, optionally against a snapshot of the atlas
+// store (viewer role on its project), or an atlas import (editor role; its
+// uploads are taken into the job's folder at once, so they cannot expire
+// while it waits in the queue). See atlas_jobs.h for how they run.
+//
 // WatchJob sends the stored events after `after_sequence`, then events as they
 // are published (including live progress that is not stored: see
 // job_event_hub.h for how sequences work), and ends after the event that makes
@@ -20,6 +25,7 @@
 #include "pba/v1/job.grpc.pb.h"
 #include "store/atlas_store.h"
 #include "store/job_store.h"
+#include "store/upload_store.h"
 
 namespace pba {
 
@@ -30,8 +36,11 @@ class JobServiceImpl final : public v1::JobService::Service {
   static constexpr char kDefaultResultFile[] = "result.h5";
 
   // `users` authenticates every call (call_auth.h).
-  JobServiceImpl(JobStore& store, JobExecutor& executor, JobEventHub& hub, AtlasStore& users,
-                 std::filesystem::path data_dir);
+  // Priorities a submit may ask for.
+  static constexpr int kMaxPriority = 100;
+
+  JobServiceImpl(JobStore& store, Executor& executor, JobEventHub& hub, AtlasStore& users,
+                 UploadStore& uploads, std::filesystem::path data_dir);
 
   grpc::Status SubmitJob(grpc::ServerContext* context, const v1::SubmitJobRequest* request,
                          v1::Job* response) override;
@@ -53,10 +62,15 @@ class JobServiceImpl final : public v1::JobService::Service {
   // The caller, or UNAUTHENTICATED (logged).
   grpc::Status Authenticate(const char* rpc, const grpc::ServerContext& context, std::string* user);
 
+  // The submit's checks beyond the scene: snapshot, import, priority, time
+  // limit; *job gets what they resolve to.
+  Status CheckSubmit(const std::string& user, const v1::SubmitJobRequest& request, NewJob* job);
+
   JobStore& store_;
-  JobExecutor& executor_;
+  Executor& executor_;
   JobEventHub& hub_;
   AtlasStore& users_;
+  UploadStore& uploads_;
   const std::filesystem::path data_dir_;
 };
 

@@ -10,6 +10,8 @@
 
 #include <CLI/CLI.hpp>
 #include <atomic>
+#include <chrono>
+#include <vector>
 #include <csignal>
 #include <cstdio>
 #include <fstream>
@@ -22,6 +24,7 @@
 #include "pba/solve.h"
 #include "pba/v1/scene.pb.h"
 #include "pba/v1/solve_event.pb.h"
+#include "atlas/structure_split.h"
 #include "solve/staging_dir.h"
 
 namespace pba {
@@ -186,6 +189,64 @@ int Run(const std::string& scene_path, const std::string& out_dir, const std::st
   return kExitOk;
 }
 
+// The atlas import's half that runs in a child process: the source split
+// into a structure set, <out>/structures/ (structure_split.h), with a
+// summary.json saying what was found.
+struct ImportArgs {
+  std::string kind;  // synthetic, plates, labels
+  std::string source;
+  std::string colour_table;
+  std::vector<std::string> structures;
+};
+
+int RunImport(const ImportArgs& args, const std::string& out_dir, ProgressMode mode) {
+  Reporter reporter(mode);
+  const auto start = std::chrono::steady_clock::now();
+  SplitOptions options;
+  if (args.kind == "synthetic") {
+    options.source.source = AtlasBuildOptions::Source::kSynthetic;
+  } else if (args.kind == "plates") {
+    options.source.source = AtlasBuildOptions::Source::kPlates;
+  } else {
+    options.source.source = AtlasBuildOptions::Source::kLabelVolume;
+    options.source.colour_table = args.colour_table;
+  }
+  options.source.input = args.source;
+  options.structures = args.structures;
+  if (args.kind != "synthetic" && args.source.empty()) {
+    return reporter.Error(Status::InvalidArgument("import-source", "required for " + args.kind));
+  }
+  reporter.Progress({"split", 0.0, "splitting the atlas into structures"});
+  StagingDir staging;
+  Status status = StagingDir::Create(out_dir, &staging);
+  if (!status.ok()) return reporter.Error(status);
+  SplitResult result;
+  status = SplitAtlas(options, staging.path() / "structures", &result);
+  if (!status.ok()) return reporter.Error(status);
+  if (g_cancel.load()) return reporter.Error(Status::Cancelled("cancelled"));
+
+  v1::Summary summary;
+  summary.set_scene_name("atlas import");
+  summary.set_solver_version(SolverVersion());
+  const int n = static_cast<int>(result.set.structures.size());
+  summary.mutable_modelled()->set_geometry(
+      std::to_string(n) + " structure" + (n == 1 ? "" : "s") + " from " +
+      (args.kind == "synthetic" ? std::string("the synthetic atlas")
+       : args.kind == "plates"  ? "plates, as plate contours"
+                                : "a label volume, as label masks"));
+  for (const std::string& name : result.absent) {
+    summary.mutable_modelled()->add_notes("absent from the source (not imported): " + name);
+  }
+  summary.mutable_performance()->set_wall_time_s(
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  status = WriteText(staging.path() / "summary.json", codec::ToJson(summary));
+  if (!status.ok()) return reporter.Error(status);
+  status = staging.Commit();
+  if (!status.ok()) return reporter.Error(status);
+  reporter.Done(std::filesystem::absolute(out_dir).lexically_normal().string(), summary);
+  return kExitOk;
+}
+
 }  // namespace
 }  // namespace pba
 
@@ -196,8 +257,18 @@ int main(int argc, char** argv) {
   std::string out_dir;
   std::string progress = "auto";
   int threads = 0;
-  app.add_option("scene", scene_path, "Scene file (YAML or JSON, see docs/scene-reference.md)")
-      ->required();
+  app.add_option("scene", scene_path, "Scene file (YAML or JSON, see docs/scene-reference.md)");
+  pba::ImportArgs import;
+  app.add_option("--import-atlas", import.kind,
+                 "Instead of a scene: split an atlas into a structure set in OUT/structures "
+                 "(the server's atlas import)")
+      ->check(CLI::IsMember({"synthetic", "plates", "labels"}));
+  app.add_option("--import-source", import.source,
+                 "--import-atlas plates: the plate directory; labels: the label volume");
+  app.add_option("--colour-table", import.colour_table,
+                 "--import-atlas labels: the label table (CSV); default the built-in one");
+  app.add_option("--structure", import.structures,
+                 "--import-atlas: keep only this structure (repeatable; group prefixes allowed)");
   std::string inp_path;
   app.add_option("-o,--out", out_dir,
                  "Result directory (created; an older result there is replaced)");
@@ -227,6 +298,17 @@ int main(int argc, char** argv) {
     mode = pba::ProgressMode::kNone;
   }
   try {
+    if (!import.kind.empty()) {
+      if (!scene_path.empty() || out_dir.empty()) {
+        std::fprintf(stderr, "pba-solve: --import-atlas takes --out DIR and no scene\n");
+        return pba::kExitInvalid;
+      }
+      return pba::RunImport(import, out_dir, mode);
+    }
+    if (scene_path.empty()) {
+      std::fprintf(stderr, "pba-solve: a scene file is required\n");
+      return pba::kExitInvalid;
+    }
     if (out_dir.empty() && inp_path.empty()) {
       std::fprintf(stderr,
                    "pba-solve: --out DIR is required (or --export-inp FILE to export only)\n");

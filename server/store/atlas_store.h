@@ -60,6 +60,20 @@ namespace pba {
 // The wall clock in microseconds since the Unix epoch; tests inject their own.
 using MicrosClock = std::function<int64_t()>;
 
+// One structure of Import().
+struct ImportedStructure {
+  std::string name;
+  StructureMetadata metadata;
+  GeometryFormat format = GeometryFormat::kContoursJson;
+  std::filesystem::path file;  // its geometry, already checked
+};
+
+// A snapshot member with where its geometry lies (SnapshotFiles()).
+struct SnapshotFile {
+  Revision revision;
+  std::filesystem::path blob;  // read-only, content-addressed
+};
+
 // Commit() arguments. `geometry` is borrowed for the call.
 struct CommitRequest {
   StructureRef structure;
@@ -194,6 +208,23 @@ class AtlasStore {
   // `tag_or_id` is a tag or a decimal snapshot id; members are loaded.
   Status ResolveSnapshot(const std::string& user, const std::string& project,
                          const std::string& tag_or_id, SnapshotInfo* snapshot);
+
+  // The geometry files of a snapshot's members, for a job run against it;
+  // viewers may read. Every blob is verified against its hash first.
+  Status SnapshotFiles(const std::string& user, const std::string& project, int64_t snapshot_id,
+                       std::vector<SnapshotFile>* files);
+
+  // --- atlas import (a job's last step) ------------------------------------
+  // Creates every structure (revision 1, kind "create", `message`) and then
+  // a snapshot of the project named `snapshot_name`, in one transaction that
+  // records `job_id` on the snapshot; editors only. Called again with the
+  // same job id it returns the snapshot made then and writes nothing
+  // (*replayed), so a job finished again after a crash does not import
+  // twice. A structure that exists already is kFailedPrecondition naming
+  // it (and up to nine more); nothing is written then.
+  Status Import(const std::string& user, const std::string& project, const std::string& job_id,
+                const std::vector<ImportedStructure>& structures, const std::string& snapshot_name,
+                const std::string& message, SnapshotInfo* snapshot, bool* replayed);
 
   // --- audit and maintenance ----------------------------------------------
   // The project's audit rows, newest first; paging as ListProjects.

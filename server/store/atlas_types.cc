@@ -18,7 +18,7 @@ std::string Describe(char c) {
 
 bool IsNameCharacter(char c) {
   return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == ' ' ||
-         c == '_' || c == '-' || c == '.' || c == '(' || c == ')';
+         c == '_' || c == '-' || c == '.' || c == '(' || c == ')' || c == ':';
 }
 
 // A validating JSON reader (RFC 8259) that builds nothing: the store keeps the
@@ -223,7 +223,7 @@ Status CheckName(std::string_view field, std::string_view name) {
     if (!IsNameCharacter(name[i])) {
       return Status::InvalidArgument(
           f, "character " + Describe(name[i]) + " at position " + std::to_string(i + 1) +
-                 " is not allowed; names use letters, digits, space and _ - . ( )");
+                 " is not allowed; names use letters, digits, space and _ - . ( ) :");
     }
   }
   if (name.front() == ' ' || name.back() == ' ') {

@@ -22,7 +22,9 @@ constexpr int kIdAttempts = 8;
 constexpr char kPageTokenPrefix[] = "jobs.v1:";
 constexpr char kJobColumns[] =
     "id, name, state, create_time_us, start_time_us, end_time_us, phase, progress, error, "
-    "attempts, scene, summary, owner";
+    "attempts, scene, summary, owner, priority, timeout_s, snapshot_project, snapshot, "
+    "atlas_import";
+constexpr int kJobColumnCount = 18;
 
 int64_t NowMicros() {
   return std::chrono::duration_cast<std::chrono::microseconds>(
@@ -116,6 +118,13 @@ void ReadJobRow(const Statement& stmt, JobView view, v1::Job* job) {
     if (!stmt.ColumnIsNull(11)) job->mutable_summary()->ParseFromString(stmt.ColumnBlob(11));
   }
   job->set_owner(stmt.ColumnText(12));
+  job->set_priority(static_cast<int32_t>(stmt.ColumnInt(13)));
+  job->set_timeout_s(static_cast<int32_t>(stmt.ColumnInt(14)));
+  if (!stmt.ColumnText(15).empty()) {
+    job->mutable_snapshot()->set_project(stmt.ColumnText(15));
+    job->mutable_snapshot()->set_snapshot(stmt.ColumnText(16));
+  }
+  if (!stmt.ColumnIsNull(17)) job->mutable_atlas_import()->ParseFromString(stmt.ColumnBlob(17));
 }
 
 }  // namespace
@@ -133,8 +142,10 @@ Status JobStore::SchemaVersion(int* version) {
   return ReadSchemaVersion(*db_, version);
 }
 
-Status JobStore::CreateJob(const v1::Scene& scene, const std::string& request_id,
-                           const std::string& owner, v1::Job* job, bool* created) {
+Status JobStore::CreateJob(const NewJob& request, v1::Job* job, bool* created) {
+  const v1::Scene& scene = request.scene;
+  const std::string& request_id = request.request_id;
+  const std::string& owner = request.owner;
   std::lock_guard lock(mutex_);
   *created = false;
   Transaction transaction(*db_);
@@ -167,10 +178,12 @@ Status JobStore::CreateJob(const v1::Scene& scene, const std::string& request_id
   }
   if (id.empty()) return Status::Internal("could not find an unused job id");
 
-  const std::string name = scene.name().empty() ? "unnamed" : scene.name();
+  std::string name = scene.name().empty() ? "unnamed" : scene.name();
+  if (request.atlas_import != nullptr) name = "import into " + request.atlas_import->project();
   PBA_RETURN_IF_ERROR(
-      db_->Prepare("INSERT INTO jobs (id, request_id, name, state, scene, create_time_us, owner) "
-                   "VALUES (?, ?, ?, ?, ?, ?, ?)",
+      db_->Prepare("INSERT INTO jobs (id, request_id, name, state, scene, create_time_us, owner, "
+                   "priority, timeout_s, snapshot_project, snapshot, atlas_import) "
+                   "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
                    &stmt));
   stmt.Bind(1, id);
   if (request_id.empty()) {
@@ -178,19 +191,47 @@ Status JobStore::CreateJob(const v1::Scene& scene, const std::string& request_id
   } else {
     stmt.Bind(2, request_id);
   }
-  PBA_RETURN_IF_ERROR(stmt.Bind(3, name)
+  stmt.Bind(3, name)
                           .Bind(4, StateName(v1::Job::QUEUED))
                           .BindBlob(5, scene.SerializeAsString())
                           .Bind(6, NowMicros())
                           .Bind(7, owner)
-                          .Run());
+                          .Bind(8, int64_t{request.priority})
+                          .Bind(9, int64_t{request.timeout_s})
+                          .Bind(10, request.snapshot.project())
+                          .Bind(11, request.snapshot.snapshot());
+  if (request.atlas_import != nullptr) {
+    stmt.BindBlob(12, request.atlas_import->SerializeAsString());
+  } else {
+    stmt.BindNull(12);
+  }
+  PBA_RETURN_IF_ERROR(stmt.Run());
   stmt = Statement();
   PBA_RETURN_IF_ERROR(InsertEvent(MakeEvent(id, 1, v1::Job::QUEUED, "", 0, "queued")));
+  if (request.before_commit) PBA_RETURN_IF_ERROR(request.before_commit(id));
   bool found = false;
   PBA_RETURN_IF_ERROR(LoadJob(id, JobView::kFull, job, &found));
   PBA_RETURN_IF_ERROR(transaction.Commit());
   *created = true;
   return Status::Ok();
+}
+
+Status JobStore::FindByRequestId(const std::string& request_id, const std::string& owner,
+                                 v1::Job* job, bool* found) {
+  std::lock_guard lock(mutex_);
+  *found = false;
+  Statement stmt;
+  PBA_RETURN_IF_ERROR(db_->Prepare("SELECT id, owner FROM jobs WHERE request_id = ?", &stmt));
+  bool row = false;
+  PBA_RETURN_IF_ERROR(stmt.Bind(1, request_id).Step(&row));
+  if (!row) return Status::Ok();
+  const std::string id = stmt.ColumnText(0);
+  if (stmt.ColumnText(1) != owner) {
+    return Status::AlreadyExists(
+        "request_id: another user's job was submitted with this request id");
+  }
+  stmt = Statement();
+  return LoadJob(id, JobView::kFull, job, found);
 }
 
 Status JobStore::GetJob(const std::string& id, JobView view, v1::Job* job, bool* found) {
@@ -257,7 +298,7 @@ Status JobStore::ListJobs(int page_size, const std::string& page_token, std::vec
     v1::Job job;
     ReadJobRow(stmt, JobView::kBasic, &job);
     jobs->push_back(std::move(job));
-    numbers.push_back(stmt.ColumnInt(13));
+    numbers.push_back(stmt.ColumnInt(kJobColumnCount));
   }
   stmt = Statement();
   if (static_cast<int>(jobs->size()) > page_size) {
@@ -351,7 +392,8 @@ Status JobStore::ClaimNextQueued(v1::Job* job, v1::JobEvent* event, bool* claime
   PBA_RETURN_IF_ERROR(transaction.status());
   Statement stmt;
   PBA_RETURN_IF_ERROR(
-      db_->Prepare("SELECT id FROM jobs WHERE state = ? ORDER BY number LIMIT 1", &stmt));
+      db_->Prepare("SELECT id FROM jobs WHERE state = ? ORDER BY priority DESC, number LIMIT 1",
+                   &stmt));
   bool row = false;
   PBA_RETURN_IF_ERROR(stmt.Bind(1, StateName(v1::Job::QUEUED)).Step(&row));
   if (!row) return Status::Ok();
@@ -433,6 +475,12 @@ Status JobStore::FinishRun(const std::string& id, int64_t sequence, const RunOut
         &stmt));
     stmt.Bind(1, NowMicros()).Bind(2, outcome.error);
     stmt.BindBlob(3, outcome.summary.SerializeAsString()).Bind(4, id);
+    if (!outcome.snapshot.project().empty()) {
+      PBA_RETURN_IF_ERROR(stmt.Run());
+      PBA_RETURN_IF_ERROR(
+          db_->Prepare("UPDATE jobs SET snapshot_project = ?, snapshot = ? WHERE id = ?", &stmt));
+      stmt.Bind(1, outcome.snapshot.project()).Bind(2, outcome.snapshot.snapshot()).Bind(3, id);
+    }
   } else {
     // A failed run keeps the phase and progress it reached: they tell where it broke.
     PBA_RETURN_IF_ERROR(db_->Prepare(

@@ -15,6 +15,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -29,6 +30,21 @@ namespace pba {
 // How much of a job to load: kFull adds the scene and the summary.
 enum class JobView { kBasic, kFull };
 
+// What a submit stores (validated and resolved by the caller).
+struct NewJob {
+  v1::Scene scene;
+  std::string request_id;
+  std::string owner;
+  int priority = 0;
+  int timeout_s = 0;
+  v1::SnapshotRef snapshot;  // resolved: the snapshot's id
+  const v1::AtlasImport* atlas_import = nullptr;  // an import job
+  // Runs inside the submit's transaction once the job has its id, before
+  // it commits (an error rolls the submit back): what the job needs is in
+  // place before any worker can see it.
+  std::function<Status(const std::string& id)> before_commit;
+};
+
 // How a run ended, for FinishRun().
 struct RunOutcome {
   v1::Job::State state = v1::Job::FAILED;  // SUCCEEDED, FAILED or CANCELLED
@@ -36,6 +52,7 @@ struct RunOutcome {
   std::string message;                     // the event's message
   v1::Summary summary;                     // SUCCEEDED only
   std::vector<v1::ResultFile> files;       // SUCCEEDED only
+  v1::SnapshotRef snapshot;                // SUCCEEDED import: the snapshot it made
 };
 
 class JobStore {
@@ -52,9 +69,20 @@ class JobStore {
   // event. With a non-empty `request_id` that `owner` used before, returns
   // the job created then and sets *created to false; another owner's
   // request_id is kAlreadyExists. The scene must already be validated.
+  Status CreateJob(const NewJob& request, v1::Job* job, bool* created);
   Status CreateJob(const v1::Scene& scene, const std::string& request_id, const std::string& owner,
-                   v1::Job* job, bool* created);
+                   v1::Job* job, bool* created) {
+    NewJob request;
+    request.scene = scene;
+    request.request_id = request_id;
+    request.owner = owner;
+    return CreateJob(request, job, created);
+  }
   Status GetJob(const std::string& id, JobView view, v1::Job* job, bool* found);
+  // The job `owner` submitted with `request_id` (kFull); another owner's is
+  // kAlreadyExists, as in CreateJob.
+  Status FindByRequestId(const std::string& request_id, const std::string& owner, v1::Job* job,
+                         bool* found);
 
   // Newest first. `page_size` 0 means kDefaultPageSize; larger than
   // kMaxPageSize is capped. An unparsable token is kInvalidArgument.
@@ -68,7 +96,7 @@ class JobStore {
   Status GetResultFile(const std::string& id, const std::string& name, v1::ResultFile* file,
                        bool* found);
 
-  // Moves the oldest QUEUED job to RUNNING (attempts + 1, start time, event).
+  // Moves the QUEUED job of highest priority, the oldest of those, to RUNNING (attempts + 1, start time, event).
   // *claimed is false when nothing is queued. `job` is loaded with kFull.
   Status ClaimNextQueued(v1::Job* job, v1::JobEvent* event, bool* claimed);
 

@@ -219,6 +219,21 @@ ALTER TABLE structure_revisions ADD COLUMN request_id TEXT;
 CREATE UNIQUE INDEX structure_revisions_by_request
   ON structure_revisions (structure, request_id) WHERE request_id IS NOT NULL;
 )sql"},
+      // Jobs: a priority (the queue runs the highest first), a wall-clock
+      // limit, the atlas snapshot a job ran against (or an import made), and
+      // an import's request. A snapshot made by an import names its job, so
+      // that an import finished again after a crash finds what it made.
+      {6, "jobs: priority, time limit, snapshot, atlas import", R"sql(
+ALTER TABLE jobs ADD COLUMN priority INTEGER NOT NULL DEFAULT 0;
+ALTER TABLE jobs ADD COLUMN timeout_s INTEGER NOT NULL DEFAULT 0;
+ALTER TABLE jobs ADD COLUMN snapshot_project TEXT NOT NULL DEFAULT '';
+ALTER TABLE jobs ADD COLUMN snapshot TEXT NOT NULL DEFAULT '';
+ALTER TABLE jobs ADD COLUMN atlas_import BLOB;
+CREATE INDEX jobs_queue ON jobs (state, priority DESC, number);
+ALTER TABLE snapshots ADD COLUMN import_job TEXT;
+CREATE UNIQUE INDEX snapshots_by_import_job ON snapshots (import_job)
+  WHERE import_job IS NOT NULL;
+)sql"},
   };
   return kMigrations;
 }

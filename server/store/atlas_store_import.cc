@@ -1,0 +1,158 @@
+// AtlasStore: an atlas import's structures and snapshot, and the files of a
+// snapshot for a job run against it.
+#include <fstream>
+#include <sstream>
+
+#include "store/atlas_store.h"
+#include "store/atlas_store_internal.h"
+#include "store/transaction.h"
+
+namespace pba {
+using namespace atlas_internal;
+
+namespace {
+
+Status ReadWholeFile(const std::filesystem::path& path, std::string* bytes) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return Status::Io("cannot open " + path.filename().string());
+  std::ostringstream out;
+  out << in.rdbuf();
+  if (in.bad()) return Status::Io("cannot read " + path.filename().string());
+  *bytes = std::move(out).str();
+  return Status::Ok();
+}
+
+}  // namespace
+
+Status AtlasStore::SnapshotFiles(const std::string& user, const std::string& project,
+                                 int64_t snapshot_id, std::vector<SnapshotFile>* files) {
+  files->clear();
+  SnapshotInfo snapshot;
+  PBA_RETURN_IF_ERROR(ResolveSnapshot(user, project, std::to_string(snapshot_id), &snapshot));
+  std::lock_guard lock(mutex_);
+  for (const auto& [name, number] : snapshot.revisions) {
+    const StructureRef ref{project, name};
+    Caller caller;
+    StructureRow structure;
+    PBA_RETURN_IF_ERROR(EnterStructure(user, ref, Role::kViewer, &caller, &structure));
+    SnapshotFile file;
+    bool found = false;
+    PBA_RETURN_IF_ERROR(ReadRevision(ref, structure.id, number, &file.revision, &found));
+    if (!found) {
+      return Status::Internal(Describe(ref) + " has no revision " + std::to_string(number) +
+                              " although snapshot " + std::to_string(snapshot_id) + " pins it");
+    }
+    // Read through once: a damaged blob is an error here, not a wrong atlas.
+    std::string bytes;
+    PBA_RETURN_IF_ERROR(blobs_->Get(file.revision.content_sha256, &bytes));
+    file.blob = blobs_->PathOf(file.revision.content_sha256);
+    files->push_back(std::move(file));
+  }
+  return Status::Ok();
+}
+
+Status AtlasStore::Import(const std::string& user, const std::string& project,
+                          const std::string& job_id,
+                          const std::vector<ImportedStructure>& structures,
+                          const std::string& snapshot_name, const std::string& message,
+                          SnapshotInfo* snapshot, bool* replayed) {
+  *replayed = false;
+  if (job_id.empty()) return Status::InvalidArgument("job", "required");
+  if (structures.empty()) return Status::InvalidArgument("structures", "the import has none");
+  PBA_RETURN_IF_ERROR(CheckName("snapshot_name", snapshot_name));
+  PBA_RETURN_IF_ERROR(CheckMessage("message", message));
+  for (const ImportedStructure& s : structures) {
+    PBA_RETURN_IF_ERROR(CheckName("structure", s.name));
+    PBA_RETURN_IF_ERROR(CheckMetadata(s.metadata));
+  }
+  std::lock_guard lock(mutex_);
+  Transaction transaction(*db_);
+  PBA_RETURN_IF_ERROR(transaction.status());
+  Caller caller;
+  PBA_RETURN_IF_ERROR(Enter(user, project, Role::kEditor, &caller));
+  Statement stmt;
+  PBA_RETURN_IF_ERROR(db_->Prepare("SELECT id FROM snapshots WHERE import_job = ?", &stmt));
+  bool row = false;
+  PBA_RETURN_IF_ERROR(stmt.Bind(1, job_id).Step(&row));
+  if (row) {
+    const int64_t id = stmt.ColumnInt(0);
+    stmt = Statement();
+    *replayed = true;
+    bool found = false;
+    return LoadSnapshot(project, caller.project, id, true, snapshot, &found);
+  }
+  std::string taken;
+  int taken_count = 0;
+  for (const ImportedStructure& s : structures) {
+    PBA_RETURN_IF_ERROR(
+        db_->Prepare("SELECT 1 FROM structures WHERE project = ? AND name = ?", &stmt));
+    bool exists = false;
+    PBA_RETURN_IF_ERROR(stmt.Bind(1, caller.project).Bind(2, s.name).Step(&exists));
+    if (exists && ++taken_count <= 10) taken += (taken.empty() ? "" : ", ") + Quoted(s.name);
+  }
+  stmt = Statement();
+  if (taken_count > 0) {
+    return Status::FailedPrecondition(
+        "project " + Quoted(project) + " already has " + std::to_string(taken_count) +
+        " of the imported structures (" + taken + (taken_count > 10 ? ", ..." : "") +
+        "); import into another project, or edit them with checkout and commit");
+  }
+  for (const ImportedStructure& s : structures) {
+    std::string bytes;
+    PBA_RETURN_IF_ERROR(ReadWholeFile(s.file, &bytes));
+    if (bytes.empty() || bytes.size() > kMaxGeometryBytes) {
+      return Status::InvalidArgument("structures", "the geometry of " + Quoted(s.name) +
+                                                       " is empty or larger than 1 GiB");
+    }
+    // The blob before any row that names it.
+    Content content;
+    PBA_RETURN_IF_ERROR(blobs_->Put(bytes, &content.sha256));
+    content.format = s.format;
+    content.size_bytes = static_cast<int64_t>(bytes.size());
+    content.metadata = s.metadata;
+    PBA_RETURN_IF_ERROR(db_->Prepare(
+        "INSERT INTO structures (project, name, head_revision, metadata_etag, created_us, "
+        "created_by) VALUES (?, ?, NULL, '', ?, ?) RETURNING id",
+        &stmt));
+    PBA_RETURN_IF_ERROR(stmt.Bind(1, caller.project)
+                            .Bind(2, s.name)
+                            .Bind(3, clock_())
+                            .Bind(4, caller.user)
+                            .Step(&row));
+    StructureRow structure;
+    structure.id = stmt.ColumnInt(0);
+    stmt = Statement();
+    Revision revision;
+    PBA_RETURN_IF_ERROR(AppendRevision(caller, StructureRef{project, s.name}, structure, "create",
+                                       "structure.import", message, content, true, &revision));
+  }
+  PBA_RETURN_IF_ERROR(
+      db_->Prepare("INSERT INTO snapshots (project, name, created_us, author, import_job) "
+                   "VALUES (?, ?, ?, ?, ?) RETURNING id",
+                   &stmt));
+  PBA_RETURN_IF_ERROR(stmt.Bind(1, caller.project)
+                          .Bind(2, snapshot_name)
+                          .Bind(3, clock_())
+                          .Bind(4, caller.user)
+                          .Bind(5, job_id)
+                          .Step(&row));
+  const int64_t id = stmt.ColumnInt(0);
+  stmt = Statement();
+  PBA_RETURN_IF_ERROR(
+      db_->Prepare("INSERT INTO snapshot_members (snapshot, structure, revision) "
+                   "SELECT ?, id, head_revision FROM structures WHERE project = ?",
+                   &stmt));
+  PBA_RETURN_IF_ERROR(stmt.Bind(1, id).Bind(2, caller.project).Run());
+  const int pinned = db_->Changes();
+  stmt = Statement();
+  PBA_RETURN_IF_ERROR(Audit(caller.user, caller.project, "snapshot.create",
+                            ProjectTarget(project) + "/snapshots/" + std::to_string(id),
+                            std::nullopt,
+                            snapshot_name + ": " + std::to_string(pinned) +
+                                " structures, made by import job " + job_id));
+  bool found = false;
+  PBA_RETURN_IF_ERROR(LoadSnapshot(project, caller.project, id, true, snapshot, &found));
+  return transaction.Commit();
+}
+
+}  // namespace pba
