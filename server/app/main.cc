@@ -80,6 +80,26 @@ int main(int argc, char** argv) {
   app.add_option("--tls-cert", tls_cert,
                  "PEM certificate (chain) to serve TLS with; needs --tls-key");
   app.add_option("--tls-key", tls_key, "PEM private key of --tls-cert");
+  int64_t max_job_time_s = 0;
+  app.add_option("--max-job-time", max_job_time_s,
+                 "Wall-clock limit of a job [s]; a job may ask for less; 0: none")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  int max_attempts = 3;
+  app.add_option("--max-attempts", max_attempts,
+                 "Starts of a job (restarts re-queue running jobs) before it is given up")
+      ->check(CLI::Range(1, 100))
+      ->capture_default_str();
+  double solver_memory_gib = 0;
+  app.add_option("--solver-memory", solver_memory_gib,
+                 "Address-space limit of each pba-solve [GiB]; 0: none")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  double keep_results_days = 30;
+  app.add_option("--keep-results", keep_results_days,
+                 "Days a finished job's files are kept; 0: forever")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
   CLI::App* admin = app.add_subcommand("admin", "Offline administration of the data directory");
   admin->require_subcommand(1);
   CLI::App* create_user =
@@ -116,6 +136,10 @@ int main(int argc, char** argv) {
   options.max_running = max_running;
   options.tls_cert = tls_cert;
   options.tls_key = tls_key;
+  options.max_job_time = std::chrono::seconds(max_job_time_s);
+  options.max_attempts = max_attempts;
+  options.max_solver_memory_bytes = static_cast<int64_t>(solver_memory_gib * (1LL << 30));
+  options.keep_results = std::chrono::seconds(static_cast<int64_t>(keep_results_days * 86400));
   // Parallel solves share the cores rather than each taking all of them.
   if (max_running > 1) {
     options.solver_threads =

@@ -150,6 +150,7 @@ Status PbaServer::Start(const ServerOptions& options, std::unique_ptr<PbaServer>
   executor_options.max_job_time = options.max_job_time;
   executor_options.max_attempts = options.max_attempts;
   executor_options.max_solver_memory_bytes = options.max_solver_memory_bytes;
+  executor_options.keep_results = options.keep_results;
   server->atlas_jobs_ =
       std::make_unique<AtlasJobs>(*server->atlas_store_, server->atlas_hub_, *server->store_);
   executor_options.preparation = server->atlas_jobs_.get();

@@ -51,6 +51,9 @@ struct ServerOptions {
   int max_attempts = 3;
   // Address-space limit of each pba-solve [bytes]; 0: none.
   int64_t max_solver_memory_bytes = 0;
+  // How long a finished job's folder is kept (ExecutorOptions::keep_results);
+  // 0: forever.
+  std::chrono::seconds keep_results{0};
 };
 
 class PbaServer {

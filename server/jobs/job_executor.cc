@@ -6,6 +6,7 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <fstream>
 #include <sstream>
 #include <system_error>
@@ -210,8 +211,40 @@ void JobExecutor::Stop() {
   workers_.clear();
 }
 
+void JobExecutor::MaybeExpireResults() {
+  if (options_.keep_results.count() <= 0) return;
+  {
+    std::lock_guard lock(mutex_);
+    const auto now = std::chrono::steady_clock::now();
+    if (expired_once_ && now - last_expiry_ < std::chrono::hours(1)) return;
+    expired_once_ = true;
+    last_expiry_ = now;
+  }
+  const int64_t now_us = std::chrono::duration_cast<std::chrono::microseconds>(
+                             std::chrono::system_clock::now().time_since_epoch())
+                             .count();
+  const int64_t cutoff =
+      now_us - std::chrono::duration_cast<std::chrono::microseconds>(options_.keep_results).count();
+  const double days = options_.keep_results.count() / 86400.0;
+  char note[128];
+  std::snprintf(note, sizeof note, "result files removed %.3g days after the job ended", days);
+  std::vector<std::string> ids;
+  const Status status = store_.ExpireResults(cutoff, note, &ids);
+  if (!status.ok()) {
+    spdlog::error("cannot expire old results: {}", status.ToString());
+    return;
+  }
+  for (const std::string& id : ids) {
+    std::error_code ec;
+    fs::remove_all(options_.data_dir / "jobs" / id, ec);
+    if (ec) spdlog::warn("cannot remove the folder of job {}: {}", id, ec.message());
+  }
+  if (!ids.empty()) spdlog::info("removed the result files of {} old job(s)", ids.size());
+}
+
 void JobExecutor::WorkerLoop() {
   while (true) {
+    MaybeExpireResults();
     v1::Job job;
     v1::JobEvent started;
     std::shared_ptr<Run> run;
@@ -244,6 +277,12 @@ void JobExecutor::Execute(const v1::Job& job, const v1::JobEvent& started, Run& 
   int64_t sequence = started.sequence();
 
   auto finish = [&](RunOutcome outcome) {
+    // Inputs staged for the run (a snapshot's structures, an import's
+    // source) are copies of what the store keeps: not kept after it.
+    for (const char* staged : {"snapshot", "source"}) {
+      std::error_code ec;
+      fs::remove_all(dir / staged, ec);
+    }
     if (outcome.message.empty()) {
       outcome.message = outcome.state == v1::Job::SUCCEEDED ? "succeeded" : outcome.error;
     }

@@ -92,6 +92,10 @@ struct ExecutorOptions {
   int max_attempts = 3;
   // The address-space limit of each pba-solve [bytes]; 0: none.
   int64_t max_solver_memory_bytes = 0;
+  // A finished job's folder (result files, log) is removed this long after
+  // it ended, at start and then hourly; the job stays listed, its files
+  // listed no more and its `error` saying so. 0: kept forever.
+  std::chrono::seconds keep_results{0};
   // Stages and completes jobs on the atlas store; nullptr: scenes only.
   JobPreparation* preparation = nullptr;
 };
@@ -122,6 +126,8 @@ class JobExecutor : public Executor {
   struct Run;  // one running job, defined in the .cc
 
   void WorkerLoop();
+  // ExpireResults when the last run was an hour ago or more (any worker).
+  void MaybeExpireResults();
   void Execute(const v1::Job& job, const v1::JobEvent& started, Run& run);
 
   JobStore& store_;
@@ -134,6 +140,8 @@ class JobExecutor : public Executor {
   bool started_ = false;
   std::map<std::string, std::shared_ptr<Run>> running_;
   std::vector<std::thread> workers_;
+  std::chrono::steady_clock::time_point last_expiry_{};
+  bool expired_once_ = false;
 };
 
 }  // namespace pba

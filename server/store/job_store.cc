@@ -531,6 +531,41 @@ Status JobStore::RequeueRun(const std::string& id, int64_t sequence, const std::
   return transaction.Commit();
 }
 
+Status JobStore::ExpireResults(int64_t ended_before_us, const std::string& note,
+                               std::vector<std::string>* ids) {
+  std::lock_guard lock(mutex_);
+  ids->clear();
+  Transaction transaction(*db_);
+  PBA_RETURN_IF_ERROR(transaction.status());
+  Statement stmt;
+  PBA_RETURN_IF_ERROR(db_->Prepare(
+      "SELECT id FROM jobs WHERE end_time_us < ? AND state IN (?, ?, ?) AND EXISTS "
+      "(SELECT 1 FROM result_files WHERE job_id = jobs.id) ORDER BY number",
+      &stmt));
+  stmt.Bind(1, ended_before_us)
+      .Bind(2, StateName(v1::Job::SUCCEEDED))
+      .Bind(3, StateName(v1::Job::FAILED))
+      .Bind(4, StateName(v1::Job::CANCELLED));
+  while (true) {
+    bool row = false;
+    PBA_RETURN_IF_ERROR(stmt.Step(&row));
+    if (!row) break;
+    ids->push_back(stmt.ColumnText(0));
+  }
+  stmt = Statement();
+  for (const std::string& id : *ids) {
+    PBA_RETURN_IF_ERROR(db_->Prepare("DELETE FROM result_files WHERE job_id = ?", &stmt));
+    PBA_RETURN_IF_ERROR(stmt.Bind(1, id).Run());
+    PBA_RETURN_IF_ERROR(db_->Prepare(
+        "UPDATE jobs SET error = CASE WHEN error = '' THEN ? ELSE error || '; ' || ? END "
+        "WHERE id = ?",
+        &stmt));
+    PBA_RETURN_IF_ERROR(stmt.Bind(1, note).Bind(2, note).Bind(3, id).Run());
+  }
+  stmt = Statement();
+  return transaction.Commit();
+}
+
 Status JobStore::RequeueInterrupted(const std::string& message, std::vector<v1::JobEvent>* events) {
   std::lock_guard lock(mutex_);
   events->clear();

@@ -118,6 +118,12 @@ class JobStore {
   Status RequeueRun(const std::string& id, int64_t sequence, const std::string& message,
                     v1::JobEvent* event);
 
+  // Jobs that ended before `ended_before_us` and still have result files:
+  // their file rows are removed and `note` is put in their error (after any
+  // error they had); *ids lists them, for their folders to be removed.
+  Status ExpireResults(int64_t ended_before_us, const std::string& note,
+                       std::vector<std::string>* ids);
+
   // Every job left RUNNING by a server that stopped goes back to QUEUED with
   // an event carrying `message`. Call once at start-up, before the executor.
   Status RequeueInterrupted(const std::string& message, std::vector<v1::JobEvent>* events);

@@ -26,7 +26,8 @@ constexpr int kBigResultBytes = 5 * 512 * 1024;
 // pba-solve contract (SCENE --out DIR --progress=json) and acts on the scene
 // name:
 //   ok / big   progress lines, then a result dir (result.h5 = "hello\n" or
-//              kBigResultBytes bytes, result.xdmf, summary.json), exit 0
+//              kBigResultBytes bytes, result.xdmf, summary.json, and the
+//              staged snapshot's manifest.json when there is one), exit 0
 //   throttle   progress 0.10 0.11 0.12 0.20 in one phase, then as ok
 //   error      an ERROR line with a field, exit 3
 //   exit4      exit 4 without an ERROR line
@@ -53,6 +54,8 @@ succeed() {
     printf 'hello\n' > "$tmp/result.h5"
   fi
   echo '<Xdmf/>' > "$tmp/result.xdmf"
+  staged="$(dirname "$scene")/snapshot/manifest.json"
+  if [ -f "$staged" ]; then cp "$staged" "$tmp/manifest.json"; fi
   echo "{\"scene_name\":\"$name\",\"modelled\":{\"nodes\":\"27\"},\"future_field\":1}" > "$tmp/summary.json"
   mv "$tmp" "$out"
   echo "{\"kind\":\"DONE\",\"message\":\"$out\"}"
@@ -98,6 +101,23 @@ exit 1
   script.close();
   ::chmod(path.c_str(), 0755);
   return path;
+}
+
+// An atlas scene that passes validation, named `name`: two structures of
+// the atlas its source names (empty: a snapshot's), surface fixed.
+inline v1::Scene AtlasScene(const std::string& name) {
+  v1::Scene scene;
+  scene.set_name(name);
+  scene.mutable_geometry()->mutable_atlas()->set_voxel_size_mm(2);
+  scene.mutable_mesh()->set_element_size_mm(4);
+  auto* material = scene.mutable_material();
+  material->set_name("tissue");
+  material->mutable_linear_elastic()->set_youngs_modulus_pa(3000);
+  material->mutable_linear_elastic()->set_poissons_ratio(0.45);
+  auto* fixed = scene.add_boundary_conditions();
+  fixed->set_set("surface");
+  fixed->mutable_fixed();
+  return scene;
 }
 
 // A scene that passes validation, named `name`.

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <thread>
 
 #include "unit/server/server_test_support.h"
 
@@ -274,6 +275,110 @@ TEST_F(JobExecutorTest, PublishesLiveEventsToTheHub) {
   std::string phase;
   double progress = 0;
   EXPECT_FALSE(hub_.Live(id, &phase, &progress));
+}
+
+TEST_F(JobExecutorTest, ATimeLimitStopsTheJob) {
+  StartExecutor();
+  NewJob request;
+  request.owner = "alice";
+  request.scene = ValidScene("slow");
+  request.timeout_s = 1;
+  v1::Job job;
+  bool created = false;
+  ASSERT_TRUE(store_->CreateJob(request, &job, &created).ok());
+  executor_->Wake();
+  const v1::Job ended = WaitForState(job.id(), v1::Job::FAILED);
+  EXPECT_EQ(ended.error(), "stopped after its time limit of 1 s");
+  EXPECT_FALSE(fs::exists(dir_.path() / "jobs" / job.id() / "result"));
+}
+
+TEST_F(JobExecutorTest, TheServersTimeLimitBoundsTheJobs) {
+  options_.max_job_time = std::chrono::seconds(1);
+  const v1::Job job = RunToEnd("slow");
+  EXPECT_EQ(job.state(), v1::Job::FAILED);
+  EXPECT_EQ(job.error(), "stopped after its time limit of 1 s");
+}
+
+TEST_F(JobExecutorTest, GivesUpAJobStartedTooOften) {
+  options_.max_attempts = 1;
+  const std::string id = Submit("ok");
+  // One start that a server stop interrupted.
+  v1::Job claimed;
+  v1::JobEvent event;
+  bool ok = false;
+  ASSERT_TRUE(store_->ClaimNextQueued(&claimed, &event, &ok).ok());
+  std::vector<v1::JobEvent> requeued;
+  ASSERT_TRUE(store_->RequeueInterrupted("re-queued", &requeued).ok());
+  StartExecutor();
+  const v1::Job job = WaitForState(id, v1::Job::FAILED);
+  EXPECT_EQ(job.attempts(), 2);
+  EXPECT_NE(job.error().find("started 1 times without finishing"), std::string::npos)
+      << job.error();
+}
+
+// Stages a marker beside the scene and renames the scene; completes by
+// naming a snapshot. Fails either step on request.
+class FakePreparation : public JobPreparation {
+ public:
+  Status Stage(const v1::Job& job, const fs::path& dir, v1::Scene* scene,
+               std::vector<std::string>* input) override {
+    if (fail_stage) return Status::FailedPrecondition("the snapshot has no structures");
+    std::ofstream(dir / "staged.txt") << job.id();
+    staged_scene_name = scene->name();
+    return Status::Ok();
+  }
+  Status Complete(const v1::Job& job, const fs::path& result_dir, RunOutcome* outcome) override {
+    if (fail_complete) return Status::FailedPrecondition("'putamen' exists already");
+    completed_with_summary = fs::exists(result_dir / "summary.json");
+    outcome->snapshot.set_project("atlas");
+    outcome->snapshot.set_snapshot("12");
+    return Status::Ok();
+  }
+  bool fail_stage = false, fail_complete = false, completed_with_summary = false;
+  std::string staged_scene_name;
+};
+
+TEST_F(JobExecutorTest, APreparationStagesAndCompletesTheJob) {
+  FakePreparation preparation;
+  options_.preparation = &preparation;
+  const v1::Job job = RunToEnd("ok");
+  ASSERT_EQ(job.state(), v1::Job::SUCCEEDED) << job.error();
+  EXPECT_EQ(preparation.staged_scene_name, "ok");
+  EXPECT_TRUE(preparation.completed_with_summary);
+  EXPECT_EQ(job.snapshot().snapshot(), "12");
+  EXPECT_TRUE(fs::exists(dir_.path() / "jobs" / job.id() / "staged.txt"));
+}
+
+TEST_F(JobExecutorTest, APreparationsRefusalFailsTheJob) {
+  FakePreparation preparation;
+  options_.preparation = &preparation;
+  preparation.fail_stage = true;
+  v1::Job job = RunToEnd("ok");
+  EXPECT_EQ(job.state(), v1::Job::FAILED);
+  EXPECT_EQ(job.error(), "the snapshot has no structures");
+  preparation.fail_stage = false;
+  preparation.fail_complete = true;
+  job = RunToEnd("ok");
+  EXPECT_EQ(job.state(), v1::Job::FAILED);
+  EXPECT_EQ(job.error(), "'putamen' exists already");
+  EXPECT_EQ(job.result_files_size(), 0);
+}
+
+TEST_F(JobExecutorTest, RemovesTheFilesOfOldJobsAtStart) {
+  const v1::Job job = RunToEnd("ok");
+  ASSERT_EQ(job.state(), v1::Job::SUCCEEDED);
+  executor_->Stop();
+  executor_.reset();
+  const fs::path folder = dir_.path() / "jobs" / job.id();
+  ASSERT_TRUE(fs::exists(folder / "result" / "result.h5"));
+  std::this_thread::sleep_for(std::chrono::milliseconds(1100));
+  options_.keep_results = std::chrono::seconds(1);
+  StartExecutor();
+  ASSERT_TRUE(WaitUntil([&] { return !fs::exists(folder); }));
+  const v1::Job expired = Get(job.id());
+  EXPECT_EQ(expired.state(), v1::Job::SUCCEEDED);
+  EXPECT_EQ(expired.result_files_size(), 0);
+  EXPECT_NE(expired.error().find("removed"), std::string::npos) << expired.error();
 }
 
 }  // namespace

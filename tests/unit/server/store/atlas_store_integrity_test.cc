@@ -300,7 +300,8 @@ TEST(AtlasStoreUpgrade, AVersionOneDatabaseIsMigratedInPlace) {
         "CREATE TABLE schema_version (version INTEGER PRIMARY KEY, description TEXT NOT NULL, "
         "applied_time_us INTEGER NOT NULL);"
         "INSERT INTO schema_version VALUES (1, 'jobs, job events and result files', 0);"
-        "CREATE TABLE jobs (number INTEGER PRIMARY KEY AUTOINCREMENT, id TEXT NOT NULL UNIQUE);"
+        "CREATE TABLE jobs (number INTEGER PRIMARY KEY AUTOINCREMENT, id TEXT NOT NULL UNIQUE, "
+        "state TEXT NOT NULL DEFAULT 'SUCCEEDED');"
         "INSERT INTO jobs (id) VALUES ('j0000000001');"));
   }
   std::unique_ptr<AtlasStore> store;

@@ -382,5 +382,134 @@ TEST_F(JobStoreTest, SharesTheDatabaseWithTheAtlasStore) {
   EXPECT_EQ(user, "alice");
 }
 
+TEST_F(JobStoreTest, ClaimsHighestPriorityFirstThenOldest) {
+  NewJob low, high, high_later;
+  low.scene = ValidScene("low");
+  high.scene = ValidScene("high");
+  high_later.scene = ValidScene("high later");
+  high.priority = high_later.priority = 10;
+  low.priority = -5;
+  v1::Job job;
+  bool created = false;
+  for (NewJob* request : {&low, &high, &high_later}) {
+    request->owner = "alice";
+    ASSERT_TRUE(store_->CreateJob(*request, &job, &created).ok());
+  }
+  Create("normal");
+  std::vector<std::string> order;
+  for (int i = 0; i < 4; ++i) {
+    v1::Job claimed;
+    v1::JobEvent event;
+    bool ok = false;
+    ASSERT_TRUE(store_->ClaimNextQueued(&claimed, &event, &ok).ok());
+    ASSERT_TRUE(ok);
+    order.push_back(claimed.name());
+  }
+  EXPECT_EQ(order, (std::vector<std::string>{"high", "high later", "normal", "low"}));
+}
+
+TEST_F(JobStoreTest, KeepsSnapshotImportPriorityAndTimeLimit) {
+  v1::AtlasImport import;
+  import.set_project("atlas");
+  import.set_source(v1::AtlasImport::PLATES);
+  NewJob request;
+  request.owner = "alice";
+  request.priority = 3;
+  request.timeout_s = 60;
+  request.atlas_import = &import;
+  v1::Job job;
+  bool created = false;
+  ASSERT_TRUE(store_->CreateJob(request, &job, &created).ok());
+  EXPECT_EQ(job.name(), "import into atlas");
+  EXPECT_EQ(job.priority(), 3);
+  EXPECT_EQ(job.timeout_s(), 60);
+  EXPECT_EQ(job.atlas_import().source(), v1::AtlasImport::PLATES);
+
+  NewJob on_snapshot;
+  on_snapshot.owner = "bob";
+  on_snapshot.scene = ValidScene("on a snapshot");
+  on_snapshot.snapshot.set_project("atlas");
+  on_snapshot.snapshot.set_snapshot("7");
+  ASSERT_TRUE(store_->CreateJob(on_snapshot, &job, &created).ok());
+  const v1::Job stored = Get(job.id());
+  EXPECT_EQ(stored.snapshot().project(), "atlas");
+  EXPECT_EQ(stored.snapshot().snapshot(), "7");
+  EXPECT_FALSE(stored.has_atlas_import());
+  // The list view carries them too.
+  std::vector<v1::Job> jobs;
+  std::string next;
+  ASSERT_TRUE(store_->ListJobs(0, "", &jobs, &next).ok());
+  ASSERT_EQ(jobs.size(), 2u);
+  EXPECT_EQ(jobs[0].snapshot().snapshot(), "7");
+  EXPECT_EQ(jobs[1].priority(), 3);
+}
+
+TEST_F(JobStoreTest, AFailingBeforeCommitStoresNothing) {
+  NewJob request;
+  request.owner = "alice";
+  request.scene = ValidScene("never");
+  std::string seen_id;
+  request.before_commit = [&](const std::string& id) {
+    seen_id = id;
+    return Status::Io("the disk is full");
+  };
+  v1::Job job;
+  bool created = false;
+  const Status status = store_->CreateJob(request, &job, &created);
+  EXPECT_EQ(status.code(), Status::Code::kIo);
+  EXPECT_FALSE(created);
+  EXPECT_TRUE(IsWellFormedJobId(seen_id));
+  bool found = true;
+  ASSERT_TRUE(store_->GetJob(seen_id, JobView::kBasic, &job, &found).ok());
+  EXPECT_FALSE(found);
+}
+
+TEST_F(JobStoreTest, FindsAJobByItsOwnersRequestId) {
+  const v1::Job job = Create("cube", "key-1");
+  v1::Job found_job;
+  bool found = false;
+  ASSERT_TRUE(store_->FindByRequestId("key-1", "alice", &found_job, &found).ok());
+  EXPECT_TRUE(found);
+  EXPECT_EQ(found_job.id(), job.id());
+  ASSERT_TRUE(store_->FindByRequestId("key-2", "alice", &found_job, &found).ok());
+  EXPECT_FALSE(found);
+  EXPECT_EQ(store_->FindByRequestId("key-1", "bob", &found_job, &found).code(),
+            Status::Code::kAlreadyExists);
+}
+
+TEST_F(JobStoreTest, ExpiresTheFilesOfJobsThatEndedLongAgo) {
+  const v1::Job job = Create("old");
+  v1::Job claimed;
+  v1::JobEvent event;
+  bool ok = false;
+  ASSERT_TRUE(store_->ClaimNextQueued(&claimed, &event, &ok).ok());
+  RunOutcome outcome;
+  outcome.state = v1::Job::SUCCEEDED;
+  outcome.snapshot.set_project("atlas");
+  outcome.snapshot.set_snapshot("4");
+  v1::ResultFile file;
+  file.set_name("result.h5");
+  file.set_size_bytes(6);
+  file.set_sha256("00");
+  outcome.files.push_back(file);
+  ASSERT_TRUE(store_->FinishRun(job.id(), event.sequence() + 1, outcome, &event).ok());
+  EXPECT_EQ(Get(job.id()).snapshot().snapshot(), "4");
+  ASSERT_EQ(Get(job.id()).result_files_size(), 1);
+
+  std::vector<std::string> ids;
+  // Ended after the cutoff: kept.
+  ASSERT_TRUE(store_->ExpireResults(0, "removed", &ids).ok());
+  EXPECT_TRUE(ids.empty());
+  ASSERT_TRUE(store_->ExpireResults(INT64_MAX, "removed after 30 days", &ids).ok());
+  EXPECT_EQ(ids, (std::vector<std::string>{job.id()}));
+  const v1::Job expired = Get(job.id());
+  EXPECT_EQ(expired.state(), v1::Job::SUCCEEDED);
+  EXPECT_EQ(expired.result_files_size(), 0);
+  EXPECT_EQ(expired.error(), "removed after 30 days");
+  // Once is enough.
+  ASSERT_TRUE(store_->ExpireResults(INT64_MAX, "again", &ids).ok());
+  EXPECT_TRUE(ids.empty());
+}
+
 }  // namespace
 }  // namespace pba
