@@ -122,6 +122,17 @@ int ReportEnd(Connection& connection, const std::string& id) {
     case v1::Job::SUCCEEDED:
       std::printf("Job %s succeeded in %s.\n", job.id().c_str(),
                   FormatDuration(job.start_time(), job.end_time()).c_str());
+      if (job.has_atlas_import()) {
+        // An import's product is in the store, not in files.
+        const v1::SnapshotRef& made = job.snapshot();
+        std::printf("Imported into %s: snapshot %s (see pba atlas snapshot show -p %s %s)\n",
+                    made.project().c_str(), made.snapshot().c_str(), made.project().c_str(),
+                    made.snapshot().c_str());
+        for (const std::string& note : job.summary().modelled().notes()) {
+          std::printf("  %s\n", note.c_str());
+        }
+        break;
+      }
       if (job.has_summary()) std::printf("\n%s", codec::FormatSummary(job.summary()).c_str());
       std::printf("\nFetch the result files with: pba job fetch %s -o DIR\n", job.id().c_str());
       break;
