@@ -1,11 +1,23 @@
 #include "commands/atlas_shared.h"
 
+#include <cstdint>
 #include <cstdio>
+#include <random>
 
 #include "transfer.h"
 
 namespace pba::cli {
 namespace fs = std::filesystem;
+
+std::string RequestIdOr(const std::string& given) {
+  if (!given.empty()) return given;
+  std::random_device device;
+  std::mt19937_64 engine((static_cast<uint64_t>(device()) << 32) ^ device());
+  char buffer[40];
+  std::snprintf(buffer, sizeof buffer, "%016llx%016llx", static_cast<unsigned long long>(engine()),
+                static_cast<unsigned long long>(engine()));
+  return buffer;
+}
 
 std::string RoleText(v1::Role role) {
   switch (role) {
