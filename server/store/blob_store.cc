@@ -122,11 +122,21 @@ Status BlobStore::PutFile(const MappedFile& file, std::string* hash) {
     return Status::Io("cannot flush " + file.path().string() + ": " + std::strerror(errno));
   }
   ::fchmod(file.fd(), 0644);
-  if (::rename(file.path().c_str(), path.c_str()) != 0) {
-    if (errno != EXDEV) {
+  // The path must still name the file that was hashed: a name is only ever
+  // given to bytes whose hash was checked. Otherwise (never seen: uploads
+  // are created exclusively and only appended to) the checked bytes are
+  // copied from the mapping.
+  struct stat mapped {};
+  struct stat named {};
+  const bool same_file = ::fstat(file.fd(), &mapped) == 0 &&
+                         ::stat(file.path().c_str(), &named) == 0 &&
+                         mapped.st_dev == named.st_dev && mapped.st_ino == named.st_ino;
+  if (!same_file || ::rename(file.path().c_str(), path.c_str()) != 0) {
+    if (same_file && errno != EXDEV) {
       return Status::Io("cannot move " + file.path().string() + " to " + path.string() + ": " +
                         std::strerror(errno));
     }
+    // Across file systems a rename cannot move it: a copy, as Put() writes.
     PBA_RETURN_IF_ERROR(WriteFileAtomically(path, file.bytes()));
   } else {
     SyncDirectory(path.parent_path());
