@@ -3,7 +3,8 @@
 // characters (blobs/ab/cdef...) so no directory grows past 256 entries of
 // subdirectories. Writes go through WriteFileAtomically (temporary sibling,
 // fsync, rename), so a crash leaves a whole blob or none, plus at worst a
-// stray temporary file that Sweep() removes.
+// stray temporary file that Sweep() removes; PutFile() instead fsyncs and
+// renames the caller's own file, with the same guarantee.
 //
 // Content addressing makes blobs immutable by construction: the same name
 // always means the same bytes, and Get() checks that it still does, so a file
@@ -52,7 +53,8 @@ class BlobStore {
   // upload). Afterwards its old path names nothing, so whatever wrote it
   // cannot write into the blob. When the content is already stored intact,
   // the file is left where it is. Across file systems (rename fails with
-  // EXDEV) the bytes are copied as Put() does.
+  // EXDEV), or if the path no longer names the mapped file, the mapped
+  // bytes are copied as Put() does.
   Status PutFile(const MappedFile& file, std::string* hash);
 
   // Reads the blob `hash` and checks its content against the name. A missing
