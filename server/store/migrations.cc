@@ -224,9 +224,9 @@ CREATE UNIQUE INDEX structure_revisions_by_request
       // what the first one made instead of ALREADY_EXISTS or a second
       // snapshot. Keys are per user (another user's key never collides) and
       // shared by the three kinds. arguments_sha256 fingerprints the
-      // request's arguments (AtlasStore::CreateFingerprint), so a key reused
-      // for different arguments is told apart from a retry. Append-only, as
-      // the rows they point at are.
+      // request's arguments (CreateFingerprint, atlas_store_internal.h), so
+      // a key reused for different arguments is told apart from a retry.
+      // Append-only, as the rows they point at are.
       {5, "creates: the creating request's id", R"sql(
 CREATE TABLE create_requests (
   user INTEGER NOT NULL REFERENCES users (id),
