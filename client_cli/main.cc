@@ -106,6 +106,14 @@ int main(int argc, char** argv) {
   CLI::App* project_create =
       project->add_subcommand("create", "Create a project (you are its admin)");
   project_create->add_option("name", name, "Project name")->required();
+  // The creates' idempotency key (one command runs per invocation).
+  std::string create_request_id;
+  const auto add_request_id = [&create_request_id](CLI::App* cmd, const char* what) {
+    cmd->add_option("--request-id", create_request_id,
+                    std::string("Idempotency key: a rerun with the same key returns the ") + what +
+                        " the first run created (default: a fresh random key)");
+  };
+  add_request_id(project_create, "project");
   CLI::App* project_list = project->add_subcommand("list", "Projects you are a member of");
   add_paging(project_list);
   std::string project_name;
@@ -147,6 +155,7 @@ int main(int argc, char** argv) {
   atlas_create->add_option("--group", create.group, "Group path, e.g. cerebrum/basal ganglia");
   atlas_create->add_option("--material", create.material, "Material parameters: JSON or @FILE");
   atlas_create->add_option("-m,--message", create.message, "Why");
+  add_request_id(atlas_create, "revision");
   CheckoutArgs checkout;
   CLI::App* atlas_checkout = atlas->add_subcommand(
       "checkout", "Lock a structure and download its head for editing (writes FILE.pba-checkout)");
@@ -213,6 +222,7 @@ int main(int argc, char** argv) {
       atlas_snapshot->add_subcommand("create", "Pin the head of every structure of a project");
   add_project(snapshot_create, &snapshot_project);
   snapshot_create->add_option("--name", name, "A name for it (default: its UTC time)");
+  add_request_id(snapshot_create, "snapshot");
   CLI::App* snapshot_list = atlas_snapshot->add_subcommand("list", "Snapshots, newest first");
   add_project(snapshot_list, &snapshot_project);
   add_paging(snapshot_list);
@@ -293,13 +303,16 @@ int main(int argc, char** argv) {
   if (*login_cmd) return Login(connection, login);
   if (*logout_cmd) return Logout(connection);
   if (*whoami_cmd) return WhoAmI(connection);
-  if (*project_create) return CreateProject(connection, name);
+  if (*project_create) return CreateProject(connection, name, create_request_id);
   if (*project_list) return ListProjects(connection, page);
   if (*project_role) return SetRole(connection, project_name, user, role);
   if (*atlas_list) return ListStructures(connection, target.project, page);
   if (*atlas_show) return ShowStructure(connection, target);
   if (*atlas_history) return History(connection, target, page);
-  if (*atlas_create) return CreateStructure(connection, create);
+  if (*atlas_create) {
+    create.request_id = create_request_id;
+    return CreateStructure(connection, create);
+  }
   if (*atlas_checkout) return Checkout(connection, checkout);
   if (*atlas_commit) return Commit(connection, commit);
   if (*atlas_unlock) return Unlock(connection, unlock_what);
@@ -308,7 +321,9 @@ int main(int argc, char** argv) {
   if (*atlas_set) return SetMetadata(connection, metadata);
   if (*atlas_download) return Download(connection, download);
   if (*atlas_diff) return Diff(connection, target, diff_from, diff_to);
-  if (*snapshot_create) return CreateSnapshot(connection, snapshot_project, name);
+  if (*snapshot_create) {
+    return CreateSnapshot(connection, snapshot_project, name, create_request_id);
+  }
   if (*snapshot_list) return ListSnapshots(connection, snapshot_project, page);
   if (*snapshot_show) return ShowSnapshot(connection, snapshot_project, snapshot_which);
   if (*snapshot_export) {

@@ -279,6 +279,7 @@ int CreateStructure(Connection& connection, const CreateStructureArgs& args) {
   if (!args.material.empty() && !ReadMaterial(args.material, &material)) return kExitError;
   request.mutable_metadata()->set_material_json(material);
   request.set_message(args.message);
+  request.set_request_id(RequestIdOr(args.request_id));
   std::string upload_id;
   if (int code = UploadFile(connection, args.file, &upload_id); code != kExitOk) return code;
   request.set_upload_id(upload_id);

@@ -45,6 +45,7 @@ struct CreateStructureArgs {
   std::string group;
   std::string material;  // JSON, or @FILE
   std::string message;
+  std::string request_id;  // --request-id; a fresh one when empty
 };
 
 struct CheckoutArgs {
@@ -101,7 +102,9 @@ int Login(Connection& connection, const LoginArgs& args);
 int Logout(Connection& connection);
 int WhoAmI(Connection& connection);
 
-int CreateProject(Connection& connection, const std::string& name);
+// `request_id` (--request-id) makes a rerun return the project the first run
+// made; a fresh one is sent when empty. So for the other creates.
+int CreateProject(Connection& connection, const std::string& name, const std::string& request_id);
 int ListProjects(Connection& connection, const PageArgs& page);
 int SetRole(Connection& connection, const std::string& project, const std::string& user,
             const std::string& role);
@@ -122,7 +125,9 @@ int Download(Connection& connection, const DownloadArgs& args);
 // head).
 int Diff(Connection& connection, const StructureArgs& target, int64_t from, int64_t to);
 
-int CreateSnapshot(Connection& connection, const std::string& project, const std::string& name);
+// An empty `name` leaves the server to name it by its UTC time.
+int CreateSnapshot(Connection& connection, const std::string& project, const std::string& name,
+                   const std::string& request_id);
 int TagSnapshot(Connection& connection, const std::string& project, int64_t id,
                 const std::string& tag);
 int ShowSnapshot(Connection& connection, const std::string& project, const std::string& snapshot);

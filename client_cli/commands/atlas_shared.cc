@@ -1,8 +1,10 @@
 #include "commands/atlas_shared.h"
 
 #include <algorithm>
+#include <cstdint>
 #include <cstdio>
 #include <fstream>
+#include <random>
 
 #include "exit_codes.h"
 #include "files.h"
@@ -76,6 +78,16 @@ int UploadFile(Connection& connection, const std::string& file, std::string* upl
   }
   *upload_id = upload.id();
   return kExitOk;
+}
+
+std::string RequestIdOr(const std::string& given) {
+  if (!given.empty()) return given;
+  std::random_device device;
+  std::mt19937_64 engine((static_cast<uint64_t>(device()) << 32) ^ device());
+  char buffer[40];
+  std::snprintf(buffer, sizeof buffer, "%016llx%016llx", static_cast<unsigned long long>(engine()),
+                static_cast<unsigned long long>(engine()));
+  return buffer;
 }
 
 std::string RoleText(v1::Role role) {

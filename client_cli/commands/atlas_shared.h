@@ -11,6 +11,11 @@
 
 namespace pba::cli {
 
+// A fresh random request id (32 hex characters) for a create, so that the
+// server can tell a retried request from a new one; `given` when not empty
+// (--request-id, for scripts that rerun a command safely).
+std::string RequestIdOr(const std::string& given);
+
 // "viewer", "editor", "admin"; "-" when unset.
 // Uploads `file` (BeginUpload, then WriteUpload from where the server says
 // it is, retried up to three times); *upload_id names the complete upload.

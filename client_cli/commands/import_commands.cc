@@ -71,7 +71,7 @@ int ImportAtlas(Connection& connection, const ImportArgs& args) {
     f->set_name(file.filename().string());
     f->set_upload_id(upload_id);
   }
-  request.set_request_id(args.request_id.empty() ? NewRequestId() : args.request_id);
+  request.set_request_id(RequestIdOr(args.request_id));
   v1::Job job;
   {
     auto context = connection.UnaryContext();

@@ -9,21 +9,13 @@
 
 #include "codec/summary_text.h"
 #include "codec/yaml_codec.h"
+#include "commands/atlas_shared.h"
 #include "exit_codes.h"
 #include "output.h"
 #include "transfer.h"
 
 namespace pba::cli {
 namespace fs = std::filesystem;
-
-std::string NewRequestId() {
-  std::random_device device;
-  std::mt19937_64 engine((static_cast<uint64_t>(device()) << 32) ^ device());
-  char buffer[40];
-  std::snprintf(buffer, sizeof buffer, "%016llx%016llx", static_cast<unsigned long long>(engine()),
-                static_cast<unsigned long long>(engine()));
-  return buffer;
-}
 
 namespace {
 
@@ -196,7 +188,7 @@ int SubmitJob(Connection& connection, const SubmitArgs& args) {
   }
   request.set_priority(args.priority);
   request.set_timeout_s(args.timeout_s);
-  request.set_request_id(args.request_id.empty() ? NewRequestId() : args.request_id);
+  request.set_request_id(RequestIdOr(args.request_id));
   v1::Job job;
   auto context = connection.UnaryContext();
   grpc::Status status = connection.jobs().SubmitJob(context.get(), request, &job);

@@ -18,9 +18,6 @@ struct SubmitArgs {
   int timeout_s = 0;
 };
 
-// A fresh random key for an idempotent request (32 hex digits).
-std::string NewRequestId();
-
 // "PROJECT/SNAPSHOT" into a SnapshotRef; false (with a message on stderr)
 // when it is not of that form.
 bool ParseSnapshotRef(const std::string& text, v1::SnapshotRef* ref);

@@ -84,9 +84,10 @@ int WhoAmI(Connection& connection) {
   return kExitOk;
 }
 
-int CreateProject(Connection& connection, const std::string& name) {
+int CreateProject(Connection& connection, const std::string& name, const std::string& request_id) {
   v1::CreateProjectRequest request;
   request.set_name(name);
+  request.set_request_id(RequestIdOr(request_id));
   v1::Project project;
   auto context = connection.UnaryContext();
   grpc::Status status = connection.atlas().CreateProject(context.get(), request, &project);

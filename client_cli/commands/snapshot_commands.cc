@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <cctype>
 #include <cstdio>
-#include <ctime>
 #include <filesystem>
 
 #include "codec/yaml_codec.h"
@@ -17,20 +16,14 @@
 namespace pba::cli {
 namespace fs = std::filesystem;
 
-int CreateSnapshot(Connection& connection, const std::string& project, const std::string& name) {
+int CreateSnapshot(Connection& connection, const std::string& project, const std::string& name,
+                   const std::string& request_id) {
   v1::CreateSnapshotRequest request;
   request.set_project(project);
-  // Unnamed: named by its time, which is how people tell snapshots apart.
-  std::string named = name;
-  if (named.empty()) {
-    const std::time_t now = std::time(nullptr);
-    std::tm tm{};
-    gmtime_r(&now, &tm);
-    char buffer[48];
-    std::strftime(buffer, sizeof buffer, "snapshot %Y-%m-%d %H.%M.%S UTC", &tm);
-    named = buffer;
-  }
-  request.set_name(named);
+  // Unnamed, the server names it by its time. Left to the server so that a
+  // rerun with the same --request-id asks for the same thing.
+  request.set_name(name);
+  request.set_request_id(RequestIdOr(request_id));
   v1::Snapshot snapshot;
   auto context = connection.UnaryContext();
   grpc::Status status = connection.atlas().CreateSnapshot(context.get(), request, &snapshot);

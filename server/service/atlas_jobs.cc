@@ -1,6 +1,8 @@
 #include "service/atlas_jobs.h"
 
+#include <fcntl.h>
 #include <google/protobuf/util/time_util.h>
+#include <unistd.h>
 #include <spdlog/spdlog.h>
 
 #include <fstream>
@@ -11,6 +13,7 @@
 #include "atlas/structure_set.h"
 #include "service/geometry_check.h"
 #include "store/atomic_file.h"
+#include "store/mapped_file.h"
 
 namespace pba {
 namespace fs = std::filesystem;
@@ -50,6 +53,13 @@ std::string FileNameFor(const std::string& structure, GeometryFormat format, boo
       return stem + ".vtk";
   }
   return stem;
+}
+
+void SyncDirectory(const fs::path& dir) {
+  const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd < 0) return;
+  ::fsync(fd);
+  ::close(fd);
 }
 
 bool StartsWithGzipMagic(const fs::path& path) {
@@ -143,7 +153,7 @@ Status StageImportSource(UploadStore& uploads, const std::string& user,
   };
   for (int i = 0; i < request.files_size(); ++i) {
     const v1::ImportFile& file = request.files(i);
-    std::string content;
+    std::unique_ptr<MappedFile> content;
     Status taken = uploads.Take(user, file.upload_id(), &content);
     if (!taken.ok()) {
       const std::string field = "atlas_import.files[" + std::to_string(i) + "].upload_id";
@@ -158,11 +168,24 @@ Status StageImportSource(UploadStore& uploads, const std::string& user,
           return undo(taken);
       }
     }
-    const Status written = WriteFileAtomically(partial / file.name(), content);
-    if (!written.ok()) return undo(written);
+    // A second name for the checked bytes (a complete upload takes no more
+    // writes), so nothing is copied and a refused submit leaves every
+    // upload as it was; a copy where a link cannot be made.
+    // The chunks were written without fsync: on disk before the job is.
+    if (::fsync(content->fd()) != 0) {
+      return undo(Status::Io("cannot sync the upload of " + file.name()));
+    }
+    fs::create_hard_link(content->path(), partial / file.name(), ec);
+    if (ec) {
+      ec.clear();
+      const Status written = WriteFileAtomically(partial / file.name(), content->bytes());
+      if (!written.ok()) return undo(written);
+    }
   }
+  SyncDirectory(partial);
   fs::rename(partial, dir, ec);
   if (ec) return undo(Status::Io("cannot move " + dir.string() + " into place: " + ec.message()));
+  SyncDirectory(dir.parent_path());
   for (const v1::ImportFile& file : request.files()) {
     const Status removed = uploads.Remove(user, file.upload_id());
     if (!removed.ok()) spdlog::warn("cannot remove upload {}: {}", file.upload_id(), removed.ToString());

@@ -85,10 +85,10 @@ void AtlasServiceImpl::Publish(v1::AtlasEvent::Kind kind, const std::string& pro
 }
 
 Status AtlasServiceImpl::TakeUpload(const std::string& user, const std::string& upload_id,
-                                    GeometryFormat format, std::string* content) {
+                                    GeometryFormat format, std::unique_ptr<MappedFile>* content) {
   if (upload_id.empty()) return Status::InvalidArgument("upload_id", "required");
   PBA_RETURN_IF_ERROR(uploads_.Take(user, upload_id, content));
-  return CheckGeometryContent("upload_id", format, *content);
+  return CheckGeometryContent("upload_id", format, (*content)->bytes());
 }
 
 // --- users and projects ----------------------------------------------------
@@ -109,7 +109,8 @@ grpc::Status AtlasServiceImpl::CreateProject(grpc::ServerContext* context,
   std::string user;
   grpc::Status auth = Authenticate(kRpc, context, &user);
   if (!auth.ok()) return auth;
-  const Status status = store_.CreateProject(user, request->name());
+  // A replayed create (same request_id) answers as the first one did.
+  const Status status = store_.CreateProject(user, request->name(), request->request_id());
   if (!status.ok()) return Fail(kRpc, status);
   // The project as the caller's listing shows it (creation time included).
   std::vector<ProjectInfo> projects;
@@ -243,20 +244,36 @@ grpc::Status AtlasServiceImpl::CreateStructure(grpc::ServerContext* context,
   const StructureMetadata metadata = MetadataFromProto(request->metadata());
   if (status.ok()) status = CheckMetadata(metadata);
   if (status.ok()) status = CheckMessage("message", request->message());
-  std::string content;
-  if (status.ok()) status = TakeUpload(user, request->upload_id(), format, &content);
-  if (!status.ok()) return Fail(kRpc, status);
+  NewStructure create;
+  create.structure = ref;
+  create.metadata = metadata;
+  create.format = format;
+  create.message = request->message();
+  create.request_id = request->request_id();
+  // A retry of a create that landed is answered before its upload is looked
+  // at: the first create consumed it.
   Revision revision;
-  {
+  bool replayed = false;
+  if (status.ok()) status = store_.FindCreatedStructure(user, create, &revision, &replayed);
+  std::unique_ptr<MappedFile> content;
+  if (status.ok() && !replayed) status = TakeUpload(user, request->upload_id(), format, &content);
+  if (!status.ok()) return Fail(kRpc, status);
+  if (!replayed) {
+    create.geometry = content->bytes();
+    create.geometry_file = content.get();
     std::lock_guard lock(change_mutex_);
-    status =
-        store_.CreateStructure(user, ref, metadata, format, content, &revision, request->message());
+    status = store_.CreateStructure(user, create, &revision, &replayed);
     if (!status.ok()) return Fail(kRpc, status);
-    Publish(v1::AtlasEvent::STRUCTURE_CREATED, ref.project, ref.structure, revision.number, 0, user,
-            request->message());
+    if (!replayed) {
+      Publish(v1::AtlasEvent::STRUCTURE_CREATED, ref.project, ref.structure, revision.number, 0,
+              user, request->message());
+    }
   }
-  const Status removed = uploads_.Remove(user, request->upload_id());
-  if (!removed.ok()) spdlog::warn("{}: {}", kRpc, removed.ToString());
+  content.reset();
+  if (!request->upload_id().empty()) {
+    const Status removed = uploads_.Remove(user, request->upload_id());
+    if (!removed.ok()) spdlog::warn("{}: {}", kRpc, removed.ToString());
+  }
   RevisionToProto(revision, response);
   return grpc::Status::OK;
 }
@@ -395,10 +412,11 @@ grpc::Status AtlasServiceImpl::CommitStructure(grpc::ServerContext* context,
   if (status.ok() && commit.lock_id.empty()) {
     status = Status::InvalidArgument("lock_id", "required: acquire the structure's lock first");
   }
-  std::string content;
+  std::unique_ptr<MappedFile> content;
   if (status.ok()) status = TakeUpload(user, request->upload_id(), commit.format, &content);
   if (!status.ok()) return Fail(kRpc, status);
-  commit.geometry = content;
+  commit.geometry = content->bytes();
+  commit.geometry_file = content.get();
   Revision revision;
   {
     std::lock_guard lock(change_mutex_);
@@ -410,6 +428,7 @@ grpc::Status AtlasServiceImpl::CommitStructure(grpc::ServerContext* context,
               revision.number, 0, user, commit.message);
     }
   }
+  content.reset();
   const Status removed = uploads_.Remove(user, request->upload_id());
   if (!removed.ok()) spdlog::warn("{}: {}", kRpc, removed.ToString());
   RevisionToProto(revision, response);
@@ -656,10 +675,14 @@ grpc::Status AtlasServiceImpl::CreateSnapshot(grpc::ServerContext* context,
   if (!auth.ok()) return auth;
   SnapshotInfo snapshot;
   std::lock_guard lock(change_mutex_);
-  const Status status = store_.CreateSnapshot(user, request->project(), request->name(), &snapshot);
+  bool replayed = false;
+  const Status status = store_.CreateSnapshot(user, request->project(), request->name(), &snapshot,
+                                              request->request_id(), &replayed);
   if (!status.ok()) return Fail(kRpc, status);
-  Publish(v1::AtlasEvent::SNAPSHOT_CREATED, request->project(), "", 0, snapshot.id, user,
-          snapshot.name);
+  if (!replayed) {
+    Publish(v1::AtlasEvent::SNAPSHOT_CREATED, request->project(), "", 0, snapshot.id, user,
+            snapshot.name);
+  }
   SnapshotToProto(snapshot, response);
   return grpc::Status::OK;
 }

@@ -14,13 +14,19 @@
 // writes anyway, so this costs no concurrency the store had).
 //
 // Uploads are consumed by CreateStructure and CommitStructure: the complete
-// content is checked (size, SHA-256, then the format's minimal check of
-// geometry_check.h), stored as the new revision's blob, and the upload is
-// removed. A refused create or commit (stale base, lock) keeps the upload,
-// so the client can retry with it.
+// upload file is mapped read-only (never copied onto the heap), checked
+// (size, SHA-256, then the format's minimal check of geometry_check.h), and
+// moved into the blob store as the new revision's blob (renamed to its
+// content-addressed name, BlobStore::PutFile); then the rest of the upload
+// is removed. A create or commit refused before the blob is stored (a
+// failing check, stale base, lock, rights) keeps the upload whole, so the
+// client can retry with it. One that fails after (a database error) has
+// consumed it: begin again. A replayed create (same request_id) needs no
+// upload: one named is removed unused.
 #pragma once
 
 #include <chrono>
+#include <memory>
 #include <mutex>
 #include <string>
 
@@ -115,7 +121,7 @@ class AtlasServiceImpl final : public v1::AtlasService::Service {
   grpc::Status Authenticate(const char* rpc, grpc::ServerContext* context, std::string* user);
   // The verified, format-checked content of `user`'s complete upload.
   Status TakeUpload(const std::string& user, const std::string& upload_id, GeometryFormat format,
-                    std::string* content);
+                    std::unique_ptr<MappedFile>* content);
   void Publish(v1::AtlasEvent::Kind kind, const std::string& project, const std::string& structure,
                int64_t revision, int64_t snapshot, const std::string& user,
                const std::string& detail);

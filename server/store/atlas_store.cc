@@ -13,6 +13,7 @@
 namespace pba {
 namespace {
 
+using atlas_internal::CheckGeometry;
 using atlas_internal::Describe;
 using atlas_internal::ProjectTarget;
 using atlas_internal::Quoted;
@@ -30,15 +31,6 @@ int64_t SystemMicros() {
 // The metadata etag names the revision that last changed the metadata. It is
 // opaque to clients; the "m" keeps it from being mistaken for a head number.
 std::string MetadataEtag(int64_t revision_number) { return "m" + std::to_string(revision_number); }
-
-Status CheckGeometry(std::string_view geometry) {
-  if (geometry.empty()) return Status::InvalidArgument("geometry", "must not be empty");
-  if (geometry.size() > AtlasStore::kMaxGeometryBytes) {
-    return Status::InvalidArgument(
-        "geometry", "is larger than " + std::to_string(AtlasStore::kMaxGeometryBytes) + " bytes");
-  }
-  return Status::Ok();
-}
 
 constexpr char kRevisionColumns[] =
     "r.number, COALESCE(p.number, 0), u.name, r.time_us, r.kind, r.message, r.content_sha256, "
@@ -305,33 +297,6 @@ Status AtlasStore::CountUsers(int64_t* count) {
   return Status::Ok();
 }
 
-Status AtlasStore::CreateProject(const std::string& user, const std::string& project) {
-  PBA_RETURN_IF_ERROR(CheckName("project", project));
-  std::lock_guard lock(mutex_);
-  Transaction transaction(*db_);
-  PBA_RETURN_IF_ERROR(transaction.status());
-  int64_t user_id = 0;
-  PBA_RETURN_IF_ERROR(ActingUser(user, &user_id));
-  Statement stmt;
-  PBA_RETURN_IF_ERROR(db_->Prepare("SELECT 1 FROM projects WHERE name = ?", &stmt));
-  bool taken = false;
-  PBA_RETURN_IF_ERROR(stmt.Bind(1, project).Step(&taken));
-  if (taken) return Status::AlreadyExists("project " + Quoted(project) + " already exists");
-  PBA_RETURN_IF_ERROR(db_->Prepare(
-      "INSERT INTO projects (name, created_us, created_by) VALUES (?, ?, ?) RETURNING id", &stmt));
-  bool row = false;
-  PBA_RETURN_IF_ERROR(stmt.Bind(1, project).Bind(2, clock_()).Bind(3, user_id).Step(&row));
-  const int64_t project_id = stmt.ColumnInt(0);
-  stmt = Statement();
-  PBA_RETURN_IF_ERROR(
-      db_->Prepare("INSERT INTO members (project, user, role) VALUES (?, ?, 'admin')", &stmt));
-  PBA_RETURN_IF_ERROR(stmt.Bind(1, project_id).Bind(2, user_id).Run());
-  stmt = Statement();
-  PBA_RETURN_IF_ERROR(Audit(user_id, project_id, "project.create", ProjectTarget(project),
-                            std::nullopt, user + " is admin"));
-  return transaction.Commit();
-}
-
 Status AtlasStore::SetRole(const std::string& admin, const std::string& project,
                            const std::string& member, Role role) {
   PBA_RETURN_IF_ERROR(CheckName("member", member));
@@ -438,53 +403,7 @@ Status AtlasStore::ListProjects(const std::string& user, int page_size,
   return Status::Ok();
 }
 
-// --- structures ----------------------------------------------------------
-
-Status AtlasStore::CreateStructure(const std::string& user, const StructureRef& ref,
-                                   const StructureMetadata& metadata, GeometryFormat format,
-                                   std::string_view geometry, Revision* revision,
-                                   const std::string& message) {
-  PBA_RETURN_IF_ERROR(CheckName("structure", ref.structure));
-  PBA_RETURN_IF_ERROR(CheckMessage("message", message));
-  PBA_RETURN_IF_ERROR(CheckMetadata(metadata));
-  PBA_RETURN_IF_ERROR(CheckGeometry(geometry));
-  std::lock_guard lock(mutex_);
-  Transaction transaction(*db_);
-  PBA_RETURN_IF_ERROR(transaction.status());
-  Caller caller;
-  PBA_RETURN_IF_ERROR(Enter(user, ref.project, Role::kEditor, &caller));
-  Statement stmt;
-  PBA_RETURN_IF_ERROR(
-      db_->Prepare("SELECT 1 FROM structures WHERE project = ? AND name = ?", &stmt));
-  bool taken = false;
-  PBA_RETURN_IF_ERROR(stmt.Bind(1, caller.project).Bind(2, ref.structure).Step(&taken));
-  if (taken) return Status::AlreadyExists(Describe(ref) + " already exists");
-
-  // The blob before any row that names it.
-  Content content;
-  PBA_RETURN_IF_ERROR(blobs_->Put(geometry, &content.sha256));
-  content.format = format;
-  content.size_bytes = static_cast<int64_t>(geometry.size());
-  content.metadata = metadata;
-
-  PBA_RETURN_IF_ERROR(db_->Prepare(
-      "INSERT INTO structures (project, name, head_revision, metadata_etag, created_us, "
-      "created_by) VALUES (?, ?, NULL, '', ?, ?) RETURNING id",
-      &stmt));
-  bool row = false;
-  PBA_RETURN_IF_ERROR(stmt.Bind(1, caller.project)
-                          .Bind(2, ref.structure)
-                          .Bind(3, clock_())
-                          .Bind(4, caller.user)
-                          .Step(&row));
-  StructureRow structure;
-  structure.id = stmt.ColumnInt(0);
-  stmt = Statement();
-  PBA_RETURN_IF_ERROR(AppendRevision(caller, ref, structure, "create", "structure.create",
-                                     message.empty() ? "created" : message, content, true,
-                                     revision));
-  return transaction.Commit();
-}
+// --- structures (creation: atlas_store_creates.cc) ---------------------
 
 Status AtlasStore::GetStructure(const std::string& user, const StructureRef& ref,
                                 StructureInfo* info) {
@@ -582,9 +501,7 @@ Status AtlasStore::Commit(const std::string& user, const CommitRequest& request,
     PBA_RETURN_IF_ERROR(CheckMaterialJson("material_json", *request.material_json));
   }
   PBA_RETURN_IF_ERROR(CheckMessage("message", request.message));
-  if (request.request_id.size() > 200) {
-    return Status::InvalidArgument("request_id", "at most 200 characters");
-  }
+  PBA_RETURN_IF_ERROR(atlas_internal::CheckRequestId(request.request_id));
   std::lock_guard lock(mutex_);
   Transaction transaction(*db_);
   PBA_RETURN_IF_ERROR(transaction.status());
@@ -624,7 +541,7 @@ Status AtlasStore::Commit(const std::string& user, const CommitRequest& request,
     metadata_changed = true;
   }
   // The blob before the row that names it.
-  PBA_RETURN_IF_ERROR(blobs_->Put(request.geometry, &content.sha256));
+  PBA_RETURN_IF_ERROR(StoreGeometry(request.geometry, request.geometry_file, &content.sha256));
   content.format = request.format;
   content.size_bytes = static_cast<int64_t>(request.geometry.size());
   PBA_RETURN_IF_ERROR(AppendRevision(caller, ref, structure, "commit", "revision.commit",

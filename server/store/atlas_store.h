@@ -35,9 +35,20 @@
 // at worst an unreferenced blob (SweepBlobs removes it), never a row naming a
 // missing blob.
 //
-// Implemented in three files: atlas_store.cc (users, projects, structures,
-// revisions), atlas_store_locks.cc and atlas_store_snapshots.cc (snapshots,
-// tags, the audit listing).
+// Idempotent creates: CreateProject, CreateStructure and CreateSnapshot take
+// an optional request id (at most 200 characters), as Commit does. A create
+// whose request id `user` already used for a create with the same arguments
+// returns what that one made (*replayed set; nothing written, nothing
+// audited), even if, say, the name is taken by now (by it). The same id with
+// other arguments (another kind, name, metadata, ...) is kInvalidArgument
+// naming request_id: a client bug, which no retry fixes. Keys are per user:
+// another user's key never collides. The geometry is not compared (a retry
+// may come after its upload was consumed), only the other arguments.
+//
+// Implemented in four files: atlas_store.cc (users, roles, structures,
+// revisions), atlas_store_creates.cc (projects, structures, request ids),
+// atlas_store_locks.cc and atlas_store_snapshots.cc (snapshots, tags, the
+// audit listing).
 #pragma once
 
 #include <cstdint>
@@ -54,6 +65,7 @@
 #include "store/atlas_types.h"
 #include "store/blob_store.h"
 #include "store/database.h"
+#include "store/mapped_file.h"
 
 namespace pba {
 
@@ -81,6 +93,11 @@ struct CommitRequest {
   int64_t base_revision = 0;
   GeometryFormat format = GeometryFormat::kContoursJson;
   std::string_view geometry;
+  // When set, `geometry` is this file's content (a verified upload), and the
+  // file becomes the blob by rename instead of being copied
+  // (BlobStore::PutFile): once the blob is stored the file's old path is
+  // gone. A call refused before that (lock, base, rights) leaves it alone.
+  const MappedFile* geometry_file = nullptr;
   // Set to change the material with the geometry; otherwise the head's is kept.
   std::optional<std::string> material_json;
   std::string message;
@@ -89,6 +106,18 @@ struct CommitRequest {
   // returns the revision it made then, whatever the lock and head are now;
   // another user's is kAlreadyExists.
   std::string request_id;
+};
+
+// CreateStructure() arguments; `geometry` and `geometry_file` as in
+// CommitRequest.
+struct NewStructure {
+  StructureRef structure;
+  StructureMetadata metadata;
+  GeometryFormat format = GeometryFormat::kContoursJson;
+  std::string_view geometry;
+  const MappedFile* geometry_file = nullptr;
+  std::string message;     // the revision's ("created" when empty)
+  std::string request_id;  // see "Idempotent creates" above; empty: none
 };
 
 // UpdateMetadata() arguments: the fields to change (at least one).
@@ -120,8 +149,9 @@ class AtlasStore {
   // How many users exist (disabled ones included): the server creates its
   // first admin when there are none.
   Status CountUsers(int64_t* count);
-  // Creates a project with `user` as its admin.
-  Status CreateProject(const std::string& user, const std::string& project);
+  // Creates a project with `user` as its admin. `request_id` as above.
+  Status CreateProject(const std::string& user, const std::string& project,
+                       const std::string& request_id = "", bool* replayed = nullptr);
   // Sets `member`'s role in `project`; `admin` must be an admin there. The
   // last admin cannot be demoted (the project would have no one to manage it).
   Status SetRole(const std::string& admin, const std::string& project, const std::string& member,
@@ -141,6 +171,15 @@ class AtlasStore {
                          const StructureMetadata& metadata, GeometryFormat format,
                          std::string_view geometry, Revision* revision,
                          const std::string& message = "");
+  // The same with a request id and a geometry file (NewStructure).
+  Status CreateStructure(const std::string& user, const NewStructure& request, Revision* revision,
+                         bool* replayed = nullptr);
+  // The revision 1 an earlier create with request.request_id made, if
+  // `user` made one with the same arguments (*found); kInvalidArgument as
+  // CreateStructure for other arguments. Lets the service answer a retry
+  // without its upload, which the first create consumed.
+  Status FindCreatedStructure(const std::string& user, const NewStructure& request,
+                              Revision* revision, bool* found);
   Status GetStructure(const std::string& user, const StructureRef& ref, StructureInfo* info);
   // The project's structures by name (byte order); viewers may list. Paging
   // as ListProjects.
@@ -195,8 +234,12 @@ class AtlasStore {
 
   // --- snapshots ----------------------------------------------------------
   // Pins the head revision of every structure in `project` at one instant.
+  // An empty `name` names it by its UTC time ("snapshot 2026-01-01
+  // 00.00.00 UTC"). `request_id` as above (an empty name is compared as
+  // empty, so a retry without a name replays).
   Status CreateSnapshot(const std::string& user, const std::string& project,
-                        const std::string& name, SnapshotInfo* snapshot);
+                        const std::string& name, SnapshotInfo* snapshot,
+                        const std::string& request_id = "", bool* replayed = nullptr);
   // Names snapshot `snapshot_id` by `tag`, unique within the project
   // (kAlreadyExists otherwise). Tags are never all digits: those read as ids.
   Status Tag(const std::string& user, const std::string& project, int64_t snapshot_id,
@@ -284,6 +327,25 @@ class AtlasStore {
   // naming the head otherwise).
   Status CheckWrite(const Caller& caller, const StructureRef& ref, const StructureRow& structure,
                     const std::string& lock_id, int64_t base_revision);
+  // A create's request id row, when `user` has one for `request_id`.
+  struct CreateRequestRow {
+    std::string kind;  // project, structure, snapshot
+    std::string arguments_sha256;
+    int64_t project = 0;
+    int64_t structure = 0;
+    int64_t snapshot = 0;
+  };
+  // Looks up (user, request_id). With a row found: *found true, and
+  // kInvalidArgument naming request_id unless kind and fingerprint match.
+  Status FindCreateRequest(int64_t user, const std::string& request_id, const std::string& kind,
+                           const std::string& fingerprint, CreateRequestRow* row, bool* found);
+  // Records what the create with `request_id` made (nothing when empty).
+  Status RecordCreateRequest(int64_t user, const std::string& request_id, const std::string& kind,
+                             const std::string& fingerprint, int64_t project, int64_t structure,
+                             int64_t snapshot);
+  // The blob of new geometry: the file moved into place when given, else a
+  // copy of `geometry`.
+  Status StoreGeometry(std::string_view geometry, const MappedFile* file, std::string* sha256);
   // Appends revision head + 1 of `kind`, moves the head (and the metadata
   // etag when `metadata_changed`) and audits it as `action`.
   Status AppendRevision(const Caller& caller, const StructureRef& ref, const StructureRow& row,

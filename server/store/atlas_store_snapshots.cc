@@ -56,20 +56,43 @@ Status AtlasStore::LoadSnapshot(const std::string& project, int64_t project_id, 
 }
 
 Status AtlasStore::CreateSnapshot(const std::string& user, const std::string& project,
-                                  const std::string& name, SnapshotInfo* snapshot) {
-  PBA_RETURN_IF_ERROR(CheckName("name", name));
+                                  const std::string& name, SnapshotInfo* snapshot,
+                                  const std::string& request_id, bool* replayed) {
+  if (replayed != nullptr) *replayed = false;
+  if (!name.empty()) PBA_RETURN_IF_ERROR(CheckName("name", name));
+  PBA_RETURN_IF_ERROR(atlas_internal::CheckRequestId(request_id));
   std::lock_guard lock(mutex_);
   Transaction transaction(*db_);
   PBA_RETURN_IF_ERROR(transaction.status());
   Caller caller;
   PBA_RETURN_IF_ERROR(Enter(user, project, Role::kEditor, &caller));
+  // The name as asked for (empty included): a retry that leaves the name to
+  // the server must match, though the time it would be named by has moved.
+  const std::string fingerprint = atlas_internal::CreateFingerprint({project, name});
+  CreateRequestRow earlier;
+  bool found = false;
+  PBA_RETURN_IF_ERROR(
+      FindCreateRequest(caller.user, request_id, "snapshot", fingerprint, &earlier, &found));
+  if (found) {
+    if (replayed != nullptr) *replayed = true;
+    PBA_RETURN_IF_ERROR(
+        LoadSnapshot(project, caller.project, earlier.snapshot, true, snapshot, &found));
+    if (!found) return Status::Internal("the snapshot a create made cannot be read back");
+    return Status::Ok();
+  }
+  // Unnamed: named by its time, which is how people tell snapshots apart.
+  const std::string named =
+      name.empty() ? "snapshot " + atlas_internal::FormatSnapshotTime(clock_()) : name;
   Statement stmt;
   PBA_RETURN_IF_ERROR(db_->Prepare(
       "INSERT INTO snapshots (project, name, created_us, author) VALUES (?, ?, ?, ?) RETURNING id",
       &stmt));
   bool row = false;
-  PBA_RETURN_IF_ERROR(
-      stmt.Bind(1, caller.project).Bind(2, name).Bind(3, clock_()).Bind(4, caller.user).Step(&row));
+  PBA_RETURN_IF_ERROR(stmt.Bind(1, caller.project)
+                          .Bind(2, named)
+                          .Bind(3, clock_())
+                          .Bind(4, caller.user)
+                          .Step(&row));
   const int64_t id = stmt.ColumnInt(0);
   stmt = Statement();
   // One statement inside the transaction: every head is read at the same instant.
@@ -82,8 +105,9 @@ Status AtlasStore::CreateSnapshot(const std::string& user, const std::string& pr
   stmt = Statement();
   PBA_RETURN_IF_ERROR(Audit(caller.user, caller.project, "snapshot.create",
                             ProjectTarget(project) + "/snapshots/" + std::to_string(id),
-                            std::nullopt, name + ": " + std::to_string(pinned) + " structures"));
-  bool found = false;
+                            std::nullopt, named + ": " + std::to_string(pinned) + " structures"));
+  PBA_RETURN_IF_ERROR(
+      RecordCreateRequest(caller.user, request_id, "snapshot", fingerprint, caller.project, 0, id));
   PBA_RETURN_IF_ERROR(LoadSnapshot(project, caller.project, id, true, snapshot, &found));
   return transaction.Commit();
 }

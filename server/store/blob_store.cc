@@ -1,5 +1,11 @@
 #include "store/blob_store.h"
 
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
 #include <fstream>
 #include <memory>
 #include <sstream>
@@ -30,6 +36,16 @@ bool IsFanOutName(const std::string& name) {
 // WriteFileAtomically names its temporary files ".<name>.tmp-<pid>".
 bool IsTempName(const std::string& name) {
   return !name.empty() && name[0] == '.' && name.find(".tmp-") != std::string::npos;
+}
+
+// Makes a rename in `dir` durable. Best effort, as in WriteFileAtomically:
+// the rename itself has happened either way.
+void SyncDirectory(const fs::path& dir) {
+  const int fd = ::open(dir.empty() ? "." : dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd >= 0) {
+    ::fsync(fd);
+    ::close(fd);
+  }
 }
 
 }  // namespace
@@ -66,19 +82,66 @@ Status BlobStore::Put(std::string_view bytes, std::string* hash) {
   std::lock_guard lock(mutex_);
   const fs::path path = PathOf(computed);
   std::error_code ec;
-  if (fs::exists(path, ec)) {
-    // Reading back is cheaper than a second fsynced write, and it repairs a
-    // copy damaged on disk instead of trusting the name.
-    std::string stored;
-    bool intact = false;
-    if (ReadVerified(computed, &stored, &intact).ok() && intact) {
-      *hash = std::move(computed);
-      return Status::Ok();
-    }
+  if (StoredIntact(computed)) {
+    *hash = std::move(computed);
+    return Status::Ok();
   }
   fs::create_directories(path.parent_path(), ec);
   if (ec) return Status::Io("cannot create " + path.parent_path().string() + ": " + ec.message());
   PBA_RETURN_IF_ERROR(WriteFileAtomically(path, bytes));
+  *hash = std::move(computed);
+  return Status::Ok();
+}
+
+bool BlobStore::StoredIntact(const std::string& hash) {
+  // Hashing the stored copy is cheaper than a second fsynced write, and it
+  // repairs a copy damaged on disk instead of trusting the name. Through a
+  // mapping: a blob may be 1 GiB.
+  std::error_code ec;
+  if (!fs::exists(PathOf(hash), ec)) return false;
+  std::string actual;
+  return Sha256HexOfFile(PathOf(hash), &actual).ok() && actual == hash;
+}
+
+Status BlobStore::PutFile(const MappedFile& file, std::string* hash) {
+  std::string computed;
+  PBA_RETURN_IF_ERROR(file.Sha256Hex(&computed));
+  std::lock_guard lock(mutex_);
+  if (StoredIntact(computed)) {
+    *hash = std::move(computed);
+    return Status::Ok();
+  }
+  const fs::path path = PathOf(computed);
+  std::error_code ec;
+  fs::create_directories(path.parent_path(), ec);
+  if (ec) return Status::Io("cannot create " + path.parent_path().string() + ": " + ec.message());
+  // The upload's chunks were written without fsync: the content must be on
+  // disk before any name says it is there. Blobs are read by anyone who may
+  // read the data directory, as WriteFileAtomically's copies are.
+  if (::fsync(file.fd()) != 0) {
+    return Status::Io("cannot flush " + file.path().string() + ": " + std::strerror(errno));
+  }
+  ::fchmod(file.fd(), 0644);
+  // The path must still name the file that was hashed: a name is only ever
+  // given to bytes whose hash was checked. Otherwise (never seen: uploads
+  // are created exclusively and only appended to) the checked bytes are
+  // copied from the mapping.
+  struct stat mapped {};
+  struct stat named {};
+  const bool same_file = ::fstat(file.fd(), &mapped) == 0 &&
+                         ::stat(file.path().c_str(), &named) == 0 &&
+                         mapped.st_dev == named.st_dev && mapped.st_ino == named.st_ino;
+  if (!same_file || ::rename(file.path().c_str(), path.c_str()) != 0) {
+    if (same_file && errno != EXDEV) {
+      return Status::Io("cannot move " + file.path().string() + " to " + path.string() + ": " +
+                        std::strerror(errno));
+    }
+    // Across file systems a rename cannot move it: a copy, as Put() writes.
+    PBA_RETURN_IF_ERROR(WriteFileAtomically(path, file.bytes()));
+  } else {
+    SyncDirectory(path.parent_path());
+    SyncDirectory(file.path().parent_path());
+  }
   *hash = std::move(computed);
   return Status::Ok();
 }

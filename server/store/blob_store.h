@@ -3,7 +3,8 @@
 // characters (blobs/ab/cdef...) so no directory grows past 256 entries of
 // subdirectories. Writes go through WriteFileAtomically (temporary sibling,
 // fsync, rename), so a crash leaves a whole blob or none, plus at worst a
-// stray temporary file that Sweep() removes.
+// stray temporary file that Sweep() removes; PutFile() instead fsyncs and
+// renames the caller's own file, with the same guarantee.
 //
 // Content addressing makes blobs immutable by construction: the same name
 // always means the same bytes, and Get() checks that it still does, so a file
@@ -22,6 +23,7 @@
 #include <string_view>
 
 #include "pba/status.h"
+#include "store/mapped_file.h"
 
 namespace pba {
 
@@ -42,6 +44,18 @@ class BlobStore {
   // already stored intact is not written again; a stored copy that no longer
   // matches its name is replaced.
   Status Put(std::string_view bytes, std::string* hash);
+
+  // Stores the content of `file` by moving the file itself into place
+  // instead of writing a copy: it is fsynced, then renamed to its
+  // content-addressed name (a rename is atomic, so the name appears only
+  // with the whole content behind it), and the directories are fsynced. The
+  // file must be complete and no longer written by anyone (a finished
+  // upload). Afterwards its old path names nothing, so whatever wrote it
+  // cannot write into the blob. When the content is already stored intact,
+  // the file is left where it is. Across file systems (rename fails with
+  // EXDEV), or if the path no longer names the mapped file, the mapped
+  // bytes are copied as Put() does.
+  Status PutFile(const MappedFile& file, std::string* hash);
 
   // Reads the blob `hash` and checks its content against the name. A missing
   // blob is kNotFound; a damaged one (hash mismatch, truncation) is kIo naming
@@ -64,6 +78,8 @@ class BlobStore {
   explicit BlobStore(std::filesystem::path root) : root_(std::move(root)) {}
 
   Status ReadVerified(const std::string& hash, std::string* bytes, bool* intact);
+  // Whether the blob `hash` is stored and its content hashes to its name.
+  bool StoredIntact(const std::string& hash);
 
   std::mutex mutex_;
   const std::filesystem::path root_;

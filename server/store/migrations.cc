@@ -219,6 +219,37 @@ ALTER TABLE structure_revisions ADD COLUMN request_id TEXT;
 CREATE UNIQUE INDEX structure_revisions_by_request
   ON structure_revisions (structure, request_id) WHERE request_id IS NOT NULL;
 )sql"},
+      // Creates (projects, structures, snapshots) may carry the client's
+      // request id too, so that a create retried after a lost reply returns
+      // what the first one made instead of ALREADY_EXISTS or a second
+      // snapshot. Keys are per user (another user's key never collides) and
+      // shared by the three kinds. arguments_sha256 fingerprints the
+      // request's arguments (CreateFingerprint, atlas_store_internal.h), so
+      // a key reused for different arguments is told apart from a retry.
+      // Append-only, as the rows they point at are.
+      {5, "creates: the creating request's id", R"sql(
+CREATE TABLE create_requests (
+  user INTEGER NOT NULL REFERENCES users (id),
+  request_id TEXT NOT NULL CHECK (length(request_id) BETWEEN 1 AND 200),
+  kind TEXT NOT NULL CHECK (kind IN ('project', 'structure', 'snapshot')),
+  arguments_sha256 TEXT NOT NULL CHECK (length(arguments_sha256) = 64),
+  project INTEGER NOT NULL REFERENCES projects (id),
+  structure INTEGER REFERENCES structures (id),
+  snapshot INTEGER REFERENCES snapshots (id),
+  time_us INTEGER NOT NULL,
+  PRIMARY KEY (user, request_id),
+  CHECK ((kind = 'structure') = (structure IS NOT NULL)),
+  CHECK ((kind = 'snapshot') = (snapshot IS NOT NULL))
+) WITHOUT ROWID;
+CREATE TRIGGER create_requests_no_update BEFORE UPDATE ON create_requests
+BEGIN
+  SELECT RAISE(ABORT, 'create requests are immutable');
+END;
+CREATE TRIGGER create_requests_no_delete BEFORE DELETE ON create_requests
+BEGIN
+  SELECT RAISE(ABORT, 'create requests are never deleted');
+END;
+)sql"},
       // Jobs: a priority (the queue runs the highest first), a wall-clock
       // limit, the atlas snapshot a job ran against (or an import made), and
       // an import's request. A snapshot made by an import names its job, so

@@ -64,7 +64,8 @@ void UploadStore::RemoveFiles(const std::string& id) {
   fs::remove(root_ / (id + kMetaSuffix), ec);
 }
 
-Status UploadStore::Load(const std::string& user, const std::string& id, UploadInfo* info) {
+Status UploadStore::Load(const std::string& user, const std::string& id, UploadInfo* info,
+                         bool data_may_be_gone) {
   if (id.empty()) return Status::InvalidArgument("upload_id", "must not be empty");
   // Checked before the id becomes part of a path.
   if (!IsWellFormedId(id)) return NotFound(id.size() <= 64 ? id : id.substr(0, 64) + "...");
@@ -91,8 +92,10 @@ Status UploadStore::Load(const std::string& user, const std::string& id, UploadI
   }
   std::error_code ec;
   const auto received = fs::file_size(root_ / id, ec);
-  if (ec) return Status::Io("the data of upload " + id + " is missing: " + ec.message());
-  loaded.received_bytes = static_cast<int64_t>(received);
+  if (ec && !(data_may_be_gone && ec == std::errc::no_such_file_or_directory)) {
+    return Status::Io("the data of upload " + id + " is missing: " + ec.message());
+  }
+  loaded.received_bytes = ec ? 0 : static_cast<int64_t>(received);
   *info = std::move(loaded);
   return Status::Ok();
 }
@@ -177,19 +180,51 @@ Status UploadStore::Get(const std::string& user, const std::string& id, UploadIn
   return Load(user, id, info);
 }
 
-Status UploadStore::Take(const std::string& user, const std::string& id, std::string* content) {
-  UploadInfo info;
+Status UploadStore::LoadComplete(const std::string& user, const std::string& id, UploadInfo* info) {
   {
     std::lock_guard lock(mutex_);
-    PBA_RETURN_IF_ERROR(Load(user, id, &info));
+    PBA_RETURN_IF_ERROR(Load(user, id, info));
   }
-  if (info.received_bytes != info.size_bytes) {
-    return Status::FailedPrecondition("upload " + id +
-                                      " is incomplete: " + std::to_string(info.received_bytes) +
-                                      " of " + std::to_string(info.size_bytes) + " bytes received");
+  if (info->received_bytes != info->size_bytes) {
+    return Status::FailedPrecondition(
+        "upload " + id + " is incomplete: " + std::to_string(info->received_bytes) + " of " +
+        std::to_string(info->size_bytes) + " bytes received");
   }
-  // Read and hashed without the mutex (up to 1 GiB: seconds), so other
+  return Status::Ok();
+}
+
+Status UploadStore::Discard(const UploadInfo& info, const std::string& hash) {
+  {
+    std::lock_guard lock(mutex_);
+    RemoveFiles(info.id);
+  }
+  return Status::InvalidArgument("sha256", "the content of upload " + info.id + " hashes to " +
+                                               hash + ", not the announced " + info.sha256 +
+                                               "; the upload is discarded, begin again");
+}
+
+Status UploadStore::Take(const std::string& user, const std::string& id,
+                         std::unique_ptr<MappedFile>* content) {
+  UploadInfo info;
+  PBA_RETURN_IF_ERROR(LoadComplete(user, id, &info));
+  // Mapped and hashed without the mutex (up to 1 GiB: seconds), so other
   // uploads go on meanwhile. A complete upload takes no more writes.
+  std::unique_ptr<MappedFile> file;
+  PBA_RETURN_IF_ERROR(MappedFile::Open(root_ / id, &file));
+  if (static_cast<int64_t>(file->size()) != info.size_bytes) {
+    return Status::Io("upload " + id + " changed size while it was being read");
+  }
+  std::string hash;
+  PBA_RETURN_IF_ERROR(file->Sha256Hex(&hash));
+  if (hash != info.sha256) return Discard(info, hash);
+  *content = std::move(file);
+  return Status::Ok();
+}
+
+Status UploadStore::Take(const std::string& user, const std::string& id, std::string* content) {
+  content->clear();
+  UploadInfo info;
+  PBA_RETURN_IF_ERROR(LoadComplete(user, id, &info));
   std::ifstream in(root_ / id, std::ios::binary);
   content->assign(static_cast<size_t>(info.size_bytes), '\0');
   if (!in.read(content->data(), info.size_bytes)) {
@@ -199,14 +234,8 @@ Status UploadStore::Take(const std::string& user, const std::string& id, std::st
   std::string hash;
   PBA_RETURN_IF_ERROR(Sha256Hex(*content, &hash));
   if (hash != info.sha256) {
-    {
-      std::lock_guard lock(mutex_);
-      RemoveFiles(id);
-    }
     content->clear();
-    return Status::InvalidArgument("sha256", "the content of upload " + id + " hashes to " + hash +
-                                                 ", not the announced " + info.sha256 +
-                                                 "; the upload is discarded, begin again");
+    return Discard(info, hash);
   }
   return Status::Ok();
 }
@@ -214,7 +243,7 @@ Status UploadStore::Take(const std::string& user, const std::string& id, std::st
 Status UploadStore::Remove(const std::string& user, const std::string& id) {
   std::lock_guard lock(mutex_);
   UploadInfo info;
-  const Status loaded = Load(user, id, &info);
+  const Status loaded = Load(user, id, &info, /*data_may_be_gone=*/true);
   if (loaded.code() == Status::Code::kNotFound) return Status::Ok();
   PBA_RETURN_IF_ERROR(loaded);
   RemoveFiles(id);

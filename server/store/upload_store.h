@@ -24,7 +24,7 @@
 // content whose hash is not the announced one kInvalidArgument (field
 // "sha256"), after which the upload is removed (it can never succeed).
 //
-// Thread-safe: one mutex around every file operation but Take()'s reading
+// Thread-safe: one mutex around every file operation but Take()'s mapping
 // and hashing. Writes of different uploads therefore take turns; a chunk is
 // at most kMaxChunkBytes.
 #pragma once
@@ -39,6 +39,7 @@
 #include <string_view>
 
 #include "pba/status.h"
+#include "store/mapped_file.h"
 
 namespace pba {
 
@@ -75,11 +76,20 @@ class UploadStore {
   Status Write(const std::string& user, const std::string& id, int64_t offset,
                std::string_view data, UploadInfo* info);
   Status Get(const std::string& user, const std::string& id, UploadInfo* info);
-  // The complete upload's content, checked against the announced size and
-  // hash. The upload stays until Remove(): the caller removes it once the
+  // The complete upload's data file, mapped read-only and checked against
+  // the announced size and hash, so that a large upload is never copied onto
+  // the heap. The upload stays until Remove(): the caller removes it once the
   // content is safely stored elsewhere, so a refused commit can be retried.
+  // The caller may move the data file away (BlobStore::PutFile renames it
+  // into the blob store): a complete upload takes no more writes, and once
+  // moved its path names nothing, so no later Write() can reach the bytes;
+  // Remove() then removes what is left.
+  Status Take(const std::string& user, const std::string& id, std::unique_ptr<MappedFile>* content);
+  // As above, read into a string (the whole upload on the heap: for small
+  // uploads, tests, and measuring what the mapping saves).
   Status Take(const std::string& user, const std::string& id, std::string* content);
-  // Removes the upload; an upload already gone is not an error.
+  // Removes the upload (also one whose data file was moved away); an upload
+  // already gone is not an error.
   Status Remove(const std::string& user, const std::string& id);
   // Removes expired uploads and stray files (a data file without its .meta,
   // temporary files). *removed counts the files removed.
@@ -90,9 +100,16 @@ class UploadStore {
       : root_(std::move(root)), clock_(std::move(clock)) {}
 
   // Loads `id`'s metadata and received size; kNotFound unless it exists,
-  // belongs to `user` and has not expired (an expired one is removed).
-  Status Load(const std::string& user, const std::string& id, UploadInfo* info);
+  // belongs to `user` and has not expired (an expired one is removed). A
+  // missing data file is kIo, unless `data_may_be_gone` (then received 0).
+  Status Load(const std::string& user, const std::string& id, UploadInfo* info,
+              bool data_may_be_gone = false);
   void RemoveFiles(const std::string& id);
+  // Load(), then kFailedPrecondition unless every byte has arrived.
+  Status LoadComplete(const std::string& user, const std::string& id, UploadInfo* info);
+  // Removes an upload whose content hashes to `hash`, not the announced
+  // hash: it can never succeed. Returns the refusal.
+  Status Discard(const UploadInfo& info, const std::string& hash);
 
   std::mutex mutex_;
   const std::filesystem::path root_;

@@ -283,6 +283,61 @@ TEST_F(CliAtlasTest, ACommitRerunAfterALostReplyGetsTheSameRevision) {
       << list.out;
 }
 
+// Creates rerun with the same --request-id (a script retried after a lost
+// reply) make nothing twice.
+TEST_F(CliAtlasTest, CreatesRerunWithTheSameRequestIdMakeOneThing) {
+  SetUpPeople();
+  const auto count = [](const std::string& text, const std::string& what) {
+    int n = 0;
+    for (size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+    return n;
+  };
+  for (int run = 0; run < 2; ++run) {
+    const RunResult project =
+        PbaAs("alice", {"project", "create", "scratch", "--request-id", "script-p1"});
+    EXPECT_EQ(project.exit_code, 0) << project.out << project.err;
+    const RunResult structure =
+        PbaAs("alice", {"atlas", "create", "-p", "demo", "Putamen",
+                        Write("putamen.json", Contours(3)).string(), "--request-id", "script-s1"});
+    EXPECT_EQ(structure.exit_code, 0) << structure.out << structure.err;
+    EXPECT_NE(structure.out.find("revision 1"), std::string::npos) << structure.out;
+  }
+  // Without a key, a second create is a conflict.
+  const RunResult taken = PbaAs("alice", {"project", "create", "scratch"});
+  EXPECT_EQ(taken.exit_code, kConflict) << taken.out << taken.err;
+
+  // Unnamed snapshots, named by the server: the rerun is the same one.
+  std::string ids[2];
+  for (int run = 0; run < 2; ++run) {
+    const RunResult snapshot = PbaAs("alice", {"--json", "atlas", "snapshot", "create", "-p",
+                                               "demo", "--request-id", "script-n1"});
+    ASSERT_EQ(snapshot.exit_code, 0) << snapshot.out << snapshot.err;
+    std::smatch id;
+    ASSERT_TRUE(std::regex_search(snapshot.out, id, std::regex("\"id\": \"(\\d+)\"")))
+        << snapshot.out;
+    ids[run] = id[1];
+  }
+  EXPECT_EQ(ids[0], ids[1]);
+  // The same key for another request is refused, naming it.
+  const RunResult reused = PbaAs("alice", {"atlas", "snapshot", "create", "-p", "demo", "--name",
+                                           "other", "--request-id", "script-n1"});
+  EXPECT_EQ(reused.exit_code, kInvalid) << reused.out << reused.err;
+  EXPECT_NE(reused.err.find("request_id"), std::string::npos) << reused.err;
+  // A fresh key each time when none is given: two snapshots.
+  ASSERT_EQ(PbaAs("alice", {"atlas", "snapshot", "create", "-p", "demo", "--name", "a"}).exit_code,
+            0);
+  ASSERT_EQ(PbaAs("alice", {"atlas", "snapshot", "create", "-p", "demo", "--name", "a"}).exit_code,
+            0);
+
+  const RunResult audit = PbaAs("admin", {"--json", "atlas", "audit", "-p", "demo", "--all"});
+  ASSERT_EQ(audit.exit_code, 0) << audit.err;
+  EXPECT_EQ(count(audit.out, "\"snapshot.create\""), 3) << audit.out;
+  EXPECT_EQ(count(audit.out, "\"structure.create\""), 1) << audit.out;
+  const RunResult scratch = PbaAs("alice", {"--json", "atlas", "audit", "-p", "scratch"});
+  ASSERT_EQ(scratch.exit_code, 0) << scratch.err;
+  EXPECT_EQ(count(scratch.out, "\"project.create\""), 1) << scratch.out;
+}
+
 // A watcher sees another person's changes as they happen.
 TEST_F(CliAtlasTest, WatchShowsAnotherPersonsChanges) {
   SetUpPeople();

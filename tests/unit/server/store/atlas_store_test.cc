@@ -644,3 +644,136 @@ TEST_F(AtlasStoreTest, TheAuditLogNamesWhoDidWhatToWhichRevisionNewestFirst) {
 
 }  // namespace
 }  // namespace pba::store_test
+
+namespace pba::store_test {
+namespace {
+
+int64_t CreateRequestRows(Database& db) {
+  Statement stmt;
+  EXPECT_TRUE(db.Prepare("SELECT COUNT(*) FROM create_requests", &stmt).ok());
+  bool row = false;
+  EXPECT_TRUE(stmt.Step(&row).ok());
+  return stmt.ColumnInt(0);
+}
+
+TEST_F(AtlasStoreTest, ARepeatedCreateProjectRequestIdReplaysPerUser) {
+  bool replayed = true;
+  ASSERT_OK(store_->CreateProject("bob", "cortex", "req-1", &replayed));
+  EXPECT_FALSE(replayed);
+  const std::map<std::string, int64_t> before = RowCounts();
+  // A retry, even after the name is taken (by it): nothing written.
+  ASSERT_OK(store_->CreateProject("bob", "cortex", "req-1", &replayed));
+  EXPECT_TRUE(replayed);
+  EXPECT_EQ(RowCounts(), before);
+  // Without a key the name is taken.
+  EXPECT_STATUS(store_->CreateProject("bob", "cortex"), Status::Code::kAlreadyExists, "cortex");
+  // The key with other arguments, or for another kind of create, is a client bug.
+  EXPECT_STATUS(store_->CreateProject("bob", "cerebellum", "req-1"), Status::Code::kInvalidArgument,
+                "request_id");
+  SnapshotInfo snapshot;
+  EXPECT_STATUS(store_->CreateSnapshot("bob", "atlas", "s", &snapshot, "req-1"),
+                Status::Code::kInvalidArgument,
+                "request_id: you already used it to create a project");
+  EXPECT_EQ(RowCounts(), before);
+  // Another user's key does not collide.
+  ASSERT_OK(store_->CreateProject("dave", "brainstem", "req-1", &replayed));
+  EXPECT_FALSE(replayed);
+  EXPECT_STATUS(store_->CreateProject("dave", "x", std::string(201, 'k')),
+                Status::Code::kInvalidArgument, "request_id");
+  auto db = RawDatabase();
+  EXPECT_EQ(CreateRequestRows(*db), 2);
+  // The rows are append-only, as the audit log is.
+  EXPECT_FALSE(db->Exec("UPDATE create_requests SET request_id = 'x'").ok());
+  EXPECT_FALSE(db->Exec("DELETE FROM create_requests").ok());
+}
+
+TEST_F(AtlasStoreTest, ARepeatedCreateStructureRequestIdReturnsRevisionOne) {
+  NewStructure request;
+  request.structure = {"atlas", "amygdala"};
+  request.metadata = Metadata();
+  request.format = GeometryFormat::kContoursJson;
+  request.geometry = "outline";
+  request.message = "traced";
+  request.request_id = "create-9c1e";
+  Revision first;
+  bool replayed = true;
+  ASSERT_OK(store_->CreateStructure("bob", request, &first, &replayed));
+  EXPECT_FALSE(replayed);
+  const int creates = AuditCounts()["structure.create"];
+  const std::map<std::string, int64_t> before = RowCounts();
+
+  // The geometry is not compared: a retry may not have its upload any more.
+  now_ += kSecond;
+  request.geometry = "other bytes";
+  Revision again;
+  ASSERT_OK(store_->CreateStructure("bob", request, &again, &replayed));
+  EXPECT_TRUE(replayed);
+  EXPECT_EQ(again.number, 1);
+  EXPECT_EQ(again.time_us, first.time_us);
+  EXPECT_EQ(again.content_sha256, Hash("outline"));
+  bool found = false;
+  ASSERT_OK(store_->FindCreatedStructure("bob", request, &again, &found));
+  EXPECT_TRUE(found);
+  EXPECT_EQ(again.content_sha256, first.content_sha256);
+  EXPECT_EQ(RowCounts(), before);
+  EXPECT_EQ(AuditCounts()["structure.create"], creates);
+
+  // Other arguments under the same key.
+  NewStructure changed = request;
+  changed.message = "traced again";
+  EXPECT_STATUS(store_->CreateStructure("bob", changed, &again), Status::Code::kInvalidArgument,
+                "request_id");
+  EXPECT_STATUS(store_->FindCreatedStructure("bob", changed, &again, &found),
+                Status::Code::kInvalidArgument, "request_id");
+  changed = request;
+  changed.metadata.colour.r = 1;
+  EXPECT_STATUS(store_->CreateStructure("bob", changed, &again), Status::Code::kInvalidArgument,
+                "request_id");
+  changed = request;
+  changed.structure.structure = "thalamus";
+  EXPECT_STATUS(store_->CreateStructure("bob", changed, &again), Status::Code::kInvalidArgument,
+                "request_id");
+  EXPECT_EQ(RowCounts(), before);
+  // Rights come first: a viewer replays nothing.
+  EXPECT_STATUS(store_->FindCreatedStructure("carol", request, &again, &found),
+                Status::Code::kPermissionDenied, "carol");
+  // Another user's identical key is a create of its own (the name is taken).
+  EXPECT_STATUS(store_->CreateStructure("alice", request, &again), Status::Code::kAlreadyExists,
+                "amygdala");
+  ASSERT_OK(store_->FindCreatedStructure("alice", request, &again, &found));
+  EXPECT_FALSE(found);
+}
+
+TEST_F(AtlasStoreTest, ARepeatedCreateSnapshotRequestIdReturnsTheSameSnapshot) {
+  SnapshotInfo first;
+  bool replayed = true;
+  // Unnamed: named by its time.
+  ASSERT_OK(store_->CreateSnapshot("bob", "atlas", "", &first, "snap-1", &replayed));
+  EXPECT_FALSE(replayed);
+  EXPECT_EQ(first.name, "snapshot 2026-01-01 00.00.00 UTC");
+  const std::map<std::string, int64_t> before = RowCounts();
+  // A retry later, after the heads moved, is the same snapshot.
+  now_ += 90 * kSecond;
+  const LockInfo lock = Lock("bob");
+  ASSERT_OK(Commit("bob", lock.lock_id, 1, "v2"));
+  const std::map<std::string, int64_t> after_commit = RowCounts();
+  SnapshotInfo again;
+  ASSERT_OK(store_->CreateSnapshot("bob", "atlas", "", &again, "snap-1", &replayed));
+  EXPECT_TRUE(replayed);
+  EXPECT_EQ(again.id, first.id);
+  EXPECT_EQ(again.name, first.name);
+  EXPECT_EQ(again.revisions, first.revisions);
+  EXPECT_EQ(RowCounts(), after_commit);
+  EXPECT_EQ(AuditCounts()["snapshot.create"], 1);
+  EXPECT_STATUS(store_->CreateSnapshot("bob", "atlas", "named", &again, "snap-1"),
+                Status::Code::kInvalidArgument, "request_id");
+  // alice's "snap-1" is hers.
+  ASSERT_OK(store_->CreateSnapshot("alice", "atlas", "", &again, "snap-1", &replayed));
+  EXPECT_FALSE(replayed);
+  EXPECT_NE(again.id, first.id);
+  EXPECT_EQ(again.name, "snapshot 2026-01-01 00.01.30 UTC");
+  EXPECT_EQ(before.at("snapshots") + 1, RowCounts().at("snapshots"));
+}
+
+}  // namespace
+}  // namespace pba::store_test

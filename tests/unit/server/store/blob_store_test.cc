@@ -150,5 +150,57 @@ TEST_F(BlobStoreTest, SweepRemovesUnreferencedBlobsAndStrayTemporaryFiles) {
   EXPECT_EQ(report.kept_blobs, 1);
 }
 
+TEST_F(BlobStoreTest, PutFileMovesTheCheckedFileIntoItsName) {
+  const fs::path source = dir_.path() / "upload";
+  Overwrite(source, "abc");
+  std::unique_ptr<MappedFile> file;
+  ASSERT_TRUE(MappedFile::Open(source, &file).ok());
+  EXPECT_EQ(file->bytes(), "abc");
+  std::string hash;
+  ASSERT_TRUE(store_->PutFile(*file, &hash).ok());
+  EXPECT_EQ(hash, kAbcHash);
+  EXPECT_FALSE(fs::exists(source));
+  EXPECT_EQ(Files(), std::vector<std::string>{std::string("ba/") + (kAbcHash + 2)});
+  std::string bytes;
+  ASSERT_TRUE(store_->Get(kAbcHash, &bytes).ok());
+  EXPECT_EQ(bytes, "abc");
+
+  // Stored already: the file stays where it is, the blob as it was.
+  Overwrite(source, "abc");
+  ASSERT_TRUE(MappedFile::Open(source, &file).ok());
+  ASSERT_TRUE(store_->PutFile(*file, &hash).ok());
+  EXPECT_TRUE(fs::exists(source));
+  EXPECT_EQ(Files().size(), 1u);
+}
+
+TEST_F(BlobStoreTest, PutFileCopiesWhenThePathNoLongerNamesTheHashedFile) {
+  const fs::path source = dir_.path() / "upload";
+  Overwrite(source, "abc");
+  std::unique_ptr<MappedFile> file;
+  ASSERT_TRUE(MappedFile::Open(source, &file).ok());
+  // Another file takes the name after the mapping: it must not become the blob.
+  fs::remove(source);
+  Overwrite(source, "not abc");
+  std::string hash;
+  ASSERT_TRUE(store_->PutFile(*file, &hash).ok());
+  EXPECT_EQ(hash, kAbcHash);
+  std::string bytes;
+  ASSERT_TRUE(store_->Get(kAbcHash, &bytes).ok());
+  EXPECT_EQ(bytes, "abc");
+  std::ifstream in(source);
+  std::string left;
+  std::getline(in, left);
+  EXPECT_EQ(left, "not abc");
+}
+
+TEST(MappedFileTest, HashesEmptyAndMissingFiles) {
+  TempDir dir;
+  std::ofstream(dir.path() / "empty").close();
+  std::string hash;
+  ASSERT_TRUE(Sha256HexOfFile(dir.path() / "empty", &hash).ok());
+  EXPECT_EQ(hash, "e3b0c44298fc1c149afbf4c8996fb92427ae41e4649b934ca495991b7852b855");
+  EXPECT_EQ(Sha256HexOfFile(dir.path() / "missing", &hash).code(), Status::Code::kIo);
+}
+
 }  // namespace
 }  // namespace pba
