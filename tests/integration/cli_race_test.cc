@@ -639,5 +639,35 @@ TEST_F(CliRaceTest, ALockWhoseHolderVanishedLapsesAndItsCheckoutCannotCommit) {
   EXPECT_EQ(QueryOne(data_, "PRAGMA integrity_check"), "ok");
 }
 
+// A commit that landed is never reported as refused: run again from the
+// same checkout after its first run gave the lock back (that run's output
+// lost, say), it exits 0 with the revision it made; nothing lands twice.
+TEST_F(CliRaceTest, ACommitRunAgainAfterItsLockWasGivenBackExitsZeroWithItsRevision) {
+  ASSERT_NO_FATAL_FAILURE(SetUpProject({"alice"}));
+  const fs::path file = dir_.path() / "alice.json";
+  const fs::path checkout_file = file.string() + ".pba-checkout";
+  const RunResult checkout =
+      PbaAs("alice", {"atlas", "checkout", "-p", kProject, kStructure, "-o", file.string()});
+  ASSERT_EQ(checkout.exit_code, 0) << checkout.out << checkout.err;
+  const std::string saved_checkout = ReadFile(checkout_file);
+  WriteFile(file, Contours(7));
+  const RunResult first = PbaAs("alice", {"atlas", "commit", file.string(), "-m", "once"});
+  ASSERT_EQ(first.exit_code, 0) << first.out << first.err;
+  EXPECT_NE(first.out.find("revision 2; unlocked"), std::string::npos) << first.out;
+  WriteFile(checkout_file, saved_checkout);
+  const RunResult again = PbaAs("alice", {"atlas", "commit", file.string(), "-m", "once"});
+  EXPECT_EQ(again.exit_code, 0) << again.out << again.err;
+  EXPECT_NE(again.out.find("revision 2; the lock was no longer held"), std::string::npos)
+      << again.out;
+  EXPECT_FALSE(fs::exists(checkout_file));
+  EXPECT_EQ(History().size(), 2u);
+  // Other content from that old checkout is still refused.
+  WriteFile(checkout_file, saved_checkout);
+  WriteFile(file, Contours(8));
+  const RunResult other = PbaAs("alice", {"atlas", "commit", file.string(), "-m", "twice"});
+  EXPECT_EQ(other.exit_code, kConflict) << other.out << other.err;
+  EXPECT_EQ(History().size(), 2u);
+}
+
 }  // namespace
 }  // namespace pba::testing
