@@ -566,7 +566,7 @@ TEST_F(CliRaceTest, ALockWhoseHolderVanishedLapsesAndItsCheckoutCannotCommit) {
   const fs::path alice_out = dir_.path() / "alice-hold.out";
   const pid_t holder =
       Spawn({PBA_CLI_BIN, "--server", server_->address(), "atlas", "checkout", "-p", kProject,
-             kStructure, "-o", alice_file.string(), "--lease", "2", "--hold"},
+             kStructure, "-o", alice_file.string(), "--lease", "3", "--hold"},
             {"PBA_TOKEN=" + tokens_.at("alice")}, alice_out);
   ASSERT_GT(holder, 0);
   const auto deadline = Clock::now() + seconds(30);
@@ -576,8 +576,9 @@ TEST_F(CliRaceTest, ALockWhoseHolderVanishedLapsesAndItsCheckoutCannotCommit) {
   }
   ASSERT_NE(ReadFile(alice_out).find("Keeping the lock alive"), std::string::npos)
       << ReadFile(alice_out);
-  // Past the first lease: --hold renewed it, so bob is still turned away.
-  std::this_thread::sleep_for(std::chrono::milliseconds(2500));
+  // Past the first lease: --hold renewed it (every second), so bob is still
+  // turned away.
+  std::this_thread::sleep_for(std::chrono::milliseconds(3500));
   const fs::path bob_file = dir_.path() / "bob.json";
   const RunResult held =
       PbaAs("bob", {"atlas", "checkout", "-p", kProject, kStructure, "-o", bob_file.string()});
@@ -596,11 +597,13 @@ TEST_F(CliRaceTest, ALockWhoseHolderVanishedLapsesAndItsCheckoutCannotCommit) {
     std::this_thread::sleep_for(std::chrono::milliseconds(250));
     taken =
         PbaAs("bob", {"atlas", "checkout", "-p", kProject, kStructure, "-o", bob_file.string()});
-  } while (taken.exit_code == kConflict && Clock::now() - vanished < seconds(10));
+  } while (taken.exit_code == kConflict && Clock::now() - vanished < seconds(20));
   ASSERT_EQ(taken.exit_code, 0) << taken.out << taken.err;
   EXPECT_NE(taken.out.find("taken over from alice"), std::string::npos) << taken.out;
   const double lapse_s = std::chrono::duration<double>(Clock::now() - vanished).count();
-  EXPECT_LE(lapse_s, 4.0) << "the 2 s lease outlived its holder by too long";
+  // At most a lease after the last renewal, plus slack for a loaded machine.
+  EXPECT_LE(lapse_s, 10.0) << "the 3 s lease outlived its holder by too long";
+  std::printf("the lock lapsed %.1f s after its holder was killed\n", lapse_s);
 
   // alice's file, edited after she vanished: refused while bob holds the lock...
   WriteFile(alice_file, Contours(1));
