@@ -412,23 +412,42 @@ int Commit(Connection& connection, const CommitArgs& args) {
     grpc::Status status = connection.atlas().CommitStructure(context.get(), request, &revision);
     if (!status.ok()) return connection.Fail("committing " + what, status, kExitConflict);
   }
+  // The revision has landed. A lock that is no longer held (this is a rerun
+  // whose first run gave it back, or the lease lapsed and was taken over) is
+  // nothing to give back: still exit 0, or a script would take the landed
+  // commit for a refused one and redo it.
+  std::string lock_note = "; unlocked";
+  int code = kExitOk;
   if (args.keep_lock) {
     state.base_revision = revision.number();
     WriteCheckout(args.file, state);
+    lock_note = " (still locked: commit again, or `pba atlas unlock FILE`)";
   } else {
-    if (int code = ReleaseLockId(connection, state.lock_id, what); code != kExitOk) return code;
-    std::error_code ec;
-    fs::remove(CheckoutPath(args.file), ec);
+    v1::ReleaseLockRequest release;
+    release.set_lock_id(state.lock_id);
+    v1::ReleaseLockResponse released;
+    auto context = connection.UnaryContext();
+    const grpc::Status status = connection.atlas().ReleaseLock(context.get(), release, &released);
+    if (status.ok() || status.error_code() == grpc::StatusCode::FAILED_PRECONDITION) {
+      if (!status.ok()) lock_note = "; the lock was no longer held";
+      std::error_code ec;
+      fs::remove(CheckoutPath(args.file), ec);
+    } else {
+      // The checkout file stays, so that `pba atlas unlock FILE` (or a rerun
+      // of this commit) can give the lock back later.
+      lock_note = "; still locked";
+      code = connection.Fail("committed " + what + " revision " +
+                                 std::to_string(revision.number()) + ", but unlocking it",
+                             status);
+    }
   }
   if (connection.options().json) {
     PrintJson(revision);
   } else {
     std::printf("Committed %s revision %lld%s\n", what.c_str(),
-                static_cast<long long>(revision.number()),
-                args.keep_lock ? " (still locked: commit again, or `pba atlas unlock FILE`)"
-                               : "; unlocked");
+                static_cast<long long>(revision.number()), lock_note.c_str());
   }
-  return kExitOk;
+  return code;
 }
 
 int Unlock(Connection& connection, const std::string& what) {

@@ -44,17 +44,39 @@ int WaitFor(pid_t pid, std::chrono::milliseconds timeout) {
   }
 }
 
+// This process's environment with `overrides` replacing or adding entries.
+std::vector<std::string> MergedEnvironment(const std::vector<std::string>& overrides) {
+  std::vector<std::string> out;
+  for (char** entry = environ; *entry != nullptr; ++entry) {
+    const std::string text = *entry;
+    const std::string name = text.substr(0, text.find('='));
+    bool replaced = false;
+    for (const auto& o : overrides) replaced = replaced || o.substr(0, o.find('=')) == name;
+    if (!replaced) out.push_back(text);
+  }
+  out.insert(out.end(), overrides.begin(), overrides.end());
+  return out;
+}
+
 }  // namespace
 
 RunResult RunProcess(const std::vector<std::string>& argv, std::chrono::seconds timeout) {
+  return RunProcess(argv, std::vector<std::string>{}, timeout);
+}
+
+RunResult RunProcess(const std::vector<std::string>& argv, const std::vector<std::string>& env,
+                     std::chrono::seconds timeout) {
+  // Built before fork: the child may only call async-signal-safe functions.
+  auto args = CArgs(argv);
+  const std::vector<std::string> environment = MergedEnvironment(env);
+  auto envp = CArgs(environment);
   int out_pipe[2], err_pipe[2];
   if (::pipe2(out_pipe, O_CLOEXEC) != 0 || ::pipe2(err_pipe, O_CLOEXEC) != 0) std::abort();
   const pid_t pid = ::fork();
   if (pid == 0) {
     ::dup2(out_pipe[1], STDOUT_FILENO);
     ::dup2(err_pipe[1], STDERR_FILENO);
-    auto args = CArgs(argv);
-    ::execv(args[0], args.data());
+    ::execve(args[0], args.data(), envp.data());
     std::_Exit(127);
   }
   ::close(out_pipe[1]);

@@ -20,6 +20,11 @@ struct RunResult {
 // Runs `argv` to completion (killed after `timeout`), capturing stdout and stderr.
 RunResult RunProcess(const std::vector<std::string>& argv,
                      std::chrono::seconds timeout = std::chrono::seconds(120));
+// The same with `env` ("NAME=VALUE" entries) added to this process's
+// environment for the child only. Unlike setenv before RunProcess, it is safe
+// from several threads at once, each child with its own user's PBA_TOKEN.
+RunResult RunProcess(const std::vector<std::string>& argv, const std::vector<std::string>& env,
+                     std::chrono::seconds timeout = std::chrono::seconds(120));
 
 // A pba-server child on 127.0.0.1 with its own data directory.
 class ServerProcess {
