@@ -22,7 +22,9 @@ namespace fs = std::filesystem;
 namespace {
 
 // Bump when the key's canonical text changes meaning (a new option, a new
-// way of reading a source), so old entries stop matching.
+// way of reading a source), or when the atlas build makes a different mesh
+// from the same input without a new solver version (the version is the
+// project's, not a commit's), so old entries stop matching.
 constexpr int kKeyFormatVersion = 1;
 
 // The entry file: magic, format version, a byte-order mark (entries hold
