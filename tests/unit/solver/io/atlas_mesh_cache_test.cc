@@ -11,6 +11,8 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <thread>
+#include <vector>
 
 #include "mesh/quadratic.h"
 
@@ -139,6 +141,42 @@ TEST_F(AtlasMeshCacheTest, ATruncatedOrAlteredEntryIsAMissAndIsRemoved) {
   CachedAtlasMesh loaded;
   EXPECT_FALSE(LoadCachedAtlasMesh(cache_, "../escape", &loaded, &hit).ok());
   EXPECT_FALSE(hit);
+}
+
+// Jobs storing and loading the same key at once: every load is a miss or
+// the whole mesh, never a damaged entry (which would be removed), and no
+// temporary file is left.
+TEST_F(AtlasMeshCacheTest, ConcurrentStoresAndLoadsOfOneKeyAreSafe) {
+  const CachedAtlasMesh stored{MakeQuadratic(TwoTets()), std::string(100000, 'q')};
+  std::vector<std::thread> jobs;
+  std::vector<int> hits(4, 0), bad(4, 0);
+  for (int j = 0; j < 4; ++j) {
+    jobs.emplace_back([&, j] {
+      for (int i = 0; i < 25; ++i) {
+        if (!StoreCachedAtlasMesh(cache_, key_, stored).ok()) ++bad[j];
+        CachedAtlasMesh loaded;
+        bool hit = false;
+        if (!LoadCachedAtlasMesh(cache_, key_, &loaded, &hit).ok()) ++bad[j];
+        if (!hit) continue;
+        ++hits[j];
+        if (loaded.mesh.midside != stored.mesh.midside ||
+            loaded.description != stored.description) {
+          ++bad[j];
+        }
+      }
+    });
+  }
+  for (std::thread& job : jobs) job.join();
+  for (int j = 0; j < 4; ++j) {
+    EXPECT_EQ(bad[j], 0) << "job " << j;
+    EXPECT_EQ(hits[j], 25) << "job " << j;  // nothing was ever damaged
+  }
+  int files = 0;
+  for (const auto& entry : fs::directory_iterator(cache_)) {
+    ++files;
+    EXPECT_EQ(entry.path().filename(), key_ + ".mesh");
+  }
+  EXPECT_EQ(files, 1);
 }
 
 TEST_F(AtlasMeshCacheTest, KeyFollowsOptionsAndContentNotTimestamps) {
