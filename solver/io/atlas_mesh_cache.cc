@@ -188,7 +188,7 @@ class Reader {
     const std::uint64_t n = Pod<std::uint64_t>();
     if (!ok_ || n > left_ / sizeof(T)) return Fail<std::vector<T>>();
     std::vector<T> v(n);
-    Take(v.data(), n * sizeof(T));
+    if (n > 0) Take(v.data(), n * sizeof(T));
     return v;
   }
   void Bytes(void* out, std::size_t n) {
