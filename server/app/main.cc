@@ -74,6 +74,11 @@ int main(int argc, char** argv) {
   app.add_option("--max-running", max_running, "Jobs run at the same time")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
+  double atlas_cache_gib = 2.0;
+  app.add_option("--atlas-cache-size", atlas_cache_gib,
+                 "Bound of <data>/cache/atlas, the built atlas meshes solves share [GiB]")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error, critical or off")
       ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "critical", "off"}))
       ->capture_default_str();
@@ -134,6 +139,7 @@ int main(int argc, char** argv) {
   options.listen = listen;
   options.solver = solver.empty() ? DefaultSolver() : fs::path(solver);
   options.max_running = max_running;
+  options.atlas_cache_gib = atlas_cache_gib;
   options.tls_cert = tls_cert;
   options.tls_key = tls_key;
   options.max_job_time = std::chrono::seconds(max_job_time_s);

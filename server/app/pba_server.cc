@@ -146,6 +146,8 @@ Status PbaServer::Start(const ServerOptions& options, std::unique_ptr<PbaServer>
   executor_options.solver = fs::absolute(options.solver);
   executor_options.max_running = options.max_running;
   executor_options.solver_threads = options.solver_threads;
+  executor_options.atlas_cache_dir = data_dir / "cache" / "atlas";
+  executor_options.atlas_cache_gib = options.atlas_cache_gib;
   executor_options.kill_grace = options.kill_grace;
   executor_options.max_job_time = options.max_job_time;
   executor_options.max_attempts = options.max_attempts;

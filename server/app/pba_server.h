@@ -38,6 +38,9 @@ struct ServerOptions {
   std::filesystem::path solver;
   int max_running = 1;
   int solver_threads = 0;
+  // Bound of data_dir/cache/atlas, the built atlas meshes every pba-solve
+  // shares [GiB].
+  double atlas_cache_gib = 2.0;
   // SIGTERM-to-SIGKILL grace for solves being cancelled or stopped.
   std::chrono::milliseconds kill_grace{10000};
   // How long in-flight RPCs may take to finish at shutdown.

@@ -3,6 +3,7 @@
 #include <google/protobuf/util/json_util.h>
 #include <google/protobuf/util/time_util.h>
 #include <signal.h>
+#include <spdlog/fmt/fmt.h>
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
@@ -342,6 +343,11 @@ void JobExecutor::Execute(const v1::Job& job, const v1::JobEvent& started, Run& 
   if (options_.solver_threads > 0) {
     command.args.push_back("--threads");
     command.args.push_back(std::to_string(options_.solver_threads));
+  }
+  if (!options_.atlas_cache_dir.empty()) {
+    command.args.insert(command.args.end(),
+                        {"--atlas-cache", options_.atlas_cache_dir.string(), "--atlas-cache-size",
+                         fmt::format("{}", options_.atlas_cache_gib)});
   }
   command.stderr_log = dir / "solve.log";
 

@@ -79,6 +79,10 @@ struct ExecutorOptions {
   int max_running = 1;
   // --threads passed to each pba-solve; 0 passes nothing (pba-solve decides).
   int solver_threads = 0;
+  // --atlas-cache passed to each pba-solve (built atlas meshes shared
+  // between jobs) with --atlas-cache-size [GiB]; empty passes nothing.
+  std::filesystem::path atlas_cache_dir;
+  double atlas_cache_gib = 2.0;
   // Time between SIGTERM and SIGKILL.
   std::chrono::milliseconds kill_grace{10000};
   // How often idle workers look at the queue without being woken (covers

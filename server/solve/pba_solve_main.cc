@@ -13,7 +13,9 @@
 #include <chrono>
 #include <vector>
 #include <csignal>
+#include <cstdint>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <string>
@@ -142,8 +144,14 @@ Status WriteText(const std::filesystem::path& path, const std::string& text) {
   return Status::Ok();
 }
 
+// --atlas-cache: where built atlas meshes are shared between solves.
+struct AtlasCacheFlags {
+  std::string dir;   // empty: no cache
+  double gib = 2.0;  // the directory's bound
+};
+
 int Run(const std::string& scene_path, const std::string& out_dir, const std::string& inp_path,
-        ProgressMode mode, int threads) {
+        ProgressMode mode, int threads, const AtlasCacheFlags& cache) {
   Reporter reporter(mode);
 
   v1::Scene scene;
@@ -167,6 +175,19 @@ int Run(const std::string& scene_path, const std::string& out_dir, const std::st
   options.threads = threads;
   options.cancel = &g_cancel;
   options.progress = [&reporter](const ProgressEvent& event) { reporter.Progress(event); };
+  if (!cache.dir.empty()) {
+    // A cache that cannot be made costs this solve its speed-up, not its
+    // result.
+    std::error_code ec;
+    std::filesystem::create_directories(cache.dir, ec);
+    if (ec) {
+      std::fprintf(stderr, "pba-solve: not using the atlas cache %s: %s\n", cache.dir.c_str(),
+                   ec.message().c_str());
+    } else {
+      options.atlas_cache_dir = cache.dir;
+      options.atlas_cache_max_bytes = static_cast<std::uint64_t>(cache.gib * 1024 * 1024 * 1024);
+    }
+  }
 
   Solution solution;
   status = SolveScene(spec, options, &solution);
@@ -281,6 +302,14 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"auto", "json", "text", "none"}));
   app.add_option("--threads", threads, "Worker threads; 0 uses every core")
       ->check(CLI::NonNegativeNumber);
+  pba::AtlasCacheFlags cache;
+  app.add_option("--atlas-cache", cache.dir,
+                 "Directory of built atlas meshes shared between solves (created if absent): a "
+                 "4-node atlas scene whose atlas and mesh options match an entry takes its mesh");
+  app.add_option("--atlas-cache-size", cache.gib,
+                 "Bound of the --atlas-cache directory [GiB]; least recently used meshes go")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -314,7 +343,7 @@ int main(int argc, char** argv) {
                    "pba-solve: --out DIR is required (or --export-inp FILE to export only)\n");
       return pba::kExitInvalid;
     }
-    return pba::Run(scene_path, out_dir, inp_path, mode, threads);
+    return pba::Run(scene_path, out_dir, inp_path, mode, threads, cache);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "pba-solve: internal error: %s\n", e.what());
     return pba::kExitInternal;

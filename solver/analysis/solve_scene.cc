@@ -54,7 +54,10 @@ Status SolveScene(const SceneSpec& scene, const SolveOptions& options, Solution*
 
   clock.Begin("mesh", 0.0, 0.05, "meshing the " + DescribeGeometry(scene.geometry));
   Model model;
-  PBA_RETURN_IF_ERROR(BuildModel(scene, &model));
+  BuildModelOptions build;
+  build.atlas_cache_dir = options.atlas_cache_dir;
+  build.atlas_cache_max_bytes = options.atlas_cache_max_bytes;
+  PBA_RETURN_IF_ERROR(BuildModel(scene, &model, build));
   const Mesh& mesh = model.mesh;
   const DofMap& dofs = model.dofs;
   const std::string free_modes = DescribeFreeRigidModes(mesh, dofs);

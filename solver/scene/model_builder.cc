@@ -11,6 +11,7 @@
 
 #include "atlas/atlas_build.h"
 #include "core/format.h"
+#include "io/atlas_mesh_cache.h"
 #include "mesh/primitive_mesher.h"
 #include "mesh/quadratic.h"
 #include "mesh/region_faces.h"
@@ -198,12 +199,57 @@ class TempPlatesDir {
   std::filesystem::path path_;
 };
 
+// How a build used the atlas mesh cache.
+struct AtlasCacheUse {
+  std::string key;  // empty: not cached (no cache, a 10-node mesh, no key)
+  bool hit = false;
+  std::string description;  // on a hit: the note of the build that made it
+};
+
+// BuildAtlas through the cache: on a hit only result->mesh is set (the
+// mesh BuildAtlas made, before any patch or set was added) and
+// use->description is what that build said of it; on a miss it builds, and
+// StoreAtlasMesh keeps the mesh once its description is known. A cache
+// that cannot be read is a miss: the cache saves time, it never fails a
+// build.
+Status BuildAtlasThroughCache(const AtlasBuildOptions& options, const BuildModelOptions& cache,
+                              bool cacheable, AtlasBuildResult* result, AtlasCacheUse* use) {
+  if (!cache.atlas_cache_dir.empty() && cacheable) {
+    // A source that cannot be read has no key; BuildAtlas then says why.
+    if (AtlasMeshCacheKey(options, &use->key).ok()) {
+      CachedAtlasMesh entry;
+      const Status loaded = LoadCachedAtlasMesh(cache.atlas_cache_dir, use->key, &entry, &use->hit);
+      if (loaded.ok() && use->hit) {
+        result->mesh = std::move(entry.mesh);
+        use->description = std::move(entry.description);
+        return Status::Ok();
+      }
+    } else {
+      use->key.clear();
+    }
+  }
+  return BuildAtlas(options, result);
+}
+
+// Keeps a mesh BuildAtlasThroughCache built, and says so in `description`.
+void StoreAtlasMesh(const BuildModelOptions& cache, const AtlasCacheUse& use, const Mesh& mesh,
+                    std::string* description) {
+  if (use.key.empty()) return;
+  const std::string key = use.key.substr(0, 12);
+  const Status stored =
+      StoreCachedAtlasMesh(cache.atlas_cache_dir, use.key, CachedAtlasMesh{mesh, *description},
+                           cache.atlas_cache_max_bytes);
+  description->append(stored.ok() ? "; atlas mesh (built, cached as " + key + ")"
+                                  : "; atlas mesh built, not cached: " + stored.message());
+}
+
 // The atlas of the scene, meshed (BuildAtlas), and a description of what
 // was kept, merged or dropped and at what size, for the summary.
 // `built` keeps what a 10-node pass needs later (the loft, the regions'
-// labels); its mesh is moved into `mesh`.
-Status BuildAtlasMesh(const SceneSpec& scene, Mesh* mesh, std::string* description,
-                      AtlasBuildResult* built) {
+// labels); its mesh is moved into `mesh`. With a cache directory a 4-node
+// mesh may come from the cache, and then `built` holds nothing else.
+Status BuildAtlasMesh(const SceneSpec& scene, const BuildModelOptions& cache, Mesh* mesh,
+                      std::string* description, AtlasBuildResult* built) {
   const AtlasSpec& a = scene.geometry.atlas;
   AtlasBuildOptions options;
   TempPlatesDir temp;
@@ -235,7 +281,10 @@ Status BuildAtlasMesh(const SceneSpec& scene, Mesh* mesh, std::string* descripti
   options.roi_radius_mm = a.roi_radius_mm;
   options.roi_size_mm = std::min(a.roi_element_size_mm, h);
   AtlasBuildResult& result = *built;
-  if (Status s = BuildAtlas(options, &result); !s.ok()) {
+  AtlasCacheUse cached;
+  if (Status s = BuildAtlasThroughCache(options, cache, !IsQuadratic(scene.mesh.element), &result,
+                                        &cached);
+      !s.ok()) {
     // The build's fields, as the scene names them.
     const std::string field = s.field() == "structures" || s.field().rfind("structures[", 0) == 0
                                   ? "geometry.atlas." + s.field()
@@ -249,6 +298,11 @@ Status BuildAtlasMesh(const SceneSpec& scene, Mesh* mesh, std::string* descripti
     return s;
   }
   *mesh = std::move(result.mesh);
+  if (cached.hit) {
+    *description =
+        cached.description + "; atlas mesh from the cache (key " + cached.key.substr(0, 12) + ")";
+    return Status::Ok();
+  }
   const int kept = static_cast<int>(result.region_labels.size()) - (result.merged.empty() ? 0 : 1);
   *description = Format("%s atlas, %d structure%s", result.synthetic ? "synthetic" : "user", kept,
                         kept == 1 ? "" : "s");
@@ -292,19 +346,21 @@ Status BuildAtlasMesh(const SceneSpec& scene, Mesh* mesh, std::string* descripti
                "%d sections",
                result.validation->overall_percentage_error, result.validation->total_sections));
   }
+  StoreAtlasMesh(cache, cached, *mesh, description);
   return Status::Ok();
 }
 
 }  // namespace
 
-Status BuildModel(const SceneSpec& scene, Model* out) {
+Status BuildModel(const SceneSpec& scene, Model* out, const BuildModelOptions& options) {
   constexpr double kMm = 1e-3;
   Model& model = *out;
   model = Model();
   MeshStats stats;
   AtlasBuildResult atlas;
   if (scene.geometry.kind == GeometrySpec::Kind::kAtlas) {
-    PBA_RETURN_IF_ERROR(BuildAtlasMesh(scene, &model.mesh, &model.mesh_description, &atlas));
+    PBA_RETURN_IF_ERROR(
+        BuildAtlasMesh(scene, options, &model.mesh, &model.mesh_description, &atlas));
     PBA_RETURN_IF_ERROR(ProvideAtlasSets(scene, &model.mesh));
   } else {
     model.mesh = BuildPrimitiveMesh(scene.geometry, scene.mesh, &stats);

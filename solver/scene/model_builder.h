@@ -2,6 +2,8 @@
 // way for a solve and for an export.
 #pragma once
 
+#include <cstdint>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -18,11 +20,20 @@ struct Model {
   std::string mesh_description;  // how the mesh was made, for the summary
 };
 
+struct BuildModelOptions {
+  // Where built atlas meshes are kept and looked up (io/atlas_mesh_cache.h);
+  // empty: every atlas is meshed. Only 4-node atlas meshes are cached (a
+  // 10-node one needs the loft, which is not kept).
+  std::filesystem::path atlas_cache_dir;
+  // The bound of that directory [bytes]; least recently used entries go.
+  std::uint64_t atlas_cache_max_bytes = std::uint64_t{2} << 30;
+};
+
 // Meshes the geometry, cuts its patches and applies the boundary conditions
 // in order (a later condition on the same node and component wins);
 // displacements in metres. Expects a validated scene; fails (naming it) on
 // a patch that holds no face, which only the mesh can tell.
-Status BuildModel(const SceneSpec& scene, Model* model);
+Status BuildModel(const SceneSpec& scene, Model* model, const BuildModelOptions& options = {});
 
 // The loads of the scene's pressure and traction conditions and its gravity,
 // at full value (SI). Pressure follows the deformation in a nonlinear

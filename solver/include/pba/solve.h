@@ -29,6 +29,12 @@ struct SolveOptions {
   // Polled between and within phases; when it becomes true the solve returns
   // Status::Cancelled.
   const std::atomic<bool>* cancel = nullptr;
+  // A directory of built atlas meshes shared by solves (created if absent):
+  // a solve whose atlas, options and solver version match an entry takes
+  // its mesh instead of meshing again. Empty: no cache.
+  std::filesystem::path atlas_cache_dir;
+  // The bound of that directory [bytes]; least recently used entries go.
+  std::uint64_t atlas_cache_max_bytes = std::uint64_t{2} << 30;
 };
 
 struct PhaseTime {

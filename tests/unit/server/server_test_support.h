@@ -42,6 +42,7 @@ scene="$1"
 out="$3"
 name=$(sed -n 's/.*"name": *"\([^"]*\)".*/\1/p' "$scene" | head -n 1)
 echo "fake pba-solve: scene $name" >&2
+echo "fake pba-solve: arguments $*" >&2
 progress() { echo "{\"kind\":\"PROGRESS\",\"phase\":\"$1\",\"progress\":$2,\"message\":\"$3\"}"; }
 succeed() {
   progress write 0.9 "writing"

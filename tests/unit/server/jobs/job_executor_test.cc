@@ -125,6 +125,20 @@ TEST_F(JobExecutorTest, SuccessRecordsSummaryFilesAndEvents) {
   EXPECT_EQ(phases, (std::vector<std::string>{"mesh", "solve", "write"}));
 }
 
+// Every solve is told where the shared atlas mesh cache is, and its bound.
+TEST_F(JobExecutorTest, SolvesShareTheAtlasCache) {
+  options_.atlas_cache_dir = dir_.path() / "cache" / "atlas";
+  options_.atlas_cache_gib = 0.5;
+  const v1::Job job = RunToEnd("ok");
+  ASSERT_EQ(job.state(), v1::Job::SUCCEEDED) << job.error();
+  std::ifstream log(dir_.path() / "jobs" / job.id() / "solve.log");
+  std::string log_text((std::istreambuf_iterator<char>(log)), std::istreambuf_iterator<char>());
+  EXPECT_NE(log_text.find(" --atlas-cache " + options_.atlas_cache_dir.string() +
+                          " --atlas-cache-size 0.5"),
+            std::string::npos)
+      << log_text;
+}
+
 TEST_F(JobExecutorTest, ProgressIsStoredThrottled) {
   const v1::Job job = RunToEnd("throttle");
   ASSERT_EQ(job.state(), v1::Job::SUCCEEDED) << job.error();
