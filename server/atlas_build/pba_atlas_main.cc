@@ -370,7 +370,7 @@ int main(int argc, char** argv) {
       ->needs(split_labels_option);
   split->add_option("--synthetic-voxel-mm", split_options.source.synthetic_voxel_mm,
                     "Voxel edge of the painted synthetic atlas [mm]");
-  split->add_option("--structures", split_options.structures,
+  split->add_option("--structures,--structure", split_options.structures,
                     "Only these structures (colour-table names, or a group such as Thalamus)");
 
   try {
