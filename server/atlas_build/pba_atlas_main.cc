@@ -5,21 +5,30 @@
 //
 //   pba-atlas plates -o DIR          the synthetic atlas's 27 plates
 //   pba-atlas build -o DIR [--plates DIR | --labels FILE] ...
+//   pba-atlas split -o DIR [--plates DIR | --labels FILE] [--structures NAME ...]
+//                                    the atlas as a structure set, one file
+//                                    per structure (structure_split.h)
 //
-// The output directory appears whole or not at all (StagingDir).
+// The output directory appears whole or not at all (StagingDir; SplitAtlas
+// for split, which refuses a directory that is there and not empty).
 // Exit codes: 0 success; 2 invalid input or command line; 3 the input cannot
 // be meshed as given; 4 I/O error; 1 internal error.
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <fstream>
 #include <optional>
+#include <sstream>
 #include <string>
 #include <vector>
 
 #include "atlas/atlas_build.h"
 #include "atlas/atlas_pictures.h"
+#include "atlas/contours.h"
 #include "atlas/label_volume_io.h"
+#include "atlas/structure_split.h"
 #include "atlas/synthetic_atlas.h"
 #include "core/atomic_write.h"
 #include "io/mesh_export.h"
@@ -71,6 +80,56 @@ int RunPlates(const std::string& out_dir, double voxel_mm) {
   if (Status s = staging.Commit(); !s.ok()) return Fail(s);
   std::printf("wrote %s/plates (27 plates, colour_table.csv, plates.json) and labels.nii.gz\n",
               out_dir.c_str());
+  return kExitOk;
+}
+
+// The size of a split structure as read back from its file: plates of a
+// contours file, voxels of a mask.
+Status DescribeStructure(const std::filesystem::path& dir, const StructureEntry& entry,
+                         std::string* size) {
+  const std::filesystem::path file = dir / entry.file;
+  if (entry.format == StructureFormat::kNifti) {
+    LabelVolume mask;
+    PBA_RETURN_IF_ERROR(ReadNifti(file, &mask));
+    int64_t voxels = 0;
+    for (uint16_t value : mask.labels()) voxels += value != 0;
+    *size = std::to_string(voxels) + " voxels";
+    return Status::Ok();
+  }
+  std::ifstream in(file, std::ios::binary);
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (!in) return Status::Io("cannot read " + file.string());
+  Contours contours;
+  PBA_RETURN_IF_ERROR(ParseContoursJson(text.str(), entry.file, &contours));
+  const size_t plates = contours.plates.size();
+  *size = std::to_string(plates) + (plates == 1 ? " plate" : " plates");
+  return Status::Ok();
+}
+
+int RunSplit(const SplitOptions& options, const std::string& out_dir) {
+  SplitResult result;
+  if (Status s = SplitAtlas(options, out_dir, &result); !s.ok()) return Fail(s);
+  size_t width = 0;
+  for (const StructureEntry& entry : result.set.structures) {
+    width = std::max(width, entry.name.size());
+  }
+  for (const StructureEntry& entry : result.set.structures) {
+    std::string size;
+    if (Status s = DescribeStructure(out_dir, entry, &size); !s.ok()) return Fail(s);
+    std::printf("%-*s  %-13s  %s  %s\n", static_cast<int>(width), entry.name.c_str(),
+                StructureFormatName(entry.format), entry.file.c_str(), size.c_str());
+  }
+  if (!result.absent.empty()) {
+    std::string names;
+    for (const std::string& n : result.absent) names += (names.empty() ? "" : ", ") + n;
+    std::printf(
+        "absent (no %s): %s\n",
+        options.source.source == AtlasBuildOptions::Source::kLabelVolume ? "voxel" : "pixel",
+        names.c_str());
+  }
+  std::printf("wrote %s (%zu structures, %s)\n", out_dir.c_str(), result.set.structures.size(),
+              kStructureSetManifest);
   return kExitOk;
 }
 
@@ -291,6 +350,29 @@ int main(int argc, char** argv) {
   build->add_option("--format", format_name, "Report form on stdout")
       ->check(CLI::IsMember({"text", "csv", "json"}));
 
+  pba::SplitOptions split_options;
+  std::string split_plates, split_labels, split_colour_table;
+  CLI::App* split = app.add_subcommand(
+      "split",
+      "Write an atlas as a structure set: the synthetic one (default) or a plate directory as "
+      "each structure's plate contours (<name>.json), a label volume as each structure's mask "
+      "(<name>.nii.gz); with manifest.json");
+  split->add_option("-o,--out", out_dir, "Output directory (created; must not exist or be empty)")
+      ->required();
+  auto* split_plates_option = split->add_option(
+      "--plates", split_plates, "Plate directory (plates.json, PNGs, colour table)");
+  auto* split_labels_option =
+      split->add_option("--labels", split_labels, "Label volume (.nii, .nii.gz or .nrrd)")
+          ->excludes(split_plates_option);
+  split
+      ->add_option("--colour-table", split_colour_table,
+                   "Label table for --labels (CSV: label,name,r,g,b); default the built-in one")
+      ->needs(split_labels_option);
+  split->add_option("--synthetic-voxel-mm", split_options.source.synthetic_voxel_mm,
+                    "Voxel edge of the painted synthetic atlas [mm]");
+  split->add_option("--structures,--structure", split_options.structures,
+                    "Only these structures (colour-table names, or a group such as Thalamus)");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -299,6 +381,17 @@ int main(int argc, char** argv) {
   }
   try {
     if (plates->parsed()) return pba::RunPlates(out_dir, voxel_mm);
+    if (split->parsed()) {
+      if (!split_plates.empty()) {
+        split_options.source.source = pba::AtlasBuildOptions::Source::kPlates;
+        split_options.source.input = split_plates;
+      } else if (!split_labels.empty()) {
+        split_options.source.source = pba::AtlasBuildOptions::Source::kLabelVolume;
+        split_options.source.input = split_labels;
+        split_options.source.colour_table = split_colour_table;
+      }
+      return pba::RunSplit(split_options, out_dir);
+    }
     if (!plates_dir.empty()) {
       build_options.source = pba::AtlasBuildOptions::Source::kPlates;
       build_options.input = plates_dir;

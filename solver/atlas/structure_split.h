@@ -7,7 +7,10 @@
 //     structure's bounding box with one voxel of background around it,
 //     spacing and position kept (<name>.nii.gz).
 // Colours and names come from the colour table. Structures with no pixel
-// or voxel are left out and listed in `absent`.
+// or voxel are left out and listed in `absent`. <name> is the structure's
+// name with every character other than [A-Za-z0-9._-] made '_' and leading
+// dots dropped, made unique regardless of case with "_2", "_3", ...; a name
+// of nothing but dots is refused.
 #pragma once
 
 #include <filesystem>
@@ -30,8 +33,10 @@ struct SplitOptions {
 };
 
 struct SplitResult {
-  StructureSet set;                 // as written into manifest.json
-  std::vector<std::string> absent;  // colour-table names with no pixel or voxel
+  StructureSet set;  // as written into manifest.json
+  // Colour-table names (of those asked for, when `structures` names some)
+  // with no pixel or voxel.
+  std::vector<std::string> absent;
 };
 
 // Writes the structure set into `dir`, which must not exist or be empty:

@@ -1,0 +1,324 @@
+#include "atlas/structure_split.h"
+
+#include <openssl/evp.h>
+#include <stdlib.h>
+
+#include <algorithm>
+#include <array>
+#include <cctype>
+#include <fstream>
+#include <iterator>
+#include <limits>
+#include <set>
+#include <sstream>
+
+#include "atlas/contours.h"
+#include "atlas/label_volume_io.h"
+#include "atlas/synthetic_atlas.h"
+#include "core/atomic_write.h"
+#include "core/format.h"
+
+namespace pba {
+namespace fs = std::filesystem;
+namespace {
+
+bool EndsWith(const std::string& s, const std::string& suffix) {
+  return s.size() >= suffix.size() &&
+         s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
+Status ReadLabelVolume(const fs::path& file, LabelVolume* volume) {
+  const std::string name = file.filename().string();
+  if (EndsWith(name, ".nii") || EndsWith(name, ".nii.gz")) return ReadNifti(file, volume);
+  if (EndsWith(name, ".nrrd")) return ReadNrrd(file, volume);
+  return Status::InvalidArgument("source.input",
+                                 file.string() + " is not a label volume (.nii, .nii.gz or .nrrd)");
+}
+
+// Lowercase hex SHA-256 of a file's bytes, as they are on disk (not of what
+// was meant to be written), so the manifest checks the file itself.
+Status Sha256File(const fs::path& file, std::string* hex) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) return Status::Io("cannot read " + file.string());
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (in.bad()) return Status::Io("cannot read " + file.string());
+  unsigned char digest[EVP_MAX_MD_SIZE];
+  unsigned int length = 0;
+  if (EVP_Digest(bytes.data(), bytes.size(), digest, &length, EVP_sha256(), nullptr) != 1) {
+    return Status::Internal("SHA-256 of " + file.string() + " failed");
+  }
+  hex->clear();
+  for (unsigned int i = 0; i < length; ++i) hex->append(Format("%02x", digest[i]));
+  return Status::Ok();
+}
+
+// Which colour-table entries to split: all, or those named (a name that is
+// not an entry stands for its group, "Thalamus" for "Thalamus: ...").
+// `present` is whether each label has a pixel or voxel; a structure asked
+// for by name that has none is an error, as for BuildAtlas.
+Status ChooseEntries(const std::vector<std::string>& structures, const ColourTable& colours,
+                     const std::vector<char>& present, std::vector<const ColourEntry*>* chosen) {
+  std::vector<char> wanted(65536, structures.empty());
+  for (size_t i = 0; i < structures.size(); ++i) {
+    const std::string& name = structures[i];
+    std::vector<const ColourEntry*> entries;
+    if (const ColourEntry* entry = colours.FindByName(name)) {
+      entries.push_back(entry);
+    } else {
+      for (const ColourEntry& e : colours.entries()) {
+        if (InStructureGroup(e.name, name)) entries.push_back(&e);
+      }
+    }
+    const std::string field = "structures[" + std::to_string(i) + "]";
+    if (entries.empty()) {
+      return Status::InvalidArgument(
+          field,
+          "no structure \"" + name + "\" in the colour table (nor any \"" + name + ": ...\")");
+    }
+    bool any = false;
+    for (const ColourEntry* e : entries) {
+      any |= present[e->label] != 0;
+      wanted[e->label] = 1;
+    }
+    if (!any) return Status::InvalidArgument(field, "\"" + name + "\" is not in the atlas");
+  }
+  chosen->clear();
+  for (const ColourEntry& e : colours.entries()) {
+    if (wanted[e.label]) chosen->push_back(&e);
+  }
+  return Status::Ok();
+}
+
+// The file name stem of a structure: its name with every character other
+// than [A-Za-z0-9._-] (a multi-byte UTF-8 character counting as one) made
+// '_', and leading dots dropped so the file is neither hidden nor "." or
+// "..". Empty when nothing is left.
+std::string FileStem(const std::string& name) {
+  std::string stem;
+  for (size_t i = 0; i < name.size(); ++i) {
+    const unsigned char ch = static_cast<unsigned char>(name[i]);
+    if ((ch & 0xc0) == 0x80 && i > 0) continue;  // UTF-8 continuation byte
+    const bool keep = std::isalnum(ch) != 0 || ch == '.' || ch == '_' || ch == '-';
+    stem += ch < 0x80 && keep ? static_cast<char>(ch) : '_';
+  }
+  stem.erase(0, stem.find_first_not_of('.'));
+  return stem;
+}
+
+// Hands out file names unique regardless of case (macOS and Windows
+// file systems fold it): "Name.json", then "Name_2.json", ...
+class FileNames {
+ public:
+  Status Take(const std::string& name, const std::string& extension, std::string* file) {
+    const std::string stem = FileStem(name);
+    if (stem.empty()) {
+      return Status::InvalidArgument(
+          "structures", "structure \"" + name + "\" gives no file name (nothing but dots)");
+    }
+    for (int n = 1;; ++n) {
+      const std::string candidate = (n == 1 ? stem : stem + "_" + std::to_string(n)) + extension;
+      std::string folded = candidate;
+      for (char& ch : folded) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+      if (taken_.insert(folded).second) {
+        *file = candidate;
+        return Status::Ok();
+      }
+    }
+  }
+
+ private:
+  std::set<std::string> taken_;
+};
+
+// The manifest refuses these in a name (structure_set.h); refusing them
+// here names the structure before anything is written for it.
+Status CheckStructureName(const std::string& name) {
+  for (unsigned char ch : name) {
+    if (ch == '/' || ch == '\\' || ch == ',' || ch < 0x20 || ch == 0x7f) {
+      return Status::InvalidArgument("structures",
+                                     "structure \"" + name +
+                                         "\" has a character a structure set refuses ('/', "
+                                         "'\\\\', ',' or a control character)");
+    }
+  }
+  return Status::Ok();
+}
+
+StructureEntry EntryFor(const ColourEntry& colour, const std::string& file,
+                        StructureFormat format) {
+  StructureEntry entry;
+  entry.name = colour.name;
+  entry.file = file;
+  entry.format = format;
+  entry.r = colour.r;
+  entry.g = colour.g;
+  entry.b = colour.b;
+  return entry;
+}
+
+// Each chosen structure's contours into <stem>.json under `dir`.
+Status SplitPlates(const PlateStack& stack, const std::vector<std::string>& structures,
+                   const fs::path& dir, SplitResult* result) {
+  std::vector<char> present(65536, 0);
+  for (const std::vector<uint16_t>& plate : stack.labels) {
+    for (uint16_t label : plate) present[label] = 1;
+  }
+  std::vector<const ColourEntry*> chosen;
+  PBA_RETURN_IF_ERROR(ChooseEntries(structures, stack.colours, present, &chosen));
+  FileNames names;
+  for (const ColourEntry* colour : chosen) {
+    if (!present[colour->label]) {
+      result->absent.push_back(colour->name);
+      continue;
+    }
+    PBA_RETURN_IF_ERROR(CheckStructureName(colour->name));
+    std::string file;
+    PBA_RETURN_IF_ERROR(names.Take(colour->name, ".json", &file));
+    const Contours contours = TraceContours(stack, colour->label);
+    PBA_RETURN_IF_ERROR(AtomicWriteText(dir / file, FormatContoursJson(contours)));
+    result->set.structures.push_back(EntryFor(*colour, file, StructureFormat::kContours));
+  }
+  return Status::Ok();
+}
+
+// Each chosen structure's voxels as a 0/1 mask into <stem>.nii.gz under
+// `dir`: the structure's bounding box and one voxel more on every side (so
+// the mask's surface is closed even where the structure meets the edge of
+// the grid), on the same lattice as `volume`.
+Status SplitVolume(const LabelVolume& volume, const ColourTable& colours,
+                   const std::vector<std::string>& structures, const fs::path& dir,
+                   SplitResult* result) {
+  constexpr int kMax = std::numeric_limits<int>::max();
+  std::vector<std::array<int, 6>> box(65536, {kMax, kMax, kMax, -1, -1, -1});
+  std::vector<char> present(65536, 0);
+  for (int k = 0; k < volume.nz(); ++k) {
+    for (int j = 0; j < volume.ny(); ++j) {
+      for (int i = 0; i < volume.nx(); ++i) {
+        const uint16_t label = volume.at(i, j, k);
+        if (label == 0) continue;
+        present[label] = 1;
+        std::array<int, 6>& b = box[label];
+        b = {std::min(b[0], i), std::min(b[1], j), std::min(b[2], k),
+             std::max(b[3], i), std::max(b[4], j), std::max(b[5], k)};
+      }
+    }
+  }
+  for (size_t label = 1; label < present.size(); ++label) {
+    if (present[label] && colours.FindByLabel(static_cast<uint16_t>(label)) == nullptr) {
+      return Status::InvalidArgument(
+          "source.colour_table",
+          "label " + std::to_string(label) + " of the label volume has no entry");
+    }
+  }
+  std::vector<const ColourEntry*> chosen;
+  PBA_RETURN_IF_ERROR(ChooseEntries(structures, colours, present, &chosen));
+  FileNames names;
+  for (const ColourEntry* colour : chosen) {
+    if (!present[colour->label]) {
+      result->absent.push_back(colour->name);
+      continue;
+    }
+    PBA_RETURN_IF_ERROR(CheckStructureName(colour->name));
+    std::string file;
+    PBA_RETURN_IF_ERROR(names.Take(colour->name, ".nii.gz", &file));
+    const std::array<int, 6>& b = box[colour->label];
+    const std::array<int, 3> first = {b[0] - 1, b[1] - 1, b[2] - 1};
+    const std::array<int, 3> dims = {b[3] - b[0] + 3, b[4] - b[1] + 3, b[5] - b[2] + 3};
+    const Eigen::Vector3d origin =
+        volume.origin_mm() +
+        Eigen::Vector3d(first[0], first[1], first[2]).cwiseProduct(volume.spacing_mm());
+    LabelVolume mask(dims, origin, volume.spacing_mm());
+    for (int k = b[2]; k <= b[5]; ++k) {
+      for (int j = b[1]; j <= b[4]; ++j) {
+        for (int i = b[0]; i <= b[3]; ++i) {
+          if (volume.at(i, j, k) == colour->label) {
+            mask.set(i - first[0], j - first[1], k - first[2], 1);
+          }
+        }
+      }
+    }
+    PBA_RETURN_IF_ERROR(WriteNifti(mask, dir / file));
+    result->set.structures.push_back(EntryFor(*colour, file, StructureFormat::kNifti));
+  }
+  return Status::Ok();
+}
+
+// Everything SplitAtlas writes, into the empty directory `dir`.
+Status WriteSplit(const SplitOptions& options, const fs::path& dir, SplitResult* result) {
+  using Source = AtlasBuildOptions::Source;
+  const AtlasBuildOptions& source = options.source;
+  if (source.source == Source::kLabelVolume) {
+    LabelVolume volume;
+    PBA_RETURN_IF_ERROR(ReadLabelVolume(source.input, &volume));
+    ColourTable colours = ColourTable::Builtin();
+    if (!source.colour_table.empty()) {
+      PBA_RETURN_IF_ERROR(ReadColourTableCsv(source.colour_table, &colours));
+    }
+    PBA_RETURN_IF_ERROR(SplitVolume(volume, colours, options.structures, dir, result));
+  } else {
+    PlateStack stack;
+    if (source.source == Source::kSynthetic) {
+      // Through real plate files, as BuildAtlas does, so the contours are
+      // those of the plates `pba-atlas plates` writes; they are rendered
+      // inside the staging directory and removed before it is renamed.
+      SyntheticAtlasOptions synthetic;
+      synthetic.voxel_size_mm = source.synthetic_voxel_mm;
+      if (Status s = synthetic.Validate(); !s.ok()) {
+        return Status::InvalidArgument("source.synthetic_voxel_mm", s.message());
+      }
+      const fs::path plates = dir / ".synthetic-plates";
+      PBA_RETURN_IF_ERROR(WritePlates(MakeSyntheticAtlas(synthetic), ColourTable::Builtin(),
+                                      PlateOptions(), plates));
+      const Status read = ReadPlates(plates, &stack);
+      std::error_code ec;
+      fs::remove_all(plates, ec);
+      PBA_RETURN_IF_ERROR(read);
+      if (ec) return Status::Io("cannot remove " + plates.string() + ": " + ec.message());
+    } else {
+      PBA_RETURN_IF_ERROR(ReadPlates(source.input, &stack));
+    }
+    PBA_RETURN_IF_ERROR(SplitPlates(stack, options.structures, dir, result));
+  }
+  if (result->set.structures.empty()) {
+    return Status::InvalidArgument("source", "the atlas has no structure to split");
+  }
+  for (StructureEntry& entry : result->set.structures) {
+    PBA_RETURN_IF_ERROR(Sha256File(dir / entry.file, &entry.sha256));
+  }
+  return WriteStructureSet(result->set, dir);
+}
+
+}  // namespace
+
+Status SplitAtlas(const SplitOptions& options, const fs::path& dir, SplitResult* result) {
+  *result = SplitResult();
+  if (options.source.source != AtlasBuildOptions::Source::kSynthetic &&
+      options.source.input.empty()) {
+    return Status::InvalidArgument("source.input",
+                                   "a plate directory or label volume file is required");
+  }
+  std::error_code ec;
+  if (fs::exists(dir, ec) && !(fs::is_directory(dir, ec) && fs::is_empty(dir, ec))) {
+    return Status::Io(dir.string() + " already exists and is not an empty directory");
+  }
+  const fs::path target = dir.has_filename() ? dir : dir.parent_path();
+  const fs::path parent = target.parent_path().empty() ? fs::path(".") : target.parent_path();
+  if (!fs::is_directory(parent, ec)) return Status::Io(parent.string() + " is not a directory");
+  std::string pattern = (parent / ("." + target.filename().string() + ".partial-XXXXXX")).string();
+  if (mkdtemp(pattern.data()) == nullptr) {
+    return Status::Io("cannot create a temporary directory in " + parent.string());
+  }
+  const fs::path temporary = pattern;
+  Status status = WriteSplit(options, temporary, result);
+  if (status.ok()) {
+    fs::rename(temporary, target, ec);  // replaces an empty directory
+    if (ec) status = Status::Io("cannot rename into " + target.string() + ": " + ec.message());
+  }
+  if (!status.ok()) {
+    fs::remove_all(temporary, ec);
+    *result = SplitResult();
+  }
+  return status;
+}
+
+}  // namespace pba
