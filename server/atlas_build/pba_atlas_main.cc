@@ -125,7 +125,8 @@ int RunBuild(AtlasBuildOptions options, const Pictures& pictures, const std::str
   std::printf("%s", FormatReportTable(quality, format).c_str());
   if (validation) std::printf("\n%s", FormatReportTable(*validation, format).c_str());
   if (format == TableFormat::kText) {
-    for (const std::string& note : result.notes) std::printf("\nnote: %s\n", note.c_str());
+    if (!result.notes.empty()) std::printf("\n");
+    for (const std::string& note : result.notes) std::printf("note: %s\n", note.c_str());
     if (!result.merged.empty()) {
       std::printf("\n%zu structures merged into \"%s\" (not asked for)\n", result.merged.size(),
                   kSurroundingTissue);
