@@ -267,6 +267,12 @@ Status ComposePlates(const StructureSet& set, const Loaded& loaded, const std::v
   for (const Contours* c : all) {
     for (const ContourPlate& p : c->plates) heights.insert(p.z_mm);
   }
+  if (heights.size() < 2) {
+    return Status::InvalidArgument(
+        "structures", Format("every structure is drawn at z = %g mm only: plates at two heights "
+                             "at least are needed to make a volume",
+                             *heights.begin()));
+  }
   stack.z_mm.assign(heights.begin(), heights.end());
   const size_t pixels = static_cast<size_t>(stack.width) * stack.height;
   for (size_t p = 0; p < stack.z_mm.size(); ++p) {
@@ -300,8 +306,28 @@ Status ComposePlates(const StructureSet& set, const Loaded& loaded, const std::v
           PBA_RETURN_IF_ERROR(loft.Build(one, loft_options));
           lofted = true;
         }
-        for (int r = 0; r < stack.height; ++r) {
-          for (int c = 0; c < stack.width; ++c) {
+        // Only pixels within its outline's box on any of its plates can be
+        // inside (its field is +infinity beyond that box).
+        double x0 = INFINITY, x1 = -INFINITY, y0 = INFINITY, y1 = -INFINITY;
+        for (const ContourPlate& own_plate : contours.plates) {
+          for (const auto& polygon : own_plate.polygons) {
+            for (const Eigen::Vector2d& v : polygon) {
+              x0 = std::min(x0, v.x());
+              x1 = std::max(x1, v.x());
+              y0 = std::min(y0, v.y());
+              y1 = std::max(y1, v.y());
+            }
+          }
+        }
+        const double h = stack.pixel_size_mm;
+        const int c0 = std::max(0, static_cast<int>((x0 - stack.origin_mm.x()) / h) - 1);
+        const int c1 =
+            std::min(stack.width - 1, static_cast<int>((x1 - stack.origin_mm.x()) / h) + 1);
+        const int r0 = std::max(0, static_cast<int>((stack.origin_mm.y() - y1) / h) - 1);
+        const int r1 =
+            std::min(stack.height - 1, static_cast<int>((stack.origin_mm.y() - y0) / h) + 1);
+        for (int r = r0; r <= r1; ++r) {
+          for (int c = c0; c <= c1; ++c) {
             if (loft.SignedDistance(1, stack.PixelCentreMm(p, c, r)) < 0) {
               own[static_cast<size_t>(r) * stack.width + c] = 1;
             }
@@ -477,11 +503,19 @@ Status ComposeVolume(const StructureSet& set, const Loaded& loaded, const std::v
     const int i = order[rank];
     const StructureEntry& e = set.structures[i];
     std::fill(inside.begin(), inside.end(), 0);
+    // The voxels whose centres lie in the structure's box.
+    Eigen::Vector3d box_lo, box_hi;
+    StructureBox(e, loaded, i, &box_lo, &box_hi);
+    std::array<int, 3> first, last;
+    for (int a = 0; a < 3; ++a) {
+      first[a] = std::max(0, static_cast<int>(std::floor((box_lo[a] - origin[a]) / v)));
+      last[a] = std::min(dims[a] - 1, static_cast<int>(std::ceil((box_hi[a] - origin[a]) / v)));
+    }
     if (e.format == StructureFormat::kNifti) {
       const LabelVolume& mask = loaded.masks[i];
-      for (int k = 0; k < dims[2]; ++k) {
-        for (int j = 0; j < dims[1]; ++j) {
-          for (int x = 0; x < dims[0]; ++x) {
+      for (int k = first[2]; k <= last[2]; ++k) {
+        for (int j = first[1]; j <= last[1]; ++j) {
+          for (int x = first[0]; x <= last[0]; ++x) {
             if (mask.SampleNearest(volume.VoxelCentreMm(x, j, k)) != 0) {
               inside[volume.Index(x, j, k)] = 1;
             }
@@ -494,13 +528,10 @@ Status ComposeVolume(const StructureSet& set, const Loaded& loaded, const std::v
       CoverContours({&contours}, ContourPixelMm({&contours}, options.pixel_size_mm), 3, &grid);
       LoftField loft;
       PBA_RETURN_IF_ERROR(LoftOne(contours, grid, v, &loft));
-      Eigen::Vector3d a, b;
-      StructureBox(e, loaded, i, &a, &b);
-      for (int k = 0; k < dims[2]; ++k) {
-        for (int j = 0; j < dims[1]; ++j) {
-          for (int x = 0; x < dims[0]; ++x) {
+      for (int k = first[2]; k <= last[2]; ++k) {
+        for (int j = first[1]; j <= last[1]; ++j) {
+          for (int x = first[0]; x <= last[0]; ++x) {
             const Eigen::Vector3d c = volume.VoxelCentreMm(x, j, k);
-            if ((c.array() < a.array()).any() || (c.array() > b.array()).any()) continue;
             if (loft.SignedDistance(1, c) < 0) inside[volume.Index(x, j, k)] = 1;
           }
         }
@@ -628,6 +659,10 @@ Status ReadStructureSet(const fs::path& dir, StructureSet* set) {
       e.b = rgb[2];
       if (s["sha256"]) {
         e.sha256 = s["sha256"].as<std::string>();
+        if (e.sha256.size() != 64 ||
+            e.sha256.find_first_not_of("0123456789abcdef") != std::string::npos) {
+          return bad(at + ".sha256", who + "'" + e.sha256 + "' is not 64 lowercase hex digits");
+        }
         std::string actual;
         PBA_RETURN_IF_ERROR(Sha256Hex(dir / e.file, &actual));
         if (actual != e.sha256) {

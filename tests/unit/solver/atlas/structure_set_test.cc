@@ -133,9 +133,11 @@ TEST_F(StructureSetTest, ManifestErrorsNameTheEntry) {
   EXPECT_EQ(format.field(), "structures[0].format");
   EXPECT_NE(format.message().find("'ply'"), std::string::npos) << format.ToString();
   const Status sha = read(R"({"name": "B", "file": "b.json", "format": "stl", "colour": "1,2,3",)"
-                          R"( "sha256": "00"})");
+                          R"( "sha256": ")" +
+                          std::string(64, '0') + "\"}");
   EXPECT_EQ(sha.field(), "structures[0].sha256");
   EXPECT_NE(sha.message().find("'B'"), std::string::npos) << sha.ToString();
+  EXPECT_NE(sha.message().find("the manifest says 0000"), std::string::npos) << sha.ToString();
   const Status slash =
       read(R"({"name": "A/B", "file": "b.json", "format": "stl", "colour": "1,2,3"})");
   EXPECT_EQ(slash.field(), "structures[0].name");
