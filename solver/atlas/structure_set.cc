@@ -420,9 +420,11 @@ void SurfaceInside(const TriangleSurface& surface, const LabelVolume& grid,
   }
 }
 
-// The x-y-z box a structure occupies [mm], loft extrapolation included.
-void StructureBox(const StructureEntry& e, const Loaded& loaded, size_t i, Eigen::Vector3d* lo,
-                  Eigen::Vector3d* hi) {
+// The x-y-z box a structure occupies [mm], loft extrapolation included
+// (contours on one plate only: `voxel_mm` either side, as LoftOne makes
+// them).
+void StructureBox(const StructureEntry& e, const Loaded& loaded, size_t i, double voxel_mm,
+                  Eigen::Vector3d* lo, Eigen::Vector3d* hi) {
   *lo = Eigen::Vector3d::Constant(INFINITY);
   *hi = Eigen::Vector3d::Constant(-INFINITY);
   if (e.format == StructureFormat::kNifti) {
@@ -449,8 +451,8 @@ void StructureBox(const StructureEntry& e, const Loaded& loaded, size_t i, Eigen
     }
     // The loft runs on half a plate spacing beyond each end plate.
     const size_t n = c.plates.size();
-    const double below = n > 1 ? (c.plates[1].z_mm - c.plates[0].z_mm) / 2 : 0;
-    const double above = n > 1 ? (c.plates[n - 1].z_mm - c.plates[n - 2].z_mm) / 2 : 0;
+    const double below = n > 1 ? (c.plates[1].z_mm - c.plates[0].z_mm) / 2 : voxel_mm;
+    const double above = n > 1 ? (c.plates[n - 1].z_mm - c.plates[n - 2].z_mm) / 2 : voxel_mm;
     lo->z() -= below;
     hi->z() += above;
   } else {
@@ -471,7 +473,7 @@ Status ComposeVolume(const StructureSet& set, const Loaded& loaded, const std::v
   Eigen::Vector3d hi = Eigen::Vector3d::Constant(-INFINITY);
   for (size_t i = 0; i < set.structures.size(); ++i) {
     Eigen::Vector3d a, b;
-    StructureBox(set.structures[i], loaded, i, &a, &b);
+    StructureBox(set.structures[i], loaded, i, v, &a, &b);
     lo = lo.cwiseMin(a);
     hi = hi.cwiseMax(b);
   }
@@ -505,7 +507,7 @@ Status ComposeVolume(const StructureSet& set, const Loaded& loaded, const std::v
     std::fill(inside.begin(), inside.end(), 0);
     // The voxels whose centres lie in the structure's box.
     Eigen::Vector3d box_lo, box_hi;
-    StructureBox(e, loaded, i, &box_lo, &box_hi);
+    StructureBox(e, loaded, i, v, &box_lo, &box_hi);
     std::array<int, 3> first, last;
     for (int a = 0; a < 3; ++a) {
       first[a] = std::max(0, static_cast<int>(std::floor((box_lo[a] - origin[a]) / v)));

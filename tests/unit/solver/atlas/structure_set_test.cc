@@ -336,6 +336,8 @@ TEST_F(StructureSetTest, MasksSurfacesAndContoursComposeToOneVolume) {
   set.structures.push_back(Entry("Mask", "mask.nii.gz", StructureFormat::kNifti, 10));
   set.structures.push_back(Entry("Cube", "cube.stl", StructureFormat::kStl, 20));
   set.structures.push_back(AddContours("Slab", Box(0, 8, 20, 28, {0, 2, 4, 6, 8}), 30));
+  // Drawn on one plate: one voxel layer (centres on the outline excluded).
+  set.structures.push_back(AddContours("Sheet", Box(40, 46, 0, 6, {3}), 40));
   ComposedAtlas atlas;
   const Status s = Compose(set, &atlas, 1.0);
   ASSERT_TRUE(s.ok()) << s.ToString();
@@ -355,6 +357,7 @@ TEST_F(StructureSetTest, MasksSurfacesAndContoursComposeToOneVolume) {
   // point half a plate spacing beyond each.
   EXPECT_GT(counts[slab], 64 * 8 - 0.5 * (2 * 64 + 4 * 8 * 8));
   EXPECT_LT(counts[slab], 64 * 10 + 0.5 * (2 * 64 + 4 * 8 * 10));
+  EXPECT_EQ(counts[atlas.colours.FindByName("Sheet")->label], 5 * 5);
 }
 
 TEST_F(StructureSetTest, VolumeOverlapsAreReportedInCubicMillimetres) {
