@@ -40,37 +40,6 @@ std::string Gunzip(std::string_view gz, size_t want) {
   return out;
 }
 
-Status CheckNiftiData(const std::string& field, std::string_view content, bool gzipped);
-
-// The header by hand first, for messages that say what the upload is not;
-// then the data block.
-Status CheckNifti(std::string_view field, std::string_view content) {
-  const std::string_view whole = content;
-  std::string inflated;
-  const bool gzipped = content.size() >= 2 && static_cast<unsigned char>(content[0]) == 0x1f &&
-                       static_cast<unsigned char>(content[1]) == 0x8b;
-  if (gzipped) {
-    inflated = Gunzip(content, kNiftiHeaderBytes);
-    content = inflated;
-  }
-  if (content.size() < kNiftiHeaderBytes) {
-    return Status::InvalidArgument(std::string(field),
-                                   "is not NIfTI-1: shorter than the 348-byte header");
-  }
-  uint32_t sizeof_hdr = 0;
-  std::memcpy(&sizeof_hdr, content.data(), 4);
-  const uint32_t swapped = __builtin_bswap32(sizeof_hdr);
-  if (sizeof_hdr != kNiftiHeaderBytes && swapped != kNiftiHeaderBytes) {
-    return Status::InvalidArgument(std::string(field), "is not NIfTI-1: sizeof_hdr is not 348");
-  }
-  const std::string_view magic = content.substr(344, 4);
-  if (magic != std::string_view("n+1\0", 4) && magic != std::string_view("ni1\0", 4)) {
-    return Status::InvalidArgument(std::string(field),
-                                   "is not NIfTI-1: the magic is not \"n+1\" or \"ni1\"");
-  }
-  return CheckNiftiData(std::string(field), whole, gzipped);
-}
-
 // The data block through the solver's own reader (the one a structure set
 // is composed with), from a temporary file as nifti1_io reads only files:
 // an integer mask, at least one voxel non-zero, those voxels' centres within
@@ -114,6 +83,41 @@ Status CheckNiftiData(const std::string& field, std::string_view content, bool g
                       low.x(), low.y(), low.z(), high.x(), high.y(), high.z()));
   }
   return Status::Ok();
+}
+
+// The header by hand first, for messages that say what the upload is not;
+// then the data block.
+Status CheckNifti(std::string_view field, std::string_view content) {
+  const std::string_view whole = content;
+  std::string inflated;
+  const bool gzipped = content.size() >= 2 && static_cast<unsigned char>(content[0]) == 0x1f &&
+                       static_cast<unsigned char>(content[1]) == 0x8b;
+  if (gzipped) {
+    inflated = Gunzip(content, kNiftiHeaderBytes);
+    content = inflated;
+  }
+  if (content.size() < kNiftiHeaderBytes) {
+    return Status::InvalidArgument(std::string(field),
+                                   "is not NIfTI-1: shorter than the 348-byte header");
+  }
+  uint32_t sizeof_hdr = 0;
+  std::memcpy(&sizeof_hdr, content.data(), 4);
+  const uint32_t swapped = __builtin_bswap32(sizeof_hdr);
+  if (sizeof_hdr != kNiftiHeaderBytes && swapped != kNiftiHeaderBytes) {
+    return Status::InvalidArgument(std::string(field), "is not NIfTI-1: sizeof_hdr is not 348");
+  }
+  const std::string_view magic = content.substr(344, 4);
+  if (magic == std::string_view("ni1\0", 4)) {
+    // Its data is in a separate .img file, which an upload does not carry.
+    return Status::InvalidArgument(std::string(field),
+                                   "is the header of a NIfTI-1 .hdr/.img pair (magic \"ni1\"); "
+                                   "upload a single-file NIfTI-1 (.nii or .nii.gz) instead");
+  }
+  if (magic != std::string_view("n+1\0", 4)) {
+    return Status::InvalidArgument(std::string(field),
+                                   "is not NIfTI-1: the magic is not \"n+1\" or \"ni1\"");
+  }
+  return CheckNiftiData(std::string(field), whole, gzipped);
 }
 
 Status CheckContoursJson(std::string_view field, std::string_view content) {

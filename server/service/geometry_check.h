@@ -5,7 +5,8 @@
 //                  least three points and non-zero area, coordinates in mm
 //                  within 500 mm of the origin, pixel_size_mm in (0, 10]
 //   nifti          a NIfTI-1 header: sizeof_hdr 348 (either byte order) and
-//                  magic "n+1" or "ni1" (gzip-compressed files inflated);
+//                  magic "n+1" (gzip-compressed files inflated; "ni1", a
+//                  header whose data is in a separate .img, is refused);
 //                  then the data through the solver's ReadNifti: integer
 //                  values, not truncated, at least one voxel non-zero, the
 //                  non-zero voxels' centres within 500 mm of the origin

@@ -156,7 +156,13 @@ TEST(GeometryCheckTest, NiftiMasksAreReadToTheirData) {
   const Status fraction = CheckGeometryContent("upload_id", GeometryFormat::kNifti, floats);
   EXPECT_NE(Message(fraction).find("0.5"), std::string::npos) << Message(fraction);
 
-  for (const Status& s : {empty, truncated, far, fraction}) {
+  // The header of a .hdr/.img pair: its data is not in the upload.
+  std::string pair = whole.substr(0, 348);
+  std::memcpy(&pair[344], "ni1", 4);
+  const Status header_only = CheckGeometryContent("upload_id", GeometryFormat::kNifti, pair);
+  EXPECT_NE(Message(header_only).find(".hdr/.img"), std::string::npos) << Message(header_only);
+
+  for (const Status& s : {empty, truncated, far, fraction, header_only}) {
     EXPECT_EQ(s.code(), Status::Code::kInvalidArgument);
     EXPECT_EQ(s.field(), "upload_id");
   }
