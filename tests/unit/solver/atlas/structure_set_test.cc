@@ -264,6 +264,30 @@ TEST_F(StructureSetTest, ContoursOnSharedHeightsComposeToTheirPixels) {
   }
 }
 
+// A polygon inside another is a hole (even-odd rule), whichever way round
+// either is drawn.
+TEST_F(StructureSetTest, APolygonInsideAnotherIsAHole) {
+  Contours ring = Box(0, 10, 0, 10, {0, 2});
+  for (ContourPlate& plate : ring.plates) {
+    plate.polygons.push_back({{3, 3}, {3, 7}, {7, 7}, {7, 3}});
+  }
+  StructureSet set;
+  set.structures.push_back(AddContours("Ring", ring, 10));
+  ComposedAtlas atlas;
+  const Status s = Compose(set, &atlas);
+  ASSERT_TRUE(s.ok()) << s.ToString();
+  const PlateStack& p = *atlas.plates;
+  for (int plate = 0; plate < 2; ++plate) {
+    int count = 0;
+    for (uint16_t l : p.labels[plate]) count += l == 1;
+    EXPECT_EQ(count, 20 * 20 - 8 * 8);
+    const Eigen::Vector3d centre = p.PixelCentreMm(plate, 0, 0);
+    const int c = static_cast<int>(std::lround((5.25 - centre.x()) / p.pixel_size_mm));
+    const int r = static_cast<int>(std::lround((centre.y() - 5.25) / p.pixel_size_mm));
+    EXPECT_EQ(p.at(plate, c, r), 0);
+  }
+}
+
 // B is drawn at z = 0 and 4 only, A at 0, 2 and 4: B's section on A's
 // plate at z = 2 is interpolated from its own (here the same square).
 TEST_F(StructureSetTest, AStructureGetsASectionOnPlatesBetweenItsOwn) {
