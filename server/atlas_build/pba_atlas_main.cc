@@ -1,11 +1,12 @@
 // pba-atlas: builds a physics-based atlas locally from files - the built-in
-// synthetic atlas, a plate stack, or a label volume - into one conforming
+// synthetic atlas, a plate stack, a label volume, or a structure set - into
+// one conforming
 // multi-material tetrahedral mesh, with its quality report and, when the
 // source has plates, its geometric validation against them.
 //
 //   pba-atlas plates -o DIR          the synthetic atlas's 27 plates
-//   pba-atlas build -o DIR [--plates DIR | --labels FILE] ...
-//   pba-atlas split -o DIR [--plates DIR | --labels FILE] [--structures NAME ...]
+//   pba-atlas build -o DIR [--plates DIR | --labels FILE | --structures DIR] ...
+//   pba-atlas split -o DIR [--plates DIR | --labels FILE] [--structure NAME]...
 //                                    the atlas as a structure set, one file
 //                                    per structure (structure_split.h)
 //
@@ -183,6 +184,8 @@ int RunBuild(AtlasBuildOptions options, const Pictures& pictures, const std::str
   std::printf("%s", FormatReportTable(quality, format).c_str());
   if (validation) std::printf("\n%s", FormatReportTable(*validation, format).c_str());
   if (format == TableFormat::kText) {
+    if (!result.notes.empty()) std::printf("\n");
+    for (const std::string& note : result.notes) std::printf("note: %s\n", note.c_str());
     if (!result.merged.empty()) {
       std::printf("\n%zu structures merged into \"%s\" (not asked for)\n", result.merged.size(),
                   kSurroundingTissue);
@@ -266,7 +269,7 @@ int main(int argc, char** argv) {
   plates->add_option("--voxel-mm", voxel_mm, "Voxel edge of the painted atlas [mm]");
 
   pba::AtlasBuildOptions build_options;
-  std::string plates_dir, labels_file, colour_table, format_name = "text";
+  std::string plates_dir, labels_file, structures_dir, colour_table, format_name = "text";
   std::vector<std::string> structures;
   CLI::App* build = app.add_subcommand(
       "build",
@@ -279,8 +282,15 @@ int main(int argc, char** argv) {
       ->required();
   auto* plates_option = build->add_option("--plates", plates_dir,
                                           "Plate directory (plates.json, PNGs, colour table)");
-  build->add_option("--labels", labels_file, "Label volume (.nii, .nii.gz or .nrrd)")
-      ->excludes(plates_option);
+  auto* labels_option =
+      build->add_option("--labels", labels_file, "Label volume (.nii, .nii.gz or .nrrd)")
+          ->excludes(plates_option);
+  build
+      ->add_option("--structures", structures_dir,
+                   "Structure set (manifest.json and one file per structure: contours, "
+                   "NIfTI masks, closed STL/OBJ/VTK surfaces)")
+      ->excludes(plates_option)
+      ->excludes(labels_option);
   build->add_option("--colour-table", colour_table,
                     "Label table for --labels (CSV: label,name,r,g,b); default the built-in one");
   build->add_option("--synthetic-voxel-mm", build_options.synthetic_voxel_mm,
@@ -370,8 +380,8 @@ int main(int argc, char** argv) {
       ->needs(split_labels_option);
   split->add_option("--synthetic-voxel-mm", split_options.source.synthetic_voxel_mm,
                     "Voxel edge of the painted synthetic atlas [mm]");
-  split->add_option("--structures,--structure", split_options.structures,
-                    "Only these structures (colour-table names, or a group such as Thalamus)");
+  split->add_option("--structure", split_options.structures,
+                    "Only this structure (repeatable; a colour-table name, or a group such as Thalamus)");
 
   try {
     app.parse(argc, argv);
@@ -399,6 +409,9 @@ int main(int argc, char** argv) {
       build_options.source = pba::AtlasBuildOptions::Source::kLabelVolume;
       build_options.input = labels_file;
       build_options.colour_table = colour_table;
+    } else if (!structures_dir.empty()) {
+      build_options.source = pba::AtlasBuildOptions::Source::kStructures;
+      build_options.input = structures_dir;
     }
     build_options.structures = structures;
     if (!roi.empty()) {

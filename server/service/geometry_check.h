@@ -1,19 +1,24 @@
 // The minimal check of uploaded geometry before it becomes a revision, by
 // format. What is checked:
-//   contours_json  {"plates": [{"z_mm": Z, "polygons": [[[x, y], ...]]}]}:
+//   contours_json  the solver's ParseContoursJson (atlas/contours.h):
 //                  plates at distinct heights, each with polygons of at
 //                  least three points and non-zero area, coordinates in mm
-//                  within 500 mm of the origin (geometry_check.cc)
+//                  within 500 mm of the origin, pixel_size_mm in (0, 10]
 //   nifti          a NIfTI-1 header: sizeof_hdr 348 (either byte order) and
-//                  magic "n+1" or "ni1"; gzip-compressed files (.nii.gz) are
-//                  inflated just far enough to read the header
-//   stl, obj, vtk  a closed surface: binary or ASCII STL, OBJ (v and f),
-//                  ASCII legacy VTK POLYDATA; points welded by coordinates;
-//                  at least four triangles, every edge shared by exactly
-//                  two, a non-zero enclosed volume, points within 500 mm
-//                  of the origin
+//                  magic "n+1" (gzip-compressed files inflated; "ni1", a
+//                  header whose data is in a separate .img, is refused);
+//                  then the data through the solver's ReadNifti: integer
+//                  values, not truncated, at least one voxel non-zero, the
+//                  non-zero voxels' centres within 500 mm of the origin
+//   stl, obj, vtk  the solver's ReadSurface (io/surface_io.h): a closed
+//                  surface, binary or ASCII STL, OBJ (v and f), ASCII
+//                  legacy VTK POLYDATA; at least four triangles, every
+//                  edge shared by exactly two, a non-zero enclosed volume,
+//                  points within 500 mm of the origin
+// The same readers compose a structure set (atlas/structure_set.h), so what
+// passes here can be meshed.
 // What is not checked yet (future work): self-intersecting polygons and
-// surfaces, the NIfTI data block and its labels, that a shape lies within
+// surfaces, that a shape lies within
 // the atlas's own bounds, and that it does not overlap neighbouring
 // structures that others hold locked.
 #pragma once

@@ -10,6 +10,7 @@
 #include "atlas/label_volume_io.h"
 #include "atlas/loft.h"
 #include "atlas/midside_projection.h"
+#include "atlas/structure_set.h"
 #include "atlas/synthetic_atlas.h"
 #include "core/format.h"
 #include "mesh/improve.h"
@@ -331,15 +332,39 @@ Status BuildAtlas(const AtlasBuildOptions& options, AtlasBuildResult* result) {
     }
     plates_dir = options.plates_dir;
   }
-  if (options.source == AtlasBuildOptions::Source::kLabelVolume) {
-    if (Status s = ReadLabelVolume(options.input, &result->volume); !s.ok()) return s;
+  // A structure set is composed into plates (every structure contours) or a
+  // label volume, and goes on as that source would.
+  std::optional<PlateStack> composed_plates;
+  bool composed_volume = false;
+  if (options.source == AtlasBuildOptions::Source::kStructures) {
+    StructureSet set;
+    PBA_RETURN_IF_ERROR(ReadStructureSet(options.input, &set));
+    ComposeOptions compose;
+    compose.voxel_size_mm = options.loft_voxel_mm;
+    ComposedAtlas atlas;
+    PBA_RETURN_IF_ERROR(ComposeStructureSet(options.input, set, compose, &atlas));
+    result->notes = std::move(atlas.notes);
+    if (atlas.plates) {
+      composed_plates = std::move(atlas.plates);
+    } else {
+      result->volume = std::move(*atlas.volume);
+      result->colours = std::move(atlas.colours);
+      composed_volume = true;
+    }
+  }
+  if (options.source == AtlasBuildOptions::Source::kLabelVolume || composed_volume) {
+    if (!composed_volume) {
+      if (Status s = ReadLabelVolume(options.input, &result->volume); !s.ok()) return s;
+    }
     const LabelVolume& v = result->volume;
     PBA_RETURN_IF_ERROR(
         CheckExtent(Eigen::Vector3d(v.nx(), v.ny(), v.nz()).cwiseProduct(v.spacing_mm()), "input",
                     options.input.string(),
                     Format("voxels of %g x %g x %g mm", v.spacing_mm().x(), v.spacing_mm().y(),
                            v.spacing_mm().z())));
-    if (options.colour_table.empty()) {
+    if (composed_volume) {
+      // The colours came with the structures.
+    } else if (options.colour_table.empty()) {
       result->colours = ColourTable::Builtin();
     } else if (Status s = ReadColourTableCsv(options.colour_table, &result->colours); !s.ok()) {
       return s;
@@ -347,11 +372,17 @@ Status BuildAtlas(const AtlasBuildOptions& options, AtlasBuildResult* result) {
     result->times.source_s = SecondsSince(start);
   } else {
     PlateStack stack;
-    if (Status s = ReadPlates(plates_dir, &stack); !s.ok()) return s;
+    if (composed_plates) {
+      stack = std::move(*composed_plates);
+    } else if (Status s = ReadPlates(plates_dir, &stack); !s.ok()) {
+      return s;
+    }
     PBA_RETURN_IF_ERROR(CheckExtent(
         Eigen::Vector3d(stack.width * stack.pixel_size_mm, stack.height * stack.pixel_size_mm,
                         stack.z_mm.back() - stack.z_mm.front()),
-        "pixel_size_mm", (plates_dir / "plates.json").string(),
+        "pixel_size_mm",
+        (composed_plates ? options.input / kStructureSetManifest : plates_dir / "plates.json")
+            .string(),
         Format("%d x %d pixels of %g mm", stack.width, stack.height, stack.pixel_size_mm)));
     result->times.source_s = SecondsSince(start);
     start = Clock::now();

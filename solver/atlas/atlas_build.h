@@ -1,11 +1,14 @@
 // Building a physics-based atlas: from its source (the built-in synthetic
-// atlas, a plate stack, or a label volume) to one conforming multi-material
+// atlas, a plate stack, a label volume, or a structure set) to one
+// conforming multi-material
 // tetrahedral mesh whose regions are the structures, with the reports it is
 // judged by.
 //
 //   synthetic ─► WritePlates ─┐
 //   plate stack ──────────────┴─► ReadPlates ─► LoftField ─┐
 //   label volume (NIfTI / NRRD) + colour table ────────────┴─► label volume
+//   structure set ─► ComposeStructureSet ─► plates (all contours: as a
+//     plate stack above) or a label volume with its colour table
 //     ─► MeshLabels (CGAL Mesh_3) ─► [MakeQuadratic ─► ProjectMidsideNodes]
 //     ─► Mesh (regions = structures) ─► quality report; against the plates,
 //        when there are plates, the geometric validation.
@@ -52,19 +55,23 @@
 namespace pba {
 
 struct AtlasBuildOptions {
-  enum class Source { kSynthetic, kPlates, kLabelVolume };
+  enum class Source { kSynthetic, kPlates, kLabelVolume, kStructures };
   Source source = Source::kSynthetic;
   // kPlates: the plate directory (plates.h). kLabelVolume: a .nii, .nii.gz
-  // or .nrrd file.
+  // or .nrrd file. kStructures: a structure-set directory (structure_set.h),
+  // composed with voxel_size_mm = loft_voxel_mm and the contours' own pixel
+  // size; from contours alone it goes on as plates (loft, 10-node curving,
+  // geometric validation), else as a label volume with the set's colours.
   std::filesystem::path input;
   // kLabelVolume: the label table (colour_table.h CSV); empty: the built-in
-  // table.
+  // table. (kStructures: unused, the manifest has the colours.)
   std::filesystem::path colour_table;
   // kSynthetic: where the rendered plates are written (must not exist).
   std::filesystem::path plates_dir;
   // kSynthetic: voxel edge of the painted atlas [mm].
   double synthetic_voxel_mm = 1.0;
-  // Plates: voxel edge of the lofted label volume [mm].
+  // Plates: voxel edge of the lofted label volume [mm]; structure sets:
+  // also of the label volume composed from masks and surfaces.
   double loft_voxel_mm = 1.0;
   // Tetrahedron size inside the structures and on their surfaces [mm]
   // (LabelMeshOptions::cell_size_mm and facet_size_mm; facet distance
@@ -152,6 +159,9 @@ struct AtlasBuildResult {
   LabelMeshReport mesher;    // the mesher's steps: their times, and any cut short by its time limit
   // 10-node from plates: the mid-edge nodes moved onto the loft's surfaces.
   std::optional<MidsideProjectionReport> projection;
+  // kStructures: what composing the set found worth saying (overlaps of
+  // structures, and who kept the disputed pixels or voxels).
+  std::vector<std::string> notes;
 };
 
 Status BuildAtlas(const AtlasBuildOptions& options, AtlasBuildResult* result);

@@ -92,7 +92,15 @@ struct ComposeOptions {
 // Labels are 1..n in byte-wise order of the names; `colours` maps them to
 // the names and colours of the manifest. Where two structures claim a
 // pixel or voxel, the one first in that order keeps it, and the overlap
-// is reported in `notes` with its area or volume.
+// is reported in `notes` with its area or volume, e.g. "A and B overlap on
+// 80 pixels (20 mm^2) at z = 3 mm; A keeps them" (one note per pair and
+// plate; in a volume "... on N voxels (V mm^3)" per pair).
+// The plate grid covers every polygon with three pixels to spare; its first
+// pixel centre is half a pixel inside the leftmost and topmost points, so
+// contours traced on a grid of the same pixel size come back onto it
+// pixel for pixel. Contours drawn at a single height are refused when every
+// structure is (a loft needs two plates); in a volume such a structure is
+// lofted to nothing a voxel above and below its plate.
 struct ComposedAtlas {
   ColourTable colours;
   std::optional<PlateStack> plates;

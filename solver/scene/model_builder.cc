@@ -10,6 +10,7 @@
 #include <string>
 
 #include "atlas/atlas_build.h"
+#include "atlas/structure_set.h"
 #include "core/format.h"
 #include "io/atlas_mesh_cache.h"
 #include "mesh/primitive_mesher.h"
@@ -257,6 +258,9 @@ Status BuildAtlasMesh(const SceneSpec& scene, const BuildModelOptions& cache, Me
     if (temp.path().empty()) return Status::Io("cannot create a temporary directory for plates");
     options.source = AtlasBuildOptions::Source::kSynthetic;
     options.plates_dir = temp.path() / "plates";
+  } else if (IsStructureSetDir(a.source)) {
+    options.source = AtlasBuildOptions::Source::kStructures;
+    options.input = a.source;
   } else if (std::filesystem::is_directory(a.source)) {
     options.source = AtlasBuildOptions::Source::kPlates;
     options.input = a.source;
@@ -346,6 +350,8 @@ Status BuildAtlasMesh(const SceneSpec& scene, const BuildModelOptions& cache, Me
                "%d sections",
                result.validation->overall_percentage_error, result.validation->total_sections));
   }
+  // A structure set's overlaps: who kept what is worth knowing in a result.
+  for (const std::string& note : result.notes) description->append("; " + note);
   StoreAtlasMesh(cache, cached, *mesh, description);
   return Status::Ok();
 }

@@ -1,6 +1,7 @@
 // pba-atlas as users call it: the synthetic atlas's plates out of the box,
 // an atlas mesh built from them, from the label volume and from the
-// synthetic source directly, each with its reports and pictures; bad input
+// synthetic source directly, and from a structure set, each with its
+// reports and pictures; bad input
 // exits 2 naming what is wrong and leaves nothing behind.
 
 #include <gtest/gtest.h>
@@ -249,6 +250,53 @@ TEST_F(PbaAtlasTest, MergedRestIsOneRegionAndOnlyKeptStructuresAreJudged) {
   }
   EXPECT_EQ(judged, (std::set<std::string>{"Putamen", "Thalamus: pulvinar"}));
   EXPECT_FALSE(fs::exists(out / "pictures"));
+}
+
+// A structure set of two contour structures that overlap: meshed through
+// the plates path (validation included), the overlap noted; a manifest
+// entry coloured black is refused naming it.
+TEST_F(PbaAtlasTest, StructureSetIsComposedAndMeshed) {
+  const fs::path set = dir_.path() / "set";
+  fs::create_directories(set);
+  const auto box = [](double x0, double x1) {
+    std::string plates;
+    for (int z : {0, 4, 8, 12}) {
+      plates += std::string(plates.empty() ? "" : ", ") + "{\"z_mm\": " + std::to_string(z) +
+                ", \"polygons\": [[[" + std::to_string(x0) + ", -6], [" + std::to_string(x1) +
+                ", -6], [" + std::to_string(x1) + ", 6], [" + std::to_string(x0) + ", 6]]]}";
+    }
+    return "{\"pixel_size_mm\": 0.5, \"plates\": [" + plates + "]}";
+  };
+  std::ofstream(set / "left.json") << box(-12, 0);
+  std::ofstream(set / "right.json") << box(-2, 12);
+  const auto manifest = [&](const std::string& left_colour) {
+    std::ofstream(set / "manifest.json")
+        << "{\"structures\": [{\"name\": \"Left\", \"file\": \"left.json\", \"format\": "
+           "\"contours_json\", \"colour\": \""
+        << left_colour
+        << "\"}, {\"name\": \"Right\", \"file\": \"right.json\", \"format\": "
+           "\"contours_json\", \"colour\": \"10,200,10\"}]}";
+  };
+  manifest("200,10,10");
+  const fs::path out = dir_.path() / "atlas";
+  std::vector<std::string> args = {PBA_ATLAS_BIN,  "build",      "-o",           out.string(),
+                                   "--structures", set.string(), "--no-pictures"};
+  for (const std::string& a : Coarse()) args.push_back(a);
+  RunResult run = RunProcess(args);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  ExpectQualityReport(out, 2);
+  EXPECT_TRUE(fs::exists(out / "validation.json"));
+  EXPECT_NE(run.out.find("note: Left and Right overlap on 96 pixels (24 mm^2) at z = 4 mm"),
+            std::string::npos)
+      << run.out;
+
+  manifest("0,0,0");
+  const fs::path refused = dir_.path() / "refused";
+  args[3] = refused.string();
+  run = RunProcess(args);
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_NE(run.err.find("structures[0].colour"), std::string::npos) << run.err;
+  EXPECT_FALSE(fs::exists(refused));
 }
 
 TEST_F(PbaAtlasTest, BadInputExitsTwoNamingItAndWritesNothing) {

@@ -210,11 +210,19 @@ TEST_F(AtlasServiceTest, AWrongHashOrBadGeometryIsRefusedAndNothingIsWritten) {
               grpc::StatusCode::NOT_FOUND, "heart");
   EXPECT_EQ(Audit().size(), audit_before);
 
-  // A minimal NIfTI-1 header passes.
-  std::string nifti(352, '\0');
+  // A minimal NIfTI-1 mask passes: one uint8 voxel, set.
+  std::string nifti(353, '\0');
   const int32_t sizeof_hdr = 348;
+  const int16_t dim[4] = {3, 1, 1, 1}, datatype = 2, bitpix = 8;
+  const float pixdim[4] = {1, 1, 1, 1}, vox_offset = 352;
   std::memcpy(nifti.data(), &sizeof_hdr, 4);
+  std::memcpy(nifti.data() + 40, dim, sizeof dim);
+  std::memcpy(nifti.data() + 70, &datatype, 2);
+  std::memcpy(nifti.data() + 72, &bitpix, 2);
+  std::memcpy(nifti.data() + 76, pixdim, sizeof pixdim);
+  std::memcpy(nifti.data() + 108, &vox_offset, 4);
   std::memcpy(nifti.data() + 344, "n+1", 4);
+  nifti[352] = 1;
   create.set_format(v1::NIFTI);
   create.set_upload_id(Upload("bob", nifti));
   ASSERT_RPC(Call("bob", &v1::AtlasService::Stub::CreateStructure, create, &revision));

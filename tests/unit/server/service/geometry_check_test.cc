@@ -5,7 +5,12 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <string>
+
+#include "atlas/label_volume_io.h"
 
 namespace pba {
 namespace {
@@ -99,6 +104,65 @@ TEST(GeometryCheckTest, OpenFlatFarOrUnreadableSurfacesAreNamed) {
   const Status noise = CheckGeometryContent("upload_id", GeometryFormat::kStl, "not a mesh at all");
   EXPECT_NE(Message(noise).find("neither binary STL"), std::string::npos) << Message(noise);
   for (const Status& s : {open, few, flat, far, index, binary_vtk, noise}) {
+    EXPECT_EQ(s.code(), Status::Code::kInvalidArgument);
+    EXPECT_EQ(s.field(), "upload_id");
+  }
+}
+
+// The bytes of a NIfTI-1 file of a 4 x 3 x 2 volume of 1 mm voxels whose
+// voxel (0, 0, 0) is centred at `origin`, with `fill` voxels set to 1.
+std::string NiftiBytes(const Eigen::Vector3d& origin, int fill, const std::string& name) {
+  LabelVolume volume({4, 3, 2}, origin, Eigen::Vector3d::Ones());
+  for (int n = 0; n < fill; ++n) volume.mutable_labels()[n] = 1;
+  const std::filesystem::path file = std::filesystem::path(testing::TempDir()) / name;
+  EXPECT_TRUE(WriteNifti(volume, file).ok());
+  std::ifstream in(file, std::ios::binary);
+  std::ostringstream bytes;
+  bytes << in.rdbuf();
+  std::filesystem::remove(file);
+  return bytes.str();
+}
+
+TEST(GeometryCheckTest, NiftiMasksAreReadToTheirData) {
+  const Eigen::Vector3d origin(-10, 5, 2);
+  for (const char* name : {"mask.nii", "mask.nii.gz"}) {
+    const Status ok =
+        CheckGeometryContent("upload_id", GeometryFormat::kNifti, NiftiBytes(origin, 5, name));
+    EXPECT_TRUE(ok.ok()) << name << ": " << Message(ok);
+  }
+  const Status empty =
+      CheckGeometryContent("upload_id", GeometryFormat::kNifti, NiftiBytes(origin, 0, "e.nii"));
+  EXPECT_NE(Message(empty).find("empty"), std::string::npos) << Message(empty);
+
+  std::string whole = NiftiBytes(origin, 5, "t.nii");
+  const Status truncated =
+      CheckGeometryContent("upload_id", GeometryFormat::kNifti, whole.substr(0, whole.size() - 7));
+  EXPECT_NE(Message(truncated).find("truncated"), std::string::npos) << Message(truncated);
+
+  const Status far = CheckGeometryContent("upload_id", GeometryFormat::kNifti,
+                                          NiftiBytes(Eigen::Vector3d(0, 0, 900), 5, "f.nii"));
+  EXPECT_NE(Message(far).find("500 mm"), std::string::npos) << Message(far);
+
+  // The same header made float32 (datatype 16, bitpix 32) over 24 floats,
+  // one of them 0.5: not a label.
+  std::string floats = whole.substr(0, 352);
+  const int16_t datatype = 16, bitpix = 32;
+  std::memcpy(&floats[70], &datatype, 2);
+  std::memcpy(&floats[72], &bitpix, 2);
+  for (int n = 0; n < 24; ++n) {
+    const float value = n == 3 ? 0.5f : 1.0f;
+    floats.append(reinterpret_cast<const char*>(&value), 4);
+  }
+  const Status fraction = CheckGeometryContent("upload_id", GeometryFormat::kNifti, floats);
+  EXPECT_NE(Message(fraction).find("0.5"), std::string::npos) << Message(fraction);
+
+  // The header of a .hdr/.img pair: its data is not in the upload.
+  std::string pair = whole.substr(0, 348);
+  std::memcpy(&pair[344], "ni1", 4);
+  const Status header_only = CheckGeometryContent("upload_id", GeometryFormat::kNifti, pair);
+  EXPECT_NE(Message(header_only).find(".hdr/.img"), std::string::npos) << Message(header_only);
+
+  for (const Status& s : {empty, truncated, far, fraction, header_only}) {
     EXPECT_EQ(s.code(), Status::Code::kInvalidArgument);
     EXPECT_EQ(s.field(), "upload_id");
   }

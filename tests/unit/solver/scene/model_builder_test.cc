@@ -10,9 +10,12 @@
 #include <chrono>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <string>
 
+#include "atlas/contours.h"
+#include "atlas/structure_set.h"
 #include "common/scene_builders.h"
 #include "mesh/mesh.h"
 #include "mesh/quadratic.h"
@@ -263,6 +266,42 @@ TEST(ModelBuilderAtlas, AnUnknownStructureIsNamed) {
   EXPECT_EQ(status.code(), Status::Code::kInvalidArgument);
   EXPECT_EQ(status.field(), "geometry.atlas.structures[1]");
   EXPECT_NE(status.message().find("Claustrum"), std::string::npos) << status.message();
+}
+
+// A scene's atlas source may be a structure set: composed (here from
+// contours into plates, with an overlap noted) and meshed.
+TEST(ModelBuilderAtlas, AStructureSetIsAnAtlasSource) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::path(::testing::TempDir()) / "model_builder_structure_set";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  StructureSet set;
+  const auto add = [&](const std::string& name, double x0, double x1, uint8_t r) {
+    Contours c;
+    for (double z : {0.0, 4.0, 8.0, 12.0}) {
+      c.plates.push_back({z, {{{x0, -8}, {x1, -8}, {x1, 8}, {x0, 8}}}});
+    }
+    std::ofstream(dir / (name + ".json")) << FormatContoursJson(c);
+    StructureEntry e;
+    e.name = name;
+    e.file = name + ".json";
+    e.r = r;
+    e.g = e.b = 90;
+    set.structures.push_back(e);
+  };
+  add("Right", -1, 16, 200);
+  add("Left", -16, 0, 100);
+  ASSERT_TRUE(WriteStructureSet(set, dir).ok());
+  SceneSpec s = AtlasScene({});
+  s.geometry.atlas.source = dir.string();
+  Model model;
+  const Status built = BuildModel(s, &model);
+  ASSERT_TRUE(built.ok()) << built.ToString();
+  EXPECT_EQ(model.mesh.region_names, (std::vector<std::string>{"Left", "Right"}));
+  const std::string& note = model.mesh_description;
+  EXPECT_NE(note.find("user atlas, 2 structures"), std::string::npos) << note;
+  EXPECT_NE(note.find("Left and Right overlap on"), std::string::npos) << note;
+  fs::remove_all(dir);
 }
 
 }  // namespace
