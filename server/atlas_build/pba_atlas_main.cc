@@ -1,8 +1,8 @@
 // pba-atlas: builds a physics-based atlas locally from files - the built-in
 // synthetic atlas, a plate stack, a label volume, or a structure set - into
-// one conforming
-// multi-material tetrahedral mesh, with its quality report and, when the
-// source has plates, its geometric validation against them.
+// one conforming multi-material tetrahedral mesh, with its quality report
+// and, when the source has plates, its geometric validation against them;
+// and splits an atlas into a structure set.
 //
 //   pba-atlas plates -o DIR          the synthetic atlas's 27 plates
 //   pba-atlas build -o DIR [--plates DIR | --labels FILE | --structures DIR] ...
@@ -380,8 +380,9 @@ int main(int argc, char** argv) {
       ->needs(split_labels_option);
   split->add_option("--synthetic-voxel-mm", split_options.source.synthetic_voxel_mm,
                     "Voxel edge of the painted synthetic atlas [mm]");
-  split->add_option("--structure", split_options.structures,
-                    "Only this structure (repeatable; a colour-table name, or a group such as Thalamus)");
+  split->add_option(
+      "--structure", split_options.structures,
+      "Only this structure (repeatable; a colour-table name, or a group such as Thalamus)");
 
   try {
     app.parse(argc, argv);
