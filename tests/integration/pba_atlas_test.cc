@@ -1,7 +1,7 @@
 // pba-atlas as users call it: the synthetic atlas's plates out of the box,
 // an atlas mesh built from them, from the label volume and from the
 // synthetic source directly, and from a structure set, each with its
-// reports and pictures; bad input
+// reports and pictures; an atlas split into a structure set; bad input
 // exits 2 naming what is wrong and leaves nothing behind.
 
 #include <gtest/gtest.h>
@@ -297,6 +297,37 @@ TEST_F(PbaAtlasTest, StructureSetIsComposedAndMeshed) {
   EXPECT_EQ(run.exit_code, 2);
   EXPECT_NE(run.err.find("structures[0].colour"), std::string::npos) << run.err;
   EXPECT_FALSE(fs::exists(refused));
+}
+
+// pba-atlas split: two structures of the synthetic atlas as their plate
+// contours, one line each, meshed again through the structure set; a second
+// split into the same directory is refused and leaves it as it was.
+TEST_F(PbaAtlasTest, SplitGivesAStructureSetThatBuilds) {
+  const fs::path set = dir_.path() / "set";
+  RunResult run = RunProcess({PBA_ATLAS_BIN, "split", "-o", set.string(), "--synthetic-voxel-mm",
+                              "2", "--structure", "Putamen", "--structure", "Thalamus: pulvinar"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_NE(run.out.find("Putamen             contours_json  Putamen.json  "), std::string::npos)
+      << run.out;
+  EXPECT_NE(run.out.find("Thalamus: pulvinar  contours_json  Thalamus__pulvinar.json  "),
+            std::string::npos)
+      << run.out;
+  EXPECT_NE(run.out.find("(2 structures, manifest.json)"), std::string::npos) << run.out;
+  const std::string manifest = ReadFile(set / "manifest.json");
+  EXPECT_NE(manifest.find("\"sha256\""), std::string::npos) << manifest;
+
+  const fs::path out = dir_.path() / "atlas";
+  std::vector<std::string> args = {PBA_ATLAS_BIN,  "build",      "-o",           out.string(),
+                                   "--structures", set.string(), "--no-pictures"};
+  for (const std::string& a : Coarse()) args.push_back(a);
+  run = RunProcess(args);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  ExpectQualityReport(out, 2);
+
+  run = RunProcess({PBA_ATLAS_BIN, "split", "-o", set.string(), "--synthetic-voxel-mm", "2"});
+  EXPECT_EQ(run.exit_code, 4);
+  EXPECT_NE(run.err.find("not an empty directory"), std::string::npos) << run.err;
+  EXPECT_EQ(ReadFile(set / "manifest.json"), manifest);
 }
 
 TEST_F(PbaAtlasTest, BadInputExitsTwoNamingItAndWritesNothing) {
