@@ -220,11 +220,12 @@ Status AtlasJobs::StageSnapshot(const v1::Job& job, const fs::path& dir, v1::Sce
   fs::remove_all(set_dir, ec);
   fs::create_directories(set_dir, ec);
   if (ec) return Status::Io("cannot create " + set_dir.string() + ": " + ec.message());
-  // Only the content goes into the staged set (no project, snapshot id or
-  // name, which the job records anyway): two snapshots pinning the same
-  // revisions stage the same files, so the second job's atlas mesh comes
-  // from the cache the first one filled.
+  // The manifest names the snapshot (the result says what it was built
+  // from); the mesh cache keys a set by its structures alone, so two
+  // snapshots pinning the same revisions share one mesh.
   StructureSet set;
+  set.project = ref.project();
+  set.snapshot = id;
   std::set<std::string> used;
   for (const SnapshotFile& file : files) {
     const Revision& r = file.revision;

@@ -7,6 +7,7 @@
 
 #include "analysis/rigid_modes.h"
 #include "analysis/static_analysis.h"
+#include "atlas/structure_set.h"
 #include "core/format.h"
 #include "material/factory.h"
 #include "mesh/primitive_mesher.h"
@@ -26,8 +27,17 @@ std::string DescribeGeometry(const GeometrySpec& g) {
   }
   if (g.kind == GeometrySpec::Kind::kAtlas) {
     const std::string& source = g.atlas.source;
-    return source.empty() || source == "synthetic" ? std::string("synthetic atlas")
-                                                   : "atlas from " + source;
+    if (source.empty() || source == "synthetic") return "synthetic atlas";
+    // A snapshot of the atlas store (staged by the server, or exported) is
+    // named as such: the staging path means nothing to the reader.
+    StructureSet set;
+    if (IsStructureSetDir(source) && ReadStructureSet(source, &set).ok() &&
+        !set.project.empty() && set.snapshot > 0) {
+      return Format("atlas of snapshot %lld of project %s (%zu structures)",
+                    static_cast<long long>(set.snapshot), set.project.c_str(),
+                    set.structures.size());
+    }
+    return "atlas from " + source;
   }
   if (g.kind == GeometrySpec::Kind::kEllipsoid) {
     return Format("ellipsoid, semi-axes %g, %g and %g mm", g.ellipsoid.semi_axes_mm[0],

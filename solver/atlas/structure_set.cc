@@ -82,38 +82,6 @@ bool ParseColour(const std::string& text, uint8_t rgb[3]) {
   return !(in >> rest);
 }
 
-// The even-odd fill of a plate's polygons onto a pixel grid, as
-// RasterizeContourPlate (contours.h) specifies it; a stand-in kept here
-// until that function is part of the solver. Per pixel row, the heights at
-// which the polygon edges cross the row's centre line (half-open in y, so
-// a vertex on the line counts once), sorted; a pixel centre is inside when
-// an odd number of crossings lie to its left.
-void FillContourPlate(const ContourPlate& plate, const Eigen::Vector2d& origin_mm, double pixel_mm,
-                      int width, int height, uint16_t label, std::vector<uint16_t>* labels) {
-  std::vector<double> xs;
-  for (int r = 0; r < height; ++r) {
-    const double y = origin_mm.y() - r * pixel_mm;
-    xs.clear();
-    for (const auto& polygon : plate.polygons) {
-      const size_t n = polygon.size();
-      for (size_t i = 0; i < n; ++i) {
-        const Eigen::Vector2d& a = polygon[i];
-        const Eigen::Vector2d& b = polygon[(i + 1) % n];
-        if ((a.y() > y) == (b.y() > y)) continue;
-        xs.push_back(a.x() + (y - a.y()) * (b.x() - a.x()) / (b.y() - a.y()));
-      }
-    }
-    std::sort(xs.begin(), xs.end());
-    for (size_t k = 0; k + 1 < xs.size(); k += 2) {
-      // Pixel centres c with xs[k] <= x_c < xs[k + 1].
-      const int c0 = std::max(0, static_cast<int>(std::ceil((xs[k] - origin_mm.x()) / pixel_mm)));
-      const int c1 = std::min(
-          width - 1, static_cast<int>(std::ceil((xs[k + 1] - origin_mm.x()) / pixel_mm)) - 1);
-      for (int c = c0; c <= c1; ++c) (*labels)[static_cast<size_t>(r) * width + c] = label;
-    }
-  }
-}
-
 // Indices of the structures in byte-wise order of their names: label
 // order[i] is i + 1.
 std::vector<int> NameOrder(const StructureSet& set) {
@@ -195,7 +163,7 @@ Status OneStructureStack(const Contours& contours, const PlateStack& grid, Plate
     stack->z_mm.push_back(plate.z_mm);
     stack->files.push_back(Format("plate_%02d.png", static_cast<int>(stack->files.size()) + 1));
     stack->labels.emplace_back(static_cast<size_t>(grid.width) * grid.height, 0);
-    FillContourPlate(plate, grid.origin_mm, grid.pixel_size_mm, grid.width, grid.height, 1,
+    RasterizeContourPlate(plate, grid.origin_mm, grid.pixel_size_mm, grid.width, grid.height, 1,
                      &stack->labels.back());
   }
   return ColourTable::FromEntries({{1, "structure", 255, 255, 255}}, &stack->colours);
@@ -294,7 +262,7 @@ Status ComposePlates(const StructureSet& set, const Loaded& loaded, const std::v
       const auto drawn = std::find_if(contours.plates.begin(), contours.plates.end(),
                                       [z](const ContourPlate& c) { return c.z_mm == z; });
       if (drawn != contours.plates.end()) {
-        FillContourPlate(*drawn, stack.origin_mm, stack.pixel_size_mm, stack.width, stack.height, 1,
+        RasterizeContourPlate(*drawn, stack.origin_mm, stack.pixel_size_mm, stack.width, stack.height, 1,
                          &own);
       } else {
         // Between two of its own plates: its section as its loft has it.

@@ -12,6 +12,7 @@
 #include <utility>
 #include <vector>
 
+#include "atlas/structure_set.h"
 #include "core/atomic_write.h"
 #include "core/format.h"
 #include "pba/solve.h"
@@ -96,6 +97,8 @@ const char* SourceName(AtlasBuildOptions::Source source) {
       return "plates";
     case AtlasBuildOptions::Source::kLabelVolume:
       return "label-volume";
+    case AtlasBuildOptions::Source::kStructures:
+      return "structure-set";
     default:
       return "other";  // a kind added later: its number tells it apart
   }
@@ -110,7 +113,22 @@ Status DescribeSourceContent(const AtlasBuildOptions& options, std::string* text
     return Status::Ok();
   }
   std::error_code ec;
-  if (fs::is_directory(options.input, ec)) {
+  if (options.source == AtlasBuildOptions::Source::kStructures) {
+    // A structure set by what makes its atlas: each structure's name,
+    // colour, format and file digest, not the manifest's provenance (the
+    // project and snapshot it was exported or staged from), so two
+    // snapshots pinning the same revisions share one mesh.
+    StructureSet set;
+    PBA_RETURN_IF_ERROR(ReadStructureSet(options.input, &set));
+    text->append(Format("content structure set %zu structures\n", set.structures.size()));
+    for (const StructureEntry& entry : set.structures) {
+      std::string digest;
+      PBA_RETURN_IF_ERROR(Sha256File(options.input / entry.file, &digest));
+      text->append(Format("structure %s %s %d,%d,%d %s\n", Quoted(entry.name).c_str(),
+                          StructureFormatName(entry.format), entry.r, entry.g, entry.b,
+                          digest.c_str()));
+    }
+  } else if (fs::is_directory(options.input, ec)) {
     std::vector<std::pair<std::string, fs::path>> files;
     fs::recursive_directory_iterator it(options.input, ec), end;
     if (ec) return Status::Io("cannot list " + options.input.string() + ": " + ec.message());

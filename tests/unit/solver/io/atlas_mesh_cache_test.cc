@@ -14,6 +14,7 @@
 #include <thread>
 #include <vector>
 
+#include "atlas/structure_set.h"
 #include "mesh/quadratic.h"
 
 namespace pba {
@@ -295,6 +296,36 @@ TEST_F(AtlasMeshCacheTest, EvictionKeepsTheMostRecentlyUsedWithinTheBound) {
   EXPECT_FALSE(fs::exists(file('c')));
   EXPECT_FALSE(fs::exists(file('d')));
   EXPECT_TRUE(fs::exists(cache_ / "notes.txt"));  // not ours to remove
+}
+
+// A structure set (a snapshot staged or exported) is keyed by its
+// structures, not by the snapshot it came from: two snapshots pinning the
+// same revisions share one mesh; a changed structure does not.
+TEST_F(AtlasMeshCacheTest, AStructureSetIsKeyedByItsStructuresNotItsSnapshot) {
+  const auto write_set = [&](const std::string& dir, int64_t snapshot, const std::string& x) {
+    const fs::path d = root_ / dir;
+    fs::create_directories(d);
+    WriteFile(d / "a.json",
+              "{\"plates\": [{\"z_mm\": 0, \"polygons\": [[[0, 0], [" + x + ", 0], [0, 5]]]}]}");
+    StructureSet set;
+    set.project = "demo";
+    set.snapshot = snapshot;
+    StructureEntry entry;
+    entry.name = "A";
+    entry.file = "a.json";
+    entry.r = 10;
+    set.structures.push_back(entry);
+    EXPECT_TRUE(WriteStructureSet(set, d).ok());
+    AtlasBuildOptions options;
+    options.source = AtlasBuildOptions::Source::kStructures;
+    options.input = d;
+    std::string key;
+    EXPECT_TRUE(AtlasMeshCacheKey(options, &key).ok());
+    return key;
+  };
+  const std::string first = write_set("s1", 1, "5");
+  EXPECT_EQ(write_set("s2", 2, "5"), first);
+  EXPECT_NE(write_set("s3", 3, "6"), first);
 }
 
 }  // namespace
