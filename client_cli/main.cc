@@ -167,6 +167,16 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   atlas_checkout->add_flag("--hold", checkout.hold,
                            "Stay running and keep the lease alive until Ctrl-C, then unlock");
+  CheckoutArgs lock_args;
+  CLI::App* atlas_lock = atlas->add_subcommand(
+      "lock", "Lock a structure without downloading it (no one else may change it)");
+  add_project(atlas_lock, &lock_args.target.project);
+  atlas_lock->add_option("structure", lock_args.target.structure, "Structure name")->required();
+  atlas_lock->add_option("--lease", lock_args.lease_s, "Lease in seconds (renew with --hold)")
+      ->check(CLI::Range(1, 3600))
+      ->capture_default_str();
+  atlas_lock->add_flag("--hold", lock_args.hold,
+                       "Stay running and keep the lease alive until Ctrl-C, then unlock");
   CommitArgs commit;
   CLI::App* atlas_commit =
       atlas->add_subcommand("commit", "Commit a checked-out file as a new revision, then unlock");
@@ -314,6 +324,7 @@ int main(int argc, char** argv) {
     return CreateStructure(connection, create);
   }
   if (*atlas_checkout) return Checkout(connection, checkout);
+  if (*atlas_lock) return LockStructure(connection, lock_args);
   if (*atlas_commit) return Commit(connection, commit);
   if (*atlas_unlock) return Unlock(connection, unlock_what);
   if (*atlas_break) return BreakLock(connection, target, reason);

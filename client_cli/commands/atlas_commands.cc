@@ -365,6 +365,39 @@ int Checkout(Connection& connection, const CheckoutArgs& args) {
   return kExitOk;
 }
 
+int LockStructure(Connection& connection, const CheckoutArgs& args) {
+  const std::string what = args.target.project + "/" + args.target.structure;
+  v1::AcquireLockRequest request;
+  request.set_project(args.target.project);
+  request.set_structure(args.target.structure);
+  request.set_lease_seconds(args.lease_s);
+  v1::Lock lock;
+  {
+    auto context = connection.UnaryContext();
+    grpc::Status status = connection.atlas().AcquireLock(context.get(), request, &lock);
+    if (!status.ok()) return connection.Fail("locking " + what, status, kExitConflict);
+  }
+  if (connection.options().json) {
+    PrintJson(lock);
+  } else {
+    std::printf("Locked %s until %s UTC%s; lock id %s (pba atlas unlock %s gives it back)\n",
+                what.c_str(), FormatTime(lock.expire_time()).c_str(),
+                lock.took_over_from().empty()
+                    ? ""
+                    : (" (taken over from " + lock.took_over_from() + ")").c_str(),
+                lock.lock_id().c_str(), lock.lock_id().c_str());
+  }
+  if (!args.hold) return kExitOk;
+  std::fflush(stdout);
+  const int held = HoldLock(connection, lock.lock_id(), args.lease_s, what);
+  if (held != kExitOk) return held;
+  const int code = ReleaseLockId(connection, lock.lock_id(), what);
+  if (code == kExitOk && !connection.options().json) {
+    std::printf("Released the lock on %s\n", what.c_str());
+  }
+  return code;
+}
+
 int Commit(Connection& connection, const CommitArgs& args) {
   CheckoutState state;
   if (!ReadCheckout(args.file, &state)) {

@@ -114,6 +114,10 @@ int ShowStructure(Connection& connection, const StructureArgs& target);
 int History(Connection& connection, const StructureArgs& target, const PageArgs& page);
 int CreateStructure(Connection& connection, const CreateStructureArgs& args);
 int Checkout(Connection& connection, const CheckoutArgs& args);
+// Locks a structure without downloading it (args.out unused): to keep it
+// from changing, and others' commits from overlapping it, while you work
+// elsewhere; --hold renews the lease until Ctrl-C, then releases it.
+int LockStructure(Connection& connection, const CheckoutArgs& args);
 int Commit(Connection& connection, const CommitArgs& args);
 // `what` is a checked-out file (its .pba-checkout names the lock) or a lock id.
 int Unlock(Connection& connection, const std::string& what);
