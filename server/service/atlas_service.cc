@@ -14,6 +14,7 @@
 #include "service/atlas_messages.h"
 #include "service/call_auth.h"
 #include "service/geometry_check.h"
+#include "service/overlap_check.h"
 #include "service/geometry_diff.h"
 #include "store/page_token.h"
 
@@ -257,6 +258,9 @@ grpc::Status AtlasServiceImpl::CreateStructure(grpc::ServerContext* context,
   if (status.ok()) status = store_.FindCreatedStructure(user, create, &revision, &replayed);
   std::unique_ptr<MappedFile> content;
   if (status.ok() && !replayed) status = TakeUpload(user, request->upload_id(), format, &content);
+  if (status.ok() && !replayed) {
+    status = CheckLockedNeighbours(store_, user, ref, format, content->path());
+  }
   if (!status.ok()) return Fail(kRpc, status);
   if (!replayed) {
     create.geometry = content->bytes();
@@ -414,6 +418,9 @@ grpc::Status AtlasServiceImpl::CommitStructure(grpc::ServerContext* context,
   }
   std::unique_ptr<MappedFile> content;
   if (status.ok()) status = TakeUpload(user, request->upload_id(), commit.format, &content);
+  if (status.ok()) {
+    status = CheckLockedNeighbours(store_, user, commit.structure, commit.format, content->path());
+  }
   if (!status.ok()) return Fail(kRpc, status);
   commit.geometry = content->bytes();
   commit.geometry_file = content.get();

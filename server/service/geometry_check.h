@@ -17,10 +17,8 @@
 //                  points within 500 mm of the origin
 // The same readers compose a structure set (atlas/structure_set.h), so what
 // passes here can be meshed.
-// What is not checked yet (future work): self-intersecting polygons and
-// surfaces, that a shape lies within
-// the atlas's own bounds, and that it does not overlap neighbouring
-// structures that others hold locked.
+// Overlap with neighbours others hold locked is checked apart
+// (overlap_check.h). Not checked: self-intersecting polygons and surfaces.
 #pragma once
 
 #include <string_view>

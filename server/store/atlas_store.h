@@ -86,6 +86,13 @@ struct SnapshotFile {
   std::filesystem::path blob;  // read-only, content-addressed
 };
 
+// A structure someone holds locked, with its head (LockedNeighbours()).
+struct LockedNeighbour {
+  Revision head;
+  std::filesystem::path blob;  // the head's geometry, read-only
+  std::string holder;
+};
+
 // Commit() arguments. `geometry` is borrowed for the call.
 struct CommitRequest {
   StructureRef structure;
@@ -256,6 +263,12 @@ class AtlasStore {
   // viewers may read. Every blob is verified against its hash first.
   Status SnapshotFiles(const std::string& user, const std::string& project, int64_t snapshot_id,
                        std::vector<SnapshotFile>* files);
+
+  // The structures of `project` other than `except` that someone other than
+  // `user` holds locked with an unexpired lease, with their heads: what a
+  // commit by `user` must not grow into. Viewers may ask.
+  Status LockedNeighbours(const std::string& user, const std::string& project,
+                          const std::string& except, std::vector<LockedNeighbour>* neighbours);
 
   // --- atlas import (a job's last step) ------------------------------------
   // Creates every structure (revision 1, kind "create", `message`) and then

@@ -1,5 +1,6 @@
-// AtlasStore: an atlas import's structures and snapshot, and the files of a
-// snapshot for a job run against it.
+// AtlasStore: an atlas import's structures and snapshot, the files of a
+// snapshot for a job run against it, and the locked neighbours a commit is
+// checked against.
 #include <fstream>
 #include <sstream>
 
@@ -47,6 +48,46 @@ Status AtlasStore::SnapshotFiles(const std::string& user, const std::string& pro
     PBA_RETURN_IF_ERROR(blobs_->Get(file.revision.content_sha256, &bytes));
     file.blob = blobs_->PathOf(file.revision.content_sha256);
     files->push_back(std::move(file));
+  }
+  return Status::Ok();
+}
+
+Status AtlasStore::LockedNeighbours(const std::string& user, const std::string& project,
+                                    const std::string& except,
+                                    std::vector<LockedNeighbour>* neighbours) {
+  neighbours->clear();
+  std::lock_guard lock(mutex_);
+  Caller caller;
+  PBA_RETURN_IF_ERROR(Enter(user, project, Role::kViewer, &caller));
+  Statement stmt;
+  PBA_RETURN_IF_ERROR(db_->Prepare(
+      "SELECT s.id, s.name, h.number, u.name FROM locks l JOIN structures s ON s.id = l.structure "
+      "JOIN structure_revisions h ON h.id = s.head_revision JOIN users u ON u.id = l.owner "
+      "WHERE s.project = ? AND s.name <> ? AND l.owner <> ? AND l.lease_expiry_us > ? "
+      "ORDER BY s.name",
+      &stmt));
+  stmt.Bind(1, caller.project).Bind(2, except).Bind(3, caller.user).Bind(4, clock_());
+  struct Row {
+    int64_t id, number;
+    std::string name, holder;
+  };
+  std::vector<Row> rows;
+  while (true) {
+    bool row = false;
+    PBA_RETURN_IF_ERROR(stmt.Step(&row));
+    if (!row) break;
+    rows.push_back({stmt.ColumnInt(0), stmt.ColumnInt(2), stmt.ColumnText(1), stmt.ColumnText(3)});
+  }
+  stmt = Statement();
+  for (const Row& r : rows) {
+    LockedNeighbour neighbour;
+    bool found = false;
+    PBA_RETURN_IF_ERROR(
+        ReadRevision({project, r.name}, r.id, r.number, &neighbour.head, &found));
+    if (!found) continue;
+    neighbour.blob = blobs_->PathOf(neighbour.head.content_sha256);
+    neighbour.holder = r.holder;
+    neighbours->push_back(std::move(neighbour));
   }
   return Status::Ok();
 }

@@ -509,16 +509,24 @@ Status ComposeVolume(const StructureSet& set, const Loaded& loaded, const std::v
     } else {
       SurfaceInside(loaded.surfaces[i], volume, &inside);
     }
+    int64_t own = 0;
     for (size_t n = 0; n < labels.size(); ++n) {
       if (!inside[n]) continue;
+      ++own;
       if (labels[n] == 0) {
         labels[n] = label;
       } else {
         ++overlaps[{-1, labels[n], label}];
       }
     }
+    atlas->structure_mm3[e.name] = own * v * v * v;
   }
   ReportOverlaps(overlaps, atlas->colours, v * v * v, "mm^3", {}, &atlas->notes);
+  for (const auto& [key, n] : overlaps) {
+    const auto& [plate, kept, lost] = key;
+    atlas->overlaps.push_back({atlas->colours.FindByLabel(kept)->name,
+                               atlas->colours.FindByLabel(lost)->name, n * v * v * v});
+  }
   atlas->volume = std::move(volume);
   return Status::Ok();
 }
@@ -698,7 +706,7 @@ Status ComposeStructureSet(const fs::path& dir, const StructureSet& set,
   const bool all_contours =
       std::all_of(set.structures.begin(), set.structures.end(),
                   [](const StructureEntry& e) { return e.format == StructureFormat::kContours; });
-  if (all_contours) {
+  if (all_contours && !options.force_volume) {
     PBA_RETURN_IF_ERROR(ComposePlates(set, loaded, order, options, &result));
   } else {
     PBA_RETURN_IF_ERROR(ComposeVolume(set, loaded, order, options, &result));

@@ -22,6 +22,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -79,6 +80,9 @@ struct ComposeOptions {
   // Voxel edge of the label volume composed when any structure is a mask
   // or a surface [mm].
   double voxel_size_mm = 1.0;
+  // A label volume even when every structure is contours (their lofts
+  // voxelised): for measuring volumes and overlaps in mm^3.
+  bool force_volume = false;
 };
 
 // The atlas a structure set makes, in the form BuildAtlas meshes:
@@ -101,11 +105,20 @@ struct ComposeOptions {
 // pixel for pixel. Contours drawn at a single height are refused when every
 // structure is (a loft needs two plates); in a volume such a structure is
 // lofted to nothing a voxel above and below its plate.
+struct ComposedOverlap {
+  std::string kept, lost;  // the structure that keeps the voxels, and the other
+  double mm3 = 0;
+};
+
 struct ComposedAtlas {
   ColourTable colours;
   std::optional<PlateStack> plates;
   std::optional<LabelVolume> volume;
   std::vector<std::string> notes;
+  // With a volume: each structure's own volume before overlaps were
+  // resolved (by name), and the overlaps [mm^3].
+  std::map<std::string, double> structure_mm3;
+  std::vector<ComposedOverlap> overlaps;
 };
 
 Status ComposeStructureSet(const std::filesystem::path& dir, const StructureSet& set,

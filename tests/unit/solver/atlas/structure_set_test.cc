@@ -2,6 +2,7 @@
 // form, and composing a set into plates or a label volume that BuildAtlas
 // meshes.
 #include "atlas/structure_set.h"
+#include "atlas/structure_overlap.h"
 
 #include <gtest/gtest.h>
 
@@ -443,6 +444,50 @@ TEST_F(StructureSetTest, BuildAtlasMeshesAStructureSet) {
   EXPECT_EQ(result.region_labels, (std::vector<uint16_t>{1, 2}));
   EXPECT_EQ(result.colours.FindByLabel(2)->name, "Right");
   EXPECT_TRUE(result.notes.empty());
+}
+
+// MeasureOverlap: two cubes 10 mm on a side, half of one inside the other;
+// voxel centres lie on whole millimetres, the cubes' faces between them.
+TEST_F(StructureSetTest, MeasureOverlapOfTwoCubesSharingHalfTheirVolume) {
+  WriteText(dir_ / "a.stl", StlCube({0.25, 0.25, 0.25}, 10));
+  WriteText(dir_ / "b.stl", StlCube({5.25, 0.25, 0.25}, 10));
+  WriteText(dir_ / "c.stl", StlCube({30.25, 0.25, 0.25}, 10));
+  OverlapMeasure m;
+  ASSERT_TRUE(MeasureOverlap({StructureFormat::kStl, dir_ / "a.stl"},
+                             {StructureFormat::kStl, dir_ / "b.stl"}, 1, &m)
+                  .ok());
+  EXPECT_DOUBLE_EQ(m.a_mm3, 1000);
+  EXPECT_DOUBLE_EQ(m.b_mm3, 1000);
+  EXPECT_DOUBLE_EQ(m.overlap_mm3, 500);
+  EXPECT_DOUBLE_EQ(m.fraction_of_smaller(), 0.5);
+  ASSERT_TRUE(MeasureOverlap({StructureFormat::kStl, dir_ / "a.stl"},
+                             {StructureFormat::kStl, dir_ / "c.stl"}, 1, &m)
+                  .ok());
+  EXPECT_DOUBLE_EQ(m.overlap_mm3, 0);
+  // The files are read, not moved.
+  EXPECT_TRUE(fs::exists(dir_ / "a.stl"));
+  // Contours too: a square drawn on two plates 4 mm apart against the cube.
+  Contours square;
+  for (double z : {2.0, 6.0}) {
+    ContourPlate plate;
+    plate.z_mm = z;
+    plate.polygons = {{{-4.75, 0.25}, {4.75, 0.25}, {4.75, 9.75}, {-4.75, 9.75}}};
+    square.plates.push_back(plate);
+  }
+  WriteText(dir_ / "square.json", FormatContoursJson(square));
+  ASSERT_TRUE(MeasureOverlap({StructureFormat::kContours, dir_ / "square.json"},
+                             {StructureFormat::kStl, dir_ / "a.stl"}, 1, &m)
+                  .ok());
+  // Columns x = 1..4 (4), y = 1..9 (9) inside both; the loft runs 2 mm
+  // beyond each end plate, so z = 1..8 (the cube's 1..10 holds them).
+  EXPECT_GT(m.overlap_mm3, 0);
+  EXPECT_LE(m.overlap_mm3, 4 * 9 * 8);
+  EXPECT_LT(m.overlap_mm3, m.a_mm3);
+  // A file that is not its format is named.
+  WriteText(dir_ / "bad.stl", "solid nothing\nendsolid\n");
+  EXPECT_FALSE(MeasureOverlap({StructureFormat::kStl, dir_ / "bad.stl"},
+                              {StructureFormat::kStl, dir_ / "a.stl"}, 1, &m)
+                   .ok());
 }
 
 }  // namespace
