@@ -2,7 +2,6 @@
 // structures into the plates or the label volume BuildAtlas meshes.
 #include "atlas/structure_set.h"
 
-#include <openssl/evp.h>
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
@@ -20,6 +19,7 @@
 #include "atlas/loft.h"
 #include "core/atomic_write.h"
 #include "core/format.h"
+#include "core/sha256.h"
 #include "io/surface_io.h"
 
 namespace pba {
@@ -51,20 +51,6 @@ Status ReadFile(const fs::path& path, std::string* content) {
   buffer << in.rdbuf();
   if (in.bad()) return Status::Io("cannot read " + path.string());
   *content = buffer.str();
-  return Status::Ok();
-}
-
-// Lowercase hex SHA-256 of a file's bytes (OpenSSL's EVP interface).
-Status Sha256Hex(const fs::path& path, std::string* hex) {
-  std::string content;
-  PBA_RETURN_IF_ERROR(ReadFile(path, &content));
-  unsigned char digest[EVP_MAX_MD_SIZE];
-  unsigned int length = 0;
-  if (EVP_Digest(content.data(), content.size(), digest, &length, EVP_sha256(), nullptr) != 1) {
-    return Status::Internal("SHA-256 of " + path.string() + " failed");
-  }
-  hex->clear();
-  for (unsigned int i = 0; i < length; ++i) hex->append(Format("%02x", digest[i]));
   return Status::Ok();
 }
 
@@ -642,7 +628,7 @@ Status ReadStructureSet(const fs::path& dir, StructureSet* set) {
           return bad(at + ".sha256", who + "'" + e.sha256 + "' is not 64 lowercase hex digits");
         }
         std::string actual;
-        PBA_RETURN_IF_ERROR(Sha256Hex(dir / e.file, &actual));
+        PBA_RETURN_IF_ERROR(FileSha256Hex(dir / e.file, &actual));
         if (actual != e.sha256) {
           return bad(at + ".sha256", who + "file '" + e.file + "' has SHA-256 " + actual +
                                          ", the manifest says " + e.sha256);

@@ -1,6 +1,5 @@
 #include "atlas/structure_split.h"
 
-#include <openssl/evp.h>
 #include <stdlib.h>
 
 #include <algorithm>
@@ -16,6 +15,7 @@
 #include "atlas/label_volume_io.h"
 #include "atlas/synthetic_atlas.h"
 #include "core/atomic_write.h"
+#include "core/sha256.h"
 #include "core/format.h"
 
 namespace pba {
@@ -33,23 +33,6 @@ Status ReadLabelVolume(const fs::path& file, LabelVolume* volume) {
   if (EndsWith(name, ".nrrd")) return ReadNrrd(file, volume);
   return Status::InvalidArgument("source.input",
                                  file.string() + " is not a label volume (.nii, .nii.gz or .nrrd)");
-}
-
-// Lowercase hex SHA-256 of a file's bytes, as they are on disk (not of what
-// was meant to be written), so the manifest checks the file itself.
-Status Sha256File(const fs::path& file, std::string* hex) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) return Status::Io("cannot read " + file.string());
-  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (in.bad()) return Status::Io("cannot read " + file.string());
-  unsigned char digest[EVP_MAX_MD_SIZE];
-  unsigned int length = 0;
-  if (EVP_Digest(bytes.data(), bytes.size(), digest, &length, EVP_sha256(), nullptr) != 1) {
-    return Status::Internal("SHA-256 of " + file.string() + " failed");
-  }
-  hex->clear();
-  for (unsigned int i = 0; i < length; ++i) hex->append(Format("%02x", digest[i]));
-  return Status::Ok();
 }
 
 // Which colour-table entries to split: all, or those named (a name that is
@@ -283,7 +266,7 @@ Status WriteSplit(const SplitOptions& options, const fs::path& dir, SplitResult*
     return Status::InvalidArgument("source", "the atlas has no structure to split");
   }
   for (StructureEntry& entry : result->set.structures) {
-    PBA_RETURN_IF_ERROR(Sha256File(dir / entry.file, &entry.sha256));
+    PBA_RETURN_IF_ERROR(FileSha256Hex(dir / entry.file, &entry.sha256));
   }
   return WriteStructureSet(result->set, dir);
 }

@@ -1,6 +1,5 @@
 #include "io/atlas_mesh_cache.h"
 
-#include <openssl/evp.h>
 
 #include <algorithm>
 #include <array>
@@ -15,6 +14,7 @@
 #include "atlas/structure_set.h"
 #include "core/atomic_write.h"
 #include "core/format.h"
+#include "core/sha256.h"
 #include "pba/solve.h"
 
 namespace pba {
@@ -41,49 +41,8 @@ constexpr char kEntrySuffix[] = ".mesh";
 
 static_assert(sizeof(int) == 4, "entries store node indices as 32-bit integers");
 
-using Digest = std::array<unsigned char, kDigestBytes>;
-
-std::string Hex(const Digest& digest) {
-  static constexpr char kDigits[] = "0123456789abcdef";
-  std::string hex;
-  hex.reserve(2 * digest.size());
-  for (unsigned char byte : digest) {
-    hex.push_back(kDigits[byte >> 4]);
-    hex.push_back(kDigits[byte & 15]);
-  }
-  return hex;
-}
-
-Digest Sha256(const void* data, std::size_t size) {
-  Digest digest{};
-  unsigned int length = 0;
-  EVP_Digest(data, size, digest.data(), &length, EVP_sha256(), nullptr);
-  return digest;
-}
-
-// The SHA-256 of a file's bytes, read in blocks (a label volume may be
-// hundreds of megabytes).
-Status Sha256File(const fs::path& path, std::string* hex) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return Status::Io("cannot read " + path.string());
-  std::unique_ptr<EVP_MD_CTX, decltype(&EVP_MD_CTX_free)> ctx(EVP_MD_CTX_new(), EVP_MD_CTX_free);
-  if (ctx == nullptr || EVP_DigestInit_ex(ctx.get(), EVP_sha256(), nullptr) != 1) {
-    return Status::Internal("cannot start a SHA-256 digest");
-  }
-  std::vector<char> buffer(1 << 20);
-  while (in) {
-    in.read(buffer.data(), static_cast<std::streamsize>(buffer.size()));
-    if (in.gcount() > 0) {
-      EVP_DigestUpdate(ctx.get(), buffer.data(), static_cast<std::size_t>(in.gcount()));
-    }
-  }
-  if (in.bad()) return Status::Io("reading " + path.string() + " failed");
-  Digest digest{};
-  unsigned int length = 0;
-  EVP_DigestFinal_ex(ctx.get(), digest.data(), &length);
-  *hex = Hex(digest);
-  return Status::Ok();
-}
+using Digest = Sha256Digest;
+static_assert(sizeof(Digest) == kDigestBytes);
 
 // A name in the canonical text, length-prefixed so that no name (with
 // spaces or newlines) can run into the next field.
@@ -123,7 +82,7 @@ Status DescribeSourceContent(const AtlasBuildOptions& options, std::string* text
     text->append(Format("content structure set %zu structures\n", set.structures.size()));
     for (const StructureEntry& entry : set.structures) {
       std::string digest;
-      PBA_RETURN_IF_ERROR(Sha256File(options.input / entry.file, &digest));
+      PBA_RETURN_IF_ERROR(FileSha256Hex(options.input / entry.file, &digest));
       text->append(Format("structure %s %s %d,%d,%d %s\n", Quoted(entry.name).c_str(),
                           StructureFormatName(entry.format), entry.r, entry.g, entry.b,
                           digest.c_str()));
@@ -141,19 +100,19 @@ Status DescribeSourceContent(const AtlasBuildOptions& options, std::string* text
     text->append(Format("content directory %zu files\n", files.size()));
     for (const auto& [name, path] : files) {
       std::string digest;
-      PBA_RETURN_IF_ERROR(Sha256File(path, &digest));
+      PBA_RETURN_IF_ERROR(FileSha256Hex(path, &digest));
       text->append("file " + Quoted(name) + " " + digest + "\n");
     }
   } else {
     std::string digest;
-    PBA_RETURN_IF_ERROR(Sha256File(options.input, &digest));
+    PBA_RETURN_IF_ERROR(FileSha256Hex(options.input, &digest));
     text->append("content file " + digest + "\n");
   }
   if (options.colour_table.empty()) {
     text->append("colour_table built-in\n");
   } else {
     std::string digest;
-    PBA_RETURN_IF_ERROR(Sha256File(options.colour_table, &digest));
+    PBA_RETURN_IF_ERROR(FileSha256Hex(options.colour_table, &digest));
     text->append("colour_table " + digest + "\n");
   }
   return Status::Ok();
@@ -350,7 +309,7 @@ Status AtlasMeshCacheKey(const AtlasBuildOptions& options, std::string* key) {
                  options.merge_rest ? 1 : 0, options.structures.size());
   for (const std::string& s : options.structures) text += "structure " + Quoted(s) + "\n";
   PBA_RETURN_IF_ERROR(DescribeSourceContent(options, &text));
-  *key = Hex(Sha256(text.data(), text.size()));
+  *key = HexOf(Sha256Of(text.data(), text.size()));
   return Status::Ok();
 }
 
@@ -375,7 +334,7 @@ Status LoadCachedAtlasMesh(const fs::path& dir, const std::string& key, CachedAt
   };
   if (bytes.size() < kHeaderBytes + kDigestBytes) return damaged();
   const std::size_t body = bytes.size() - kDigestBytes;
-  const Digest digest = Sha256(bytes.data(), body);
+  const Digest digest = Sha256Of(bytes.data(), body);
   if (std::memcmp(digest.data(), bytes.data() + body, kDigestBytes) != 0) return damaged();
   Reader r(bytes.data(), body);
   char magic[sizeof(kMagic)];
@@ -407,7 +366,7 @@ Status StoreCachedAtlasMesh(const fs::path& dir, const std::string& key,
   w.Pod(kFileFormatVersion);
   w.Pod(kByteOrderMark);
   WritePayload(entry, &w);
-  const Digest digest = Sha256(w.bytes().data(), w.bytes().size());
+  const Digest digest = Sha256Of(w.bytes().data(), w.bytes().size());
   w.bytes().append(reinterpret_cast<const char*>(digest.data()), digest.size());
   const std::string& bytes = w.bytes();
   PBA_RETURN_IF_ERROR(AtomicWrite(EntryPath(dir, key), "", [&](int fd, const std::string& tmp) {
