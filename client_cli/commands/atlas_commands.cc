@@ -300,18 +300,29 @@ int CreateStructure(Connection& connection, const CreateStructureArgs& args) {
   return kExitOk;
 }
 
-int Checkout(Connection& connection, const CheckoutArgs& args) {
-  const std::string what = args.target.project + "/" + args.target.structure;
+namespace {
+
+// Locks args.target for args.lease_s seconds.
+int AcquireLock(Connection& connection, const CheckoutArgs& args, v1::Lock* lock) {
   v1::AcquireLockRequest request;
   request.set_project(args.target.project);
   request.set_structure(args.target.structure);
   request.set_lease_seconds(args.lease_s);
-  v1::Lock lock;
-  {
-    auto context = connection.UnaryContext();
-    grpc::Status status = connection.atlas().AcquireLock(context.get(), request, &lock);
-    if (!status.ok()) return connection.Fail("locking " + what, status, kExitConflict);
+  auto context = connection.UnaryContext();
+  grpc::Status status = connection.atlas().AcquireLock(context.get(), request, lock);
+  if (!status.ok()) {
+    return connection.Fail("locking " + args.target.project + "/" + args.target.structure, status,
+                           kExitConflict);
   }
+  return kExitOk;
+}
+
+}  // namespace
+
+int Checkout(Connection& connection, const CheckoutArgs& args) {
+  const std::string what = args.target.project + "/" + args.target.structure;
+  v1::Lock lock;
+  if (int code = AcquireLock(connection, args, &lock); code != kExitOk) return code;
   // From here on a failure gives the lock back: nothing is left held.
   const auto give_back = [&](int code) {
     ReleaseLockId(connection, lock.lock_id(), what);
@@ -367,16 +378,8 @@ int Checkout(Connection& connection, const CheckoutArgs& args) {
 
 int LockStructure(Connection& connection, const CheckoutArgs& args) {
   const std::string what = args.target.project + "/" + args.target.structure;
-  v1::AcquireLockRequest request;
-  request.set_project(args.target.project);
-  request.set_structure(args.target.structure);
-  request.set_lease_seconds(args.lease_s);
   v1::Lock lock;
-  {
-    auto context = connection.UnaryContext();
-    grpc::Status status = connection.atlas().AcquireLock(context.get(), request, &lock);
-    if (!status.ok()) return connection.Fail("locking " + what, status, kExitConflict);
-  }
+  if (int code = AcquireLock(connection, args, &lock); code != kExitOk) return code;
   if (connection.options().json) {
     PrintJson(lock);
   } else {

@@ -375,6 +375,12 @@ class AtlasStore {
                const std::string& action, const std::string& target,
                std::optional<int64_t> revision, const std::string& detail);
   Status CheckLease(int64_t lease_us) const;
+  // The row of a new structure (head NULL until its first revision).
+  Status InsertStructure(const Caller& caller, const std::string& name, int64_t* id);
+  // A snapshot of every head of the caller's project, audited; `import_job`
+  // non-empty records the import that made it.
+  Status PinSnapshot(const Caller& caller, const std::string& project, const std::string& name,
+                     const std::string& import_job, int64_t* id);
 
   std::mutex mutex_;
   std::unique_ptr<Database> db_;

@@ -209,25 +209,31 @@ Status AtlasStore::CreateStructure(const std::string& user, const NewStructure& 
   content.size_bytes = static_cast<int64_t>(request.geometry.size());
   content.metadata = request.metadata;
 
-  PBA_RETURN_IF_ERROR(db_->Prepare(
-      "INSERT INTO structures (project, name, head_revision, metadata_etag, created_us, "
-      "created_by) VALUES (?, ?, NULL, '', ?, ?) RETURNING id",
-      &stmt));
-  bool row = false;
-  PBA_RETURN_IF_ERROR(stmt.Bind(1, caller.project)
-                          .Bind(2, ref.structure)
-                          .Bind(3, clock_())
-                          .Bind(4, caller.user)
-                          .Step(&row));
-  StructureRow structure;
-  structure.id = stmt.ColumnInt(0);
   stmt = Statement();
+  StructureRow structure;
+  PBA_RETURN_IF_ERROR(InsertStructure(caller, ref.structure, &structure.id));
   PBA_RETURN_IF_ERROR(AppendRevision(caller, ref, structure, "create", "structure.create",
                                      request.message.empty() ? "created" : request.message, content,
                                      true, revision));
   PBA_RETURN_IF_ERROR(RecordCreateRequest(caller.user, request.request_id, "structure", fingerprint,
                                           caller.project, structure.id, 0));
   return transaction.Commit();
+}
+
+Status AtlasStore::InsertStructure(const Caller& caller, const std::string& name, int64_t* id) {
+  Statement stmt;
+  PBA_RETURN_IF_ERROR(db_->Prepare(
+      "INSERT INTO structures (project, name, head_revision, metadata_etag, created_us, "
+      "created_by) VALUES (?, ?, NULL, '', ?, ?) RETURNING id",
+      &stmt));
+  bool row = false;
+  PBA_RETURN_IF_ERROR(stmt.Bind(1, caller.project)
+                          .Bind(2, name)
+                          .Bind(3, clock_())
+                          .Bind(4, caller.user)
+                          .Step(&row));
+  *id = stmt.ColumnInt(0);
+  return Status::Ok();
 }
 
 }  // namespace pba

@@ -151,46 +151,14 @@ Status AtlasStore::Import(const std::string& user, const std::string& project,
     content.format = s.format;
     content.size_bytes = static_cast<int64_t>(bytes.size());
     content.metadata = s.metadata;
-    PBA_RETURN_IF_ERROR(db_->Prepare(
-        "INSERT INTO structures (project, name, head_revision, metadata_etag, created_us, "
-        "created_by) VALUES (?, ?, NULL, '', ?, ?) RETURNING id",
-        &stmt));
-    PBA_RETURN_IF_ERROR(stmt.Bind(1, caller.project)
-                            .Bind(2, s.name)
-                            .Bind(3, clock_())
-                            .Bind(4, caller.user)
-                            .Step(&row));
     StructureRow structure;
-    structure.id = stmt.ColumnInt(0);
-    stmt = Statement();
+    PBA_RETURN_IF_ERROR(InsertStructure(caller, s.name, &structure.id));
     Revision revision;
     PBA_RETURN_IF_ERROR(AppendRevision(caller, StructureRef{project, s.name}, structure, "create",
                                        "structure.import", message, content, true, &revision));
   }
-  PBA_RETURN_IF_ERROR(
-      db_->Prepare("INSERT INTO snapshots (project, name, created_us, author, import_job) "
-                   "VALUES (?, ?, ?, ?, ?) RETURNING id",
-                   &stmt));
-  PBA_RETURN_IF_ERROR(stmt.Bind(1, caller.project)
-                          .Bind(2, snapshot_name)
-                          .Bind(3, clock_())
-                          .Bind(4, caller.user)
-                          .Bind(5, job_id)
-                          .Step(&row));
-  const int64_t id = stmt.ColumnInt(0);
-  stmt = Statement();
-  PBA_RETURN_IF_ERROR(
-      db_->Prepare("INSERT INTO snapshot_members (snapshot, structure, revision) "
-                   "SELECT ?, id, head_revision FROM structures WHERE project = ?",
-                   &stmt));
-  PBA_RETURN_IF_ERROR(stmt.Bind(1, id).Bind(2, caller.project).Run());
-  const int pinned = db_->Changes();
-  stmt = Statement();
-  PBA_RETURN_IF_ERROR(Audit(caller.user, caller.project, "snapshot.create",
-                            ProjectTarget(project) + "/snapshots/" + std::to_string(id),
-                            std::nullopt,
-                            snapshot_name + ": " + std::to_string(pinned) +
-                                " structures, made by import job " + job_id));
+  int64_t id = 0;
+  PBA_RETURN_IF_ERROR(PinSnapshot(caller, project, snapshot_name, job_id, &id));
   bool found = false;
   PBA_RETURN_IF_ERROR(LoadSnapshot(project, caller.project, id, true, snapshot, &found));
   return transaction.Commit();

@@ -83,33 +83,44 @@ Status AtlasStore::CreateSnapshot(const std::string& user, const std::string& pr
   // Unnamed: named by its time, which is how people tell snapshots apart.
   const std::string named =
       name.empty() ? "snapshot " + atlas_internal::FormatSnapshotTime(clock_()) : name;
+  int64_t id = 0;
+  PBA_RETURN_IF_ERROR(PinSnapshot(caller, project, named, "", &id));
+  PBA_RETURN_IF_ERROR(
+      RecordCreateRequest(caller.user, request_id, "snapshot", fingerprint, caller.project, 0, id));
+  PBA_RETURN_IF_ERROR(LoadSnapshot(project, caller.project, id, true, snapshot, &found));
+  return transaction.Commit();
+}
+
+Status AtlasStore::PinSnapshot(const Caller& caller, const std::string& project,
+                               const std::string& name, const std::string& import_job,
+                               int64_t* id) {
   Statement stmt;
-  PBA_RETURN_IF_ERROR(db_->Prepare(
-      "INSERT INTO snapshots (project, name, created_us, author) VALUES (?, ?, ?, ?) RETURNING id",
-      &stmt));
+  PBA_RETURN_IF_ERROR(
+      db_->Prepare("INSERT INTO snapshots (project, name, created_us, author, import_job) "
+                   "VALUES (?, ?, ?, ?, ?) RETURNING id",
+                   &stmt));
+  stmt.Bind(1, caller.project).Bind(2, name).Bind(3, clock_()).Bind(4, caller.user);
+  if (import_job.empty()) {
+    stmt.BindNull(5);
+  } else {
+    stmt.Bind(5, import_job);
+  }
   bool row = false;
-  PBA_RETURN_IF_ERROR(stmt.Bind(1, caller.project)
-                          .Bind(2, named)
-                          .Bind(3, clock_())
-                          .Bind(4, caller.user)
-                          .Step(&row));
-  const int64_t id = stmt.ColumnInt(0);
+  PBA_RETURN_IF_ERROR(stmt.Step(&row));
+  *id = stmt.ColumnInt(0);
   stmt = Statement();
   // One statement inside the transaction: every head is read at the same instant.
   PBA_RETURN_IF_ERROR(
       db_->Prepare("INSERT INTO snapshot_members (snapshot, structure, revision) "
                    "SELECT ?, id, head_revision FROM structures WHERE project = ?",
                    &stmt));
-  PBA_RETURN_IF_ERROR(stmt.Bind(1, id).Bind(2, caller.project).Run());
+  PBA_RETURN_IF_ERROR(stmt.Bind(1, *id).Bind(2, caller.project).Run());
   const int pinned = db_->Changes();
   stmt = Statement();
-  PBA_RETURN_IF_ERROR(Audit(caller.user, caller.project, "snapshot.create",
-                            ProjectTarget(project) + "/snapshots/" + std::to_string(id),
-                            std::nullopt, named + ": " + std::to_string(pinned) + " structures"));
-  PBA_RETURN_IF_ERROR(
-      RecordCreateRequest(caller.user, request_id, "snapshot", fingerprint, caller.project, 0, id));
-  PBA_RETURN_IF_ERROR(LoadSnapshot(project, caller.project, id, true, snapshot, &found));
-  return transaction.Commit();
+  return Audit(caller.user, caller.project, "snapshot.create",
+               ProjectTarget(project) + "/snapshots/" + std::to_string(*id), std::nullopt,
+               name + ": " + std::to_string(pinned) + " structures" +
+                   (import_job.empty() ? "" : ", made by import job " + import_job));
 }
 
 Status AtlasStore::Tag(const std::string& user, const std::string& project, int64_t snapshot_id,
