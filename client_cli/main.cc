@@ -51,8 +51,9 @@ int main(int argc, char** argv) {
                          "atlas store (its id or a tag)");
   submit_cmd->add_option("--priority", submit.priority, "Higher runs first (-100..100)")
       ->check(CLI::Range(-100, 100));
-  submit_cmd->add_option("--timeout", submit.timeout_s,
-                         "Wall-clock limit [s] (at most the server's); 0: the server's")
+  submit_cmd
+      ->add_option("--timeout", submit.timeout_s,
+                   "Wall-clock limit [s] (at most the server's); 0: the server's")
       ->check(CLI::NonNegativeNumber);
 
   ListArgs list;
@@ -254,8 +255,9 @@ int main(int argc, char** argv) {
       ->check(CLI::ExistingDirectory);
   atlas_import->add_option("--labels", import_args.labels, "A label volume (.nii, .nii.gz, .nrrd)")
       ->check(CLI::ExistingFile);
-  atlas_import->add_option("--colour-table", import_args.colour_table,
-                           "With --labels: its label table (CSV); default the built-in one")
+  atlas_import
+      ->add_option("--colour-table", import_args.colour_table,
+                   "With --labels: its label table (CSV); default the built-in one")
       ->check(CLI::ExistingFile);
   atlas_import->add_option("--structure", import_args.structures,
                            "Import only this structure (repeatable; group prefixes allowed)");

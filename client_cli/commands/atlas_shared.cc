@@ -36,7 +36,8 @@ int UploadFile(Connection& connection, const std::string& file, std::string* upl
   }
   Progress progress("uploading " + file, size);
   std::ifstream in(file, std::ios::binary);
-  std::string buffer(static_cast<size_t>(std::min(kUploadChunkBytes, std::max<int64_t>(size, 1))), '\0');
+  std::string buffer(static_cast<size_t>(std::min(kUploadChunkBytes, std::max<int64_t>(size, 1))),
+                     '\0');
   grpc::Status last;
   for (int attempt = 0; attempt < 3 && upload.received_bytes() < size; ++attempt) {
     if (attempt > 0) {
@@ -54,7 +55,8 @@ int UploadFile(Connection& connection, const std::string& file, std::string* upl
     auto writer = connection.atlas().WriteUpload(context.get(), &result);
     int64_t offset = upload.received_bytes();
     while (offset < size) {
-      const auto n = static_cast<std::streamsize>(std::min<int64_t>(kUploadChunkBytes, size - offset));
+      const auto n =
+          static_cast<std::streamsize>(std::min<int64_t>(kUploadChunkBytes, size - offset));
       in.read(buffer.data(), n);
       if (in.gcount() != n) {
         std::fprintf(stderr, "pba: %s changed while it was being uploaded\n", file.c_str());

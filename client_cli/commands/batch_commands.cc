@@ -301,10 +301,10 @@ bool LoadBatch(const std::string& file, Batch* batch, std::string* error) {
     // The same member of the same batch gets the same request id, so a
     // submit repeated after an interruption returns the job already made.
     // The key changes with the scene and with the snapshot it is built from.
-    const std::string on = batch->snapshot.project().empty()
-                               ? ""
-                               : "\nsnapshot " + batch->snapshot.project() + "/" +
-                                     batch->snapshot.snapshot();
+    const std::string on =
+        batch->snapshot.project().empty()
+            ? ""
+            : "\nsnapshot " + batch->snapshot.project() + "/" + batch->snapshot.snapshot();
     member.request_id = Sha256Text(batch->name + "\n" + out.c_str() + on).substr(0, 32);
     batch->members.push_back(std::move(member));
   }

@@ -40,8 +40,8 @@ int ImportAtlas(Connection& connection, const ImportArgs& args) {
   spec.set_message(args.message);
   for (const std::string& s : args.structures) spec.add_structures(s);
   std::vector<fs::path> files;
-  const int sources = (args.synthetic ? 1 : 0) + (args.plates.empty() ? 0 : 1) +
-                      (args.labels.empty() ? 0 : 1);
+  const int sources =
+      (args.synthetic ? 1 : 0) + (args.plates.empty() ? 0 : 1) + (args.labels.empty() ? 0 : 1);
   if (sources != 1) {
     std::fprintf(stderr, "pba: give exactly one of --synthetic, --plates DIR, --labels FILE\n");
     return kExitUsage;

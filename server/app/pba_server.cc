@@ -161,9 +161,9 @@ Status PbaServer::Start(const ServerOptions& options, std::unique_ptr<PbaServer>
       [atlas_jobs](const v1::JobEvent& event) { atlas_jobs->PublishJobEvent(event); });
   server->executor_ =
       std::make_unique<JobExecutor>(*server->store_, server->hub_, std::move(executor_options));
-  server->service_ = std::make_unique<JobServiceImpl>(*server->store_, *server->executor_,
-                                                      server->hub_, *server->atlas_store_,
-                                                      *server->uploads_, data_dir);
+  server->service_ =
+      std::make_unique<JobServiceImpl>(*server->store_, *server->executor_, server->hub_,
+                                       *server->atlas_store_, *server->uploads_, data_dir);
 
   grpc::EnableDefaultHealthCheckService(true);
   grpc::reflection::InitProtoReflectionServerBuilderPlugin();

@@ -19,10 +19,10 @@
 #include <condition_variable>
 #include <cstdint>
 #include <deque>
+#include <functional>
 #include <map>
 #include <mutex>
 #include <string>
-#include <functional>
 #include <vector>
 
 #include "pba/v1/job.pb.h"

@@ -2,8 +2,8 @@
 
 #include <fcntl.h>
 #include <google/protobuf/util/time_util.h>
-#include <unistd.h>
 #include <spdlog/spdlog.h>
+#include <unistd.h>
 
 #include <fstream>
 #include <set>
@@ -188,7 +188,8 @@ Status StageImportSource(UploadStore& uploads, const std::string& user,
   SyncDirectory(dir.parent_path());
   for (const v1::ImportFile& file : request.files()) {
     const Status removed = uploads.Remove(user, file.upload_id());
-    if (!removed.ok()) spdlog::warn("cannot remove upload {}: {}", file.upload_id(), removed.ToString());
+    if (!removed.ok())
+      spdlog::warn("cannot remove upload {}: {}", file.upload_id(), removed.ToString());
   }
   return Status::Ok();
 }
@@ -278,8 +279,7 @@ Status AtlasJobs::StageImport(const v1::Job& job, const fs::path& dir,
         }
       }
       if (!request.colour_table().empty()) {
-        input->insert(input->end(),
-                      {"--colour-table", (source / request.colour_table()).string()});
+        input->insert(input->end(), {"--colour-table", (source / request.colour_table()).string()});
       }
       break;
     default:

@@ -14,8 +14,8 @@
 #include "service/atlas_messages.h"
 #include "service/call_auth.h"
 #include "service/geometry_check.h"
-#include "service/overlap_check.h"
 #include "service/geometry_diff.h"
+#include "service/overlap_check.h"
 #include "store/page_token.h"
 
 namespace pba {

@@ -109,8 +109,7 @@ Status JobServiceImpl::CheckSubmit(const std::string& user, const v1::SubmitJobR
     PBA_RETURN_IF_ERROR(users_.RoleOf(request.atlas_import().project(), user, &role, &member));
     if (!member || role < Role::kEditor) {
       return Status::PermissionDenied("importing into project '" +
-                                      request.atlas_import().project() +
-                                      "' needs the editor role");
+                                      request.atlas_import().project() + "' needs the editor role");
     }
     job->atlas_import = &request.atlas_import();
     return Status::Ok();
@@ -121,8 +120,8 @@ Status JobServiceImpl::CheckSubmit(const std::string& user, const v1::SubmitJobR
   if (!request.has_snapshot()) return Status::Ok();
   const v1::SnapshotRef& ref = request.snapshot();
   if (!request.scene().geometry().has_atlas()) {
-    return Status::InvalidArgument(
-        "snapshot", "only an atlas scene (geometry.atlas) is built from a snapshot");
+    return Status::InvalidArgument("snapshot",
+                                   "only an atlas scene (geometry.atlas) is built from a snapshot");
   }
   const std::string& source = request.scene().geometry().atlas().source();
   if (!source.empty()) {

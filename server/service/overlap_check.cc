@@ -24,9 +24,9 @@ Status CheckLockedNeighbours(AtlasStore& store, const std::string& user, const S
   PBA_RETURN_IF_ERROR(store.LockedNeighbours(user, ref.project, ref.structure, &neighbours));
   for (const LockedNeighbour& n : neighbours) {
     OverlapMeasure m;
-    const Status measured = MeasureOverlap({ToStructureFormat(format), file},
-                                           {ToStructureFormat(n.head.format), n.blob},
-                                           kOverlapVoxelMm, &m);
+    const Status measured =
+        MeasureOverlap({ToStructureFormat(format), file},
+                       {ToStructureFormat(n.head.format), n.blob}, kOverlapVoxelMm, &m);
     if (!measured.ok()) {
       spdlog::warn("overlap of {} with {}: not measured: {}", ref.structure, n.head.structure,
                    measured.ToString());

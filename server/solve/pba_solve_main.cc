@@ -11,7 +11,6 @@
 #include <CLI/CLI.hpp>
 #include <atomic>
 #include <chrono>
-#include <vector>
 #include <csignal>
 #include <cstdint>
 #include <cstdio>
@@ -19,14 +18,15 @@
 #include <fstream>
 #include <iostream>
 #include <string>
+#include <vector>
 
+#include "atlas/structure_split.h"
 #include "codec/summary_text.h"
 #include "codec/yaml_codec.h"
 #include "convert/convert.h"
 #include "pba/solve.h"
 #include "pba/v1/scene.pb.h"
 #include "pba/v1/solve_event.pb.h"
-#include "atlas/structure_split.h"
 #include "solve/staging_dir.h"
 
 namespace pba {

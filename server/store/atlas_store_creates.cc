@@ -227,11 +227,8 @@ Status AtlasStore::InsertStructure(const Caller& caller, const std::string& name
       "created_by) VALUES (?, ?, NULL, '', ?, ?) RETURNING id",
       &stmt));
   bool row = false;
-  PBA_RETURN_IF_ERROR(stmt.Bind(1, caller.project)
-                          .Bind(2, name)
-                          .Bind(3, clock_())
-                          .Bind(4, caller.user)
-                          .Step(&row));
+  PBA_RETURN_IF_ERROR(
+      stmt.Bind(1, caller.project).Bind(2, name).Bind(3, clock_()).Bind(4, caller.user).Step(&row));
   *id = stmt.ColumnInt(0);
   return Status::Ok();
 }

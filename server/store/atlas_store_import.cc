@@ -82,8 +82,7 @@ Status AtlasStore::LockedNeighbours(const std::string& user, const std::string& 
   for (const Row& r : rows) {
     LockedNeighbour neighbour;
     bool found = false;
-    PBA_RETURN_IF_ERROR(
-        ReadRevision({project, r.name}, r.id, r.number, &neighbour.head, &found));
+    PBA_RETURN_IF_ERROR(ReadRevision({project, r.name}, r.id, r.number, &neighbour.head, &found));
     if (!found) continue;
     neighbour.blob = blobs_->PathOf(neighbour.head.content_sha256);
     neighbour.holder = r.holder;
@@ -142,8 +141,8 @@ Status AtlasStore::Import(const std::string& user, const std::string& project,
     std::string bytes;
     PBA_RETURN_IF_ERROR(ReadWholeFile(s.file, &bytes));
     if (bytes.empty() || bytes.size() > kMaxGeometryBytes) {
-      return Status::InvalidArgument("structures", "the geometry of " + Quoted(s.name) +
-                                                       " is empty or larger than 1 GiB");
+      return Status::InvalidArgument(
+          "structures", "the geometry of " + Quoted(s.name) + " is empty or larger than 1 GiB");
     }
     // The blob before any row that names it.
     Content content;

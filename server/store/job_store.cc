@@ -192,14 +192,14 @@ Status JobStore::CreateJob(const NewJob& request, v1::Job* job, bool* created) {
     stmt.Bind(2, request_id);
   }
   stmt.Bind(3, name)
-                          .Bind(4, StateName(v1::Job::QUEUED))
-                          .BindBlob(5, scene.SerializeAsString())
-                          .Bind(6, NowMicros())
-                          .Bind(7, owner)
-                          .Bind(8, int64_t{request.priority})
-                          .Bind(9, int64_t{request.timeout_s})
-                          .Bind(10, request.snapshot.project())
-                          .Bind(11, request.snapshot.snapshot());
+      .Bind(4, StateName(v1::Job::QUEUED))
+      .BindBlob(5, scene.SerializeAsString())
+      .Bind(6, NowMicros())
+      .Bind(7, owner)
+      .Bind(8, int64_t{request.priority})
+      .Bind(9, int64_t{request.timeout_s})
+      .Bind(10, request.snapshot.project())
+      .Bind(11, request.snapshot.snapshot());
   if (request.atlas_import != nullptr) {
     stmt.BindBlob(12, request.atlas_import->SerializeAsString());
   } else {
@@ -391,9 +391,8 @@ Status JobStore::ClaimNextQueued(v1::Job* job, v1::JobEvent* event, bool* claime
   Transaction transaction(*db_);
   PBA_RETURN_IF_ERROR(transaction.status());
   Statement stmt;
-  PBA_RETURN_IF_ERROR(
-      db_->Prepare("SELECT id FROM jobs WHERE state = ? ORDER BY priority DESC, number LIMIT 1",
-                   &stmt));
+  PBA_RETURN_IF_ERROR(db_->Prepare(
+      "SELECT id FROM jobs WHERE state = ? ORDER BY priority DESC, number LIMIT 1", &stmt));
   bool row = false;
   PBA_RETURN_IF_ERROR(stmt.Bind(1, StateName(v1::Job::QUEUED)).Step(&row));
   if (!row) return Status::Ok();
@@ -538,10 +537,10 @@ Status JobStore::ExpireResults(int64_t ended_before_us, const std::string& note,
   Transaction transaction(*db_);
   PBA_RETURN_IF_ERROR(transaction.status());
   Statement stmt;
-  PBA_RETURN_IF_ERROR(db_->Prepare(
-      "SELECT id FROM jobs WHERE end_time_us < ? AND state IN (?, ?, ?) AND EXISTS "
-      "(SELECT 1 FROM result_files WHERE job_id = jobs.id) ORDER BY number",
-      &stmt));
+  PBA_RETURN_IF_ERROR(
+      db_->Prepare("SELECT id FROM jobs WHERE end_time_us < ? AND state IN (?, ?, ?) AND EXISTS "
+                   "(SELECT 1 FROM result_files WHERE job_id = jobs.id) ORDER BY number",
+                   &stmt));
   stmt.Bind(1, ended_before_us)
       .Bind(2, StateName(v1::Job::SUCCEEDED))
       .Bind(3, StateName(v1::Job::FAILED))

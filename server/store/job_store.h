@@ -37,7 +37,7 @@ struct NewJob {
   std::string owner;
   int priority = 0;
   int timeout_s = 0;
-  v1::SnapshotRef snapshot;  // resolved: the snapshot's id
+  v1::SnapshotRef snapshot;                       // resolved: the snapshot's id
   const v1::AtlasImport* atlas_import = nullptr;  // an import job
   // Runs inside the submit's transaction once the job has its id, before
   // it commits (an error rolls the submit back): what the job needs is in
@@ -96,8 +96,8 @@ class JobStore {
   Status GetResultFile(const std::string& id, const std::string& name, v1::ResultFile* file,
                        bool* found);
 
-  // Moves the QUEUED job of highest priority, the oldest of those, to RUNNING (attempts + 1, start time, event).
-  // *claimed is false when nothing is queued. `job` is loaded with kFull.
+  // Moves the QUEUED job of highest priority, the oldest of those, to RUNNING (attempts + 1, start
+  // time, event). *claimed is false when nothing is queued. `job` is loaded with kFull.
   Status ClaimNextQueued(v1::Job* job, v1::JobEvent* event, bool* claimed);
 
   // QUEUED -> CANCELLED with an event; *cancelled is false (and nothing

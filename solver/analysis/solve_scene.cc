@@ -31,8 +31,8 @@ std::string DescribeGeometry(const GeometrySpec& g) {
     // A snapshot of the atlas store (staged by the server, or exported) is
     // named as such: the staging path means nothing to the reader.
     StructureSet set;
-    if (IsStructureSetDir(source) && ReadStructureSet(source, &set).ok() &&
-        !set.project.empty() && set.snapshot > 0) {
+    if (IsStructureSetDir(source) && ReadStructureSet(source, &set).ok() && !set.project.empty() &&
+        set.snapshot > 0) {
       return Format("atlas of snapshot %lld of project %s (%zu structures)",
                     static_cast<long long>(set.snapshot), set.project.c_str(),
                     set.structures.size());

@@ -150,7 +150,7 @@ Status OneStructureStack(const Contours& contours, const PlateStack& grid, Plate
     stack->files.push_back(Format("plate_%02d.png", static_cast<int>(stack->files.size()) + 1));
     stack->labels.emplace_back(static_cast<size_t>(grid.width) * grid.height, 0);
     RasterizeContourPlate(plate, grid.origin_mm, grid.pixel_size_mm, grid.width, grid.height, 1,
-                     &stack->labels.back());
+                          &stack->labels.back());
   }
   return ColourTable::FromEntries({{1, "structure", 255, 255, 255}}, &stack->colours);
 }
@@ -248,8 +248,8 @@ Status ComposePlates(const StructureSet& set, const Loaded& loaded, const std::v
       const auto drawn = std::find_if(contours.plates.begin(), contours.plates.end(),
                                       [z](const ContourPlate& c) { return c.z_mm == z; });
       if (drawn != contours.plates.end()) {
-        RasterizeContourPlate(*drawn, stack.origin_mm, stack.pixel_size_mm, stack.width, stack.height, 1,
-                         &own);
+        RasterizeContourPlate(*drawn, stack.origin_mm, stack.pixel_size_mm, stack.width,
+                              stack.height, 1, &own);
       } else {
         // Between two of its own plates: its section as its loft has it.
         if (!lofted) {

@@ -15,8 +15,8 @@
 #include "atlas/label_volume_io.h"
 #include "atlas/synthetic_atlas.h"
 #include "core/atomic_write.h"
-#include "core/sha256.h"
 #include "core/format.h"
+#include "core/sha256.h"
 
 namespace pba {
 namespace fs = std::filesystem;

@@ -1,6 +1,5 @@
 #include "io/atlas_mesh_cache.h"
 
-
 #include <algorithm>
 #include <array>
 #include <chrono>

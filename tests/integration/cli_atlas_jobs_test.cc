@@ -70,8 +70,7 @@ TEST_F(CliAtlasJobsTest, ImportRunAgainstTheSnapshotExportAndReproduce) {
       Pba({"atlas", "import", "-p", "demo", "--synthetic", "--structure", "Putamen", "--structure",
            "Globus pallidus lateralis", "--snapshot-name", "basal ganglia"});
   ASSERT_EQ(imported.exit_code, 0) << imported.out << imported.err;
-  EXPECT_NE(imported.out.find("Imported into demo: snapshot 1"), std::string::npos)
-      << imported.out;
+  EXPECT_NE(imported.out.find("Imported into demo: snapshot 1"), std::string::npos) << imported.out;
   const RunResult listed = Pba({"atlas", "list", "-p", "demo"});
   EXPECT_NE(listed.out.find("Putamen"), std::string::npos) << listed.out;
   EXPECT_NE(listed.out.find("Globus pallidus lateralis"), std::string::npos) << listed.out;
@@ -89,7 +88,8 @@ TEST_F(CliAtlasJobsTest, ImportRunAgainstTheSnapshotExportAndReproduce) {
   EXPECT_NE(run.exit_code, 0);
   const RunResult tag = Pba({"atlas", "tag", "-p", "demo", "1", "basal"});
   ASSERT_EQ(tag.exit_code, 0) << tag.out << tag.err;
-  const RunResult job = Pba({"--json", "job", "submit", scene, "--snapshot", "demo/basal", "--wait"});
+  const RunResult job =
+      Pba({"--json", "job", "submit", scene, "--snapshot", "demo/basal", "--wait"});
   ASSERT_EQ(job.exit_code, 0) << job.out << job.err;
   watcher.join();
   const RunResult watch = watched.get_future().get();
@@ -121,10 +121,9 @@ TEST_F(CliAtlasJobsTest, ImportRunAgainstTheSnapshotExportAndReproduce) {
                                    "voxel_size_mm: 2\n    source: " + exported.string());
   const fs::path local = dir_.path() / "local.yaml";
   std::ofstream(local) << local_scene;
-  const RunResult solved = RunProcess(
-      {PBA_SOLVE_BIN, local.string(), "--out", (dir_.path() / "local").string(), "--progress",
-       "none"},
-      seconds(300));
+  const RunResult solved = RunProcess({PBA_SOLVE_BIN, local.string(), "--out",
+                                       (dir_.path() / "local").string(), "--progress", "none"},
+                                      seconds(300));
   ASSERT_EQ(solved.exit_code, 0) << solved.out << solved.err;
   const std::string summary = ReadFile(dir_.path() / "local" / "summary.json");
   EXPECT_EQ(Find(summary, R"re("elements": "([0-9]+)")re"), elements) << summary;
@@ -143,8 +142,8 @@ TEST_F(CliAtlasJobsTest, ALabelVolumeImportAndARepeatThatFailsWritingNothing) {
   EXPECT_NE(shown.out.find("nifti"), std::string::npos) << shown.out;
 
   // The same structures again: the job fails naming one, and nothing is written.
-  const RunResult repeat = Pba({"atlas", "import", "-p", "demo", "--labels", labels,
-                                "--structure", "Putamen"});
+  const RunResult repeat =
+      Pba({"atlas", "import", "-p", "demo", "--labels", labels, "--structure", "Putamen"});
   EXPECT_EQ(repeat.exit_code, kJobFailed) << repeat.out << repeat.err;
   EXPECT_NE(repeat.err.find("'Putamen'"), std::string::npos) << repeat.err;
   const RunResult snapshots = Pba({"--json", "atlas", "snapshot", "list", "-p", "demo"});

@@ -77,9 +77,9 @@ class AtlasJobsTest : public ::testing::Test {
     EXPECT_TRUE(Sha256Hex(bytes, &sha).ok());
     begin.set_sha256(sha);
     v1::Upload upload;
-    EXPECT_TRUE(
-        Call(admin_, [&](grpc::ClientContext* c) { return atlas_->BeginUpload(c, begin, &upload); })
-            .ok());
+    EXPECT_TRUE(Call(admin_, [&](grpc::ClientContext* c) {
+                  return atlas_->BeginUpload(c, begin, &upload);
+                }).ok());
     grpc::ClientContext context;
     context.AddMetadata("authorization", "Bearer " + admin_);
     v1::Upload done;
@@ -107,8 +107,7 @@ class AtlasJobsTest : public ::testing::Test {
     ASSERT_TRUE(status.ok()) << status.error_message();
   }
 
-  grpc::Status Submit(const std::string& token, const v1::SubmitJobRequest& request,
-                      v1::Job* job) {
+  grpc::Status Submit(const std::string& token, const v1::SubmitJobRequest& request, v1::Job* job) {
     return Call(token, [&](grpc::ClientContext* c) { return jobs_->SubmitJob(c, request, job); });
   }
 
@@ -126,8 +125,7 @@ class AtlasJobsTest : public ::testing::Test {
     request.set_id(id);
     v1::Job job;
     EXPECT_TRUE(
-        Call(admin_, [&](grpc::ClientContext* c) { return jobs_->GetJob(c, request, &job); })
-            .ok());
+        Call(admin_, [&](grpc::ClientContext* c) { return jobs_->GetJob(c, request, &job); }).ok());
     return job;
   }
 
@@ -168,8 +166,7 @@ TEST_F(AtlasJobsTest, ASubmitAgainstASnapshotIsChecked) {
        "scene.geometry.atlas.source"},
       {no_project, "admin", grpc::INVALID_ARGUMENT, "snapshot.project"},
       {OnSnapshot(testing::AtlasScene("ok"), "9"), "admin", grpc::NOT_FOUND, "no snapshot"},
-      {OnSnapshot(testing::AtlasScene("ok"), "nosuchtag"), "admin", grpc::NOT_FOUND,
-       "nosuchtag"},
+      {OnSnapshot(testing::AtlasScene("ok"), "nosuchtag"), "admin", grpc::NOT_FOUND, "nosuchtag"},
       {OnSnapshot(testing::AtlasScene("ok"), "1"), "eve", grpc::PERMISSION_DENIED, ""},
       {too_high, "admin", grpc::INVALID_ARGUMENT, "priority"},
   };
@@ -178,8 +175,7 @@ TEST_F(AtlasJobsTest, ASubmitAgainstASnapshotIsChecked) {
     const grpc::Status status =
         Submit(std::string(c.token_of) == "eve" ? eve_ : admin_, c.request, &job);
     EXPECT_EQ(status.error_code(), c.code) << status.error_message();
-    EXPECT_NE(status.error_message().find(c.fragment), std::string::npos)
-        << status.error_message();
+    EXPECT_NE(status.error_message().find(c.fragment), std::string::npos) << status.error_message();
   }
   EXPECT_EQ(CountJobs(), 0);
 }
@@ -256,12 +252,12 @@ TEST_F(AtlasJobsTest, AnImportIsCheckedAndARefusalLeavesNoTrace) {
   const std::vector<Case> cases = {
       {Import(v1::AtlasImport::SOURCE_UNSPECIFIED, {}), false, grpc::INVALID_ARGUMENT,
        "atlas_import.source"},
-      {Import(v1::AtlasImport::SYNTHETIC, {{"plates.json", upload}}), false,
-       grpc::INVALID_ARGUMENT, "send no files"},
-      {Import(v1::AtlasImport::PLATES, {{"../plates.json", upload}}), false,
-       grpc::INVALID_ARGUMENT, "atlas_import.files[0].name"},
-      {Import(v1::AtlasImport::PLATES, {{"plate_01.png", upload}}), false,
-       grpc::INVALID_ARGUMENT, "plates.json"},
+      {Import(v1::AtlasImport::SYNTHETIC, {{"plates.json", upload}}), false, grpc::INVALID_ARGUMENT,
+       "send no files"},
+      {Import(v1::AtlasImport::PLATES, {{"../plates.json", upload}}), false, grpc::INVALID_ARGUMENT,
+       "atlas_import.files[0].name"},
+      {Import(v1::AtlasImport::PLATES, {{"plate_01.png", upload}}), false, grpc::INVALID_ARGUMENT,
+       "plates.json"},
       {Import(v1::AtlasImport::LABEL_VOLUME, {{"a.nii", upload}, {"b.nrrd", upload}}), false,
        grpc::INVALID_ARGUMENT, "exactly one"},
       {Import(v1::AtlasImport::PLATES, {{"plates.json", "0123456789abcdef0123456789abcdef"}}),
@@ -273,8 +269,7 @@ TEST_F(AtlasJobsTest, AnImportIsCheckedAndARefusalLeavesNoTrace) {
     v1::Job job;
     const grpc::Status status = Submit(c.as_eve ? eve_ : admin_, c.request, &job);
     EXPECT_EQ(status.error_code(), c.code) << status.error_message();
-    EXPECT_NE(status.error_message().find(c.fragment), std::string::npos)
-        << status.error_message();
+    EXPECT_NE(status.error_message().find(c.fragment), std::string::npos) << status.error_message();
   }
   EXPECT_EQ(CountJobs(), 0);
   // Nothing half-made in the jobs folder, and the unused upload is still there.
@@ -301,10 +296,9 @@ TEST_F(AtlasJobsTest, AnImportTakesItsUploadsAtOnceAndARepeatReturnsTheJob) {
   v1::GetUploadRequest get;
   get.set_upload_id(upload);
   v1::Upload info;
-  EXPECT_EQ(
-      Call(admin_, [&](grpc::ClientContext* c) { return atlas_->GetUpload(c, get, &info); })
-          .error_code(),
-      grpc::NOT_FOUND);
+  EXPECT_EQ(Call(admin_, [&](grpc::ClientContext* c) { return atlas_->GetUpload(c, get, &info); })
+                .error_code(),
+            grpc::NOT_FOUND);
   v1::Job again;
   ASSERT_TRUE(Submit(admin_, request, &again).ok());
   EXPECT_EQ(again.id(), job.id());

@@ -15,8 +15,8 @@ std::string Square(double x0, double x1) {
   std::ostringstream out;
   out << R"({"plates": [)";
   for (double z : {0.0, 4.0}) {
-    out << (z > 0 ? ", " : "") << R"({"z_mm": )" << z << R"(, "polygons": [[[)" << x0
-        << ", 0], [" << x1 << ", 0], [" << x1 << ", 10], [" << x0 << ", 10]]]}";
+    out << (z > 0 ? ", " : "") << R"({"z_mm": )" << z << R"(, "polygons": [[[)" << x0 << ", 0], ["
+        << x1 << ", 0], [" << x1 << ", 10], [" << x0 << ", 10]]]}";
   }
   out << "]}";
   return out.str();
@@ -30,8 +30,7 @@ TEST_F(AtlasServiceTest, ACommitIntoANeighbourSomeoneElseHoldsIsRefused) {
   v1::Lock bobs;
   ASSERT_RPC(Acquire("bob", &bobs, "left"));
   const grpc::Status refused = Commit("bob", bobs.lock_id(), 1, Square(0, 25), nullptr, "left");
-  EXPECT_EQ(refused.error_code(), grpc::StatusCode::FAILED_PRECONDITION)
-      << refused.error_message();
+  EXPECT_EQ(refused.error_code(), grpc::StatusCode::FAILED_PRECONDITION) << refused.error_message();
   EXPECT_NE(refused.error_message().find("overlaps 'right', which admin holds locked"),
             std::string::npos)
       << refused.error_message();

@@ -59,12 +59,12 @@ TEST_F(AtlasImportTest, CreatesStructuresAndASnapshotOfTheProject) {
 TEST_F(AtlasImportTest, AgainWithTheSameJobReturnsTheSnapshotAndWritesNothing) {
   SnapshotInfo first, second;
   bool replayed = false;
-  ASSERT_OK(store_->Import("bob", "atlas", "job1", TwoStructures(), "imported", "m", &first,
-                           &replayed));
+  ASSERT_OK(
+      store_->Import("bob", "atlas", "job1", TwoStructures(), "imported", "m", &first, &replayed));
   const int64_t audit = CountRows("audit_log");
   const int64_t revisions = CountRows("structure_revisions");
-  ASSERT_OK(store_->Import("bob", "atlas", "job1", TwoStructures(), "imported", "m", &second,
-                           &replayed));
+  ASSERT_OK(
+      store_->Import("bob", "atlas", "job1", TwoStructures(), "imported", "m", &second, &replayed));
   EXPECT_TRUE(replayed);
   EXPECT_EQ(second.id, first.id);
   EXPECT_EQ(CountRows("audit_log"), audit);
@@ -109,8 +109,8 @@ TEST_F(AtlasImportTest, AMissingFileWritesNothing) {
 TEST_F(AtlasImportTest, SnapshotFilesNameVerifiedBlobsOfThePinnedRevisions) {
   SnapshotInfo snapshot;
   bool replayed = false;
-  ASSERT_OK(store_->Import("bob", "atlas", "job5", TwoStructures(), "s", "m", &snapshot,
-                           &replayed));
+  ASSERT_OK(
+      store_->Import("bob", "atlas", "job5", TwoStructures(), "s", "m", &snapshot, &replayed));
   std::vector<SnapshotFile> files;
   ASSERT_OK(store_->SnapshotFiles("carol", "atlas", snapshot.id, &files));
   ASSERT_EQ(files.size(), 3u);

@@ -2,7 +2,6 @@
 // form, and composing a set into plates or a label volume that BuildAtlas
 // meshes.
 #include "atlas/structure_set.h"
-#include "atlas/structure_overlap.h"
 
 #include <gtest/gtest.h>
 
@@ -14,6 +13,7 @@
 #include "atlas/atlas_build.h"
 #include "atlas/contours.h"
 #include "atlas/label_volume_io.h"
+#include "atlas/structure_overlap.h"
 
 namespace pba {
 namespace {
