@@ -653,7 +653,15 @@ int Diff(Connection& connection, const StructureArgs& target, int64_t from, int6
     char from_volume[32], to_volume[32];
     std::snprintf(from_volume, sizeof from_volume, "%.1f mm^3", c.from_volume_mm3());
     std::snprintf(to_volume, sizeof to_volume, "%.1f mm^3", c.to_volume_mm3());
-    rows.push_back({"volume", from_volume, to_volume});
+    rows.push_back({"volume (plates x slabs)", from_volume, to_volume});
+  }
+  if (diff.has_shape()) {
+    const v1::ShapeDiff& shape = diff.shape();
+    char from_volume[48], to_volume[48];
+    std::snprintf(from_volume, sizeof from_volume, "%.0f mm^3", shape.from_volume_mm3());
+    std::snprintf(to_volume, sizeof to_volume, "%.0f mm^3", shape.to_volume_mm3());
+    rows.push_back({"volume (" + std::to_string(shape.voxel_mm()).substr(0, 3) + " mm voxels)",
+                    from_volume, to_volume});
   }
   if (rows.size() > 1) PrintTable(rows);
   if (!diff.geometry_changed()) {
@@ -661,7 +669,7 @@ int Diff(Connection& connection, const StructureArgs& target, int64_t from, int6
   } else if (diff.has_contours()) {
     const v1::ContoursDiff& c = diff.contours();
     std::printf(
-        "Geometry: over %d plate%s at shared heights the contours are at most %.3f mm apart "
+        "Contours: over %d plate%s at shared heights the contours are at most %.3f mm apart "
         "(Hausdorff), %.3f mm on average",
         c.plates_compared(), c.plates_compared() == 1 ? "" : "s", c.hausdorff_mm(),
         c.mean_distance_mm());
@@ -675,8 +683,14 @@ int Diff(Connection& connection, const StructureArgs& target, int64_t from, int6
     if (!c.only_in_to_z_mm().empty())
       std::printf("; plates added at z = %s mm", heights(c.only_in_to_z_mm()).c_str());
     std::puts(".");
-  } else {
-    std::puts("Geometry: changed (distances are measured between plate contours only).");
+  }
+  if (diff.has_shape()) {
+    const v1::ShapeDiff& shape = diff.shape();
+    std::printf(
+        "Shape: %.0f mm^3 shared, Dice %.3f; surfaces at most %.2f mm apart (Hausdorff), %.2f mm "
+        "on average (%.3g mm voxels).\n",
+        shape.shared_volume_mm3(), shape.dice(), shape.hausdorff_mm(),
+        shape.mean_surface_distance_mm(), shape.voxel_mm());
   }
   return kExitOk;
 }

@@ -559,6 +559,10 @@ void DiffMaterials(const std::string& from, const std::string& to, v1::RevisionD
 
 }  // namespace
 
+// The voxels revisions are compared on [mm]: fine enough for the brain's
+// nuclei (a few mm across), coarse enough for a whole cortex in a second.
+constexpr double kDiffVoxelMm = 1.0;
+
 grpc::Status AtlasServiceImpl::DiffRevisions(grpc::ServerContext* context,
                                              const v1::DiffRevisionsRequest* request,
                                              v1::RevisionDiff* response) {
@@ -600,9 +604,9 @@ grpc::Status AtlasServiceImpl::DiffRevisions(grpc::ServerContext* context,
   response->set_to_group(b.metadata.group_path);
   response->set_geometry_changed(a.content_sha256 != b.content_sha256);
   if (a.format == GeometryFormat::kContoursJson && b.format == GeometryFormat::kContoursJson) {
-    std::vector<ContourPlate> plates_a, plates_b;
-    status = ParseContours(geometry_a, &plates_a);
-    if (status.ok()) status = ParseContours(geometry_b, &plates_b);
+    Contours plates_a, plates_b;
+    status = ParseContoursJson(geometry_a, "from", &plates_a);
+    if (status.ok()) status = ParseContoursJson(geometry_b, "to", &plates_b);
     if (!status.ok()) return Fail(kRpc, status);
     v1::ContoursDiff* contours = response->mutable_contours();
     contours->set_from_volume_mm3(ContoursVolume(plates_a));
@@ -613,6 +617,20 @@ grpc::Status AtlasServiceImpl::DiffRevisions(grpc::ServerContext* context,
     contours->set_plates_compared(distance.plates_compared);
     for (double z : distance.only_in_a_z_mm) contours->add_only_in_from_z_mm(z);
     for (double z : distance.only_in_b_z_mm) contours->add_only_in_to_z_mm(z);
+  }
+  if (a.content_sha256 != b.content_sha256) {
+    ShapeComparison shapes;
+    status =
+        CompareRevisionShapes(a.format, geometry_a, b.format, geometry_b, kDiffVoxelMm, &shapes);
+    if (!status.ok()) return Fail(kRpc, status);
+    v1::ShapeDiff* shape = response->mutable_shape();
+    shape->set_voxel_mm(kDiffVoxelMm);
+    shape->set_from_volume_mm3(shapes.overlap.a_mm3);
+    shape->set_to_volume_mm3(shapes.overlap.b_mm3);
+    shape->set_shared_volume_mm3(shapes.overlap.overlap_mm3);
+    shape->set_dice(shapes.dice);
+    shape->set_hausdorff_mm(shapes.hausdorff_mm);
+    shape->set_mean_surface_distance_mm(shapes.mean_surface_distance_mm);
   }
   return grpc::Status::OK;
 }

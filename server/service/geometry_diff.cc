@@ -1,25 +1,27 @@
 #include "service/geometry_diff.h"
 
-#include <google/protobuf/struct.pb.h>
-#include <google/protobuf/util/json_util.h>
+#include <stdlib.h>
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <limits>
+#include <tuple>
+
+#include "store/atomic_file.h"
 
 namespace pba {
+namespace fs = std::filesystem;
 namespace {
 
-using Point = std::array<double, 2>;
+using Point = Eigen::Vector2d;
 using Polygons = std::vector<std::vector<Point>>;
 
 double SegmentDistance(const Point& p, const Point& a, const Point& b) {
-  const double dx = b[0] - a[0], dy = b[1] - a[1];
-  const double length2 = dx * dx + dy * dy;
-  double t = length2 > 0 ? ((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / length2 : 0;
-  t = std::clamp(t, 0.0, 1.0);
-  const double x = a[0] + t * dx - p[0], y = a[1] + t * dy - p[1];
-  return std::sqrt(x * x + y * y);
+  const Point ab = b - a;
+  const double length2 = ab.squaredNorm();
+  const double t = length2 > 0 ? std::clamp((p - a).dot(ab) / length2, 0.0, 1.0) : 0.0;
+  return (a + t * ab - p).norm();
 }
 
 double DistanceToContours(const Point& p, const Polygons& polygons) {
@@ -39,11 +41,11 @@ void Accumulate(const Polygons& from, const Polygons& to, double step, double* l
     for (size_t i = 0; i < polygon.size(); ++i) {
       const Point& a = polygon[i];
       const Point& b = polygon[(i + 1) % polygon.size()];
-      const double length = std::hypot(b[0] - a[0], b[1] - a[1]);
+      const double length = (b - a).norm();
       const int n = std::max(1, static_cast<int>(std::ceil(length / step)));
       for (int k = 0; k < n; ++k) {  // the edge's end is the next edge's start
         const double t = static_cast<double>(k) / n;
-        const Point p{a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])};
+        const Point p = a + t * (b - a);
         const double d = DistanceToContours(p, to);
         *largest = std::max(*largest, d);
         *sum += d;
@@ -55,33 +57,6 @@ void Accumulate(const Polygons& from, const Polygons& to, double step, double* l
 
 }  // namespace
 
-Status ParseContours(std::string_view json, std::vector<ContourPlate>* plates) {
-  google::protobuf::Value value;
-  const auto parsed = google::protobuf::util::JsonStringToMessage(
-      google::protobuf::StringPiece(json.data(), json.size()), &value);
-  if (!parsed.ok()) return Status::InvalidArgument("contours", parsed.ToString());
-  plates->clear();
-  const auto& top = value.struct_value().fields();
-  const auto it = top.find("plates");
-  if (it == top.end()) return Status::InvalidArgument("contours", "no plates");
-  for (const auto& p : it->second.list_value().values()) {
-    const auto& fields = p.struct_value().fields();
-    ContourPlate plate;
-    plate.z_mm = fields.at("z_mm").number_value();
-    for (const auto& polygon : fields.at("polygons").list_value().values()) {
-      plate.polygons.emplace_back();
-      for (const auto& point : polygon.list_value().values()) {
-        plate.polygons.back().push_back({point.list_value().values(0).number_value(),
-                                         point.list_value().values(1).number_value()});
-      }
-    }
-    plates->push_back(std::move(plate));
-  }
-  std::sort(plates->begin(), plates->end(),
-            [](const ContourPlate& a, const ContourPlate& b) { return a.z_mm < b.z_mm; });
-  return Status::Ok();
-}
-
 double PlateArea(const ContourPlate& plate) {
   double total = 0;
   for (const auto& polygon : plate.polygons) {
@@ -89,14 +64,15 @@ double PlateArea(const ContourPlate& plate) {
     for (size_t i = 0; i < polygon.size(); ++i) {
       const Point& a = polygon[i];
       const Point& b = polygon[(i + 1) % polygon.size()];
-      twice += a[0] * b[1] - b[0] * a[1];
+      twice += a.x() * b.y() - b.x() * a.y();
     }
     total += std::abs(twice) / 2;
   }
   return total;
 }
 
-double ContoursVolume(const std::vector<ContourPlate>& plates) {
+double ContoursVolume(const Contours& contours) {
+  const std::vector<ContourPlate>& plates = contours.plates;
   if (plates.size() < 2) return 0;
   double volume = 0;
   for (size_t i = 0; i < plates.size(); ++i) {
@@ -109,8 +85,10 @@ double ContoursVolume(const std::vector<ContourPlate>& plates) {
   return volume;
 }
 
-ContoursDistance DistanceBetween(const std::vector<ContourPlate>& a,
-                                 const std::vector<ContourPlate>& b, double step_mm) {
+ContoursDistance DistanceBetween(const Contours& contours_a, const Contours& contours_b,
+                                 double step_mm) {
+  const std::vector<ContourPlate>& a = contours_a.plates;
+  const std::vector<ContourPlate>& b = contours_b.plates;
   constexpr double kSameHeight = 1e-6;
   ContoursDistance result;
   double sum = 0;
@@ -134,6 +112,25 @@ ContoursDistance DistanceBetween(const std::vector<ContourPlate>& a,
   }
   result.mean_mm = count > 0 ? sum / static_cast<double>(count) : 0;
   return result;
+}
+
+Status CompareRevisionShapes(GeometryFormat format_a, std::string_view a, GeometryFormat format_b,
+                             std::string_view b, double voxel_mm, ShapeComparison* comparison) {
+  std::string pattern = (fs::temp_directory_path() / "pba-diff-XXXXXX").string();
+  if (::mkdtemp(pattern.data()) == nullptr) return Status::Io("cannot create a scratch directory");
+  const fs::path dir = pattern;
+  StructureGeometry ga, gb;
+  Status status = Status::Ok();
+  for (auto [name, format, bytes, geometry] :
+       {std::tuple{"a", format_a, a, &ga}, std::tuple{"b", format_b, b, &gb}}) {
+    geometry->file = dir / name;
+    ParseStructureFormat(GeometryFormatName(format), &geometry->format);
+    if (status.ok()) status = WriteFileAtomically(geometry->file, bytes);
+  }
+  if (status.ok()) status = CompareShapes(ga, gb, voxel_mm, comparison);
+  std::error_code ignored;
+  fs::remove_all(dir, ignored);
+  return status;
 }
 
 }  // namespace pba

@@ -1,24 +1,19 @@
-// What changed between two revisions of a structure's plate contours
-// (geometry_check.h gives their form): the volume, and how far apart the
-// contours lie at the heights both have (Hausdorff and mean distance).
+// What changed between two revisions of a structure's geometry: for plate
+// contours (contours.h) the volume and how far apart the contours lie at the
+// heights both have (Hausdorff and mean distance); for any forms, the two
+// shapes compared on voxels.
 #pragma once
 
 #include <array>
 #include <string_view>
 #include <vector>
 
+#include "atlas/contours.h"
+#include "atlas/structure_overlap.h"
 #include "pba/status.h"
+#include "store/atlas_types.h"
 
 namespace pba {
-
-struct ContourPlate {
-  double z_mm = 0;
-  std::vector<std::vector<std::array<double, 2>>> polygons;  // [x_mm, y_mm], closed implicitly
-};
-
-// The plates of a contours JSON document, by increasing height; the
-// document must pass CheckGeometryContent.
-Status ParseContours(std::string_view json, std::vector<ContourPlate>* plates);
 
 // Area of a plate's polygons [mm^2]: each polygon's absolute area, summed
 // (polygons of one plate are separate pieces of the structure).
@@ -27,7 +22,7 @@ double PlateArea(const ContourPlate& plate);
 // Each plate's area times its slab: from half-way to the plate below to
 // half-way to the plate above; an end plate's slab reaches as far out as it
 // reaches in. 0 for a single plate [mm^3].
-double ContoursVolume(const std::vector<ContourPlate>& plates);
+double ContoursVolume(const Contours& contours);
 
 struct ContoursDistance {
   double hausdorff_mm = 0;
@@ -41,7 +36,13 @@ struct ContoursDistance {
 // at its ends), each sample's distance to the nearest edge of the other
 // revision's plate; the Hausdorff distance is the largest over both
 // directions, the mean is over all samples of both.
-ContoursDistance DistanceBetween(const std::vector<ContourPlate>& a,
-                                 const std::vector<ContourPlate>& b, double step_mm = 0.1);
+ContoursDistance DistanceBetween(const Contours& a, const Contours& b, double step_mm = 0.1);
+
+// Two revisions' geometry in any forms compared on `voxel_mm` voxels
+// (CompareShapes, atlas/structure_overlap.h): volumes, the volume they
+// share, Dice, and Hausdorff and mean distance between their surfaces. The
+// bytes go through a scratch directory under the system's temporary one.
+Status CompareRevisionShapes(GeometryFormat format_a, std::string_view a, GeometryFormat format_b,
+                             std::string_view b, double voxel_mm, ShapeComparison* comparison);
 
 }  // namespace pba

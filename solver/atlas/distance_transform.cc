@@ -62,4 +62,26 @@ void SquaredDistanceTransform2d(const std::vector<uint8_t>& feature, int w, int 
   }
 }
 
+void SquaredDistanceTransform3d(const std::vector<uint8_t>& feature, int nx, int ny, int nz,
+                                std::vector<double>* out) {
+  const size_t slice = static_cast<size_t>(nx) * ny;
+  out->assign(slice * nz, kFar);
+  std::vector<uint8_t> plane(slice);
+  std::vector<double> d2;
+  for (int k = 0; k < nz; ++k) {
+    std::copy(feature.begin() + k * slice, feature.begin() + (k + 1) * slice, plane.begin());
+    SquaredDistanceTransform2d(plane, nx, ny, &d2);
+    std::copy(d2.begin(), d2.end(), out->begin() + k * slice);
+  }
+  // Then along z, on the in-plane squared distances (the transform is
+  // separable: the lower envelope works on any sampled function).
+  std::vector<double> f(nz), d(nz), z(nz + 1);
+  std::vector<int> v(nz);
+  for (size_t i = 0; i < slice; ++i) {
+    for (int k = 0; k < nz; ++k) f[k] = (*out)[i + k * slice];
+    SquaredDistance1d(f.data(), nz, d.data(), v.data(), z.data());
+    for (int k = 0; k < nz; ++k) (*out)[i + k * slice] = d[k];
+  }
+}
+
 }  // namespace pba

@@ -42,4 +42,9 @@ struct PixelBox {
 void SquaredDistanceTransform2d(const std::vector<uint8_t>& feature, int w, int h,
                                 std::vector<double>* out);
 
+// The same in 3-D [voxels^2]: an nx x ny x nz grid, x fastest (as
+// LabelVolume), each z-slice transformed in-plane, then along z.
+void SquaredDistanceTransform3d(const std::vector<uint8_t>& feature, int nx, int ny, int nz,
+                                std::vector<double>* out);
+
 }  // namespace pba

@@ -36,4 +36,22 @@ struct OverlapMeasure {
 Status MeasureOverlap(const StructureGeometry& a, const StructureGeometry& b, double voxel_mm,
                       OverlapMeasure* measure);
 
+// How two revisions of one structure differ in shape, in any forms:
+// both voxelised on one grid (each in full, whichever else claims its
+// voxels), then their volumes, the volume they share, the Dice coefficient
+// 2|A n B| / (|A| + |B|), and the distances between their surfaces (the
+// boundary voxels: inside ones with a face-neighbour outside), Hausdorff
+// (the largest of either's boundary voxels' distance to the other's) and
+// mean (over both), by an exact 3-D Euclidean distance transform
+// [voxel-centre distances, mm].
+struct ShapeComparison {
+  OverlapMeasure overlap;
+  double dice = 0;
+  double hausdorff_mm = 0;
+  double mean_surface_distance_mm = 0;
+};
+
+Status CompareShapes(const StructureGeometry& a, const StructureGeometry& b, double voxel_mm,
+                     ShapeComparison* comparison);
+
 }  // namespace pba

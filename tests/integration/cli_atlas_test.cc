@@ -179,6 +179,12 @@ TEST_F(CliAtlasTest, TwoPeopleEditOneStructureWithoutLosingAChange) {
   ASSERT_TRUE(std::regex_search(grown.out, hausdorff, std::regex("\"hausdorff_mm\": ([0-9.]+)")))
       << grown.out;
   EXPECT_NEAR(std::stod(hausdorff[1].str()), std::sqrt(2.0), 1e-9);
+  // And compared as shapes on 1 mm voxels: the 5 mm square inside the 6 mm
+  // one, so all of the smaller is shared.
+  std::smatch dice;
+  ASSERT_TRUE(std::regex_search(grown.out, dice, std::regex("\"dice\": ([0-9.]+)"))) << grown.out;
+  EXPECT_GT(std::stod(dice[1].str()), 0.5);
+  EXPECT_LT(std::stod(dice[1].str()), 1.0);
   const RunResult recoloured = PbaAs("admin", {"atlas", "diff", "-p", "demo", "Putamen"});
   ASSERT_EQ(recoloured.exit_code, 0) << recoloured.err;
   EXPECT_NE(recoloured.out.find("Geometry: unchanged."), std::string::npos) << recoloured.out;

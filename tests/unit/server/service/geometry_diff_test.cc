@@ -24,11 +24,11 @@ std::string Squares(const std::vector<double>& z, double side, double x0 = 0, do
   return json + "]}";
 }
 
-std::vector<ContourPlate> Parse(const std::string& json) {
-  std::vector<ContourPlate> plates;
-  const Status s = ParseContours(json, &plates);
+Contours Parse(const std::string& json) {
+  Contours contours;
+  const Status s = ParseContoursJson(json, "contours", &contours);
   EXPECT_TRUE(s.ok()) << s.ToString();
-  return plates;
+  return contours;
 }
 
 TEST(GeometryDiffTest, VolumeIsAreaTimesSlab) {
@@ -39,8 +39,8 @@ TEST(GeometryDiffTest, VolumeIsAreaTimesSlab) {
   EXPECT_NEAR(ContoursVolume(Parse(Squares({0, 2, 5}, 10))), 100 * (2 + 2.5 + 3), 1e-9);
   EXPECT_EQ(ContoursVolume(Parse(Squares({1}, 10))), 0);
   // Two pieces on one plate add up.
-  ContourPlate two = Parse(Squares({0}, 10))[0];
-  two.polygons.push_back(Parse(Squares({0}, 2, 50, 50))[0].polygons[0]);
+  ContourPlate two = Parse(Squares({0}, 10)).plates[0];
+  two.polygons.push_back(Parse(Squares({0}, 2, 50, 50)).plates[0].polygons[0]);
   EXPECT_NEAR(PlateArea(two), 104, 1e-9);
 }
 

@@ -490,5 +490,30 @@ TEST_F(StructureSetTest, MeasureOverlapOfTwoCubesSharingHalfTheirVolume) {
                    .ok());
 }
 
+// CompareShapes: the same two cubes, now as two revisions of a structure.
+TEST_F(StructureSetTest, CompareShapesOfTwoCubes) {
+  WriteText(dir_ / "a.stl", StlCube({0.25, 0.25, 0.25}, 10));
+  WriteText(dir_ / "b.stl", StlCube({5.25, 0.25, 0.25}, 10));
+  ShapeComparison c;
+  ASSERT_TRUE(CompareShapes({StructureFormat::kStl, dir_ / "a.stl"},
+                            {StructureFormat::kStl, dir_ / "b.stl"}, 1, &c)
+                  .ok());
+  EXPECT_DOUBLE_EQ(c.overlap.a_mm3, 1000);
+  EXPECT_DOUBLE_EQ(c.overlap.b_mm3, 1000);
+  EXPECT_DOUBLE_EQ(c.overlap.overlap_mm3, 500);
+  EXPECT_DOUBLE_EQ(c.dice, 0.5);
+  // The x = 1 face of one lies 5 voxels from the nearest boundary of the
+  // other (its x = 6 face); nothing lies farther.
+  EXPECT_DOUBLE_EQ(c.hausdorff_mm, 5);
+  EXPECT_GT(c.mean_surface_distance_mm, 0);
+  EXPECT_LT(c.mean_surface_distance_mm, 5);
+  // A shape against itself.
+  ASSERT_TRUE(CompareShapes({StructureFormat::kStl, dir_ / "a.stl"},
+                            {StructureFormat::kStl, dir_ / "a.stl"}, 1, &c)
+                  .ok());
+  EXPECT_DOUBLE_EQ(c.dice, 1);
+  EXPECT_DOUBLE_EQ(c.hausdorff_mm, 0);
+}
+
 }  // namespace
 }  // namespace pba
