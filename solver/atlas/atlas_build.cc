@@ -26,19 +26,6 @@ double SecondsSince(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
-bool EndsWith(const std::string& s, const std::string& suffix) {
-  return s.size() >= suffix.size() &&
-         s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
-}
-
-Status ReadLabelVolume(const std::filesystem::path& file, LabelVolume* volume) {
-  const std::string name = file.filename().string();
-  if (EndsWith(name, ".nii") || EndsWith(name, ".nii.gz")) return ReadNifti(file, volume);
-  if (EndsWith(name, ".nrrd")) return ReadNrrd(file, volume);
-  return Status::InvalidArgument("input",
-                                 file.string() + " is not a label volume (.nii, .nii.gz or .nrrd)");
-}
-
 // The labels the mesh keeps, in label order: those present in the volume
 // and, when the options name structures, among them.
 Status ChooseLabels(const AtlasBuildOptions& options, const ColourTable& colours,
@@ -50,18 +37,8 @@ Status ChooseLabels(const AtlasBuildOptions& options, const ColourTable& colours
     const std::string& name = options.structures[i];
     // A structure, or a group: "Thalamus" for every "Thalamus: ..." entry.
     std::vector<const ColourEntry*> entries;
-    if (const ColourEntry* entry = colours.FindByName(name)) {
-      entries.push_back(entry);
-    } else {
-      for (const ColourEntry& e : colours.entries()) {
-        if (InStructureGroup(e.name, name)) entries.push_back(&e);
-      }
-    }
-    if (entries.empty()) {
-      return Status::InvalidArgument(
-          "structures[" + std::to_string(i) + "]",
-          "no structure \"" + name + "\" in the colour table (nor any \"" + name + ": ...\")");
-    }
+    PBA_RETURN_IF_ERROR(
+        EntriesNamed(colours, name, "structures[" + std::to_string(i) + "]", &entries));
     bool present = false;
     for (const ColourEntry* e : entries) {
       present |= counts[e->label] > 0;
@@ -354,7 +331,7 @@ Status BuildAtlas(const AtlasBuildOptions& options, AtlasBuildResult* result) {
   }
   if (options.source == AtlasBuildOptions::Source::kLabelVolume || composed_volume) {
     if (!composed_volume) {
-      if (Status s = ReadLabelVolume(options.input, &result->volume); !s.ok()) return s;
+      if (Status s = ReadLabelVolume(options.input, "input", &result->volume); !s.ok()) return s;
     }
     const LabelVolume& v = result->volume;
     PBA_RETURN_IF_ERROR(

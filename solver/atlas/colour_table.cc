@@ -159,6 +159,23 @@ bool InStructureGroup(std::string_view name, std::string_view group) {
          name[group.size()] == ':';
 }
 
+Status EntriesNamed(const ColourTable& table, const std::string& name, const std::string& field,
+                    std::vector<const ColourEntry*>* entries) {
+  entries->clear();
+  if (const ColourEntry* entry = table.FindByName(name)) {
+    entries->push_back(entry);
+    return Status::Ok();
+  }
+  for (const ColourEntry& e : table.entries()) {
+    if (InStructureGroup(e.name, name)) entries->push_back(&e);
+  }
+  if (entries->empty()) {
+    return Status::InvalidArgument(
+        field, "no structure \"" + name + "\" in the colour table (nor any \"" + name + ": ...\")");
+  }
+  return Status::Ok();
+}
+
 const ColourEntry* ColourTable::FindByName(std::string_view name) const {
   for (const ColourEntry& e : entries_) {
     if (e.name == name) return &e;

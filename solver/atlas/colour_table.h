@@ -115,6 +115,12 @@ class ColourTable {
   std::vector<ColourEntry> entries_;  // sorted by label
 };
 
+// The entries `name` stands for in `table`: the one so named, else every
+// member of the group `name` (InStructureGroup); kInvalidArgument on
+// `field` when there is none.
+Status EntriesNamed(const ColourTable& table, const std::string& name, const std::string& field,
+                    std::vector<const ColourEntry*>* entries);
+
 // The CSV text described at the top of this file, notice comment first.
 std::string FormatColourTableCsv(const ColourTable& table);
 

@@ -546,4 +546,12 @@ Status ReadNrrd(const fs::path& file, LabelVolume* volume) {
   return AxisAlignedToVolume(n, m, origin, labels, path, volume);
 }
 
+Status ReadLabelVolume(const fs::path& file, const std::string& field, LabelVolume* volume) {
+  const std::string name = file.filename().string();
+  if (EndsWith(name, ".nii") || EndsWith(name, ".nii.gz")) return ReadNifti(file, volume);
+  if (EndsWith(name, ".nrrd")) return ReadNrrd(file, volume);
+  return Status::InvalidArgument(field,
+                                 file.string() + " is not a label volume (.nii, .nii.gz or .nrrd)");
+}
+
 }  // namespace pba

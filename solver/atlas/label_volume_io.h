@@ -49,6 +49,11 @@ namespace pba {
 // call so it prints nothing); calls from several threads race on it only
 // for that setting.
 Status WriteNifti(const LabelVolume& volume, const std::filesystem::path& file);
+
+// ReadNifti or ReadNrrd by the file's extension (.nii, .nii.gz, .nrrd);
+// another is kInvalidArgument on `field` naming the file.
+Status ReadLabelVolume(const std::filesystem::path& file, const std::string& field,
+                       LabelVolume* volume);
 Status ReadNifti(const std::filesystem::path& file, LabelVolume* volume);
 
 enum class NrrdEncoding { kRaw, kGzip };

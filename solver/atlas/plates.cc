@@ -230,25 +230,9 @@ Status WritePlates(const LabelVolume& volume, const ColourTable& colours,
                    const PlateOptions& options, const fs::path& dir) {
   PBA_RETURN_IF_ERROR(options.Validate());
   if (volume.num_voxels() == 0) return Status::InvalidArgument("volume", "empty label volume");
-  std::error_code ec;
-  if (fs::exists(dir, ec) && !(fs::is_directory(dir, ec) && fs::is_empty(dir, ec))) {
-    return Status::Io(dir.string() + " already exists and is not an empty directory");
-  }
-  const fs::path target = dir.has_filename() ? dir : dir.parent_path();
-  const fs::path parent = target.parent_path().empty() ? fs::path(".") : target.parent_path();
-  if (!fs::is_directory(parent, ec)) return Status::Io(parent.string() + " is not a directory");
-  std::string pattern = (parent / ("." + target.filename().string() + ".partial-XXXXXX")).string();
-  if (mkdtemp(pattern.data()) == nullptr) {
-    return Status::Io("cannot create a temporary directory in " + parent.string());
-  }
-  const fs::path temporary = pattern;
-  Status status = WriteAll(volume, colours, options, temporary);
-  if (status.ok()) {
-    fs::rename(temporary, target, ec);  // replaces an empty directory
-    if (ec) status = Status::Io("cannot rename into " + target.string() + ": " + ec.message());
-  }
-  if (!status.ok()) fs::remove_all(temporary, ec);
-  return status;
+  return AtomicWriteDirectory(dir, [&](const fs::path& temporary) {
+    return WriteAll(volume, colours, options, temporary);
+  });
 }
 
 Status ReadPlates(const fs::path& dir, PlateStack* stack) {

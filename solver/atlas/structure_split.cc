@@ -22,19 +22,6 @@ namespace pba {
 namespace fs = std::filesystem;
 namespace {
 
-bool EndsWith(const std::string& s, const std::string& suffix) {
-  return s.size() >= suffix.size() &&
-         s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
-}
-
-Status ReadLabelVolume(const fs::path& file, LabelVolume* volume) {
-  const std::string name = file.filename().string();
-  if (EndsWith(name, ".nii") || EndsWith(name, ".nii.gz")) return ReadNifti(file, volume);
-  if (EndsWith(name, ".nrrd")) return ReadNrrd(file, volume);
-  return Status::InvalidArgument("source.input",
-                                 file.string() + " is not a label volume (.nii, .nii.gz or .nrrd)");
-}
-
 // Which colour-table entries to split: all, or those named (a name that is
 // not an entry stands for its group, "Thalamus" for "Thalamus: ...").
 // `present` is whether each label has a pixel or voxel; a structure asked
@@ -44,20 +31,9 @@ Status ChooseEntries(const std::vector<std::string>& structures, const ColourTab
   std::vector<char> wanted(65536, structures.empty());
   for (size_t i = 0; i < structures.size(); ++i) {
     const std::string& name = structures[i];
-    std::vector<const ColourEntry*> entries;
-    if (const ColourEntry* entry = colours.FindByName(name)) {
-      entries.push_back(entry);
-    } else {
-      for (const ColourEntry& e : colours.entries()) {
-        if (InStructureGroup(e.name, name)) entries.push_back(&e);
-      }
-    }
     const std::string field = "structures[" + std::to_string(i) + "]";
-    if (entries.empty()) {
-      return Status::InvalidArgument(
-          field,
-          "no structure \"" + name + "\" in the colour table (nor any \"" + name + ": ...\")");
-    }
+    std::vector<const ColourEntry*> entries;
+    PBA_RETURN_IF_ERROR(EntriesNamed(colours, name, field, &entries));
     bool any = false;
     for (const ColourEntry* e : entries) {
       any |= present[e->label] != 0;
@@ -232,7 +208,7 @@ Status WriteSplit(const SplitOptions& options, const fs::path& dir, SplitResult*
   const AtlasBuildOptions& source = options.source;
   if (source.source == Source::kLabelVolume) {
     LabelVolume volume;
-    PBA_RETURN_IF_ERROR(ReadLabelVolume(source.input, &volume));
+    PBA_RETURN_IF_ERROR(ReadLabelVolume(source.input, "source.input", &volume));
     ColourTable colours = ColourTable::Builtin();
     if (!source.colour_table.empty()) {
       PBA_RETURN_IF_ERROR(ReadColourTableCsv(source.colour_table, &colours));
@@ -280,27 +256,9 @@ Status SplitAtlas(const SplitOptions& options, const fs::path& dir, SplitResult*
     return Status::InvalidArgument("source.input",
                                    "a plate directory or label volume file is required");
   }
-  std::error_code ec;
-  if (fs::exists(dir, ec) && !(fs::is_directory(dir, ec) && fs::is_empty(dir, ec))) {
-    return Status::Io(dir.string() + " already exists and is not an empty directory");
-  }
-  const fs::path target = dir.has_filename() ? dir : dir.parent_path();
-  const fs::path parent = target.parent_path().empty() ? fs::path(".") : target.parent_path();
-  if (!fs::is_directory(parent, ec)) return Status::Io(parent.string() + " is not a directory");
-  std::string pattern = (parent / ("." + target.filename().string() + ".partial-XXXXXX")).string();
-  if (mkdtemp(pattern.data()) == nullptr) {
-    return Status::Io("cannot create a temporary directory in " + parent.string());
-  }
-  const fs::path temporary = pattern;
-  Status status = WriteSplit(options, temporary, result);
-  if (status.ok()) {
-    fs::rename(temporary, target, ec);  // replaces an empty directory
-    if (ec) status = Status::Io("cannot rename into " + target.string() + ": " + ec.message());
-  }
-  if (!status.ok()) {
-    fs::remove_all(temporary, ec);
-    *result = SplitResult();
-  }
+  const Status status = AtomicWriteDirectory(
+      dir, [&](const fs::path& temporary) { return WriteSplit(options, temporary, result); });
+  if (!status.ok()) *result = SplitResult();
   return status;
 }
 

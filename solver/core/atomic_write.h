@@ -28,4 +28,12 @@ Status WriteAll(int fd, const void* data, std::size_t size, const std::string& p
 // AtomicWrite of a text.
 Status AtomicWriteText(const std::filesystem::path& file, const std::string& text);
 
+// A new directory `dir`, whole or not at all: fill(temporary) writes into a
+// hidden directory beside it ("." + its name + ".partial-XXXXXX"), which is
+// then renamed to `dir` (replacing an empty directory); on failure the
+// temporary directory is removed. kIo when `dir` exists and is not an
+// empty directory, or its parent is not a directory.
+Status AtomicWriteDirectory(const std::filesystem::path& dir,
+                            const std::function<Status(const std::filesystem::path&)>& fill);
+
 }  // namespace pba
