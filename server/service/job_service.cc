@@ -117,7 +117,19 @@ Status JobServiceImpl::CheckSubmit(const std::string& user, const v1::SubmitJobR
   if (!request.has_scene()) return Status::InvalidArgument("scene", "required");
   PBA_RETURN_IF_ERROR(ValidateSceneProto(request.scene()));
   job->scene = request.scene();
-  if (!request.has_snapshot()) return Status::Ok();
+  if (!request.has_snapshot()) {
+    // A job's atlas is one a result can be reproduced from: the built-in one
+    // (versioned with the software) or a snapshot, never a file on the
+    // server that may change or vanish.
+    const std::string& source = request.scene().geometry().atlas().source();
+    if (request.scene().geometry().has_atlas() && !source.empty() && source != "synthetic") {
+      return Status::InvalidArgument(
+          "scene.geometry.atlas.source",
+          "names a file on the server; a job's atlas is the built-in one (\"synthetic\") or a "
+          "snapshot of the atlas store: import it (pba atlas import) and submit with --snapshot");
+    }
+    return Status::Ok();
+  }
   const v1::SnapshotRef& ref = request.snapshot();
   if (!request.scene().geometry().has_atlas()) {
     return Status::InvalidArgument("snapshot",

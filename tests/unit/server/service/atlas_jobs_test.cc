@@ -159,7 +159,11 @@ TEST_F(AtlasJobsTest, ASubmitAgainstASnapshotIsChecked) {
   no_project.mutable_snapshot()->set_project("");
   v1::SubmitJobRequest too_high = OnSnapshot(testing::AtlasScene("ok"), "1");
   too_high.set_priority(101);
+  v1::SubmitJobRequest server_file;
+  *server_file.mutable_scene() = with_source;
+  server_file.mutable_scene()->mutable_geometry()->mutable_atlas()->set_source("/etc/atlas");
   const std::vector<Case> cases = {
+      {server_file, "admin", grpc::INVALID_ARGUMENT, "names a file on the server"},
       {OnSnapshot(testing::ValidScene("ok"), "1"), "admin", grpc::INVALID_ARGUMENT,
        "snapshot: only an atlas scene"},
       {OnSnapshot(with_source, "1"), "admin", grpc::INVALID_ARGUMENT,
