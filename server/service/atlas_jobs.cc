@@ -5,6 +5,7 @@
 #include <spdlog/spdlog.h>
 #include <unistd.h>
 
+#include <cstdint>
 #include <fstream>
 #include <set>
 #include <sstream>
@@ -228,6 +229,7 @@ Status AtlasJobs::StageSnapshot(const v1::Job& job, const fs::path& dir, v1::Sce
   set.project = ref.project();
   set.snapshot = id;
   std::set<std::string> used;
+  std::set<uint32_t> colours;
   for (const SnapshotFile& file : files) {
     const Revision& r = file.revision;
     std::string name = FileNameFor(r.structure, r.format, StartsWithGzipMagic(file.blob));
@@ -239,9 +241,16 @@ Status AtlasJobs::StageSnapshot(const v1::Job& job, const fs::path& dir, v1::Sce
     entry.name = r.structure;
     entry.file = name;
     ParseStructureFormat(GeometryFormatName(r.format), &entry.format);
-    entry.r = static_cast<uint8_t>(r.metadata.colour.r);
-    entry.g = static_cast<uint8_t>(r.metadata.colour.g);
-    entry.b = static_cast<uint8_t>(r.metadata.colour.b);
+    // A structure set needs a colour per structure, distinct and not black
+    // (structure_set.h); the store lets two structures share one, so a
+    // repeat is moved to the nearest free colour for the build.
+    uint32_t rgb = (static_cast<uint32_t>(r.metadata.colour.r) << 16) |
+                   (static_cast<uint32_t>(r.metadata.colour.g) << 8) |
+                   static_cast<uint32_t>(r.metadata.colour.b);
+    while (rgb == 0 || !colours.insert(rgb).second) rgb = (rgb + 1) & 0xffffff;
+    entry.r = static_cast<uint8_t>(rgb >> 16);
+    entry.g = static_cast<uint8_t>(rgb >> 8);
+    entry.b = static_cast<uint8_t>(rgb);
     entry.sha256 = r.content_sha256;
     entry.revision = r.number;
     entry.group_path = r.metadata.group_path;
@@ -286,7 +295,8 @@ Status AtlasJobs::StageImport(const v1::Job& job, const fs::path& dir,
       return Status::InvalidArgument("atlas_import.source", "unknown");
   }
   for (const std::string& structure : request.structures()) {
-    input->insert(input->end(), {"--structure", structure});
+    // One argument, so that no name can read as an option.
+    input->push_back("--structure=" + structure);
   }
   return Status::Ok();
 }

@@ -207,6 +207,29 @@ TEST_F(AtlasJobsTest, AJobAgainstASnapshotGetsItsStructuresStaged) {
   EXPECT_FALSE(fs::exists(folder / "snapshot"));
 }
 
+// The store lets two structures share a colour; a structure set may not:
+// the staged copy moves the repeat to the nearest free colour.
+TEST_F(AtlasJobsTest, StructuresSharingAColourAreStagedWithDistinctOnes) {
+  CreateStructure("Caudate", kContours);  // the same colour as Putamen
+  v1::CreateSnapshotRequest snapshot;
+  snapshot.set_project("atlas");
+  snapshot.set_name("both");
+  v1::Snapshot made;
+  ASSERT_TRUE(Call(admin_, [&](grpc::ClientContext* c) {
+                return atlas_->CreateSnapshot(c, snapshot, &made);
+              }).ok());
+  v1::Job job;
+  ASSERT_TRUE(
+      Submit(admin_, OnSnapshot(testing::AtlasScene("ok"), std::to_string(made.id())), &job).ok());
+  ASSERT_TRUE(WaitUntil([&] { return Get(job.id()).state() == v1::Job::SUCCEEDED; }))
+      << Get(job.id()).error();
+  std::ifstream manifest_file(options_.data_dir / "jobs" / job.id() / "result" / "manifest.json");
+  std::stringstream manifest;
+  manifest << manifest_file.rdbuf();
+  EXPECT_NE(manifest.str().find("\"200,0,0\""), std::string::npos) << manifest.str();
+  EXPECT_NE(manifest.str().find("\"200,0,1\""), std::string::npos) << manifest.str();
+}
+
 TEST_F(AtlasJobsTest, TheProjectsWatchersHearOfItsJobs) {
   grpc::ClientContext context;
   context.AddMetadata("authorization", "Bearer " + admin_);
