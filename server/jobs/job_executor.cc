@@ -337,8 +337,7 @@ void JobExecutor::Execute(const v1::Job& job, const v1::JobEvent& started, Run& 
   SolverCommand command;
   command.program = options_.solver;
   command.args = input;
-  for (const char* arg : {"--out", "", "--progress=json"}) command.args.push_back(arg);
-  command.args[command.args.size() - 2] = result_dir.string();
+  command.args.insert(command.args.end(), {"--out", result_dir.string(), "--progress=json"});
   command.max_address_space_bytes = options_.max_solver_memory_bytes;
   if (options_.solver_threads > 0) {
     command.args.push_back("--threads");
