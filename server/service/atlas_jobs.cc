@@ -187,12 +187,17 @@ Status StageImportSource(UploadStore& uploads, const std::string& user,
   fs::rename(partial, dir, ec);
   if (ec) return undo(Status::Io("cannot move " + dir.string() + " into place: " + ec.message()));
   SyncDirectory(dir.parent_path());
+  return Status::Ok();
+}
+
+void RemoveImportUploads(UploadStore& uploads, const std::string& user,
+                         const v1::AtlasImport& request) {
   for (const v1::ImportFile& file : request.files()) {
     const Status removed = uploads.Remove(user, file.upload_id());
-    if (!removed.ok())
+    if (!removed.ok()) {
       spdlog::warn("cannot remove upload {}: {}", file.upload_id(), removed.ToString());
+    }
   }
-  return Status::Ok();
 }
 
 Status AtlasJobs::Stage(const v1::Job& job, const fs::path& dir, v1::Scene* scene,

@@ -60,9 +60,14 @@ class AtlasJobs : public JobPreparation {
 Status CheckAtlasImport(const v1::AtlasImport& request);
 
 // Takes the import's uploads (each checked against its announced hash) into
-// `dir`/<file name>, which must not exist; on any error nothing is left
-// there. The uploads are removed once all are in place.
+// `dir`/<file name>, which must not exist, as second names of their files
+// (synced); on any error nothing is left there. The uploads stay until
+// RemoveImportUploads, so a submit that fails later can be retried.
 Status StageImportSource(UploadStore& uploads, const std::string& user,
                          const v1::AtlasImport& request, const std::filesystem::path& dir);
+
+// Removes the import's uploads once its job is stored.
+void RemoveImportUploads(UploadStore& uploads, const std::string& user,
+                         const v1::AtlasImport& request);
 
 }  // namespace pba

@@ -221,6 +221,9 @@ grpc::Status JobServiceImpl::SubmitJob(grpc::ServerContext* context,
     fs::remove_all(staged, ec);  // left only when the submit failed or was a repeat
   }
   if (!stored.ok()) return StoreError(kRpc, stored);
+  if (created && job.atlas_import != nullptr) {
+    RemoveImportUploads(uploads_, user, *job.atlas_import);
+  }
   if (created) {
     spdlog::info("job {} QUEUED: {} submitted by {}", response->id(), response->name(), user);
     v1::JobEvent queued;
