@@ -54,7 +54,7 @@ const RampCase kRamps[] = {{0.64, 0.7, -2239.16}, {0.64, 1.3, 351.49}, {0.0064, 
 // one-dimensional nominal stress (Fung's QLV); this engine relaxes the
 // isochoric tensor S_iso and lets the lateral equilibrium follow, so the two
 // differ by a few tenths of a per cent: the lateral stress history is relaxed
-// too. 0.5 % is the tolerance the brief asks for.
+// too. Hence a 0.5 % tolerance rather than the table's digits.
 TEST(ViscoelasticRampTest, MatchesValidationTable) {
   const auto material = BrainOgden();
   const PronySeries series = BrainSeries();
