@@ -28,6 +28,7 @@
 #include <thread>
 #include <vector>
 
+#include "integration/db_query.h"
 #include "integration/subprocess.h"
 
 namespace pba::testing {
@@ -84,45 +85,6 @@ std::string UserName(int client) {
   char name[16];
   std::snprintf(name, sizeof name, "user%02d", client);
   return name;
-}
-
-// Rows of a read-only query on <data>/pba.db, opened beside the running
-// server's connection (WAL allows it); NULL reads as "NULL".
-using Rows = std::vector<std::vector<std::string>>;
-Rows Query(const fs::path& data_dir, const std::string& sql) {
-  Rows rows;
-  sqlite3* db = nullptr;
-  const fs::path path = data_dir / "pba.db";
-  if (sqlite3_open_v2(path.c_str(), &db, SQLITE_OPEN_READONLY, nullptr) != SQLITE_OK) {
-    ADD_FAILURE() << "cannot open " << path << ": " << sqlite3_errmsg(db);
-    sqlite3_close(db);
-    return rows;
-  }
-  sqlite3_busy_timeout(db, 5000);
-  sqlite3_stmt* stmt = nullptr;
-  if (sqlite3_prepare_v2(db, sql.c_str(), -1, &stmt, nullptr) != SQLITE_OK) {
-    ADD_FAILURE() << sql << ": " << sqlite3_errmsg(db);
-    sqlite3_close(db);
-    return rows;
-  }
-  int rc;
-  while ((rc = sqlite3_step(stmt)) == SQLITE_ROW) {
-    std::vector<std::string> row;
-    for (int i = 0; i < sqlite3_column_count(stmt); ++i) {
-      const auto* text = sqlite3_column_text(stmt, i);
-      row.push_back(text == nullptr ? "NULL" : reinterpret_cast<const char*>(text));
-    }
-    rows.push_back(std::move(row));
-  }
-  if (rc != SQLITE_DONE) ADD_FAILURE() << sql << ": " << sqlite3_errmsg(db);
-  sqlite3_finalize(stmt);
-  sqlite3_close(db);
-  return rows;
-}
-
-std::string QueryOne(const fs::path& data_dir, const std::string& sql) {
-  const Rows rows = Query(data_dir, sql);
-  return rows.empty() || rows[0].empty() ? "" : rows[0][0];
 }
 
 // The value of "key": "value" (or a bare number) in one printed JSON object;

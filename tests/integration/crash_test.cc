@@ -27,6 +27,7 @@
 #include <thread>
 #include <vector>
 
+#include "integration/db_query.h"
 #include "integration/subprocess.h"
 
 namespace pba::testing {
@@ -35,7 +36,6 @@ namespace fs = std::filesystem;
 using std::chrono::milliseconds;
 using std::chrono::seconds;
 using Clock = std::chrono::steady_clock;
-using Rows = std::vector<std::vector<std::string>>;
 
 std::string ReadFile(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);
@@ -59,45 +59,6 @@ std::string Sha256Hex(const std::string& bytes) {
 
 double SecondsSince(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
-}
-
-// Runs `sql` on <data>/pba.db through a read-only connection of its own
-// (beside the running server's, which WAL allows) and returns every row as
-// text; NULL reads as "NULL". A failure is a test failure.
-Rows Query(const fs::path& data_dir, const std::string& sql) {
-  Rows rows;
-  sqlite3* db = nullptr;
-  const fs::path path = data_dir / "pba.db";
-  if (sqlite3_open_v2(path.c_str(), &db, SQLITE_OPEN_READONLY, nullptr) != SQLITE_OK) {
-    ADD_FAILURE() << "cannot open " << path << ": " << sqlite3_errmsg(db);
-    sqlite3_close(db);
-    return rows;
-  }
-  sqlite3_busy_timeout(db, 5000);
-  sqlite3_stmt* stmt = nullptr;
-  if (sqlite3_prepare_v2(db, sql.c_str(), -1, &stmt, nullptr) != SQLITE_OK) {
-    ADD_FAILURE() << sql << ": " << sqlite3_errmsg(db);
-    sqlite3_close(db);
-    return rows;
-  }
-  int rc;
-  while ((rc = sqlite3_step(stmt)) == SQLITE_ROW) {
-    std::vector<std::string> row;
-    for (int i = 0; i < sqlite3_column_count(stmt); ++i) {
-      const auto* text = sqlite3_column_text(stmt, i);
-      row.push_back(text == nullptr ? "NULL" : reinterpret_cast<const char*>(text));
-    }
-    rows.push_back(std::move(row));
-  }
-  if (rc != SQLITE_DONE) ADD_FAILURE() << sql << ": " << sqlite3_errmsg(db);
-  sqlite3_finalize(stmt);
-  sqlite3_close(db);
-  return rows;
-}
-
-std::string QueryOne(const fs::path& data_dir, const std::string& sql) {
-  const Rows rows = Query(data_dir, sql);
-  return rows.empty() || rows[0].empty() ? "" : rows[0][0];
 }
 
 // The whole file is sound and every reference resolves.
