@@ -1,16 +1,14 @@
 #include "service/atlas_jobs.h"
 
-#include <fcntl.h>
 #include <google/protobuf/util/time_util.h>
 #include <spdlog/spdlog.h>
 #include <unistd.h>
 
 #include <cstdint>
-#include <fstream>
 #include <set>
-#include <sstream>
 #include <system_error>
 
+#include "atlas/label_volume_io.h"
 #include "atlas/structure_set.h"
 #include "service/geometry_check.h"
 #include "store/atomic_file.h"
@@ -54,29 +52,6 @@ std::string FileNameFor(const std::string& structure, GeometryFormat format, boo
       return stem + ".vtk";
   }
   return stem;
-}
-
-void SyncDirectory(const fs::path& dir) {
-  const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-  if (fd < 0) return;
-  ::fsync(fd);
-  ::close(fd);
-}
-
-bool StartsWithGzipMagic(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  unsigned char magic[2] = {0, 0};
-  in.read(reinterpret_cast<char*>(magic), 2);
-  return in.gcount() == 2 && magic[0] == 0x1f && magic[1] == 0x8b;
-}
-
-Status ReadFile(const fs::path& path, std::string* bytes) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return Status::Io("cannot open " + path.string());
-  std::ostringstream out;
-  out << in.rdbuf();
-  *bytes = std::move(out).str();
-  return Status::Ok();
 }
 
 // "<group>: <name>" names (the thalamic nuclei of the built-in atlas) go
@@ -237,7 +212,7 @@ Status AtlasJobs::StageSnapshot(const v1::Job& job, const fs::path& dir, v1::Sce
   std::set<uint32_t> colours;
   for (const SnapshotFile& file : files) {
     const Revision& r = file.revision;
-    std::string name = FileNameFor(r.structure, r.format, StartsWithGzipMagic(file.blob));
+    std::string name = FileNameFor(r.structure, r.format, HasGzipMagic(file.blob));
     // Two names that map to one file name ("a b" and "a_b") get a number.
     for (int n = 2; !used.insert(name).second; ++n) name = std::to_string(n) + "_" + name;
     fs::copy_file(file.blob, set_dir / name, fs::copy_options::overwrite_existing, ec);
@@ -323,9 +298,10 @@ Status AtlasJobs::Complete(const v1::Job& job, const fs::path& result_dir, RunOu
     s.metadata.group_path = entry.group_path.empty() ? GroupOf(entry.name) : entry.group_path;
     s.metadata.material_json = entry.material_json.empty() ? "{}" : entry.material_json;
     // Checked as a commit of it would be.
-    std::string bytes;
-    PBA_RETURN_IF_ERROR(ReadFile(s.file, &bytes));
-    PBA_RETURN_IF_ERROR(CheckGeometryContent("structure '" + entry.name + "'", s.format, bytes));
+    std::unique_ptr<MappedFile> bytes;
+    PBA_RETURN_IF_ERROR(MappedFile::Open(s.file, &bytes));
+    PBA_RETURN_IF_ERROR(
+        CheckGeometryContent("structure '" + entry.name + "'", s.format, bytes->bytes()));
     structures.push_back(std::move(s));
   }
   const std::string snapshot_name =

@@ -1,29 +1,13 @@
 // AtlasStore: an atlas import's structures and snapshot, the files of a
 // snapshot for a job run against it, and the locked neighbours a commit is
 // checked against.
-#include <fstream>
-#include <sstream>
-
 #include "store/atlas_store.h"
 #include "store/atlas_store_internal.h"
+#include "store/mapped_file.h"
 #include "store/transaction.h"
 
 namespace pba {
 using namespace atlas_internal;
-
-namespace {
-
-Status ReadWholeFile(const std::filesystem::path& path, std::string* bytes) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return Status::Io("cannot open " + path.filename().string());
-  std::ostringstream out;
-  out << in.rdbuf();
-  if (in.bad()) return Status::Io("cannot read " + path.filename().string());
-  *bytes = std::move(out).str();
-  return Status::Ok();
-}
-
-}  // namespace
 
 Status AtlasStore::SnapshotFiles(const std::string& user, const std::string& project,
                                  int64_t snapshot_id, std::vector<SnapshotFile>* files) {
@@ -138,12 +122,11 @@ Status AtlasStore::Import(const std::string& user, const std::string& project,
         "); import into another project, or edit them with checkout and commit");
   }
   for (const ImportedStructure& s : structures) {
-    std::string bytes;
-    PBA_RETURN_IF_ERROR(ReadWholeFile(s.file, &bytes));
-    if (bytes.empty() || bytes.size() > kMaxGeometryBytes) {
-      return Status::InvalidArgument(
-          "structures", "the geometry of " + Quoted(s.name) + " is empty or larger than 1 GiB");
-    }
+    // Mapped, not copied onto the heap: a label mask may be large.
+    std::unique_ptr<MappedFile> mapped;
+    PBA_RETURN_IF_ERROR(MappedFile::Open(s.file, &mapped));
+    const std::string_view bytes = mapped->bytes();
+    PBA_RETURN_IF_ERROR(CheckGeometry(bytes));
     // The blob before any row that names it.
     Content content;
     PBA_RETURN_IF_ERROR(blobs_->Put(bytes, &content.sha256));

@@ -40,13 +40,16 @@ Status WriteFileAtomically(const fs::path& path, std::string_view content) {
     return Status::Io("cannot rename " + temp.string() + " to " + path.string() + ": " + error);
   }
   // The rename is only durable once the directory entry is.
-  const int dir = ::open(path.parent_path().empty() ? "." : path.parent_path().c_str(),
-                         O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-  if (dir >= 0) {
-    ::fsync(dir);
-    ::close(dir);
-  }
+  SyncDirectory(path.parent_path());
   return Status::Ok();
+}
+
+void SyncDirectory(const std::filesystem::path& dir) {
+  const int fd = ::open(dir.empty() ? "." : dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd >= 0) {
+    ::fsync(fd);
+    ::close(fd);
+  }
 }
 
 }  // namespace pba

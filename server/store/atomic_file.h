@@ -12,4 +12,8 @@ namespace pba {
 
 Status WriteFileAtomically(const std::filesystem::path& path, std::string_view content);
 
+// Makes a rename in `dir` durable (fsync of the directory). Best effort: the
+// rename itself has happened either way.
+void SyncDirectory(const std::filesystem::path& dir);
+
 }  // namespace pba

@@ -38,16 +38,6 @@ bool IsTempName(const std::string& name) {
   return !name.empty() && name[0] == '.' && name.find(".tmp-") != std::string::npos;
 }
 
-// Makes a rename in `dir` durable. Best effort, as in WriteFileAtomically:
-// the rename itself has happened either way.
-void SyncDirectory(const fs::path& dir) {
-  const int fd = ::open(dir.empty() ? "." : dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-  if (fd >= 0) {
-    ::fsync(fd);
-    ::close(fd);
-  }
-}
-
 }  // namespace
 
 Status BlobStore::Open(const fs::path& root, std::unique_ptr<BlobStore>* out) {

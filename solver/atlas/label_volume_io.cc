@@ -554,4 +554,11 @@ Status ReadLabelVolume(const fs::path& file, const std::string& field, LabelVolu
                                  file.string() + " is not a label volume (.nii, .nii.gz or .nrrd)");
 }
 
+bool HasGzipMagic(const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  unsigned char magic[2] = {0, 0};
+  in.read(reinterpret_cast<char*>(magic), 2);
+  return in.gcount() == 2 && magic[0] == 0x1f && magic[1] == 0x8b;
+}
+
 }  // namespace pba

@@ -50,6 +50,10 @@ namespace pba {
 // for that setting.
 Status WriteNifti(const LabelVolume& volume, const std::filesystem::path& file);
 
+// Whether the file starts with the gzip magic bytes (a .nii.gz whatever it
+// is called: uploads and blobs have no extension).
+bool HasGzipMagic(const std::filesystem::path& file);
+
 // ReadNifti or ReadNrrd by the file's extension (.nii, .nii.gz, .nrrd);
 // another is kInvalidArgument on `field` naming the file.
 Status ReadLabelVolume(const std::filesystem::path& file, const std::string& field,

@@ -4,11 +4,11 @@
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <system_error>
 #include <vector>
 
 #include "atlas/distance_transform.h"
+#include "atlas/label_volume_io.h"
 
 namespace pba {
 namespace fs = std::filesystem;
@@ -60,12 +60,7 @@ Status Place(const StructureGeometry& g, const fs::path& dir, const std::string&
              std::string* file_name) {
   *file_name = name + Extension(g.format);
   if (g.format == StructureFormat::kNifti) {
-    // By its first bytes: uploads and blobs have no extension.
-    std::ifstream in(g.file, std::ios::binary);
-    unsigned char magic[2] = {0, 0};
-    in.read(reinterpret_cast<char*>(magic), 2);
-    const bool gz = in.gcount() == 2 && magic[0] == 0x1f && magic[1] == 0x8b;
-    *file_name = name + (gz ? ".nii.gz" : ".nii");
+    *file_name = name + (HasGzipMagic(g.file) ? ".nii.gz" : ".nii");
   }
   std::error_code ec;
   fs::create_hard_link(g.file, dir / *file_name, ec);
