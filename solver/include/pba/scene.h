@@ -215,6 +215,31 @@ struct OgdenParams {
   double bulk_modulus_pa = 0;        // K [Pa], > 0
 };
 
+// Quasi-linear viscoelasticity (DOMAIN.md eq. 2.31): the isochoric stress
+// of the hyperelastic model relaxes as mu(t) = mu0 [1 - sum_k g_k (1 -
+// exp(-t/tau_k))]; the volumetric response stays elastic. Three ways to give
+// the relaxation, all mapped onto one normalised Prony series:
+//   kProny:       g_k [-] and tau_k [s] directly;
+//   kExponential: G(t) = G_inf + (G0 - G_inf) exp(-beta t), as
+//                 long_term_ratio = G_inf / G0 and beta_per_s;
+//   kModuli:      G(t) = G_inf + sum_i G_i exp(-t/tau_i) with moduli in Pa
+//                 (the rat-brain tables); only the ratios G_i / G0 enter, G0
+//                 = G_inf + sum G_i, the scale staying the hyperelastic one.
+// Only analyses with time (QUASI_STATIC) use it; the others take the
+// instantaneous (static analyses: elastic) response and say so.
+struct ViscoelasticSpec {
+  enum class Form { kNone, kProny, kExponential, kModuli };
+  Form form = Form::kNone;
+  std::vector<double> g;      // kProny: g_k [-], each >= 0, sum < 1
+  std::vector<double> tau_s;  // kProny, kModuli: relaxation times [s], > 0
+  double long_term_ratio = 0;  // kExponential: G_inf / G0, in (0, 1]
+  double beta_per_s = 0;       // kExponential: decay rate [1/s], > 0
+  double long_term_modulus_pa = 0;  // kModuli: G_inf [Pa], > 0
+  std::vector<double> moduli_pa;    // kModuli: G_i [Pa], >= 0, one per tau_s
+
+  bool enabled() const { return form != Form::kNone; }
+};
+
 struct MaterialSpec {
   enum class Kind {
     kNone,
@@ -235,10 +260,63 @@ struct MaterialSpec {
   MooneyRivlinParams mooney_rivlin;
   PolynomialParams polynomial;
   OgdenParams ogden;
+  // Relaxation of a hyperelastic model's isochoric stress; not for the
+  // linear models.
+  ViscoelasticSpec viscoelastic;
 
   bool hyperelastic() const {
     return kind != Kind::kNone && kind != Kind::kLinearElastic && kind != Kind::kOrthotropicElastic;
   }
+};
+
+// A material of its own for some structures of an atlas (their regions);
+// the others keep the scene's `material`. Every region material must be the
+// same family as the scene's (all hyperelastic for a nonlinear analysis).
+struct RegionMaterialSpec {
+  std::vector<std::string> structures;  // structure (region) names, each kept by the scene
+  MaterialSpec material;
+};
+
+// A ball of tissue made a region of its own (e.g. a tumour): the elements
+// whose centroid lies within radius_mm of centre_mm, cut out of whichever
+// regions held them. It takes its own material, and may grow: an isotropic
+// growth strain, F = F_e (1 + growth_strain a(t)) I with a(t) the analysis's
+// time curve (the multiplicative split of growth, Rodriguez, Hoger and
+// McCulloch, J. Biomech. 27:455, 1994), so that a free inclusion's volume
+// becomes (1 + growth_strain)^3 times its own.
+struct InclusionSpec {
+  std::string name;                          // region name, e.g. "tumour"; new
+  std::array<double, 3> centre_mm{0, 0, 0};  // [mm]
+  double radius_mm = 0;                      // [mm], > 0
+  MaterialSpec material;                     // same family as the scene's material
+  double growth_strain = 0;                  // linear growth strain at a(t) = 1 [-], > -1
+};
+
+// A rigid body pressed against a face set of the tissue (node-to-surface,
+// frictionless or with Coulomb friction), moved by motion_mm times the
+// analysis's time curve a(t) (a static analysis: its load factor).
+//   kFlatPunch: a flat-ended cylinder of radius_mm whose end face is centred
+//               at position_mm with outward normal -axis; axis points from
+//               the face into the tissue (the direction it presses).
+//   kSphere:    a ball of radius_mm centred at position_mm.
+//   kPlane:     the half-space behind the plane through position_mm with
+//               normal axis pointing into the tissue (e.g. a skull base).
+// The contact is enforced by a penalty, augmented (Uzawa) until the deepest
+// penetration is below penetration_tolerance_mm; the penalty stiffness is
+// penalty_factor times the tissue's initial shear modulus over the element
+// size, per unit area.
+struct ContactSpec {
+  enum class Shape { kNone, kFlatPunch, kSphere, kPlane };
+  std::string name;  // names its force and area in the summary and history
+  std::string set;   // face set of the tissue that may touch it
+  Shape shape = Shape::kNone;
+  std::array<double, 3> position_mm{0, 0, 0};
+  std::array<double, 3> axis{0, 0, -1};  // any length, non-zero
+  double radius_mm = 0;                  // kFlatPunch, kSphere: > 0
+  std::array<double, 3> motion_mm{0, 0, 0};
+  double friction = 0;                  // Coulomb coefficient, 0..0.5
+  double penalty_factor = 0;            // 0: 100
+  double penetration_tolerance_mm = 0;  // 0: 1 % of the element size
 };
 
 struct BoundaryConditionSpec {
@@ -266,6 +344,12 @@ struct BoundaryConditionSpec {
 struct GravitySpec {
   bool enabled = false;
   std::array<double, 3> acceleration_m_per_s2{0, 0, 0};  // e.g. (0, 0, -9.81)
+  // Buoyancy in a surrounding fluid (cerebrospinal fluid: about 1007
+  // kg/m^3): tissue below the fluid level weighs (rho - rho_fluid) g, tissue
+  // above it rho g; 0: no fluid. The level is a height along -g (up) [mm];
+  // unset: the fluid covers everything.
+  double fluid_density_kg_per_m3 = 0;
+  std::optional<double> fluid_level_mm;
 };
 
 // Load stepping and Newton-Raphson controls of a nonlinear static analysis;
@@ -279,11 +363,30 @@ struct NonlinearOptionsSpec {
   bool line_search = true;
 };
 
+// Time of a QUASI_STATIC analysis. Every prescribed displacement, load,
+// gravity, rigid-body motion and growth strain is its full value times the
+// amplitude a(t) of `curve`, piecewise linear through (time_s, amplitude)
+// points with increasing times, held at its last value after them; no curve:
+// a(t) = t / end_time_s, a ramp. Steps adapt: they shrink when Newton
+// struggles and grow after quick convergence, are at most half the shortest
+// relaxation time that is active while the amplitude changes, and never
+// step over a corner of the curve.
+struct TimeSpec {
+  double end_time_s = 0;       // [s], > 0
+  double initial_step_s = 0;   // [s]; 0: end_time_s / 20
+  double min_step_s = 0;       // [s]; 0: end_time_s * 1e-6
+  double max_step_s = 0;       // [s]; 0: end_time_s / 5
+  std::vector<std::pair<double, double>> curve;  // (time [s], amplitude [-])
+};
+
 struct AnalysisSpec {
   enum class Type {
     kLinearStatic,     // small strain, K u = f; hyperelastic models use their initial moduli
     kNonlinearStatic,  // finite strain, total Lagrangian, Newton-Raphson; needs a hyperelastic
                        // model
+    // finite strain through time: loads follow `time`, viscoelastic
+    // materials relax, rigid bodies move; a history of every step
+    kQuasiStatic,
   };
   enum class LinearSolver {
     kCholmod,    // supernodal sparse Cholesky (SuiteSparse), the default
@@ -295,7 +398,8 @@ struct AnalysisSpec {
   };
   Type type = Type::kLinearStatic;
   LinearSolver linear_solver = LinearSolver::kCholmod;
-  NonlinearOptionsSpec nonlinear;
+  NonlinearOptionsSpec nonlinear;  // Newton controls (increments: see time)
+  TimeSpec time;                   // kQuasiStatic
 };
 
 struct OutputSpec {
@@ -310,6 +414,10 @@ struct OutputSpec {
   // Sets whose total reaction goes into the summary; empty = every set that
   // carries a boundary condition.
   std::vector<std::string> reaction_sets;
+  // Structures (regions) whose mean and largest displacement are reported at
+  // the end and, in a QUASI_STATIC analysis, at every step of history.csv;
+  // "*" means all of them.
+  std::vector<std::string> structure_displacements;
 };
 
 struct SceneSpec {
@@ -318,7 +426,15 @@ struct SceneSpec {
   GeometrySpec geometry;
   MeshSpec mesh;
   MaterialSpec material;
+  // A built-in table of per-structure tissue (material/tissue_library.h,
+  // docs/materials.md): each atlas structure it names takes its material;
+  // `region_materials` then override it, and the rest keep `material`.
+  // Empty: none.
+  std::string material_library;
+  std::vector<RegionMaterialSpec> region_materials;
+  std::vector<InclusionSpec> inclusions;
   std::vector<BoundaryConditionSpec> boundary_conditions;
+  std::vector<ContactSpec> contacts;
   GravitySpec gravity;
   AnalysisSpec analysis;
   OutputSpec outputs;

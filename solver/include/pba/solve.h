@@ -73,6 +73,33 @@ struct IncrementSummary {
   int negative_eigenvalues = 0;
 };
 
+// A rigid body's contact at the end of the analysis (scene.contacts).
+struct ContactSummary {
+  std::string name;
+  std::array<double, 3> force_n{0, 0, 0};  // force of the tissue on the body [N]
+  double peak_force_n = 0;                 // largest |force| over the steps [N]
+  double area_mm2 = 0;                     // tissue surface in contact [mm^2]
+  double max_penetration_mm = 0;           // deepest penetration left [mm]
+  double penalty_pa_per_mm = 0;            // penalty stiffness per area [Pa/mm]
+  int augmentations = 0;                   // Uzawa updates over the analysis
+};
+
+// Displacement of one structure (region) at the end (outputs.structure_displacements).
+struct StructureDisplacement {
+  std::string name;
+  std::array<double, 3> mean_mm{0, 0, 0};  // volume-weighted mean displacement [mm]
+  double max_mm = 0;                       // largest nodal displacement magnitude [mm]
+};
+
+// One time step of a QUASI_STATIC analysis.
+struct TimeStepSummary {
+  double time_s = 0;
+  double step_s = 0;
+  double amplitude = 0;  // a(t)
+  int iterations = 0;
+  double relative_residual = 0;
+};
+
 // What a solve reports beside its fields. Mirrors pba.v1.Summary.
 struct Summary {
   std::string scene_name;
@@ -104,6 +131,11 @@ struct Summary {
   double newton_assembly_s = 0;
   double newton_linear_solve_s = 0;
   double newton_residual_s = 0;
+  // QUASI_STATIC: the converged time steps (their load factor in
+  // `increments` is a(t)); contacts and structure displacements at the end.
+  std::vector<TimeStepSummary> time_steps;
+  std::vector<ContactSummary> contacts;
+  std::vector<StructureDisplacement> structure_displacements;
   ErrorEstimate error;
   // Speed.
   double wall_time_s = 0;
@@ -139,6 +171,11 @@ struct Solution {
   // increment (steps x nodes x 3 [mm]) and its load factor (steps).
   std::vector<double> step_load_factor;
   std::vector<double> step_displacement_mm;
+  // QUASI_STATIC: one row per converged step (time first), written as
+  // history.csv: time, amplitude, each reaction set's force, each contact's
+  // force, area and penetration, each reported structure's mean displacement.
+  std::vector<std::string> history_columns;  // with units, e.g. "time_s"
+  std::vector<std::vector<double>> history;
   // Element-wise estimated error share (ZZ), elements; empty if not estimated.
   std::vector<double> error_indicator;
   Summary summary;
