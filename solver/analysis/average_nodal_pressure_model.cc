@@ -94,10 +94,33 @@ struct State {
   double energy = 0;
 };
 
+// dPi_vol/dv_a-style derivatives of node a's volumetric energy at J_a: U
+// of the one material, or the volume-weighted mean of the U_e of its elements
+// (weights V_e / (4 V_a)).
+ScalarDerivatives NodalVolumetric(const MaterialField& field, const Csr& incidence,
+                                  const std::vector<double>& reference_volume, double nodal_volume,
+                                  int a, double j) {
+  if (field.uniform()) return field.Base(0).Volumetric(j);
+  ScalarDerivatives sum;
+  for (int t = incidence.begin(a); t < incidence.end(a); ++t) {
+    const int e = incidence.index[t];
+    const double weight = reference_volume[e] / 4 / nodal_volume;
+    const ScalarDerivatives u = field.At(e).Volumetric(j);
+    sum.value += weight * u.value;
+    sum.first += weight * u.first;
+    sum.second += weight * u.second;
+  }
+  return sum;
+}
+
 class NodalPressureModel final : public FiniteStrainModel {
  public:
-  NodalPressureModel(const Mesh& mesh, const HyperelasticMaterial& material)
-      : mesh_(mesh), material_(material), parallel_(mesh.num_elements() >= kParallelFrom) {
+  NodalPressureModel(const Mesh& mesh, const MaterialField& field,
+                     std::unique_ptr<MaterialField> owned = nullptr)
+      : mesh_(mesh),
+        owned_(std::move(owned)),
+        field_(owned_ ? *owned_ : field),
+        parallel_(mesh.num_elements() >= kParallelFrom) {
     const int ne = mesh.num_elements(), nn = mesh.num_nodes();
     geometry_.reserve(ne);
     reference_volume_.reserve(ne);
@@ -226,7 +249,7 @@ class NodalPressureModel final : public FiniteStrainModel {
       const double v0 = reference_volume_[e];
       Vector6d stress;
       Matrix6d tangent;
-      material_.Isochoric(s.f, &s.iso_energy, &stress, with_tangent ? &tangent : nullptr);
+      field_.At(e).Isochoric(s.f, &s.iso_energy, &stress, with_tangent ? &tangent : nullptr);
       s.iso_energy *= v0;
       const BMatrix b = GreenLagrangeVariation(g, s.f);
       s.force = v0 * b.transpose() * stress;
@@ -262,7 +285,8 @@ class NodalPressureModel final : public FiniteStrainModel {
       for (int t = incidence_.begin(a); t < incidence_.end(a); ++t) {
         v += state->elements[incidence_.index[t]].volume / 4;
       }
-      state->nodal[a] = material_.Volumetric(v / nodal_volume_[a]);
+      state->nodal[a] = NodalVolumetric(field_, incidence_, reference_volume_, nodal_volume_[a], a,
+                                        v / nodal_volume_[a]);
       energy += nodal_volume_[a] * state->nodal[a].value;
     }
 
@@ -421,7 +445,8 @@ class NodalPressureModel final : public FiniteStrainModel {
   }
 
   const Mesh& mesh_;
-  const HyperelasticMaterial& material_;
+  std::unique_ptr<MaterialField> owned_;  // a uniform field made for one material
+  const MaterialField& field_;
   const bool parallel_;  // use OpenMP threads
   std::vector<Tet4Geometry> geometry_;
   std::vector<double> reference_volume_;  // V_e
@@ -444,7 +469,47 @@ class NodalPressureModel final : public FiniteStrainModel {
 
 std::unique_ptr<FiniteStrainModel> MakeAverageNodalPressureTet4Model(
     const Mesh& mesh, const HyperelasticMaterial& material) {
-  return std::make_unique<NodalPressureModel>(mesh, material);
+  auto field = MaterialField::Uniform(material, mesh.num_elements());
+  const MaterialField& view = *field;
+  return std::make_unique<NodalPressureModel>(mesh, view, std::move(field));
+}
+
+std::unique_ptr<FiniteStrainModel> MakeAverageNodalPressureTet4Model(const Mesh& mesh,
+                                                                     const MaterialField& field) {
+  return std::make_unique<NodalPressureModel>(mesh, field);
+}
+
+void AverageNodalPressures(const Mesh& mesh, const MaterialField& field, const Eigen::VectorXd& u,
+                           std::vector<double>* pressure, std::vector<double>* volume_ratio) {
+  const int ne = mesh.num_elements(), nn = mesh.num_nodes();
+  std::vector<double> v0(nn, 0.0), v(nn, 0.0), reference_volume(ne);
+  std::vector<std::vector<int>> elements_of(nn);
+  for (int e = 0; e < ne; ++e) {
+    const Tet4Geometry g = ComputeTet4Geometry(TetCorners(mesh, e));
+    reference_volume[e] = std::abs(g.volume);
+    const double j = DeformationGradient(g, GatherElement(mesh, e, u)).determinant();
+    for (int a : mesh.tets[e]) {
+      v0[a] += reference_volume[e] / 4;
+      v[a] += j * reference_volume[e] / 4;
+      elements_of[a].push_back(e);
+    }
+  }
+  const Csr incidence = Flatten(elements_of);
+  std::vector<double> nodal_pressure(nn, 0.0);
+  for (int a = 0; a < nn; ++a) {
+    if (v0[a] > 0) {
+      nodal_pressure[a] =
+          NodalVolumetric(field, incidence, reference_volume, v0[a], a, v[a] / v0[a]).first;
+    }
+  }
+  pressure->assign(ne, 0.0);
+  volume_ratio->assign(ne, 0.0);
+  for (int e = 0; e < ne; ++e) {
+    for (int a : mesh.tets[e]) {
+      (*pressure)[e] += nodal_pressure[a] / 4;
+      (*volume_ratio)[e] += v[a] / v0[a] / 4;
+    }
+  }
 }
 
 }  // namespace pba

@@ -13,14 +13,30 @@
 // node's patch (a wider pattern than element by element).
 #pragma once
 
+#include <Eigen/Core>
 #include <memory>
+#include <vector>
 
 #include "analysis/finite_strain_model.h"
+#include "analysis/material_field.h"
 
 namespace pba {
 
 // `mesh` and `material` must outlive the model.
 std::unique_ptr<FiniteStrainModel> MakeAverageNodalPressureTet4Model(
     const Mesh& mesh, const HyperelasticMaterial& material);
+
+// With a material per element (analysis/material_field.h), which must
+// outlive the model; its current step is read at every evaluation. A node
+// shared by elements of different materials carries each one's volumetric
+// energy on that element's share of the node's volume:
+//   Pi_vol = sum_a sum_{e ∋ a} (V_e / 4) U_e(J_a).
+std::unique_ptr<FiniteStrainModel> MakeAverageNodalPressureTet4Model(const Mesh& mesh,
+                                                                     const MaterialField& field);
+
+// Each element's pressure and volume ratio at `u` as the model sees them:
+// the means over its corners of dPi_vol/dv_a and of J_a = v_a / V_a.
+void AverageNodalPressures(const Mesh& mesh, const MaterialField& field, const Eigen::VectorXd& u,
+                           std::vector<double>* pressure, std::vector<double>* volume_ratio);
 
 }  // namespace pba

@@ -22,10 +22,12 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "analysis/finite_strain_model.h"
+#include "analysis/material_field.h"
 #include "material/hyperelastic.h"
 
 namespace pba {
@@ -38,9 +40,14 @@ class ElementModel final : public FiniteStrainModel {
   // than the work.
   static constexpr int kParallelFrom = 256;
 
-  ElementModel(const Mesh& mesh, const HyperelasticMaterial& material, Element element)
+  // `field` gives each element's material (only its base: these elements
+  // keep no history, see MaterialField); `owned` is a field made for the
+  // model, else `field` must outlive it.
+  ElementModel(const Mesh& mesh, const MaterialField& field, Element element,
+               std::unique_ptr<MaterialField> owned = nullptr)
       : mesh_(mesh),
-        material_(material),
+        owned_(std::move(owned)),
+        field_(owned_ ? *owned_ : field),
         element_(element),
         parallel_(mesh.num_elements() >= kParallelFrom),
         colours_(ColourElements(mesh)) {
@@ -65,8 +72,8 @@ class ElementModel final : public FiniteStrainModel {
       for (std::size_t k = 0; k < colour.size(); ++k) {
         const int e = colour[k];
         typename Element::Result r;
-        if (!element_.Evaluate(geometry_[e], Element::Gather(mesh_, e, u), material_, false, false,
-                               &r)) {
+        if (!element_.Evaluate(geometry_[e], Element::Gather(mesh_, e, u), field_.Base(e), false,
+                               false, &r)) {
           ok = false;
           continue;
         }
@@ -85,7 +92,7 @@ class ElementModel final : public FiniteStrainModel {
                   LinearSystem* system) const override {
     const typename Element::Kernel kernel = [&](int e, auto* k, auto* f) {
       typename Element::Result r;
-      if (!element_.Evaluate(geometry_[e], Element::Gather(mesh_, e, u), material_, true,
+      if (!element_.Evaluate(geometry_[e], Element::Gather(mesh_, e, u), field_.Base(e), true,
                              options.drop_pressure_stiffness, &r)) {
         return false;
       }
@@ -136,11 +143,22 @@ class ElementModel final : public FiniteStrainModel {
   }
 
   const Mesh& mesh_;
-  const HyperelasticMaterial& material_;
+  std::unique_ptr<MaterialField> owned_;
+  const MaterialField& field_;
   const Element element_;
   const bool parallel_;  // use OpenMP threads
   std::vector<std::vector<int>> colours_;
   std::vector<typename Element::Geometry> geometry_;
 };
+
+// An ElementModel of one material for every element (a field made for it).
+template <typename Element>
+std::unique_ptr<FiniteStrainModel> MakeElementModel(const Mesh& mesh,
+                                                    const HyperelasticMaterial& material,
+                                                    Element element) {
+  auto field = MaterialField::Uniform(material, mesh.num_elements());
+  const MaterialField& view = *field;
+  return std::make_unique<ElementModel<Element>>(mesh, view, element, std::move(field));
+}
 
 }  // namespace pba

@@ -1,5 +1,6 @@
 #include "analysis/finite_strain_model.h"
 
+#include "analysis/material_field.h"
 #include "fem/tet4_finite_strain.h"
 #include "material/hyperelastic.h"
 
@@ -8,8 +9,12 @@ namespace {
 
 class Tet4Model final : public FiniteStrainModel {
  public:
-  Tet4Model(const Mesh& mesh, const HyperelasticMaterial& material)
-      : mesh_(mesh), material_(material), colours_(ColourElements(mesh)) {
+  Tet4Model(const Mesh& mesh, const MaterialField& field,
+            std::unique_ptr<MaterialField> owned = nullptr)
+      : mesh_(mesh),
+        owned_(std::move(owned)),
+        field_(owned_ ? *owned_ : field),
+        colours_(ColourElements(mesh)) {
     geometry_.reserve(mesh.num_elements());
     for (int e = 0; e < mesh.num_elements(); ++e) {
       geometry_.push_back(ComputeTet4Geometry(TetCorners(mesh, e)));
@@ -29,7 +34,7 @@ class Tet4Model final : public FiniteStrainModel {
       for (std::size_t k = 0; k < colour.size(); ++k) {
         const int e = colour[k];
         Tet4FiniteStrainResult r;
-        if (!Tet4FiniteStrain(geometry_[e], GatherElement(mesh_, e, u), material_, false, &r)) {
+        if (!Tet4FiniteStrain(geometry_[e], GatherElement(mesh_, e, u), field_.At(e), false, &r)) {
           ok = false;
           continue;
         }
@@ -47,7 +52,7 @@ class Tet4Model final : public FiniteStrainModel {
                   LinearSystem* system) const override {
     const ElementKernel kernel = [&](int e, Matrix12d* k, Vector12d* f) {
       Tet4FiniteStrainResult r;
-      if (!Tet4FiniteStrain(geometry_[e], GatherElement(mesh_, e, u), material_, true, &r)) {
+      if (!Tet4FiniteStrain(geometry_[e], GatherElement(mesh_, e, u), field_.At(e), true, &r)) {
         return false;
       }
       *k = r.tangent;
@@ -62,7 +67,8 @@ class Tet4Model final : public FiniteStrainModel {
 
  private:
   const Mesh& mesh_;
-  const HyperelasticMaterial& material_;
+  std::unique_ptr<MaterialField> owned_;  // a uniform field made for one material
+  const MaterialField& field_;
   std::vector<std::vector<int>> colours_;
   std::vector<Tet4Geometry> geometry_;
 };
@@ -71,7 +77,23 @@ class Tet4Model final : public FiniteStrainModel {
 
 std::unique_ptr<FiniteStrainModel> MakeTet4Model(const Mesh& mesh,
                                                  const HyperelasticMaterial& material) {
-  return std::make_unique<Tet4Model>(mesh, material);
+  auto field = MaterialField::Uniform(material, mesh.num_elements());
+  const MaterialField& view = *field;
+  return std::make_unique<Tet4Model>(mesh, view, std::move(field));
+}
+
+std::unique_ptr<FiniteStrainModel> MakeTet4Model(const Mesh& mesh, const MaterialField& field) {
+  return std::make_unique<Tet4Model>(mesh, field);
+}
+
+std::vector<Eigen::Matrix3d> ElementDeformationGradients(const Mesh& mesh,
+                                                         const Eigen::VectorXd& u) {
+  std::vector<Eigen::Matrix3d> f(mesh.num_elements());
+#pragma omp parallel for schedule(static) if (mesh.num_elements() >= 2000)
+  for (int e = 0; e < mesh.num_elements(); ++e) {
+    f[e] = DeformationGradient(ComputeTet4Geometry(TetCorners(mesh, e)), GatherElement(mesh, e, u));
+  }
+  return f;
 }
 
 }  // namespace pba

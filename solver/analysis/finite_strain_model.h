@@ -17,6 +17,7 @@
 namespace pba {
 
 class HyperelasticMaterial;
+class MaterialField;
 
 class FiniteStrainModel {
  public:
@@ -44,5 +45,13 @@ class FiniteStrainModel {
 // outlive the model.
 std::unique_ptr<FiniteStrainModel> MakeTet4Model(const Mesh& mesh,
                                                  const HyperelasticMaterial& material);
+// With a material per element, read in its current step at every
+// evaluation; `field` must outlive the model.
+std::unique_ptr<FiniteStrainModel> MakeTet4Model(const Mesh& mesh, const MaterialField& field);
+
+// The deformation gradient of every 4-node element at `u` (one point each),
+// e.g. for MaterialField::Commit.
+std::vector<Eigen::Matrix3d> ElementDeformationGradients(const Mesh& mesh,
+                                                         const Eigen::VectorXd& u);
 
 }  // namespace pba

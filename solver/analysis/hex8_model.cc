@@ -53,12 +53,20 @@ struct Hex8Element {
 
 std::unique_ptr<FiniteStrainModel> MakeHex8Model(const Mesh& mesh,
                                                  const HyperelasticMaterial& material) {
-  return std::make_unique<ElementModel<Hex8Element>>(mesh, material, Hex8Element{false});
+  return MakeElementModel(mesh, material, Hex8Element{false});
+}
+
+std::unique_ptr<FiniteStrainModel> MakeHex8Model(const Mesh& mesh, const MaterialField& field) {
+  return std::make_unique<ElementModel<Hex8Element>>(mesh, field, Hex8Element{false});
 }
 
 std::unique_ptr<FiniteStrainModel> MakeHex8FullModel(const Mesh& mesh,
                                                      const HyperelasticMaterial& material) {
-  return std::make_unique<ElementModel<Hex8Element>>(mesh, material, Hex8Element{true});
+  return MakeElementModel(mesh, material, Hex8Element{true});
+}
+
+std::unique_ptr<FiniteStrainModel> MakeHex8FullModel(const Mesh& mesh, const MaterialField& field) {
+  return std::make_unique<ElementModel<Hex8Element>>(mesh, field, Hex8Element{true});
 }
 
 }  // namespace pba

@@ -22,9 +22,11 @@ namespace pba {
 // node order [m, N]. `mesh` and `material` must outlive the model.
 std::unique_ptr<FiniteStrainModel> MakeHex8Model(const Mesh& mesh,
                                                  const HyperelasticMaterial& material);
+std::unique_ptr<FiniteStrainModel> MakeHex8Model(const Mesh& mesh, const MaterialField& field);
 
 // The fully integrated brick, on the same terms as MakeHex8Model.
 std::unique_ptr<FiniteStrainModel> MakeHex8FullModel(const Mesh& mesh,
                                                      const HyperelasticMaterial& material);
+std::unique_ptr<FiniteStrainModel> MakeHex8FullModel(const Mesh& mesh, const MaterialField& field);
 
 }  // namespace pba

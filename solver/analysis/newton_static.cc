@@ -142,8 +142,15 @@ Status SolveNewtonStatic(const FiniteStrainModel& model, const ExternalLoads* lo
                          const DofMap& dofs, const NewtonOptions& options, LinearSolver* solver,
                          const std::function<bool(const NewtonProgress&)>& keep_going,
                          Eigen::VectorXd* u, NewtonReport* report) {
-  *u = Eigen::VectorXd::Zero(dofs.num_dofs());
   *report = NewtonReport();
+  const auto amplitude = [&](double lambda) {
+    return options.amplitude ? options.amplitude(lambda) : lambda;
+  };
+  if (options.start_u.size() > 0 && options.start_u.size() != dofs.num_dofs()) {
+    return Status::Internal(Format("the start state has %d unknowns, the model %d",
+                                   static_cast<int>(options.start_u.size()), dofs.num_dofs()));
+  }
+  *u = options.start_u.size() > 0 ? options.start_u : Eigen::VectorXd::Zero(dofs.num_dofs());
   // Far from equilibrium the tangent may be indefinite: a nearly
   // incompressible body's predictor leaves J - 1 = O(step^2), and the
   // pressure K (J - 1) >> mu that follows destroys positive definiteness
@@ -236,7 +243,7 @@ Status SolveNewtonStatic(const FiniteStrainModel& model, const ExternalLoads* lo
   // same pattern in place (see AssembleSystem) instead of building a new
   // matrix beside the old one.
   LinearSystem system;
-  double load = 0;
+  double load = options.start_load;
   // The last converged state's tangent had negative eigenvalues (the path
   // passed a bifurcation and follows the now unstable fundamental branch):
   // its indefinite tangent is then the right predictor.
@@ -247,15 +254,22 @@ Status SolveNewtonStatic(const FiniteStrainModel& model, const ExternalLoads* lo
 
   while (load < 1.0) {
     if (!keep_going({load, 0, INFINITY})) return cancelled();
-    const double target = std::min(1.0, load + step);
-    const Loading loading{loads, target};
+    const double largest = options.max_increment_at
+                               ? std::max(options.min_increment, options.max_increment_at(load))
+                               : INFINITY;
+    step = std::min(step, largest);
+    // A last sliver below the smallest increment joins this one.
+    const double target = load + step >= 1.0 - 0.5 * options.min_increment ? 1.0 : load + step;
+    const Loading loading{loads, amplitude(target)};
+    if (options.begin_increment) PBA_RETURN_IF_ERROR(options.begin_increment(load, target));
 
     // Predictor: the tangent at the converged state carries the prescribed
     // increment into the free unknowns.
+    const double amplitude_change = amplitude(target) - amplitude(load);
     DofMap increment = dofs;
     for (int dof = 0; dof < dofs.num_dofs(); ++dof) {
       if (dofs.prescribed(dof)) {
-        increment.Prescribe(dof / 3, dof % 3, (target - load) * dofs.prescribed_value(dof));
+        increment.Prescribe(dof / 3, dof % 3, amplitude_change * dofs.prescribed_value(dof));
       }
     }
     increment.Finalize();
@@ -289,7 +303,7 @@ Status SolveNewtonStatic(const FiniteStrainModel& model, const ExternalLoads* lo
     if (status.ok()) {
       if (dofs.num_free() > 0) AddFree(dofs, du, 1.0, &trial);
       for (int dof = 0; dof < dofs.num_dofs(); ++dof) {
-        if (dofs.prescribed(dof)) trial(dof) = target * dofs.prescribed_value(dof);
+        if (dofs.prescribed(dof)) trial(dof) = loading.factor * dofs.prescribed_value(dof);
       }
       const auto evaluate = [&](const Eigen::VectorXd& state) {
         ScopedTimer timer(&report->residual_s);
@@ -302,8 +316,9 @@ Status SolveNewtonStatic(const FiniteStrainModel& model, const ExternalLoads* lo
       } else if (dofs.num_free() == 0) {
         converged = true;
       }
-      for (iteration = 1; status.ok() && !converged && iteration <= options.max_iterations;
-           ++iteration) {
+      int augmentations = 0;
+      int budget = options.max_iterations;
+      for (iteration = 1; status.ok() && !converged && iteration <= budget; ++iteration) {
         if (!keep_going({load, iteration, residual})) return cancelled();
         {
           ScopedTimer timer(&report->assembly_s);
@@ -353,6 +368,17 @@ Status SolveNewtonStatic(const FiniteStrainModel& model, const ExternalLoads* lo
         if ((residual <= options.residual_tolerance || rounding_floor) &&
             (change <= options.displacement_tolerance || rounding_floor) &&
             energy <= options.energy_tolerance * std::max(energy_scale, 1e-300)) {
+          if (options.augment && augmentations < options.max_augmentations &&
+              options.augment(trial)) {
+            // The equations changed (e.g. contact multipliers): iterate again
+            // from this state, with a fresh iteration budget.
+            ++augmentations;
+            ++report->augmentations;
+            budget = iteration + options.max_iterations;
+            current = evaluate(trial);
+            residual = current.relative;
+            continue;
+          }
           converged = true;
           break;
         }
@@ -364,8 +390,8 @@ Status SolveNewtonStatic(const FiniteStrainModel& model, const ExternalLoads* lo
     }
     if (converged) {
       *u = std::move(trial);
+      report->increments.push_back({target, target - load, iteration, residual, step_negative});
       load = target;
-      report->increments.push_back({load, iteration, residual, step_negative});
       unstable_branch = step_negative > 0;
       if (options.on_increment) options.on_increment(load, *u);
       if (iteration <= options.quick_iterations) {

@@ -49,10 +49,35 @@ struct NewtonOptions {
   bool line_search = true;
   // Called with each converged increment's load factor and full displacement.
   std::function<void(double load_factor, const Eigen::VectorXd& u)> on_increment;
+
+  // For analyses through time (the load factor is then t / T):
+  // The scale of the prescribed values and loads at a load factor, a(lambda)
+  // (a time curve); unset: a(lambda) = lambda.
+  std::function<double(double load_factor)> amplitude;
+  // Called before every attempt of an increment from the converged `from`
+  // to `to` (again with a smaller `to` after a cut), e.g. to set a
+  // viscoelastic model's time step or a rigid body's position; an error
+  // stops the solve with it.
+  std::function<Status(double from, double to)> begin_increment;
+  // Called when an increment has converged, before it is accepted; true
+  // asks for more iterations of the same increment from that state (a
+  // contact's multipliers changed). At most max_augmentations times per
+  // increment.
+  std::function<bool(const Eigen::VectorXd& u)> augment;
+  int max_augmentations = 10;
+  // The largest increment allowed from a converged load factor (a corner of
+  // the time curve, a relaxation time); unset: max_increment. Never below
+  // min_increment.
+  std::function<double(double load_factor)> max_increment_at;
+  // Start from this load factor and state instead of 0 and u = 0 (a
+  // restart); the state must be converged at start_load.
+  double start_load = 0;
+  Eigen::VectorXd start_u;
 };
 
 struct IncrementRecord {
   double load_factor = 0;  // at the end of the increment
+  double step = 0;         // its size (load factor)
   int iterations = 0;
   double relative_residual = 0;
   // Negative eigenvalues of the tangent of the last iteration (close to the
@@ -73,6 +98,7 @@ struct NewtonReport {
   // Iterations close to equilibrium whose consistent tangent was not
   // positive definite and that stepped with it all the same (LDL^T).
   int indefinite_iterations = 0;
+  int augmentations = 0;                 // times `augment` asked for more iterations
   std::vector<std::string> cut_reasons;  // why each cut happened
   // Wall time [s] spent assembling tangents, in factorisations and solves,
   // and evaluating residuals (line search included).

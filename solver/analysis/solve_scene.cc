@@ -103,6 +103,9 @@ Status SolveScene(const SceneSpec& scene, const SolveOptions& options, Solution*
     case AnalysisSpec::Type::kNonlinearStatic:
       PBA_RETURN_IF_ERROR(SolveNonlinearStatic(scene, model, &clock, solution, &result));
       break;
+    case AnalysisSpec::Type::kQuasiStatic:
+      PBA_RETURN_IF_ERROR(SolveQuasiStatic(scene, model, &clock, solution, &result));
+      break;
   }
 
   for (const std::string& name : ReactionSetNames(scene)) {

@@ -32,4 +32,10 @@ Status SolveLinearStatic(const SceneSpec& scene, const Model& model, PhaseClock*
 Status SolveNonlinearStatic(const SceneSpec& scene, const Model& model, PhaseClock* clock,
                             Solution* solution, StaticResult* result);
 
+// Finite strain through time (scene.analysis.time): loads, motions and
+// growth follow the time curve, viscoelastic materials relax, rigid bodies
+// touch the tissue; every converged step goes into the history.
+Status SolveQuasiStatic(const SceneSpec& scene, const Model& model, PhaseClock* clock,
+                        Solution* solution, StaticResult* result);
+
 }  // namespace pba

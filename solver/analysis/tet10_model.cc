@@ -55,12 +55,20 @@ struct Tet10Element {
 
 std::unique_ptr<FiniteStrainModel> MakeTet10Model(const Mesh& mesh,
                                                   const HyperelasticMaterial& material) {
-  return std::make_unique<ElementModel<Tet10Element>>(mesh, material, Tet10Element{false});
+  return MakeElementModel(mesh, material, Tet10Element{false});
+}
+
+std::unique_ptr<FiniteStrainModel> MakeTet10Model(const Mesh& mesh, const MaterialField& field) {
+  return std::make_unique<ElementModel<Tet10Element>>(mesh, field, Tet10Element{false});
 }
 
 std::unique_ptr<FiniteStrainModel> MakeTet10MdModel(const Mesh& mesh,
                                                     const HyperelasticMaterial& material) {
-  return std::make_unique<ElementModel<Tet10Element>>(mesh, material, Tet10Element{true});
+  return MakeElementModel(mesh, material, Tet10Element{true});
+}
+
+std::unique_ptr<FiniteStrainModel> MakeTet10MdModel(const Mesh& mesh, const MaterialField& field) {
+  return std::make_unique<ElementModel<Tet10Element>>(mesh, field, Tet10Element{true});
 }
 
 }  // namespace pba

@@ -74,6 +74,34 @@ PronySeries FromModuli(double g_inf, const std::vector<double>& g_i,
   return series;
 }
 
+ViscousStep ViscousStep::Of(const PronySeries& series, double dt_s) {
+  ViscousStep step;
+  step.alpha = series.LongTermFactor();
+  for (std::size_t k = 0; k < series.g.size(); ++k) {
+    step.decay.push_back(std::exp(-dt_s / series.tau_s[k]));
+    step.weight.push_back(series.g[k] * StepWeight(dt_s, series.tau_s[k]));
+    step.alpha += step.weight.back();
+  }
+  return step;
+}
+
+Vector6d ViscousStep::Offset(const Vector6d& s_iso, const std::vector<Vector6d>& h) const {
+  Vector6d offset = Vector6d::Zero();
+  for (std::size_t k = 0; k < weight.size(); ++k) {
+    offset -= weight[k] * s_iso;
+    if (k < h.size()) offset += decay[k] * h[k];
+  }
+  return offset;
+}
+
+void ViscousStep::Advance(const Vector6d& s_iso_old, const Vector6d& s_iso_new,
+                          std::vector<Vector6d>* h) const {
+  h->resize(weight.size(), Vector6d::Zero());
+  for (std::size_t k = 0; k < weight.size(); ++k) {
+    (*h)[k] = decay[k] * (*h)[k] + weight[k] * (s_iso_new - s_iso_old);
+  }
+}
+
 Status ViscoelasticPoint::Update(const HyperelasticMaterial& material, const PronySeries& series,
                                  const Eigen::Matrix3d& f, double dt_s, Vector6d* stress,
                                  Matrix6d* tangent) {
@@ -83,8 +111,7 @@ Status ViscoelasticPoint::Update(const HyperelasticMaterial& material, const Pro
   if (!IsAdmissible(f)) {
     return Status::Numerical("viscoelastic update: det F <= 0 or F not finite");
   }
-  const std::size_t terms = series.g.size();
-  if (h_.size() != terms) h_.assign(terms, Vector6d::Zero());
+  if (h_.size() != series.g.size()) h_.assign(series.g.size(), Vector6d::Zero());
 
   Vector6d s_iso;
   Matrix6d c_iso;
@@ -97,21 +124,15 @@ Status ViscoelasticPoint::Update(const HyperelasticMaterial& material, const Pro
   InvariantResponse(invariants, IsochoricInvariantEnergy{}, material.Volumetric(invariants.j),
                     &s_vol, tangent ? &c_vol : nullptr);
 
-  const Vector6d increment = s_iso - s_iso_;
-  trial_h_.resize(terms);
-  double factor = series.LongTermFactor();
-  Vector6d s_visc = factor * s_iso;
-  for (std::size_t k = 0; k < terms; ++k) {
-    const double weight = series.g[k] * StepWeight(dt_s, series.tau_s[k]);
-    trial_h_[k] = std::exp(-dt_s / series.tau_s[k]) * h_[k] + weight * increment;
-    s_visc += trial_h_[k];
-    factor += weight;
-  }
+  const ViscousStep step = ViscousStep::Of(series, dt_s);
+  const Vector6d s_visc = step.alpha * s_iso + step.Offset(s_iso_, h_);
+  trial_h_ = h_;
+  step.Advance(s_iso_, s_iso, &trial_h_);
   trial_s_iso_ = s_iso;
   has_trial_ = true;
 
   if (stress) *stress = s_vol + s_visc;
-  if (tangent) *tangent = c_vol + factor * c_iso;
+  if (tangent) *tangent = c_vol + step.alpha * c_iso;
   return Status::Ok();
 }
 

@@ -60,6 +60,28 @@ PronySeries FromExponential(double g_inf_over_g0, double beta_per_s);
 PronySeries FromModuli(double g_inf, const std::vector<double>& g_i,
                        const std::vector<double>& tau_i);
 
+// One step of dt for a series, independent of the point: within the step
+// the viscous isochoric stress is affine in the end-of-step S_iso,
+//   S_visc = alpha S_iso^{n+1} + offset^n,
+//   alpha = g_inf + sum_k weight_k,  weight_k = g_k (1 - exp(-dt/tau_k)) tau_k/dt,
+//   offset^n = sum_k (decay_k H_k^n - weight_k S_iso^n),  decay_k = exp(-dt/tau_k),
+// so that alpha W_iso + offset^n . E is an incremental potential whose
+// derivatives are S_visc and alpha C_iso (the elements' Newton iterations
+// and line searches use it as an energy).
+struct ViscousStep {
+  double alpha = 1;
+  std::vector<double> decay, weight;
+
+  // `series` must have passed Validate(); dt_s > 0.
+  static ViscousStep Of(const PronySeries& series, double dt_s);
+  // offset^n of a point with committed S_iso^n and H_k^n (an empty h: zero).
+  Vector6d Offset(const Vector6d& s_iso, const std::vector<Vector6d>& h) const;
+  // The internal variables at the end of the step, given the step's final
+  // S_iso: H_k^{n+1} from H_k^n in `h` (resized to the series' terms).
+  void Advance(const Vector6d& s_iso_old, const Vector6d& s_iso_new,
+               std::vector<Vector6d>* h) const;
+};
+
 // History of one material point. Starts unstressed and fully relaxed
 // (S_iso = 0 and H_k = 0 at t = 0, which holds at F = I for the uncoupled
 // models).
