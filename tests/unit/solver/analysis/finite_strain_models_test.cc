@@ -32,13 +32,17 @@ struct ElementCase {
   std::function<std::unique_ptr<FiniteStrainModel>(const Mesh&, const HyperelasticMaterial&)> make;
 };
 
+// The one-material overload of each model factory.
+using Maker = std::unique_ptr<FiniteStrainModel> (*)(const Mesh&, const HyperelasticMaterial&);
+
 std::vector<ElementCase> Elements() {
   return {
-      {"TET4", ElementType::kTet4, false, MakeTet4Model},
-      {"TET4_ANP", ElementType::kTet4, false, MakeAverageNodalPressureTet4Model},
-      {"TET10", ElementType::kTet4, true, MakeTet10Model},
-      {"TET10_MD", ElementType::kTet4, true, MakeTet10MdModel},
-      {"HEX8", ElementType::kHex8, false, MakeHex8Model},
+      {"TET4", ElementType::kTet4, false, static_cast<Maker>(MakeTet4Model)},
+      {"TET4_ANP", ElementType::kTet4, false,
+       static_cast<Maker>(MakeAverageNodalPressureTet4Model)},
+      {"TET10", ElementType::kTet4, true, static_cast<Maker>(MakeTet10Model)},
+      {"TET10_MD", ElementType::kTet4, true, static_cast<Maker>(MakeTet10MdModel)},
+      {"HEX8", ElementType::kHex8, false, static_cast<Maker>(MakeHex8Model)},
   };
 }
 
