@@ -103,6 +103,8 @@ Status SolveScene(const SceneSpec& scene, const SolveOptions& options, Solution*
     case AnalysisSpec::Type::kNonlinearStatic:
       PBA_RETURN_IF_ERROR(SolveNonlinearStatic(scene, model, &clock, solution, &result));
       break;
+    case AnalysisSpec::Type::kQuasiStatic:
+      return Status::FailedPrecondition("QUASI_STATIC analyses are not solved yet");
   }
 
   for (const std::string& name : ReactionSetNames(scene)) {
