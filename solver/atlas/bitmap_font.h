@@ -1,8 +1,7 @@
 // A 5 x 7 pixel bitmap font for the captions of the atlas pictures
-// (atlas_pictures.h): digits, "+-.,:=()" and the space, the lowercase
-// letters a-z and the uppercase letters of the orientation marks (A, I, L,
-// P, R, S). Any other character is drawn as a hollow box, so a caption
-// never silently loses one.
+// (atlas_pictures.h) and the labels of line plots (io/line_plot.h): digits,
+// "+-.,:=()/[]%_^*'&<>" and the space, the letters a-z and A-Z. Any other
+// character is drawn as a hollow box, so a caption never silently loses one.
 #pragma once
 
 #include <array>
