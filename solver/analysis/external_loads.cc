@@ -265,6 +265,11 @@ void ExternalLoads::AddBodyForce(const Eigen::Vector3d& force_per_volume) {
 }
 
 void ExternalLoads::AddBodyForceField(const BodyForceField& force_per_volume) {
+  AddElementBodyForceField(
+      [&](const Eigen::Vector3d& position, int) { return force_per_volume(position); });
+}
+
+void ExternalLoads::AddElementBodyForceField(const ElementBodyForceField& force_per_volume) {
   // f_a = integral b(x) N_a dV over each element, by a rule exact for a
   // uniform b (and of degree 5 on tetrahedra, 5 per coordinate on bricks, for
   // a varying one); |det J| so that a consistently negatively oriented
@@ -280,7 +285,7 @@ void ExternalLoads::AddBodyForceField(const BodyForceField& force_per_volume) {
             const Hex8Vector n = Hex8ShapeFunctions(xi);
             const double det = (x.transpose() * Hex8NaturalGradients(xi)).determinant();
             const Eigen::Vector3d b =
-                w[i] * w[j] * w[k] * std::abs(det) * force_per_volume(x.transpose() * n);
+                w[i] * w[j] * w[k] * std::abs(det) * force_per_volume(x.transpose() * n, e);
             for (int a = 0; a < 8; ++a) dead_.segment<3>(3 * mesh_.hexes[e][a]) += n(a) * b;
           }
         }
@@ -295,7 +300,7 @@ void ExternalLoads::AddBodyForceField(const BodyForceField& force_per_volume) {
       for (const QuadraturePoint& q : Tet10MassRule()) {
         const Tet10Vector n = Tet10ShapeFunctions(q.xi);
         const double det = (x.transpose() * Tet10NaturalGradients(q.xi)).determinant();
-        const Eigen::Vector3d b = q.weight * std::abs(det) * force_per_volume(x.transpose() * n);
+        const Eigen::Vector3d b = q.weight * std::abs(det) * force_per_volume(x.transpose() * n, e);
         for (int a = 0; a < 10; ++a) dead_.segment<3>(3 * nodes[a]) += n(a) * b;
       }
       continue;
@@ -305,7 +310,7 @@ void ExternalLoads::AddBodyForceField(const BodyForceField& force_per_volume) {
     for (const QuadraturePoint& q : Tet10MassRule()) {
       // Linear shape functions: the volume coordinates at xi.
       const Eigen::Vector4d n(1 - q.xi.sum(), q.xi.x(), q.xi.y(), q.xi.z());
-      const Eigen::Vector3d b = q.weight * 6 * volume * force_per_volume(x.transpose() * n);
+      const Eigen::Vector3d b = q.weight * 6 * volume * force_per_volume(x.transpose() * n, e);
       for (int a = 0; a < 4; ++a) dead_.segment<3>(3 * mesh_.tets[e][a]) += n(a) * b;
     }
   }

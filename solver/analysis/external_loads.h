@@ -87,6 +87,10 @@ class ExternalLoads {
   // shape functions with a rule of degree 5.
   using BodyForceField = std::function<Eigen::Vector3d(const Eigen::Vector3d& position)>;
   void AddBodyForceField(const BodyForceField& force_per_volume);
+  // The same with the element known, b(X, e) (e.g. a density per region).
+  using ElementBodyForceField =
+      std::function<Eigen::Vector3d(const Eigen::Vector3d& position, int element)>;
+  void AddElementBodyForceField(const ElementBodyForceField& force_per_volume);
 
   // Adds a pressure p [Pa] on the triangles of `set`, a boundary face set of
   // the mesh; each triangle is turned to face out of its tetrahedron. With

@@ -85,7 +85,7 @@ Status SolveLinearStatic(const SceneSpec& scene, const Model& model, PhaseClock*
       : full_bricks    ? AssembleLinearSystemHex8Full(mesh, d, dofs, colours, keep_going, &system)
       : mesh.hexahedral() ? AssembleLinearSystemHex8(mesh, d, dofs, colours, keep_going, &system)
                           : AssembleLinearSystem(mesh, d, dofs, colours, keep_going, &system));
-  const ExternalLoads loads = BuildLoads(scene, mesh);
+  const ExternalLoads loads = BuildLoads(scene, model);
   Eigen::VectorXd external;
   if (!loads.empty()) {
     external = loads.Force(Eigen::VectorXd::Zero(dofs.num_dofs()));

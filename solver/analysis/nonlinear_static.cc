@@ -14,6 +14,8 @@
 #include "analysis/newton_static.h"
 #include "analysis/static_analysis.h"
 #include "analysis/tet10_model.h"
+#include "analysis/time_curve.h"
+#include "analysis/time_history.h"
 #include "core/format.h"
 #include "fem/hex8.h"
 #include "fem/tet4_finite_strain.h"
@@ -22,6 +24,7 @@
 #include "material/hyperelastic.h"
 #include "material/linear_elastic.h"
 #include "mesh/quadratic.h"
+#include "scene/materials.h"
 
 namespace pba {
 namespace {
@@ -119,41 +122,80 @@ NewtonOptions OptionsOf(const NonlinearOptionsSpec& spec) {
 
 }  // namespace
 
-Status SolveNonlinearStatic(const SceneSpec& scene, const Model& model, PhaseClock* clock_ptr,
-                            Solution* solution, StaticResult* result) {
+namespace {
+
+// Both finite-strain analyses: NONLINEAR_STATIC ramps the loads with the
+// load factor, QUASI_STATIC follows them through time.
+Status SolveFiniteStrain(const SceneSpec& scene, const Model& model, PhaseClock* clock_ptr,
+                         Solution* solution, StaticResult* result) {
   PhaseClock& clock = *clock_ptr;
   Summary& summary = solution->summary;
   const Mesh& mesh = model.mesh;
   const DofMap& dofs = model.dofs;
-  const auto material = MakeHyperelasticMaterial(scene.material);
+  const bool timed = scene.analysis.type == AnalysisSpec::Type::kQuasiStatic;
+  const std::unique_ptr<MaterialField> field = MakeMaterialField(model.materials);
   const bool plain = scene.mesh.element == ElementType::kTet4;
   const bool full_bricks = scene.mesh.element == ElementType::kHex8Full;
   const bool tet10_md = scene.mesh.element == ElementType::kTet10Md;
-  const auto body = tet10_md            ? MakeTet10MdModel(mesh, *material)
-                    : mesh.quadratic()  ? MakeTet10Model(mesh, *material)
-                    : full_bricks       ? MakeHex8FullModel(mesh, *material)
-                    : mesh.hexahedral() ? MakeHex8Model(mesh, *material)
-                    : plain             ? MakeTet4Model(mesh, *material)
-                                        : MakeAverageNodalPressureTet4Model(mesh, *material);
+  const bool one_point = !mesh.quadratic() && !mesh.hexahedral();
   summary.element_type = tet10_md            ? "TET10_MD"
                          : mesh.quadratic()  ? "TET10"
                          : full_bricks       ? "HEX8_FULL"
                          : mesh.hexahedral() ? "HEX8"
                          : plain             ? "TET4"
                                              : "TET4_ANP";
+  if (!one_point && ((timed && field->viscous()) || field->grows())) {
+    return Status::InvalidArgument(
+        "mesh.element",
+        std::string(field->grows() ? "growth" : "viscoelastic relaxation") +
+            " is modelled on 4-node tetrahedra (TET4_ANP, TET4), whose one integration point "
+            "keeps the history; this scene uses " +
+            summary.element_type);
+  }
+  if (!timed && field->viscous()) {
+    summary.notes.push_back(
+        "viscoelastic relaxation is not used by a static analysis: the instantaneous "
+        "(hyperelastic) response is solved; QUASI_STATIC follows it through time");
+  }
+  for (const std::string& note : model.materials.notes) summary.notes.push_back(note);
+  const auto body = tet10_md            ? MakeTet10MdModel(mesh, *field)
+                    : mesh.quadratic()  ? MakeTet10Model(mesh, *field)
+                    : full_bricks       ? MakeHex8FullModel(mesh, *field)
+                    : mesh.hexahedral() ? MakeHex8Model(mesh, *field)
+                    : plain             ? MakeTet4Model(mesh, *field)
+                                        : MakeAverageNodalPressureTet4Model(mesh, *field);
   auto solver = CreateLinearSolver(scene.analysis.linear_solver);
   NewtonOptions options = OptionsOf(scene.analysis.nonlinear);
-  options.on_increment = [solution](double load, const Eigen::VectorXd& u) {
-    solution->step_load_factor.push_back(load);
+  // Time: the load factor is t / T and the loads follow a(t); a static
+  // analysis is the ramp a = load factor with instantaneous steps.
+  const TimeCurve curve(timed ? scene.analysis.time : TimeSpec{1.0, 0, 0, 0, {}});
+  const double duration = curve.end_s();
+  const auto amplitude = [&](double load) {
+    return timed ? curve.Amplitude(load * duration) : load;
+  };
+  if (timed) summary.notes.push_back(SetTimeSteps(scene.analysis.time, curve, *field, &options));
+  options.amplitude = amplitude;
+  options.begin_increment = [&](double from, double to) {
+    field->BeginStep(timed ? (to - from) * duration : 0.0, amplitude(to));
+    return Status::Ok();
+  };
+  const ExternalLoads loads = BuildLoads(scene, model);
+  const HistoryRecorder history(scene, model, timed ? duration : 0.0);
+  options.on_increment = [&](double load, const Eigen::VectorXd& u) {
+    solution->step_load_factor.push_back(timed ? amplitude(load) : load);
+    if (timed) solution->step_time_s.push_back(load * duration);
     for (int i = 0; i < u.size(); ++i) solution->step_displacement_mm.push_back(u(i) / 1e-3);
+    if (field->viscous() && one_point) field->Commit(ElementDeformationGradients(mesh, u));
+    if (timed) history.Record(*body, &loads, load, amplitude(load), u, solution);
   };
 
   clock.Begin("newton", 0.05, 0.85,
-              Format("Newton-Raphson on %d unknowns, %d initial increments", dofs.num_free(),
-                     options.initial_increments));
+              timed
+                  ? Format("Newton-Raphson on %d unknowns through %g s", dofs.num_free(), duration)
+                  : Format("Newton-Raphson on %d unknowns, %d initial increments", dofs.num_free(),
+                           options.initial_increments));
   NewtonReport report;
   Eigen::VectorXd u;
-  const ExternalLoads loads = BuildLoads(scene, mesh);
   if (!loads.empty()) {
     const Eigen::Vector3d total = loads.ReferenceResultant();
     summary.notes.push_back(
@@ -164,11 +206,12 @@ Status SolveNonlinearStatic(const SceneSpec& scene, const Model& model, PhaseClo
   const Status status = SolveNewtonStatic(
       *body, &loads, dofs, options, solver.get(),
       [&](const NewtonProgress& p) {
-        clock.Update(p.load_factor,
-                     p.iteration == 0
-                         ? Format("load factor %.3g reached", p.load_factor)
-                         : Format("load factor %.3g, iteration %d, relative residual %.2g",
-                                  p.load_factor, p.iteration, p.relative_residual));
+        const std::string where = timed ? Format("t = %.4g s", p.load_factor * duration)
+                                        : Format("load factor %.3g", p.load_factor);
+        clock.Update(p.load_factor, p.iteration == 0
+                                        ? where + " reached"
+                                        : Format("%s, iteration %d, relative residual %.2g",
+                                                 where.c_str(), p.iteration, p.relative_residual));
         return !clock.cancelled();
       },
       &u, &report);
@@ -183,8 +226,19 @@ Status SolveNonlinearStatic(const SceneSpec& scene, const Model& model, PhaseClo
   summary.newton_linear_solve_s = report.linear_solve_s;
   summary.newton_residual_s = report.residual_s;
   for (const IncrementRecord& r : report.increments) {
-    summary.increments.push_back(
-        {r.load_factor, r.iterations, r.relative_residual, r.negative_eigenvalues});
+    summary.increments.push_back({timed ? amplitude(r.load_factor) : r.load_factor, r.iterations,
+                                  r.relative_residual, r.negative_eigenvalues});
+    if (timed) {
+      summary.time_steps.push_back({r.load_factor * duration, r.step * duration,
+                                    amplitude(r.load_factor), r.iterations, r.relative_residual});
+    }
+  }
+  if (status.code() == Status::Code::kNumerical && timed) {
+    return Status::Numerical(
+        status.message() + Format(" (load factor = t / %g s)", duration) +
+        "; the motion or load may be too large or too fast for this mesh - try a finer mesh, "
+        "smaller steps (analysis.time.initial_step_s, min_step_s) or a smaller displacement or "
+        "load");
   }
   if (status.code() == Status::Code::kNumerical) {
     return Status::Numerical(status.message() +
@@ -212,23 +266,7 @@ Status SolveNonlinearStatic(const SceneSpec& scene, const Model& model, PhaseClo
   std::vector<double> element_pressure, element_volume_ratio;
   const bool nodal_pressure = !plain && !mesh.quadratic() && !mesh.hexahedral();
   if (nodal_pressure) {
-    std::vector<double> v0(mesh.num_nodes(), 0.0), v(mesh.num_nodes(), 0.0);
-    for (int e = 0; e < ne; ++e) {
-      const Tet4Geometry g = ComputeTet4Geometry(TetCorners(mesh, e));
-      const double j = DeformationGradient(g, GatherElement(mesh, e, u)).determinant();
-      for (int a : mesh.tets[e]) {
-        v0[a] += g.volume / 4;
-        v[a] += j * g.volume / 4;
-      }
-    }
-    element_pressure.assign(ne, 0.0);
-    element_volume_ratio.assign(ne, 0.0);
-    for (int e = 0; e < ne; ++e) {
-      for (int a : mesh.tets[e]) {
-        element_pressure[e] += material->Volumetric(v[a] / v0[a]).first / 4;
-        element_volume_ratio[e] += v[a] / v0[a] / 4;
-      }
-    }
+    AverageNodalPressures(mesh, *field, u, &element_pressure, &element_volume_ratio);
   }
 #pragma omp parallel for reduction(max : max_strain) schedule(static)
   for (int e = 0; e < ne; ++e) {
@@ -244,7 +282,7 @@ Status SolveNonlinearStatic(const SceneSpec& scene, const Model& model, PhaseClo
       const double theta = MeanDilatation(g, ue);
       for (int q = 0; q < 8; ++q) {
         const PointFields p =
-            FieldsAt(*material,
+            FieldsAt(field->At(e),
                      full_bricks ? DeformationGradientHex8(g.grad[q], ue)
                                  : MeanDilatationF(DeformationGradientHex8(g.grad[q], ue), theta));
         sum.Add(g.volume[q], p);
@@ -258,7 +296,7 @@ Status SolveNonlinearStatic(const SceneSpec& scene, const Model& model, PhaseClo
       const double theta = tet10_md ? MeanDilatation(g, ue) : 0;
       for (int q = 0; q < 4; ++q) {
         const Eigen::Matrix3d f = DeformationGradientTet10(g.grad[q], ue);
-        const PointFields p = FieldsAt(*material, tet10_md ? MeanDilatationF(f, theta) : f);
+        const PointFields p = FieldsAt(field->At(e), tet10_md ? MeanDilatationF(f, theta) : f);
         sum.Add(g.volume[q], p);
         v += g.volume[q];
         max_strain = std::max(max_strain, p.green.cwiseAbs().maxCoeff());
@@ -268,8 +306,8 @@ Status SolveNonlinearStatic(const SceneSpec& scene, const Model& model, PhaseClo
       v = g.volume;
       const Eigen::Matrix3d f = DeformationGradient(g, GatherElement(mesh, e, u));
       sum.Add(v, nodal_pressure
-                     ? FieldsAt(*material, f, element_pressure[e], element_volume_ratio[e])
-                     : FieldsAt(*material, f));
+                     ? FieldsAt(field->At(e), f, element_pressure[e], element_volume_ratio[e])
+                     : FieldsAt(field->At(e), f));
       max_strain = std::max(max_strain, sum.green.cwiseAbs().maxCoeff() / v);
     }
     Eigen::Map<Vector6d>(&solution->strain[6 * e]) = sum.green / v;
@@ -293,7 +331,7 @@ Status SolveNonlinearStatic(const SceneSpec& scene, const Model& model, PhaseClo
   // although the element is sound where it is integrated. There it takes
   // the element's mean stress.
   const auto stress_or_mean = [&](int e, const Eigen::Matrix3d& f) -> Vector6d {
-    if (IsAdmissible(f)) return material->Stress(f);
+    if (IsAdmissible(f)) return field->At(e).Stress(f);
     return Eigen::Map<const Vector6d>(&solution->pk2_stress_pa[6 * static_cast<std::size_t>(e)]);
   };
   const ErrorEstimateResult estimate =
@@ -343,7 +381,11 @@ Status SolveNonlinearStatic(const SceneSpec& scene, const Model& model, PhaseClo
   clock.Update(1.0);
   clock.End();
 
-  summary.analysis = "nonlinear static (finite strain, total Lagrangian, Newton-Raphson)";
+  summary.analysis = timed ? Format(
+                                 "quasi-static through %g s (finite strain, total Lagrangian, "
+                                 "Newton-Raphson in %zu adaptive time steps)",
+                                 duration, report.increments.size())
+                           : "nonlinear static (finite strain, total Lagrangian, Newton-Raphson)";
   summary.linear_solver = solver_name;
   summary.notes.push_back("elements: " + body->Describe());
   if (report.approximate_iterations > 0) {
@@ -381,6 +423,18 @@ Status SolveNonlinearStatic(const SceneSpec& scene, const Model& model, PhaseClo
   result->strain_energy_j = energy;
   result->max_strain = max_strain;
   return Status::Ok();
+}
+
+}  // namespace
+
+Status SolveNonlinearStatic(const SceneSpec& scene, const Model& model, PhaseClock* clock,
+                            Solution* solution, StaticResult* result) {
+  return SolveFiniteStrain(scene, model, clock, solution, result);
+}
+
+Status SolveQuasiStatic(const SceneSpec& scene, const Model& model, PhaseClock* clock,
+                        Solution* solution, StaticResult* result) {
+  return SolveFiniteStrain(scene, model, clock, solution, result);
 }
 
 }  // namespace pba

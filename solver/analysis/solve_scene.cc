@@ -7,6 +7,7 @@
 
 #include "analysis/rigid_modes.h"
 #include "analysis/static_analysis.h"
+#include "analysis/time_history.h"
 #include "atlas/structure_set.h"
 #include "core/format.h"
 #include "material/factory.h"
@@ -119,6 +120,11 @@ Status SolveScene(const SceneSpec& scene, const SolveOptions& options, Solution*
       }
     }
     summary.reactions.push_back(reaction);
+  }
+
+  const StructureProbe structures(scene.outputs.structure_displacements, mesh);
+  for (std::size_t i = 0; i < structures.size(); ++i) {
+    summary.structure_displacements.push_back(structures.Measure(i, result.u));
   }
 
   // Fields in the units of result.h5: mm for lengths and displacements.

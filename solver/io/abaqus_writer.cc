@@ -222,7 +222,7 @@ Status ExportAbaqusInput(const SceneSpec& scene, const std::filesystem::path& fi
   // Tractions and gravity as the nodal forces PBA turns them into (exact for
   // uniform loads; on a 10-node mesh the consistent forces, mid-edge nodes
   // included).
-  const ExternalLoads loads = BuildLoads(scene, mesh);
+  const ExternalLoads loads = BuildLoads(scene, model);
   bool cload = false;
   for (int dof = 0; dof < model.dofs.num_dofs(); ++dof) {
     const double f = loads.dead_force()(dof);

@@ -1,9 +1,13 @@
 // result.h5 (HDF5 C API) and result.xdmf (XDMF 3, the ParaView view of it).
 #include <chrono>
+#include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <string>
 
+#include "core/atomic_write.h"
 #include "io/h5_writer.h"
+#include "io/line_plot.h"
 #include "pba/solve.h"
 
 namespace pba {
@@ -122,7 +126,8 @@ std::string XdmfText(const SceneSpec& scene, const Solution& s) {
     x += "    <Grid Name=\"" + name + "\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
     for (size_t k = 0; k < steps; ++k) {
       char time[32];
-      std::snprintf(time, sizeof time, "%.17g", s.step_load_factor[k]);
+      std::snprintf(time, sizeof time, "%.17g",
+                    s.step_time_s.empty() ? s.step_load_factor[k] : s.step_time_s[k]);
       x += "    <Grid Name=\"increment " + std::to_string(k + 1) +
            "\" GridType=\"Uniform\">\n      <Time Value=\"" + time + "\" />\n" + mesh;
       if (k + 1 == steps) {
@@ -138,6 +143,62 @@ std::string XdmfText(const SceneSpec& scene, const Solution& s) {
     x += "    </Grid>\n";
   }
   return x + "  </Domain>\n</Xdmf>\n";
+}
+
+// A CSV field, quoted when it holds a comma or a quote.
+std::string CsvField(const std::string& text) {
+  if (text.find_first_of(",\"") == std::string::npos) return text;
+  std::string quoted = "\"";
+  for (char c : text) quoted += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return quoted + "\"";
+}
+
+// history.csv (one row per step) and history.png: every force column
+// ("[N]") whose values are not all zero, as its magnitude per reaction set
+// or contact, against time.
+Status WriteHistory(const Solution& solution, const std::filesystem::path& dir) {
+  const auto& columns = solution.history_columns;
+  std::string csv;
+  for (std::size_t c = 0; c < columns.size(); ++c) csv += (c ? "," : "") + CsvField(columns[c]);
+  csv += "\n";
+  char number[32];
+  for (const auto& row : solution.history) {
+    for (std::size_t c = 0; c < row.size(); ++c) {
+      std::snprintf(number, sizeof number, "%.10g", row[c]);
+      csv += (c ? "," : "") + std::string(number);
+    }
+    csv += "\n";
+  }
+  PBA_RETURN_IF_ERROR(AtomicWriteText(dir / "history.csv", csv));
+
+  // Force components come in x, y, z triples named "... x [N]".
+  LinePlot plot;
+  plot.title = solution.summary.scene_name + ": forces through time";
+  plot.x_label = "time [s]";
+  plot.y_label = "force [N]";
+  for (std::size_t c = 0; c + 2 < columns.size(); ++c) {
+    const std::string& name = columns[c];
+    const std::string suffix = " x [N]";
+    if (name.size() <= suffix.size() ||
+        name.compare(name.size() - suffix.size(), suffix.size(), suffix) != 0) {
+      continue;
+    }
+    LineSeries series;
+    series.name = name.substr(0, name.size() - suffix.size());
+    bool any = false;
+    for (const auto& row : solution.history) {
+      const double f =
+          std::sqrt(row[c] * row[c] + row[c + 1] * row[c + 1] + row[c + 2] * row[c + 2]);
+      series.x.push_back(row[0]);
+      series.y.push_back(f);
+      any = any || f > 0;
+    }
+    if (!any) continue;
+    series.colour = SeriesColour(static_cast<int>(plot.series.size()));
+    plot.series.push_back(std::move(series));
+  }
+  if (plot.series.empty()) return Status::Ok();
+  return WriteLinePlot(plot, dir / "history.png");
 }
 
 }  // namespace
@@ -197,6 +258,9 @@ Status WriteResultFiles(const SceneSpec& scene, Solution* solution,
                 "fraction of the prescribed loads applied");
       w.Dataset("/steps/displacement", solution->step_displacement_mm, 3, "mm",
                 "x y z; rows step-major: step k holds rows k*nodes .. (k+1)*nodes-1");
+      if (!solution->step_time_s.empty()) {
+        w.Dataset("/steps/time", solution->step_time_s, 0, "s", "time of each step");
+      }
     }
     if (!w.ok()) return Status::Io("cannot write " + h5.string());
   }
@@ -205,6 +269,8 @@ Status WriteResultFiles(const SceneSpec& scene, Solution* solution,
   out << XdmfText(scene, *solution);
   out.close();
   if (!out) return Status::Io("cannot write " + xdmf.string());
+
+  if (!solution->history.empty()) PBA_RETURN_IF_ERROR(WriteHistory(*solution, dir));
 
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

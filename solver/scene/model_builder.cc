@@ -9,6 +9,7 @@
 #include <optional>
 #include <string>
 
+#include "analysis/time_history.h"
 #include "atlas/atlas_build.h"
 #include "atlas/structure_set.h"
 #include "core/format.h"
@@ -373,6 +374,9 @@ Status BuildModel(const SceneSpec& scene, Model* out, const BuildModelOptions& o
     model.mesh_description = stats.description;
   }
   PBA_RETURN_IF_ERROR(CutPatches(scene.geometry, &model.mesh));
+  PBA_RETURN_IF_ERROR(CutInclusions(scene, &model.mesh));
+  PBA_RETURN_IF_ERROR(ResolveMaterials(scene, model.mesh, &model.materials));
+  PBA_RETURN_IF_ERROR(CheckStructureNames(scene, model.mesh));
   if (IsQuadratic(scene.mesh.element)) {
     model.mesh =
         MakeQuadratic(model.mesh, WithPatches(scene.geometry, CurvedSurfaces(scene.geometry)));
@@ -419,9 +423,10 @@ Status BuildModel(const SceneSpec& scene, Model* out, const BuildModelOptions& o
   return Status::Ok();
 }
 
-ExternalLoads BuildLoads(const SceneSpec& scene, const Mesh& mesh) {
+ExternalLoads BuildLoads(const SceneSpec& scene, const Model& model) {
+  const Mesh& mesh = model.mesh;
   ExternalLoads loads(mesh);
-  const bool follower = scene.analysis.type == AnalysisSpec::Type::kNonlinearStatic;
+  const bool follower = scene.analysis.type != AnalysisSpec::Type::kLinearStatic;
   for (const BoundaryConditionSpec& bc : scene.boundary_conditions) {
     const FaceSet& set = mesh.face_sets.at(bc.set);
     if (bc.kind == BoundaryConditionSpec::Kind::kPressure && bc.pressure_pa != 0) {
@@ -431,8 +436,24 @@ ExternalLoads BuildLoads(const SceneSpec& scene, const Mesh& mesh) {
     }
   }
   if (scene.gravity.enabled) {
-    loads.AddBodyForce(scene.material.density_kg_per_m3 *
-                       Eigen::Vector3d(scene.gravity.acceleration_m_per_s2.data()));
+    const GravitySpec& gravity = scene.gravity;
+    const Eigen::Vector3d g(gravity.acceleration_m_per_s2.data());
+    const SceneMaterials& materials = model.materials;
+    if (materials.uniform() && gravity.fluid_density_kg_per_m3 == 0) {
+      loads.AddBodyForce(scene.material.density_kg_per_m3 * g);
+    } else {
+      // Buoyancy: the fluid's weight pushes up on whatever it surrounds,
+      // below its level (a height along -g).
+      const Eigen::Vector3d up =
+          g.norm() > 0 ? Eigen::Vector3d(-g.normalized()) : Eigen::Vector3d::Zero();
+      loads.AddElementBodyForceField([&](const Eigen::Vector3d& x, int e) -> Eigen::Vector3d {
+        double density = materials.density(e);
+        if (!gravity.fluid_level_mm || up.dot(x) <= *gravity.fluid_level_mm * 1e-3) {
+          density -= gravity.fluid_density_kg_per_m3;
+        }
+        return density * g;
+      });
+    }
   }
   return loads;
 }

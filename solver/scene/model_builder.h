@@ -11,6 +11,7 @@
 #include "assembly/dof_map.h"
 #include "mesh/mesh.h"
 #include "pba/scene.h"
+#include "scene/materials.h"
 
 namespace pba {
 
@@ -18,6 +19,7 @@ struct Model {
   Mesh mesh;
   DofMap dofs{0};
   std::string mesh_description;  // how the mesh was made, for the summary
+  SceneMaterials materials;      // the material of every element
 };
 
 struct BuildModelOptions {
@@ -37,8 +39,9 @@ Status BuildModel(const SceneSpec& scene, Model* model, const BuildModelOptions&
 
 // The loads of the scene's pressure and traction conditions and its gravity,
 // at full value (SI). Pressure follows the deformation in a nonlinear
-// analysis. `mesh` must outlive the result.
-ExternalLoads BuildLoads(const SceneSpec& scene, const Mesh& mesh);
+// analysis. Gravity acts on each element's own density, less the buoyancy
+// of the fluid below its level. `model` must outlive the result.
+ExternalLoads BuildLoads(const SceneSpec& scene, const Model& model);
 
 // The sets whose reactions are reported: outputs.reaction_sets, or else every
 // set a displacement-type condition (fixed, displacement, symmetry) names, in

@@ -258,7 +258,7 @@ Status ValidateAnalysis(const AnalysisSpec& analysis, const MaterialSpec& materi
         "nonlinear static analysis needs a hyperelastic material (neo_hookean, mooney_rivlin, "
         "polynomial or ogden)");
   }
-  if (analysis.type != AnalysisSpec::Type::kNonlinearStatic) return Status::Ok();
+  if (analysis.type == AnalysisSpec::Type::kLinearStatic) return Status::Ok();
   if (!material.hyperelastic()) {
     return Status::InvalidArgument(
         "material",
@@ -376,14 +376,14 @@ Status ValidateScene(const SceneSpec& scene) {
   }
 
   if (scene.mesh.element == ElementType::kTet4Anp &&
-      scene.analysis.type != AnalysisSpec::Type::kNonlinearStatic) {
+      scene.analysis.type == AnalysisSpec::Type::kLinearStatic) {
     return Status::InvalidArgument(
         "mesh.element",
         "TET4_ANP (average nodal pressure) is implemented for NONLINEAR_STATIC; "
         "a linear analysis uses TET4");
   }
   if (scene.mesh.element == ElementType::kTet10Md &&
-      scene.analysis.type != AnalysisSpec::Type::kNonlinearStatic) {
+      scene.analysis.type == AnalysisSpec::Type::kLinearStatic) {
     return Status::InvalidArgument(
         "mesh.element",
         "TET10_MD (10-node tetrahedron with mean dilatation) is implemented for "

@@ -230,10 +230,10 @@ struct OgdenParams {
 struct ViscoelasticSpec {
   enum class Form { kNone, kProny, kExponential, kModuli };
   Form form = Form::kNone;
-  std::vector<double> g;      // kProny: g_k [-], each >= 0, sum < 1
-  std::vector<double> tau_s;  // kProny, kModuli: relaxation times [s], > 0
-  double long_term_ratio = 0;  // kExponential: G_inf / G0, in (0, 1]
-  double beta_per_s = 0;       // kExponential: decay rate [1/s], > 0
+  std::vector<double> g;            // kProny: g_k [-], each >= 0, sum < 1
+  std::vector<double> tau_s;        // kProny, kModuli: relaxation times [s], > 0
+  double long_term_ratio = 0;       // kExponential: G_inf / G0, in (0, 1]
+  double beta_per_s = 0;            // kExponential: decay rate [1/s], > 0
   double long_term_modulus_pa = 0;  // kModuli: G_inf [Pa], > 0
   std::vector<double> moduli_pa;    // kModuli: G_i [Pa], >= 0, one per tau_s
 
@@ -372,10 +372,10 @@ struct NonlinearOptionsSpec {
 // relaxation time that is active while the amplitude changes, and never
 // step over a corner of the curve.
 struct TimeSpec {
-  double end_time_s = 0;       // [s], > 0
-  double initial_step_s = 0;   // [s]; 0: end_time_s / 20
-  double min_step_s = 0;       // [s]; 0: end_time_s * 1e-6
-  double max_step_s = 0;       // [s]; 0: end_time_s / 5
+  double end_time_s = 0;                         // [s], > 0
+  double initial_step_s = 0;                     // [s]; 0: end_time_s / 20
+  double min_step_s = 0;                         // [s]; 0: end_time_s * 1e-6
+  double max_step_s = 0;                         // [s]; 0: end_time_s / 5
   std::vector<std::pair<double, double>> curve;  // (time [s], amplitude [-])
 };
 

@@ -170,6 +170,7 @@ struct Solution {
   // Nonlinear analyses: the displacement at the end of every converged load
   // increment (steps x nodes x 3 [mm]) and its load factor (steps).
   std::vector<double> step_load_factor;
+  std::vector<double> step_time_s;  // QUASI_STATIC: the time of each step [s]
   std::vector<double> step_displacement_mm;
   // QUASI_STATIC: one row per converged step (time first), written as
   // history.csv: time, amplitude, each reaction set's force, each contact's
@@ -187,7 +188,9 @@ struct Solution {
 Status SolveScene(const SceneSpec& scene, const SolveOptions& options, Solution* solution);
 
 // Writes result.h5 (mesh, fields, unit attributes) and result.xdmf (the
-// ParaView view of result.h5) into the existing directory `dir`, and appends
+// ParaView view of result.h5) into the existing directory `dir` - with a
+// history, also history.csv and history.png (its forces against time) - and
+// appends
 // the write phase to solution.summary. Fields not requested in
 // `scene.outputs` are left out.
 Status WriteResultFiles(const SceneSpec& scene, Solution* solution,

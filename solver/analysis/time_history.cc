@@ -1,0 +1,143 @@
+#include "analysis/time_history.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "core/format.h"
+#include "fem/tet4.h"
+
+namespace pba {
+
+constexpr double kMm = 1e-3;
+
+std::string SetTimeSteps(const TimeSpec& time, const TimeCurve& curve, const MaterialField& field,
+                         NewtonOptions* options) {
+  const double duration = curve.end_s();
+  const double initial = time.initial_step_s > 0 ? time.initial_step_s : duration / 20;
+  const double smallest = time.min_step_s > 0 ? time.min_step_s : duration * 1e-6;
+  const double largest = time.max_step_s > 0 ? time.max_step_s : duration / 5;
+  double active = std::numeric_limits<double>::infinity();
+  for (const MaterialField::Entry& entry : field.entries()) {
+    for (double tau : entry.relaxation.tau_s) {
+      if (tau >= duration / 1000 && tau <= duration) active = std::min(active, tau);
+    }
+  }
+  options->initial_increments = std::max(1, static_cast<int>(std::ceil(duration / initial - 1e-9)));
+  options->min_increment = smallest / duration;
+  options->max_increment = largest / duration;
+  options->max_increment_at = [&curve, duration, largest, active](double load) {
+    const double t = load * duration;
+    double bound = std::min(largest, curve.NextCorner(t) - t);
+    if (std::isfinite(active) && curve.Changes(t, t + bound)) bound = std::min(bound, active);
+    return bound / duration;
+  };
+  return Format("time steps: first %g s, between %g and %g s", initial, smallest, largest) +
+         (std::isfinite(active)
+              ? Format(", at most %g s (the shortest active relaxation time) while loading", active)
+              : std::string());
+}
+
+StructureProbe::StructureProbe(const std::vector<std::string>& names, const Mesh& mesh) {
+  std::vector<std::string> wanted = names;
+  if (std::find(names.begin(), names.end(), "*") != names.end()) wanted = mesh.region_names;
+  for (const std::string& name : wanted) {
+    const auto it = std::find(mesh.region_names.begin(), mesh.region_names.end(), name);
+    if (it == mesh.region_names.end()) continue;  // CheckStructureNames refuses it
+    const int region = static_cast<int>(it - mesh.region_names.begin());
+    std::vector<double> weight(mesh.num_nodes(), 0.0);
+    double total = 0;
+    for (int e = 0; e < mesh.num_elements(); ++e) {
+      if (mesh.element_region[e] != region) continue;
+      if (mesh.hexahedral()) {
+        const double v = std::abs(HexVolume(mesh, e)) / 8;
+        for (int a : mesh.hexes[e]) weight[a] += v;
+        total += 8 * v;
+      } else {
+        const double v = std::abs(ComputeTet4Geometry(TetCorners(mesh, e)).volume) / 4;
+        for (int a : mesh.tets[e]) weight[a] += v;
+        total += 4 * v;
+      }
+    }
+    std::vector<std::pair<int, double>> nodes;
+    for (int a = 0; a < mesh.num_nodes(); ++a) {
+      if (weight[a] > 0) nodes.emplace_back(a, weight[a] / total);
+    }
+    names_.push_back(name);
+    nodes_.push_back(std::move(nodes));
+  }
+}
+
+StructureDisplacement StructureProbe::Measure(std::size_t i, const Eigen::VectorXd& u) const {
+  StructureDisplacement out;
+  out.name = names_[i];
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const auto& [node, weight] : nodes_[i]) {
+    const Eigen::Vector3d d = u.segment<3>(3 * node);
+    mean += weight * d;
+    out.max_mm = std::max(out.max_mm, d.norm() / kMm);
+  }
+  for (int c = 0; c < 3; ++c) out.mean_mm[c] = mean(c) / kMm;
+  return out;
+}
+
+Status CheckStructureNames(const SceneSpec& scene, const Mesh& mesh) {
+  const auto& names = scene.outputs.structure_displacements;
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    if (names[i] == "*") continue;
+    if (std::find(mesh.region_names.begin(), mesh.region_names.end(), names[i]) ==
+        mesh.region_names.end()) {
+      return Status::InvalidArgument(
+          Format("outputs.structure_displacements[%zu]", i),
+          "the model has no structure named \"" + names[i] +
+              "\" (names as in the atlas's colour table or an inclusion's name)");
+    }
+  }
+  return Status::Ok();
+}
+
+HistoryRecorder::HistoryRecorder(const SceneSpec& scene, const Model& model, double duration_s)
+    : mesh_(model.mesh),
+      duration_s_(duration_s),
+      reaction_sets_(ReactionSetNames(scene)),
+      structures_(scene.outputs.structure_displacements, model.mesh) {
+  columns_ = {"time_s", "amplitude"};
+  for (const std::string& set : reaction_sets_) {
+    for (const char* axis : {"x", "y", "z"}) {
+      columns_.push_back("reaction " + set + " " + axis + " [N]");
+    }
+  }
+  for (std::size_t i = 0; i < structures_.size(); ++i) {
+    for (const char* axis : {"x", "y", "z"}) {
+      columns_.push_back(structures_.name(i) + " mean u" + axis + " [mm]");
+    }
+    columns_.push_back(structures_.name(i) + " max |u| [mm]");
+  }
+}
+
+void HistoryRecorder::Record(const FiniteStrainModel& model, const ExternalLoads* loads,
+                             double load, double amplitude, const Eigen::VectorXd& u,
+                             Solution* solution) const {
+  if (solution->history_columns.empty()) solution->history_columns = columns_;
+  std::vector<double> row = {load * duration_s_, amplitude};
+  if (!reaction_sets_.empty()) {
+    Eigen::VectorXd force;
+    const bool ok = model.InternalForce(u, &force, nullptr);
+    if (ok && loads != nullptr && !loads->empty()) force -= amplitude * loads->Force(u);
+    for (const std::string& set : reaction_sets_) {
+      Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+      if (ok) {
+        for (int node : mesh_.face_sets.at(set).nodes) sum += force.segment<3>(3 * node);
+      }
+      for (int c = 0; c < 3; ++c) row.push_back(ok ? sum(c) : NAN);
+    }
+  }
+  for (std::size_t i = 0; i < structures_.size(); ++i) {
+    const StructureDisplacement d = structures_.Measure(i, u);
+    row.insert(row.end(), d.mean_mm.begin(), d.mean_mm.end());
+    row.push_back(d.max_mm);
+  }
+  solution->history.push_back(std::move(row));
+}
+
+}  // namespace pba

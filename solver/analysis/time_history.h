@@ -1,0 +1,68 @@
+// What a QUASI_STATIC analysis records at every converged step (history.csv)
+// and how its steps are bounded; the structure displacements every
+// analysis reports.
+#pragma once
+
+#include <Eigen/Core>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "analysis/finite_strain_model.h"
+#include "analysis/material_field.h"
+#include "analysis/newton_static.h"
+#include "analysis/time_curve.h"
+#include "pba/solve.h"
+#include "scene/model_builder.h"
+
+namespace pba {
+
+// Step controls of a time-dependent Newton solve (load factor = t / T):
+// the first step, the smallest and largest, and a bound from every
+// converged time that keeps a step from crossing a corner of the curve and,
+// while a(t) changes, from exceeding the shortest active relaxation time
+// (one between T / 1000 and T: faster terms relax within any step, slower
+// ones stay elastic through the analysis, and the exact exponential update
+// handles both). Sets `options` and returns a note for the summary.
+std::string SetTimeSteps(const TimeSpec& time, const TimeCurve& curve, const MaterialField& field,
+                         NewtonOptions* options);
+
+// The nodes of each reported structure with their volume weights.
+class StructureProbe {
+ public:
+  // `names` as in outputs.structure_displacements ("*": every region).
+  StructureProbe(const std::vector<std::string>& names, const Mesh& mesh);
+  std::size_t size() const { return names_.size(); }
+  const std::string& name(std::size_t i) const { return names_[i]; }
+  // Volume-weighted mean and largest nodal displacement of structure i [m].
+  StructureDisplacement Measure(std::size_t i, const Eigen::VectorXd& u) const;
+
+ private:
+  std::vector<std::string> names_;
+  std::vector<std::vector<std::pair<int, double>>> nodes_;  // (node, weight), weights sum to 1
+};
+
+// Fails naming outputs.structure_displacements[i] when the model has no
+// region of that name.
+Status CheckStructureNames(const SceneSpec& scene, const Mesh& mesh);
+
+// Rows of history.csv.
+class HistoryRecorder {
+ public:
+  HistoryRecorder(const SceneSpec& scene, const Model& model, double duration_s);
+  // Appends the row of a converged step at load factor `load` (t = load T)
+  // to solution->history, setting solution->history_columns on the first.
+  // The reactions are the internal force less the loads (`loads`, may be
+  // null) at that amplitude.
+  void Record(const FiniteStrainModel& model, const ExternalLoads* loads, double load,
+              double amplitude, const Eigen::VectorXd& u, Solution* solution) const;
+
+ private:
+  const Mesh& mesh_;
+  double duration_s_;
+  std::vector<std::string> reaction_sets_;
+  StructureProbe structures_;
+  std::vector<std::string> columns_;
+};
+
+}  // namespace pba
