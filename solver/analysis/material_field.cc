@@ -88,9 +88,26 @@ std::unique_ptr<MaterialField> MaterialField::Uniform(const HyperelasticMaterial
   return std::make_unique<MaterialField>(std::move(entries), std::vector<int>(elements, 0));
 }
 
+PronySeries ReduceRelaxation(const PronySeries& series, double relaxed_below_s,
+                             double frozen_above_s, double* scale) {
+  *scale = 1;
+  PronySeries kept;
+  for (std::size_t k = 0; k < series.g.size(); ++k) {
+    if (series.tau_s[k] < relaxed_below_s) {
+      *scale *= 1 - series.g[k];
+    } else if (frozen_above_s <= 0 || series.tau_s[k] <= frozen_above_s) {
+      kept.g.push_back(series.g[k]);
+      kept.tau_s.push_back(series.tau_s[k]);
+    }
+  }
+  for (double& g : kept.g) g /= *scale;
+  return kept;
+}
+
 ElementResponse MaterialField::At(int e) const {
   const int k = of_element_[e];
-  return ElementResponse(*entries_[k].material, steps_[k].alpha, volume_factor_[k],
+  return ElementResponse(*entries_[k].material, steps_[k].alpha * entries_[k].isochoric_scale,
+                         volume_factor_[k],
                          viscous_ ? offset_[e] : Vector6d::Zero());
 }
 
@@ -118,7 +135,7 @@ void MaterialField::Commit(const std::vector<Eigen::Matrix3d>& f) {
     if (steps_[k].weight.empty()) continue;  // elastic, or an instantaneous step
     Vector6d s_iso;
     entries_[k].material->Isochoric(f[e], nullptr, &s_iso, nullptr);
-    s_iso *= volume_factor_[k];
+    s_iso *= volume_factor_[k] * entries_[k].isochoric_scale;
     steps_[k].Advance(s_iso_[e], s_iso, &h_[e]);
     s_iso_[e] = s_iso;
   }

@@ -65,6 +65,9 @@ class MaterialField {
     PronySeries relaxation;
     double growth_strain = 0;
     std::string name;  // for messages and summaries, e.g. "Putamen"
+    // A constant factor on the isochoric stress (relaxation terms taken as
+    // already relaxed, see ReduceRelaxation).
+    double isochoric_scale = 1;
   };
 
   // `entries[of_element[e]]` is element e's material; entries must be
@@ -120,6 +123,15 @@ class MaterialField {
   std::vector<std::vector<Vector6d>> h_;
   std::vector<Vector6d> offset_;
 };
+
+// A series for loading that cannot resolve some of its terms: those with
+// tau < relaxed_below_s have relaxed before anything is measured (each
+// scales the modulus by 1 - g_k and the others' g by 1 / (1 - g_k):
+// 1 - sum_j g_j (1 - e^{-t/tau_j}) with e^{-t/tau_k} = 0), those with tau >
+// frozen_above_s (when > 0) never relax (e^{-t/tau_k} = 1: the term
+// vanishes). Returns the remaining series and the scale.
+PronySeries ReduceRelaxation(const PronySeries& series, double relaxed_below_s,
+                             double frozen_above_s, double* scale);
 
 // Green-Lagrange strain of F, Voigt with engineering shear.
 Vector6d GreenLagrangeVoigt(const Eigen::Matrix3d& f);

@@ -133,7 +133,7 @@ Status SolveFiniteStrain(const SceneSpec& scene, const Model& model, PhaseClock*
   const Mesh& mesh = model.mesh;
   const DofMap& dofs = model.dofs;
   const bool timed = scene.analysis.type == AnalysisSpec::Type::kQuasiStatic;
-  const std::unique_ptr<MaterialField> field = MakeMaterialField(model.materials);
+  const std::unique_ptr<MaterialField> field = MakeMaterialField(model.materials, scene.analysis);
   const bool plain = scene.mesh.element == ElementType::kTet4;
   const bool full_bricks = scene.mesh.element == ElementType::kHex8Full;
   const bool tet10_md = scene.mesh.element == ElementType::kTet10Md;

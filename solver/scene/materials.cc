@@ -147,12 +147,15 @@ PronySeries RelaxationOf(const ViscoelasticSpec& spec) {
   return PronySeries();
 }
 
-std::unique_ptr<MaterialField> MakeMaterialField(const SceneMaterials& materials) {
+std::unique_ptr<MaterialField> MakeMaterialField(const SceneMaterials& materials,
+                                                 const AnalysisSpec& analysis) {
   std::vector<MaterialField::Entry> entries;
   for (std::size_t k = 0; k < materials.specs.size(); ++k) {
     MaterialField::Entry entry;
     entry.material = MakeHyperelasticMaterial(materials.specs[k]);
-    entry.relaxation = RelaxationOf(materials.specs[k].viscoelastic);
+    entry.relaxation =
+        ReduceRelaxation(RelaxationOf(materials.specs[k].viscoelastic), analysis.relaxed_below_s,
+                         analysis.frozen_above_s, &entry.isochoric_scale);
     entry.growth_strain = materials.growth_strain[k];
     entry.name = materials.labels[k];
     entries.push_back(std::move(entry));

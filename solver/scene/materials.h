@@ -38,8 +38,11 @@ Status CutInclusions(const SceneSpec& scene, Mesh* mesh);
 // of a region material whose structure the mesh does not have.
 Status ResolveMaterials(const SceneSpec& scene, const Mesh& mesh, SceneMaterials* out);
 
-// The material field of resolved (hyperelastic) materials.
-std::unique_ptr<MaterialField> MakeMaterialField(const SceneMaterials& materials);
+// The material field of resolved (hyperelastic) materials, their
+// relaxation reduced to what `analysis` resolves (relaxed_below_s,
+// frozen_above_s; see ReduceRelaxation).
+std::unique_ptr<MaterialField> MakeMaterialField(const SceneMaterials& materials,
+                                                 const AnalysisSpec& analysis);
 
 // The relaxation of a material spec as a normalised Prony series (no terms:
 // elastic).

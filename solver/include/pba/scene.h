@@ -400,6 +400,11 @@ struct AnalysisSpec {
   LinearSolver linear_solver = LinearSolver::kCholmod;
   NonlinearOptionsSpec nonlinear;  // Newton controls (increments: see time)
   TimeSpec time;                   // kQuasiStatic
+  // Set by formulation AUTO, not read from a scene file: relaxation terms
+  // with tau below the first are taken as relaxed (folded into the
+  // long-term modulus), those above the second as never relaxing (dropped).
+  double relaxed_below_s = 0;
+  double frozen_above_s = 0;  // 0: none
 };
 
 struct OutputSpec {
@@ -420,6 +425,17 @@ struct OutputSpec {
   std::vector<std::string> structure_displacements;
 };
 
+// How much of the physics the scene asks for is modelled.
+//   kAsWritten: all of it.
+//   kAuto: only what the scene needs (docs/scenes.md): relaxation terms far
+//     faster than the loading fold into the long-term modulus and those far
+//     slower than the analysis drop out; finite strain only when a first
+//     cheap linear solve strains beyond 2 %; of an atlas, only the
+//     structures the scene names, the rest merged into one region. Each
+//     decision is reported with the quantity that drove it, and a coarse run
+//     of the full model estimates what the reduction costs in accuracy.
+enum class Formulation { kAsWritten, kAuto };
+
 struct SceneSpec {
   std::string name;
   std::string description;
@@ -438,6 +454,7 @@ struct SceneSpec {
   GravitySpec gravity;
   AnalysisSpec analysis;
   OutputSpec outputs;
+  Formulation formulation = Formulation::kAsWritten;
 };
 
 // Face set names a geometry defines (box: bottom top x_min x_max y_min y_max;

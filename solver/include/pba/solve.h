@@ -91,6 +91,24 @@ struct StructureDisplacement {
   double max_mm = 0;                       // largest nodal displacement magnitude [mm]
 };
 
+// One decision of `formulation: AUTO` (pba/scene.h).
+struct ModelDecision {
+  std::string aspect;    // "viscoelasticity", "finite strain", "structures"
+  std::string decision;  // what was modelled, e.g. "long-term modulus"
+  std::string reason;    // the quantity that drove it, e.g. "tau 0.5 s vs loading 80 s"
+};
+
+// What the reduced model of `formulation: AUTO` costs and saves, from the
+// same scene on meshes twice as coarse, once reduced and once in full.
+struct ReductionEstimate {
+  bool estimated = false;
+  double relative_difference = 0;  // largest over the compared quantities
+  std::string quantity;            // the one that differed most
+  double reduced_coarse_s = 0;     // wall times of the two coarse runs [s]
+  double full_coarse_s = 0;
+  std::string note;
+};
+
 // One time step of a QUASI_STATIC analysis.
 struct TimeStepSummary {
   double time_s = 0;
@@ -136,6 +154,9 @@ struct Summary {
   std::vector<TimeStepSummary> time_steps;
   std::vector<ContactSummary> contacts;
   std::vector<StructureDisplacement> structure_displacements;
+  // formulation: AUTO.
+  std::vector<ModelDecision> decisions;
+  ReductionEstimate reduction;
   ErrorEstimate error;
   // Speed.
   double wall_time_s = 0;

@@ -1,0 +1,217 @@
+#include "scene/formulation.h"
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+
+#include "analysis/time_curve.h"
+#include "core/format.h"
+#include "mesh/primitive_mesher.h"
+#include "scene/materials.h"
+
+namespace pba {
+namespace {
+
+// The materials a scene names, with where (for the decisions' wording).
+std::vector<std::pair<std::string, const MaterialSpec*>> NamedMaterials(const SceneSpec& scene) {
+  std::vector<std::pair<std::string, const MaterialSpec*>> out = {{"material", &scene.material}};
+  for (std::size_t i = 0; i < scene.region_materials.size(); ++i) {
+    out.emplace_back(Format("region_materials[%zu]", i), &scene.region_materials[i].material);
+  }
+  for (const InclusionSpec& inclusion : scene.inclusions) {
+    out.emplace_back("inclusion " + inclusion.name, &inclusion.material);
+  }
+  return out;
+}
+
+// The shortest stretch of the curve over which the amplitude changes [s].
+double ShortestLoading(const TimeSpec& time) {
+  if (time.curve.size() < 2) return time.end_time_s;
+  double shortest = INFINITY;
+  for (std::size_t i = 0; i + 1 < time.curve.size(); ++i) {
+    if (time.curve[i].second != time.curve[i + 1].second) {
+      shortest = std::min(shortest, time.curve[i + 1].first - time.curve[i].first);
+    }
+  }
+  return std::isfinite(shortest) ? shortest : time.end_time_s;
+}
+
+}  // namespace
+
+void ReduceViscoelasticity(const SceneSpec& scene, SceneSpec* reduced,
+                           std::vector<ModelDecision>* decisions) {
+  bool any = !scene.material_library.empty();
+  for (const auto& [where, material] : NamedMaterials(scene)) any = any || material->viscoelastic.enabled();
+  if (!any) return;
+  if (scene.analysis.type != AnalysisSpec::Type::kQuasiStatic) {
+    decisions->push_back({"viscoelasticity", "instantaneous modulus",
+                          "a static analysis has no time to relax in"});
+    return;
+  }
+  const double loading = ShortestLoading(scene.analysis.time);
+  const double relaxed = loading / 100, frozen = 100 * scene.analysis.time.end_time_s;
+  reduced->analysis.relaxed_below_s = relaxed;
+  reduced->analysis.frozen_above_s = frozen;
+  for (const auto& [where, material] : NamedMaterials(scene)) {
+    if (!material->viscoelastic.enabled()) continue;
+    const PronySeries series = RelaxationOf(material->viscoelastic);
+    double scale = 1;
+    const PronySeries kept = ReduceRelaxation(series, relaxed, frozen, &scale);
+    std::string decision;
+    if (kept.g.empty()) {
+      decision = scale < 1 ? Format("long-term modulus (%.3g of the instantaneous)", scale)
+                           : std::string("instantaneous modulus");
+    } else if (kept.g.size() == series.g.size()) {
+      decision = Format("all %zu relaxation terms", series.g.size());
+    } else {
+      decision = Format("%zu of %zu relaxation terms", kept.g.size(), series.g.size());
+    }
+    std::string taus;
+    for (double tau : series.tau_s) taus += (taus.empty() ? "" : ", ") + FormatNumber(tau);
+    decisions->push_back(
+        {"viscoelasticity", where + ": " + decision,
+         Format("tau = [%s] s against loading over %g s and an analysis of %g s (terms below "
+                "%g s relax within the loading, above %g s not within the analysis)",
+                taus.c_str(), loading, scene.analysis.time.end_time_s, relaxed, frozen)});
+  }
+  if (!scene.material_library.empty()) {
+    decisions->push_back({"viscoelasticity",
+                          "library " + scene.material_library + ": the same rule per structure",
+                          Format("terms below %g s relaxed, above %g s dropped", relaxed, frozen)});
+  }
+}
+
+std::string FiniteStrainRequiredBy(const SceneSpec& scene) {
+  if (!scene.contacts.empty()) return "rigid contact needs the finite-strain solve";
+  for (const InclusionSpec& inclusion : scene.inclusions) {
+    if (inclusion.growth_strain != 0) return "growth needs the finite-strain solve";
+  }
+  if (scene.analysis.type == AnalysisSpec::Type::kQuasiStatic) {
+    return "a history through time needs the time-stepping (finite-strain) solve";
+  }
+  return "";
+}
+
+SceneSpec CheapStrainScene(const SceneSpec& scene) {
+  SceneSpec cheap = Coarsened(scene);
+  cheap.formulation = Formulation::kAsWritten;
+  cheap.analysis.type = AnalysisSpec::Type::kLinearStatic;
+  cheap.mesh.element = IsHexahedral(scene.mesh.element) ? ElementType::kHex8 : ElementType::kTet10;
+  cheap.contacts.clear();
+  cheap.outputs = OutputSpec();
+  return cheap;
+}
+
+void ReduceFiniteStrain(const SceneSpec& scene, std::optional<double> max_strain,
+                        SceneSpec* reduced, std::vector<ModelDecision>* decisions) {
+  if (scene.analysis.type == AnalysisSpec::Type::kLinearStatic) return;
+  const std::string required = FiniteStrainRequiredBy(scene);
+  if (!required.empty()) {
+    decisions->push_back({"finite strain", "kept", required});
+    return;
+  }
+  if (!max_strain) return;
+  const std::string measured =
+      Format("largest strain %.3g %% in a linear solve on a mesh twice as coarse (threshold %g %%)",
+             100 * *max_strain, 100 * kFiniteStrainThreshold);
+  if (*max_strain >= kFiniteStrainThreshold) {
+    decisions->push_back({"finite strain", "kept", measured});
+    return;
+  }
+  reduced->analysis.type = AnalysisSpec::Type::kLinearStatic;
+  // The linear solve has no average-nodal-pressure or mean-dilatation
+  // tetrahedra: the quadratic one does not lock.
+  std::string element;
+  if (scene.mesh.element == ElementType::kTet4Anp || scene.mesh.element == ElementType::kTet10Md ||
+      scene.mesh.element == ElementType::kDefault) {
+    reduced->mesh.element = ElementType::kTet10;
+    element = ", with TET10 elements";
+  }
+  decisions->push_back({"finite strain", "small strain (LINEAR_STATIC" + element + ")", measured});
+}
+
+void ReduceStructures(const SceneSpec& scene, SceneSpec* reduced,
+                      std::vector<ModelDecision>* decisions) {
+  if (scene.geometry.kind != GeometrySpec::Kind::kAtlas) return;
+  std::set<std::string> named;
+  for (const std::string& name : scene.outputs.structure_displacements) {
+    if (name == "*") return;  // every structure is wanted
+    named.insert(name);
+  }
+  for (const RegionMaterialSpec& r : scene.region_materials) {
+    named.insert(r.structures.begin(), r.structures.end());
+  }
+  for (const InclusionSpec& inclusion : scene.inclusions) named.erase(inclusion.name);
+  AtlasSpec& atlas = reduced->geometry.atlas;
+  if (!scene.geometry.atlas.structures.empty()) {
+    // The scene chose its structures; keep those it names, if any.
+    std::vector<std::string> kept;
+    for (const std::string& s : scene.geometry.atlas.structures) {
+      if (named.count(s) > 0) kept.push_back(s);
+    }
+    if (kept.size() == scene.geometry.atlas.structures.size() ||
+        (!scene.geometry.atlas.merge_rest && kept.empty())) {
+      return;
+    }
+    atlas.structures = kept;
+  } else {
+    atlas.structures.assign(named.begin(), named.end());
+  }
+  atlas.merge_rest = true;
+  decisions->push_back(
+      {"structures",
+       atlas.structures.empty()
+           ? std::string("one body: every structure merged into one region")
+           : Format("%zu structure(s) kept, the rest merged into one region",
+                    atlas.structures.size()),
+       atlas.structures.empty()
+           ? std::string("the scene names no structure in its outputs or materials")
+           : std::string("the structures the outputs and materials name")});
+}
+
+SceneSpec Coarsened(const SceneSpec& scene) {
+  SceneSpec coarse = scene;
+  coarse.mesh.element_size_mm = 2 * EffectiveElementSize(scene.geometry, scene.mesh);
+  AtlasSpec& atlas = coarse.geometry.atlas;
+  if (atlas.roi_radius_mm > 0) atlas.roi_element_size_mm *= 2;
+  if (atlas.facet_size_mm > 0) atlas.facet_size_mm *= 2;
+  return coarse;
+}
+
+double LargestRelativeDifference(const Summary& reference, const Summary& other,
+                                 std::string* quantity) {
+  double largest = 0;
+  const auto compare = [&](const std::string& name, double a, double b, double scale) {
+    const double d = std::abs(a - b) / std::max(scale, 1e-300);
+    if (d > largest) largest = d, *quantity = name;
+  };
+  const auto norm = [](const std::array<double, 3>& v) {
+    return std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+  };
+  compare("largest displacement", reference.max_displacement_mm, other.max_displacement_mm,
+          std::abs(reference.max_displacement_mm));
+  for (const Reaction& r : reference.reactions) {
+    for (const Reaction& o : other.reactions) {
+      if (o.set != r.set) continue;
+      double d = 0;
+      for (int c = 0; c < 3; ++c) d += (r.force_n[c] - o.force_n[c]) * (r.force_n[c] - o.force_n[c]);
+      compare("reaction on " + r.set, 0, std::sqrt(d), norm(r.force_n));
+    }
+  }
+  for (const ContactSummary& r : reference.contacts) {
+    for (const ContactSummary& o : other.contacts) {
+      if (o.name == r.name) compare("force on " + r.name, norm(r.force_n), norm(o.force_n), norm(r.force_n));
+    }
+  }
+  for (const StructureDisplacement& r : reference.structure_displacements) {
+    for (const StructureDisplacement& o : other.structure_displacements) {
+      if (o.name != r.name) continue;
+      double d = 0;
+      for (int c = 0; c < 3; ++c) d += (r.mean_mm[c] - o.mean_mm[c]) * (r.mean_mm[c] - o.mean_mm[c]);
+      compare("mean displacement of " + r.name, 0, std::sqrt(d), norm(r.mean_mm));
+    }
+  }
+  return largest;
+}
+
+}  // namespace pba
