@@ -103,6 +103,10 @@ Status SolveScene(const SceneSpec& scene, const SolveOptions& options, Solution*
     case AnalysisSpec::Type::kNonlinearStatic:
       PBA_RETURN_IF_ERROR(SolveNonlinearStatic(scene, model, &clock, solution, &result));
       break;
+    case AnalysisSpec::Type::kQuasiStatic:
+      // The scene reads and validates; the time-stepping solve is not there yet.
+      return Status::FailedPrecondition(
+          "analysis.type: QUASI_STATIC is not solved by this version; use NONLINEAR_STATIC");
   }
 
   for (const std::string& name : ReactionSetNames(scene)) {
