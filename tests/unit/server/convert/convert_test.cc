@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <filesystem>
 #include <string>
 #include <utility>
 #include <vector>
@@ -559,6 +560,21 @@ TEST(SceneFromProto, NewFieldPathsOfBadValues) {
   bad = scene;
   bad.mutable_analysis()->mutable_time()->mutable_curve(1)->set_time_s(0);
   EXPECT_EQ(ValidateSceneProto(bad).field(), "analysis.time.curve[1].time_s");
+}
+
+// The example scenes stay valid as the checks grow.
+TEST(ValidateSceneProto, EveryExampleIsValid) {
+  int examples = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(PBA_EXAMPLES_DIR)) {
+    if (entry.path().extension() != ".yaml") continue;
+    v1::Scene scene;
+    codec::ParseError error;
+    ASSERT_TRUE(codec::ReadYamlFile(entry.path(), &scene, &error)) << error.ToString();
+    const Status status = ValidateSceneProto(scene);
+    EXPECT_TRUE(status.ok()) << entry.path().filename() << ": " << status.ToString();
+    ++examples;
+  }
+  EXPECT_GT(examples, 0);
 }
 
 Summary QuasiStaticSummary(int structures) {
