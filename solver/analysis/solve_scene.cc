@@ -11,6 +11,7 @@
 #include "core/format.h"
 #include "material/factory.h"
 #include "mesh/primitive_mesher.h"
+#include "scene/unsolved.h"
 
 namespace pba {
 namespace {
@@ -52,6 +53,7 @@ const char* SolverVersion() { return PBA_VERSION; }
 
 Status SolveScene(const SceneSpec& scene, const SolveOptions& options, Solution* solution) {
   PBA_RETURN_IF_ERROR(ValidateScene(scene));
+  PBA_RETURN_IF_ERROR(RefuseUnsupportedFields(scene, "solved"));
   if (options.threads > 0) omp_set_num_threads(options.threads);
   // CHOLMOD's supernodal factorisation asks OpenMP for a fixed team of 4
   // threads (its compile-time default); on fewer cores that oversubscribes
@@ -91,6 +93,11 @@ Status SolveScene(const SceneSpec& scene, const SolveOptions& options, Solution*
   summary.constrained_dofs = dofs.num_dofs() - dofs.num_free();
   summary.material = (scene.material.name.empty() ? std::string("material") : scene.material.name) +
                      ": " + DescribeMaterial(scene.material);
+  if (AnyViscoelastic(scene)) {
+    summary.notes.push_back(
+        "viscoelastic: a static analysis takes the instantaneous response; the relaxation "
+        "acts only in QUASI_STATIC");
+  }
   summary.notes.push_back(
       "mesh: " + model.mesh_description +
       Format(" (element size %g mm)", EffectiveElementSize(scene.geometry, scene.mesh)));
@@ -104,9 +111,7 @@ Status SolveScene(const SceneSpec& scene, const SolveOptions& options, Solution*
       PBA_RETURN_IF_ERROR(SolveNonlinearStatic(scene, model, &clock, solution, &result));
       break;
     case AnalysisSpec::Type::kQuasiStatic:
-      // The scene reads and validates; the time-stepping solve is not there yet.
-      return Status::FailedPrecondition(
-          "analysis.type: QUASI_STATIC is not solved by this version; use NONLINEAR_STATIC");
+      return Status::Internal("QUASI_STATIC reached the dispatch");  // refused above
   }
 
   for (const std::string& name : ReactionSetNames(scene)) {

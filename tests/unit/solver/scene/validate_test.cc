@@ -4,6 +4,7 @@
 #include <functional>
 
 #include "pba/scene.h"
+#include "scene/unsolved.h"
 
 namespace pba {
 namespace {
@@ -627,6 +628,36 @@ INSTANTIATE_TEST_SUITE_P(
              },
              "boundary_conditions", "direction x, y"}),
     [](const ::testing::TestParamInfo<Case>& info) { return std::string(info.param.label); });
+
+// Read and checked, not yet solved: the solve and the export refuse each
+// such field by name rather than answer without it.
+TEST(RefuseUnsupportedFieldsTest, NamesTheFirstUnsolvedField) {
+  SceneSpec s = QuasiStaticScene();
+  const auto refused = [&](const SceneSpec& scene) {
+    const Status status = RefuseUnsupportedFields(scene, "solved");
+    EXPECT_EQ(status.code(), Status::Code::kFailedPrecondition);
+    return status.message().substr(0, status.message().find(':'));
+  };
+  EXPECT_EQ(refused(s), "analysis.type");
+  s.analysis.type = AnalysisSpec::Type::kNonlinearStatic;
+  EXPECT_EQ(refused(s), "material_library");
+  s.material_library.clear();
+  EXPECT_EQ(refused(s), "region_materials");
+  s.region_materials.clear();
+  EXPECT_EQ(refused(s), "inclusions");
+  s.inclusions.clear();
+  EXPECT_EQ(refused(s), "contacts");
+  s.contacts.clear();
+  EXPECT_EQ(refused(s), "gravity.fluid_density_kg_per_m3");
+  s.gravity.fluid_density_kg_per_m3 = 0;
+  s.gravity.fluid_level_mm.reset();
+  EXPECT_EQ(refused(s), "outputs.structure_displacements");
+  s.outputs.structure_displacements.clear();
+  // A relaxing material is solved with its instantaneous response.
+  EXPECT_TRUE(RefuseUnsupportedFields(s, "solved").ok());
+  EXPECT_TRUE(AnyViscoelastic(s));
+  EXPECT_FALSE(AnyViscoelastic(GoodScene()));
+}
 
 TEST(FaceSetNamesTest, PerGeometry) {
   GeometrySpec g;
