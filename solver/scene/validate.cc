@@ -225,6 +225,15 @@ Status CheckAtlasSetName(const GeometrySpec& geometry, const std::string& name,
   return check_structure(second);
 }
 
+bool IsAtlasStructureName(const GeometrySpec& geometry, const std::string& name) {
+  if (geometry.kind != GeometrySpec::Kind::kAtlas) return false;
+  const AtlasSpec& a = geometry.atlas;
+  if (name == kSurroundingTissue) return true;
+  if (std::find(a.structures.begin(), a.structures.end(), name) != a.structures.end()) return true;
+  const bool synthetic = a.source.empty() || a.source == "synthetic";
+  return synthetic && ColourTable::Builtin().FindByName(name) != nullptr;
+}
+
 Status CheckFaceSet(const GeometrySpec& geometry, const std::string& set, const std::string& path) {
   if (IsAtlasSetName(geometry, set)) return CheckAtlasSetName(geometry, set, path);
   const std::vector<std::string> sets = FaceSetNames(geometry);

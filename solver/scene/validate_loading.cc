@@ -133,6 +133,11 @@ Status ValidateInclusions(const SceneSpec& scene) {
       return Status::InvalidArgument(path + ".name",
                                      "'" + inclusion.name + "' is a face set name; choose another");
     }
+    if (IsAtlasStructureName(scene.geometry, inclusion.name)) {
+      return Status::InvalidArgument(
+          path + ".name",
+          "'" + inclusion.name + "' is an atlas structure's name; an inclusion is a new region");
+    }
     PBA_RETURN_IF_ERROR(CheckFiniteThree(inclusion.centre_mm, path + ".centre_mm", " of mm"));
     if (!PositiveFinite(inclusion.radius_mm)) {
       return Status::InvalidArgument(path + ".radius_mm", "must be a positive number of mm, got " +

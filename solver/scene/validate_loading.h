@@ -26,6 +26,10 @@ bool IsAtlasSetName(const GeometrySpec& geometry, const std::string& name);
 Status CheckAtlasSetName(const GeometrySpec& geometry, const std::string& name,
                          const std::string& path);
 
+// True when `name` is a structure of the atlas geometry: one it keeps, the
+// merged rest, or (synthetic atlas) one of its colour table.
+bool IsAtlasStructureName(const GeometrySpec& geometry, const std::string& name);
+
 // A face set the scene may name at `path`: one of FaceSetNames(geometry) or
 // an atlas's structure set.
 Status CheckFaceSet(const GeometrySpec& geometry, const std::string& set, const std::string& path);
