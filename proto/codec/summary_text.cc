@@ -1,7 +1,10 @@
 #include "codec/summary_text.h"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <string>
+#include <vector>
 
 namespace pba::codec {
 namespace {
@@ -10,6 +13,67 @@ std::string Format(const char* format, auto... args) {
   char buffer[512];
   std::snprintf(buffer, sizeof buffer, format, args...);
   return buffer;
+}
+
+// "(x, y, z)" of a three-component list, "-" when it is not one.
+std::string Triple(const google::protobuf::RepeatedField<double>& v) {
+  if (v.size() != 3) return "-";
+  return Format("(%.4g, %.4g, %.4g)", v[0], v[1], v[2]);
+}
+
+double Norm(const google::protobuf::RepeatedField<double>& v) {
+  double sum = 0;
+  for (double x : v) sum += x * x;
+  return std::sqrt(sum);
+}
+
+// The time steps of a quasi-static analysis in one line.
+std::string TimeStepLine(const v1::Convergence& c) {
+  if (c.time_steps().empty()) return "";
+  int iterations = 0;
+  for (const v1::TimeStep& step : c.time_steps()) iterations += step.iterations();
+  const v1::TimeStep& first = c.time_steps(0);
+  const v1::TimeStep& last = c.time_steps(c.time_steps_size() - 1);
+  return Format(
+      "  time               %d steps to %.4g s, step %.3g s first, %.3g s last; %d iterations\n",
+      c.time_steps_size(), last.time_s(), first.step_s(), last.step_s(), iterations);
+}
+
+// Each rigid body's contact at the end.
+std::string ContactTable(const v1::Results& r) {
+  if (r.contacts().empty()) return "";
+  std::string out = Format("  %-18s %-34s %10s %10s %16s\n", "contact", "force (x, y, z) N",
+                           "peak N", "area mm^2", "penetration mm");
+  for (const v1::ContactResult& c : r.contacts()) {
+    out +=
+        Format("    %-16s %-34s %10.4g %10.4g %16.3g\n", c.name().c_str(),
+               Triple(c.force_n()).c_str(), c.peak_force_n(), c.area_mm2(), c.max_penetration_mm());
+  }
+  return out;
+}
+
+// The structures' displacements, the largest mean first; the first rows
+// only when there are many.
+std::string StructureTable(const v1::Results& r) {
+  constexpr int kMaxRows = 15;
+  if (r.structure_displacements().empty()) return "";
+  std::vector<const v1::StructureDisplacement*> rows;
+  for (const v1::StructureDisplacement& d : r.structure_displacements()) rows.push_back(&d);
+  std::stable_sort(rows.begin(), rows.end(), [](const auto* a, const auto* b) {
+    return Norm(a->mean_mm()) > Norm(b->mean_mm());
+  });
+  std::string out = Format("  %-30s %-34s %10s %10s\n", "structure", "mean displacement mm",
+                           "|mean| mm", "max mm");
+  const int shown = std::min<int>(kMaxRows, static_cast<int>(rows.size()));
+  for (int i = 0; i < shown; ++i) {
+    const v1::StructureDisplacement& d = *rows[i];
+    out += Format("    %-28s %-34s %10.4g %10.4g\n", d.name().c_str(), Triple(d.mean_mm()).c_str(),
+                  Norm(d.mean_mm()), d.max_mm());
+  }
+  if (static_cast<int>(rows.size()) > shown) {
+    out += Format("    ... and %d more\n", static_cast<int>(rows.size()) - shown);
+  }
+  return out;
 }
 
 }  // namespace
@@ -66,7 +130,10 @@ std::string FormatSummary(const v1::Summary& summary) {
               ? Format(", unstable (%d negative eigenvalues)", inc.negative_eigenvalues()).c_str()
               : "");
     }
+    out += TimeStepLine(c);
   }
+  out += ContactTable(r);
+  out += StructureTable(r);
   out += Format("Wall time    %.3f s on %d thread(s):", p.wall_time_s(), p.threads());
   for (const auto& phase : p.phases()) {
     out += Format(" %s %.3f s,", phase.phase().c_str(), phase.seconds());

@@ -20,6 +20,98 @@ Status CopyThree(const google::protobuf::RepeatedField<double>& given, const std
   return Status::Ok();
 }
 
+// One material, wherever it stands (the scene's, a region's, an
+// inclusion's); `path` is its field path, e.g. "region_materials[1].material".
+Status MaterialFromProto(const v1::Material& material, const std::string& path, MaterialSpec* out) {
+  *out = MaterialSpec();
+  MaterialSpec& m = *out;
+  m.name = material.name();
+  m.density_kg_per_m3 = material.density_kg_per_m3();
+  switch (material.model_case()) {
+    case v1::Material::kLinearElastic:
+      m.kind = MaterialSpec::Kind::kLinearElastic;
+      m.linear_elastic.youngs_modulus_pa = material.linear_elastic().youngs_modulus_pa();
+      m.linear_elastic.poissons_ratio = material.linear_elastic().poissons_ratio();
+      break;
+    case v1::Material::kNeoHookean:
+      m.kind = MaterialSpec::Kind::kNeoHookean;
+      m.neo_hookean.shear_modulus_pa = material.neo_hookean().shear_modulus_pa();
+      m.neo_hookean.bulk_modulus_pa = material.neo_hookean().bulk_modulus_pa();
+      break;
+    case v1::Material::kMooneyRivlin:
+      m.kind = MaterialSpec::Kind::kMooneyRivlin;
+      m.mooney_rivlin.c10_pa = material.mooney_rivlin().c10_pa();
+      m.mooney_rivlin.c01_pa = material.mooney_rivlin().c01_pa();
+      m.mooney_rivlin.bulk_modulus_pa = material.mooney_rivlin().bulk_modulus_pa();
+      break;
+    case v1::Material::kPolynomial:
+      m.kind = MaterialSpec::Kind::kPolynomial;
+      for (const v1::PolynomialTerm& t : material.polynomial().terms()) {
+        m.polynomial.terms.push_back({t.i(), t.j(), t.c_pa()});
+      }
+      m.polynomial.d_per_pa.assign(material.polynomial().d_per_pa().begin(),
+                                   material.polynomial().d_per_pa().end());
+      break;
+    case v1::Material::kOgden:
+      m.kind = MaterialSpec::Kind::kOgden;
+      for (const v1::OgdenTerm& t : material.ogden().terms()) {
+        m.ogden.terms.push_back({t.mu_pa(), t.alpha()});
+      }
+      m.ogden.bulk_modulus_pa = material.ogden().bulk_modulus_pa();
+      break;
+    case v1::Material::kOrthotropicElastic: {
+      m.kind = MaterialSpec::Kind::kOrthotropicElastic;
+      const v1::OrthotropicElastic& o = material.orthotropic_elastic();
+      OrthotropicElasticParams& p = m.orthotropic_elastic;
+      p.e1_pa = o.e1_pa();
+      p.e2_pa = o.e2_pa();
+      p.e3_pa = o.e3_pa();
+      p.nu12 = o.nu12();
+      p.nu13 = o.nu13();
+      p.nu23 = o.nu23();
+      p.g12_pa = o.g12_pa();
+      p.g13_pa = o.g13_pa();
+      p.g23_pa = o.g23_pa();
+      // An absent axis keeps the spec's default (the global x or y axis).
+      const std::pair<const google::protobuf::RepeatedField<double>*, std::array<double, 3>*>
+          axes[] = {{&o.axis_1(), &p.axis_1}, {&o.axis_2(), &p.axis_2}};
+      for (int a = 0; a < 2; ++a) {
+        if (axes[a].first->empty()) continue;
+        PBA_RETURN_IF_ERROR(CopyThree(*axes[a].first,
+                                      path + ".orthotropic_elastic.axis_" + std::to_string(a + 1),
+                                      "components (x, y, z)", axes[a].second));
+      }
+      break;
+    }
+    case v1::Material::MODEL_NOT_SET:
+      break;  // ValidateScene names it
+  }
+
+  const v1::Viscoelastic& visco = material.viscoelastic();
+  ViscoelasticSpec& v = m.viscoelastic;
+  switch (visco.form_case()) {
+    case v1::Viscoelastic::kProny:
+      v.form = ViscoelasticSpec::Form::kProny;
+      v.g.assign(visco.prony().g().begin(), visco.prony().g().end());
+      v.tau_s.assign(visco.prony().tau_s().begin(), visco.prony().tau_s().end());
+      break;
+    case v1::Viscoelastic::kExponential:
+      v.form = ViscoelasticSpec::Form::kExponential;
+      v.long_term_ratio = visco.exponential().long_term_ratio();
+      v.beta_per_s = visco.exponential().beta_per_s();
+      break;
+    case v1::Viscoelastic::kModuli:
+      v.form = ViscoelasticSpec::Form::kModuli;
+      v.long_term_modulus_pa = visco.moduli().long_term_modulus_pa();
+      v.moduli_pa.assign(visco.moduli().moduli_pa().begin(), visco.moduli().moduli_pa().end());
+      v.tau_s.assign(visco.moduli().tau_s().begin(), visco.moduli().tau_s().end());
+      break;
+    case v1::Viscoelastic::FORM_NOT_SET:
+      break;  // no relaxation
+  }
+  return Status::Ok();
+}
+
 }  // namespace
 
 Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec) {
@@ -122,68 +214,25 @@ Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec) {
   }
   spec->mesh.element_size_mm = scene.mesh().element_size_mm();
 
-  const v1::Material& material = scene.material();
-  MaterialSpec& m = spec->material;
-  m.name = material.name();
-  m.density_kg_per_m3 = material.density_kg_per_m3();
-  switch (material.model_case()) {
-    case v1::Material::kLinearElastic:
-      m.kind = MaterialSpec::Kind::kLinearElastic;
-      m.linear_elastic.youngs_modulus_pa = material.linear_elastic().youngs_modulus_pa();
-      m.linear_elastic.poissons_ratio = material.linear_elastic().poissons_ratio();
-      break;
-    case v1::Material::kNeoHookean:
-      m.kind = MaterialSpec::Kind::kNeoHookean;
-      m.neo_hookean.shear_modulus_pa = material.neo_hookean().shear_modulus_pa();
-      m.neo_hookean.bulk_modulus_pa = material.neo_hookean().bulk_modulus_pa();
-      break;
-    case v1::Material::kMooneyRivlin:
-      m.kind = MaterialSpec::Kind::kMooneyRivlin;
-      m.mooney_rivlin.c10_pa = material.mooney_rivlin().c10_pa();
-      m.mooney_rivlin.c01_pa = material.mooney_rivlin().c01_pa();
-      m.mooney_rivlin.bulk_modulus_pa = material.mooney_rivlin().bulk_modulus_pa();
-      break;
-    case v1::Material::kPolynomial:
-      m.kind = MaterialSpec::Kind::kPolynomial;
-      for (const v1::PolynomialTerm& t : material.polynomial().terms()) {
-        m.polynomial.terms.push_back({t.i(), t.j(), t.c_pa()});
-      }
-      m.polynomial.d_per_pa.assign(material.polynomial().d_per_pa().begin(),
-                                   material.polynomial().d_per_pa().end());
-      break;
-    case v1::Material::kOgden:
-      m.kind = MaterialSpec::Kind::kOgden;
-      for (const v1::OgdenTerm& t : material.ogden().terms()) {
-        m.ogden.terms.push_back({t.mu_pa(), t.alpha()});
-      }
-      m.ogden.bulk_modulus_pa = material.ogden().bulk_modulus_pa();
-      break;
-    case v1::Material::kOrthotropicElastic: {
-      m.kind = MaterialSpec::Kind::kOrthotropicElastic;
-      const v1::OrthotropicElastic& o = material.orthotropic_elastic();
-      OrthotropicElasticParams& p = m.orthotropic_elastic;
-      p.e1_pa = o.e1_pa();
-      p.e2_pa = o.e2_pa();
-      p.e3_pa = o.e3_pa();
-      p.nu12 = o.nu12();
-      p.nu13 = o.nu13();
-      p.nu23 = o.nu23();
-      p.g12_pa = o.g12_pa();
-      p.g13_pa = o.g13_pa();
-      p.g23_pa = o.g23_pa();
-      // An absent axis keeps the spec's default (the global x or y axis).
-      const std::pair<const google::protobuf::RepeatedField<double>*, std::array<double, 3>*>
-          axes[] = {{&o.axis_1(), &p.axis_1}, {&o.axis_2(), &p.axis_2}};
-      for (int a = 0; a < 2; ++a) {
-        if (axes[a].first->empty()) continue;
-        PBA_RETURN_IF_ERROR(CopyThree(*axes[a].first,
-                                      "material.orthotropic_elastic.axis_" + std::to_string(a + 1),
-                                      "components (x, y, z)", axes[a].second));
-      }
-      break;
-    }
-    case v1::Material::MODEL_NOT_SET:
-      break;  // ValidateScene names it
+  PBA_RETURN_IF_ERROR(MaterialFromProto(scene.material(), "material", &spec->material));
+  spec->material_library = scene.material_library();
+  for (int i = 0; i < scene.region_materials_size(); ++i) {
+    const v1::RegionMaterial& r = scene.region_materials(i);
+    RegionMaterialSpec& out = spec->region_materials.emplace_back();
+    out.structures.assign(r.structures().begin(), r.structures().end());
+    PBA_RETURN_IF_ERROR(MaterialFromProto(
+        r.material(), "region_materials[" + std::to_string(i) + "].material", &out.material));
+  }
+  for (int i = 0; i < scene.inclusions_size(); ++i) {
+    const v1::Inclusion& inclusion = scene.inclusions(i);
+    const std::string path = "inclusions[" + std::to_string(i) + "]";
+    InclusionSpec& out = spec->inclusions.emplace_back();
+    out.name = inclusion.name();
+    PBA_RETURN_IF_ERROR(CopyThree(inclusion.centre_mm(), path + ".centre_mm",
+                                  "coordinates (x, y, z) in mm", &out.centre_mm));
+    out.radius_mm = inclusion.radius_mm();
+    PBA_RETURN_IF_ERROR(MaterialFromProto(inclusion.material(), path + ".material", &out.material));
+    out.growth_strain = inclusion.growth_strain();
   }
 
   for (const v1::BoundaryCondition& bc : scene.boundary_conditions()) {
@@ -223,11 +272,55 @@ Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec) {
     spec->boundary_conditions.push_back(std::move(out));
   }
 
+  for (int i = 0; i < scene.contacts_size(); ++i) {
+    const v1::Contact& c = scene.contacts(i);
+    const std::string path = "contacts[" + std::to_string(i) + "]";
+    ContactSpec& out = spec->contacts.emplace_back();
+    out.name = c.name();
+    out.set = c.set();
+    switch (c.shape()) {
+      case v1::Contact::SHAPE_UNSPECIFIED:
+        out.shape = ContactSpec::Shape::kNone;  // ValidateScene names it
+        break;
+      case v1::Contact::FLAT_PUNCH:
+        out.shape = ContactSpec::Shape::kFlatPunch;
+        break;
+      case v1::Contact::SPHERE:
+        out.shape = ContactSpec::Shape::kSphere;
+        break;
+      case v1::Contact::PLANE:
+        out.shape = ContactSpec::Shape::kPlane;
+        break;
+      default:
+        return Status::InvalidArgument(path + ".shape",
+                                       "unknown contact shape " + std::to_string(c.shape()));
+    }
+    PBA_RETURN_IF_ERROR(CopyThree(c.position_mm(), path + ".position_mm",
+                                  "coordinates (x, y, z) in mm", &out.position_mm));
+    // An absent axis keeps the spec's default, pressing along -z.
+    if (!c.axis().empty()) {
+      PBA_RETURN_IF_ERROR(CopyThree(c.axis(), path + ".axis", "components (x, y, z)", &out.axis));
+    }
+    out.radius_mm = c.radius_mm();
+    // An absent motion keeps the body where it is.
+    if (!c.motion_mm().empty()) {
+      PBA_RETURN_IF_ERROR(CopyThree(c.motion_mm(), path + ".motion_mm",
+                                    "components (x, y, z) in mm", &out.motion_mm));
+    }
+    out.friction = c.friction();
+    out.penalty_factor = c.penalty_factor();
+    out.penetration_tolerance_mm = c.penetration_tolerance_mm();
+  }
+
   if (scene.has_gravity()) {
     PBA_RETURN_IF_ERROR(CopyThree(scene.gravity().acceleration_m_per_s2(),
                                   "gravity.acceleration_m_per_s2", "components (x, y, z) in m/s^2",
                                   &spec->gravity.acceleration_m_per_s2));
     spec->gravity.enabled = true;
+    spec->gravity.fluid_density_kg_per_m3 = scene.gravity().fluid_density_kg_per_m3();
+    if (scene.gravity().has_fluid_level_mm()) {
+      spec->gravity.fluid_level_mm = scene.gravity().fluid_level_mm();
+    }
   }
 
   switch (scene.analysis().type()) {
@@ -237,6 +330,9 @@ Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec) {
       break;
     case v1::Analysis::NONLINEAR_STATIC:
       spec->analysis.type = AnalysisSpec::Type::kNonlinearStatic;
+      break;
+    case v1::Analysis::QUASI_STATIC:
+      spec->analysis.type = AnalysisSpec::Type::kQuasiStatic;
       break;
     default:
       return Status::InvalidArgument(
@@ -267,6 +363,16 @@ Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec) {
   n.displacement_tolerance = nonlinear.displacement_tolerance();
   n.min_increment = nonlinear.min_increment();
   n.line_search = !nonlinear.has_line_search() || nonlinear.line_search();
+
+  const v1::Time& time = scene.analysis().time();
+  TimeSpec& t = spec->analysis.time;
+  t.end_time_s = time.end_time_s();
+  t.initial_step_s = time.initial_step_s();
+  t.min_step_s = time.min_step_s();
+  t.max_step_s = time.max_step_s();
+  for (const v1::CurvePoint& point : time.curve()) {
+    t.curve.emplace_back(point.time_s(), point.amplitude());
+  }
 
   const auto& fields = scene.outputs().fields();
   if (!fields.empty()) {
@@ -304,6 +410,8 @@ Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec) {
   }
   spec->outputs.reaction_sets.assign(scene.outputs().reaction_sets().begin(),
                                      scene.outputs().reaction_sets().end());
+  spec->outputs.structure_displacements.assign(scene.outputs().structure_displacements().begin(),
+                                               scene.outputs().structure_displacements().end());
   return Status::Ok();
 }
 
@@ -355,6 +463,30 @@ v1::Summary SummaryToProto(const Summary& summary) {
     convergence->set_assembly_s(summary.newton_assembly_s);
     convergence->set_linear_solve_s(summary.newton_linear_solve_s);
     convergence->set_residual_s(summary.newton_residual_s);
+    for (const TimeStepSummary& step : summary.time_steps) {
+      v1::TimeStep* out = convergence->add_time_steps();
+      out->set_time_s(step.time_s);
+      out->set_step_s(step.step_s);
+      out->set_amplitude(step.amplitude);
+      out->set_iterations(step.iterations);
+      out->set_relative_residual(step.relative_residual);
+    }
+  }
+  for (const ContactSummary& contact : summary.contacts) {
+    v1::ContactResult* c = results->add_contacts();
+    c->set_name(contact.name);
+    for (double f : contact.force_n) c->add_force_n(f);
+    c->set_peak_force_n(contact.peak_force_n);
+    c->set_area_mm2(contact.area_mm2);
+    c->set_max_penetration_mm(contact.max_penetration_mm);
+    c->set_penalty_pa_per_mm(contact.penalty_pa_per_mm);
+    c->set_augmentations(contact.augmentations);
+  }
+  for (const StructureDisplacement& structure : summary.structure_displacements) {
+    v1::StructureDisplacement* d = results->add_structure_displacements();
+    d->set_name(structure.name);
+    for (double u : structure.mean_mm) d->add_mean_mm(u);
+    d->set_max_mm(structure.max_mm);
   }
 
   v1::Performance* performance = out.mutable_performance();

@@ -9,6 +9,7 @@
 #include "mesh/quadratic.h"
 #include "pba/solve.h"
 #include "scene/model_builder.h"
+#include "scene/unsolved.h"
 
 namespace pba {
 namespace {
@@ -99,6 +100,7 @@ std::string MaterialCards(const MaterialSpec& m) {
 
 Status ExportAbaqusInput(const SceneSpec& scene, const std::filesystem::path& file) {
   PBA_RETURN_IF_ERROR(ValidateScene(scene));
+  PBA_RETURN_IF_ERROR(RefuseUnsupportedFields(scene, "exported"));
   Model model;
   PBA_RETURN_IF_ERROR(BuildModel(scene, &model));
   const Mesh& mesh = model.mesh;

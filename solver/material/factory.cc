@@ -87,9 +87,67 @@ Status ValidatePolynomial(const PolynomialParams& p, const std::string& path) {
   return c.Validate(path);  // backstop: the same checks on the internal form
 }
 
-}  // namespace
+// A Prony series longer than this is a fit gone wrong, and each term costs a
+// history variable per quadrature point.
+constexpr std::size_t kMaxPronyTerms = 10;
 
-Status ValidateMaterialSpec(const MaterialSpec& m, const std::string& path) {
+Status ValidateTermCount(std::size_t terms, const std::string& field) {
+  if (terms < 1 || terms > kMaxPronyTerms) {
+    return Status::InvalidArgument(field, "takes 1 to " + std::to_string(kMaxPronyTerms) +
+                                              " relaxation terms, got " + std::to_string(terms));
+  }
+  return Status::Ok();
+}
+
+// The relaxation of a material whose model has passed its own checks;
+// `path` is the viscoelastic section's ("material.viscoelastic").
+Status ValidateViscoelastic(const MaterialSpec& m, const std::string& path) {
+  const ViscoelasticSpec& v = m.viscoelastic;
+  if (!m.hyperelastic()) {
+    return Status::InvalidArgument(
+        path,
+        "quasi-linear viscoelasticity relaxes a hyperelastic model's isochoric stress: it is "
+        "only for hyperelastic models (neo_hookean, mooney_rivlin, polynomial or ogden)");
+  }
+  switch (v.form) {
+    case ViscoelasticSpec::Form::kNone:
+      return Status::Ok();
+    case ViscoelasticSpec::Form::kProny: {
+      const std::string p = path + ".prony";
+      PBA_RETURN_IF_ERROR(ValidateTermCount(v.g.size(), p + ".g"));
+      return PronySeriesOf(v).Validate(p);
+    }
+    case ViscoelasticSpec::Form::kExponential: {
+      const std::string p = path + ".exponential";
+      if (!std::isfinite(v.long_term_ratio) || v.long_term_ratio <= 0 || v.long_term_ratio > 1) {
+        return Status::InvalidArgument(
+            p + ".long_term_ratio",
+            "G_inf / G0 must lie in (0, 1], got " + FormatNumber(v.long_term_ratio));
+      }
+      PBA_RETURN_IF_ERROR(RequirePositive(v.beta_per_s, p + ".beta_per_s"));
+      return PronySeriesOf(v).Validate(p);
+    }
+    case ViscoelasticSpec::Form::kModuli: {
+      const std::string p = path + ".moduli";
+      PBA_RETURN_IF_ERROR(RequirePositive(v.long_term_modulus_pa, p + ".long_term_modulus_pa"));
+      PBA_RETURN_IF_ERROR(ValidateTermCount(v.moduli_pa.size(), p + ".moduli_pa"));
+      for (std::size_t k = 0; k < v.moduli_pa.size(); ++k) {
+        const std::string field = p + ".moduli_pa[" + std::to_string(k) + "]";
+        PBA_RETURN_IF_ERROR(RequireFinite(v.moduli_pa[k], field));
+        if (v.moduli_pa[k] < 0) {
+          return Status::InvalidArgument(field,
+                                         "must be >= 0 Pa, got " + FormatNumber(v.moduli_pa[k]));
+        }
+      }
+      // Sizes and relaxation times are checked on the series (".tau_s");
+      // its g are the ratios of the moduli checked above.
+      return PronySeriesOf(v).Validate(p);
+    }
+  }
+  return Status::Internal("unhandled viscoelastic form");
+}
+
+Status ValidateModel(const MaterialSpec& m, const std::string& path) {
   switch (m.kind) {
     case MaterialSpec::Kind::kNone:
       return Status::InvalidArgument(path,
@@ -130,6 +188,28 @@ Status ValidateMaterialSpec(const MaterialSpec& m, const std::string& path) {
     }
   }
   return Status::Internal("unhandled material kind");
+}
+
+}  // namespace
+
+Status ValidateMaterialSpec(const MaterialSpec& m, const std::string& path) {
+  PBA_RETURN_IF_ERROR(ValidateModel(m, path));
+  if (!m.viscoelastic.enabled()) return Status::Ok();
+  return ValidateViscoelastic(m, path + ".viscoelastic");
+}
+
+PronySeries PronySeriesOf(const ViscoelasticSpec& v) {
+  switch (v.form) {
+    case ViscoelasticSpec::Form::kNone:
+      break;
+    case ViscoelasticSpec::Form::kProny:
+      return PronySeries{v.g, v.tau_s};
+    case ViscoelasticSpec::Form::kExponential:
+      return FromExponential(v.long_term_ratio, v.beta_per_s);
+    case ViscoelasticSpec::Form::kModuli:
+      return FromModuli(v.long_term_modulus_pa, v.moduli_pa, v.tau_s);
+  }
+  return PronySeries();
 }
 
 std::unique_ptr<HyperelasticMaterial> MakeHyperelasticMaterial(const MaterialSpec& m) {
@@ -183,7 +263,16 @@ Matrix6d ComplianceMatrix(const MaterialSpec& m) {
   return IsotropicCompliance(p.youngs_modulus_pa, p.poissons_ratio);
 }
 
-std::string DescribeMaterial(const MaterialSpec& m) {
+namespace {
+
+// "[0.5, 0.2]"
+std::string ListOf(const std::vector<double>& values) {
+  std::string out;
+  for (double v : values) out += (out.empty() ? "" : ", ") + FormatNumber(v);
+  return "[" + out + "]";
+}
+
+std::string DescribeModel(const MaterialSpec& m) {
   if (m.kind == MaterialSpec::Kind::kLinearElastic) {
     return "linear elastic, E = " + FormatNumber(m.linear_elastic.youngs_modulus_pa) +
            " Pa, nu = " + FormatNumber(m.linear_elastic.poissons_ratio);
@@ -203,6 +292,18 @@ std::string DescribeMaterial(const MaterialSpec& m) {
            " Pa, axis 1 = " + axis(0) + ", axis 2 = " + axis(1);
   }
   return MakeHyperelasticMaterial(m)->Describe();
+}
+
+}  // namespace
+
+std::string DescribeMaterial(const MaterialSpec& m) {
+  std::string out = DescribeModel(m);
+  if (m.viscoelastic.enabled()) {
+    const PronySeries series = PronySeriesOf(m.viscoelastic);
+    out += ", relaxing: g = " + ListOf(series.g) + ", tau = " + ListOf(series.tau_s) +
+           " s, mu_inf/mu0 = " + FormatNumber(series.LongTermFactor());
+  }
+  return out;
 }
 
 }  // namespace pba

@@ -7,6 +7,7 @@
 
 #include "fem/tet4.h"
 #include "material/hyperelastic.h"
+#include "material/viscoelastic.h"
 #include "pba/scene.h"
 
 namespace pba {
@@ -15,6 +16,12 @@ namespace pba {
 // material's field path ("material"); a failure names e.g.
 // "material.ogden.terms[0].alpha" or "material.polynomial.d_per_pa[1]".
 Status ValidateMaterialSpec(const MaterialSpec& material, const std::string& path);
+
+// The normalised Prony series of an enabled viscoelastic spec, whichever
+// form gives it: kProny as written, kExponential through FromExponential(),
+// kModuli through FromModuli(). A disabled spec gives an empty series (no
+// relaxation). Checks nothing: ValidateMaterialSpec() does.
+PronySeries PronySeriesOf(const ViscoelasticSpec& viscoelastic);
 
 // The hyperelastic model of a validated spec (material.hyperelastic()).
 std::unique_ptr<HyperelasticMaterial> MakeHyperelasticMaterial(const MaterialSpec& material);

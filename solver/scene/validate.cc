@@ -11,12 +11,18 @@
 #include "mesh/primitive_mesher.h"
 #include "mesh/region_faces.h"
 #include "pba/scene.h"
+#include "scene/validate_loading.h"
 
 namespace pba {
 namespace {
 
-// A mesh beyond this would need more memory than the machines PBA targets.
-constexpr int64_t kMaxElements = 4'000'000;
+// The name of a per-structure tissue table, checked against the tissue
+// library. Every name passes until the library is wired in.
+Status CheckMaterialLibraryName(const std::string& name);
+
+}  // namespace
+
+namespace scene_checks {
 
 std::string Number(double value) {
   char buffer[32];
@@ -31,6 +37,29 @@ std::string JoinNames(const std::vector<std::string>& names) {
   for (const auto& name : names) out += (out.empty() ? "" : ", ") + name;
   return out;
 }
+
+const char* AnalysisTypeName(AnalysisSpec::Type type) {
+  switch (type) {
+    case AnalysisSpec::Type::kLinearStatic:
+      return "LINEAR_STATIC";
+    case AnalysisSpec::Type::kNonlinearStatic:
+      return "NONLINEAR_STATIC";
+    case AnalysisSpec::Type::kQuasiStatic:
+      return "QUASI_STATIC";
+  }
+  return "unknown";
+}
+
+}  // namespace scene_checks
+
+namespace {
+
+using scene_checks::JoinNames;
+using scene_checks::Number;
+using scene_checks::PositiveFinite;
+
+// A mesh beyond this would need more memory than the machines PBA targets.
+constexpr int64_t kMaxElements = 4'000'000;
 
 Status ValidateGeometry(const GeometrySpec& geometry) {
   switch (geometry.kind) {
@@ -128,6 +157,40 @@ Status ValidateGeometry(const GeometrySpec& geometry) {
   return Status::Internal("unhandled geometry kind");
 }
 
+}  // namespace
+
+namespace scene_checks {
+namespace {
+
+// An atlas structure the mesh will have: kept by geometry.atlas.structures
+// (by name, or in a group such as "Thalamus") and, for the synthetic atlas,
+// in the built-in colour table. `context` opens each message (e.g. "'surface:X': ").
+Status CheckStructure(const GeometrySpec& geometry, const std::string& structure,
+                      const std::string& context, const std::string& path) {
+  const AtlasSpec& a = geometry.atlas;
+  if (structure == kSurroundingTissue) {
+    if (a.merge_rest) return Status::Ok();
+    return Status::InvalidArgument(path, context + "\"" + kSurroundingTissue +
+                                             "\" exists only with geometry.atlas.merge_rest: true");
+  }
+  const auto kept = [&](const std::string& asked) {  // by name, or as a group ("Thalamus")
+    return asked == structure || InStructureGroup(structure, asked);
+  };
+  if (!a.structures.empty() && std::none_of(a.structures.begin(), a.structures.end(), kept)) {
+    return Status::InvalidArgument(
+        path, context + "\"" + structure +
+                  "\" is not among geometry.atlas.structures, so the mesh will not have it");
+  }
+  const bool synthetic = a.source.empty() || a.source == "synthetic";
+  if (synthetic && ColourTable::Builtin().FindByName(structure) == nullptr) {
+    return Status::InvalidArgument(
+        path, context + "the synthetic atlas has no structure \"" + structure + "\"");
+  }
+  return Status::Ok();
+}
+
+}  // namespace
+
 // A face set an atlas mesh will have, named before it exists:
 // "surface:<structure>" (the whole boundary of a structure) or
 // "interface:<a>|<b>" (between two structures). Which structures touch is
@@ -141,31 +204,11 @@ bool IsAtlasSetName(const GeometrySpec& geometry, const std::string& name) {
 
 Status CheckAtlasSetName(const GeometrySpec& geometry, const std::string& name,
                          const std::string& path) {
-  const AtlasSpec& a = geometry.atlas;
-  const bool synthetic = a.source.empty() || a.source == "synthetic";
   const auto check_structure = [&](const std::string& structure) -> Status {
     if (structure.empty()) {
       return Status::InvalidArgument(path, "'" + name + "' names no structure");
     }
-    if (structure == kSurroundingTissue) {
-      if (a.merge_rest) return Status::Ok();
-      return Status::InvalidArgument(path,
-                                     "'" + name + "': \"" + kSurroundingTissue +
-                                         "\" exists only with geometry.atlas.merge_rest: true");
-    }
-    const auto kept = [&](const std::string& asked) {  // by name, or as a group ("Thalamus")
-      return asked == structure || InStructureGroup(structure, asked);
-    };
-    if (!a.structures.empty() && std::none_of(a.structures.begin(), a.structures.end(), kept)) {
-      return Status::InvalidArgument(
-          path, "'" + name + "': \"" + structure +
-                    "\" is not among geometry.atlas.structures, so the mesh will not have it");
-    }
-    if (synthetic && ColourTable::Builtin().FindByName(structure) == nullptr) {
-      return Status::InvalidArgument(
-          path, "'" + name + "': the synthetic atlas has no structure \"" + structure + "\"");
-    }
-    return Status::Ok();
+    return CheckStructure(geometry, structure, "'" + name + "': ", path);
   };
   const std::optional<RegionSetName> parsed = ParseRegionSetName(name);
   if (!parsed) {
@@ -181,6 +224,53 @@ Status CheckAtlasSetName(const GeometrySpec& geometry, const std::string& name,
   PBA_RETURN_IF_ERROR(check_structure(first));
   return check_structure(second);
 }
+
+bool IsAtlasStructureName(const GeometrySpec& geometry, const std::string& name) {
+  if (geometry.kind != GeometrySpec::Kind::kAtlas) return false;
+  const AtlasSpec& a = geometry.atlas;
+  if (name == kSurroundingTissue) return true;
+  if (std::find(a.structures.begin(), a.structures.end(), name) != a.structures.end()) return true;
+  const bool synthetic = a.source.empty() || a.source == "synthetic";
+  return synthetic && ColourTable::Builtin().FindByName(name) != nullptr;
+}
+
+Status CheckFaceSet(const GeometrySpec& geometry, const std::string& set, const std::string& path) {
+  if (IsAtlasSetName(geometry, set)) return CheckAtlasSetName(geometry, set, path);
+  const std::vector<std::string> sets = FaceSetNames(geometry);
+  if (std::find(sets.begin(), sets.end(), set) == sets.end()) {
+    return Status::InvalidArgument(
+        path, "unknown face set '" + set + "'; this geometry has: " + JoinNames(sets));
+  }
+  return Status::Ok();
+}
+
+Status CheckExtraMaterial(const MaterialSpec& material, const MaterialSpec& scene_material,
+                          const std::string& path) {
+  PBA_RETURN_IF_ERROR(ValidateMaterialSpec(material, path));
+  const double density = material.density_kg_per_m3;
+  if (!std::isfinite(density) || density < 0) {
+    return Status::InvalidArgument(
+        path + ".density_kg_per_m3",
+        "must be a non-negative number of kg/m^3, got " + Number(density));
+  }
+  // One family per model: the analysis that suits the scene's material must
+  // suit every other material as well.
+  if (material.hyperelastic() != scene_material.hyperelastic()) {
+    return Status::InvalidArgument(
+        path, std::string("must be of the scene material's family: the scene's is ") +
+                  (scene_material.hyperelastic() ? "hyperelastic" : "linear") + ", this one is " +
+                  (material.hyperelastic() ? "hyperelastic" : "linear"));
+  }
+  return Status::Ok();
+}
+
+}  // namespace scene_checks
+
+namespace {
+
+using scene_checks::CheckAtlasSetName;
+using scene_checks::CheckFaceSet;
+using scene_checks::IsAtlasSetName;
 
 // Names unique and new, parents among the geometry's own sets, a ball that
 // can hold a face. Whether it does is known only after meshing (BuildModel).
@@ -247,6 +337,75 @@ Status ValidatePatches(const GeometrySpec& geometry) {
   return Status::Ok();
 }
 
+// material_library and region_materials: tissue per atlas structure.
+Status ValidateRegionMaterials(const SceneSpec& scene) {
+  const bool atlas = scene.geometry.kind == GeometrySpec::Kind::kAtlas;
+  if (!scene.material_library.empty()) {
+    if (!atlas) {
+      return Status::InvalidArgument("material_library",
+                                     "assigns tissue to atlas structures: it needs geometry.atlas");
+    }
+    PBA_RETURN_IF_ERROR(CheckMaterialLibraryName(scene.material_library));
+  }
+  if (scene.region_materials.empty()) return Status::Ok();
+  if (!atlas) {
+    return Status::InvalidArgument(
+        "region_materials", "materials per structure need an atlas geometry (geometry.atlas)");
+  }
+  std::vector<std::pair<std::string, std::size_t>> seen;  // structure, its entry
+  for (std::size_t i = 0; i < scene.region_materials.size(); ++i) {
+    const RegionMaterialSpec& r = scene.region_materials[i];
+    const std::string path = "region_materials[" + std::to_string(i) + "]";
+    if (r.structures.empty()) {
+      return Status::InvalidArgument(
+          path + ".structures", "lists no structure: name the structures this material is for");
+    }
+    for (std::size_t j = 0; j < r.structures.size(); ++j) {
+      const std::string& name = r.structures[j];
+      const std::string field = path + ".structures[" + std::to_string(j) + "]";
+      if (name.empty()) return Status::InvalidArgument(field, "is empty");
+      const auto before = std::find_if(seen.begin(), seen.end(),
+                                       [&](const auto& entry) { return entry.first == name; });
+      if (before != seen.end()) {
+        return Status::InvalidArgument(field, "'" + name + "' already has a material (in " +
+                                                  "region_materials[" +
+                                                  std::to_string(before->second) + "])");
+      }
+      PBA_RETURN_IF_ERROR(scene_checks::CheckStructure(scene.geometry, name, "", field));
+      seen.emplace_back(name, i);
+    }
+    PBA_RETURN_IF_ERROR(
+        scene_checks::CheckExtraMaterial(r.material, scene.material, path + ".material"));
+  }
+  return Status::Ok();
+}
+
+// outputs.structure_displacements: atlas structures, inclusions or "*".
+Status ValidateStructureDisplacements(const SceneSpec& scene) {
+  const bool atlas = scene.geometry.kind == GeometrySpec::Kind::kAtlas;
+  for (std::size_t i = 0; i < scene.outputs.structure_displacements.size(); ++i) {
+    const std::string& name = scene.outputs.structure_displacements[i];
+    const std::string path = "outputs.structure_displacements[" + std::to_string(i) + "]";
+    if (name.empty()) return Status::InvalidArgument(path, "is empty");
+    const bool inclusion =
+        std::any_of(scene.inclusions.begin(), scene.inclusions.end(),
+                    [&](const InclusionSpec& inclusion) { return inclusion.name == name; });
+    if (inclusion || (name == "*" && (atlas || !scene.inclusions.empty()))) continue;
+    if (!atlas) {
+      return Status::InvalidArgument(
+          path, "'" + name +
+                    "' is not an inclusion, and only an atlas geometry has structures to report");
+    }
+    PBA_RETURN_IF_ERROR(scene_checks::CheckStructure(scene.geometry, name, "", path));
+  }
+  return Status::Ok();
+}
+
+Status CheckMaterialLibraryName(const std::string& name) {
+  (void)name;  // checked against the tissue library
+  return Status::Ok();
+}
+
 Status ValidateAnalysis(const AnalysisSpec& analysis, const MaterialSpec& material) {
   // Small-strain orthotropy has no finite-strain counterpart here (that would
   // be an anisotropic hyperelastic model), so only the linear solve takes it.
@@ -258,12 +417,17 @@ Status ValidateAnalysis(const AnalysisSpec& analysis, const MaterialSpec& materi
         "nonlinear static analysis needs a hyperelastic material (neo_hookean, mooney_rivlin, "
         "polynomial or ogden)");
   }
+  PBA_RETURN_IF_ERROR(scene_checks::ValidateTime(analysis));
   if (analysis.type == AnalysisSpec::Type::kLinearStatic) return Status::Ok();
+  // Both finite-strain analyses: Newton on a hyperelastic model.
   if (!material.hyperelastic()) {
     return Status::InvalidArgument(
-        "material",
-        "a nonlinear static analysis needs a hyperelastic material (neo_hookean, "
-        "mooney_rivlin, polynomial or ogden); linear_elastic is for LINEAR_STATIC");
+        "material", std::string("a ") +
+                        (analysis.type == AnalysisSpec::Type::kQuasiStatic ? "quasi-static"
+                                                                           : "nonlinear static") +
+                        " analysis needs a hyperelastic material (neo_hookean, "
+                        "mooney_rivlin, polynomial or ogden); linear_elastic is for "
+                        "LINEAR_STATIC");
   }
   const NonlinearOptionsSpec& n = analysis.nonlinear;
   if (n.increments < 0 || n.increments > 10000) {
@@ -375,15 +539,15 @@ Status ValidateScene(const SceneSpec& scene) {
                                     std::to_string(kMaxElements) + "; choose a larger size");
   }
 
-  if (scene.mesh.element == ElementType::kTet4Anp &&
-      scene.analysis.type == AnalysisSpec::Type::kLinearStatic) {
+  // The finite-strain elements serve both finite-strain analyses.
+  const bool finite_strain = scene.analysis.type != AnalysisSpec::Type::kLinearStatic;
+  if (scene.mesh.element == ElementType::kTet4Anp && !finite_strain) {
     return Status::InvalidArgument(
         "mesh.element",
         "TET4_ANP (average nodal pressure) is implemented for NONLINEAR_STATIC; "
         "a linear analysis uses TET4");
   }
-  if (scene.mesh.element == ElementType::kTet10Md &&
-      scene.analysis.type == AnalysisSpec::Type::kLinearStatic) {
+  if (scene.mesh.element == ElementType::kTet10Md && !finite_strain) {
     return Status::InvalidArgument(
         "mesh.element",
         "TET10_MD (10-node tetrahedron with mean dilatation) is implemented for "
@@ -391,6 +555,8 @@ Status ValidateScene(const SceneSpec& scene) {
   }
   PBA_RETURN_IF_ERROR(ValidateMaterialSpec(scene.material, "material"));
   PBA_RETURN_IF_ERROR(ValidateAnalysis(scene.analysis, scene.material));
+  PBA_RETURN_IF_ERROR(ValidateRegionMaterials(scene));
+  PBA_RETURN_IF_ERROR(scene_checks::ValidateInclusions(scene));
 
   if (scene.boundary_conditions.empty()) {
     return Status::InvalidArgument("boundary_conditions",
@@ -481,6 +647,7 @@ Status ValidateScene(const SceneSpec& scene) {
           "1040 kg/m^3)");
     }
   }
+  PBA_RETURN_IF_ERROR(scene_checks::ValidateBuoyancy(scene.gravity));
   std::string free;
   for (int c = 0; c < 3; ++c) {
     if (!held[c]) free += std::string(free.empty() ? "" : ", ") + "xyz"[c];
@@ -491,6 +658,7 @@ Status ValidateScene(const SceneSpec& scene) {
                                        ", so it could slide away; fix or prescribe that component "
                                        "on some face");
   }
+  PBA_RETURN_IF_ERROR(scene_checks::ValidateContacts(scene));
   for (std::size_t i = 0; i < scene.outputs.reaction_sets.size(); ++i) {
     const std::string& name = scene.outputs.reaction_sets[i];
     const std::string path = "outputs.reaction_sets[" + std::to_string(i) + "]";
@@ -501,7 +669,7 @@ Status ValidateScene(const SceneSpec& scene) {
           path, "unknown face set '" + name + "'; this geometry has: " + JoinNames(sets));
     }
   }
-  return Status::Ok();
+  return ValidateStructureDisplacements(scene);
 }
 
 }  // namespace pba

@@ -134,5 +134,106 @@ TEST(YamlCodecTest, JsonRoundTrip) {
   EXPECT_EQ(scene.SerializeAsString(), again.SerializeAsString());
 }
 
+// Every key added for time, viscoelasticity, region materials, inclusions,
+// contacts, buoyancy and structure displacements.
+constexpr const char* kQuasiStaticScene = R"(
+name: punch-and-tumour
+geometry:
+  atlas: {structures: [Putamen, Globus pallidus lateralis]}
+material:
+  neo_hookean: {shear_modulus_pa: 1000, bulk_modulus_pa: 1.0e6}
+  density_kg_per_m3: 1040
+  viscoelastic:
+    prony: {g: [0.5, 0.2], tau_s: [0.5, 5]}
+material_library: default
+region_materials:
+  - structures: [Putamen]
+    material:
+      ogden: {terms: [{mu_pa: 842, alpha: -4.7}], bulk_modulus_pa: 8.42e8}
+      viscoelastic: {exponential: {long_term_ratio: 0.3, beta_per_s: 2}}
+inclusions:
+  - name: tumour
+    centre_mm: [0, 0, 2]
+    radius_mm: 3
+    growth_strain: 0.1
+    material:
+      neo_hookean: {shear_modulus_pa: 3000, bulk_modulus_pa: 3.0e6}
+      viscoelastic:
+        moduli: {long_term_modulus_pa: 300, moduli_pa: [500, 200], tau_s: [0.1, 10]}
+boundary_conditions:
+  - {set: surface, fixed: {}}
+contacts:
+  - name: punch
+    set: "surface:Putamen"
+    shape: flat_punch
+    position_mm: [0, 0, 20]
+    axis: [0, 0, -1]
+    radius_mm: 3
+    motion_mm: [0, 0, -2]
+    friction: 0.1
+    penalty_factor: 50
+    penetration_tolerance_mm: 0.01
+gravity:
+  acceleration_m_per_s2: [0, 0, -9.81]
+  fluid_density_kg_per_m3: 1007
+  fluid_level_mm: 10
+analysis:
+  type: quasi_static
+  time:
+    end_time_s: 10
+    initial_step_s: 0.5
+    min_step_s: 0.01
+    max_step_s: 2
+    curve: [{time_s: 0, amplitude: 0}, {time_s: 5, amplitude: 1}, {time_s: 10, amplitude: 1}]
+outputs:
+  structure_displacements: [Putamen, tumour]
+)";
+
+TEST(YamlCodecTest, NewSceneKeysRoundTrip) {
+  v1::Scene scene;
+  ParseError error;
+  ASSERT_TRUE(ParseYaml(kQuasiStaticScene, &scene, &error)) << error.ToString();
+  EXPECT_EQ(scene.material().viscoelastic().prony().tau_s(1), 5.0);
+  EXPECT_EQ(scene.material_library(), "default");
+  ASSERT_EQ(scene.region_materials_size(), 1);
+  EXPECT_EQ(scene.region_materials(0).material().viscoelastic().exponential().beta_per_s(), 2.0);
+  ASSERT_EQ(scene.inclusions_size(), 1);
+  EXPECT_EQ(scene.inclusions(0).material().viscoelastic().moduli().moduli_pa(0), 500.0);
+  EXPECT_EQ(scene.inclusions(0).growth_strain(), 0.1);
+  ASSERT_EQ(scene.contacts_size(), 1);
+  EXPECT_EQ(scene.contacts(0).shape(), v1::Contact::FLAT_PUNCH);
+  EXPECT_EQ(scene.contacts(0).set(), "surface:Putamen");
+  EXPECT_EQ(scene.contacts(0).penetration_tolerance_mm(), 0.01);
+  EXPECT_EQ(scene.gravity().fluid_density_kg_per_m3(), 1007.0);
+  ASSERT_TRUE(scene.gravity().has_fluid_level_mm());
+  EXPECT_EQ(scene.gravity().fluid_level_mm(), 10.0);
+  EXPECT_EQ(scene.analysis().type(), v1::Analysis::QUASI_STATIC);
+  ASSERT_EQ(scene.analysis().time().curve_size(), 3);
+  EXPECT_EQ(scene.analysis().time().curve(1).time_s(), 5.0);
+  EXPECT_EQ(scene.outputs().structure_displacements(1), "tumour");
+
+  v1::Scene again;
+  ASSERT_TRUE(ParseYaml(ToJson(scene), &again, &error)) << error.ToString();
+  EXPECT_EQ(scene.SerializeAsString(), again.SerializeAsString());
+}
+
+TEST(YamlCodecTest, FluidLevelZeroIsGiven) {
+  v1::Scene scene;
+  ParseError error;
+  ASSERT_TRUE(ParseYaml("gravity: {fluid_level_mm: 0}\n", &scene, &error)) << error.ToString();
+  EXPECT_TRUE(scene.gravity().has_fluid_level_mm());
+  ASSERT_TRUE(ParseYaml("gravity: {fluid_density_kg_per_m3: 1007}\n", &scene, &error));
+  EXPECT_FALSE(scene.gravity().has_fluid_level_mm());
+}
+
+TEST(YamlCodecTest, TwoRelaxationFormsAreRefused) {
+  v1::Scene scene;
+  ParseError error;
+  EXPECT_FALSE(ParseYaml(
+      "material:\n  viscoelastic:\n    prony: {g: [0.5], tau_s: [1]}\n    exponential: {}\n",
+      &scene, &error));
+  EXPECT_EQ(error.field, "material.viscoelastic.exponential");
+}
+
 }  // namespace
 }  // namespace pba::codec

@@ -6,7 +6,10 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <filesystem>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "codec/summary_text.h"
 #include "codec/yaml_codec.h"
@@ -395,6 +398,248 @@ TEST(ValidateSceneProto, NamesTheBadField) {
   EXPECT_TRUE(Validate("material: {ogden: {terms: [{mu_pa: 842, alpha: -4.7}], "
                        "bulk_modulus_pa: 8.42e7}}\nanalysis: {type: NONLINEAR_STATIC}\n")
                   .ok());
+}
+
+// A box scene of the finite-strain fields that need no atlas: the scene's
+// material relaxing, a growing inclusion, a punch, buoyancy and a time curve.
+constexpr const char* kQuasiStatic = R"(
+material:
+  neo_hookean: {shear_modulus_pa: 1000, bulk_modulus_pa: 1e6}
+  density_kg_per_m3: 1040
+  viscoelastic: {prony: {g: [0.5, 0.2], tau_s: [0.5, 5]}}
+inclusions:
+  - name: tumour
+    centre_mm: [5, 5, 5]
+    radius_mm: 2
+    growth_strain: 0.1
+    material:
+      name: tumour tissue
+      mooney_rivlin: {c10_pa: 600, c01_pa: 400, bulk_modulus_pa: 2e6}
+      viscoelastic: {moduli: {long_term_modulus_pa: 300, moduli_pa: [500, 200], tau_s: [0.1, 10]}}
+contacts:
+  - {name: punch, set: top, shape: FLAT_PUNCH, position_mm: [5, 5, 10], radius_mm: 2,
+     motion_mm: [0, 0, -1], friction: 0.2, penalty_factor: 50, penetration_tolerance_mm: 0.01}
+  - {name: base, set: bottom, shape: PLANE, position_mm: [0, 0, 0], axis: [0, 0, 2]}
+gravity: {acceleration_m_per_s2: [0, 0, -9.81], fluid_density_kg_per_m3: 1007, fluid_level_mm: 4}
+analysis:
+  type: QUASI_STATIC
+  time:
+    end_time_s: 10
+    initial_step_s: 0.5
+    min_step_s: 0.01
+    max_step_s: 2
+    curve: [{time_s: 0, amplitude: 0}, {time_s: 5, amplitude: 1}]
+outputs: {structure_displacements: [tumour]}
+)";
+
+TEST(SceneFromProto, QuasiStaticWithEveryNewField) {
+  const SceneSpec s = Parse(kQuasiStatic);
+  EXPECT_EQ(s.analysis.type, AnalysisSpec::Type::kQuasiStatic);
+  EXPECT_EQ(s.material.viscoelastic.form, ViscoelasticSpec::Form::kProny);
+  EXPECT_EQ(s.material.viscoelastic.g, (std::vector<double>{0.5, 0.2}));
+  EXPECT_EQ(s.material.viscoelastic.tau_s, (std::vector<double>{0.5, 5}));
+
+  ASSERT_EQ(s.inclusions.size(), 1u);
+  const InclusionSpec& tumour = s.inclusions[0];
+  EXPECT_EQ(tumour.name, "tumour");
+  EXPECT_EQ(tumour.centre_mm, (std::array<double, 3>{5, 5, 5}));
+  EXPECT_EQ(tumour.radius_mm, 2);
+  EXPECT_EQ(tumour.growth_strain, 0.1);
+  EXPECT_EQ(tumour.material.name, "tumour tissue");
+  EXPECT_EQ(tumour.material.kind, MaterialSpec::Kind::kMooneyRivlin);
+  EXPECT_EQ(tumour.material.mooney_rivlin.c01_pa, 400);
+  EXPECT_EQ(tumour.material.viscoelastic.form, ViscoelasticSpec::Form::kModuli);
+  EXPECT_EQ(tumour.material.viscoelastic.long_term_modulus_pa, 300);
+  EXPECT_EQ(tumour.material.viscoelastic.moduli_pa, (std::vector<double>{500, 200}));
+  EXPECT_EQ(tumour.material.viscoelastic.tau_s, (std::vector<double>{0.1, 10}));
+
+  ASSERT_EQ(s.contacts.size(), 2u);
+  const ContactSpec& punch = s.contacts[0];
+  EXPECT_EQ(punch.name, "punch");
+  EXPECT_EQ(punch.set, "top");
+  EXPECT_EQ(punch.shape, ContactSpec::Shape::kFlatPunch);
+  EXPECT_EQ(punch.position_mm, (std::array<double, 3>{5, 5, 10}));
+  EXPECT_EQ(punch.axis, (std::array<double, 3>{0, 0, -1}));  // absent: the default
+  EXPECT_EQ(punch.radius_mm, 2);
+  EXPECT_EQ(punch.motion_mm, (std::array<double, 3>{0, 0, -1}));
+  EXPECT_EQ(punch.friction, 0.2);
+  EXPECT_EQ(punch.penalty_factor, 50);
+  EXPECT_EQ(punch.penetration_tolerance_mm, 0.01);
+  EXPECT_EQ(s.contacts[1].shape, ContactSpec::Shape::kPlane);
+  EXPECT_EQ(s.contacts[1].axis, (std::array<double, 3>{0, 0, 2}));
+  EXPECT_EQ(s.contacts[1].motion_mm, (std::array<double, 3>{0, 0, 0}));
+
+  EXPECT_EQ(s.gravity.fluid_density_kg_per_m3, 1007);
+  ASSERT_TRUE(s.gravity.fluid_level_mm.has_value());
+  EXPECT_EQ(*s.gravity.fluid_level_mm, 4);
+
+  const TimeSpec& t = s.analysis.time;
+  EXPECT_EQ(t.end_time_s, 10);
+  EXPECT_EQ(t.initial_step_s, 0.5);
+  EXPECT_EQ(t.min_step_s, 0.01);
+  EXPECT_EQ(t.max_step_s, 2);
+  ASSERT_EQ(t.curve.size(), 2u);
+  EXPECT_EQ(t.curve[1], (std::pair<double, double>{5, 1}));
+  EXPECT_EQ(s.outputs.structure_displacements, (std::vector<std::string>{"tumour"}));
+
+  const Status status = Validate(kQuasiStatic);
+  EXPECT_TRUE(status.ok()) << status.ToString();
+}
+
+TEST(SceneFromProto, RegionMaterialsOnAnAtlas) {
+  v1::Scene scene;
+  codec::ParseError error;
+  ASSERT_TRUE(codec::ParseYaml(R"(
+geometry: {atlas: {structures: [Putamen, Globus pallidus lateralis]}}
+material: {linear_elastic: {youngs_modulus_pa: 3000, poissons_ratio: 0.45}}
+material_library: default
+region_materials:
+  - structures: [Putamen]
+    material: {linear_elastic: {youngs_modulus_pa: 6000, poissons_ratio: 0.4}}
+  - structures: [Globus pallidus lateralis]
+    material:
+      orthotropic_elastic: {e1_pa: 6000, e2_pa: 3000, e3_pa: 3000, g12_pa: 1500, g13_pa: 1500,
+                            g23_pa: 1000, axis_1: [1, 1]}
+boundary_conditions: [{set: surface, fixed: {}}]
+outputs: {structure_displacements: ["*"]}
+)",
+                               &scene, &error))
+      << error.ToString();
+  SceneSpec spec;
+  // The shared material conversion names the region's own path.
+  Status status = SceneFromProto(scene, &spec);
+  EXPECT_EQ(status.field(), "region_materials[1].material.orthotropic_elastic.axis_1")
+      << status.ToString();
+  scene.mutable_region_materials(1)->mutable_material()->mutable_orthotropic_elastic()->add_axis_1(
+      0);
+  status = SceneFromProto(scene, &spec);
+  ASSERT_TRUE(status.ok()) << status.ToString();
+  EXPECT_EQ(spec.material_library, "default");
+  ASSERT_EQ(spec.region_materials.size(), 2u);
+  EXPECT_EQ(spec.region_materials[0].structures, (std::vector<std::string>{"Putamen"}));
+  EXPECT_EQ(spec.region_materials[0].material.linear_elastic.youngs_modulus_pa, 6000);
+  EXPECT_EQ(spec.region_materials[1].material.orthotropic_elastic.axis_1,
+            (std::array<double, 3>{1, 1, 0}));
+  EXPECT_EQ(spec.outputs.structure_displacements, (std::vector<std::string>{"*"}));
+  status = ValidateSceneProto(scene);
+  EXPECT_TRUE(status.ok()) << status.ToString();
+}
+
+TEST(SceneFromProto, NewFieldPathsOfBadValues) {
+  const std::string base = kQuasiStatic;
+  // Lists that must hold three values name themselves.
+  v1::Scene scene;
+  codec::ParseError error;
+  ASSERT_TRUE(codec::ParseYaml(std::string(kBase) + base, &scene, &error)) << error.ToString();
+  SceneSpec spec;
+  v1::Scene bad = scene;
+  bad.mutable_inclusions(0)->clear_centre_mm();
+  EXPECT_EQ(SceneFromProto(bad, &spec).field(), "inclusions[0].centre_mm");
+  bad = scene;
+  bad.mutable_contacts(1)->add_axis(1);
+  EXPECT_EQ(SceneFromProto(bad, &spec).field(), "contacts[1].axis");
+  bad = scene;
+  bad.mutable_contacts(0)->clear_position_mm();
+  EXPECT_EQ(SceneFromProto(bad, &spec).field(), "contacts[0].position_mm");
+  bad = scene;
+  bad.mutable_contacts(0)->add_motion_mm(0);
+  EXPECT_EQ(SceneFromProto(bad, &spec).field(), "contacts[0].motion_mm");
+  bad = scene;
+  bad.mutable_contacts(0)->set_shape(static_cast<v1::Contact::Shape>(9));
+  EXPECT_EQ(SceneFromProto(bad, &spec).field(), "contacts[0].shape");
+  // Values the validation refuses, through the proto.
+  bad = scene;
+  bad.mutable_contacts(1)->set_shape(v1::Contact::SHAPE_UNSPECIFIED);
+  EXPECT_EQ(ValidateSceneProto(bad).field(), "contacts[1].shape");
+  bad = scene;
+  bad.mutable_material()->mutable_viscoelastic()->mutable_prony()->set_g(0, 0.9);
+  EXPECT_EQ(ValidateSceneProto(bad).field(), "material.viscoelastic.prony.g");
+  bad = scene;
+  bad.mutable_analysis()->set_type(v1::Analysis::NONLINEAR_STATIC);
+  EXPECT_EQ(ValidateSceneProto(bad).field(), "analysis.time");
+  bad = scene;
+  bad.mutable_analysis()->mutable_time()->mutable_curve(1)->set_time_s(0);
+  EXPECT_EQ(ValidateSceneProto(bad).field(), "analysis.time.curve[1].time_s");
+}
+
+// The example scenes stay valid as the checks grow.
+TEST(ValidateSceneProto, EveryExampleIsValid) {
+  int examples = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(PBA_EXAMPLES_DIR)) {
+    if (entry.path().extension() != ".yaml") continue;
+    v1::Scene scene;
+    codec::ParseError error;
+    ASSERT_TRUE(codec::ReadYamlFile(entry.path(), &scene, &error)) << error.ToString();
+    const Status status = ValidateSceneProto(scene);
+    EXPECT_TRUE(status.ok()) << entry.path().filename() << ": " << status.ToString();
+    ++examples;
+  }
+  EXPECT_GT(examples, 0);
+}
+
+Summary QuasiStaticSummary(int structures) {
+  Summary s;
+  s.scene_name = "punch";
+  s.analysis = "quasi-static";
+  s.increments = {{0.5, 3, 1e-10}, {1, 4, 1e-10}};
+  s.newton_iterations = 7;
+  s.time_steps = {{0.5, 0.5, 0.5, 3, 1e-10}, {5, 4.5, 1, 4, 2e-10}};
+  s.contacts = {{"punch", {0, 0, -0.0123}, 0.0125, 12.5, 0.004, 2e4, 3}};
+  for (int i = 0; i < structures; ++i) {
+    s.structure_displacements.push_back(
+        {"structure " + std::to_string(i), {0, 0, -0.1 * (i + 1)}, 0.2 * (i + 1)});
+  }
+  return s;
+}
+
+TEST(SummaryToProto, CarriesTimeStepsContactsAndStructures) {
+  const v1::Summary proto = SummaryToProto(QuasiStaticSummary(2));
+  const v1::Convergence& c = proto.results().convergence();
+  ASSERT_EQ(c.time_steps_size(), 2);
+  EXPECT_EQ(c.time_steps(1).time_s(), 5);
+  EXPECT_EQ(c.time_steps(1).step_s(), 4.5);
+  EXPECT_EQ(c.time_steps(1).amplitude(), 1);
+  EXPECT_EQ(c.time_steps(1).iterations(), 4);
+  EXPECT_EQ(c.time_steps(1).relative_residual(), 2e-10);
+  ASSERT_EQ(proto.results().contacts_size(), 1);
+  const v1::ContactResult& punch = proto.results().contacts(0);
+  EXPECT_EQ(punch.name(), "punch");
+  ASSERT_EQ(punch.force_n_size(), 3);
+  EXPECT_EQ(punch.force_n(2), -0.0123);
+  EXPECT_EQ(punch.peak_force_n(), 0.0125);
+  EXPECT_EQ(punch.area_mm2(), 12.5);
+  EXPECT_EQ(punch.max_penetration_mm(), 0.004);
+  EXPECT_EQ(punch.penalty_pa_per_mm(), 2e4);
+  EXPECT_EQ(punch.augmentations(), 3);
+  ASSERT_EQ(proto.results().structure_displacements_size(), 2);
+  EXPECT_EQ(proto.results().structure_displacements(1).name(), "structure 1");
+  ASSERT_EQ(proto.results().structure_displacements(1).mean_mm_size(), 3);
+  EXPECT_EQ(proto.results().structure_displacements(1).max_mm(), 0.4);
+}
+
+TEST(FormatSummary, TimeStepsContactsAndStructures) {
+  std::string text = codec::FormatSummary(SummaryToProto(QuasiStaticSummary(3)));
+  EXPECT_NE(text.find("time               2 steps to 5 s, step 0.5 s first, 4.5 s last; 7 "
+                      "iterations"),
+            std::string::npos)
+      << text;
+  EXPECT_NE(text.find("punch"), std::string::npos) << text;
+  EXPECT_NE(text.find("(0, 0, -0.0123)"), std::string::npos) << text;
+  EXPECT_NE(text.find("0.0125"), std::string::npos) << text;
+  // Largest mean first.
+  EXPECT_LT(text.find("structure 2"), text.find("structure 0")) << text;
+  EXPECT_EQ(text.find("more"), std::string::npos) << text;
+
+  text = codec::FormatSummary(SummaryToProto(QuasiStaticSummary(20)));
+  EXPECT_NE(text.find("structure 19"), std::string::npos) << text;
+  EXPECT_NE(text.find("structure 5 "), std::string::npos) << text;
+  EXPECT_EQ(text.find("structure 4 "), std::string::npos) << text;
+  EXPECT_NE(text.find("... and 5 more"), std::string::npos) << text;
+  // A static summary has none of it.
+  text = codec::FormatSummary(SummaryToProto(Summary()));
+  EXPECT_EQ(text.find("contact"), std::string::npos) << text;
+  EXPECT_EQ(text.find("structure"), std::string::npos) << text;
+  EXPECT_EQ(text.find("steps to"), std::string::npos) << text;
 }
 
 Summary NonlinearSummary(int increments) {
