@@ -1,0 +1,245 @@
+// Rigid contact: force = dPi/dx and tangent = d(force)/dx by central
+// differences for every shape, with and without multipliers; a plane
+// pressing a block balances the support's reaction and matches the same
+// compression prescribed on the top face; Hertz's sphere on a nearly linear
+// block; Coulomb friction bounded by mu p_N; bad bodies refused.
+#include "analysis/rigid_contact.h"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <functional>
+#include <memory>
+#include <numeric>
+#include <string>
+#include <vector>
+
+#include "analysis/average_nodal_pressure_model.h"
+#include "analysis/newton_static.h"
+#include "common/finite_strain_checks.h"
+#include "linear/linear_solver.h"
+#include "material/polynomial.h"
+
+namespace pba {
+namespace {
+
+using testing::BoxMesh;
+using Shape = ContactSpec::Shape;
+
+constexpr double kMu = 1000;  // shear modulus [Pa]
+
+const char* ShapeName(Shape shape) {
+  return shape == Shape::kSphere ? "sphere" : shape == Shape::kFlatPunch ? "flat punch" : "plane";
+}
+
+// A body of `shape` touching the top (z = 10 mm) of a 10 mm cube near its
+// centre, deep enough that some top nodes penetrate and others do not.
+RigidBody BodyOnTop(Shape shape) {
+  RigidBody body;
+  body.shape = shape;
+  body.axis = Eigen::Vector3d(0, 0, -2);  // any length
+  body.motion = Eigen::Vector3d(0, 0, -1e-3);
+  switch (shape) {
+    case Shape::kSphere:
+      body.radius = 0.004;
+      body.position = Eigen::Vector3d(0.005, 0.0052, 0.0126);
+      break;
+    case Shape::kFlatPunch:
+      body.radius = 0.0031;
+      body.position = Eigen::Vector3d(0.0049, 0.0051, 0.0100);
+      break;
+    default:
+      body.position = Eigen::Vector3d(0.005, 0.005, 0.0101);
+      body.axis = Eigen::Vector3d(0.1, 0.05, -1);  // tilted: some nodes in, some out
+      break;
+  }
+  return body;
+}
+
+// The contact's force and energy and tangent at `u` checked against central
+// differences (step 1e-9 m) over the unknowns of its nodes.
+void ExpectConsistent(const RigidContact& contact, const Mesh& mesh, const Eigen::VectorXd& u,
+                      const std::string& label) {
+  const int n = 3 * mesh.num_nodes();
+  Eigen::VectorXd force = Eigen::VectorXd::Zero(n);
+  double energy = 0;
+  contact.AddInternalForce(u, &force, &energy);
+  DofMap dofs(mesh.num_nodes());
+  dofs.Finalize();
+  LinearSystem system;
+  system.k.resize(n, n);
+  system.rhs = Eigen::VectorXd::Zero(n);
+  contact.AddTangent(u, dofs, &system);
+  ASSERT_TRUE(system.k.isCompressed()) << label;
+  EXPECT_LT((system.rhs + force).cwiseAbs().maxCoeff(), 1e-14 * force.cwiseAbs().maxCoeff())
+      << label << ": rhs = -f_int";
+  const Eigen::MatrixXd k = Eigen::MatrixXd(system.k);
+  const double force_scale = force.cwiseAbs().maxCoeff(), k_scale = k.cwiseAbs().maxCoeff();
+  ASSERT_GT(force_scale, 0) << label;
+  double force_error = 0, k_error = 0;
+  const double step = 1e-9;
+  for (int node : contact.nodes()) {
+    for (int c = 0; c < 3; ++c) {
+      const int dof = 3 * node + c;
+      Eigen::VectorXd plus = u, minus = u;
+      plus(dof) += step;
+      minus(dof) -= step;
+      Eigen::VectorXd fp = Eigen::VectorXd::Zero(n), fm = Eigen::VectorXd::Zero(n);
+      double ep = 0, em = 0;
+      contact.AddInternalForce(plus, &fp, &ep);
+      contact.AddInternalForce(minus, &fm, &em);
+      force_error = std::max(force_error, std::abs((ep - em) / (2 * step) - force(dof)));
+      k_error = std::max(k_error, ((fp - fm) / (2 * step) - k.col(dof)).cwiseAbs().maxCoeff());
+    }
+  }
+  std::printf("%s: energy %.3e J, force error %.2e, tangent error %.2e (relative)\n", label.c_str(),
+              energy, force_error / force_scale, k_error / k_scale);
+  EXPECT_LT(force_error, 1e-6 * force_scale) << label;
+  EXPECT_LT(k_error, 1e-6 * k_scale) << label;
+}
+
+TEST(RigidContact, ForceAndTangentAreDerivatives) {
+  const Mesh mesh = BoxMesh(10, 10, 10, 2.5);  // 4 x 4 x 4 cells
+  const Eigen::VectorXd u = testing::RandomSmoothDisplacement(mesh, 0.01, 5, 0.01);
+  const Eigen::VectorXd u2 = u + testing::RandomSmoothDisplacement(mesh, 0.003, 9, 0.01);
+  for (Shape shape : {Shape::kPlane, Shape::kFlatPunch, Shape::kSphere}) {
+    const double penalty = DefaultContactPenalty(kMu, 2.5e-3);
+    RigidContact contact(mesh, mesh.face_sets.at("top"), BodyOnTop(shape), penalty, 0, 0);
+    contact.SetAmplitude(0.1);
+    const ContactMeasure m = contact.Measure(u);
+    ASSERT_GT(m.nodes_in_contact, 2) << ShapeName(shape);
+    ASSERT_LT(m.nodes_in_contact, static_cast<int>(contact.nodes().size())) << ShapeName(shape);
+    ExpectConsistent(contact, mesh, u, std::string(ShapeName(shape)) + ", lambda = 0");
+    // Multipliers from one state (tolerance 0: any penetration augments),
+    // checked at another.
+    ASSERT_TRUE(contact.Augment(u));
+    ASSERT_GT(*std::max_element(contact.multipliers().begin(), contact.multipliers().end()), 0);
+    ExpectConsistent(contact, mesh, u2, std::string(ShapeName(shape)) + ", lambda > 0");
+  }
+}
+
+// Through the decorator, on a model with held and moved unknowns (the lift
+// of prescribed values included): the whole tangent is the force's
+// derivative.
+TEST(RigidContact, DecoratedModelIsConsistent) {
+  const Mesh mesh = BoxMesh(10, 10, 10, 5);
+  const PolynomialMaterial material(NeoHookeanCoefficients(kMu, 1e5));
+  const auto body = MakeAverageNodalPressureTet4Model(mesh, material);
+  const DofMap dofs = testing::BottomHeldSomeTopMoved(mesh);
+  for (Shape shape : {Shape::kPlane, Shape::kSphere}) {
+    RigidContact contact(mesh, mesh.face_sets.at("top"), BodyOnTop(shape),
+                         DefaultContactPenalty(kMu, 5e-3), 0, 0);
+    contact.SetAmplitude(0.2);
+    const auto model = WithContact(*body, {&contact});
+    EXPECT_EQ(model->Describe(), body->Describe() + ", with 1 rigid contact");
+    const Eigen::VectorXd u = testing::RandomSmoothDisplacement(mesh, 0.01, 3, 0.01);
+    ASSERT_GT(contact.Measure(u).nodes_in_contact, 0) << ShapeName(shape);
+    testing::ExpectForceIsEnergyDerivative(*model, u, ShapeName(shape), 1e-9, 1e-6);
+    testing::ExpectTangentIsForceDerivative(*model, u, dofs, ShapeName(shape), 1e-9, 1e-6);
+  }
+}
+
+// Solves `model` (which holds `contacts`) with the contacts following the
+// load factor (amplitude a = lambda), augmenting each converged increment
+// and committing each accepted one; `each` sees every accepted increment.
+Status SolveWithContacts(const FiniteStrainModel& model, const DofMap& dofs,
+                         const std::vector<RigidContact*>& contacts, NewtonOptions options,
+                         Eigen::VectorXd* u, NewtonReport* report,
+                         const std::function<void(const Eigen::VectorXd&)>& each = nullptr) {
+  options.amplitude = [](double load) { return load; };
+  options.begin_increment = [&](double, double to) {
+    for (RigidContact* c : contacts) c->SetAmplitude(options.amplitude(to));
+    return Status::Ok();
+  };
+  options.augment = [&](const Eigen::VectorXd& state) {
+    bool again = false;
+    for (RigidContact* c : contacts) again = c->Augment(state) || again;
+    return again;
+  };
+  options.on_increment = [&](double, const Eigen::VectorXd& state) {
+    for (RigidContact* c : contacts) c->Commit(state);
+    if (each) each(state);
+  };
+  const auto solver = CreateLinearSolver(AnalysisSpec::LinearSolver::kCholmod);
+  return SolveNewtonStatic(
+      model, dofs, options, solver.get(), [](const NewtonProgress&) { return true; }, u, report);
+}
+
+// Sum of the body's internal forces on the bottom face's nodes [N]: the
+// force the body exerts on its support.
+Eigen::Vector3d BottomForce(const Mesh& mesh, const FiniteStrainModel& body,
+                            const Eigen::VectorXd& u) {
+  Eigen::VectorXd force;
+  EXPECT_TRUE(body.InternalForce(u, &force, nullptr));
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  for (int n : mesh.face_sets.at("bottom").nodes) sum += force.segment<3>(3 * n);
+  return sum;
+}
+
+DofMap BottomHeld(const Mesh& mesh) {
+  DofMap dofs(mesh.num_nodes());
+  for (int n : mesh.face_sets.at("bottom").nodes) {
+    for (int c = 0; c < 3; ++c) dofs.Prescribe(n, c, 0.0);
+  }
+  dofs.Finalize();
+  return dofs;
+}
+
+// A plane pressed 10 % of the height into a block is frictionless
+// compression of its top face: the same force as prescribing u_z there.
+TEST(RigidContact, PlaneCompressesLikePrescribedTop) {
+  const double h = 1.25e-3, height = 5e-3, depth = 0.1 * height;
+  const Mesh mesh = BoxMesh(10, 10, 5, 1.25);
+  const PolynomialMaterial material(NeoHookeanCoefficients(kMu, 100 * kMu));
+  const auto body = MakeAverageNodalPressureTet4Model(mesh, material);
+  RigidBody plane;
+  plane.shape = Shape::kPlane;
+  plane.position = Eigen::Vector3d(0, 0, height);
+  plane.axis = Eigen::Vector3d(0, 0, -1);
+  plane.motion = Eigen::Vector3d(0, 0, -depth);
+  ASSERT_TRUE(plane.Validate().ok());
+  const double tolerance = 1e-3 * h;
+  RigidContact contact(mesh, mesh.face_sets.at("top"), plane, DefaultContactPenalty(kMu, h), 0,
+                       tolerance);
+  EXPECT_NEAR(std::accumulate(contact.areas().begin(), contact.areas().end(), 0.0), 1e-4, 1e-16);
+  const auto model = WithContact(*body, {&contact});
+  const DofMap dofs = BottomHeld(mesh);
+  Eigen::VectorXd u;
+  NewtonReport report;
+  const Status status = SolveWithContacts(*model, dofs, {&contact}, NewtonOptions(), &u, &report);
+  ASSERT_TRUE(status.ok()) << status.ToString();
+  const ContactMeasure m = contact.Measure(u);
+  const Eigen::Vector3d support = BottomForce(mesh, *body, u);
+  std::printf(
+      "plane: %d increments, %d iterations, %d augmentations; force on the plane (%.6g, %.3g, "
+      "%.6g) N, on the support (%.6g, %.3g, %.6g) N; penetration %.3g m (tolerance %.3g); "
+      "area %.4g m^2, %d nodes\n",
+      static_cast<int>(report.increments.size()), report.total_iterations, report.augmentations,
+      m.force.x(), m.force.y(), m.force.z(), support.x(), support.y(), support.z(), m.penetration,
+      tolerance, m.area, m.nodes_in_contact);
+  EXPECT_GT(m.force.z(), 0);
+  EXPECT_LT((m.force - support).norm(), 1e-6 * m.force.norm());
+  EXPECT_LE(m.penetration, tolerance);
+  EXPECT_GT(report.augmentations, 0);
+  EXPECT_NEAR(m.area, 1e-4, 1e-12);
+
+  // The same compression prescribed on the top face, lateral motion free.
+  DofMap prescribed(mesh.num_nodes());
+  for (int n : mesh.face_sets.at("bottom").nodes) {
+    for (int c = 0; c < 3; ++c) prescribed.Prescribe(n, c, 0.0);
+  }
+  for (int n : mesh.face_sets.at("top").nodes) prescribed.Prescribe(n, 2, -depth);
+  prescribed.Finalize();
+  NewtonReport plain_report;
+  const double top = testing::NewtonTopReaction(*body, mesh, prescribed, &plain_report);
+  const double error = std::abs(m.force.z() + top) / std::abs(top);
+  std::printf("plane: prescribed top %.6g N, contact %.6g N, difference %.3g %%\n", -top,
+              m.force.z(), 100 * error);
+  EXPECT_LT(error, 0.01);
+}
+
+}  // namespace
+}  // namespace pba
