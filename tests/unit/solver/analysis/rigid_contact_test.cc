@@ -241,5 +241,212 @@ TEST(RigidContact, PlaneCompressesLikePrescribedTop) {
   EXPECT_LT(error, 0.01);
 }
 
+// A quarter of a block, 0 <= x, y <= side and 0 <= z <= height [m], whose
+// cells shrink towards the axis x = y = 0 and the top face: the primitive
+// mesher's uniform grid of n x n x n cells with each coordinate mapped by
+// g(t) = c t + (1 - c) t^3 (t the coordinate over the side, measured from
+// the axis, or down from the top), c the first cell's share of a uniform
+// one. Each grid cell stays an axis-aligned box, so the tetrahedra remain
+// positively oriented, and the face sets keep their names and planes.
+Mesh GradedQuarterBlock(double side, double height, int n, double c) {
+  Mesh mesh = BoxMesh(n, n, n, 1);  // [m]: unit cells of 1 mm
+  const double cells = 1e-3 * n;
+  const auto g = [c](double t) { return c * t + (1 - c) * t * t * t; };
+  for (int i = 0; i < mesh.num_nodes(); ++i) {
+    mesh.nodes(i, 0) = side * g(mesh.nodes(i, 0) / cells);
+    mesh.nodes(i, 1) = side * g(mesh.nodes(i, 1) / cells);
+    mesh.nodes(i, 2) = height * (1 - g(1 - mesh.nodes(i, 2) / cells));
+  }
+  return mesh;
+}
+
+// Symmetry planes x = 0 and y = 0, bottom held.
+DofMap QuarterDofs(const Mesh& mesh) {
+  DofMap dofs(mesh.num_nodes());
+  for (int n : mesh.face_sets.at("x_min").nodes) dofs.Prescribe(n, 0, 0.0);
+  for (int n : mesh.face_sets.at("y_min").nodes) dofs.Prescribe(n, 1, 0.0);
+  for (int n : mesh.face_sets.at("bottom").nodes) {
+    for (int c = 0; c < 3; ++c) dofs.Prescribe(n, c, 0.0);
+  }
+  dofs.Finalize();
+  return dofs;
+}
+
+struct IndentationCase {
+  const char* name;
+  Shape shape;
+  double radius;  // of the sphere or the punch [m]
+  double depth;   // indentation [m]
+  double exact;   // the half-space's force [N]
+};
+
+// Indents a graded quarter block (20 mm deep, 20 mm wide, so 40 x 40 mm
+// whole) of a compressible neo-Hookean (K / mu = 10 / 3: nu = 4 / 11, E =
+// 30 mu / 11, linear at small strain) on the axis and compares the whole
+// force with the half-space's (Johnson, Contact Mechanics, 1985, 3.8 and
+// 4.2): a sphere of radius R at depth d, F = (4/3) E* R^(1/2) d^(3/2); a
+// flat-ended punch of radius a, F = 2 a E* d; E* = E / (1 - nu^2). Returns
+// the relative error.
+double Indent(const IndentationCase& c, int cells) {
+  const double side = 0.02, height = 0.02, bulk = 10.0 / 3 * kMu;
+  const Mesh mesh = GradedQuarterBlock(side, height, cells, 0.2);
+  const double h = 0.2 * side / cells;  // the finest cells, under the body [m]
+  const PolynomialMaterial material(NeoHookeanCoefficients(kMu, bulk));
+  const auto body = MakeAverageNodalPressureTet4Model(mesh, material);
+  RigidBody rigid;
+  rigid.shape = c.shape;
+  rigid.radius = c.radius;
+  rigid.axis = Eigen::Vector3d(0, 0, -1);
+  rigid.position = Eigen::Vector3d(0, 0, height + (c.shape == Shape::kSphere ? c.radius : 0));
+  rigid.motion = Eigen::Vector3d(0, 0, -c.depth);
+  const double tolerance = 0.005 * c.depth;
+  RigidContact contact(mesh, mesh.face_sets.at("top"), rigid, DefaultContactPenalty(kMu, h), 0,
+                       tolerance);
+  const auto model = WithContact(*body, {&contact});
+  NewtonOptions options;
+  options.initial_increments = 2;
+  Eigen::VectorXd u;
+  NewtonReport report;
+  const Status status =
+      SolveWithContacts(*model, QuarterDofs(mesh), {&contact}, options, &u, &report);
+  EXPECT_TRUE(status.ok()) << c.name << ": " << status.ToString();
+  const ContactMeasure m = contact.Measure(u);
+  const double force = 4 * m.force.z();
+  const double error = (force - c.exact) / c.exact;
+  std::printf(
+      "%s, %d^3 cells (finest %.3g mm): force %.5g N, half-space %.5g N, error %+.2f %%; contact "
+      "area %.4g mm^2 (quarter), %d nodes; penetration %.3g of the depth; %d increments, %d "
+      "iterations, %d augmentations\n",
+      c.name, cells, 1e3 * h, force, c.exact, 100 * error, 1e6 * m.area, m.nodes_in_contact,
+      m.penetration / c.depth, static_cast<int>(report.increments.size()), report.total_iterations,
+      report.augmentations);
+  EXPECT_LE(m.penetration, tolerance) << c.name;
+  return error;
+}
+
+double ReducedModulus() {
+  const double bulk = 10.0 / 3 * kMu;
+  const double e = 9 * bulk * kMu / (3 * bulk + kMu),
+               nu = (3 * bulk - 2 * kMu) / (6 * bulk + 2 * kMu);
+  return e / (1 - nu * nu);
+}
+
+TEST(RigidContact, SphereFollowsHertz) {
+  const double radius = 0.01, depth = 3e-4;  // d / R = 0.03, contact radius 1.7 mm
+  const IndentationCase hertz{
+      "Hertz sphere", Shape::kSphere, radius, depth,
+      4.0 / 3 * ReducedModulus() * std::sqrt(radius) * std::pow(depth, 1.5)};
+  EXPECT_LT(std::abs(Indent(hertz, 16)), 0.15);
+}
+
+TEST(RigidContact, FlatPunchFollowsBoussinesq) {
+  const double radius = 0.003, depth = 6e-5;  // d / a = 0.02
+  const IndentationCase punch{"Boussinesq flat punch", Shape::kFlatPunch, radius, depth,
+                              2 * radius * ReducedModulus() * depth};
+  EXPECT_LT(std::abs(Indent(punch, 16)), 0.15);
+}
+
+// A block pressed 5 % by a plane, which then slides 1.5 mm along x: with
+// Coulomb friction the tangential force on the plane never exceeds mu times
+// the normal one and reaches it once the whole contact slides; without
+// friction there is none.
+void PressAndSlide(double friction, double* largest_ratio, double* final_ratio) {
+  const double h = 1.25e-3, height = 5e-3;
+  const Mesh mesh = BoxMesh(10, 10, 5, 1.25);
+  const PolynomialMaterial material(NeoHookeanCoefficients(kMu, 100 * kMu));
+  const auto body = MakeAverageNodalPressureTet4Model(mesh, material);
+  RigidBody plane;
+  plane.shape = Shape::kPlane;
+  plane.position = Eigen::Vector3d(0, 0, height);
+  plane.motion = Eigen::Vector3d(0, 0, -0.05 * height);
+  RigidContact contact(mesh, mesh.face_sets.at("top"), plane, DefaultContactPenalty(kMu, h),
+                       friction, 1e-3 * h);
+  const auto model = WithContact(*body, {&contact});
+  const DofMap dofs = BottomHeld(mesh);
+  *largest_ratio = 0;
+  *final_ratio = 0;
+  int increments = 0;
+  const auto check = [&](const Eigen::VectorXd& state) {
+    const ContactMeasure m = contact.Measure(state);
+    const double tangential = std::hypot(m.force.x(), m.force.y());
+    *largest_ratio = std::max(*largest_ratio, tangential / m.force.z());
+    *final_ratio = tangential / m.force.z();
+    ++increments;
+    EXPECT_GT(m.force.z(), 0);
+    EXPECT_LE(tangential, friction * m.force.z() * (1 + 1e-6));
+  };
+  NewtonOptions options;
+  options.max_iterations = 100;  // linear convergence while sliding
+  Eigen::VectorXd u;
+  NewtonReport press, slide;
+  Status status = SolveWithContacts(*model, dofs, {&contact}, options, &u, &press, check);
+  ASSERT_TRUE(status.ok()) << status.ToString();
+  plane.position = contact.Centre();
+  plane.motion = Eigen::Vector3d(1.5e-3, 0, 0);
+  contact.SetBody(plane);
+  contact.SetAmplitude(0);
+  options.start_u = u;
+  status = SolveWithContacts(*model, dofs, {&contact}, options, &u, &slide, check);
+  ASSERT_TRUE(status.ok()) << status.ToString();
+  const ContactMeasure m = contact.Measure(u);
+  std::printf(
+      "friction %.1f: force on the plane (%.5g, %.3g, %.5g) N, tangential / normal %.6f at the "
+      "end, %.6f at most; %d increments, pressing %d iterations, sliding %d iterations (%d "
+      "augmentations)\n",
+      friction, m.force.x(), m.force.y(), m.force.z(), *final_ratio, *largest_ratio, increments,
+      press.total_iterations, slide.total_iterations, slide.augmentations);
+}
+
+TEST(RigidContact, CoulombFrictionBoundsTheTangentialForce) {
+  double largest = 0, final = 0;
+  PressAndSlide(0.5, &largest, &final);
+  EXPECT_LE(largest, 0.5 * (1 + 1e-6));
+  EXPECT_GT(final, 0.5 * (1 - 1e-3));  // the whole contact slides
+}
+
+TEST(RigidContact, FrictionlessPlaneHasNoTangentialForce) {
+  double largest = 0, final = 0;
+  PressAndSlide(0, &largest, &final);
+  EXPECT_LT(largest, 1e-12);
+}
+
+TEST(RigidContact, BadBodiesAreRefused) {
+  RigidBody sphere;
+  sphere.shape = Shape::kSphere;
+  sphere.radius = 0.01;
+  EXPECT_TRUE(sphere.Validate().ok());
+  for (double radius : {0.0, -1e-3, std::nan("")}) {
+    sphere.radius = radius;
+    const Status status = sphere.Validate("contacts[0]");
+    EXPECT_EQ(status.code(), Status::Code::kInvalidArgument) << radius;
+    EXPECT_EQ(status.field(), "contacts[0].radius") << radius;
+  }
+  RigidBody punch;
+  punch.shape = Shape::kFlatPunch;
+  punch.radius = 0.002;
+  punch.axis = Eigen::Vector3d::Zero();
+  EXPECT_EQ(punch.Validate().field(), "contact.axis");
+  EXPECT_NE(punch.Validate().message().find("non-zero"), std::string::npos);
+  punch.axis = Eigen::Vector3d(0, 0, 3);
+  EXPECT_TRUE(punch.Validate().ok());
+  punch.radius = 0;
+  EXPECT_EQ(punch.Validate().field(), "contact.radius");
+
+  RigidBody plane;
+  plane.shape = Shape::kPlane;  // needs no radius
+  EXPECT_TRUE(plane.Validate().ok());
+  plane.axis = Eigen::Vector3d::Zero();
+  EXPECT_EQ(plane.Validate().field(), "contact.axis");
+  plane.axis = Eigen::Vector3d(0, 0, 1);
+  plane.motion = Eigen::Vector3d(0, std::nan(""), 0);
+  EXPECT_EQ(plane.Validate().field(), "contact.motion");
+  EXPECT_EQ(RigidBody().Validate().field(), "contact.shape");
+}
+
+TEST(RigidContact, DefaultPenaltyIsAHundredShearModuliPerElement) {
+  EXPECT_DOUBLE_EQ(DefaultContactPenalty(1000, 1e-3), 1e8);
+  EXPECT_DOUBLE_EQ(DefaultContactPenalty(1000, 1e-3, 10), 1e7);
+}
+
 }  // namespace
 }  // namespace pba
