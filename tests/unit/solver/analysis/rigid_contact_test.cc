@@ -282,10 +282,10 @@ struct IndentationCase {
 };
 
 // Indents a graded quarter block (40 mm deep, 40 mm wide, so 80 x 80 mm
-// whole; finest cells 0.25 mm) of a compressible neo-Hookean (K / mu = 10 / 3: nu = 4 / 11, E =
-// 30 mu / 11, linear at small strain) on the axis and compares the whole
-// force with the half-space's (Johnson, Contact Mechanics, 1985, 3.8 and
-// 4.2): a sphere of radius R at depth d, F = (4/3) E* R^(1/2) d^(3/2); a
+// whole; finest cells 0.25 mm) of a compressible neo-Hookean (K / mu =
+// 10 / 3: nu = 4 / 11, E = 30 mu / 11, linear at small strain) on the axis and compares the whole
+// force with the half-space's (Johnson, Contact Mechanics, 1985, chapters 3
+// and 4): a sphere of radius R at depth d, F = (4/3) E* R^(1/2) d^(3/2); a
 // flat-ended punch of radius a, F = 2 a E* d; E* = E / (1 - nu^2). Returns
 // the relative error. Measured on 16^3 cells: sphere +8.1 %, punch -4.3 %.
 // The sphere's error falls with the cells (+6.9 % on 20^3, finest 0.16 mm):
