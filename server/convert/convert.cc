@@ -216,6 +216,18 @@ Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec) {
 
   PBA_RETURN_IF_ERROR(MaterialFromProto(scene.material(), "material", &spec->material));
   spec->material_library = scene.material_library();
+  switch (scene.formulation()) {
+    case v1::Scene::FORMULATION_UNSPECIFIED:
+    case v1::Scene::AS_WRITTEN:
+      spec->formulation = Formulation::kAsWritten;
+      break;
+    case v1::Scene::AUTO:
+      spec->formulation = Formulation::kAuto;
+      break;
+    default:
+      return Status::InvalidArgument(
+          "formulation", "unknown formulation " + std::to_string(scene.formulation()));
+  }
   for (int i = 0; i < scene.region_materials_size(); ++i) {
     const v1::RegionMaterial& r = scene.region_materials(i);
     RegionMaterialSpec& out = spec->region_materials.emplace_back();
@@ -437,6 +449,22 @@ v1::Summary SummaryToProto(const Summary& summary) {
   modelled->set_analysis(summary.analysis);
   modelled->set_linear_solver(summary.linear_solver);
   for (const auto& note : summary.notes) modelled->add_notes(note);
+  for (const ModelDecision& d : summary.decisions) {
+    v1::ModelDecision* out = modelled->add_decisions();
+    out->set_aspect(d.aspect);
+    out->set_decision(d.decision);
+    out->set_reason(d.reason);
+    out->set_reduces(d.reduces);
+  }
+  if (!summary.decisions.empty()) {
+    v1::ReductionEstimate* r = modelled->mutable_reduction();
+    r->set_estimated(summary.reduction.estimated);
+    r->set_relative_difference(summary.reduction.relative_difference);
+    r->set_quantity(summary.reduction.quantity);
+    r->set_reduced_coarse_s(summary.reduction.reduced_coarse_s);
+    r->set_full_coarse_s(summary.reduction.full_coarse_s);
+    r->set_note(summary.reduction.note);
+  }
 
   v1::Results* results = out.mutable_results();
   results->set_max_displacement_mm(summary.max_displacement_mm);

@@ -107,8 +107,7 @@ PronySeries ReduceRelaxation(const PronySeries& series, double relaxed_below_s,
 ElementResponse MaterialField::At(int e) const {
   const int k = of_element_[e];
   return ElementResponse(*entries_[k].material, steps_[k].alpha * entries_[k].isochoric_scale,
-                         volume_factor_[k],
-                         viscous_ ? offset_[e] : Vector6d::Zero());
+                         volume_factor_[k], viscous_ ? offset_[e] : Vector6d::Zero());
 }
 
 void MaterialField::BeginStep(double dt_s, double amplitude) {

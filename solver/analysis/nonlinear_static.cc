@@ -12,6 +12,7 @@
 #include "analysis/finite_strain_model.h"
 #include "analysis/hex8_model.h"
 #include "analysis/newton_static.h"
+#include "analysis/rigid_contact.h"
 #include "analysis/static_analysis.h"
 #include "analysis/tet10_model.h"
 #include "analysis/time_curve.h"
@@ -23,6 +24,7 @@
 #include "material/factory.h"
 #include "material/hyperelastic.h"
 #include "material/linear_elastic.h"
+#include "mesh/primitive_mesher.h"
 #include "mesh/quadratic.h"
 #include "scene/materials.h"
 
@@ -164,6 +166,32 @@ Status SolveFiniteStrain(const SceneSpec& scene, const Model& model, PhaseClock*
                     : mesh.hexahedral() ? MakeHex8Model(mesh, *field)
                     : plain             ? MakeTet4Model(mesh, *field)
                                         : MakeAverageNodalPressureTet4Model(mesh, *field);
+  // Rigid bodies: their penalty from the tissue's shear modulus at the mesh
+  // scale, their tolerance 1 % of an element unless the scene says.
+  const double element_size = EffectiveElementSize(scene.geometry, scene.mesh) * 1e-3;
+  std::vector<std::unique_ptr<RigidContact>> contacts;
+  std::vector<const RigidContact*> contact_views;
+  std::vector<std::pair<std::string, const RigidContact*>> named_contacts;
+  for (const ContactSpec& c : scene.contacts) {
+    RigidBody rigid;
+    rigid.shape = c.shape;
+    rigid.position = Eigen::Vector3d(c.position_mm.data()) * 1e-3;
+    rigid.axis = Eigen::Vector3d(c.axis.data()).normalized();
+    rigid.radius = c.radius_mm * 1e-3;
+    rigid.motion = Eigen::Vector3d(c.motion_mm.data()) * 1e-3;
+    const double penalty = DefaultContactPenalty(field->Base(0).ShearModulus(), element_size,
+                                                 c.penalty_factor > 0 ? c.penalty_factor : 100);
+    const double tolerance =
+        c.penetration_tolerance_mm > 0 ? c.penetration_tolerance_mm * 1e-3 : 0.01 * element_size;
+    contacts.push_back(std::make_unique<RigidContact>(mesh, mesh.face_sets.at(c.set), rigid,
+                                                      penalty, c.friction, tolerance));
+    contact_views.push_back(contacts.back().get());
+    named_contacts.emplace_back(c.name, contacts.back().get());
+  }
+  const std::unique_ptr<FiniteStrainModel> touching =
+      contacts.empty() ? nullptr : WithContact(*body, contact_views);
+  const FiniteStrainModel& solid = touching ? *touching : *body;
+
   auto solver = CreateLinearSolver(scene.analysis.linear_solver);
   NewtonOptions options = OptionsOf(scene.analysis.nonlinear);
   // Time: the load factor is t / T and the loads follow a(t); a static
@@ -177,16 +205,29 @@ Status SolveFiniteStrain(const SceneSpec& scene, const Model& model, PhaseClock*
   options.amplitude = amplitude;
   options.begin_increment = [&](double from, double to) {
     field->BeginStep(timed ? (to - from) * duration : 0.0, amplitude(to));
+    for (auto& contact : contacts) contact->SetAmplitude(amplitude(to));
     return Status::Ok();
   };
+  if (!contacts.empty()) {
+    options.augment = [&](const Eigen::VectorXd& u) {
+      bool changed = false;
+      for (auto& contact : contacts) changed = contact->Augment(u) || changed;
+      return changed;
+    };
+  }
+  std::vector<double> peak_contact_force(contacts.size(), 0.0);
   const ExternalLoads loads = BuildLoads(scene, model);
-  const HistoryRecorder history(scene, model, timed ? duration : 0.0);
+  const HistoryRecorder history(scene, model, timed ? duration : 0.0, named_contacts);
   options.on_increment = [&](double load, const Eigen::VectorXd& u) {
     solution->step_load_factor.push_back(timed ? amplitude(load) : load);
     if (timed) solution->step_time_s.push_back(load * duration);
     for (int i = 0; i < u.size(); ++i) solution->step_displacement_mm.push_back(u(i) / 1e-3);
     if (field->viscous() && one_point) field->Commit(ElementDeformationGradients(mesh, u));
-    if (timed) history.Record(*body, &loads, load, amplitude(load), u, solution);
+    for (std::size_t i = 0; i < contacts.size(); ++i) {
+      contacts[i]->Commit(u);
+      peak_contact_force[i] = std::max(peak_contact_force[i], contacts[i]->Measure(u).force.norm());
+    }
+    if (timed) history.Record(solid, &loads, load, amplitude(load), u, solution);
   };
 
   clock.Begin("newton", 0.05, 0.85,
@@ -204,7 +245,7 @@ Status SolveFiniteStrain(const SceneSpec& scene, const Model& model, PhaseClock*
                loads.follows_deformation() ? "; pressure follows the deformed surface" : ""));
   }
   const Status status = SolveNewtonStatic(
-      *body, &loads, dofs, options, solver.get(),
+      solid, &loads, dofs, options, solver.get(),
       [&](const NewtonProgress& p) {
         const std::string where = timed ? Format("t = %.4g s", p.load_factor * duration)
                                         : Format("load factor %.3g", p.load_factor);
@@ -319,7 +360,19 @@ Status SolveFiniteStrain(const SceneSpec& scene, const Model& model, PhaseClock*
     volume[e] = v;
   }
   double energy = 0;
-  if (!body->InternalForce(u, &result->internal_force, &energy)) {
+  for (std::size_t i = 0; i < contacts.size(); ++i) {
+    const ContactMeasure m = contacts[i]->Measure(u);
+    ContactSummary c;
+    c.name = scene.contacts[i].name;
+    for (int k = 0; k < 3; ++k) c.force_n[k] = m.force(k);
+    c.peak_force_n = peak_contact_force[i];
+    c.area_mm2 = m.area * 1e6;
+    c.max_penetration_mm = m.penetration * 1e3;
+    c.penalty_pa_per_mm = contacts[i]->penalty() * 1e-3;
+    c.augmentations = report.augmentations;
+    summary.contacts.push_back(c);
+  }
+  if (!solid.InternalForce(u, &result->internal_force, &energy)) {
     return Status::Internal("an element inverted after a converged solve");
   }
   if (!loads.empty()) result->external_force = loads.Force(u);
@@ -387,7 +440,7 @@ Status SolveFiniteStrain(const SceneSpec& scene, const Model& model, PhaseClock*
                                  duration, report.increments.size())
                            : "nonlinear static (finite strain, total Lagrangian, Newton-Raphson)";
   summary.linear_solver = solver_name;
-  summary.notes.push_back("elements: " + body->Describe());
+  summary.notes.push_back("elements: " + solid.Describe());
   if (report.approximate_iterations > 0) {
     summary.notes.push_back(
         Format("%d Newton iteration(s) met a tangent that was not positive definite (far from "

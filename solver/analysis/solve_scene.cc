@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cstdio>
 
+#include "analysis/auto_formulation.h"
 #include "analysis/rigid_modes.h"
 #include "analysis/static_analysis.h"
 #include "analysis/time_history.h"
@@ -53,6 +54,7 @@ const char* SolverVersion() { return PBA_VERSION; }
 
 Status SolveScene(const SceneSpec& scene, const SolveOptions& options, Solution* solution) {
   PBA_RETURN_IF_ERROR(ValidateScene(scene));
+  if (scene.formulation == Formulation::kAuto) return SolveAuto(scene, options, solution);
   if (options.threads > 0) omp_set_num_threads(options.threads);
   // CHOLMOD's supernodal factorisation asks OpenMP for a fixed team of 4
   // threads (its compile-time default); on fewer cores that oversubscribes

@@ -96,16 +96,28 @@ Status CheckStructureNames(const SceneSpec& scene, const Mesh& mesh) {
   return Status::Ok();
 }
 
-HistoryRecorder::HistoryRecorder(const SceneSpec& scene, const Model& model, double duration_s)
+HistoryRecorder::HistoryRecorder(const SceneSpec& scene, const Model& model, double duration_s,
+                                 std::vector<std::pair<std::string, const RigidContact*>> contacts)
     : mesh_(model.mesh),
       duration_s_(duration_s),
       reaction_sets_(ReactionSetNames(scene)),
-      structures_(scene.outputs.structure_displacements, model.mesh) {
+      structures_(scene.outputs.structure_displacements, model.mesh),
+      contacts_(std::move(contacts)) {
   columns_ = {"time_s", "amplitude"};
   for (const std::string& set : reaction_sets_) {
     for (const char* axis : {"x", "y", "z"}) {
       columns_.push_back("reaction " + set + " " + axis + " [N]");
     }
+  }
+  // A contact's force on its body, how far the body has moved along its
+  // motion, the area in contact and the deepest penetration.
+  for (const auto& [name, contact] : contacts_) {
+    for (const char* axis : {"x", "y", "z"}) {
+      columns_.push_back("contact " + name + " " + axis + " [N]");
+    }
+    columns_.push_back("contact " + name + " travel [mm]");
+    columns_.push_back("contact " + name + " area [mm^2]");
+    columns_.push_back("contact " + name + " penetration [mm]");
   }
   for (std::size_t i = 0; i < structures_.size(); ++i) {
     for (const char* axis : {"x", "y", "z"}) {
@@ -131,6 +143,12 @@ void HistoryRecorder::Record(const FiniteStrainModel& model, const ExternalLoads
       }
       for (int c = 0; c < 3; ++c) row.push_back(ok ? sum(c) : NAN);
     }
+  }
+  for (const auto& [name, contact] : contacts_) {
+    const ContactMeasure m = contact->Measure(u);
+    row.insert(row.end(), {m.force.x(), m.force.y(), m.force.z(),
+                           amplitude * contact->body().motion.norm() / kMm, m.area / (kMm * kMm),
+                           m.penetration / kMm});
   }
   for (std::size_t i = 0; i < structures_.size(); ++i) {
     const StructureDisplacement d = structures_.Measure(i, u);

@@ -11,6 +11,7 @@
 #include "analysis/finite_strain_model.h"
 #include "analysis/material_field.h"
 #include "analysis/newton_static.h"
+#include "analysis/rigid_contact.h"
 #include "analysis/time_curve.h"
 #include "pba/solve.h"
 #include "scene/model_builder.h"
@@ -49,7 +50,9 @@ Status CheckStructureNames(const SceneSpec& scene, const Mesh& mesh);
 // Rows of history.csv.
 class HistoryRecorder {
  public:
-  HistoryRecorder(const SceneSpec& scene, const Model& model, double duration_s);
+  // `contacts` (named as in scene.contacts) must outlive the recorder.
+  HistoryRecorder(const SceneSpec& scene, const Model& model, double duration_s,
+                  std::vector<std::pair<std::string, const RigidContact*>> contacts = {});
   // Appends the row of a converged step at load factor `load` (t = load T)
   // to solution->history, setting solution->history_columns on the first.
   // The reactions are the internal force less the loads (`loads`, may be
@@ -62,6 +65,7 @@ class HistoryRecorder {
   double duration_s_;
   std::vector<std::string> reaction_sets_;
   StructureProbe structures_;
+  std::vector<std::pair<std::string, const RigidContact*>> contacts_;
   std::vector<std::string> columns_;
 };
 

@@ -41,11 +41,12 @@ double ShortestLoading(const TimeSpec& time) {
 void ReduceViscoelasticity(const SceneSpec& scene, SceneSpec* reduced,
                            std::vector<ModelDecision>* decisions) {
   bool any = !scene.material_library.empty();
-  for (const auto& [where, material] : NamedMaterials(scene)) any = any || material->viscoelastic.enabled();
+  for (const auto& [where, material] : NamedMaterials(scene))
+    any = any || material->viscoelastic.enabled();
   if (!any) return;
   if (scene.analysis.type != AnalysisSpec::Type::kQuasiStatic) {
-    decisions->push_back({"viscoelasticity", "instantaneous modulus",
-                          "a static analysis has no time to relax in"});
+    decisions->push_back(
+        {"viscoelasticity", "instantaneous modulus", "a static analysis has no time to relax in"});
     return;
   }
   const double loading = ShortestLoading(scene.analysis.time);
@@ -72,12 +73,13 @@ void ReduceViscoelasticity(const SceneSpec& scene, SceneSpec* reduced,
         {"viscoelasticity", where + ": " + decision,
          Format("tau = [%s] s against loading over %g s and an analysis of %g s (terms below "
                 "%g s relax within the loading, above %g s not within the analysis)",
-                taus.c_str(), loading, scene.analysis.time.end_time_s, relaxed, frozen)});
+                taus.c_str(), loading, scene.analysis.time.end_time_s, relaxed, frozen),
+         kept.g.size() != series.g.size()});
   }
   if (!scene.material_library.empty()) {
-    decisions->push_back({"viscoelasticity",
-                          "library " + scene.material_library + ": the same rule per structure",
-                          Format("terms below %g s relaxed, above %g s dropped", relaxed, frozen)});
+    decisions->push_back(
+        {"viscoelasticity", "library " + scene.material_library + ": the same rule per structure",
+         Format("terms below %g s relaxed, above %g s dropped", relaxed, frozen), true});
   }
 }
 
@@ -118,16 +120,20 @@ void ReduceFiniteStrain(const SceneSpec& scene, std::optional<double> max_strain
     decisions->push_back({"finite strain", "kept", measured});
     return;
   }
-  reduced->analysis.type = AnalysisSpec::Type::kLinearStatic;
-  // The linear solve has no average-nodal-pressure or mean-dilatation
-  // tetrahedra: the quadratic one does not lock.
-  std::string element;
+  // The average-nodal-pressure and mean-dilatation tetrahedra have no
+  // small-strain counterpart: a linear solve would change the element, and
+  // with it the discretisation error, which can exceed what the strain
+  // costs. Their Newton solve then takes one load increment instead.
   if (scene.mesh.element == ElementType::kTet4Anp || scene.mesh.element == ElementType::kTet10Md ||
       scene.mesh.element == ElementType::kDefault) {
-    reduced->mesh.element = ElementType::kTet10;
-    element = ", with TET10 elements";
+    reduced->analysis.nonlinear.increments = 1;
+    decisions->push_back({"finite strain",
+                          "one load increment (the element has no small-strain form)", measured,
+                          true});
+    return;
   }
-  decisions->push_back({"finite strain", "small strain (LINEAR_STATIC" + element + ")", measured});
+  reduced->analysis.type = AnalysisSpec::Type::kLinearStatic;
+  decisions->push_back({"finite strain", "small strain (LINEAR_STATIC)", measured, true});
 }
 
 void ReduceStructures(const SceneSpec& scene, SceneSpec* reduced,
@@ -160,13 +166,13 @@ void ReduceStructures(const SceneSpec& scene, SceneSpec* reduced,
   atlas.merge_rest = true;
   decisions->push_back(
       {"structures",
-       atlas.structures.empty()
-           ? std::string("one body: every structure merged into one region")
-           : Format("%zu structure(s) kept, the rest merged into one region",
-                    atlas.structures.size()),
+       atlas.structures.empty() ? std::string("one body: every structure merged into one region")
+                                : Format("%zu structure(s) kept, the rest merged into one region",
+                                         atlas.structures.size()),
        atlas.structures.empty()
            ? std::string("the scene names no structure in its outputs or materials")
-           : std::string("the structures the outputs and materials name")});
+           : std::string("the structures the outputs and materials name"),
+       true});
 }
 
 SceneSpec Coarsened(const SceneSpec& scene) {
@@ -194,20 +200,23 @@ double LargestRelativeDifference(const Summary& reference, const Summary& other,
     for (const Reaction& o : other.reactions) {
       if (o.set != r.set) continue;
       double d = 0;
-      for (int c = 0; c < 3; ++c) d += (r.force_n[c] - o.force_n[c]) * (r.force_n[c] - o.force_n[c]);
+      for (int c = 0; c < 3; ++c)
+        d += (r.force_n[c] - o.force_n[c]) * (r.force_n[c] - o.force_n[c]);
       compare("reaction on " + r.set, 0, std::sqrt(d), norm(r.force_n));
     }
   }
   for (const ContactSummary& r : reference.contacts) {
     for (const ContactSummary& o : other.contacts) {
-      if (o.name == r.name) compare("force on " + r.name, norm(r.force_n), norm(o.force_n), norm(r.force_n));
+      if (o.name == r.name)
+        compare("force on " + r.name, norm(r.force_n), norm(o.force_n), norm(r.force_n));
     }
   }
   for (const StructureDisplacement& r : reference.structure_displacements) {
     for (const StructureDisplacement& o : other.structure_displacements) {
       if (o.name != r.name) continue;
       double d = 0;
-      for (int c = 0; c < 3; ++c) d += (r.mean_mm[c] - o.mean_mm[c]) * (r.mean_mm[c] - o.mean_mm[c]);
+      for (int c = 0; c < 3; ++c)
+        d += (r.mean_mm[c] - o.mean_mm[c]) * (r.mean_mm[c] - o.mean_mm[c]);
       compare("mean displacement of " + r.name, 0, std::sqrt(d), norm(r.mean_mm));
     }
   }

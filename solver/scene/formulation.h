@@ -35,8 +35,8 @@ std::string FiniteStrainRequiredBy(const SceneSpec& scene);
 SceneSpec CheapStrainScene(const SceneSpec& scene);
 
 // Switches `reduced` to LINEAR_STATIC when `max_strain` is below the
-// threshold (a NONLINEAR_STATIC scene only), choosing an element the linear
-// solve has; records the decision either way.
+// threshold (a NONLINEAR_STATIC scene only) and its element has a linear
+// form, else to one load increment; records the decision either way.
 void ReduceFiniteStrain(const SceneSpec& scene, std::optional<double> max_strain,
                         SceneSpec* reduced, std::vector<ModelDecision>* decisions);
 

@@ -96,6 +96,7 @@ struct ModelDecision {
   std::string aspect;    // "viscoelasticity", "finite strain", "structures"
   std::string decision;  // what was modelled, e.g. "long-term modulus"
   std::string reason;    // the quantity that drove it, e.g. "tau 0.5 s vs loading 80 s"
+  bool reduces = false;  // true when it models less than the scene wrote
 };
 
 // What the reduced model of `formulation: AUTO` costs and saves, from the
