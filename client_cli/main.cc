@@ -348,6 +348,8 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   study_convergence->add_flag("--retry-failed", study_args.retry_failed,
                               "Resubmit meshes whose earlier job failed or was cancelled");
+  study_convergence->add_flag("--dry-run", study_args.dry_run,
+                              "Print the sizes each mesh's scene gets, submit nothing");
 
   try {
     app.parse(argc, argv);

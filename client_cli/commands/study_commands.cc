@@ -118,6 +118,8 @@ struct Study {
   std::string name;           // the base scene's
   std::vector<double> sizes;  // element sizes [mm], coarsest first
   std::vector<RunMember> members;
+  // What each member's scene sets: path, value [mm].
+  std::vector<std::vector<std::pair<std::string, double>>> set;
   v1::SnapshotRef snapshot;
 };
 
@@ -221,6 +223,7 @@ bool BuildStudy(const StudyArgs& args, Study* study, std::string* error) {
     member.request_id = Sha256Text("convergence\n" + std::string(out.c_str()) + on).substr(0, 32);
     member.key = member.request_id;
     study->members.push_back(std::move(member));
+    study->set.push_back(std::move(set));
   }
   return true;
 }
@@ -259,6 +262,16 @@ int RunConvergenceStudy(Connection& connection, const StudyArgs& args) {
   if (!BuildStudy(args, &study, &error)) {
     std::fprintf(stderr, "pba: %s\n", error.c_str());
     return kExitInvalid;
+  }
+  if (args.dry_run) {
+    for (size_t i = 0; i < study.members.size(); ++i) {
+      std::string sizes;
+      for (const auto& [path, value] : study.set[i])
+        sizes += (sizes.empty() ? "" : ", ") + path + " = " + Format("%g", value);
+      std::printf("mesh %zu: %s\n", i + 1, sizes.c_str());
+    }
+    std::printf("%zu meshes; nothing submitted (--dry-run)\n", study.members.size());
+    return kExitOk;
   }
   const bool json = connection.options().json;
   const fs::path out = args.out.empty()

@@ -164,5 +164,40 @@ TEST_F(CliStudyTest, UnknownQuantityIsNamedAndNothingIsSubmitted) {
   EXPECT_FALSE(fs::exists(dir_.path() / "bad.csv.pba-study"));
 }
 
+// An atlas scene's region of interest and facets are refined with the
+// mesh: each scaled by the ratio of the element sizes (--dry-run: nothing
+// is meshed or submitted).
+TEST_F(CliStudyTest, AtlasRegionOfInterestScalesWithTheMesh) {
+  const fs::path scene = dir_.path() / "roi.yaml";
+  std::ofstream(scene) << R"(
+name: roi-study
+geometry:
+  atlas:
+    source: synthetic
+    facet_size_mm: 5
+    roi_centre_mm: [25, -29, 60]
+    roi_radius_mm: 20
+    roi_element_size_mm: 4
+mesh: {element: TET4_ANP, element_size_mm: 10}
+material: {linear_elastic: {youngs_modulus_pa: 3000, poissons_ratio: 0.45}}
+boundary_conditions:
+  - {set: surface, fixed: {}}
+)";
+  const RunResult run =
+      Pba({"study", "convergence", scene.string(), "--quantity", "results.max_von_mises_pa",
+           "--meshes", "3", "--ratio", "2", "--dry-run"});
+  ASSERT_EQ(run.exit_code, 0) << run.out << run.err;
+  EXPECT_NE(run.out.find("mesh 1: mesh.element_size_mm = 10, geometry.atlas.roi_element_size_mm = "
+                         "4, geometry.atlas.facet_size_mm = 5"),
+            std::string::npos)
+      << run.out;
+  EXPECT_NE(run.out.find("mesh 3: mesh.element_size_mm = 2.5, geometry.atlas.roi_element_size_mm "
+                         "= 1, geometry.atlas.facet_size_mm = 1.25"),
+            std::string::npos)
+      << run.out;
+  EXPECT_NE(run.out.find("3 meshes; nothing submitted"), std::string::npos) << run.out;
+  EXPECT_EQ(JobCount(), 0u);
+}
+
 }  // namespace
 }  // namespace pba::testing
