@@ -206,6 +206,14 @@ int SubmitAndPoll(Connection& connection, const RunOptions& options,
       m.job_id = m.job.id();
       WriteState(options, *members);
       if (!options.quiet) std::printf("submitted %s: %s\n", m.job_id.c_str(), m.name.c_str());
+      // A request id seen before returns its job, which may have ended.
+      if (IsDone(m.job.state())) {
+        ++finished;
+        if (!options.quiet) {
+          std::printf("[%zu/%zu] %s %s: %s\n", finished, to_submit.size(), m.job_id.c_str(),
+                      m.name.c_str(), StateName(m.job.state()).c_str());
+        }
+      }
     }
     bool any_open = false;
     for (RunMember& m : *members) {

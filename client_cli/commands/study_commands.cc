@@ -429,7 +429,9 @@ int RunConvergenceStudy(Connection& connection, const StudyArgs& args) {
                           " % of the finest result.");
           break;
         case study::Behaviour::kDiverging:
-          notes.push_back(name + ": the change grows on refinement; no order, no extrapolate.");
+          notes.push_back(name +
+                          ": the change grows on refinement (as at a stress singularity: a "
+                          "corner, or the edge of a support or a load); no order, no extrapolate.");
           break;
         case study::Behaviour::kIndeterminate:
           notes.push_back(name + ": two successive meshes give the same value; no order.");
@@ -442,6 +444,31 @@ int RunConvergenceStudy(Connection& connection, const StudyArgs& args) {
             notes.push_back(name + ": GCI ratio " + Format("%.3f", *g.asymptotic_ratio) +
                             " is not near 1: the meshes may not be in the asymptotic range.");
           break;
+      }
+      // With more meshes: the order of every three successive ones,
+      // coarsest first, to show whether it settles.
+      if (n > 3) {
+        std::string orders;
+        bool any_order = false;
+        auto* list = (*a.mutable_fields())["orders_of_successive_triples"].mutable_list_value();
+        for (size_t j = 0; j + 2 < n; ++j) {
+          study::ThreeGrid t;
+          if (!study::AnalyseThreeGrids(size(j + 2), values[q][j + 2], size(j + 1),
+                                        values[q][j + 1], size(j), values[q][j], &t, &error))
+            continue;
+          const std::string text =
+              t.order ? Format("%.2f", *t.order) : study::BehaviourName(t.behaviour);
+          orders += (orders.empty() ? "" : ", ") + text;
+          any_order = any_order || t.order;
+          if (t.order) {
+            list->add_values()->set_number_value(*t.order);
+          } else {
+            list->add_values()->set_string_value(text);
+          }
+        }
+        if (any_order)
+          notes.push_back(
+              name + ": order p of each three successive meshes, coarsest first: " + orders + ".");
       }
     }
   } else {
