@@ -341,7 +341,7 @@ int RunConvergenceStudy(Connection& connection, const StudyArgs& args) {
                                          "nodes", "wall_time_s",     "job"};
   for (const std::string& q : args.quantities) {
     header.insert(header.end(), {q, "change [%]", below});
-    csv_header.insert(csv_header.end(), {q, q + " change_pct", q + " below_tolerance"});
+    csv_header.insert(csv_header.end(), {q, q + ":change_pct", q + ":below_tolerance"});
   }
   std::vector<std::vector<std::string>> rows = {header}, csv_rows = {csv_header};
   google::protobuf::Struct document;
