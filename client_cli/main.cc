@@ -8,6 +8,7 @@
 #include "commands/atlas_commands.h"
 #include "commands/batch_commands.h"
 #include "commands/job_commands.h"
+#include "commands/study_commands.h"
 #include "connection.h"
 #include "credentials.h"
 #include "exit_codes.h"
@@ -302,6 +303,54 @@ int main(int argc, char** argv) {
                       "Resubmit members whose earlier job failed or was cancelled");
   batch_run->add_flag("--dry-run", batch_args.dry_run, "Check the members, submit nothing");
 
+  // --- studies ---
+  CLI::App* study = app.add_subcommand("study", "Studies over many jobs of one scene");
+  study->require_subcommand(1);
+  StudyArgs study_args;
+  CLI::App* study_convergence = study->add_subcommand(
+      "convergence",
+      "Mesh convergence: the scene on successively finer meshes; change per mesh, observed "
+      "order, Richardson extrapolate and grid convergence index");
+  study_convergence->add_option("scene", study_args.scene, "Scene file (YAML)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  study_convergence
+      ->add_option("-q,--quantity", study_args.quantities,
+                   "A number of the summary, e.g. results.reactions[0].force_n[2] (repeatable)")
+      ->required();
+  auto* sizes_opt =
+      study_convergence
+          ->add_option("--sizes", study_args.sizes,
+                       "Element sizes [mm], e.g. 8,5.6,4 (default: the scene's own, then divided "
+                       "by --ratio)")
+          ->delimiter(',');
+  study_convergence->add_option("--meshes", study_args.meshes, "Number of meshes without --sizes")
+      ->check(CLI::Range(2, 12))
+      ->capture_default_str()
+      ->excludes(sizes_opt);
+  study_convergence
+      ->add_option("--ratio", study_args.ratio, "Ratio of successive element sizes, > 1")
+      ->check(CLI::Range(1.05, 4.0))
+      ->capture_default_str()
+      ->excludes(sizes_opt);
+  study_convergence->add_option("--parallel", study_args.parallel, "Jobs in flight at most")
+      ->check(CLI::Range(1, 64))
+      ->capture_default_str();
+  study_convergence->add_option(
+      "-o,--out", study_args.out,
+      "CSV table (default SCENE's name .convergence.csv beside it; the state file beside it)");
+  study_convergence->add_option("--snapshot", study_args.snapshot,
+                                "PROJECT/SNAPSHOT: build an atlas scene from this snapshot");
+  study_convergence
+      ->add_option("--tolerance", study_args.tolerance_pct,
+                   "A change from the previous mesh below it [%] counts as converged")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  study_convergence->add_flag("--retry-failed", study_args.retry_failed,
+                              "Resubmit meshes whose earlier job failed or was cancelled");
+  study_convergence->add_flag("--dry-run", study_args.dry_run,
+                              "Print the sizes each mesh's scene gets, submit nothing");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -312,6 +361,7 @@ int main(int argc, char** argv) {
   global.token = FindToken(global.server);
   Connection connection(global);
   if (*batch_run) return RunBatch(connection, batch_args);
+  if (*study_convergence) return RunConvergenceStudy(connection, study_args);
   if (*login_cmd) return Login(connection, login);
   if (*logout_cmd) return Logout(connection);
   if (*whoami_cmd) return WhoAmI(connection);

@@ -4,17 +4,13 @@
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
-#include <map>
 #include <set>
-#include <sstream>
-#include <thread>
 
 #include "codec/yaml_codec.h"
+#include "commands/batch_shared.h"
 #include "commands/job_commands.h"
 #include "exit_codes.h"
 #include "files.h"
@@ -24,123 +20,17 @@ namespace pba::cli {
 namespace fs = std::filesystem;
 namespace {
 
-struct Member {
-  std::string name;
-  std::vector<std::pair<std::string, std::string>> values;  // path, value as written
-  v1::Scene scene;
-  std::string request_id;
-  std::string job_id;  // from the state file or the submit
-  v1::Job job;
-};
-
 struct Batch {
   std::string name;
   fs::path scene_file;
   v1::SnapshotRef snapshot;  // every member's atlas from it, when set
   int parallel = 2;
   std::vector<std::string> parameters;  // the paths the members set, in order
-  std::vector<Member> members;
+  std::vector<RunMember> members;       // keyed by name in the state file
+  // What each member sets: path, value as written.
+  std::vector<std::vector<std::pair<std::string, std::string>>> values;
   std::vector<std::string> outputs;
 };
-
-// "a.b[2].c" -> {"a", "b", "[2]", "c"}; false on a malformed path.
-bool SplitPath(const std::string& path, std::vector<std::string>* parts) {
-  parts->clear();
-  std::string current;
-  for (size_t i = 0; i < path.size(); ++i) {
-    const char c = path[i];
-    if (c == '.') {
-      if (current.empty() && (parts->empty() || parts->back()[0] != '[')) return false;
-      if (!current.empty()) parts->push_back(current);
-      current.clear();
-    } else if (c == '[') {
-      if (!current.empty()) parts->push_back(current);
-      current.clear();
-      const size_t close = path.find(']', i);
-      if (close == std::string::npos || close == i + 1) return false;
-      const std::string index = path.substr(i + 1, close - i - 1);
-      if (index.find_first_not_of("0123456789") != std::string::npos) return false;
-      parts->push_back("[" + index + "]");
-      i = close;
-    } else {
-      current += c;
-    }
-  }
-  if (!current.empty()) parts->push_back(current);
-  return !parts->empty() && (*parts)[0][0] != '[';
-}
-
-// Sets `path` in `node` to `value`, creating maps on the way; a list index
-// must exist. False with *error naming the part that does not fit.
-bool SetPath(YAML::Node node, const std::string& path, const YAML::Node& value,
-             std::string* error) {
-  std::vector<std::string> parts;
-  if (!SplitPath(path, &parts)) {
-    *error = "'" + path + "' is not a path (names joined by dots, [i] for list elements)";
-    return false;
-  }
-  for (size_t i = 0; i < parts.size(); ++i) {
-    const bool last = i + 1 == parts.size();
-    const std::string& part = parts[i];
-    if (part[0] == '[') {
-      const size_t index = std::stoul(part.substr(1, part.size() - 2));
-      if (!node.IsSequence() || index >= node.size()) {
-        *error = path + ": the base scene has " +
-                 std::to_string(node.IsSequence() ? node.size() : 0) + " entries there, no " + part;
-        return false;
-      }
-      if (last) {
-        node[index] = value;
-        return true;
-      }
-      node.reset(node[index]);
-      continue;
-    }
-    if (node.IsDefined() && !node.IsNull() && !node.IsMap()) {
-      *error = path + ": '" + part + "' is inside a value that is not a map";
-      return false;
-    }
-    if (last) {
-      node[part] = value;
-      return true;
-    }
-    YAML::Node child = node[part];
-    if (!child.IsDefined() || child.IsNull()) {
-      node[part] = YAML::Node(YAML::NodeType::Map);
-      child = node[part];
-    }
-    node.reset(child);
-  }
-  return true;
-}
-
-// The value at `path` in a JSON document read as YAML; "" when absent.
-std::string GetPath(const YAML::Node& root, const std::string& path) {
-  std::vector<std::string> parts;
-  if (!SplitPath(path, &parts)) return "";
-  YAML::Node node = YAML::Clone(root);
-  for (const std::string& part : parts) {
-    if (part[0] == '[') {
-      const size_t index = std::stoul(part.substr(1, part.size() - 2));
-      if (!node.IsSequence() || index >= node.size()) return "";
-      node.reset(node[index]);
-    } else {
-      if (!node.IsMap() || !node[part]) return "";
-      node.reset(node[part]);
-    }
-  }
-  if (node.IsScalar()) return node.Scalar();
-  YAML::Emitter out;
-  out << YAML::Flow << node;
-  return out.c_str();
-}
-
-std::string Scalar(const YAML::Node& value) {
-  if (value.IsScalar()) return value.Scalar();
-  YAML::Emitter out;
-  out << YAML::Flow << value;
-  return out.c_str();
-}
 
 std::string LastName(const std::string& path) {
   const size_t dot = path.rfind('.');
@@ -278,8 +168,10 @@ bool LoadBatch(const std::string& file, Batch* batch, std::string* error) {
   }
   const std::string base_name = base["name"] ? base["name"].Scalar() : batch->name;
   for (const auto& [name, values] : members) {
-    Member member;
+    RunMember member;
     member.name = name;
+    member.key = name;
+    std::vector<std::pair<std::string, std::string>> written;
     YAML::Node scene = YAML::Clone(base);
     for (const auto& [path, value] : values) {
       std::string why;
@@ -287,7 +179,7 @@ bool LoadBatch(const std::string& file, Batch* batch, std::string* error) {
         *error = file + ": member '" + name + "': " + why;
         return false;
       }
-      member.values.push_back({path, Scalar(value)});
+      written.push_back({path, Scalar(value)});
     }
     scene["name"] = base_name + " [" + name + "]";
     YAML::Emitter out;
@@ -307,42 +199,12 @@ bool LoadBatch(const std::string& file, Batch* batch, std::string* error) {
             : "\nsnapshot " + batch->snapshot.project() + "/" + batch->snapshot.snapshot();
     member.request_id = Sha256Text(batch->name + "\n" + out.c_str() + on).substr(0, 32);
     batch->members.push_back(std::move(member));
+    batch->values.push_back(std::move(written));
   }
   return true;
 }
 
 fs::path StatePath(const std::string& file) { return file + ".pba-batch"; }
-
-// member name -> job id, one "job-id<TAB>member" line each.
-std::map<std::string, std::string> ReadState(const std::string& file) {
-  std::map<std::string, std::string> jobs;
-  std::ifstream in(StatePath(file));
-  std::string line;
-  while (std::getline(in, line)) {
-    const size_t tab = line.find('\t');
-    if (tab != std::string::npos) jobs[line.substr(tab + 1)] = line.substr(0, tab);
-  }
-  return jobs;
-}
-
-void WriteState(const std::string& file, const Batch& batch) {
-  std::string content;
-  for (const Member& m : batch.members) {
-    if (!m.job_id.empty()) content += m.job_id + "\t" + m.name + "\n";
-  }
-  WriteFileAtomically(StatePath(file), content);
-}
-
-std::string CsvCell(const std::string& text) {
-  if (text.find_first_of(",\"\n") == std::string::npos) return text;
-  std::string quoted = "\"";
-  for (char c : text) quoted += c == '"' ? std::string("\"\"") : std::string(1, c);
-  return quoted + "\"";
-}
-
-bool IsDone(v1::Job::State state) {
-  return state == v1::Job::SUCCEEDED || state == v1::Job::FAILED || state == v1::Job::CANCELLED;
-}
 
 }  // namespace
 
@@ -355,87 +217,30 @@ int RunBatch(Connection& connection, const BatchArgs& args) {
   }
   const bool json = connection.options().json;
   if (args.dry_run) {
-    for (const Member& m : batch.members) std::printf("%s\n", m.scene.name().c_str());
+    for (const RunMember& m : batch.members) std::printf("%s\n", m.scene.name().c_str());
     std::printf("%zu members; nothing submitted (--dry-run)\n", batch.members.size());
     return kExitOk;
   }
 
   // Jobs of an earlier run: kept when they succeeded (or are still going),
   // resubmitted when they failed and --retry-failed says so.
-  const auto earlier = ReadState(args.file);
-  std::vector<size_t> to_submit;
-  for (size_t i = 0; i < batch.members.size(); ++i) {
-    Member& m = batch.members[i];
-    const auto it = earlier.find(m.name);
-    if (it != earlier.end()) {
-      v1::GetJobRequest request;
-      request.set_id(it->second);
-      auto context = connection.UnaryContext();
-      grpc::Status status = connection.jobs().GetJob(context.get(), request, &m.job);
-      const bool failed =
-          status.ok() && (m.job.state() == v1::Job::FAILED || m.job.state() == v1::Job::CANCELLED);
-      if (status.ok() && !(failed && args.retry_failed)) {
-        m.job_id = it->second;
-        continue;
-      }
-      if (failed) m.request_id = Sha256Text(m.request_id + it->second).substr(0, 32);
-    }
-    to_submit.push_back(i);
-  }
+  RunOptions options;
+  options.state = StatePath(args.file);
+  options.snapshot = batch.snapshot;
+  options.parallel = batch.parallel;
+  options.retry_failed = args.retry_failed;
+  options.poll_s = args.poll_s;
+  options.quiet = json;
+  const std::vector<size_t> to_submit = ResumeMembers(connection, options, &batch.members);
   const size_t kept = batch.members.size() - to_submit.size();
   if (!json) {
     std::printf("Batch %s: %zu members, %zu from an earlier run, %zu to submit, %d at a time\n",
                 batch.name.c_str(), batch.members.size(), kept, to_submit.size(), batch.parallel);
     std::fflush(stdout);
   }
-
-  // Submit with at most `parallel` unfinished jobs; poll them.
-  size_t next = 0, finished = 0;
-  const auto in_flight = [&] {
-    int n = 0;
-    for (const Member& m : batch.members) n += !m.job_id.empty() && !IsDone(m.job.state());
-    return n;
-  };
-  while (true) {
-    while (next < to_submit.size() && in_flight() < batch.parallel) {
-      Member& m = batch.members[to_submit[next++]];
-      v1::SubmitJobRequest request;
-      *request.mutable_scene() = m.scene;
-      if (!batch.snapshot.project().empty()) *request.mutable_snapshot() = batch.snapshot;
-      request.set_request_id(m.request_id);
-      auto context = connection.UnaryContext();
-      grpc::Status status = connection.jobs().SubmitJob(context.get(), request, &m.job);
-      if (!status.ok()) {
-        WriteState(args.file, batch);
-        return connection.Fail("submitting member '" + m.name + "'", status);
-      }
-      m.job_id = m.job.id();
-      WriteState(args.file, batch);
-      if (!json) std::printf("submitted %s: %s\n", m.job_id.c_str(), m.name.c_str());
-    }
-    bool any_open = false;
-    for (Member& m : batch.members) {
-      if (m.job_id.empty() || IsDone(m.job.state())) continue;
-      v1::GetJobRequest request;
-      request.set_id(m.job_id);
-      auto context = connection.UnaryContext();
-      grpc::Status status = connection.jobs().GetJob(context.get(), request, &m.job);
-      if (!status.ok()) return connection.Fail("job " + m.job_id, status);
-      if (IsDone(m.job.state())) {
-        ++finished;
-        if (!json) {
-          std::printf("[%zu/%zu] %s %s: %s%s\n", finished, to_submit.size(), m.job_id.c_str(),
-                      m.name.c_str(), StateName(m.job.state()).c_str(),
-                      m.job.error().empty() ? "" : (" (" + m.job.error() + ")").c_str());
-        }
-      } else {
-        any_open = true;
-      }
-    }
-    std::fflush(stdout);
-    if (!any_open && next >= to_submit.size()) break;
-    std::this_thread::sleep_for(std::chrono::milliseconds(static_cast<int>(args.poll_s * 1000)));
-  }
+  if (const int code = SubmitAndPoll(connection, options, to_submit, &batch.members);
+      code != kExitOk)
+    return code;
 
   // The table: member, its values, job, state, outputs.
   std::vector<std::string> header = {"member"};
@@ -444,18 +249,19 @@ int RunBatch(Connection& connection, const BatchArgs& args) {
   for (const std::string& o : batch.outputs) header.push_back(o);
   std::vector<std::vector<std::string>> rows = {header};
   int failed = 0;
-  for (const Member& m : batch.members) {
+  for (size_t i = 0; i < batch.members.size(); ++i) {
+    const RunMember& m = batch.members[i];
     std::vector<std::string> row = {m.name};
     for (const std::string& p : batch.parameters) {
       std::string value;
-      for (const auto& [path, v] : m.values) {
+      for (const auto& [path, v] : batch.values[i]) {
         if (path == p) value = v;
       }
       row.push_back(value);
     }
     row.insert(row.end(), {m.job_id, StateName(m.job.state())});
     failed += m.job.state() != v1::Job::SUCCEEDED;
-    const YAML::Node summary = YAML::Load(codec::ToJson(m.job.summary()));
+    const YAML::Node summary = SummaryTree(m.job.summary(), false);
     for (const std::string& o : batch.outputs) row.push_back(GetPath(summary, o));
     rows.push_back(row);
   }
