@@ -322,6 +322,7 @@ Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec) {
     out.friction = c.friction();
     out.penalty_factor = c.penalty_factor();
     out.penetration_tolerance_mm = c.penetration_tolerance_mm();
+    out.start_touching = c.start_touching();
   }
 
   if (scene.has_gravity()) {

@@ -168,7 +168,14 @@ Status SolveFiniteStrain(const SceneSpec& scene, const Model& model, PhaseClock*
                                         : MakeAverageNodalPressureTet4Model(mesh, *field);
   // Rigid bodies: their penalty from the tissue's shear modulus at the mesh
   // scale, their tolerance 1 % of an element unless the scene says.
-  const double element_size = EffectiveElementSize(scene.geometry, scene.mesh) * 1e-3;
+  // The finest elements of the mesh (an atlas's region of interest is
+  // where a punch presses).
+  const AtlasSpec& atlas = scene.geometry.atlas;
+  const double element_size =
+      (scene.geometry.kind == GeometrySpec::Kind::kAtlas && atlas.roi_radius_mm > 0
+           ? std::min(atlas.roi_element_size_mm, EffectiveElementSize(scene.geometry, scene.mesh))
+           : EffectiveElementSize(scene.geometry, scene.mesh)) *
+      1e-3;
   std::vector<std::unique_ptr<RigidContact>> contacts;
   std::vector<const RigidContact*> contact_views;
   std::vector<std::pair<std::string, const RigidContact*>> named_contacts;
@@ -179,6 +186,16 @@ Status SolveFiniteStrain(const SceneSpec& scene, const Model& model, PhaseClock*
     rigid.axis = Eigen::Vector3d(c.axis.data()).normalized();
     rigid.radius = c.radius_mm * 1e-3;
     rigid.motion = Eigen::Vector3d(c.motion_mm.data()) * 1e-3;
+    if (c.start_touching) {
+      const Status placed = PlaceTouching(mesh, mesh.face_sets.at(c.set), &rigid);
+      if (!placed.ok()) {
+        return Status::FailedPrecondition("contacts[" + std::to_string(contacts.size()) +
+                                          "].start_touching: " + placed.message());
+      }
+      summary.notes.push_back(
+          Format("contact %s placed touching the tissue at (%.4g, %.4g, %.4g) mm", c.name.c_str(),
+                 rigid.position.x() * 1e3, rigid.position.y() * 1e3, rigid.position.z() * 1e3));
+    }
     const double penalty = DefaultContactPenalty(field->Base(0).ShearModulus(), element_size,
                                                  c.penalty_factor > 0 ? c.penalty_factor : 100);
     const double tolerance =

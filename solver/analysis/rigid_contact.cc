@@ -278,4 +278,40 @@ double DefaultContactPenalty(double shear_modulus_pa, double element_size_m, dou
   return factor * shear_modulus_pa / element_size_m;
 }
 
+Status PlaceTouching(const Mesh& mesh, const FaceSet& set, RigidBody* body) {
+  const Eigen::Vector3d d = body->axis.normalized();
+  // For each node the shift along d at which it would first touch; the
+  // body moves by the smallest (a negative shift moves it back).
+  double shift = INFINITY;
+  for (int a : set.nodes) {
+    const Eigen::Vector3d r = mesh.nodes.row(a).transpose() - body->position;
+    const double along = r.dot(d);
+    const double off_axis = (r - along * d).norm();
+    switch (body->shape) {
+      case ContactSpec::Shape::kFlatPunch:
+        if (off_axis <= body->radius) shift = std::min(shift, along);
+        break;
+      case ContactSpec::Shape::kSphere:
+        // |r - s d| = R at s = along - sqrt(R^2 - off^2), the first touch.
+        if (off_axis <= body->radius) {
+          shift =
+              std::min(shift, along - std::sqrt(body->radius * body->radius - off_axis * off_axis));
+        }
+        break;
+      case ContactSpec::Shape::kPlane:
+        shift = std::min(shift, along);
+        break;
+      case ContactSpec::Shape::kNone:
+        break;
+    }
+  }
+  if (!std::isfinite(shift)) {
+    return Status::FailedPrecondition(
+        "no node of the set lies in the rigid body's path along its axis: move position_mm over "
+        "the surface it should touch");
+  }
+  body->position += shift * d;
+  return Status::Ok();
+}
+
 }  // namespace pba

@@ -84,6 +84,14 @@ struct RigidBody {
   Status Validate(const std::string& path = "contact") const;
 };
 
+// Moves `body` along its axis (towards the tissue or back) so that it just
+// touches the nearest node of `set` at amplitude 0, no node penetrating:
+// the shift s along the axis d that makes the smallest gap zero (a punch:
+// the nodes within its radius of its axis; a sphere: the nodes within its
+// radius of the line through its centre along d; a plane: every node).
+// FailedPrecondition when no node lies in the body's path.
+Status PlaceTouching(const Mesh& mesh, const FaceSet& set, RigidBody* body);
+
 // What a contact carries at a state.
 struct ContactMeasure {
   Eigen::Vector3d force = Eigen::Vector3d::Zero();  // on the rigid body [N]

@@ -42,4 +42,12 @@ bool TimeCurve::Changes(double t0_s, double t1_s) const {
   return false;
 }
 
+double TimeCurve::ShortestLoading() const {
+  double shortest = end_s_;
+  for (std::size_t i = 0; i + 1 < t_.size(); ++i) {
+    if (a_[i] != a_[i + 1]) shortest = std::min(shortest, t_[i + 1] - t_[i]);
+  }
+  return shortest;
+}
+
 }  // namespace pba

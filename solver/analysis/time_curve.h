@@ -22,6 +22,10 @@ class TimeCurve {
   double NextCorner(double t_s) const;
   // True when a(t) changes anywhere within [t0, t1].
   bool Changes(double t0_s, double t1_s) const;
+  // The shortest stretch between two points of the curve over which the
+  // amplitude changes [s]: the loading's time scale (no curve: the ramp's
+  // whole length).
+  double ShortestLoading() const;
 
  private:
   double end_s_;

@@ -22,9 +22,10 @@ namespace pba {
 // the first step, the smallest and largest, and a bound from every
 // converged time that keeps a step from crossing a corner of the curve and,
 // while a(t) changes, from exceeding the shortest active relaxation time
-// (one between T / 1000 and T: faster terms relax within any step, slower
-// ones stay elastic through the analysis, and the exact exponential update
-// handles both). Sets `options` and returns a note for the summary.
+// (one between a thousandth of the shortest loading segment and T: faster
+// terms follow the load with a lag the exact exponential update gives at
+// any step, slower ones hardly relax). Sets `options` and returns a note
+// for the summary.
 std::string SetTimeSteps(const TimeSpec& time, const TimeCurve& curve, const MaterialField& field,
                          NewtonOptions* options);
 

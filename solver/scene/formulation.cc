@@ -24,18 +24,6 @@ std::vector<std::pair<std::string, const MaterialSpec*>> NamedMaterials(const Sc
   return out;
 }
 
-// The shortest stretch of the curve over which the amplitude changes [s].
-double ShortestLoading(const TimeSpec& time) {
-  if (time.curve.size() < 2) return time.end_time_s;
-  double shortest = INFINITY;
-  for (std::size_t i = 0; i + 1 < time.curve.size(); ++i) {
-    if (time.curve[i].second != time.curve[i + 1].second) {
-      shortest = std::min(shortest, time.curve[i + 1].first - time.curve[i].first);
-    }
-  }
-  return std::isfinite(shortest) ? shortest : time.end_time_s;
-}
-
 }  // namespace
 
 void ReduceViscoelasticity(const SceneSpec& scene, SceneSpec* reduced,
@@ -49,7 +37,7 @@ void ReduceViscoelasticity(const SceneSpec& scene, SceneSpec* reduced,
         {"viscoelasticity", "instantaneous modulus", "a static analysis has no time to relax in"});
     return;
   }
-  const double loading = ShortestLoading(scene.analysis.time);
+  const double loading = TimeCurve(scene.analysis.time).ShortestLoading();
   const double relaxed = loading / 100, frozen = 100 * scene.analysis.time.end_time_s;
   reduced->analysis.relaxed_below_s = relaxed;
   reduced->analysis.frozen_above_s = frozen;

@@ -11,14 +11,11 @@
 #include "mesh/primitive_mesher.h"
 #include "mesh/region_faces.h"
 #include "pba/scene.h"
+#include "material/tissue_library.h"
 #include "scene/validate_loading.h"
 
 namespace pba {
 namespace {
-
-// The name of a per-structure tissue table, checked against the tissue
-// library. Every name passes until the library is wired in.
-Status CheckMaterialLibraryName(const std::string& name);
 
 }  // namespace
 
@@ -345,7 +342,7 @@ Status ValidateRegionMaterials(const SceneSpec& scene) {
       return Status::InvalidArgument("material_library",
                                      "assigns tissue to atlas structures: it needs geometry.atlas");
     }
-    PBA_RETURN_IF_ERROR(CheckMaterialLibraryName(scene.material_library));
+    PBA_RETURN_IF_ERROR(CheckLibraryName(scene.material_library));
   }
   if (scene.region_materials.empty()) return Status::Ok();
   if (!atlas) {
@@ -398,11 +395,6 @@ Status ValidateStructureDisplacements(const SceneSpec& scene) {
     }
     PBA_RETURN_IF_ERROR(scene_checks::CheckStructure(scene.geometry, name, "", path));
   }
-  return Status::Ok();
-}
-
-Status CheckMaterialLibraryName(const std::string& name) {
-  (void)name;  // checked against the tissue library
   return Status::Ok();
 }
 

@@ -317,6 +317,10 @@ struct ContactSpec {
   double friction = 0;                  // Coulomb coefficient, 0..0.5
   double penalty_factor = 0;            // 0: 100
   double penetration_tolerance_mm = 0;  // 0: 1 % of the element size
+  // Moved along `axis` before the analysis until it just touches the set's
+  // nearest node (position_mm need only lie off the surface, on the side
+  // the axis points from).
+  bool start_touching = false;
 };
 
 struct BoundaryConditionSpec {
