@@ -38,6 +38,7 @@ struct BatchArgs {
   std::string out;  // the table as CSV; default FILE's stem + ".csv" beside it
   bool retry_failed = false;
   bool dry_run = false;  // check and list the members, submit nothing
+  bool no_plot = false;  // skip the plot section's picture
   double poll_s = 0.5;
 };
 
