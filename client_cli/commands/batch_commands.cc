@@ -211,10 +211,6 @@ bool LoadBatch(const std::string& file, Batch* batch, std::string* error) {
     batch->members.push_back(std::move(member));
     batch->values.push_back(std::move(written));
   }
-  if (batch->plot.enabled && !MembersWriteHistory(batch->members, error)) {
-    *error = file + ": " + *error;
-    return false;
-  }
   return true;
 }
 
@@ -227,6 +223,12 @@ int RunBatch(Connection& connection, const BatchArgs& args) {
   std::string error;
   if (!LoadBatch(args.file, &batch, &error)) {
     std::fprintf(stderr, "pba: %s\n", error.c_str());
+    return kExitInvalid;
+  }
+  // Only QUASI_STATIC jobs write the history a plot draws: refused before
+  // anything runs rather than after the whole batch.
+  if (batch.plot.enabled && !args.no_plot && !MembersWriteHistory(batch.members, &error)) {
+    std::fprintf(stderr, "pba: %s: %s\n", args.file.c_str(), error.c_str());
     return kExitInvalid;
   }
   const bool json = connection.options().json;

@@ -26,7 +26,7 @@
 // submitted.
 //
 // With plot, every member must be QUASI_STATIC (the analysis that writes a
-// history.csv; checked before anything is submitted). After the members
+// history.csv; checked before anything is submitted, unless --no-plot). After the members
 // have ended, each succeeded member's history.csv is fetched into
 // FILE-stem_histories/MEMBER.csv beside the batch file (the member's name
 // with characters other than letters, digits and "._-=,+" made "_"; a file

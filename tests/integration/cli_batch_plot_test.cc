@@ -180,7 +180,8 @@ TEST_F(CliBatchPlotTest, AMissingColumnIsNamedAndNoPictureWritten) {
 }
 
 // A plot needs every member to write a history: a static analysis (the
-// quick-start block's LINEAR_STATIC) is refused before anything is submitted.
+// quick-start block's LINEAR_STATIC) is refused before anything is
+// submitted, unless the plot is skipped.
 TEST_F(CliBatchPlotTest, AStaticMemberIsRefusedBeforeSubmitting) {
   const RunResult run =
       Pba({"batch", "run",
@@ -191,6 +192,10 @@ TEST_F(CliBatchPlotTest, AStaticMemberIsRefusedBeforeSubmitting) {
   EXPECT_NE(run.err.find("member 'static': plot: only a QUASI_STATIC analysis"), std::string::npos)
       << run.err;
   EXPECT_EQ(JobCount(), 0u);
+  // Without the picture the same batch is fine.
+  const RunResult checked =
+      Pba({"batch", "run", (dir_.path() / "static.yaml").string(), "--no-plot", "--dry-run"});
+  EXPECT_EQ(checked.exit_code, 0) << checked.out << checked.err;
 }
 
 // A member that fails is left out with a warning; the others are drawn and
