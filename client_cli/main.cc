@@ -302,6 +302,8 @@ int main(int argc, char** argv) {
   batch_run->add_flag("--retry-failed", batch_args.retry_failed,
                       "Resubmit members whose earlier job failed or was cancelled");
   batch_run->add_flag("--dry-run", batch_args.dry_run, "Check the members, submit nothing");
+  batch_run->add_flag("--no-plot", batch_args.no_plot,
+                      "Draw no picture of the members' histories (the plot section)");
 
   // --- studies ---
   CLI::App* study = app.add_subcommand("study", "Studies over many jobs of one scene");

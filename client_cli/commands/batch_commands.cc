@@ -10,6 +10,7 @@
 #include <set>
 
 #include "codec/yaml_codec.h"
+#include "commands/batch_plot.h"
 #include "commands/batch_shared.h"
 #include "commands/job_commands.h"
 #include "exit_codes.h"
@@ -30,6 +31,7 @@ struct Batch {
   // What each member sets: path, value as written.
   std::vector<std::vector<std::pair<std::string, std::string>>> values;
   std::vector<std::string> outputs;
+  PlotSpec plot;  // the picture of the members' histories, when enabled
 };
 
 std::string LastName(const std::string& path) {
@@ -52,12 +54,13 @@ bool LoadBatch(const std::string& file, Batch* batch, std::string* error) {
     return false;
   }
   static const char* kKeys[] = {"name",  "scene",   "snapshot", "parallel",
-                                "sweep", "members", "outputs"};
+                                "sweep", "members", "outputs",  "plot"};
   for (const auto& entry : root) {
     const std::string key = entry.first.Scalar();
     if (std::find(std::begin(kKeys), std::end(kKeys), key) == std::end(kKeys)) {
       *error = file + ": unknown key '" + key +
-               "' (a batch has name, scene, snapshot, parallel, sweep or members, outputs)";
+               "' (a batch has name, scene, snapshot, parallel, sweep or members, outputs, "
+               "plot)";
       return false;
     }
   }
@@ -91,6 +94,13 @@ bool LoadBatch(const std::string& file, Batch* batch, std::string* error) {
       return false;
     }
     for (const auto& o : root["outputs"]) batch->outputs.push_back(o.Scalar());
+  }
+  if (root["plot"]) {
+    std::string why;
+    if (!ParsePlotSpec(root["plot"], &batch->plot, &why)) {
+      *error = file + ": plot: " + why;
+      return false;
+    }
   }
   // The members' values: a cartesian product, or a list.
   std::vector<std::pair<std::string, std::vector<std::pair<std::string, YAML::Node>>>> members;
@@ -215,6 +225,12 @@ int RunBatch(Connection& connection, const BatchArgs& args) {
     std::fprintf(stderr, "pba: %s\n", error.c_str());
     return kExitInvalid;
   }
+  // Only QUASI_STATIC jobs write the history a plot draws: refused before
+  // anything runs rather than after the whole batch.
+  if (batch.plot.enabled && !args.no_plot && !MembersWriteHistory(batch.members, &error)) {
+    std::fprintf(stderr, "pba: %s: %s\n", args.file.c_str(), error.c_str());
+    return kExitInvalid;
+  }
   const bool json = connection.options().json;
   if (args.dry_run) {
     for (const RunMember& m : batch.members) std::printf("%s\n", m.scene.name().c_str());
@@ -298,6 +314,19 @@ int RunBatch(Connection& connection, const BatchArgs& args) {
   } else {
     PrintTable(rows);
     std::printf("Table written to %s\n", out.c_str());
+  }
+  if (batch.plot.enabled && !args.no_plot) {
+    // Beside the batch file: its histories; beside the table: the picture.
+    const std::string stem = fs::path(args.file).stem().string();
+    BatchPlotOptions plot;
+    plot.histories = fs::path(args.file).parent_path() / (stem + "_histories");
+    plot.png = out.parent_path() / (stem + ".png");
+    plot.default_title = batch.name;
+    plot.quiet = json;
+    std::fflush(stdout);
+    if (const int code = DrawBatchPlot(connection, batch.plot, batch.members, plot);
+        code != kExitOk)
+      return code;
   }
   return failed > 0 ? kExitJobFailed : kExitOk;
 }

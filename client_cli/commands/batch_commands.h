@@ -13,12 +13,30 @@
 //     - results.max_displacement_mm
 //     - results.reactions[0].force_n[2]
 //     - performance.wall_time_s
+//   plot:                             # optional (QUASI_STATIC): every member's history
+//     x: time_s                       # a column of history.csv
+//     y: ["reaction top z [N]"]       # one or more columns
+//     title: "Three speeds"           # default: the batch's name
+//     scale_y: -1                     # every y value times this (default 1)
 //
 // A path is the scene's (or the summary's) proto field names joined by dots,
 // with [i] for the i-th element of a list (quote such a path inside a
 // [...] list: YAML reads its brackets as the list's). Every member's scene is checked
 // (the message names the member and the field) before anything is
 // submitted.
+//
+// With plot, every member must be QUASI_STATIC (the analysis that writes a
+// history.csv; checked before anything is submitted, unless --no-plot). After the members
+// have ended, each succeeded member's history.csv is fetched into
+// FILE-stem_histories/MEMBER.csv beside the batch file (the member's name
+// with characters other than letters, digits and "._-=,+" made "_"; a file
+// already there with the job's checksum is kept, so a rerun of a finished
+// batch downloads nothing new), and
+// FILE-stem.png beside the table gets one series per member and y column,
+// named by the member (and the column when there are several). A member
+// that did not succeed is left out with a warning; a missing history or
+// column names the member, the column and the columns there are, and no
+// picture is written. --no-plot skips all of it.
 //
 // Resumable: FILE.pba-batch (beside the batch file) records each member's
 // job; a rerun keeps the members whose job succeeded and submits the rest
@@ -38,6 +56,7 @@ struct BatchArgs {
   std::string out;  // the table as CSV; default FILE's stem + ".csv" beside it
   bool retry_failed = false;
   bool dry_run = false;  // check and list the members, submit nothing
+  bool no_plot = false;  // skip the plot section's picture
   double poll_s = 0.5;
 };
 
