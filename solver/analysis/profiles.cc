@@ -198,12 +198,13 @@ bool ElementLocator::Inside(int64_t e, const Eigen::Vector3d& x, Eigen::Vector3d
   return xi->cwiseAbs().maxCoeff() <= 1 + kInsideTolerance;
 }
 
-int64_t ElementLocator::Locate(const Eigen::Vector3d& x_mm, Eigen::Vector3d* xi) const {
-  if (num_elements_ == 0 || !x_mm.allFinite()) return -1;
+std::vector<ElementLocator::Hit> ElementLocator::LocateAll(const Eigen::Vector3d& x_mm) const {
+  std::vector<Hit> hits;
+  if (num_elements_ == 0 || !x_mm.allFinite()) return hits;
   std::array<int64_t, 3> cell;
   for (int c = 0; c < 3; ++c) {
     const double index = std::floor((x_mm[c] - origin_[c]) / cell_mm_);
-    if (index < 0 || index >= static_cast<double>(dims_[c])) return -1;
+    if (index < 0 || index >= static_cast<double>(dims_[c])) return hits;
     cell[c] = static_cast<int64_t>(index);
   }
   const int64_t k = (cell[2] * dims_[1] + cell[1]) * dims_[0] + cell[0];
@@ -212,9 +213,20 @@ int64_t ElementLocator::Locate(const Eigen::Vector3d& x_mm, Eigen::Vector3d* xi)
     const float* box = &boxes_[6 * e];
     bool in_box = true;
     for (int c = 0; c < 3 && in_box; ++c) in_box = x_mm[c] >= box[c] && x_mm[c] <= box[3 + c];
-    if (in_box && Inside(e, x_mm, xi)) return e;
+    Hit hit;
+    if (in_box && Inside(e, x_mm, &hit.xi)) {
+      hit.element = e;
+      hits.push_back(hit);
+    }
   }
-  return -1;
+  return hits;
+}
+
+int64_t ElementLocator::Locate(const Eigen::Vector3d& x_mm, Eigen::Vector3d* xi) const {
+  const std::vector<Hit> hits = LocateAll(x_mm);
+  if (hits.empty()) return -1;
+  *xi = hits[0].xi;
+  return hits[0].element;
 }
 
 Eigen::VectorXd ElementLocator::ShapeFunctions(const Eigen::Vector3d& xi) const {
@@ -264,23 +276,32 @@ Status SampleProfiles(const SceneSpec& scene, const Solution& solution,
       std::vector<double> row(kColumnCount, kNaN);
       row[kDistance] = f * length;
       for (int c = 0; c < 3; ++c) row[kX + c] = x[c];
-      Eigen::Vector3d xi;
-      const int64_t e = locator.Locate(x, &xi);
-      if (e >= 0) {
-        const Eigen::VectorXd shape = locator.ShapeFunctions(xi);
+      const std::vector<ElementLocator::Hit> hits = locator.LocateAll(x);
+      if (!hits.empty()) {
+        // The displacement is continuous: any holding element gives it.
+        const Eigen::VectorXd shape = locator.ShapeFunctions(hits[0].xi);
         for (int c = 0; c < 3; ++c) row[kUx + c] = 0;
         for (int a = 0; a < npe; ++a) {
-          const int64_t node = solution.tets[npe * e + a];
-          for (int c = 0; c < 3; ++c)
+          const int64_t node = solution.tets[npe * hits[0].element + a];
+          for (int c = 0; c < 3; ++c) {
             row[kUx + c] += shape[a] * solution.displacement_mm[3 * node + c];
+          }
         }
-        if (has_stress) {
-          const double* s = &solution.stress_pa[6 * e];
-          row[kStressAlong] = AlongLine(s, t, 1);
-          row[kMeanStress] = (s[0] + s[1] + s[2]) / 3;
+        // Element fields: the mean over the holding elements.
+        const double share = 1.0 / static_cast<double>(hits.size());
+        row[kStressAlong] = row[kMeanStress] = has_stress ? 0 : kNaN;
+        row[kVonMises] = has_von_mises ? 0 : kNaN;
+        row[kStrainAlong] = has_strain ? 0 : kNaN;
+        for (const ElementLocator::Hit& hit : hits) {
+          const int64_t e = hit.element;
+          if (has_stress) {
+            const double* s = &solution.stress_pa[6 * e];
+            row[kStressAlong] += share * AlongLine(s, t, 1);
+            row[kMeanStress] += share * (s[0] + s[1] + s[2]) / 3;
+          }
+          if (has_von_mises) row[kVonMises] += share * solution.von_mises_pa[e];
+          if (has_strain) row[kStrainAlong] += share * AlongLine(&strain[6 * e], t, 2);
         }
-        if (has_von_mises) row[kVonMises] = solution.von_mises_pa[e];
-        if (has_strain) row[kStrainAlong] = AlongLine(&strain[6 * e], t, 2);
       }
       table.rows.push_back(std::move(row));
     }

@@ -34,11 +34,20 @@ class ElementLocator {
   ElementLocator(const std::vector<double>& nodes_mm, const std::vector<int64_t>& elements,
                  int nodes_per_element);
 
-  // The element holding `x_mm` and the point's natural coordinates in it
-  // (tetrahedra: r, s, t, the volume coordinates L1..L3; bricks: in
-  // [-1, 1]^3), or -1 when the point lies in no element. A point on a face
-  // (within 1e-7 in natural coordinates) counts as inside; on a face shared
-  // by two elements it takes the one with the lower index in its cell.
+  struct Hit {
+    int64_t element = -1;
+    Eigen::Vector3d xi = Eigen::Vector3d::Zero();  // natural coordinates of the point
+  };
+
+  // Every element holding `x_mm`, in ascending order, with the point's
+  // natural coordinates in each (tetrahedra: r, s, t, the volume
+  // coordinates L1..L3; bricks: in [-1, 1]^3); none when it lies in no
+  // element. A point on a face (within 1e-7 in natural coordinates) counts as
+  // inside, so a point on a face, edge or node shared by several elements
+  // is held by all of them.
+  std::vector<Hit> LocateAll(const Eigen::Vector3d& x_mm) const;
+
+  // The first element of LocateAll, or -1.
   int64_t Locate(const Eigen::Vector3d& x_mm, Eigen::Vector3d* xi) const;
 
   // The element's shape functions at natural point `xi`, one per node.
@@ -67,7 +76,9 @@ class ElementLocator {
 // distance_mm, x_mm, y_mm, z_mm (the point, reference configuration),
 // ux_mm, uy_mm, uz_mm (displacement interpolated with the element's shape
 // functions), and of the element holding the point (its one, or
-// volume-averaged, value): stress_along_pa = t . sigma . t with t the unit
+// volume-averaged, value; a point on a face, edge or node shared by several
+// elements takes the mean over them, so a line along element boundaries
+// is not biased to one side): stress_along_pa = t . sigma . t with t the unit
 // direction from from_mm to to_mm and sigma the Cauchy stress,
 // mean_stress_pa = tr(sigma) / 3, von_mises_pa, and strain_along = t . e . t
 // with e the Euler-Almansi strain of a finite-strain analysis or the small

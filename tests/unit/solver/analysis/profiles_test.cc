@@ -181,6 +181,27 @@ TEST(Profiles, ShearComponentsAndTheAlmansiStrain) {
   }
 }
 
+// A point on a face shared by two elements takes the mean of their
+// element fields; one inside a single element, that element's.
+TEST(Profiles, APointOnASharedFaceTakesTheMeanOfItsElements) {
+  Solution s = BoxMesh(Kind::kHex8, {2, 1, 1}, 1.0);  // bricks [0, 1] and [1, 2] in x
+  s.stress_pa[0] = 100;
+  s.stress_pa[6] = 300;
+  s.von_mises_pa = {100, 300};
+  std::vector<ProfileTable> tables;
+  ASSERT_TRUE(
+      SampleProfiles(WithProfile(Line("x", {0.5, 0.5, 0.5}, {1.5, 0.5, 0.5}, 3)), s, &tables).ok());
+  ASSERT_EQ(tables[0].rows.size(), 3u);
+  EXPECT_NEAR(tables[0].rows[0][7], 100, 1e-12);
+  EXPECT_NEAR(tables[0].rows[1][7], 200, 1e-12);  // x = 1, the shared face
+  EXPECT_NEAR(tables[0].rows[1][9], 200, 1e-12);
+  EXPECT_NEAR(tables[0].rows[2][7], 300, 1e-12);
+  const ElementLocator locator(s.nodes_mm, s.tets, 8);
+  EXPECT_EQ(locator.LocateAll(Eigen::Vector3d(1, 0.5, 0.5)).size(), 2u);
+  EXPECT_EQ(locator.LocateAll(Eigen::Vector3d(1, 1, 1)).size(), 2u);
+  EXPECT_TRUE(locator.LocateAll(Eigen::Vector3d(2.01, 0.5, 0.5)).empty());
+}
+
 // u = A x + b lies in every element's space: interpolated exactly at any
 // point, element boundaries included.
 TEST(Profiles, LinearDisplacementIsInterpolatedExactly) {
