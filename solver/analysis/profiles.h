@@ -30,7 +30,8 @@ int ProfilePointCount(const ProfileSpec& profile);
 class ElementLocator {
  public:
   // `nodes_mm`: nodes x 3 [mm]; `elements`: elements x nodes_per_element
-  // node indices in the Solution's layout (4, 10 or 8 per element).
+  // node indices in the Solution's layout (4, 10 or 8 per element). Both
+  // are kept by reference and must outlive the locator.
   ElementLocator(const std::vector<double>& nodes_mm, const std::vector<int64_t>& elements,
                  int nodes_per_element);
 

@@ -320,5 +320,39 @@ TEST(Profiles, SolvedSceneWritesProfileCsv) {
   fs::remove_all(dir);
 }
 
+// A finite-strain bar on symmetry planes, stretched uniformly to 0.95 of
+// its length along z: the strain along z is the Euler-Almansi
+// (1 - 1 / lambda^2) / 2, not the Green-Lagrange (lambda^2 - 1) / 2, and the
+// stress along the line the element's Cauchy sigma_zz.
+TEST(Profiles, FiniteStrainGivesTheAlmansiStrainAlongTheLine) {
+  using K = BoundaryConditionSpec::Kind;
+  SceneSpec scene;
+  scene.name = "almansi";
+  scene.geometry.kind = GeometrySpec::Kind::kBox;
+  scene.geometry.box.size_mm = {4, 4, 8};
+  scene.mesh.element_size_mm = 2;
+  scene.material.kind = MaterialSpec::Kind::kNeoHookean;
+  scene.material.neo_hookean = {1000, 1e4};
+  scene.analysis.type = AnalysisSpec::Type::kNonlinearStatic;
+  BoundaryConditionSpec top{"top", K::kDisplacement, {}};
+  top.displacement_mm[2] = -0.4;
+  scene.boundary_conditions = {
+      {"x_min", K::kSymmetry, {}}, {"y_min", K::kSymmetry, {}}, {"bottom", K::kSymmetry, {}}, top};
+  scene.outputs.profiles = {Line("z", {1.3, 2.7, 0}, {1.3, 2.7, 8}, 9)};
+  Solution solution;
+  const Status solved = SolveScene(scene, {}, &solution);
+  ASSERT_TRUE(solved.ok()) << solved.ToString();
+  ASSERT_FALSE(solution.almansi_strain.empty());
+  const double lambda = 0.95, almansi = 0.5 * (1 - 1 / (lambda * lambda));
+  const double sigma_zz = solution.stress_pa[2];  // uniform: any element's
+  ASSERT_LT(sigma_zz, 0);
+  ASSERT_EQ(solution.profiles.size(), 1u);
+  for (const auto& row : solution.profiles[0].rows) {
+    EXPECT_NEAR(row[6], -0.05 * row[3], 1e-9);  // uz
+    EXPECT_NEAR(row[10], almansi, 1e-9);
+    EXPECT_NEAR(row[7], sigma_zz, 1e-6 * std::abs(sigma_zz));
+  }
+}
+
 }  // namespace
 }  // namespace pba
