@@ -76,6 +76,22 @@ std::string StructureTable(const v1::Results& r) {
   return out;
 }
 
+// One line per line profile: points in the body, the largest stress along
+// the line and where it is.
+std::string ProfileLines(const v1::Results& r) {
+  std::string out;
+  for (const v1::ProfileResult& p : r.profiles()) {
+    out +=
+        Format("  profile %-10s %d of %d points inside", p.name().c_str(), p.inside(), p.points());
+    if (p.inside() > 0) {
+      out += Format("; largest stress along the line %.4g Pa at %.4g mm %s",
+                    p.max_stress_along_pa(), p.at_distance_mm(), Triple(p.at_mm()).c_str());
+    }
+    out += "\n";
+  }
+  return out;
+}
+
 }  // namespace
 
 std::string FormatSummary(const v1::Summary& summary) {
@@ -134,6 +150,7 @@ std::string FormatSummary(const v1::Summary& summary) {
   }
   out += ContactTable(r);
   out += StructureTable(r);
+  out += ProfileLines(r);
   out += Format("Wall time    %.3f s on %d thread(s):", p.wall_time_s(), p.threads());
   for (const auto& phase : p.phases()) {
     out += Format(" %s %.3f s,", phase.phase().c_str(), phase.seconds());

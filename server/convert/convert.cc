@@ -225,8 +225,8 @@ Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec) {
       spec->formulation = Formulation::kAuto;
       break;
     default:
-      return Status::InvalidArgument(
-          "formulation", "unknown formulation " + std::to_string(scene.formulation()));
+      return Status::InvalidArgument("formulation",
+                                     "unknown formulation " + std::to_string(scene.formulation()));
   }
   for (int i = 0; i < scene.region_materials_size(); ++i) {
     const v1::RegionMaterial& r = scene.region_materials(i);
@@ -425,6 +425,18 @@ Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec) {
                                      scene.outputs().reaction_sets().end());
   spec->outputs.structure_displacements.assign(scene.outputs().structure_displacements().begin(),
                                                scene.outputs().structure_displacements().end());
+  for (int i = 0; i < scene.outputs().profiles_size(); ++i) {
+    const v1::Profile& p = scene.outputs().profiles(i);
+    const std::string path = "outputs.profiles[" + std::to_string(i) + "]";
+    ProfileSpec out;
+    out.name = p.name();
+    PBA_RETURN_IF_ERROR(
+        CopyThree(p.from_mm(), path + ".from_mm", "coordinates (x, y, z) in mm", &out.from_mm));
+    PBA_RETURN_IF_ERROR(
+        CopyThree(p.to_mm(), path + ".to_mm", "coordinates (x, y, z) in mm", &out.to_mm));
+    out.points = p.points();
+    spec->outputs.profiles.push_back(std::move(out));
+  }
   return Status::Ok();
 }
 
@@ -516,6 +528,16 @@ v1::Summary SummaryToProto(const Summary& summary) {
     d->set_name(structure.name);
     for (double u : structure.mean_mm) d->add_mean_mm(u);
     d->set_max_mm(structure.max_mm);
+  }
+
+  for (const ProfileSummary& profile : summary.profiles) {
+    v1::ProfileResult* p = results->add_profiles();
+    p->set_name(profile.name);
+    p->set_points(profile.points);
+    p->set_inside(profile.inside);
+    p->set_max_stress_along_pa(profile.max_stress_along_pa);
+    p->set_at_distance_mm(profile.at_distance_mm);
+    for (double x : profile.at_mm) p->add_at_mm(x);
   }
 
   v1::Performance* performance = out.mutable_performance();

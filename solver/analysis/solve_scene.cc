@@ -6,6 +6,7 @@
 #include <cstdio>
 
 #include "analysis/auto_formulation.h"
+#include "analysis/profiles.h"
 #include "analysis/rigid_modes.h"
 #include "analysis/static_analysis.h"
 #include "analysis/time_history.h"
@@ -163,6 +164,18 @@ Status SolveScene(const SceneSpec& scene, const SolveOptions& options, Solution*
           ? 0
           : *std::max_element(solution->von_mises_pa.begin(), solution->von_mises_pa.end());
   summary.strain_energy_j = result.strain_energy_j;
+
+  // Line profiles, from the fields just filled in.
+  PBA_RETURN_IF_ERROR(SampleProfiles(scene, *solution, &solution->profiles));
+  summary.profiles = SummariseProfiles(solution->profiles);
+  for (const ProfileSummary& profile : summary.profiles) {
+    if (profile.inside == profile.points) continue;
+    summary.notes.push_back(Format(
+        "profile %s: %d of its %d points lie outside the body (reference configuration); their "
+        "values in profile_%s.csv are empty",
+        profile.name.c_str(), profile.points - profile.inside, profile.points,
+        profile.name.c_str()));
+  }
   summary.threads = omp_get_max_threads();
   summary.wall_time_s = clock.elapsed_s();
   return Status::Ok();

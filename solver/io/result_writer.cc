@@ -1,4 +1,6 @@
 // result.h5 (HDF5 C API) and result.xdmf (XDMF 3, the ParaView view of it).
+#include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -201,6 +203,37 @@ Status WriteHistory(const Solution& solution, const std::filesystem::path& dir) 
   return WriteLinePlot(plot, dir / "history.png");
 }
 
+// profile_<name>.csv of each line profile: the header its columns, then one
+// row per point; a value that is not finite (a point outside the body) is
+// an empty cell.
+Status WriteProfiles(const Solution& solution, const std::filesystem::path& dir) {
+  char number[32];
+  for (const ProfileTable& table : solution.profiles) {
+    // The name becomes part of a file name: ValidateScene allows only these.
+    const bool plain =
+        !table.name.empty() && std::all_of(table.name.begin(), table.name.end(), [](char c) {
+          return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-';
+        });
+    if (!plain) return Status::Internal("profile name '" + table.name + "' cannot name a file");
+    std::string csv;
+    for (std::size_t c = 0; c < table.columns.size(); ++c) {
+      csv += (c ? "," : "") + CsvField(table.columns[c]);
+    }
+    csv += "\n";
+    for (const auto& row : table.rows) {
+      for (std::size_t c = 0; c < row.size(); ++c) {
+        if (c) csv += ",";
+        if (!std::isfinite(row[c])) continue;
+        std::snprintf(number, sizeof number, "%.10g", row[c]);
+        csv += number;
+      }
+      csv += "\n";
+    }
+    PBA_RETURN_IF_ERROR(AtomicWriteText(dir / ("profile_" + table.name + ".csv"), csv));
+  }
+  return Status::Ok();
+}
+
 }  // namespace
 
 Status WriteResultFiles(const SceneSpec& scene, Solution* solution,
@@ -271,6 +304,7 @@ Status WriteResultFiles(const SceneSpec& scene, Solution* solution,
   if (!out) return Status::Io("cannot write " + xdmf.string());
 
   if (!solution->history.empty()) PBA_RETURN_IF_ERROR(WriteHistory(*solution, dir));
+  PBA_RETURN_IF_ERROR(WriteProfiles(*solution, dir));
 
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -661,6 +661,7 @@ Status ValidateScene(const SceneSpec& scene) {
           path, "unknown face set '" + name + "'; this geometry has: " + JoinNames(sets));
     }
   }
+  PBA_RETURN_IF_ERROR(scene_checks::ValidateProfiles(scene.outputs));
   return ValidateStructureDisplacements(scene);
 }
 

@@ -1,10 +1,13 @@
-// The scene checks of time, rigid contacts, inclusions and buoyancy; every
+// The scene checks of time, rigid contacts, inclusions, buoyancy and line
+// profiles; every
 // failure names its field path.
 #include "scene/validate_loading.h"
 
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <cmath>
+#include <set>
 #include <utility>
 
 namespace pba::scene_checks {
@@ -216,6 +219,50 @@ Status ValidateContacts(const SceneSpec& scene) {
           path + ".penetration_tolerance_mm",
           "must be a non-negative number of mm (0 for 1 % of the element size), got " +
               Number(c.penetration_tolerance_mm));
+    }
+  }
+  return Status::Ok();
+}
+
+// A profile names its file (profile_<name>.csv), so its name is a plain
+// word; its line has two distinct finite ends and 2..1000 points (0: 50).
+Status ValidateProfiles(const OutputSpec& outputs) {
+  constexpr int kMaxPoints = 1000;
+  std::set<std::string> names;
+  for (std::size_t i = 0; i < outputs.profiles.size(); ++i) {
+    const ProfileSpec& p = outputs.profiles[i];
+    const std::string path = "outputs.profiles[" + std::to_string(i) + "]";
+    if (p.name.empty()) return Status::InvalidArgument(path + ".name", "is empty");
+    const bool plain = std::all_of(p.name.begin(), p.name.end(), [](char c) {
+      return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-';
+    });
+    if (!plain) {
+      return Status::InvalidArgument(path + ".name",
+                                     "'" + p.name +
+                                         "' names the file profile_<name>.csv: use letters, "
+                                         "digits, '_' and '-' only");
+    }
+    if (!names.insert(p.name).second) {
+      return Status::InvalidArgument(path + ".name",
+                                     "another profile is already named '" + p.name + "'");
+    }
+    for (const auto& [end, field] : {std::pair{&p.from_mm, ".from_mm"}, {&p.to_mm, ".to_mm"}}) {
+      for (int c = 0; c < 3; ++c) {
+        if (!std::isfinite((*end)[c])) {
+          return Status::InvalidArgument(
+              path + field,
+              "xyz"[c] + std::string(" must be a finite number of mm, got ") + Number((*end)[c]));
+        }
+      }
+    }
+    if (p.from_mm == p.to_mm) {
+      return Status::InvalidArgument(path + ".to_mm",
+                                     "is the same point as from_mm: a line needs two ends");
+    }
+    if (p.points != 0 && (p.points < 2 || p.points > kMaxPoints)) {
+      return Status::InvalidArgument(path + ".points", "must be 2.." + std::to_string(kMaxPoints) +
+                                                           " (or left out for 50), got " +
+                                                           std::to_string(p.points));
     }
   }
   return Status::Ok();

@@ -1,7 +1,8 @@
 // Scene checks of the time of a QUASI_STATIC analysis, the rigid contacts,
-// the inclusions and the buoyancy of gravity (validate_loading.cc), and the
-// helpers they share with the rest of ValidateScene (validate.cc). Internal
-// to the scene checks; every failure names its field path.
+// the inclusions, the buoyancy of gravity and the line profiles
+// (validate_loading.cc), and the helpers they share with the rest of
+// ValidateScene (validate.cc). Internal to the scene checks; every failure
+// names its field path.
 #pragma once
 
 #include <string>
@@ -47,5 +48,7 @@ Status ValidateBuoyancy(const GravitySpec& gravity);
 Status ValidateInclusions(const SceneSpec& scene);
 // contacts[i]: names, sets, shapes, rigid-body geometry, friction, penalty.
 Status ValidateContacts(const SceneSpec& scene);
+// outputs.profiles[i]: names (unique, fit for a file name), ends, points.
+Status ValidateProfiles(const OutputSpec& outputs);
 
 }  // namespace pba::scene_checks

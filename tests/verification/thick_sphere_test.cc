@@ -209,6 +209,81 @@ TEST(ThickSphere, HigherElementsMatchLameOnCoarseMeshes) {
   }
 }
 
+// A radial line profile (outputs.profiles) read against Lame: the stress
+// along a radius is sigma_rr, the displacement along it u(r). Elements carry
+// one (mean) stress each, so a single sample is the stress of the element
+// that holds it, whose centre may lie half an element away (sigma_rr
+// changes by 7 Pa/mm at mid-thickness, -19.6 Pa): the profile is read as one
+// would, by its mean over the samples within 1.5 mm of mid-thickness,
+// against Lame's mean at the same points. One line runs in a general
+// direction, one along the octant's diagonal, where the mesh's faces and
+// edges lie on the line and the samples take the mean of the elements
+// sharing them.
+TEST(ThickSphere, RadialProfileMatchesLame) {
+  struct Case {
+    const char* name;
+    ElementType element;
+    double nu, h_mm;
+    bool diagonal;
+    double u_tolerance;  // on u_r at mid-thickness, fraction
+  };
+  const double p = 100, e = 3000;
+  for (const Case& c : {Case{"TET4", ElementType::kTet4, 0.3, 1.25, false, 0.02},
+                        Case{"TET10", ElementType::kTet10, 0.45, 2.5, false, 0.01},
+                        Case{"HEX8", ElementType::kHex8, 0.45, 2.5, false, 0.04},
+                        Case{"HEX8", ElementType::kHex8, 0.45, 2.5, true, 0.04}}) {
+    MaterialSpec material;
+    material.kind = MaterialSpec::Kind::kLinearElastic;
+    material.linear_elastic = {e, c.nu};
+    SceneSpec scene = PressurisedShell(material, p, c.h_mm, c.element);
+    const Eigen::Vector3d t =
+        (c.diagonal ? Eigen::Vector3d(1, 1, 1) : Eigen::Vector3d(0.5, 0.6, 0.62)).normalized();
+    ProfileSpec radial;
+    radial.name = "radial";
+    radial.from_mm = {kA * t.x(), kA * t.y(), kA * t.z()};
+    radial.to_mm = {kB * t.x(), kB * t.y(), kB * t.z()};
+    radial.points = 81;
+    scene.outputs.profiles = {radial};
+    Solution solution;
+    const Status status = SolveScene(scene, {}, &solution);
+    ASSERT_TRUE(status.ok()) << status.message();
+    ASSERT_EQ(solution.profiles.size(), 1u);
+    const double lame_c = p * kA * kA * kA / (kB * kB * kB - kA * kA * kA);
+    const auto srr = [&](double r) { return lame_c * (1 - kB * kB * kB / (r * r * r)); };
+    const double mid = 0.5 * (kA + kB);
+    double sampled = 0, lame = 0, u_mid = NAN, at_mid = NAN;
+    int window = 0;
+    for (const auto& row : solution.profiles[0].rows) {
+      const double r = kA + row[0];
+      if (std::isnan(row[7])) continue;
+      if (std::abs(r - mid) < 1e-9) {
+        at_mid = row[7];
+        u_mid = Eigen::Vector3d(row[4], row[5], row[6]).dot(t);
+      }
+      if (std::abs(r - mid) > 1.5 + 1e-9) continue;
+      sampled += row[7], lame += srr(r), ++window;
+    }
+    sampled /= window, lame /= window;
+    const double lame_u = testing::LameDisplacement(p, e, c.nu, mid);
+    const ProfileSummary& summary = solution.summary.profiles[0];
+    std::printf(
+        "%s%s, h = %g mm, nu = %g, %d elements: %d of %d points inside; sigma_rr at r = 15 mm "
+        "%.3f Pa (Lame %.3f), mean over r = 13.5..16.5 mm %.3f Pa (Lame %.3f, %+.2f %%); u_r(15) "
+        "%.5f mm (Lame %.5f, %+.2f %%); largest |stress along| %.2f Pa at r = %.3f mm\n",
+        c.name, c.diagonal ? " (diagonal)" : "", c.h_mm, c.nu,
+        static_cast<int>(solution.summary.elements), summary.inside, summary.points, at_mid,
+        srr(mid), sampled, lame, 100 * (sampled / lame - 1), u_mid, lame_u,
+        100 * (u_mid / lame_u - 1), summary.max_stress_along_pa, kA + summary.at_distance_mm);
+    // The faceted outer surface may leave the last point (r = 20 mm) out.
+    EXPECT_GE(summary.inside, 80) << c.name;
+    EXPECT_NEAR(sampled, lame, 0.03 * std::abs(lame)) << c.name;
+    EXPECT_NEAR(u_mid, lame_u, c.u_tolerance * lame_u) << c.name;
+    // The largest compression is next to the cavity wall.
+    EXPECT_LT(summary.max_stress_along_pa, 0) << c.name;
+    EXPECT_LT(summary.at_distance_mm, 2.5) << c.name;
+  }
+}
+
 TEST(ThickSphere, FiniteStrainFollowsTheIncompressiblePressureStretchCurve) {
   ASSERT_NEAR(IncompressiblePressure(1.25), 0.551869, 1e-6);
   ASSERT_NEAR(IncompressiblePressure(1.5), 0.755433, 1e-6);

@@ -411,6 +411,18 @@ struct AnalysisSpec {
   double frozen_above_s = 0;  // 0: none
 };
 
+// A straight line along which fields are sampled at the end of the
+// analysis and written as profile_<name>.csv (docs/results.md): e.g. a
+// radial line from a tumour's centre gives the displacement of the
+// neighbouring tissue and the radial stress and strain. Points are located
+// in the reference (undeformed) configuration.
+struct ProfileSpec {
+  std::string name;                        // names the file: letters, digits, '_' and '-'; unique
+  std::array<double, 3> from_mm{0, 0, 0};  // first point [mm]
+  std::array<double, 3> to_mm{0, 0, 0};    // last point [mm], not from_mm
+  int points = 0;  // equally spaced points, ends included; 0: 50, else 2..1000
+};
+
 struct OutputSpec {
   bool displacement = true;
   bool stress = true;
@@ -427,6 +439,8 @@ struct OutputSpec {
   // the end and, in a QUASI_STATIC analysis, at every step of history.csv;
   // "*" means all of them.
   std::vector<std::string> structure_displacements;
+  // Lines along which the final fields are sampled (profile_<name>.csv).
+  std::vector<ProfileSpec> profiles;
 };
 
 // How much of the physics the scene asks for is modelled.

@@ -91,6 +91,20 @@ struct StructureDisplacement {
   double max_mm = 0;                       // largest nodal displacement magnitude [mm]
 };
 
+// A profile (outputs.profiles) at the end of the analysis: how much of the
+// line lies in the body and its largest stress along the line.
+struct ProfileSummary {
+  std::string name;
+  int points = 0;  // sampled
+  int inside = 0;  // of them, in the body (the others have empty values)
+  // t . sigma . t of largest magnitude over the inside points, signed
+  // (negative: compression) [Pa]; where it is, as the distance from the
+  // line's start [mm] and the point (reference configuration) [mm].
+  double max_stress_along_pa = 0;
+  double at_distance_mm = 0;
+  std::array<double, 3> at_mm{0, 0, 0};
+};
+
 // One decision of `formulation: AUTO` (pba/scene.h).
 struct ModelDecision {
   std::string aspect;    // "viscoelasticity", "finite strain", "structures"
@@ -155,6 +169,7 @@ struct Summary {
   std::vector<TimeStepSummary> time_steps;
   std::vector<ContactSummary> contacts;
   std::vector<StructureDisplacement> structure_displacements;
+  std::vector<ProfileSummary> profiles;  // outputs.profiles, in order
   // formulation: AUTO.
   std::vector<ModelDecision> decisions;
   ReductionEstimate reduction;
@@ -163,6 +178,16 @@ struct Summary {
   double wall_time_s = 0;
   std::vector<PhaseTime> phases;
   int threads = 1;
+};
+
+// The fields sampled along one line of outputs.profiles, written as
+// profile_<name>.csv: one row per point, the columns named with their units
+// (distance_mm, x_mm, ..., strain_along; docs/results.md). A point outside
+// the body has NaN values past its position (empty cells in the file).
+struct ProfileTable {
+  std::string name;
+  std::vector<std::string> columns;
+  std::vector<std::vector<double>> rows;
 };
 
 // The solved fields, in the units result.h5 uses.
@@ -201,6 +226,8 @@ struct Solution {
   std::vector<std::vector<double>> history;
   // Element-wise estimated error share (ZZ), elements; empty if not estimated.
   std::vector<double> error_indicator;
+  // outputs.profiles, sampled from the final fields above.
+  std::vector<ProfileTable> profiles;
   Summary summary;
 };
 
@@ -211,9 +238,9 @@ Status SolveScene(const SceneSpec& scene, const SolveOptions& options, Solution*
 
 // Writes result.h5 (mesh, fields, unit attributes) and result.xdmf (the
 // ParaView view of result.h5) into the existing directory `dir` - with a
-// history, also history.csv and history.png (its forces against time) - and
-// appends
-// the write phase to solution.summary. Fields not requested in
+// history, also history.csv and history.png (its forces against time), and
+// with profiles profile_<name>.csv each - and appends the write phase to
+// solution.summary. Fields not requested in
 // `scene.outputs` are left out.
 Status WriteResultFiles(const SceneSpec& scene, Solution* solution,
                         const std::filesystem::path& dir);

@@ -217,6 +217,33 @@ TEST(YamlCodecTest, NewSceneKeysRoundTrip) {
   EXPECT_EQ(scene.SerializeAsString(), again.SerializeAsString());
 }
 
+TEST(YamlCodecTest, ProfilesRoundTrip) {
+  const std::string yaml = std::string(kScene) + R"(  profiles:
+    - {name: radial, from_mm: [0, 0, 0], to_mm: [12.5, 0, 0], points: 120}
+    - name: axis
+      from_mm: [5, 5, 0]
+      to_mm: [5, 5, 20]
+)";
+  v1::Scene scene;
+  ParseError error;
+  ASSERT_TRUE(ParseYaml(yaml, &scene, &error)) << error.ToString();
+  ASSERT_EQ(scene.outputs().profiles_size(), 2);
+  EXPECT_EQ(scene.outputs().profiles(0).name(), "radial");
+  ASSERT_EQ(scene.outputs().profiles(0).to_mm_size(), 3);
+  EXPECT_EQ(scene.outputs().profiles(0).to_mm(0), 12.5);
+  EXPECT_EQ(scene.outputs().profiles(0).points(), 120);
+  EXPECT_EQ(scene.outputs().profiles(1).points(), 0);
+  EXPECT_EQ(scene.outputs().profiles(1).from_mm(1), 5.0);
+  v1::Scene again;
+  ASSERT_TRUE(ParseYaml(ToJson(scene), &again, &error)) << error.ToString();
+  EXPECT_EQ(scene.SerializeAsString(), again.SerializeAsString());
+  // A misspelt key names its path.
+  EXPECT_FALSE(ParseYaml(std::string(kScene) + "  profiles: [{name: r, form_mm: [0, 0, 0]}]\n",
+                         &scene, &error));
+  EXPECT_NE(error.ToString().find("outputs.profiles[0].form_mm"), std::string::npos)
+      << error.ToString();
+}
+
 TEST(YamlCodecTest, FluidLevelZeroIsGiven) {
   v1::Scene scene;
   ParseError error;

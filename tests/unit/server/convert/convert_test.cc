@@ -562,6 +562,65 @@ TEST(SceneFromProto, NewFieldPathsOfBadValues) {
   EXPECT_EQ(ValidateSceneProto(bad).field(), "analysis.time.curve[1].time_s");
 }
 
+TEST(SceneFromProto, Profiles) {
+  const SceneSpec spec =
+      Parse(R"(material: {linear_elastic: {youngs_modulus_pa: 3000, poissons_ratio: 0.45}}
+outputs:
+  profiles:
+    - {name: radial, from_mm: [1, 2, 3], to_mm: [4, 5, 6], points: 7}
+    - {name: axis, from_mm: [5, 5, 0], to_mm: [5, 5, 10]}
+)");
+  ASSERT_EQ(spec.outputs.profiles.size(), 2u);
+  EXPECT_EQ(spec.outputs.profiles[0].name, "radial");
+  EXPECT_EQ(spec.outputs.profiles[0].from_mm, (std::array<double, 3>{1, 2, 3}));
+  EXPECT_EQ(spec.outputs.profiles[0].to_mm, (std::array<double, 3>{4, 5, 6}));
+  EXPECT_EQ(spec.outputs.profiles[0].points, 7);
+  EXPECT_EQ(spec.outputs.profiles[1].points, 0);
+  EXPECT_TRUE(ValidateScene(spec).ok());
+  // Two values where three belong; then the checks, through the proto.
+  v1::Scene scene;
+  codec::ParseError error;
+  ASSERT_TRUE(codec::ParseYaml(
+      std::string(kBase) +
+          R"(material: {linear_elastic: {youngs_modulus_pa: 3000, poissons_ratio: 0.45}}
+outputs:
+  profiles: [{name: r, from_mm: [0, 0], to_mm: [1, 1, 1]}]
+)",
+      &scene, &error));
+  SceneSpec out;
+  const Status status = SceneFromProto(scene, &out);
+  EXPECT_EQ(status.field(), "outputs.profiles[0].from_mm");
+  EXPECT_NE(status.message().find("expected three"), std::string::npos) << status.message();
+  scene.mutable_outputs()->mutable_profiles(0)->add_from_mm(0);
+  scene.mutable_outputs()->mutable_profiles(0)->set_points(1);
+  EXPECT_EQ(ValidateSceneProto(scene).field(), "outputs.profiles[0].points");
+  scene.mutable_outputs()->mutable_profiles(0)->set_points(0);
+  scene.mutable_outputs()->mutable_profiles(0)->set_name("r/s");
+  EXPECT_EQ(ValidateSceneProto(scene).field(), "outputs.profiles[0].name");
+}
+
+TEST(SummaryToProto, ProfilesAndTheirLines) {
+  Summary s;
+  s.profiles = {{"radial", 50, 48, -512.31, 3.5, {13.5, 0, 0}}, {"away", 10, 0, 0, 0, {0, 0, 0}}};
+  const v1::Summary proto = SummaryToProto(s);
+  ASSERT_EQ(proto.results().profiles_size(), 2);
+  const v1::ProfileResult& radial = proto.results().profiles(0);
+  EXPECT_EQ(radial.name(), "radial");
+  EXPECT_EQ(radial.points(), 50);
+  EXPECT_EQ(radial.inside(), 48);
+  EXPECT_EQ(radial.max_stress_along_pa(), -512.31);
+  EXPECT_EQ(radial.at_distance_mm(), 3.5);
+  ASSERT_EQ(radial.at_mm_size(), 3);
+  EXPECT_EQ(radial.at_mm(0), 13.5);
+  const std::string text = codec::FormatSummary(proto);
+  EXPECT_NE(text.find("profile radial     48 of 50 points inside; largest stress along the line "
+                      "-512.3 Pa at 3.5 mm (13.5, 0, 0)"),
+            std::string::npos)
+      << text;
+  EXPECT_NE(text.find("profile away       0 of 10 points inside\n"), std::string::npos) << text;
+  EXPECT_EQ(codec::FormatSummary(SummaryToProto(Summary())).find("profile"), std::string::npos);
+}
+
 // The example scenes stay valid as the checks grow.
 TEST(ValidateSceneProto, EveryExampleIsValid) {
   int examples = 0;

@@ -2,6 +2,8 @@
 
 #include <cmath>
 #include <functional>
+#include <string>
+#include <utility>
 
 #include "pba/scene.h"
 #include "scene/unsolved.h"
@@ -630,6 +632,83 @@ INSTANTIATE_TEST_SUITE_P(
                s->boundary_conditions[0].displacement_mm[2] = 0;
              },
              "boundary_conditions", "direction x, y"}),
+    [](const ::testing::TestParamInfo<Case>& info) { return std::string(info.param.label); });
+
+ProfileSpec Profile(std::string name) {
+  ProfileSpec p;
+  p.name = std::move(name);
+  p.from_mm = {5, 5, 0};
+  p.to_mm = {5, 5, 20};
+  return p;
+}
+
+TEST(ValidateProfilesGoodTest, PointsDefaultAndRange) {
+  SceneSpec s = GoodScene();
+  s.outputs.profiles = {Profile("axis"), Profile("Radial_2-b")};
+  s.outputs.profiles[1].points = 2;
+  EXPECT_TRUE(ValidateScene(s).ok());
+  s.outputs.profiles[1].points = 1000;
+  // A line may leave the body: its points there are reported empty.
+  s.outputs.profiles[0].to_mm = {5, 5, 100};
+  EXPECT_TRUE(ValidateScene(s).ok());
+  // Outputs only: the Abaqus export does not refuse them.
+  EXPECT_TRUE(RefuseUnsupportedFields(s, "exported").ok());
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Profiles, ValidateSceneTest,
+    ::testing::Values(Case{"profile_name_empty",
+                           [](SceneSpec* s) { s->outputs.profiles = {Profile("")}; },
+                           "outputs.profiles[0].name", "is empty"},
+                      Case{"profile_name_not_a_file_name",
+                           [](SceneSpec* s) {
+                             s->outputs.profiles = {Profile("a"), Profile("../b")};
+                           },
+                           "outputs.profiles[1].name", "letters, digits"},
+                      Case{"profile_name_with_a_space",
+                           [](SceneSpec* s) { s->outputs.profiles = {Profile("radial line")}; },
+                           "outputs.profiles[0].name", "letters, digits"},
+                      Case{"profile_name_twice",
+                           [](SceneSpec* s) {
+                             s->outputs.profiles = {Profile("r"), Profile("q"), Profile("r")};
+                           },
+                           "outputs.profiles[2].name", "already named 'r'"},
+                      Case{"profile_from_not_finite",
+                           [](SceneSpec* s) {
+                             s->outputs.profiles = {Profile("r")};
+                             s->outputs.profiles[0].from_mm[1] = NAN;
+                           },
+                           "outputs.profiles[0].from_mm", "y must be a finite number of mm"},
+                      Case{"profile_to_infinite",
+                           [](SceneSpec* s) {
+                             s->outputs.profiles = {Profile("r")};
+                             s->outputs.profiles[0].to_mm[2] = INFINITY;
+                           },
+                           "outputs.profiles[0].to_mm", "z must be a finite number of mm"},
+                      Case{"profile_ends_equal",
+                           [](SceneSpec* s) {
+                             s->outputs.profiles = {Profile("r")};
+                             s->outputs.profiles[0].to_mm = s->outputs.profiles[0].from_mm;
+                           },
+                           "outputs.profiles[0].to_mm", "same point as from_mm"},
+                      Case{"profile_one_point",
+                           [](SceneSpec* s) {
+                             s->outputs.profiles = {Profile("r")};
+                             s->outputs.profiles[0].points = 1;
+                           },
+                           "outputs.profiles[0].points", "must be 2..1000"},
+                      Case{"profile_too_many_points",
+                           [](SceneSpec* s) {
+                             s->outputs.profiles = {Profile("r")};
+                             s->outputs.profiles[0].points = 1001;
+                           },
+                           "outputs.profiles[0].points", "got 1001"},
+                      Case{"profile_negative_points",
+                           [](SceneSpec* s) {
+                             s->outputs.profiles = {Profile("r")};
+                             s->outputs.profiles[0].points = -5;
+                           },
+                           "outputs.profiles[0].points", "must be 2..1000"}),
     [](const ::testing::TestParamInfo<Case>& info) { return std::string(info.param.label); });
 
 // Solved but not exported: the Abaqus export refuses each such field by
