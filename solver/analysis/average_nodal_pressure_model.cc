@@ -94,23 +94,51 @@ struct State {
   double energy = 0;
 };
 
-// dPi_vol/dv_a-style derivatives of node a's volumetric energy at J_a: U
-// of the one material, or the volume-weighted mean of the U_e of its elements
-// (weights V_e / (4 V_a)).
-ScalarDerivatives NodalVolumetric(const MaterialField& field, const Csr& incidence,
-                                  const std::vector<double>& reference_volume, double nodal_volume,
-                                  int a, double j) {
-  if (field.uniform()) return field.Base(0).Volumetric(j);
-  ScalarDerivatives sum;
-  for (int t = incidence.begin(a); t < incidence.end(a); ++t) {
-    const int e = incidence.index[t];
-    const double weight = reference_volume[e] / 4 / nodal_volume;
-    const ScalarDerivatives u = field.At(e).Volumetric(j);
-    sum.value += weight * u.value;
-    sum.first += weight * u.first;
-    sum.second += weight * u.second;
+// The volumetric constraints: one per node and material around it (a
+// group), so that a node on an interface between materials keeps each
+// side's volume change apart, as the pressure jumps there: a growing
+// inclusion's nodes are not held to the volume of the incompressible tissue
+// around them. Group g of node a holds the elements of a of one material
+// entry, reference volume V_g = sum V_e / 4 over them; with one material a
+// node has one group and the model is the plain average-nodal-pressure one.
+struct NodalGroups {
+  Csr of_node;                     // node -> its groups
+  std::vector<int> first_element;  // group -> one of its elements (its material)
+  std::vector<double> volume;      // group -> V_g [m^3]
+  std::vector<int> of_incidence;   // incidence t of incidence Csr -> its group
+
+  NodalGroups(const Csr& incidence, const std::vector<double>& reference_volume,
+              const MaterialField& field, int nodes) {
+    std::vector<std::vector<int>> rows(nodes);
+    of_incidence.resize(incidence.index.size());
+    for (int a = 0; a < nodes; ++a) {
+      const int first = static_cast<int>(first_element.size());
+      for (int t = incidence.begin(a); t < incidence.end(a); ++t) {
+        const int e = incidence.index[t], entry = field.entry_of(e);
+        int g = first;
+        while (g < static_cast<int>(first_element.size()) &&
+               field.entry_of(first_element[g]) != entry) {
+          ++g;
+        }
+        if (g == static_cast<int>(first_element.size())) {
+          first_element.push_back(e);
+          volume.push_back(0);
+          rows[a].push_back(g);
+        }
+        volume[g] += reference_volume[e] / 4;
+        of_incidence[t] = g;
+      }
+    }
+    of_node = Flatten(rows);
   }
-  return sum;
+  int size() const { return static_cast<int>(first_element.size()); }
+};
+
+// U_g and its derivatives at the group's volume ratio j.
+ScalarDerivatives GroupVolumetric(const MaterialField& field, const NodalGroups& groups, int g,
+                                  double j) {
+  if (field.uniform()) return field.Base(0).Volumetric(j);
+  return field.At(groups.first_element[g]).Volumetric(j);
 }
 
 class NodalPressureModel final : public FiniteStrainModel {
@@ -124,13 +152,11 @@ class NodalPressureModel final : public FiniteStrainModel {
     const int ne = mesh.num_elements(), nn = mesh.num_nodes();
     geometry_.reserve(ne);
     reference_volume_.reserve(ne);
-    nodal_volume_.assign(nn, 0.0);
     std::vector<std::vector<int>> elements_of(nn);
     for (int e = 0; e < ne; ++e) {
       geometry_.push_back(ComputeTet4Geometry(TetCorners(mesh, e)));
       reference_volume_.push_back(std::abs(geometry_[e].volume));
       for (int a : mesh.tets[e]) {
-        nodal_volume_[a] += reference_volume_[e] / 4;
         elements_of[a].push_back(e);
       }
     }
@@ -140,6 +166,14 @@ class NodalPressureModel final : public FiniteStrainModel {
       for (int t = incidence_.begin(a); t < incidence_.end(a); ++t) {
         const auto& tet = mesh.tets[incidence_.index[t]];
         incidence_corner_[t] = static_cast<int>(std::find(tet.begin(), tet.end(), a) - tet.begin());
+      }
+    }
+
+    groups_ = std::make_unique<NodalGroups>(incidence_, reference_volume_, field_, nn);
+    element_group_.resize(4 * static_cast<std::size_t>(ne));
+    for (int a = 0; a < nn; ++a) {
+      for (int t = incidence_.begin(a); t < incidence_.end(a); ++t) {
+        element_group_[4 * incidence_.index[t] + incidence_corner_[t]] = groups_->of_incidence[t];
       }
     }
 
@@ -154,6 +188,16 @@ class NodalPressureModel final : public FiniteStrainModel {
       rows[a].erase(std::unique(rows[a].begin(), rows[a].end()), rows[a].end());
     }
     patch_ = Flatten(rows);
+    group_patch_.assign(groups_->size() + 1, 0);
+    for (int a = 0; a < nn; ++a) {
+      for (int q = groups_->of_node.begin(a); q < groups_->of_node.end(a); ++q) {
+        const int group = groups_->of_node.index[q];
+        group_patch_[group + 1] = patch_.end(a) - patch_.begin(a);
+      }
+    }
+    for (int group = 0; group < groups_->size(); ++group) {
+      group_patch_[group + 1] += group_patch_[group];
+    }
 
     // Column c of K couples with every node of the patch of every node in
     // c's patch (the support of the g_a g_a^T terms that involve c).
@@ -276,18 +320,20 @@ class NodalPressureModel final : public FiniteStrainModel {
     }
     if (bad < ne) return bad;
 
-    state->nodal.assign(nn, ScalarDerivatives());
+    const NodalGroups& groups = *groups_;
+    state->nodal.assign(groups.size(), ScalarDerivatives());
     double energy = 0;
 #pragma omp parallel for schedule(static) if (parallel_) reduction(+ : energy)
     for (int a = 0; a < nn; ++a) {
-      if (nodal_volume_[a] == 0) continue;  // a node outside every element
-      double v = 0;
-      for (int t = incidence_.begin(a); t < incidence_.end(a); ++t) {
-        v += state->elements[incidence_.index[t]].volume / 4;
+      for (int g = groups.of_node.begin(a); g < groups.of_node.end(a); ++g) {
+        const int group = groups.of_node.index[g];
+        double v = 0;
+        for (int t = incidence_.begin(a); t < incidence_.end(a); ++t) {
+          if (groups.of_incidence[t] == group) v += state->elements[incidence_.index[t]].volume / 4;
+        }
+        state->nodal[group] = GroupVolumetric(field_, groups, group, v / groups.volume[group]);
+        energy += groups.volume[group] * state->nodal[group].value;
       }
-      state->nodal[a] = NodalVolumetric(field_, incidence_, reference_volume_, nodal_volume_[a], a,
-                                        v / nodal_volume_[a]);
-      energy += nodal_volume_[a] * state->nodal[a].value;
     }
 
 #pragma omp parallel for schedule(static) if (parallel_) reduction(+ : energy)
@@ -295,7 +341,7 @@ class NodalPressureModel final : public FiniteStrainModel {
       ElementState& s = state->elements[e];
       energy += s.iso_energy;
       double pbar = 0;
-      for (int a : mesh_.tets[e]) pbar += state->nodal[a].first / 4;
+      for (int i = 0; i < 4; ++i) pbar += state->nodal[element_group_[4 * e + i]].first / 4;
       s.force += pbar * s.volume_gradient;
       if (!with_tangent || drop_pressure_stiffness) continue;
       Matrix12d& k = state->tangents[e];
@@ -332,19 +378,27 @@ class NodalPressureModel final : public FiniteStrainModel {
   // nodal g_a g_a^T terms, so the pass needs neither colouring nor locks.
   std::vector<Eigen::Matrix3d> NodeBlocks(const State& state) const {
     const int nn = mesh_.num_nodes();
-    // g_a = dv_a/dx on a's patch, one vector per patch entry.
-    std::vector<Eigen::Vector3d> g(patch_.index.size());
-    std::vector<double> weight(nn, 0.0);
+    const NodalGroups& groups = *groups_;
+    // g_g = dv_g/dx on the patch of the group's node, one vector per patch
+    // entry: group g's vectors start at group_patch_[g], entry m of node a's
+    // patch at group_patch_[g] + m - patch_.begin(a).
+    std::vector<Eigen::Vector3d> g(group_patch_.back());
+    std::vector<double> weight(groups.size(), 0.0);
 #pragma omp parallel for schedule(static) if (parallel_)
     for (int a = 0; a < nn; ++a) {
-      for (int m = patch_.begin(a); m < patch_.end(a); ++m) g[m].setZero();
+      for (int q = groups.of_node.begin(a); q < groups.of_node.end(a); ++q) {
+        const int group = groups.of_node.index[q];
+        for (int m = 0; m < patch_.end(a) - patch_.begin(a); ++m)
+          g[group_patch_[group] + m].setZero();
+        weight[group] = state.nodal[group].second / groups.volume[group];
+      }
       for (int t = incidence_.begin(a); t < incidence_.end(a); ++t) {
         const ElementState& s = state.elements[incidence_.index[t]];
+        const int base = group_patch_[groups.of_incidence[t]] - patch_.begin(a);
         for (int j = 0; j < 4; ++j) {
-          g[incidence_patch_[4 * t + j]] += s.volume_gradient.segment<3>(3 * j) / 4;
+          g[base + incidence_patch_[4 * t + j]] += s.volume_gradient.segment<3>(3 * j) / 4;
         }
       }
-      if (nodal_volume_[a] > 0) weight[a] = state.nodal[a].second / nodal_volume_[a];
     }
 
     std::vector<Eigen::Matrix3d> blocks(wide_.index.size());
@@ -359,13 +413,18 @@ class NodalPressureModel final : public FiniteStrainModel {
       }
       for (int m = patch_.begin(c); m < patch_.end(c); ++m) {
         const int a = patch_.index[m];
-        if (weight[a] == 0) continue;
-        const Eigen::Vector3d gc = weight[a] * g[patch_transpose_[m]];
-        // a's patch is sorted and contained in c's sorted wide row: a merge walk.
-        int k = wide_.begin(c);
-        for (int n = patch_.begin(a); n < patch_.end(a); ++n) {
-          while (wide_.index[k] != patch_.index[n]) ++k;
-          blocks[k] += g[n] * gc.transpose();
+        for (int q = groups.of_node.begin(a); q < groups.of_node.end(a); ++q) {
+          const int group = groups.of_node.index[q];
+          const int base = group_patch_[group] - patch_.begin(a);
+          const Eigen::Vector3d gc = weight[group] * g[base + patch_transpose_[m]];
+          if (gc.isZero(0)) continue;  // c is not in the group's elements
+          // a's patch is sorted and contained in c's sorted wide row: a
+          // merge walk.
+          int k = wide_.begin(c);
+          for (int n = patch_.begin(a); n < patch_.end(a); ++n) {
+            while (wide_.index[k] != patch_.index[n]) ++k;
+            blocks[k] += g[base + n] * gc.transpose();
+          }
         }
       }
     }
@@ -450,7 +509,9 @@ class NodalPressureModel final : public FiniteStrainModel {
   const bool parallel_;  // use OpenMP threads
   std::vector<Tet4Geometry> geometry_;
   std::vector<double> reference_volume_;  // V_e
-  std::vector<double> nodal_volume_;      // V_a
+  std::unique_ptr<NodalGroups> groups_;   // the nodal volumetric constraints
+  std::vector<int> element_group_;        // group of corner i of element e, 4 e + i
+  std::vector<int> group_patch_;          // offsets of the groups' patch vectors
   Csr incidence_;                         // elements around each node
   std::vector<int> incidence_corner_;     // which corner of the element the node is
   Csr patch_;                             // nodes of those elements, sorted
@@ -482,33 +543,28 @@ std::unique_ptr<FiniteStrainModel> MakeAverageNodalPressureTet4Model(const Mesh&
 void AverageNodalPressures(const Mesh& mesh, const MaterialField& field, const Eigen::VectorXd& u,
                            std::vector<double>* pressure, std::vector<double>* volume_ratio) {
   const int ne = mesh.num_elements(), nn = mesh.num_nodes();
-  std::vector<double> v0(nn, 0.0), v(nn, 0.0), reference_volume(ne);
+  std::vector<double> reference_volume(ne), jacobian(ne);
   std::vector<std::vector<int>> elements_of(nn);
   for (int e = 0; e < ne; ++e) {
     const Tet4Geometry g = ComputeTet4Geometry(TetCorners(mesh, e));
     reference_volume[e] = std::abs(g.volume);
-    const double j = DeformationGradient(g, GatherElement(mesh, e, u)).determinant();
-    for (int a : mesh.tets[e]) {
-      v0[a] += reference_volume[e] / 4;
-      v[a] += j * reference_volume[e] / 4;
-      elements_of[a].push_back(e);
-    }
+    jacobian[e] = DeformationGradient(g, GatherElement(mesh, e, u)).determinant();
+    for (int a : mesh.tets[e]) elements_of[a].push_back(e);
   }
   const Csr incidence = Flatten(elements_of);
-  std::vector<double> nodal_pressure(nn, 0.0);
-  for (int a = 0; a < nn; ++a) {
-    if (v0[a] > 0) {
-      nodal_pressure[a] =
-          NodalVolumetric(field, incidence, reference_volume, v0[a], a, v[a] / v0[a]).first;
-    }
+  const NodalGroups groups(incidence, reference_volume, field, nn);
+  std::vector<double> v(groups.size(), 0.0);
+  for (std::size_t t = 0; t < incidence.index.size(); ++t) {
+    const int e = incidence.index[t];
+    v[groups.of_incidence[t]] += jacobian[e] * reference_volume[e] / 4;
   }
   pressure->assign(ne, 0.0);
   volume_ratio->assign(ne, 0.0);
-  for (int e = 0; e < ne; ++e) {
-    for (int a : mesh.tets[e]) {
-      (*pressure)[e] += nodal_pressure[a] / 4;
-      (*volume_ratio)[e] += v[a] / v0[a] / 4;
-    }
+  for (std::size_t t = 0; t < incidence.index.size(); ++t) {
+    const int e = incidence.index[t], group = groups.of_incidence[t];
+    const double j = v[group] / groups.volume[group];
+    (*pressure)[e] += GroupVolumetric(field, groups, group, j).first / 4;
+    (*volume_ratio)[e] += j / 4;
   }
 }
 

@@ -28,14 +28,18 @@ std::unique_ptr<FiniteStrainModel> MakeAverageNodalPressureTet4Model(
 
 // With a material per element (analysis/material_field.h), which must
 // outlive the model; its current step is read at every evaluation. A node
-// shared by elements of different materials carries each one's volumetric
-// energy on that element's share of the node's volume:
-//   Pi_vol = sum_a sum_{e ∋ a} (V_e / 4) U_e(J_a).
+// shared by elements of different materials has one volumetric constraint
+// per material, over that material's elements around it (the pressure
+// jumps at an interface; a growing inclusion is not held to the volume of
+// the incompressible tissue around it):
+//   Pi_vol = sum_a sum_m V_am U_m(v_am / V_am),
+//   V_am, v_am = sum over the elements e ∋ a of material m of V_e / 4, v_e / 4.
 std::unique_ptr<FiniteStrainModel> MakeAverageNodalPressureTet4Model(const Mesh& mesh,
                                                                      const MaterialField& field);
 
 // Each element's pressure and volume ratio at `u` as the model sees them:
-// the means over its corners of dPi_vol/dv_a and of J_a = v_a / V_a.
+// the means over its corners of U_m'(J_am) and of J_am = v_am / V_am, m the
+// element's material.
 void AverageNodalPressures(const Mesh& mesh, const MaterialField& field, const Eigen::VectorXd& u,
                            std::vector<double>* pressure, std::vector<double>* volume_ratio);
 

@@ -15,6 +15,7 @@
 #include <utility>
 #include <vector>
 
+#include "analysis/material_field.h"
 #include "analysis/newton_static.h"
 #include "common/finite_strain_checks.h"
 #include "fem/tet4_finite_strain.h"
@@ -70,6 +71,63 @@ TEST(AverageNodalPressure, TangentIsTheForceDerivativeAndLiftsPrescribedValues) 
     const Eigen::VectorXd u = testing::RandomSmoothDisplacement(mesh, 0.06, 11, kEdge);
     testing::ExpectTangentIsForceDerivative(*model, u, dofs, c.name, 1e-9, 1e-7);
   }
+}
+
+// Two materials (a stiff growing one in half the cube), a viscous step with
+// history: each node on the interface has one volumetric constraint per
+// material; force and tangent stay the derivatives of the step's energy.
+MaterialField TwoMaterials(const Mesh& mesh) {
+  std::vector<MaterialField::Entry> entries(2);
+  entries[0].material = std::make_shared<PolynomialMaterial>(NeoHookeanCoefficients(1000, 1e6));
+  entries[0].relaxation = PronySeries{{0.5, 0.2}, {0.1, 10}};
+  entries[1].material = std::make_shared<PolynomialMaterial>(NeoHookeanCoefficients(2000, 6e3));
+  entries[1].growth_strain = 0.2;
+  std::vector<int> of_element(mesh.num_elements(), 0);
+  for (int e = 0; e < mesh.num_elements(); ++e) {
+    double x = 0;
+    for (int a : mesh.tets[e]) x += mesh.nodes(a, 0) / 4;
+    of_element[e] = x > kEdge / 2;
+  }
+  return MaterialField(std::move(entries), std::move(of_element));
+}
+
+TEST(AverageNodalPressure, MaterialsGrowthAndHistoryKeepForceAndTangentExact) {
+  const Mesh mesh = Cube(2.5);
+  MaterialField field = TwoMaterials(mesh);
+  const auto model = MakeAverageNodalPressureTet4Model(mesh, field);
+  // A committed step, then a trial step with history and growth.
+  field.BeginStep(0.05, 0.5);
+  field.Commit(
+      ElementDeformationGradients(mesh, testing::RandomSmoothDisplacement(mesh, 0.04, 3, kEdge)));
+  field.BeginStep(0.05, 1.0);
+  const Eigen::VectorXd u = testing::RandomSmoothDisplacement(mesh, 0.06, 5, kEdge);
+  testing::ExpectForceIsEnergyDerivative(*model, u, "two materials", 1e-9, 1e-7);
+  testing::ExpectTangentIsForceDerivative(*model, u, testing::BottomHeldSomeTopMoved(mesh),
+                                          "two materials", 1e-9, 1e-7);
+}
+
+TEST(AverageNodalPressure, AGrownBodyIsStressFreeAtItsGrownShape) {
+  // Growth by 10 % in every direction of a nearly incompressible body: the
+  // nodal volume ratios must reach 1.331 with no energy.
+  const Mesh mesh = Cube(2.5);
+  std::vector<MaterialField::Entry> entries(2);
+  entries[0].material = std::make_shared<PolynomialMaterial>(NeoHookeanCoefficients(1000, 1e7));
+  entries[1].material = std::make_shared<PolynomialMaterial>(NeoHookeanCoefficients(1000, 1e7));
+  entries[1].growth_strain = 0.1;
+  std::vector<int> of_element(mesh.num_elements(), 1);
+  MaterialField grown(std::move(entries), std::move(of_element));
+  grown.BeginStep(0, 1.0);
+  // All of the cube grows and nothing holds it but rigid modes: the model
+  // is stress-free at u = 0.1 X.
+  const auto model = MakeAverageNodalPressureTet4Model(mesh, grown);
+  Eigen::VectorXd u(3 * mesh.num_nodes());
+  for (int a = 0; a < mesh.num_nodes(); ++a)
+    u.segment<3>(3 * a) = 0.1 * mesh.nodes.row(a).transpose();
+  Eigen::VectorXd force;
+  double energy = 0;
+  ASSERT_TRUE(model->InternalForce(u, &force, &energy));
+  EXPECT_LT(force.cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_LT(std::abs(energy), 1e-15);
 }
 
 // Nodes that share no element still couple (through a common neighbour's
