@@ -247,6 +247,13 @@ Status SolveFiniteStrain(const SceneSpec& scene, const Model& model, PhaseClock*
     if (timed) history.Record(solid, &loads, load, amplitude(load), u, solution);
   };
 
+  if (timed) {
+    // The history starts at t = 0 with the state before any step.
+    for (auto& contact : contacts) contact->SetAmplitude(amplitude(0));
+    field->BeginStep(0, amplitude(0));
+    history.Record(solid, &loads, 0, amplitude(0), Eigen::VectorXd::Zero(dofs.num_dofs()),
+                   solution);
+  }
   clock.Begin("newton", 0.05, 0.85,
               timed
                   ? Format("Newton-Raphson on %d unknowns through %g s", dofs.num_free(), duration)

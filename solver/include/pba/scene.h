@@ -303,8 +303,9 @@ struct InclusionSpec {
 //               normal axis pointing into the tissue (e.g. a skull base).
 // The contact is enforced by a penalty, augmented (Uzawa) until the deepest
 // penetration is below penetration_tolerance_mm; the penalty stiffness is
-// penalty_factor times the tissue's initial shear modulus over the element
-// size, per unit area.
+// penalty_factor times the tissue's initial shear modulus over the finest
+// element size (an atlas's region-of-interest size when it has one), per
+// unit area, and the default tolerance 1 % of that size.
 struct ContactSpec {
   enum class Shape { kNone, kFlatPunch, kSphere, kPlane };
   std::string name;  // names its force and area in the summary and history
@@ -316,7 +317,7 @@ struct ContactSpec {
   std::array<double, 3> motion_mm{0, 0, 0};
   double friction = 0;                  // Coulomb coefficient, 0..0.5
   double penalty_factor = 0;            // 0: 100
-  double penetration_tolerance_mm = 0;  // 0: 1 % of the element size
+  double penetration_tolerance_mm = 0;  // 0: 1 % of the finest element size
   // Moved along `axis` before the analysis until it just touches the set's
   // nearest node (position_mm need only lie off the surface, on the side
   // the axis points from).
