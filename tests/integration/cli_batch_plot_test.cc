@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "atlas/png_io.h"
+#include "integration/server_fixture.h"
 #include "integration/subprocess.h"
 #include "io/line_plot.h"
 
@@ -23,13 +24,6 @@ namespace fs = std::filesystem;
 
 constexpr int kInvalid = 5;    // client_cli/exit_codes.h
 constexpr int kJobFailed = 6;  // client_cli/exit_codes.h
-
-std::string ReadFile(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
 
 // A 10 mm box of neo-Hookean tissue in 5 mm elements, its bottom fixed and
 // its top moved down 1 mm along the default ramp over end_time_s.
@@ -57,28 +51,8 @@ long CountColour(const RgbImage& image, const std::array<uint8_t, 3>& colour) {
   return n;
 }
 
-class CliBatchPlotTest : public ::testing::Test {
+class CliBatchPlotTest : public ServerTest {
  protected:
-  void SetUp() override {
-    server_ = std::make_unique<ServerProcess>(PBA_SERVER_BIN, dir_.path() / "data");
-    std::string log;
-    ASSERT_TRUE(server_->Start(&log)) << "pba-server did not start:\n" << log;
-    std::ifstream token(dir_.path() / "data" / "admin.token");
-    std::string admin;
-    ASSERT_TRUE(token >> admin);
-    ::setenv("PBA_TOKEN", admin.c_str(), 1);
-    std::ofstream(dir_.path() / "box.yaml") << kScene;
-  }
-
-  void TearDown() override {
-    if (HasFailure()) std::cerr << "server log:\n" << ReadFile(server_->log_path());
-  }
-
-  RunResult Pba(std::vector<std::string> args) {
-    args.insert(args.begin(), {PBA_CLI_BIN, "--server", server_->address()});
-    return RunProcess(args, std::chrono::seconds(120));
-  }
-
   // A batch file `stem`.yaml of the box with the given members and plot.
   fs::path Batch(const std::string& stem, const std::string& members, const std::string& plot,
                  const std::string& scene = "box.yaml") {
@@ -88,18 +62,6 @@ class CliBatchPlotTest : public ::testing::Test {
                         << plot;
     return file;
   }
-
-  size_t JobCount() {
-    const RunResult list = Pba({"--json", "job", "list", "--all"});
-    size_t jobs = 0;
-    for (size_t at = list.out.find("\"id\""); at != std::string::npos;
-         at = list.out.find("\"id\"", at + 1))
-      ++jobs;
-    return jobs;
-  }
-
-  TempDir dir_;
-  std::unique_ptr<ServerProcess> server_;
 };
 
 const std::string kTwoSpeeds = "sweep:\n  analysis.time.end_time_s: [1, 2]\n";

@@ -14,6 +14,7 @@
 #include <string>
 #include <thread>
 
+#include "integration/server_fixture.h"
 #include "integration/subprocess.h"
 
 namespace pba::testing {
@@ -40,35 +41,8 @@ boundary_conditions:
   - {set: top, displacement: {z_mm: -1}}
 )";
 
-std::string ReadFile(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
-class CliServerTest : public ::testing::Test {
+class CliServerTest : public ServerTest {
  protected:
-  void SetUp() override {
-    server_ = std::make_unique<ServerProcess>(PBA_SERVER_BIN, dir_.path() / "data");
-    std::string log;
-    ASSERT_TRUE(server_->Start(&log)) << "pba-server did not start:\n" << log;
-    // Jobs need a user: the admin the first start created.
-    std::ifstream token(dir_.path() / "data" / "admin.token");
-    std::string admin;
-    ASSERT_TRUE(token >> admin);
-    ::setenv("PBA_TOKEN", admin.c_str(), 1);
-  }
-
-  void TearDown() override {
-    if (HasFailure()) std::cerr << "server log:\n" << ReadFile(server_->log_path());
-  }
-
-  RunResult Pba(std::vector<std::string> args, seconds timeout = seconds(120)) {
-    args.insert(args.begin(), {PBA_CLI_BIN, "--server", server_->address()});
-    return RunProcess(args, timeout);
-  }
-
   fs::path WriteScene(const std::string& name, const std::string& yaml) {
     const fs::path path = dir_.path() / name;
     std::ofstream(path) << yaml;
@@ -100,9 +74,6 @@ class CliServerTest : public ::testing::Test {
     EXPECT_TRUE(WaitForState(id, "RUNNING", seconds(30)));
     return id;
   }
-
-  TempDir dir_;
-  std::unique_ptr<ServerProcess> server_;
 };
 
 // A finite-strain job travels the same way and its summary shows the Newton

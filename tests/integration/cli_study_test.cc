@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "integration/server_fixture.h"
 #include "integration/subprocess.h"
 
 namespace pba::testing {
@@ -21,13 +22,6 @@ namespace {
 namespace fs = std::filesystem;
 
 constexpr int kInvalid = 5;  // client_cli/exit_codes.h
-
-std::string ReadFile(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
 
 // The whitespace-separated cells of the printed line that starts with `first`.
 std::vector<std::string> Row(const std::string& out, const std::string& first) {
@@ -41,39 +35,7 @@ std::vector<std::string> Row(const std::string& out, const std::string& first) {
   return {};
 }
 
-class CliStudyTest : public ::testing::Test {
- protected:
-  void SetUp() override {
-    server_ = std::make_unique<ServerProcess>(PBA_SERVER_BIN, dir_.path() / "data");
-    std::string log;
-    ASSERT_TRUE(server_->Start(&log)) << "pba-server did not start:\n" << log;
-    std::ifstream token(dir_.path() / "data" / "admin.token");
-    std::string admin;
-    ASSERT_TRUE(token >> admin);
-    ::setenv("PBA_TOKEN", admin.c_str(), 1);
-  }
-
-  void TearDown() override {
-    if (HasFailure()) std::cerr << "server log:\n" << ReadFile(server_->log_path());
-  }
-
-  RunResult Pba(std::vector<std::string> args) {
-    args.insert(args.begin(), {PBA_CLI_BIN, "--server", server_->address()});
-    return RunProcess(args, std::chrono::seconds(120));
-  }
-
-  size_t JobCount() {
-    const RunResult list = Pba({"--json", "job", "list", "--all"});
-    size_t jobs = 0;
-    for (size_t at = list.out.find("\"id\""); at != std::string::npos;
-         at = list.out.find("\"id\"", at + 1))
-      ++jobs;
-    return jobs;
-  }
-
-  TempDir dir_;
-  std::unique_ptr<ServerProcess> server_;
-};
+using CliStudyTest = ServerTest;
 
 // Three meshes of the quick-start block (element sizes 2, 1.418, 1.006 mm:
 // 9000 to 72000 tetrahedra, about a second of solving in all). The top's
