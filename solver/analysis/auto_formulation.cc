@@ -76,11 +76,15 @@ Status SolveAuto(const SceneSpec& scene, const SolveOptions& options, Solution* 
           coarse_full.summary, coarse_reduced.summary, &estimate.quantity);
       estimate.reduced_coarse_s = coarse_reduced.summary.wall_time_s;
       estimate.full_coarse_s = coarse_full.summary.wall_time_s;
-      estimate.note = Format(
-          "on meshes twice as coarse the reduced model differs from the full one by %.3g %% "
-          "(%s) and took %.3g s against %.3g s",
-          100 * estimate.relative_difference, estimate.quantity.c_str(),
-          estimate.reduced_coarse_s, estimate.full_coarse_s);
+      estimate.note =
+          (estimate.quantity.empty()
+               ? std::string("on meshes twice as coarse no shared result of the reduced model "
+                             "differs from the full one's")
+               : Format("on meshes twice as coarse the reduced model differs from the full one "
+                        "by %.3g %% (%s)",
+                        100 * estimate.relative_difference, estimate.quantity.c_str())) +
+          Format(" and took %.3g s against %.3g s", estimate.reduced_coarse_s,
+                 estimate.full_coarse_s);
       side_phases.push_back({"auto: coarse reduced", estimate.reduced_coarse_s});
       side_phases.push_back({"auto: coarse full", estimate.full_coarse_s});
     }

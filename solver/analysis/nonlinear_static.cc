@@ -126,6 +126,48 @@ NewtonOptions OptionsOf(const NonlinearOptionsSpec& spec) {
 
 namespace {
 
+// The scene's rigid contacts, each placed touching the tissue when it asks
+// (noted in `notes`). The penalty is DefaultContactPenalty of the tissue's
+// shear modulus over the finest element size (an atlas's region of
+// interest is where a punch presses), the default tolerance 1 % of it.
+Status MakeContacts(const SceneSpec& scene, const Mesh& mesh, double shear_modulus_pa,
+                    std::vector<std::unique_ptr<RigidContact>>* contacts,
+                    std::vector<std::string>* notes) {
+  const AtlasSpec& atlas = scene.geometry.atlas;
+  const double element_size =
+      (scene.geometry.kind == GeometrySpec::Kind::kAtlas && atlas.roi_radius_mm > 0
+           ? std::min(atlas.roi_element_size_mm, EffectiveElementSize(scene.geometry, scene.mesh))
+           : EffectiveElementSize(scene.geometry, scene.mesh)) *
+      1e-3;
+  for (std::size_t k = 0; k < scene.contacts.size(); ++k) {
+    const ContactSpec& c = scene.contacts[k];
+    RigidBody rigid;
+    rigid.shape = c.shape;
+    rigid.position = Eigen::Vector3d(c.position_mm.data()) * 1e-3;
+    rigid.axis = Eigen::Vector3d(c.axis.data()).normalized();
+    rigid.radius = c.radius_mm * 1e-3;
+    rigid.motion = Eigen::Vector3d(c.motion_mm.data()) * 1e-3;
+    const FaceSet& set = mesh.face_sets.at(c.set);
+    if (c.start_touching) {
+      const Status placed = PlaceTouching(mesh, set, &rigid);
+      if (!placed.ok()) {
+        return Status::FailedPrecondition(Format("contacts[%zu].start_touching: ", k) +
+                                          placed.message());
+      }
+      notes->push_back(Format("contact %s placed touching the tissue at (%.4g, %.4g, %.4g) mm",
+                              c.name.c_str(), rigid.position.x() * 1e3, rigid.position.y() * 1e3,
+                              rigid.position.z() * 1e3));
+    }
+    const double penalty = DefaultContactPenalty(shear_modulus_pa, element_size,
+                                                 c.penalty_factor > 0 ? c.penalty_factor : 100);
+    const double tolerance =
+        c.penetration_tolerance_mm > 0 ? c.penetration_tolerance_mm * 1e-3 : 0.01 * element_size;
+    contacts->push_back(
+        std::make_unique<RigidContact>(mesh, set, rigid, penalty, c.friction, tolerance));
+  }
+  return Status::Ok();
+}
+
 // Both finite-strain analyses: NONLINEAR_STATIC ramps the loads with the
 // load factor, QUASI_STATIC follows them through time.
 Status SolveFiniteStrain(const SceneSpec& scene, const Model& model, PhaseClock* clock_ptr,
@@ -166,44 +208,14 @@ Status SolveFiniteStrain(const SceneSpec& scene, const Model& model, PhaseClock*
                     : mesh.hexahedral() ? MakeHex8Model(mesh, *field)
                     : plain             ? MakeTet4Model(mesh, *field)
                                         : MakeAverageNodalPressureTet4Model(mesh, *field);
-  // Rigid bodies: their penalty from the tissue's shear modulus at the mesh
-  // scale, their tolerance 1 % of an element unless the scene says.
-  // The finest elements of the mesh (an atlas's region of interest is
-  // where a punch presses).
-  const AtlasSpec& atlas = scene.geometry.atlas;
-  const double element_size =
-      (scene.geometry.kind == GeometrySpec::Kind::kAtlas && atlas.roi_radius_mm > 0
-           ? std::min(atlas.roi_element_size_mm, EffectiveElementSize(scene.geometry, scene.mesh))
-           : EffectiveElementSize(scene.geometry, scene.mesh)) *
-      1e-3;
   std::vector<std::unique_ptr<RigidContact>> contacts;
+  PBA_RETURN_IF_ERROR(
+      MakeContacts(scene, mesh, field->Base(0).ShearModulus(), &contacts, &summary.notes));
   std::vector<const RigidContact*> contact_views;
   std::vector<std::pair<std::string, const RigidContact*>> named_contacts;
-  for (const ContactSpec& c : scene.contacts) {
-    RigidBody rigid;
-    rigid.shape = c.shape;
-    rigid.position = Eigen::Vector3d(c.position_mm.data()) * 1e-3;
-    rigid.axis = Eigen::Vector3d(c.axis.data()).normalized();
-    rigid.radius = c.radius_mm * 1e-3;
-    rigid.motion = Eigen::Vector3d(c.motion_mm.data()) * 1e-3;
-    if (c.start_touching) {
-      const Status placed = PlaceTouching(mesh, mesh.face_sets.at(c.set), &rigid);
-      if (!placed.ok()) {
-        return Status::FailedPrecondition("contacts[" + std::to_string(contacts.size()) +
-                                          "].start_touching: " + placed.message());
-      }
-      summary.notes.push_back(
-          Format("contact %s placed touching the tissue at (%.4g, %.4g, %.4g) mm", c.name.c_str(),
-                 rigid.position.x() * 1e3, rigid.position.y() * 1e3, rigid.position.z() * 1e3));
-    }
-    const double penalty = DefaultContactPenalty(field->Base(0).ShearModulus(), element_size,
-                                                 c.penalty_factor > 0 ? c.penalty_factor : 100);
-    const double tolerance =
-        c.penetration_tolerance_mm > 0 ? c.penetration_tolerance_mm * 1e-3 : 0.01 * element_size;
-    contacts.push_back(std::make_unique<RigidContact>(mesh, mesh.face_sets.at(c.set), rigid,
-                                                      penalty, c.friction, tolerance));
-    contact_views.push_back(contacts.back().get());
-    named_contacts.emplace_back(c.name, contacts.back().get());
+  for (std::size_t i = 0; i < contacts.size(); ++i) {
+    contact_views.push_back(contacts[i].get());
+    named_contacts.emplace_back(scene.contacts[i].name, contacts[i].get());
   }
   const std::unique_ptr<FiniteStrainModel> touching =
       contacts.empty() ? nullptr : WithContact(*body, contact_views);

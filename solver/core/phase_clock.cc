@@ -17,7 +17,10 @@ void PhaseClock::Begin(const std::string& phase, double begin, double end,
 
 void PhaseClock::Update(double f, const std::string& message) {
   const double fraction = begin_ + std::clamp(f, 0.0, 1.0) * (end_ - begin_);
-  if (fraction - last_reported_ < 0.02) return;  // about fifty events per run at most
+  // About fifty events per run at most, and one every few seconds when the
+  // fraction creeps (the first steps of a long hold, Newton iterations on a
+  // big mesh), so a reader sees the run is alive.
+  if (fraction - last_reported_ < 0.02 && Seconds(last_emitted_) < kQuietSeconds) return;
   Emit(fraction, message.empty() ? message_ : message);
 }
 
@@ -30,6 +33,7 @@ void PhaseClock::End() {
 void PhaseClock::Emit(double fraction, const std::string& message) {
   fraction = std::max(fraction, last_reported_);
   last_reported_ = fraction;
+  last_emitted_ = Clock::now();
   if (options_.progress) options_.progress({phase_, fraction, message});
 }
 

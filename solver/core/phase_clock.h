@@ -20,7 +20,8 @@ class PhaseClock {
   // Ends the current phase (recording its time) and starts `phase`, which
   // covers the fractions [begin, end] of the whole run.
   void Begin(const std::string& phase, double begin, double end, const std::string& message);
-  // Reports progress `f` (0..1) within the current phase; rate-limited.
+  // Reports progress `f` (0..1) within the current phase; rate-limited to
+  // steps of 2 % of the run, or kQuietSeconds since the last report.
   void Update(double f, const std::string& message = "");
   // Ends the current phase.
   void End();
@@ -41,6 +42,8 @@ class PhaseClock {
   std::string phase_;
   std::string message_;
   double begin_ = 0, end_ = 0, last_reported_ = -1;
+  Clock::time_point last_emitted_ = Clock::now();
+  static constexpr double kQuietSeconds = 5;
 };
 
 }  // namespace pba

@@ -5,7 +5,9 @@
 #include <set>
 
 #include "analysis/time_curve.h"
+#include "atlas/colour_table.h"
 #include "core/format.h"
+#include "material/tissue_library.h"
 #include "mesh/primitive_mesher.h"
 #include "scene/materials.h"
 
@@ -65,9 +67,24 @@ void ReduceViscoelasticity(const SceneSpec& scene, SceneSpec* reduced,
          kept.g.size() != series.g.size()});
   }
   if (!scene.material_library.empty()) {
+    // The library's materials for the built-in atlas's structures: does the
+    // window reduce any of their terms?
+    int reduced_terms = 0, terms = 0;
+    for (const ColourEntry& entry : ColourTable::Builtin().entries()) {
+      MaterialSpec material;
+      if (!LibraryMaterial(scene.material_library, entry.name, &material, nullptr).ok()) continue;
+      const PronySeries series = RelaxationOf(material.viscoelastic);
+      double scale = 1;
+      terms += static_cast<int>(series.g.size());
+      reduced_terms += static_cast<int>(series.g.size() -
+                                        ReduceRelaxation(series, relaxed, frozen, &scale).g.size());
+    }
     decisions->push_back(
-        {"viscoelasticity", "library " + scene.material_library + ": the same rule per structure",
-         Format("terms below %g s relaxed, above %g s dropped", relaxed, frozen), true});
+        {"viscoelasticity",
+         Format("library %s: %d of its %d relaxation terms (over the structures) reduced",
+                scene.material_library.c_str(), reduced_terms, terms),
+         Format("terms below %g s relaxed, above %g s dropped", relaxed, frozen),
+         reduced_terms > 0});
   }
 }
 
@@ -136,31 +153,23 @@ void ReduceStructures(const SceneSpec& scene, SceneSpec* reduced,
     named.insert(r.structures.begin(), r.structures.end());
   }
   for (const InclusionSpec& inclusion : scene.inclusions) named.erase(inclusion.name);
-  AtlasSpec& atlas = reduced->geometry.atlas;
-  if (!scene.geometry.atlas.structures.empty()) {
-    // The scene chose its structures; keep those it names, if any.
-    std::vector<std::string> kept;
+  // Without a named structure there is nothing to keep apart: the scene
+  // is left as it is (an empty list would mean every structure).
+  std::vector<std::string> kept;
+  if (scene.geometry.atlas.structures.empty()) {
+    kept.assign(named.begin(), named.end());
+  } else {
     for (const std::string& s : scene.geometry.atlas.structures) {
       if (named.count(s) > 0) kept.push_back(s);
     }
-    if (kept.size() == scene.geometry.atlas.structures.size() ||
-        (!scene.geometry.atlas.merge_rest && kept.empty())) {
-      return;
-    }
-    atlas.structures = kept;
-  } else {
-    atlas.structures.assign(named.begin(), named.end());
+    if (kept.size() == scene.geometry.atlas.structures.size()) return;
   }
-  atlas.merge_rest = true;
+  if (kept.empty()) return;
+  reduced->geometry.atlas.structures = kept;
+  reduced->geometry.atlas.merge_rest = true;
   decisions->push_back(
-      {"structures",
-       atlas.structures.empty() ? std::string("one body: every structure merged into one region")
-                                : Format("%zu structure(s) kept, the rest merged into one region",
-                                         atlas.structures.size()),
-       atlas.structures.empty()
-           ? std::string("the scene names no structure in its outputs or materials")
-           : std::string("the structures the outputs and materials name"),
-       true});
+      {"structures", Format("%zu structure(s) kept, the rest merged into one region", kept.size()),
+       "the structures the outputs and materials name", true});
 }
 
 SceneSpec Coarsened(const SceneSpec& scene) {

@@ -41,8 +41,8 @@ void ReduceFiniteStrain(const SceneSpec& scene, std::optional<double> max_strain
                         SceneSpec* reduced, std::vector<ModelDecision>* decisions);
 
 // Of an atlas, keeps only the structures the scene names (outputs,
-// region_materials), merging the rest into one region; all of them
-// merged when it names none.
+// region_materials), merging the rest into one region; nothing changes
+// when it names none.
 void ReduceStructures(const SceneSpec& scene, SceneSpec* reduced,
                       std::vector<ModelDecision>* decisions);
 
