@@ -145,7 +145,7 @@ material:
   density_kg_per_m3: 1040
   viscoelastic:
     prony: {g: [0.5, 0.2], tau_s: [0.5, 5]}
-material_library: default
+material_library: rat-brain-prony
 region_materials:
   - structures: [Putamen]
     material:
@@ -194,7 +194,7 @@ TEST(YamlCodecTest, NewSceneKeysRoundTrip) {
   ParseError error;
   ASSERT_TRUE(ParseYaml(kQuasiStaticScene, &scene, &error)) << error.ToString();
   EXPECT_EQ(scene.material().viscoelastic().prony().tau_s(1), 5.0);
-  EXPECT_EQ(scene.material_library(), "default");
+  EXPECT_EQ(scene.material_library(), "rat-brain-prony");
   ASSERT_EQ(scene.region_materials_size(), 1);
   EXPECT_EQ(scene.region_materials(0).material().viscoelastic().exponential().beta_per_s(), 2.0);
   ASSERT_EQ(scene.inclusions_size(), 1);

@@ -492,7 +492,7 @@ TEST(SceneFromProto, RegionMaterialsOnAnAtlas) {
   ASSERT_TRUE(codec::ParseYaml(R"(
 geometry: {atlas: {structures: [Putamen, Globus pallidus lateralis]}}
 material: {linear_elastic: {youngs_modulus_pa: 3000, poissons_ratio: 0.45}}
-material_library: default
+material_library: rat-brain-prony
 region_materials:
   - structures: [Putamen]
     material: {linear_elastic: {youngs_modulus_pa: 6000, poissons_ratio: 0.4}}
@@ -514,7 +514,7 @@ outputs: {structure_displacements: ["*"]}
       0);
   status = SceneFromProto(scene, &spec);
   ASSERT_TRUE(status.ok()) << status.ToString();
-  EXPECT_EQ(spec.material_library, "default");
+  EXPECT_EQ(spec.material_library, "rat-brain-prony");
   ASSERT_EQ(spec.region_materials.size(), 2u);
   EXPECT_EQ(spec.region_materials[0].structures, (std::vector<std::string>{"Putamen"}));
   EXPECT_EQ(spec.region_materials[0].material.linear_elastic.youngs_modulus_pa, 6000);

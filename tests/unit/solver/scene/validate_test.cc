@@ -271,7 +271,7 @@ SceneSpec QuasiStaticScene() {
   s.material.viscoelastic.form = ViscoelasticSpec::Form::kProny;
   s.material.viscoelastic.g = {0.5, 0.2};
   s.material.viscoelastic.tau_s = {0.5, 5};
-  s.material_library = "default";
+  s.material_library = "rat-brain-prony";
 
   RegionMaterialSpec putamen;
   putamen.structures = {"Putamen"};
@@ -455,9 +455,12 @@ INSTANTIATE_TEST_SUITE_P(
         Case{"material_library_without_atlas",
              [](SceneSpec* s) {
                ToBox(s);
-               s->material_library = "default";
+               s->material_library = "rat-brain-prony";
              },
              "material_library", "geometry.atlas"},
+        Case{"material_library_unknown",
+             [](SceneSpec* s) { s->material_library = "no-such-tissue"; },
+             "material_library", "rat-brain-prony, brain-ogden-qlv"},
         Case{"region_materials_without_atlas",
              [](SceneSpec* s) {
                const auto regions = s->region_materials;
