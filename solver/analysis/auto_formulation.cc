@@ -34,9 +34,12 @@ Status SolveAuto(const SceneSpec& scene, const SolveOptions& options, Solution* 
   ReduceStructures(full, &reduced, &decisions);
 
   // Side runs report no progress of their own (the job's progress is the
-  // reduced solve's) but stop when asked to.
+  // reduced solve's) but stop when asked to; checkpoints and restarts are
+  // the reduced solve's alone.
   SolveOptions side = options;
   side.progress = nullptr;
+  side.checkpoint_dir.clear();
+  side.restart_from.clear();
   std::vector<PhaseTime> side_phases;
   std::optional<double> strain;
   if (full.analysis.type == AnalysisSpec::Type::kNonlinearStatic &&
@@ -79,8 +82,8 @@ Status SolveAuto(const SceneSpec& scene, const SolveOptions& options, Solution* 
       estimate.note = Format(
           "on meshes twice as coarse the reduced model differs from the full one by %.3g %% "
           "(%s) and took %.3g s against %.3g s",
-          100 * estimate.relative_difference, estimate.quantity.c_str(),
-          estimate.reduced_coarse_s, estimate.full_coarse_s);
+          100 * estimate.relative_difference, estimate.quantity.c_str(), estimate.reduced_coarse_s,
+          estimate.full_coarse_s);
       side_phases.push_back({"auto: coarse reduced", estimate.reduced_coarse_s});
       side_phases.push_back({"auto: coarse full", estimate.full_coarse_s});
     }
