@@ -373,6 +373,8 @@ Checkpointer::Checkpointer(const SolveOptions& options, std::string scene_name, 
       field_(field),
       contacts_(std::move(contacts)),
       last_write_(std::chrono::steady_clock::now()) {
+  // Only checkpoints and restarts need it (it reads the whole mesh).
+  if (!writes() && !restarts()) return;
   fingerprint_ = FingerprintOf(
       mesh, dofs, *field, std::vector<const RigidContact*>(contacts_.begin(), contacts_.end()));
 }
@@ -393,6 +395,14 @@ Status Checkpointer::Restore(Solution* solution, NewtonOptions* newton,
   if (c.time_s > duration_s_ * (1 + 1e-12)) {
     return Status::FailedPrecondition(Format(
         "the checkpoint reached t = %g s, past this analysis' end at %g s", c.time_s, duration_s_));
+  }
+  // A run that has ended leaves nothing to solve (and its last step's
+  // viscous response, which the final stresses come from, is not kept).
+  if (c.time_s >= duration_s_ * (1 - 1e-12)) {
+    return Status::FailedPrecondition(
+        Format("the checkpoint is at this analysis' end (t = %g s): nothing is left to solve; a "
+               "later analysis.time.end_time_s continues it",
+               c.time_s));
   }
   PBA_RETURN_IF_ERROR(field_->RestoreHistory(c.material_history));
   for (std::size_t i = 0; i < contacts_.size(); ++i) {

@@ -89,7 +89,7 @@ class Checkpointer {
   bool restarts() const { return !options_.restart_from.empty(); }
 
   // Reads options.restart_from, refuses it when it is of another solver
-  // version, model or a later time than this analysis ends, and restores
+  // version or model, or whose time is at or past this analysis' end, and restores
   // the field's history, the contacts' states, the history rows and step
   // records into `solution`, the peak contact forces and Newton's start
   // (start_load, start_u, start_step).

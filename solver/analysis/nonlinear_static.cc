@@ -251,10 +251,6 @@ Status SolveFiniteStrain(const SceneSpec& scene, const Model& model, PhaseClock*
   // Checkpoints (QUASI_STATIC only): a restart takes up the state of a
   // converged step; later ones are written after converged steps.
   const SolveOptions& solve_options = clock.options();
-  if (!timed && !solve_options.restart_from.empty()) {
-    return Status::InvalidArgument("restart_from",
-                                   "only a QUASI_STATIC analysis restarts from a checkpoint");
-  }
   std::vector<RigidContact*> contact_state;
   for (auto& contact : contacts) contact_state.push_back(contact.get());
   Checkpointer checkpoints(solve_options, scene.name, duration, mesh, dofs, field.get(),

@@ -214,7 +214,8 @@ TEST_F(CheckpointRestartTest, ACheckpointOfAnotherModelIsRefusedNamingWhatDiffer
   SceneSpec shorter = PressAndHold(10);
   for (const Case& c : {Case{"mesh has", finer}, Case{"materials differ", stiffer},
                         Case{"boundary conditions differ", held}, Case{"contacts differ", rough},
-                        Case{"past this analysis' end", shorter}}) {
+                        Case{"past this analysis' end", shorter},
+                        Case{"nothing is left to solve", PressAndHold()}}) {
     Solution solution;
     const Status status = SolveScene(c.scene, options, &solution);
     std::printf("%s\n", status.ToString().c_str());
@@ -248,16 +249,20 @@ TEST_F(CheckpointRestartTest, AFileThatIsNotACheckpointIsRefused) {
 }
 
 TEST_F(CheckpointRestartTest, OnlyQuasiStaticRestarts) {
-  SceneSpec s = PressAndHold();
-  s.analysis.type = AnalysisSpec::Type::kNonlinearStatic;
-  s.material.viscoelastic = ViscoelasticSpec();
-  s.analysis.time = TimeSpec();
-  s.contacts.clear();
-  SolveOptions options;
-  options.restart_from = *full_dir_ / "checkpoint.h5";
-  Solution solution;
-  const Status status = SolveScene(s, options, &solution);
-  EXPECT_EQ(status.code(), Status::Code::kInvalidArgument) << status.ToString();
+  for (auto type : {AnalysisSpec::Type::kNonlinearStatic, AnalysisSpec::Type::kLinearStatic}) {
+    SceneSpec s = PressAndHold();
+    s.analysis.type = type;
+    s.material.viscoelastic = ViscoelasticSpec();
+    s.analysis.time = TimeSpec();
+    s.contacts.clear();
+    s.mesh.element = ElementType::kTet4;
+    SolveOptions options;
+    options.restart_from = *full_dir_ / "checkpoint.h5";
+    Solution solution;
+    const Status status = SolveScene(s, options, &solution);
+    EXPECT_EQ(status.code(), Status::Code::kInvalidArgument) << status.ToString();
+    EXPECT_EQ(status.field(), "restart_from") << status.ToString();
+  }
 }
 
 }  // namespace
