@@ -150,8 +150,16 @@ struct AtlasCacheFlags {
   double gib = 2.0;  // the directory's bound
 };
 
+// --checkpoint, --checkpoint-every, --restart (QUASI_STATIC).
+struct CheckpointFlags {
+  std::string dir;      // empty: no checkpoints
+  double every_s = 30;  // at most this often [s of wall time]
+  std::string restart;  // a checkpoint.h5 to continue from; empty: from t = 0
+};
+
 int Run(const std::string& scene_path, const std::string& out_dir, const std::string& inp_path,
-        ProgressMode mode, int threads, const AtlasCacheFlags& cache) {
+        ProgressMode mode, int threads, const AtlasCacheFlags& cache,
+        const CheckpointFlags& checkpoint) {
   Reporter reporter(mode);
 
   v1::Scene scene;
@@ -175,6 +183,9 @@ int Run(const std::string& scene_path, const std::string& out_dir, const std::st
   options.threads = threads;
   options.cancel = &g_cancel;
   options.progress = [&reporter](const ProgressEvent& event) { reporter.Progress(event); };
+  options.checkpoint_dir = checkpoint.dir;
+  options.checkpoint_every_s = checkpoint.every_s;
+  options.restart_from = checkpoint.restart;
   if (!cache.dir.empty()) {
     // A cache that cannot be made costs this solve its speed-up, not its
     // result.
@@ -310,6 +321,17 @@ int main(int argc, char** argv) {
                  "Bound of the --atlas-cache directory [GiB]; least recently used meshes go")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
+  pba::CheckpointFlags checkpoint;
+  app.add_option("--checkpoint", checkpoint.dir,
+                 "QUASI_STATIC: write DIR/checkpoint.h5 (created if absent) after converged time "
+                 "steps and after the last, so that an interrupted run can be resumed (--restart)");
+  app.add_option("--checkpoint-every", checkpoint.every_s,
+                 "Wall time between two checkpoints at least [s]; 0 writes after every step")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  app.add_option("--restart", checkpoint.restart,
+                 "QUASI_STATIC: continue from this checkpoint.h5 (same mesh, materials, "
+                 "constraints and contacts; the time curve may run further)");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -343,7 +365,7 @@ int main(int argc, char** argv) {
                    "pba-solve: --out DIR is required (or --export-inp FILE to export only)\n");
       return pba::kExitInvalid;
     }
-    return pba::Run(scene_path, out_dir, inp_path, mode, threads, cache);
+    return pba::Run(scene_path, out_dir, inp_path, mode, threads, cache, checkpoint);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "pba-solve: internal error: %s\n", e.what());
     return pba::kExitInternal;

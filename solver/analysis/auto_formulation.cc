@@ -34,9 +34,12 @@ Status SolveAuto(const SceneSpec& scene, const SolveOptions& options, Solution* 
   ReduceStructures(full, &reduced, &decisions);
 
   // Side runs report no progress of their own (the job's progress is the
-  // reduced solve's) but stop when asked to.
+  // reduced solve's) but stop when asked to; checkpoints and restarts are
+  // the reduced solve's alone.
   SolveOptions side = options;
   side.progress = nullptr;
+  side.checkpoint_dir.clear();
+  side.restart_from.clear();
   std::vector<PhaseTime> side_phases;
   std::optional<double> strain;
   if (full.analysis.type == AnalysisSpec::Type::kNonlinearStatic &&

@@ -248,7 +248,8 @@ Status SolveNewtonStatic(const FiniteStrainModel& model, const ExternalLoads* lo
   // passed a bifurcation and follows the now unstable fundamental branch):
   // its indefinite tangent is then the right predictor.
   bool unstable_branch = false;
-  double step = 1.0 / std::max(1, options.initial_increments);
+  double step =
+      options.start_step > 0 ? options.start_step : 1.0 / std::max(1, options.initial_increments);
   std::string last_failure;
   auto cancelled = [&] { return Status::Cancelled(Format("cancelled at load factor %.4g", load)); };
 
@@ -397,6 +398,7 @@ Status SolveNewtonStatic(const FiniteStrainModel& model, const ExternalLoads* lo
       if (iteration <= options.quick_iterations) {
         step = std::min(step * 1.5, options.max_increment);
       }
+      if (options.after_increment) PBA_RETURN_IF_ERROR(options.after_increment(load, step, *u));
       continue;
     }
     if (status.code() == Status::Code::kCancelled) return status;

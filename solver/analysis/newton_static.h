@@ -73,6 +73,15 @@ struct NewtonOptions {
   // restart); the state must be converged at start_load.
   double start_load = 0;
   Eigen::VectorXd start_u;
+  // The size of the first increment (load factor); 0: 1 / initial_increments.
+  // A restart passes the next_step its checkpoint was written with, so that
+  // it takes the steps the uninterrupted solve would.
+  double start_step = 0;
+  // Called after on_increment with the converged load factor, the size of
+  // the increment to be tried next and the state (e.g. to write a
+  // checkpoint); an error stops the solve with it.
+  std::function<Status(double load_factor, double next_step, const Eigen::VectorXd& u)>
+      after_increment;
 };
 
 struct IncrementRecord {

@@ -8,6 +8,7 @@
 #include <optional>
 
 #include "analysis/average_nodal_pressure_model.h"
+#include "analysis/checkpoint.h"
 #include "analysis/error_estimator.h"
 #include "analysis/finite_strain_model.h"
 #include "analysis/hex8_model.h"
@@ -259,19 +260,35 @@ Status SolveFiniteStrain(const SceneSpec& scene, const Model& model, PhaseClock*
     if (timed) history.Record(solid, &loads, load, amplitude(load), u, solution);
   };
 
-  if (timed) {
+  // Checkpoints (QUASI_STATIC only): a restart takes up the state of a
+  // converged step; later ones are written after converged steps.
+  const SolveOptions& solve_options = clock.options();
+  std::vector<RigidContact*> contact_state;
+  for (auto& contact : contacts) contact_state.push_back(contact.get());
+  Checkpointer checkpoints(solve_options, scene.name, duration, mesh, dofs, field.get(),
+                           contact_state);
+  NewtonReport report;
+  if (timed && checkpoints.restarts()) {
+    PBA_RETURN_IF_ERROR(checkpoints.Restore(solution, &options, &peak_contact_force));
+    summary.notes.push_back(
+        Format("restarted from a checkpoint at t = %g s", checkpoints.restored_time_s()));
+  } else if (timed) {
     // The history starts at t = 0 with the state before any step.
     for (auto& contact : contacts) contact->SetAmplitude(amplitude(0));
     field->BeginStep(0, amplitude(0));
     history.Record(solid, &loads, 0, amplitude(0), Eigen::VectorXd::Zero(dofs.num_dofs()),
                    solution);
   }
+  if (timed && checkpoints.writes()) {
+    options.after_increment = [&](double load, double next_step, const Eigen::VectorXd& u) {
+      return checkpoints.AfterIncrement(load, next_step, u, *solution, report, peak_contact_force);
+    };
+  }
   clock.Begin("newton", 0.05, 0.85,
               timed
                   ? Format("Newton-Raphson on %d unknowns through %g s", dofs.num_free(), duration)
                   : Format("Newton-Raphson on %d unknowns, %d initial increments", dofs.num_free(),
                            options.initial_increments));
-  NewtonReport report;
   Eigen::VectorXd u;
   if (!loads.empty()) {
     const Eigen::Vector3d total = loads.ReferenceResultant();
@@ -297,6 +314,7 @@ Status SolveFiniteStrain(const SceneSpec& scene, const Model& model, PhaseClock*
   // estimate; only the solver's name is wanted after Newton.
   const std::string solver_name = solver->Name();
   solver.reset();
+  checkpoints.Merge(&report);
   summary.newton_iterations = report.total_iterations;
   summary.increment_cuts = report.cuts;
   summary.newton_assembly_s = report.assembly_s;

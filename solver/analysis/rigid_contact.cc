@@ -256,6 +256,25 @@ void RigidContact::Commit(const Eigen::VectorXd& u) {
   }
 }
 
+std::vector<double> RigidContact::SaveState() const {
+  std::vector<double> values(lambda_);
+  for (const Eigen::Vector3d& s : stick_) values.insert(values.end(), s.data(), s.data() + 3);
+  return values;
+}
+
+Status RigidContact::RestoreState(const std::vector<double>& values) {
+  if (values.size() != 4 * nodes_.size()) {
+    return Status::InvalidArgument("contact", "its state holds " + std::to_string(values.size()) +
+                                                  " numbers where this contact's " +
+                                                  std::to_string(nodes_.size()) + " nodes keep " +
+                                                  std::to_string(4 * nodes_.size()));
+  }
+  const std::size_t n = nodes_.size();
+  lambda_.assign(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(n));
+  for (std::size_t k = 0; k < n; ++k) stick_[k] = Eigen::Vector3d(&values[n + 3 * k]);
+  return Status::Ok();
+}
+
 ContactMeasure RigidContact::Measure(const Eigen::VectorXd& u) const {
   ContactMeasure m;
   for (int k = 0; k < static_cast<int>(nodes_.size()); ++k) {

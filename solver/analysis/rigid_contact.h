@@ -148,6 +148,12 @@ class RigidContact {
 
   ContactMeasure Measure(const Eigen::VectorXd& u) const;
 
+  // The state carried from step to step, as flat numbers (a checkpoint):
+  // per node its multiplier [Pa], then per node its stick point [m]. Restore
+  // fails on a length that does not fit this contact's face set.
+  std::vector<double> SaveState() const;
+  Status RestoreState(const std::vector<double>& values);
+
   const std::vector<int>& nodes() const { return nodes_; }
   const std::vector<double>& areas() const { return areas_; }         // [m^2], per node
   const std::vector<double>& multipliers() const { return lambda_; }  // [Pa], per node

@@ -55,6 +55,10 @@ const char* SolverVersion() { return PBA_VERSION; }
 
 Status SolveScene(const SceneSpec& scene, const SolveOptions& options, Solution* solution) {
   PBA_RETURN_IF_ERROR(ValidateScene(scene));
+  if (!options.restart_from.empty() && scene.analysis.type != AnalysisSpec::Type::kQuasiStatic) {
+    return Status::InvalidArgument("restart_from",
+                                   "only a QUASI_STATIC analysis restarts from a checkpoint");
+  }
   if (scene.formulation == Formulation::kAuto) return SolveAuto(scene, options, solution);
   if (options.threads > 0) omp_set_num_threads(options.threads);
   // CHOLMOD's supernodal factorisation asks OpenMP for a fixed team of 4

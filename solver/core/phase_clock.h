@@ -27,6 +27,7 @@ class PhaseClock {
   void End();
   bool cancelled() const { return options_.cancel != nullptr && options_.cancel->load(); }
   double elapsed_s() const { return Seconds(start_); }
+  const SolveOptions& options() const { return options_; }
 
  private:
   using Clock = std::chrono::steady_clock;

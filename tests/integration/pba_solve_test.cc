@@ -32,7 +32,8 @@ TEST_P(ExampleTest, Solves) {
   TempDir dir;
   const fs::path out = dir.path() / "result";
   const RunResult run =
-      RunProcess({PBA_SOLVE_BIN, GetParam().string(), "--out", out.string(), "--progress", "json"});
+      RunProcess({PBA_SOLVE_BIN, GetParam().string(), "--out", out.string(), "--progress", "json"},
+                 std::chrono::seconds(800));  // the atlas scenes take minutes on two cores
   ASSERT_EQ(run.exit_code, 0) << run.out << run.err;
   for (const char* name : {"result.h5", "result.xdmf", "summary.json"}) {
     EXPECT_TRUE(fs::exists(out / name)) << name;
@@ -138,6 +139,76 @@ TEST(PbaSolveTest, NeitherOutNorExportIsAUsageError) {
       RunProcess({PBA_SOLVE_BIN, std::string(PBA_EXAMPLES_DIR) + "/quickstart.yaml"});
   EXPECT_EQ(run.exit_code, 2);
   EXPECT_NE(run.err.find("--out"), std::string::npos) << run.err;
+}
+
+// A small QUASI_STATIC hold of a viscoelastic cube, held until `end_s`,
+// meshed at `size_mm`.
+std::string HoldScene(double end_s, double size_mm = 5) {
+  std::ostringstream s;
+  s << "name: hold\n"
+       "geometry: {box: {size_mm: [10, 10, 10]}}\n"
+       "mesh: {element: TET4_ANP, element_size_mm: "
+    << size_mm
+    << "}\n"
+       "material:\n"
+       "  neo_hookean: {shear_modulus_pa: 2200, bulk_modulus_pa: 2.2e6}\n"
+       "  viscoelastic: {prony: {g: [0.5], tau_s: [2]}}\n"
+       "boundary_conditions:\n"
+       "  - {set: bottom, symmetry: {}}\n"
+       "  - {set: x_min, symmetry: {}}\n"
+       "  - {set: y_min, symmetry: {}}\n"
+       "  - {set: top, displacement: {z_mm: -1}}\n"
+       "analysis:\n"
+       "  type: QUASI_STATIC\n"
+       "  time:\n"
+       "    end_time_s: "
+    << end_s
+    << "\n"
+       "    curve: [{time_s: 0, amplitude: 0}, {time_s: 1, amplitude: 1}, {time_s: "
+    << end_s
+    << ", amplitude: 1}]\n"
+       "outputs: {reaction_sets: [top]}\n";
+  return s.str();
+}
+
+TEST(PbaSolveTest, CheckpointThenRestartExtendsTheHold) {
+  TempDir dir;
+  const fs::path first = dir.path() / "first.yaml", longer = dir.path() / "longer.yaml",
+                 finer = dir.path() / "finer.yaml";
+  std::ofstream(first) << HoldScene(10);
+  std::ofstream(longer) << HoldScene(20);
+  std::ofstream(finer) << HoldScene(20, 2.5);
+  const fs::path checkpoints = dir.path() / "checkpoints";
+  RunResult run = RunProcess({PBA_SOLVE_BIN, first.string(), "--out", (dir.path() / "r1").string(),
+                              "--progress", "none", "--checkpoint", checkpoints.string(),
+                              "--checkpoint-every", "0"});
+  ASSERT_EQ(run.exit_code, 0) << run.out << run.err;
+  const fs::path checkpoint = checkpoints / "checkpoint.h5";
+  ASSERT_TRUE(fs::exists(checkpoint));
+
+  // The same hold, twice as long, from the checkpoint at 10 s.
+  const fs::path r2 = dir.path() / "r2";
+  run = RunProcess({PBA_SOLVE_BIN, longer.string(), "--out", r2.string(), "--progress", "none",
+                    "--restart", checkpoint.string()});
+  ASSERT_EQ(run.exit_code, 0) << run.out << run.err;
+  std::ifstream summary(r2 / "summary.json");
+  const std::string text((std::istreambuf_iterator<char>(summary)),
+                         std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("restarted from a checkpoint at t = 10 s"), std::string::npos) << text;
+  std::ifstream history(r2 / "history.csv");
+  std::string line, last;
+  while (std::getline(history, line)) {
+    if (!line.empty()) last = line;
+  }
+  EXPECT_EQ(last.rfind("20,", 0), 0u) << last;
+
+  // Another mesh: refused, naming it, and no result written.
+  const fs::path r3 = dir.path() / "r3";
+  run = RunProcess({PBA_SOLVE_BIN, finer.string(), "--out", r3.string(), "--progress", "none",
+                    "--restart", checkpoint.string()});
+  EXPECT_EQ(run.exit_code, 3) << run.out << run.err;
+  EXPECT_NE(run.err.find("its mesh has"), std::string::npos) << run.err;
+  EXPECT_FALSE(fs::exists(r3));
 }
 
 }  // namespace

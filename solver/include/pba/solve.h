@@ -35,6 +35,16 @@ struct SolveOptions {
   std::filesystem::path atlas_cache_dir;
   // The bound of that directory [bytes]; least recently used entries go.
   std::uint64_t atlas_cache_max_bytes = std::uint64_t{2} << 30;
+  // QUASI_STATIC: a directory (created if absent) that receives
+  // checkpoint.h5 after converged steps, at most every checkpoint_every_s of
+  // wall time and always after the last step, so that an interrupted run
+  // can be resumed (restart_from). Empty: no checkpoints.
+  std::filesystem::path checkpoint_dir;
+  double checkpoint_every_s = 30;
+  // QUASI_STATIC: a checkpoint.h5 to continue from. Its scene must have the
+  // same mesh, materials, constraints and contacts; the time curve may run
+  // further (an extended hold). Empty: start at t = 0.
+  std::filesystem::path restart_from;
 };
 
 struct PhaseTime {

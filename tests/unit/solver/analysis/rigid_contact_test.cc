@@ -121,6 +121,37 @@ TEST(RigidContact, ForceAndTangentAreDerivatives) {
   }
 }
 
+// The state a checkpoint carries: multipliers and stick points come back
+// exactly, so a restored contact gives the same forces as the original;
+// a state of the wrong length is refused.
+TEST(RigidContact, SavedStateRestoresTheSameForces) {
+  const Mesh mesh = BoxMesh(10, 10, 10, 2.5);
+  const Eigen::VectorXd u = testing::RandomSmoothDisplacement(mesh, 0.01, 5, 0.01);
+  const Eigen::VectorXd u2 = u + testing::RandomSmoothDisplacement(mesh, 0.003, 9, 0.01);
+  const double penalty = DefaultContactPenalty(kMu, 2.5e-3);
+  RigidContact contact(mesh, mesh.face_sets.at("top"), BodyOnTop(Shape::kPlane), penalty, 0.3, 0);
+  contact.SetAmplitude(0.1);
+  ASSERT_TRUE(contact.Augment(u));
+  contact.Commit(u);  // sliding nodes move their stick points
+  const std::vector<double> state = contact.SaveState();
+  EXPECT_EQ(state.size(), 4 * contact.nodes().size());
+
+  RigidContact restored(mesh, mesh.face_sets.at("top"), BodyOnTop(Shape::kPlane), penalty, 0.3, 0);
+  restored.SetAmplitude(0.1);
+  ASSERT_TRUE(restored.RestoreState(state).ok());
+  EXPECT_EQ(restored.SaveState(), state);
+  EXPECT_EQ(restored.multipliers(), contact.multipliers());
+  Eigen::VectorXd f1 = Eigen::VectorXd::Zero(u.size()), f2 = f1;
+  contact.AddInternalForce(u2, &f1, nullptr);
+  restored.AddInternalForce(u2, &f2, nullptr);
+  EXPECT_EQ((f1 - f2).cwiseAbs().maxCoeff(), 0);
+  EXPECT_GT(f1.cwiseAbs().maxCoeff(), 0);
+
+  std::vector<double> short_state(state.begin(), state.end() - 1);
+  const Status status = restored.RestoreState(short_state);
+  EXPECT_EQ(status.code(), Status::Code::kInvalidArgument) << status.ToString();
+}
+
 // Through the decorator, on a model with held and moved unknowns (the lift
 // of prescribed values included): the whole tangent is the force's
 // derivative.
