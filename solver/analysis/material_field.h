@@ -17,8 +17,9 @@
 // line search keeps an energy.
 //
 // History is kept per element: only one-point elements (TET4, TET4_ANP)
-// may relax or grow; multi-point ones take per-element materials alone
-// (SupportsHistory() says which).
+// may relax or grow; multi-point ones take per-element materials alone (the
+// finite-strain analysis refuses relaxation or growth on them, naming the
+// element).
 #pragma once
 
 #include <Eigen/Core>

@@ -53,6 +53,11 @@ long CountColour(const RgbImage& image, const std::array<uint8_t, 3>& colour) {
 
 class CliBatchPlotTest : public ServerTest {
  protected:
+  void SetUp() override {
+    ServerTest::SetUp();
+    std::ofstream(dir_.path() / "box.yaml") << kScene;
+  }
+
   // A batch file `stem`.yaml of the box with the given members and plot.
   fs::path Batch(const std::string& stem, const std::string& members, const std::string& plot,
                  const std::string& scene = "box.yaml") {
