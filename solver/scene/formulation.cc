@@ -9,6 +9,7 @@
 #include "core/format.h"
 #include "material/tissue_library.h"
 #include "mesh/primitive_mesher.h"
+#include "mesh/region_faces.h"
 #include "scene/materials.h"
 
 namespace pba {
@@ -151,6 +152,21 @@ void ReduceStructures(const SceneSpec& scene, SceneSpec* reduced,
   }
   for (const RegionMaterialSpec& r : scene.region_materials) {
     named.insert(r.structures.begin(), r.structures.end());
+  }
+  // Structures the loads and contacts touch: the sets of a structure's own
+  // surface ("surface:<a>") or of an interface ("interface:<a>|<b>"), and
+  // the patches cut out of them.
+  std::vector<std::string> sets;
+  for (const BoundaryConditionSpec& bc : scene.boundary_conditions) sets.push_back(bc.set);
+  for (const ContactSpec& c : scene.contacts) sets.push_back(c.set);
+  for (const PatchSpec& patch : scene.geometry.patches) {
+    if (std::find(sets.begin(), sets.end(), patch.name) != sets.end()) sets.push_back(patch.set);
+  }
+  for (const std::string& set : sets) {
+    if (const std::optional<RegionSetName> parts = ParseRegionSetName(set)) {
+      named.insert(parts->first);
+      if (parts->interface) named.insert(parts->second);
+    }
   }
   for (const InclusionSpec& inclusion : scene.inclusions) named.erase(inclusion.name);
   // Without a named structure there is nothing to keep apart: the scene

@@ -41,8 +41,9 @@ void ReduceFiniteStrain(const SceneSpec& scene, std::optional<double> max_strain
                         SceneSpec* reduced, std::vector<ModelDecision>* decisions);
 
 // Of an atlas, keeps only the structures the scene names (outputs,
-// region_materials), merging the rest into one region; nothing changes
-// when it names none.
+// region_materials) or loads (conditions and contacts on a structure's
+// surface or an interface, or on patches of them), merging the rest into
+// one region; nothing changes when it names none.
 void ReduceStructures(const SceneSpec& scene, SceneSpec* reduced,
                       std::vector<ModelDecision>* decisions);
 

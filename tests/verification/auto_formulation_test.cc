@@ -9,6 +9,7 @@
 #include "analysis/material_field.h"
 #include "common/scene_builders.h"
 #include "pba/solve.h"
+#include "scene/formulation.h"
 
 namespace pba {
 namespace {
@@ -115,6 +116,33 @@ TEST(AutoFormulationTest, RelaxationFarFasterThanTheLoadingFoldsIntoTheLongTermM
               reduced.summary.time_steps.size(), full.summary.time_steps.size());
   EXPECT_LT(truth, 0.01);
   EXPECT_LT(reduced.summary.time_steps.size(), full.summary.time_steps.size());
+}
+
+TEST(ReduceStructuresTest, KeepsTheStructuresOutputsAndLoadsName) {
+  SceneSpec s;
+  s.geometry.kind = GeometrySpec::Kind::kAtlas;
+  s.geometry.patches = {PatchSpec::Ball("push", "surface:Putamen", {0, 0, 0}, 5)};
+  s.boundary_conditions = {Condition("push", K::kDisplacement, {0.0, 0.0, -1.0}),
+                           Condition("interface:Thalamus: pulvinar|Ventricles", K::kPressure, {})};
+  s.outputs.structure_displacements = {"Nucleus caudatus"};
+  SceneSpec reduced = s;
+  std::vector<ModelDecision> decisions;
+  ReduceStructures(s, &reduced, &decisions);
+  EXPECT_EQ(reduced.geometry.atlas.structures,
+            (std::vector<std::string>{"Nucleus caudatus", "Putamen", "Thalamus: pulvinar",
+                                      "Ventricles"}));
+  EXPECT_TRUE(reduced.geometry.atlas.merge_rest);
+  ASSERT_EQ(decisions.size(), 1u);
+  EXPECT_TRUE(decisions[0].reduces);
+  // Naming none leaves the atlas whole.
+  SceneSpec plain;
+  plain.geometry.kind = GeometrySpec::Kind::kAtlas;
+  SceneSpec same = plain;
+  decisions.clear();
+  ReduceStructures(plain, &same, &decisions);
+  EXPECT_TRUE(same.geometry.atlas.structures.empty());
+  EXPECT_FALSE(same.geometry.atlas.merge_rest);
+  EXPECT_TRUE(decisions.empty());
 }
 
 TEST(ReduceRelaxationTest, RelaxedTermsScaleTheModulusAndFrozenTermsDropOut) {
