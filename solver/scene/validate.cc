@@ -8,16 +8,14 @@
 #include "atlas/atlas_build.h"
 #include "atlas/colour_table.h"
 #include "material/factory.h"
+#include "material/tissue_library.h"
 #include "mesh/primitive_mesher.h"
 #include "mesh/region_faces.h"
 #include "pba/scene.h"
-#include "material/tissue_library.h"
 #include "scene/validate_loading.h"
 
 namespace pba {
-namespace {
-
-}  // namespace
+namespace {}  // namespace
 
 namespace scene_checks {
 

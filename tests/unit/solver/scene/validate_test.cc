@@ -459,8 +459,8 @@ INSTANTIATE_TEST_SUITE_P(
              },
              "material_library", "geometry.atlas"},
         Case{"material_library_unknown",
-             [](SceneSpec* s) { s->material_library = "no-such-tissue"; },
-             "material_library", "rat-brain-prony, brain-ogden-qlv"},
+             [](SceneSpec* s) { s->material_library = "no-such-tissue"; }, "material_library",
+             "rat-brain-prony, brain-ogden-qlv"},
         Case{"region_materials_without_atlas",
              [](SceneSpec* s) {
                const auto regions = s->region_materials;
