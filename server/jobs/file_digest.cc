@@ -6,6 +6,8 @@
 #include <memory>
 #include <vector>
 
+#include "store/sha256.h"
+
 namespace pba {
 
 Status Sha256File(const std::filesystem::path& path, std::string* hex, int64_t* size) {
@@ -31,12 +33,7 @@ Status Sha256File(const std::filesystem::path& path, std::string* hex, int64_t* 
   if (EVP_DigestFinal_ex(ctx.get(), digest, &length) != 1) {
     return Status::Internal("cannot finish SHA-256");
   }
-  static constexpr char kHex[] = "0123456789abcdef";
-  hex->clear();
-  for (unsigned int i = 0; i < length; ++i) {
-    hex->push_back(kHex[digest[i] >> 4]);
-    hex->push_back(kHex[digest[i] & 0xf]);
-  }
+  *hex = HexOf(digest, length);
   *size = total;
   return Status::Ok();
 }

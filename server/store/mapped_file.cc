@@ -10,6 +10,8 @@
 #include <cerrno>
 #include <cstring>
 
+#include "store/sha256.h"
+
 namespace pba {
 namespace {
 
@@ -70,12 +72,7 @@ Status MappedFile::Sha256Hex(std::string* hex) const {
   if (EVP_DigestFinal_ex(context.get(), digest, &length) != 1) {
     return Status::Internal("cannot compute SHA-256");
   }
-  static constexpr char kHex[] = "0123456789abcdef";
-  hex->clear();
-  for (unsigned int i = 0; i < length; ++i) {
-    hex->push_back(kHex[digest[i] >> 4]);
-    hex->push_back(kHex[digest[i] & 0xf]);
-  }
+  *hex = HexOf(digest, length);
   return Status::Ok();
 }
 

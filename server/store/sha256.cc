@@ -7,9 +7,8 @@
 #include <vector>
 
 namespace pba {
-namespace {
 
-std::string ToHex(const unsigned char* bytes, size_t count) {
+std::string HexOf(const unsigned char* bytes, size_t count) {
   static constexpr char kHex[] = "0123456789abcdef";
   std::string hex;
   hex.reserve(2 * count);
@@ -20,15 +19,13 @@ std::string ToHex(const unsigned char* bytes, size_t count) {
   return hex;
 }
 
-}  // namespace
-
 Status Sha256Hex(std::string_view bytes, std::string* hex) {
   unsigned char digest[EVP_MAX_MD_SIZE];
   unsigned int length = 0;
   if (EVP_Digest(bytes.data(), bytes.size(), digest, &length, EVP_sha256(), nullptr) != 1) {
     return Status::Internal("cannot compute SHA-256");
   }
-  *hex = ToHex(digest, length);
+  *hex = HexOf(digest, length);
   return Status::Ok();
 }
 
@@ -45,7 +42,7 @@ Status RandomHex(int count, std::string* hex) {
   if (RAND_bytes(bytes.data(), count) != 1) {
     return Status::Internal("the system random number generator failed");
   }
-  *hex = ToHex(bytes.data(), bytes.size());
+  *hex = HexOf(bytes.data(), bytes.size());
   return Status::Ok();
 }
 

@@ -2,12 +2,16 @@
 // storing access tokens only as hashes.
 #pragma once
 
+#include <cstddef>
 #include <string>
 #include <string_view>
 
 #include "pba/status.h"
 
 namespace pba {
+
+// Lowercase hex of `count` bytes (2 * count characters), e.g. a digest.
+std::string HexOf(const unsigned char* bytes, size_t count);
 
 // Lowercase hex SHA-256 (64 characters) of `bytes`.
 Status Sha256Hex(std::string_view bytes, std::string* hex);

@@ -12,6 +12,7 @@
 #include "analysis/error_estimator.h"
 #include "analysis/finite_strain_model.h"
 #include "analysis/hex8_model.h"
+#include "analysis/material_field.h"
 #include "analysis/newton_static.h"
 #include "analysis/rigid_contact.h"
 #include "analysis/static_analysis.h"
@@ -95,9 +96,8 @@ PointFields FieldsAt(const HyperelasticMaterial& material, const Eigen::Matrix3d
   PointFields p;
   p.j = f.determinant();
   const Eigen::Matrix3d identity = Eigen::Matrix3d::Identity();
-  p.green = SymmetricToVoigt(0.5 * (f.transpose() * f - identity));
+  p.green = GreenLagrangeVoigt(f);
   p.almansi = SymmetricToVoigt(0.5 * (identity - (f * f.transpose()).inverse()));
-  p.green.tail<3>() *= 2;
   p.almansi.tail<3>() *= 2;
   if (pressure) {
     double w;
