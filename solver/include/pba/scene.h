@@ -301,19 +301,33 @@ struct InclusionSpec {
 //   kSphere:    a ball of radius_mm centred at position_mm.
 //   kPlane:     the half-space behind the plane through position_mm with
 //               normal axis pointing into the tissue (e.g. a skull base).
+//   kCylinderFlat, kCylinderRounded: a rigid cylinder of radius_mm (a bolt, a
+//               probe) whose tip is at position_mm, pointing along axis into
+//               the tissue and reaching back without end; the tip is flat or
+//               a hemisphere of the same radius (its pole at position_mm). A
+//               node inside is pushed out through the nearest of its
+//               surfaces: the tip or the side wall, so the bolt may
+//               penetrate (EXPLICIT_DYNAMIC; in the static analyses its
+//               tangent leaves out the turn of the wall's normal).
+// In an EXPLICIT_DYNAMIC analysis every contact is an impactor: its
+// motion_mm times a(t) is its displacement (a(t) with a constant slope is
+// a constant speed), friction is not modelled, and the penalty is chosen
+// from each node's mass and the time step (explicit/impactor.h), reported
+// in the summary; penalty_factor scales it (0: 1) and the tolerance is
+// not used.
 // The contact is enforced by a penalty, augmented (Uzawa) until the deepest
 // penetration is below penetration_tolerance_mm; the penalty stiffness is
 // penalty_factor times the tissue's initial shear modulus over the finest
 // element size (an atlas's region-of-interest size when it has one), per
 // unit area, and the default tolerance 1 % of that size.
 struct ContactSpec {
-  enum class Shape { kNone, kFlatPunch, kSphere, kPlane };
+  enum class Shape { kNone, kFlatPunch, kSphere, kPlane, kCylinderFlat, kCylinderRounded };
   std::string name;  // names its force and area in the summary and history
   std::string set;   // face set of the tissue that may touch it
   Shape shape = Shape::kNone;
   std::array<double, 3> position_mm{0, 0, 0};
   std::array<double, 3> axis{0, 0, -1};  // any length, non-zero
-  double radius_mm = 0;                  // kFlatPunch, kSphere: > 0
+  double radius_mm = 0;                  // all but kPlane: > 0
   std::array<double, 3> motion_mm{0, 0, 0};
   double friction = 0;                  // Coulomb coefficient, 0..0.5
   double penalty_factor = 0;            // 0: 100
@@ -332,11 +346,16 @@ struct BoundaryConditionSpec {
   // (acts on the current area along the current normal).
   // kTraction: a force per reference area of fixed direction (a dead load).
   // Loads are ramped with the load factor like prescribed displacements.
-  enum class Kind { kNone, kFixed, kDisplacement, kSymmetry, kPressure, kTraction };
+  // kVelocity (EXPLICIT_DYNAMIC only): the given components of the nodes'
+  // velocity are velocity_m_per_s times a(t) (e.g. a piston), the others
+  // free.
+  enum class Kind { kNone, kFixed, kDisplacement, kSymmetry, kPressure, kTraction, kVelocity };
   std::string set;  // named face set of the geometry
   Kind kind = Kind::kNone;
   // kDisplacement: prescribed x, y, z components [mm]; nullopt = free.
   std::array<std::optional<double>, 3> displacement_mm;
+  // kVelocity: prescribed x, y, z components [m/s] at a(t) = 1; nullopt = free.
+  std::array<std::optional<double>, 3> velocity_m_per_s;
   double pressure_pa = 0;                      // kPressure [Pa]
   std::array<double, 3> traction_pa{0, 0, 0};  // kTraction, x y z [Pa]
 
@@ -384,6 +403,39 @@ struct TimeSpec {
   std::vector<std::pair<double, double>> curve;  // (time [s], amplitude [-])
 };
 
+// Controls of the explicit engine (EXPLICIT_DYNAMIC, DYNAMIC_RELAXATION);
+// 0 (or unset) picks the default given.
+struct ExplicitSpec {
+  // Fraction of the stable time step (each element's characteristic length
+  // over its dilatational wave speed, the smallest over the mesh) taken as
+  // the step; 0: 0.7. Above 1 the integration is unstable: allowed, so that
+  // the run's blow-up detection can be seen to catch it; at most 2.
+  double time_step_factor = 0;
+  // Bulk viscosity (von Neumann-Richtmyer with a linear term, as in LS-DYNA):
+  // q = rho l (q_quadratic l tr(D)^2 - q_linear c tr(D)) while the element
+  // compresses (tr(D) < 0), added to its pressure. Unset: 0.06 and 1.5;
+  // 0 turns a term off.
+  std::optional<double> bulk_viscosity_linear;
+  std::optional<double> bulk_viscosity_quadratic;
+  // Mass-proportional damping C = alpha M [1/s], >= 0 (EXPLICIT_DYNAMIC;
+  // dynamic relaxation chooses its own).
+  double mass_damping_per_s = 0;
+  // HEX8: stiffness of the hourglass control, a fraction of the element's
+  // dilatational stiffness; 0: 0.05, at most 0.5.
+  double hourglass_coefficient = 0;
+  // Energy balance, history.csv rows and result frames every this many
+  // seconds; 0: end_time_s / 100.
+  double output_interval_s = 0;
+  // Element erosion: an element whose largest principal Green-Lagrange
+  // strain exceeds this is removed (its mass and the kinetic and internal
+  // energy it held are accounted for); 0: none, else > 0.
+  double erosion_strain = 0;
+  // DYNAMIC_RELAXATION: converged when the largest out-of-balance force is
+  // below this fraction of the largest reaction or load and the kinetic
+  // energy below it times the internal energy; 0: 1e-4.
+  double relaxation_tolerance = 0;
+};
+
 struct AnalysisSpec {
   enum class Type {
     kLinearStatic,     // small strain, K u = f; hyperelastic models use their initial moduli
@@ -392,6 +444,16 @@ struct AnalysisSpec {
     // finite strain through time: loads follow `time`, viscoelastic
     // materials relax, rigid bodies move; a history of every step
     kQuasiStatic,
+    // Explicit central-difference dynamics on the total-Lagrangian
+    // formulation (lumped mass; TET4_ANP, TET4 or HEX8 with one-point
+    // integration and hourglass control) to time.end_time_s: impacts and
+    // pressure waves. Loads, prescribed motions and impactors follow
+    // time.curve; viscoelastic materials relax; sensors sample the fields.
+    kExplicitDynamic,
+    // The explicit engine, damped, run until the body comes to rest under
+    // its loads at full value: the static answer of NONLINEAR_STATIC with
+    // no tangent and no linear solve (explicit/dynamic_relaxation.h).
+    kDynamicRelaxation,
   };
   enum class LinearSolver {
     kCholmod,    // supernodal sparse Cholesky (SuiteSparse), the default
@@ -404,7 +466,8 @@ struct AnalysisSpec {
   Type type = Type::kLinearStatic;
   LinearSolver linear_solver = LinearSolver::kCholmod;
   NonlinearOptionsSpec nonlinear;  // Newton controls (increments: see time)
-  TimeSpec time;                   // kQuasiStatic
+  TimeSpec time;                   // kQuasiStatic, kExplicitDynamic (end and curve only)
+  ExplicitSpec explicit_dynamics;  // kExplicitDynamic, kDynamicRelaxation
   // Set by formulation AUTO, not read from a scene file: relaxation terms
   // with tau below the first are taken as relaxed (folded into the
   // long-term modulus), those above the second as never relaxing (dropped).
@@ -422,6 +485,18 @@ struct ProfileSpec {
   std::array<double, 3> from_mm{0, 0, 0};  // first point [mm]
   std::array<double, 3> to_mm{0, 0, 0};    // last point [mm], not from_mm
   int points = 0;  // equally spaced points, ends included; 0: 50, else 2..1000
+};
+
+// A point (or a small ball) inside the body at which an EXPLICIT_DYNAMIC
+// analysis samples its fields through time (sensors.csv, docs/results.md):
+// the pressure -tr(sigma)/3 [Pa], the velocity [m/s] and the largest
+// principal Green-Lagrange strain, raw and low-pass filtered.
+struct SensorSpec {
+  std::string name;  // letters, digits, '_' and '-'; unique
+  std::array<double, 3> position_mm{0, 0, 0};  // reference configuration [mm]
+  // 0: the element holding the point (velocity: its nodes' mean); else the
+  // volume-weighted mean of the elements whose centroid lies within it.
+  double radius_mm = 0;
 };
 
 struct OutputSpec {
@@ -442,6 +517,14 @@ struct OutputSpec {
   std::vector<std::string> structure_displacements;
   // Lines along which the final fields are sampled (profile_<name>.csv).
   std::vector<ProfileSpec> profiles;
+  // EXPLICIT_DYNAMIC: sensors sampled every sensor_interval_s (0: 1e-6 s,
+  // or the time step if longer) and filtered by a zero-phase Butterworth
+  // low-pass (signal/butterworth.h) of filter_order (0: 4, 1..10) and
+  // filter_cutoff_hz (0: 10 kHz; below half the sampling rate).
+  std::vector<SensorSpec> sensors;
+  double sensor_interval_s = 0;
+  double filter_cutoff_hz = 0;
+  int filter_order = 0;
 };
 
 // How much of the physics the scene asks for is modelled.

@@ -143,6 +143,52 @@ struct TimeStepSummary {
   double relative_residual = 0;
 };
 
+// The peak of one sensor quantity over an EXPLICIT_DYNAMIC run.
+struct SensorPeak {
+  std::string sensor;
+  std::string quantity;      // "pressure_pa", "speed_m_per_s", "strain"
+  double peak_raw = 0;       // largest value of the raw samples
+  double time_raw_s = 0;     // when [s]
+  double peak_filtered = 0;  // largest value after the low-pass filter
+  double time_filtered_s = 0;
+};
+
+// An explicit run (EXPLICIT_DYNAMIC, DYNAMIC_RELAXATION).
+struct ExplicitSummary {
+  bool ran = false;
+  int64_t steps = 0;
+  double end_time_s = 0;            // simulated time reached [s]
+  double stable_step_s = 0;         // smallest stable step at the start [s]
+  double first_step_s = 0;          // step taken at the start (factor x stable) [s]
+  double last_step_s = 0;           // step at the end (it may have shrunk) [s]
+  int step_reductions = 0;          // times the step had to shrink
+  std::string controlling_element;  // "element 812 (Putamen), length 0.41 mm"
+  // Energies at the end [J] and the balance error
+  // |kinetic + internal + hourglass + contact + damping + eroded - external|
+  // relative to the largest of external work, kinetic and internal energy,
+  // its largest value over the run.
+  double kinetic_j = 0;
+  double internal_j = 0;
+  double hourglass_j = 0;
+  double contact_j = 0;
+  double damping_j = 0;
+  double eroded_j = 0;
+  double external_work_j = 0;
+  double max_energy_error = 0;
+  int eroded_elements = 0;
+  double eroded_mass_kg = 0;
+  // Penalty stiffness of the impactors, per node [N/m]: the smallest and
+  // largest over the contact nodes.
+  double contact_stiffness_min_n_per_m = 0;
+  double contact_stiffness_max_n_per_m = 0;
+  // Speed: element updates (elements x steps) per second of the time loop.
+  double element_updates_per_s = 0;
+  // DYNAMIC_RELAXATION: whether it converged and the final out-of-balance
+  // force relative to the largest reaction or load.
+  bool converged = false;
+  double relative_residual = 0;
+};
+
 // What a solve reports beside its fields. Mirrors pba.v1.Summary.
 struct Summary {
   std::string scene_name;
@@ -180,6 +226,9 @@ struct Summary {
   std::vector<ContactSummary> contacts;
   std::vector<StructureDisplacement> structure_displacements;
   std::vector<ProfileSummary> profiles;  // outputs.profiles, in order
+  // EXPLICIT_DYNAMIC, DYNAMIC_RELAXATION.
+  ExplicitSummary explicit_run;
+  std::vector<SensorPeak> sensor_peaks;  // per sensor and quantity, in order
   // formulation: AUTO.
   std::vector<ModelDecision> decisions;
   ReductionEstimate reduction;
@@ -232,12 +281,19 @@ struct Solution {
   // QUASI_STATIC: one row per converged step (time first), written as
   // history.csv: time, amplitude, each reaction set's force, each contact's
   // force, area and penetration, each reported structure's mean displacement.
+  // EXPLICIT_DYNAMIC, DYNAMIC_RELAXATION: one row per output interval: time,
+  // step, the energies and the balance error, each impactor's force.
   std::vector<std::string> history_columns;  // with units, e.g. "time_s"
   std::vector<std::vector<double>> history;
   // Element-wise estimated error share (ZZ), elements; empty if not estimated.
   std::vector<double> error_indicator;
   // outputs.profiles, sampled from the final fields above.
   std::vector<ProfileTable> profiles;
+  // EXPLICIT_DYNAMIC with outputs.sensors: one row per sample, written as
+  // sensors.csv: time_s, then per sensor its raw and filtered pressure,
+  // speed and strain (docs/results.md).
+  std::vector<std::string> sensor_columns;
+  std::vector<std::vector<double>> sensor_rows;
   Summary summary;
 };
 
