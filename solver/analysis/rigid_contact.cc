@@ -65,7 +65,12 @@ class ContactModel : public FiniteStrainModel {
 Status RigidBody::Validate(const std::string& path) const {
   using Shape = ContactSpec::Shape;
   if (shape != Shape::kFlatPunch && shape != Shape::kSphere && shape != Shape::kPlane) {
-    return Status::InvalidArgument(path + ".shape", "give FLAT_PUNCH, SPHERE or PLANE");
+    return Status::InvalidArgument(
+        path + ".shape", shape == Shape::kCylinderFlat || shape == Shape::kCylinderRounded
+                             ? "CYLINDER_FLAT and CYLINDER_ROUNDED are impactors of an "
+                               "EXPLICIT_DYNAMIC analysis; a static one takes FLAT_PUNCH, SPHERE "
+                               "or PLANE"
+                             : "give FLAT_PUNCH, SPHERE or PLANE");
   }
   if (!IsFinite(position)) return Status::InvalidArgument(path + ".position", "not finite");
   if (!IsFinite(motion)) return Status::InvalidArgument(path + ".motion", "not finite");
@@ -308,7 +313,15 @@ Status PlaceTouching(const Mesh& mesh, const FaceSet& set, RigidBody* body) {
     const double off_axis = (r - along * d).norm();
     switch (body->shape) {
       case ContactSpec::Shape::kFlatPunch:
+      case ContactSpec::Shape::kCylinderFlat:
         if (off_axis <= body->radius) shift = std::min(shift, along);
+        break;
+      case ContactSpec::Shape::kCylinderRounded:
+        // The hemisphere's centre lies R behind the pole at the position.
+        if (off_axis <= body->radius) {
+          shift = std::min(shift, along + body->radius -
+                                      std::sqrt(body->radius * body->radius - off_axis * off_axis));
+        }
         break;
       case ContactSpec::Shape::kSphere:
         // |r - s d| = R at s = along - sqrt(R^2 - off^2), the first touch.

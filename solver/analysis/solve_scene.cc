@@ -12,6 +12,7 @@
 #include "analysis/time_history.h"
 #include "atlas/structure_set.h"
 #include "core/format.h"
+#include "explicit/explicit_dynamics.h"
 #include "material/factory.h"
 #include "mesh/primitive_mesher.h"
 
@@ -78,7 +79,9 @@ Status SolveScene(const SceneSpec& scene, const SolveOptions& options, Solution*
   PBA_RETURN_IF_ERROR(BuildModel(scene, &model, build));
   const Mesh& mesh = model.mesh;
   const DofMap& dofs = model.dofs;
-  const std::string free_modes = DescribeFreeRigidModes(mesh, dofs);
+  // A body in motion need not be held.
+  const bool dynamic = scene.analysis.type == AnalysisSpec::Type::kExplicitDynamic;
+  const std::string free_modes = dynamic ? "" : DescribeFreeRigidModes(mesh, dofs);
   if (!free_modes.empty()) {
     return Status::FailedPrecondition("the boundary conditions leave the body free to move: " +
                                       free_modes + "; hold it with further conditions");
@@ -114,6 +117,14 @@ Status SolveScene(const SceneSpec& scene, const SolveOptions& options, Solution*
     case AnalysisSpec::Type::kQuasiStatic:
       PBA_RETURN_IF_ERROR(SolveQuasiStatic(scene, model, &clock, solution, &result));
       break;
+    case AnalysisSpec::Type::kExplicitDynamic:
+      summary.element_type = mesh.hexahedral() ? "HEX8 (one point, hourglass control)"
+                             : scene.mesh.element == ElementType::kTet4 ? "TET4"
+                                                                        : "TET4_ANP";
+      PBA_RETURN_IF_ERROR(SolveExplicitDynamic(scene, model, &clock, solution, &result));
+      break;
+    case AnalysisSpec::Type::kDynamicRelaxation:
+      return Status::InvalidArgument("analysis.type", "DYNAMIC_RELAXATION is not available yet");
   }
 
   for (const std::string& name : ReactionSetNames(scene)) {

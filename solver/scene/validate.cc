@@ -41,6 +41,10 @@ const char* AnalysisTypeName(AnalysisSpec::Type type) {
       return "NONLINEAR_STATIC";
     case AnalysisSpec::Type::kQuasiStatic:
       return "QUASI_STATIC";
+    case AnalysisSpec::Type::kExplicitDynamic:
+      return "EXPLICIT_DYNAMIC";
+    case AnalysisSpec::Type::kDynamicRelaxation:
+      return "DYNAMIC_RELAXATION";
   }
   return "unknown";
 }
@@ -565,6 +569,8 @@ Status ValidateScene(const SceneSpec& scene) {
                                                         "'; this geometry has: " + JoinNames(sets));
     }
     switch (bc.kind) {
+      case BoundaryConditionSpec::Kind::kVelocity:
+        break;
       case BoundaryConditionSpec::Kind::kNone:
         return Status::InvalidArgument(
             path, "no condition given: set fixed, displacement, symmetry, pressure or traction");
@@ -640,6 +646,7 @@ Status ValidateScene(const SceneSpec& scene) {
   PBA_RETURN_IF_ERROR(scene_checks::ValidateBuoyancy(scene.gravity));
   std::string free;
   for (int c = 0; c < 3; ++c) {
+    if (scene.analysis.type == AnalysisSpec::Type::kExplicitDynamic) break;
     if (!held[c]) free += std::string(free.empty() ? "" : ", ") + "xyz"[c];
   }
   if (!free.empty()) {

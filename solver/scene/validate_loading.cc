@@ -36,7 +36,8 @@ Status CheckFiniteThree(const std::array<double, 3>& values, const std::string& 
 
 Status ValidateTime(const AnalysisSpec& analysis) {
   const TimeSpec& t = analysis.time;
-  if (analysis.type != AnalysisSpec::Type::kQuasiStatic) {
+  if (analysis.type != AnalysisSpec::Type::kQuasiStatic &&
+      analysis.type != AnalysisSpec::Type::kExplicitDynamic) {
     const bool given = t.end_time_s != 0 || t.initial_step_s != 0 || t.min_step_s != 0 ||
                        t.max_step_s != 0 || !t.curve.empty();
     if (given) {

@@ -307,8 +307,7 @@ struct InclusionSpec {
 //               a hemisphere of the same radius (its pole at position_mm). A
 //               node inside is pushed out through the nearest of its
 //               surfaces: the tip or the side wall, so the bolt may
-//               penetrate (EXPLICIT_DYNAMIC; in the static analyses its
-//               tangent leaves out the turn of the wall's normal).
+//               penetrate (EXPLICIT_DYNAMIC only).
 // In an EXPLICIT_DYNAMIC analysis every contact is an impactor: its
 // motion_mm times a(t) is its displacement (a(t) with a constant slope is
 // a constant speed), friction is not modelled, and the penalty is chosen

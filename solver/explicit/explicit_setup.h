@@ -1,0 +1,38 @@
+// What the explicit analyses (EXPLICIT_DYNAMIC, DYNAMIC_RELAXATION) make of
+// a scene before their time loop: the TLED elements with every element's
+// material, the prescribed motion of every unknown and the loads.
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include "analysis/external_loads.h"
+#include "explicit/tled_model.h"
+#include "pba/scene.h"
+#include "scene/model_builder.h"
+
+namespace pba {
+
+// How one unknown moves: free, or its displacement [m] or velocity [m/s]
+// at a(t) = 1 prescribed (times a(t)).
+struct PrescribedDof {
+  enum Kind : char { kFree, kDisplacement, kVelocity };
+  Kind kind = kFree;
+  double value = 0;
+};
+
+struct ExplicitSetup {
+  std::unique_ptr<TledModel> tled;
+  TledOptions options;
+  std::vector<PrescribedDof> prescribed;  // 3 per node
+  std::unique_ptr<ExternalLoads> loads;   // pressure, traction, gravity at a(t) = 1
+  bool has_loads = false;
+  double time_step_factor = 0.7;
+};
+
+// Builds the setup of a validated scene on its model. Fails naming the
+// field for what the engine cannot take: 10-node elements or full
+// hexahedra (mesh.element), growing inclusions (inclusions[i].growth_strain).
+Status MakeExplicitSetup(const SceneSpec& scene, const Model& model, ExplicitSetup* out);
+
+}  // namespace pba

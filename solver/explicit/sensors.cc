@@ -1,0 +1,192 @@
+#include "explicit/sensors.h"
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/LU>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "core/format.h"
+#include "fem/hex8.h"
+#include "signal/butterworth.h"
+
+namespace pba {
+namespace {
+
+constexpr double kMm = 1e-3;
+
+// True when reference point p lies in element e (barycentric for a
+// tetrahedron, Newton on the trilinear map for a hexahedron), with a
+// relative tolerance.
+bool Contains(const Mesh& mesh, int e, const Eigen::Vector3d& p) {
+  constexpr double kTol = 1e-9;
+  if (!mesh.hexahedral()) {
+    const Eigen::Matrix<double, 4, 3> x = TetCorners(mesh, e);
+    Eigen::Matrix3d a;
+    for (int k = 0; k < 3; ++k) a.col(k) = (x.row(k + 1) - x.row(0)).transpose();
+    const Eigen::Vector3d l = a.partialPivLu().solve(p - x.row(0).transpose());
+    return l.minCoeff() >= -kTol && l.sum() <= 1 + kTol;
+  }
+  const Hex8Nodes x = HexCorners(mesh, e);
+  const Eigen::Vector3d lo = x.colwise().minCoeff().transpose(),
+                        hi = x.colwise().maxCoeff().transpose();
+  if ((p.array() < lo.array() - kTol * (hi - lo).norm()).any() ||
+      (p.array() > hi.array() + kTol * (hi - lo).norm()).any()) {
+    return false;
+  }
+  Eigen::Vector3d xi = Eigen::Vector3d::Zero();
+  for (int it = 0; it < 30; ++it) {
+    const Eigen::Vector3d r = x.transpose() * Hex8ShapeFunctions(xi) - p;
+    const Eigen::Matrix3d j = x.transpose() * Hex8NaturalGradients(xi);
+    const Eigen::Vector3d step = j.partialPivLu().solve(r);
+    xi -= step;
+    if (step.norm() < 1e-12) break;
+  }
+  return xi.cwiseAbs().maxCoeff() <= 1 + 1e-7;
+}
+
+Eigen::Vector3d Centroid(const Mesh& mesh, int e) {
+  if (mesh.hexahedral()) return HexCorners(mesh, e).colwise().mean().transpose();
+  return TetCorners(mesh, e).colwise().mean().transpose();
+}
+
+}  // namespace
+
+double LargestPrincipalStrain(const Eigen::Matrix3d& f) {
+  const Eigen::Matrix3d e = 0.5 * (f.transpose() * f - Eigen::Matrix3d::Identity());
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
+  eig.computeDirect(e, Eigen::EigenvaluesOnly);
+  return eig.eigenvalues()(2);
+}
+
+Status SensorArray::Locate(const std::vector<SensorSpec>& specs, const Mesh& mesh,
+                           const TledModel& model, SensorArray* out) {
+  *out = SensorArray();
+  const int ne = mesh.num_elements();
+  for (std::size_t i = 0; i < specs.size(); ++i) {
+    const SensorSpec& spec = specs[i];
+    const std::string path = Format("outputs.sensors[%zu]", i);
+    const Eigen::Vector3d p =
+        Eigen::Vector3d(spec.position_mm[0], spec.position_mm[1], spec.position_mm[2]) * kMm;
+    Sensor s;
+    s.name = spec.name;
+    if (spec.radius_mm > 0) {
+      const double r = spec.radius_mm * kMm;
+      for (int e = 0; e < ne; ++e) {
+        if ((Centroid(mesh, e) - p).norm() <= r) s.elements.push_back(e);
+      }
+      if (s.elements.empty()) {
+        return Status::InvalidArgument(
+            path + ".radius_mm",
+            Format("sensor %s: no element's centroid lies within %g mm of (%g, %g, %g) mm; "
+                   "enlarge the radius or move the sensor into the body",
+                   spec.name.c_str(), spec.radius_mm, spec.position_mm[0], spec.position_mm[1],
+                   spec.position_mm[2]));
+      }
+    } else {
+      for (int e = 0; e < ne && s.elements.empty(); ++e) {
+        if (Contains(mesh, e, p)) s.elements.push_back(e);
+      }
+      if (s.elements.empty()) {
+        return Status::InvalidArgument(
+            path + ".position_mm",
+            Format("sensor %s at (%g, %g, %g) mm lies outside the body", spec.name.c_str(),
+                   spec.position_mm[0], spec.position_mm[1], spec.position_mm[2]));
+      }
+    }
+    double total = 0;
+    for (int e : s.elements) total += model.reference_volume(e);
+    for (int e : s.elements) {
+      s.weights.push_back(model.reference_volume(e) / total);
+      const int* nodes = model.element_nodes(e);
+      s.nodes.insert(s.nodes.end(), nodes, nodes + model.nodes_per_element());
+    }
+    std::sort(s.nodes.begin(), s.nodes.end());
+    s.nodes.erase(std::unique(s.nodes.begin(), s.nodes.end()), s.nodes.end());
+    out->sensors_.push_back(std::move(s));
+  }
+  out->pressure_.resize(out->sensors_.size());
+  out->speed_.resize(out->sensors_.size());
+  out->strain_.resize(out->sensors_.size());
+  return Status::Ok();
+}
+
+void SensorArray::Sample(double t, const TledModel& model, const Eigen::VectorXd& v) {
+  time_.push_back(t);
+  for (std::size_t i = 0; i < sensors_.size(); ++i) {
+    const Sensor& s = sensors_[i];
+    double pressure = 0, strain = 0;
+    for (std::size_t k = 0; k < s.elements.size(); ++k) {
+      const int e = s.elements[k];
+      pressure += s.weights[k] * model.pressure(e);
+      strain += s.weights[k] * LargestPrincipalStrain(model.DeformationGradient(e));
+    }
+    Eigen::Vector3d velocity = Eigen::Vector3d::Zero();
+    for (int n : s.nodes) velocity += v.segment<3>(3 * n);
+    velocity /= static_cast<double>(s.nodes.size());
+    pressure_[i].push_back(pressure);
+    speed_[i].push_back(velocity.norm());
+    strain_[i].push_back(strain);
+  }
+}
+
+Status SensorArray::Finish(int order, double cutoff_hz, Solution* solution) const {
+  if (sensors_.empty()) return Status::Ok();
+  const std::size_t n = time_.size();
+  ButterworthLowPass filter;
+  const bool filtered = n >= 2;
+  if (filtered) {
+    const double rate = (n - 1) / (time_.back() - time_.front());
+    const Status designed = ButterworthLowPass::Design(order, cutoff_hz, rate, &filter);
+    if (!designed.ok()) {
+      return Status::InvalidArgument(
+          "outputs.filter_cutoff_hz",
+          Format("the sensors' filter (order %d, cutoff %g Hz) does not fit the sampling rate "
+                 "%g Hz: %s",
+                 order, cutoff_hz, rate, designed.message().c_str()));
+    }
+  }
+  std::vector<std::string>& columns = solution->sensor_columns;
+  columns = {"time_s"};
+  std::vector<std::vector<double>> series;
+  struct Quantity {
+    const char* key;
+    const char* column;
+    const std::vector<std::vector<double>>* values;
+  };
+  const Quantity quantities[] = {{"pressure_pa", "pressure [Pa]", &pressure_},
+                                 {"speed_m_per_s", "speed [m/s]", &speed_},
+                                 {"strain", "strain", &strain_}};
+  for (std::size_t i = 0; i < sensors_.size(); ++i) {
+    for (const Quantity& q : quantities) {
+      const std::vector<double>& raw = (*q.values)[i];
+      const std::vector<double> smooth = filtered ? filter.FilterZeroPhase(raw) : raw;
+      columns.push_back(sensors_[i].name + " " + q.column);
+      columns.push_back(sensors_[i].name + " " + q.column + " filtered");
+      SensorPeak peak;
+      peak.sensor = sensors_[i].name;
+      peak.quantity = q.key;
+      peak.peak_raw = peak.peak_filtered = -std::numeric_limits<double>::infinity();
+      for (std::size_t k = 0; k < n; ++k) {
+        if (raw[k] > peak.peak_raw) peak.peak_raw = raw[k], peak.time_raw_s = time_[k];
+        if (smooth[k] > peak.peak_filtered) {
+          peak.peak_filtered = smooth[k], peak.time_filtered_s = time_[k];
+        }
+      }
+      if (n == 0) peak.peak_raw = peak.peak_filtered = 0;
+      solution->summary.sensor_peaks.push_back(peak);
+      series.push_back(raw);
+      series.push_back(smooth);
+    }
+  }
+  solution->sensor_rows.assign(n, std::vector<double>());
+  for (std::size_t k = 0; k < n; ++k) {
+    std::vector<double>& row = solution->sensor_rows[k];
+    row.reserve(1 + series.size());
+    row.push_back(time_[k]);
+    for (const std::vector<double>& s : series) row.push_back(s[k]);
+  }
+  return Status::Ok();
+}
+
+}  // namespace pba

@@ -1,0 +1,54 @@
+// Sensors of an explicit analysis (outputs.sensors): the pressure
+// -tr(sigma)/3, the speed |v| and the largest principal Green-Lagrange
+// strain at points (or small balls) of the body, sampled at a fixed rate,
+// then low-pass filtered without phase shift (signal/butterworth.h) and
+// reduced to peaks.
+#pragma once
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "explicit/tled_model.h"
+#include "mesh/mesh.h"
+#include "pba/scene.h"
+#include "pba/solve.h"
+
+namespace pba {
+
+class SensorArray {
+ public:
+  // Finds each sensor's elements: the one holding the point, or those whose
+  // centroid lies within its radius. Fails naming
+  // outputs.sensors[i].position_mm (outside the body) or .radius_mm (a
+  // ball that holds no centroid).
+  static Status Locate(const std::vector<SensorSpec>& specs, const Mesh& mesh,
+                       const TledModel& model, SensorArray* out);
+
+  bool empty() const { return sensors_.empty(); }
+  std::size_t samples() const { return time_.size(); }
+  // Records one sample at time t from the model's last evaluation and the
+  // velocity v [m/s].
+  void Sample(double t, const TledModel& model, const Eigen::VectorXd& v);
+  // Filters the samples (order, cutoff [Hz]; the rate is that of the
+  // samples) and fills solution->sensor_columns / sensor_rows and the
+  // summary's sensor_peaks.
+  Status Finish(int order, double cutoff_hz, Solution* solution) const;
+
+ private:
+  struct Sensor {
+    std::string name;
+    std::vector<int> elements;
+    std::vector<double> weights;  // volume fractions, summing to 1
+    std::vector<int> nodes;       // the elements' nodes, for the velocity
+  };
+  std::vector<Sensor> sensors_;
+  std::vector<double> time_;
+  // Per sensor: pressure, speed, strain series.
+  std::vector<std::vector<double>> pressure_, speed_, strain_;
+};
+
+// Largest principal value of the Green-Lagrange strain of F.
+double LargestPrincipalStrain(const Eigen::Matrix3d& f);
+
+}  // namespace pba

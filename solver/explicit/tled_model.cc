@@ -1,0 +1,524 @@
+#include "explicit/tled_model.h"
+
+#include <omp.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "core/format.h"
+#include "fem/hex8.h"
+#include "fem/tet4.h"
+
+namespace pba {
+namespace {
+
+// Faces of a tetrahedron (corner indices) and of a hexahedron (C3D8 order).
+constexpr int kTetFaces[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+constexpr int kHexFaces[6][4] = {{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4},
+                                 {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7}};
+
+// Characteristic length of an element with corners `x` (rows) and volume
+// `volume`: the smallest altitude 3V / A_max of a tetrahedron, V / A_max of
+// a hexahedron (a quad's area as half its diagonals' cross product).
+template <int N>
+double CharacteristicLength(const Eigen::Matrix<double, N, 3>& x, double volume) {
+  double max_area = 0;
+  if constexpr (N == 4) {
+    for (const auto& f : kTetFaces) {
+      const Eigen::Vector3d a = x.row(f[1]) - x.row(f[0]), b = x.row(f[2]) - x.row(f[0]);
+      max_area = std::max(max_area, 0.5 * a.cross(b).norm());
+    }
+    return 3 * volume / max_area;
+  } else {
+    for (const auto& f : kHexFaces) {
+      const Eigen::Vector3d d1 = x.row(f[2]) - x.row(f[0]), d2 = x.row(f[3]) - x.row(f[1]);
+      max_area = std::max(max_area, 0.5 * d1.cross(d2).norm());
+    }
+    return volume / max_area;
+  }
+}
+
+// cof F = det(F) F^-T, row-major 3 x 3.
+inline void Cofactor(const double* f, double* c) {
+  c[0] = f[4] * f[8] - f[5] * f[7];
+  c[1] = f[5] * f[6] - f[3] * f[8];
+  c[2] = f[3] * f[7] - f[4] * f[6];
+  c[3] = f[2] * f[7] - f[1] * f[8];
+  c[4] = f[0] * f[8] - f[2] * f[6];
+  c[5] = f[1] * f[6] - f[0] * f[7];
+  c[6] = f[1] * f[5] - f[2] * f[4];
+  c[7] = f[2] * f[3] - f[0] * f[5];
+  c[8] = f[0] * f[4] - f[1] * f[3];
+}
+
+}  // namespace
+
+double TledMaterial::WaveSpeed() const { return std::sqrt((bulk + 4 * mu / 3) / density); }
+
+Status TledModel::Build(const Mesh& mesh, std::vector<TledMaterial> materials,
+                        std::vector<int> material_of, const TledOptions& options,
+                        std::unique_ptr<TledModel>* out) {
+  if (mesh.quadratic()) {
+    return Status::InvalidArgument("mesh.element",
+                                   "the explicit engine takes 4-node tetrahedra or 8-node "
+                                   "hexahedra, not 10-node tetrahedra");
+  }
+  for (std::size_t m = 0; m < materials.size(); ++m) {
+    if (!(materials[m].density > 0)) {
+      return Status::InvalidArgument(
+          "material.density_kg_per_m3",
+          "material " + materials[m].name + " has no density; an explicit analysis needs its mass");
+    }
+  }
+  std::unique_ptr<TledModel> model(new TledModel());
+  TledModel& t = *model;
+  t.mesh_ = &mesh;
+  t.options_ = options;
+  t.materials_ = std::move(materials);
+  t.material_of_ = std::move(material_of);
+  t.num_nodes_ = mesh.num_nodes();
+  t.num_elements_ = mesh.num_elements();
+  const int ne = t.num_elements_;
+  const bool hex = mesh.hexahedral();
+  t.npe_ = hex ? 8 : 4;
+  const int npe = t.npe_;
+  t.anp_ = !hex && options.average_nodal_pressure;
+  t.conn_.resize(static_cast<std::size_t>(npe) * ne);
+  t.grad_.resize(static_cast<std::size_t>(3 * npe) * ne);
+  t.volume_.resize(ne);
+  t.length_.resize(ne);
+  t.mass_ = Eigen::VectorXd::Zero(t.num_nodes_);
+  if (hex) {
+    t.gamma_.resize(32 * static_cast<std::size_t>(ne));
+    t.hourglass_k_.resize(ne);
+  }
+  // Hourglass base vectors at the nodes: xi eta, eta zeta, zeta xi, xi eta zeta.
+  double h[8][4];
+  for (int a = 0; a < 8; ++a) {
+    const double r = kHex8NodeNatural[a][0], s = kHex8NodeNatural[a][1], z = kHex8NodeNatural[a][2];
+    h[a][0] = r * s, h[a][1] = s * z, h[a][2] = z * r, h[a][3] = r * s * z;
+  }
+  for (int e = 0; e < ne; ++e) {
+    double volume = 0;
+    if (hex) {
+      const Hex8Nodes x = HexCorners(mesh, e);
+      const Hex8Geometry g = ComputeHex8Geometry(x);
+      volume = g.element_volume;
+      if (!(g.min_jacobian > 0)) {
+        return Status::InvalidArgument(
+            "mesh",
+            Format("hexahedron %d is inverted or degenerate (det J %g)", e, g.min_jacobian));
+      }
+      for (int a = 0; a < 8; ++a) {
+        t.conn_[8 * e + a] = mesh.hexes[e][a];
+        for (int j = 0; j < 3; ++j) t.grad_[24 * e + 3 * a + j] = g.mean_grad(a, j);
+      }
+      t.length_[e] = CharacteristicLength<8>(x, volume);
+      // gamma_{a alpha} = (h_{a alpha} - sum_b h_{b alpha} X_bi b_ai) / 8.
+      for (int alpha = 0; alpha < 4; ++alpha) {
+        Eigen::Vector3d hx = Eigen::Vector3d::Zero();
+        for (int b = 0; b < 8; ++b) hx += h[b][alpha] * x.row(b).transpose();
+        for (int a = 0; a < 8; ++a) {
+          t.gamma_[32 * e + 4 * a + alpha] = (h[a][alpha] - hx.dot(g.mean_grad.row(a))) / 8;
+        }
+      }
+      const TledMaterial& m = t.materials_[t.material_of_[e]];
+      t.hourglass_k_[e] =
+          options.hourglass * (m.bulk + 4 * m.mu / 3) * volume * g.mean_grad.squaredNorm();
+    } else {
+      const Eigen::Matrix<double, 4, 3> x = TetCorners(mesh, e);
+      const Tet4Geometry g = ComputeTet4Geometry(x);
+      volume = g.volume;
+      if (!(volume > 0)) {
+        return Status::InvalidArgument(
+            "mesh", Format("tetrahedron %d is inverted or degenerate (volume %g m^3)", e, volume));
+      }
+      for (int a = 0; a < 4; ++a) {
+        t.conn_[4 * e + a] = mesh.tets[e][a];
+        for (int j = 0; j < 3; ++j) t.grad_[12 * e + 3 * a + j] = g.grad(a, j);
+      }
+      t.length_[e] = CharacteristicLength<4>(x, volume);
+    }
+    t.volume_[e] = volume;
+    const double corner_mass = t.materials_[t.material_of_[e]].density * volume / npe;
+    for (int a = 0; a < npe; ++a) t.mass_(t.conn_[npe * e + a]) += corner_mass;
+  }
+  // Node-to-corner lists.
+  t.node_start_.assign(t.num_nodes_ + 1, 0);
+  for (int c = 0; c < npe * ne; ++c) ++t.node_start_[t.conn_[c] + 1];
+  for (int n = 0; n < t.num_nodes_; ++n) t.node_start_[n + 1] += t.node_start_[n];
+  t.node_corner_.resize(static_cast<std::size_t>(npe) * ne);
+  {
+    std::vector<int> next(t.node_start_.begin(), t.node_start_.end() - 1);
+    for (int c = 0; c < npe * ne; ++c) t.node_corner_[next[t.conn_[c]]++] = c;
+  }
+  // Nodal groups of one material each (average nodal pressure).
+  if (t.anp_) {
+    t.corner_group_.assign(static_cast<std::size_t>(npe) * ne, -1);
+    std::vector<std::vector<int>> members;
+    for (int n = 0; n < t.num_nodes_; ++n) {
+      const int first = static_cast<int>(members.size());
+      for (int k = t.node_start_[n]; k < t.node_start_[n + 1]; ++k) {
+        const int c = t.node_corner_[k];
+        const int m = t.material_of_[c / npe];
+        int g = first;
+        while (g < static_cast<int>(members.size()) && t.group_material_[g] != m) ++g;
+        if (g == static_cast<int>(members.size())) {
+          members.emplace_back();
+          t.group_material_.push_back(m);
+        }
+        members[g].push_back(c);
+        t.corner_group_[c] = g;
+      }
+    }
+    t.group_start_.assign(1, 0);
+    for (const std::vector<int>& g : members) {
+      t.group_corner_.insert(t.group_corner_.end(), g.begin(), g.end());
+      t.group_start_.push_back(static_cast<int>(t.group_corner_.size()));
+    }
+    t.group_pressure_.assign(members.size(), 0.0);
+  }
+  // Relaxation history.
+  t.history_start_.assign(ne, -1);
+  std::size_t history = 0;
+  for (int e = 0; e < ne; ++e) {
+    const std::size_t terms = t.materials_[t.material_of_[e]].relaxation.g.size();
+    if (terms == 0) continue;
+    t.history_start_[e] = static_cast<int>(history);
+    history += 6 * (terms + 1);
+  }
+  t.history_.assign(history, 0.0);
+  t.steps_.resize(t.materials_.size());
+  t.f_.assign(9 * static_cast<std::size_t>(ne), 0.0);
+  for (int e = 0; e < ne; ++e) t.f_[9 * e] = t.f_[9 * e + 4] = t.f_[9 * e + 8] = 1;
+  t.j_.assign(ne, 1.0);
+  t.pressure_.assign(ne, 0.0);
+  t.force_.assign(static_cast<std::size_t>(3 * npe) * ne, 0.0);
+  *out = std::move(model);
+  return Status::Ok();
+}
+
+double TledModel::StableTimeStep(const Eigen::VectorXd* u, const Eigen::VectorXd* v, int* element,
+                                 double* length) const {
+  double best = std::numeric_limits<double>::infinity();
+  int best_e = -1;
+  double best_l = 0;
+  const double c1 = options_.bulk_viscosity_linear, c2 = options_.bulk_viscosity_quadratic;
+#pragma omp parallel
+  {
+    double local = std::numeric_limits<double>::infinity();
+    int local_e = -1;
+    double local_l = 0;
+#pragma omp for schedule(static) nowait
+    for (int e = 0; e < num_elements_; ++e) {
+      if (eroded(e)) continue;
+      double l = length_[e];
+      if (u != nullptr) {
+        // The current length, from the current corners.
+        if (npe_ == 4) {
+          Eigen::Matrix<double, 4, 3> x;
+          for (int a = 0; a < 4; ++a) {
+            const int n = conn_[4 * e + a];
+            x.row(a) = mesh_->nodes.row(n) + u->segment<3>(3 * n).transpose();
+          }
+          l = CharacteristicLength<4>(x, j_[e] * volume_[e]);
+        } else {
+          Eigen::Matrix<double, 8, 3> x;
+          for (int a = 0; a < 8; ++a) {
+            const int n = conn_[8 * e + a];
+            x.row(a) = mesh_->nodes.row(n) + u->segment<3>(3 * n).transpose();
+          }
+          l = CharacteristicLength<8>(x, j_[e] * volume_[e]);
+        }
+      }
+      const double c = material(e).WaveSpeed();
+      double q = 0;
+      if (v != nullptr) {
+        // tr D = dJ/dt / J = (dF/dt : cof F) / J.
+        const double* g = &grad_[3 * npe_ * static_cast<std::size_t>(e)];
+        double fdot[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
+        for (int a = 0; a < npe_; ++a) {
+          const int n = conn_[npe_ * e + a];
+          for (int i = 0; i < 3; ++i) {
+            for (int j = 0; j < 3; ++j) fdot[3 * i + j] += (*v)(3 * n + i) * g[3 * a + j];
+          }
+        }
+        double cof[9];
+        Cofactor(&f_[9 * static_cast<std::size_t>(e)], cof);
+        double rate = 0;
+        for (int k = 0; k < 9; ++k) rate += fdot[k] * cof[k];
+        rate /= j_[e];
+        if (rate < 0) q = c1 * c + c2 * l * -rate;
+      }
+      const double dt = q > 0 ? l / (q + std::sqrt(q * q + c * c)) : l / c;
+      if (!(dt >= local)) {
+        local = dt, local_e = e, local_l = l;
+      }
+    }
+#pragma omp critical
+    if (local < best || (local == best && local_e < best_e)) {
+      best = local, best_e = local_e, best_l = local_l;
+    }
+  }
+  if (element != nullptr) *element = best_e;
+  if (length != nullptr) *length = best_l;
+  return best;
+}
+
+void TledModel::SetTimeStep(double dt) {
+  dt_ = dt;
+  for (std::size_t m = 0; m < materials_.size(); ++m) {
+    if (!materials_[m].relaxation.g.empty()) {
+      steps_[m] = ViscousStep::Of(materials_[m].relaxation, dt);
+    }
+  }
+}
+
+void TledModel::ComputeDeformation(const Eigen::VectorXd& u) {
+  const double* ud = u.data();
+#pragma omp for schedule(static)
+  for (int e = 0; e < num_elements_; ++e) {
+    const int* nodes = &conn_[npe_ * static_cast<std::size_t>(e)];
+    const double* g = &grad_[3 * npe_ * static_cast<std::size_t>(e)];
+    double f[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+    for (int a = 0; a < npe_; ++a) {
+      const double* ua = ud + 3 * nodes[a];
+      const double* ga = g + 3 * a;
+      for (int i = 0; i < 3; ++i) {
+        f[3 * i + 0] += ua[i] * ga[0];
+        f[3 * i + 1] += ua[i] * ga[1];
+        f[3 * i + 2] += ua[i] * ga[2];
+      }
+    }
+    double* fe = &f_[9 * static_cast<std::size_t>(e)];
+    for (int k = 0; k < 9; ++k) fe[k] = f[k];
+    j_[e] = f[0] * (f[4] * f[8] - f[5] * f[7]) - f[1] * (f[3] * f[8] - f[5] * f[6]) +
+            f[2] * (f[3] * f[7] - f[4] * f[6]);
+  }
+}
+
+void TledModel::AverageNodalPressure() {
+  const int groups = static_cast<int>(group_pressure_.size());
+#pragma omp for schedule(static)
+  for (int g = 0; g < groups; ++g) {
+    double sum_vj = 0, sum_v = 0;
+    for (int k = group_start_[g]; k < group_start_[g + 1]; ++k) {
+      const int e = group_corner_[k] / npe_;
+      if (eroded(e)) continue;
+      sum_vj += volume_[e] * j_[e];
+      sum_v += volume_[e];
+    }
+    if (sum_v == 0) {
+      group_pressure_[g] = 0;
+      continue;
+    }
+    const double j = sum_vj / sum_v;
+    const TledMaterial& m = materials_[group_material_[g]];
+    group_pressure_[g] = m.neo_hookean ? m.bulk * (j - 1) : m.model->Volumetric(j).first;
+  }
+}
+
+void TledModel::ElementForces(const Eigen::VectorXd& u, const Eigen::VectorXd& v,
+                              TledEvaluation* eval) {
+  const double c1 = options_.bulk_viscosity_linear, c2 = options_.bulk_viscosity_quadratic;
+  const double* vd = v.data();
+  const double* ud = u.data();
+  // This thread's share; `eval` (shared) receives the sums.
+  double hourglass = 0;
+  int inverted = std::numeric_limits<int>::max();
+#pragma omp for schedule(static) nowait
+  for (int e = 0; e < num_elements_; ++e) {
+    double* force = &force_[3 * npe_ * static_cast<std::size_t>(e)];
+    const double* fe = &f_[9 * static_cast<std::size_t>(e)];
+    const double j = j_[e];
+    if (eroded(e) || !(j > 0) || !std::isfinite(j)) {
+      std::fill(force, force + 3 * npe_, 0.0);
+      if (!eroded(e)) inverted = std::min(inverted, e);
+      continue;
+    }
+    const int* nodes = &conn_[npe_ * static_cast<std::size_t>(e)];
+    const double* g = &grad_[3 * npe_ * static_cast<std::size_t>(e)];
+    const TledMaterial& m = materials_[material_of_[e]];
+    double cof[9];
+    Cofactor(fe, cof);
+    // Pressure U'(J): the element's, or the mean of its corners' groups.
+    double p;
+    if (anp_) {
+      p = 0;
+      for (int a = 0; a < npe_; ++a) p += group_pressure_[corner_group_[npe_ * e + a]];
+      p /= npe_;
+    } else {
+      p = m.neo_hookean ? m.bulk * (j - 1) : m.model->Volumetric(j).first;
+    }
+    // Bulk viscosity from tr D = (dF/dt : cof F) / J.
+    double q = 0;
+    if (c1 > 0 || c2 > 0) {
+      double rate = 0;
+      for (int a = 0; a < npe_; ++a) {
+        const double* va = vd + 3 * nodes[a];
+        const double* ga = g + 3 * a;
+        for (int i = 0; i < 3; ++i) {
+          rate += va[i] * (ga[0] * cof[3 * i] + ga[1] * cof[3 * i + 1] + ga[2] * cof[3 * i + 2]);
+        }
+      }
+      rate /= j;
+      if (rate < 0) {
+        const double l = length_[e] * std::cbrt(j);
+        q = m.density * l * (c2 * l * rate * rate - c1 * m.WaveSpeed() * rate);
+      }
+    }
+    double pk[9];  // first Piola-Kirchhoff stress, row-major
+    if (m.neo_hookean) {
+      double i1 = 0;
+      for (int k = 0; k < 9; ++k) i1 += fe[k] * fe[k];
+      const double a = m.mu / std::cbrt(j * j);
+      const double b = p - q - a * i1 / (3 * j);
+      for (int k = 0; k < 9; ++k) pk[k] = a * fe[k] + b * cof[k];
+    } else {
+      const Eigen::Matrix3d f = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(fe);
+      Vector6d s_iso;
+      m.model->Isochoric(f, nullptr, &s_iso, nullptr);
+      if (history_start_[e] >= 0) {
+        // S_visc = g_inf S_iso + sum_k H_k; H_k advances over the step.
+        const ViscousStep& step = steps_[material_of_[e]];
+        double* hist = &history_[history_start_[e]];
+        Eigen::Map<Vector6d> s_old(hist);
+        const Vector6d ds = s_iso - s_old;
+        Vector6d s_visc = m.relaxation.LongTermFactor() * s_iso;
+        for (std::size_t k = 0; k < step.decay.size(); ++k) {
+          Eigen::Map<Vector6d> hk(hist + 6 * (k + 1));
+          hk = step.decay[k] * hk + step.weight[k] * ds;
+          s_visc += hk;
+        }
+        s_old = s_iso;
+        s_iso = s_visc;
+      }
+      const Eigen::Matrix3d p_iso = f * VoigtToSymmetric(s_iso);
+      for (int i = 0; i < 3; ++i) {
+        for (int k = 0; k < 3; ++k) pk[3 * i + k] = p_iso(i, k) + (p - q) * cof[3 * i + k];
+      }
+    }
+    // Pressure -tr(sigma)/3 = -(P : F) / (3 J), less the viscosity's q.
+    double pf = 0;
+    for (int k = 0; k < 9; ++k) pf += pk[k] * fe[k];
+    pressure_[e] = -pf / (3 * j) - q;
+    if (record_stress_) {
+      // sigma = P F^T / J + q I (the stress without the viscosity).
+      double s[9];
+      for (int i = 0; i < 3; ++i) {
+        for (int k = 0; k < 3; ++k) {
+          s[3 * i + k] = (pk[3 * i] * fe[3 * k] + pk[3 * i + 1] * fe[3 * k + 1] +
+                          pk[3 * i + 2] * fe[3 * k + 2]) /
+                         j;
+        }
+      }
+      double* out = &stress_[6 * static_cast<std::size_t>(e)];
+      out[0] = s[0] + q, out[1] = s[4] + q, out[2] = s[8] + q;
+      out[3] = s[5], out[4] = s[2], out[5] = s[1];
+    }
+    const double v0 = volume_[e];
+    for (int a = 0; a < npe_; ++a) {
+      const double* ga = g + 3 * a;
+      for (int i = 0; i < 3; ++i) {
+        force[3 * a + i] = v0 * (pk[3 * i] * ga[0] + pk[3 * i + 1] * ga[1] + pk[3 * i + 2] * ga[2]);
+      }
+    }
+    if (npe_ == 8 && options_.hourglass > 0) {
+      const double* gamma = &gamma_[32 * static_cast<std::size_t>(e)];
+      double hq[4][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
+      for (int a = 0; a < 8; ++a) {
+        const double* ua = ud + 3 * nodes[a];
+        for (int alpha = 0; alpha < 4; ++alpha) {
+          for (int i = 0; i < 3; ++i) hq[alpha][i] += gamma[4 * a + alpha] * ua[i];
+        }
+      }
+      const double k = hourglass_k_[e];
+      double sq = 0;
+      for (int alpha = 0; alpha < 4; ++alpha) {
+        for (int i = 0; i < 3; ++i) sq += hq[alpha][i] * hq[alpha][i];
+      }
+      hourglass += 0.5 * k * sq;
+      for (int a = 0; a < 8; ++a) {
+        for (int i = 0; i < 3; ++i) {
+          double sum = 0;
+          for (int alpha = 0; alpha < 4; ++alpha) sum += gamma[4 * a + alpha] * hq[alpha][i];
+          force[3 * a + i] += k * sum;
+        }
+      }
+    }
+  }
+#pragma omp critical(tled_evaluation)
+  {
+    eval->hourglass_energy += hourglass;
+    if (inverted != std::numeric_limits<int>::max() &&
+        (eval->inverted_element < 0 || inverted < eval->inverted_element)) {
+      eval->inverted_element = inverted;
+    }
+  }
+#pragma omp barrier
+}
+
+void TledModel::Gather(Eigen::VectorXd* f_int) const {
+  double* out = f_int->data();
+#pragma omp for schedule(static)
+  for (int n = 0; n < num_nodes_; ++n) {
+    double fx = 0, fy = 0, fz = 0;
+    for (int k = node_start_[n]; k < node_start_[n + 1]; ++k) {
+      const double* f = &force_[3 * static_cast<std::size_t>(node_corner_[k])];
+      fx += f[0], fy += f[1], fz += f[2];
+    }
+    out[3 * n] = fx, out[3 * n + 1] = fy, out[3 * n + 2] = fz;
+  }
+}
+
+TledEvaluation TledModel::InternalForce(const Eigen::VectorXd& u, const Eigen::VectorXd& v,
+                                        Eigen::VectorXd* f_int) {
+  TledEvaluation eval;
+  if (record_stress_) stress_.resize(6 * static_cast<std::size_t>(num_elements_));
+  f_int->resize(3 * static_cast<Eigen::Index>(num_nodes_));
+#pragma omp parallel
+  {
+    ComputeDeformation(u);
+    if (anp_) AverageNodalPressure();
+    ElementForces(u, v, &eval);
+    Gather(f_int);
+  }
+  return eval;
+}
+
+Eigen::Matrix3d TledModel::DeformationGradient(int e) const {
+  return Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(
+      &f_[9 * static_cast<std::size_t>(e)]);
+}
+
+Vector6d TledModel::CauchyStress(int e) const {
+  if (stress_.empty()) return Vector6d::Zero();
+  return Eigen::Map<const Vector6d>(&stress_[6 * static_cast<std::size_t>(e)]);
+}
+
+double TledModel::Erode(int e) {
+  if (eroded_.empty()) eroded_.assign(num_elements_, 0);
+  if (eroded_[e]) return 0;
+  eroded_[e] = 1;
+  const Eigen::Matrix3d f = DeformationGradient(e);
+  if (!IsAdmissible(f)) return 0;
+  const double w = material(e).model->Energy(f);
+  return std::isfinite(w) ? w * volume_[e] : 0;
+}
+
+std::vector<int> TledModel::OrphanNodes() const {
+  std::vector<int> out;
+  if (eroded_.empty()) return out;
+  for (int n = 0; n < num_nodes_; ++n) {
+    bool alive = false;
+    for (int k = node_start_[n]; k < node_start_[n + 1] && !alive; ++k) {
+      alive = !eroded_[node_corner_[k] / npe_];
+    }
+    if (!alive && node_start_[n + 1] > node_start_[n]) out.push_back(n);
+  }
+  return out;
+}
+
+}  // namespace pba
