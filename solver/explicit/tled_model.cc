@@ -179,6 +179,7 @@ Status TledModel::Build(const Mesh& mesh, std::vector<TledMaterial> materials,
       t.group_start_.push_back(static_cast<int>(t.group_corner_.size()));
     }
     t.group_pressure_.assign(members.size(), 0.0);
+    t.group_j_.assign(members.size(), 1.0);
   }
   // Relaxation history.
   t.history_start_.assign(ne, -1);
@@ -311,10 +312,11 @@ void TledModel::AverageNodalPressure() {
       sum_v += volume_[e];
     }
     if (sum_v == 0) {
-      group_pressure_[g] = 0;
+      group_pressure_[g] = 0, group_j_[g] = 1;
       continue;
     }
     const double j = sum_vj / sum_v;
+    group_j_[g] = j;
     const TledMaterial& m = materials_[group_material_[g]];
     group_pressure_[g] = m.neo_hookean ? m.bulk * (j - 1) : m.model->Volumetric(j).first;
   }
@@ -504,7 +506,16 @@ double TledModel::Erode(int e) {
   eroded_[e] = 1;
   const Eigen::Matrix3d f = DeformationGradient(e);
   if (!IsAdmissible(f)) return 0;
-  const double w = material(e).model->Energy(f);
+  const HyperelasticMaterial& m = *material(e).model;
+  double w = m.Energy(f);
+  if (anp_) {
+    // The volumetric energy is the nodes', sum_n V_n U(J_n): the element
+    // holds a quarter of its volume's share at each corner.
+    m.Isochoric(f, &w, nullptr, nullptr);
+    for (int a = 0; a < 4; ++a) {
+      w += 0.25 * m.Volumetric(group_j_[corner_group_[4 * e + a]]).value;
+    }
+  }
   return std::isfinite(w) ? w * volume_[e] : 0;
 }
 

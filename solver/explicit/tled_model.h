@@ -174,6 +174,7 @@ class TledModel {
   std::vector<double> group_weight_;  // V0_e / sum V0 per corner of a group
   std::vector<int> group_material_;
   std::vector<double> group_pressure_;
+  std::vector<double> group_j_;  // J_n of each group
   // Per element, from the last evaluation.
   std::vector<double> f_;         // 9 per element
   std::vector<double> j_;         // det F

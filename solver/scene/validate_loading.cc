@@ -166,7 +166,8 @@ Status ValidateInclusions(const SceneSpec& scene) {
 }
 
 Status ValidateContacts(const SceneSpec& scene) {
-  if (!scene.contacts.empty() && !FiniteStrain(scene.analysis.type)) {
+  if (!scene.contacts.empty() && !FiniteStrain(scene.analysis.type) &&
+      scene.analysis.type != AnalysisSpec::Type::kExplicitDynamic) {
     return Status::InvalidArgument(
         "contacts", std::string("rigid contact needs a NONLINEAR_STATIC or QUASI_STATIC "
                                 "analysis; this one is ") +

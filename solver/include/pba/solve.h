@@ -164,9 +164,9 @@ struct ExplicitSummary {
   int step_reductions = 0;          // times the step had to shrink
   std::string controlling_element;  // "element 812 (Putamen), length 0.41 mm"
   // Energies at the end [J] and the balance error
-  // |kinetic + internal + hourglass + contact + damping + eroded - external|
-  // relative to the largest of external work, kinetic and internal energy,
-  // its largest value over the run.
+  // |kinetic + internal + hourglass + contact + damping + eroded - external
+  //  - initial kinetic|, its largest value over the run relative to the
+  // largest external work, kinetic or internal energy of the run.
   double kinetic_j = 0;
   double internal_j = 0;
   double hourglass_j = 0;
