@@ -12,6 +12,7 @@
 #include "analysis/time_history.h"
 #include "atlas/structure_set.h"
 #include "core/format.h"
+#include "explicit/dynamic_relaxation.h"
 #include "explicit/explicit_dynamics.h"
 #include "material/factory.h"
 #include "mesh/primitive_mesher.h"
@@ -48,6 +49,12 @@ std::string DescribeGeometry(const GeometrySpec& g) {
                   g.ellipsoid.semi_axes_mm[1], g.ellipsoid.semi_axes_mm[2]);
   }
   return Format("cylinder r = %g mm, h = %g mm", g.cylinder.radius_mm, g.cylinder.height_mm);
+}
+
+// The element of the explicit engine (explicit/tled_model.h).
+std::string ExplicitElementName(const SceneSpec& scene, const Mesh& mesh) {
+  if (mesh.hexahedral()) return "HEX8 (one point, hourglass control)";
+  return scene.mesh.element == ElementType::kTet4 ? "TET4" : "TET4_ANP";
 }
 
 }  // namespace
@@ -118,13 +125,13 @@ Status SolveScene(const SceneSpec& scene, const SolveOptions& options, Solution*
       PBA_RETURN_IF_ERROR(SolveQuasiStatic(scene, model, &clock, solution, &result));
       break;
     case AnalysisSpec::Type::kExplicitDynamic:
-      summary.element_type = mesh.hexahedral() ? "HEX8 (one point, hourglass control)"
-                             : scene.mesh.element == ElementType::kTet4 ? "TET4"
-                                                                        : "TET4_ANP";
+      summary.element_type = ExplicitElementName(scene, mesh);
       PBA_RETURN_IF_ERROR(SolveExplicitDynamic(scene, model, &clock, solution, &result));
       break;
     case AnalysisSpec::Type::kDynamicRelaxation:
-      return Status::InvalidArgument("analysis.type", "DYNAMIC_RELAXATION is not available yet");
+      summary.element_type = ExplicitElementName(scene, mesh);
+      PBA_RETURN_IF_ERROR(SolveDynamicRelaxation(scene, model, &clock, solution, &result));
+      break;
   }
 
   for (const std::string& name : ReactionSetNames(scene)) {

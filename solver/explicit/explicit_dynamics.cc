@@ -14,7 +14,6 @@
 #include "explicit/impactor.h"
 #include "explicit/sensors.h"
 #include "explicit/tled_model.h"
-#include "material/linear_elastic.h"
 
 namespace pba {
 namespace {
@@ -59,39 +58,6 @@ struct Energies {
 std::string ElementName(const Mesh& mesh, int e) {
   if (mesh.region_names.empty()) return Format("element %d", e);
   return Format("element %d (%s)", e, mesh.region_names[mesh.element_region[e]].c_str());
-}
-
-// The finite-strain fields of the end state from the model's last
-// evaluation (RecordStress on).
-void FillFields(const TledModel& tled, Solution* solution, double* max_strain) {
-  const int ne = tled.num_elements();
-  solution->strain.assign(6 * static_cast<std::size_t>(ne), 0.0);
-  solution->almansi_strain.assign(6 * static_cast<std::size_t>(ne), 0.0);
-  solution->stress_pa.assign(6 * static_cast<std::size_t>(ne), 0.0);
-  solution->pk2_stress_pa.assign(6 * static_cast<std::size_t>(ne), 0.0);
-  solution->von_mises_pa.assign(ne, 0.0);
-  solution->jacobian.assign(ne, 1.0);
-  double largest = 0;
-  for (int e = 0; e < ne; ++e) {
-    if (tled.eroded(e)) continue;
-    const Eigen::Matrix3d f = tled.DeformationGradient(e);
-    const double j = f.determinant();
-    const Eigen::Matrix3d identity = Eigen::Matrix3d::Identity();
-    const Vector6d green = GreenLagrangeVoigt(f);
-    Vector6d almansi = SymmetricToVoigt(0.5 * (identity - (f * f.transpose()).inverse()));
-    almansi.tail<3>() *= 2;
-    const Vector6d cauchy = tled.CauchyStress(e);
-    const Eigen::Matrix3d finv = f.inverse();
-    const Vector6d pk2 = SymmetricToVoigt(j * finv * VoigtToSymmetric(cauchy) * finv.transpose());
-    Eigen::Map<Vector6d>(&solution->strain[6 * e]) = green;
-    Eigen::Map<Vector6d>(&solution->almansi_strain[6 * e]) = almansi;
-    Eigen::Map<Vector6d>(&solution->stress_pa[6 * e]) = cauchy;
-    Eigen::Map<Vector6d>(&solution->pk2_stress_pa[6 * e]) = pk2;
-    solution->von_mises_pa[e] = VonMises(cauchy);
-    solution->jacobian[e] = j;
-    largest = std::max(largest, green.cwiseAbs().maxCoeff());
-  }
-  *max_strain = largest;
 }
 
 }  // namespace
@@ -414,7 +380,7 @@ Status SolveExplicitDynamic(const SceneSpec& scene, const Model& model, PhaseClo
   run.element_updates_per_s =
       loop_s > 0 ? static_cast<double>(step) * tled.num_elements() / loop_s : 0;
   double max_strain = 0;
-  FillFields(tled, solution, &max_strain);
+  FillExplicitFields(tled, solution, &max_strain);
   summary.analysis = Format(
       "explicit dynamics (central difference, total Lagrangian, lumped mass) to %.4g ms", t * 1e3);
   summary.notes.push_back(Format(

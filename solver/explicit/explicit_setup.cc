@@ -1,7 +1,11 @@
 #include "explicit/explicit_setup.h"
 
+#include <Eigen/LU>
+
+#include "analysis/material_field.h"
 #include "core/format.h"
 #include "material/factory.h"
+#include "material/linear_elastic.h"
 
 namespace pba {
 
@@ -23,8 +27,10 @@ Status MakeExplicitSetup(const SceneSpec& scene, const Model& model, ExplicitSet
   const ExplicitSpec& spec = scene.analysis.explicit_dynamics;
   TledOptions& options = out->options;
   options.average_nodal_pressure = scene.mesh.element != ElementType::kTet4;
-  options.bulk_viscosity_linear = spec.bulk_viscosity_linear.value_or(0.06);
-  options.bulk_viscosity_quadratic = spec.bulk_viscosity_quadratic.value_or(1.5);
+  // Dynamic relaxation damps on its own and wants the elastic answer.
+  const bool relaxation = scene.analysis.type == AnalysisSpec::Type::kDynamicRelaxation;
+  options.bulk_viscosity_linear = relaxation ? 0 : spec.bulk_viscosity_linear.value_or(0.06);
+  options.bulk_viscosity_quadratic = relaxation ? 0 : spec.bulk_viscosity_quadratic.value_or(1.5);
   options.hourglass = spec.hourglass_coefficient > 0 ? spec.hourglass_coefficient : 0.05;
   out->time_step_factor = spec.time_step_factor > 0 ? spec.time_step_factor : 0.7;
 
@@ -40,8 +46,9 @@ Status MakeExplicitSetup(const SceneSpec& scene, const Model& model, ExplicitSet
     }
     TledMaterial t;
     t.model = MakeHyperelasticMaterial(ms);
-    t.relaxation = RelaxationOf(ms.viscoelastic);
-    t.density = ms.density_kg_per_m3;
+    if (!relaxation) t.relaxation = RelaxationOf(ms.viscoelastic);
+    // Dynamic relaxation sets its own masses.
+    t.density = relaxation && !(ms.density_kg_per_m3 > 0) ? 1000 : ms.density_kg_per_m3;
     t.mu = t.model->ShearModulus();
     t.bulk = t.model->BulkModulus();
     t.neo_hookean = ms.kind == MaterialSpec::Kind::kNeoHookean && t.relaxation.g.empty();
@@ -85,6 +92,37 @@ Status MakeExplicitSetup(const SceneSpec& scene, const Model& model, ExplicitSet
   out->loads = std::make_unique<ExternalLoads>(BuildLoads(scene, model));
   out->has_loads = !out->loads->empty();
   return Status::Ok();
+}
+
+void FillExplicitFields(const TledModel& tled, Solution* solution, double* max_strain) {
+  const int ne = tled.num_elements();
+  solution->strain.assign(6 * static_cast<std::size_t>(ne), 0.0);
+  solution->almansi_strain.assign(6 * static_cast<std::size_t>(ne), 0.0);
+  solution->stress_pa.assign(6 * static_cast<std::size_t>(ne), 0.0);
+  solution->pk2_stress_pa.assign(6 * static_cast<std::size_t>(ne), 0.0);
+  solution->von_mises_pa.assign(ne, 0.0);
+  solution->jacobian.assign(ne, 1.0);
+  double largest = 0;
+  for (int e = 0; e < ne; ++e) {
+    if (tled.eroded(e)) continue;
+    const Eigen::Matrix3d f = tled.DeformationGradient(e);
+    const double j = f.determinant();
+    const Eigen::Matrix3d identity = Eigen::Matrix3d::Identity();
+    const Vector6d green = GreenLagrangeVoigt(f);
+    Vector6d almansi = SymmetricToVoigt(0.5 * (identity - (f * f.transpose()).inverse()));
+    almansi.tail<3>() *= 2;
+    const Vector6d cauchy = tled.CauchyStress(e);
+    const Eigen::Matrix3d finv = f.inverse();
+    const Vector6d pk2 = SymmetricToVoigt(j * finv * VoigtToSymmetric(cauchy) * finv.transpose());
+    Eigen::Map<Vector6d>(&solution->strain[6 * e]) = green;
+    Eigen::Map<Vector6d>(&solution->almansi_strain[6 * e]) = almansi;
+    Eigen::Map<Vector6d>(&solution->stress_pa[6 * e]) = cauchy;
+    Eigen::Map<Vector6d>(&solution->pk2_stress_pa[6 * e]) = pk2;
+    solution->von_mises_pa[e] = VonMises(cauchy);
+    solution->jacobian[e] = j;
+    largest = std::max(largest, green.cwiseAbs().maxCoeff());
+  }
+  *max_strain = largest;
 }
 
 }  // namespace pba

@@ -9,6 +9,7 @@
 #include "analysis/external_loads.h"
 #include "explicit/tled_model.h"
 #include "pba/scene.h"
+#include "pba/solve.h"
 #include "scene/model_builder.h"
 
 namespace pba {
@@ -30,7 +31,14 @@ struct ExplicitSetup {
   double time_step_factor = 0.7;
 };
 
-// Builds the setup of a validated scene on its model. Fails naming the
+// The finite-strain fields (strain, Almansi strain, Cauchy and second
+// Piola-Kirchhoff stress, von Mises, J) of the model's last evaluation,
+// which must have had RecordStress on; *max_strain the largest
+// Green-Lagrange component.
+void FillExplicitFields(const TledModel& tled, Solution* solution, double* max_strain);
+
+// Builds the setup of a validated scene on its model. DYNAMIC_RELAXATION
+// takes the instantaneous elastic materials and no bulk viscosity. Fails naming the
 // field for what the engine cannot take: 10-node elements or full
 // hexahedra (mesh.element), growing inclusions (inclusions[i].growth_strain).
 Status MakeExplicitSetup(const SceneSpec& scene, const Model& model, ExplicitSetup* out);

@@ -103,6 +103,10 @@ class TledModel {
   const TledMaterial& material(int e) const { return materials_[material_of_[e]]; }
   // Lumped mass per node (rho V0 shared equally among the corners) [kg].
   const Eigen::VectorXd& lumped_mass() const { return mass_; }
+  // Replaces it (dynamic relaxation's fictitious masses).
+  void SetLumpedMass(Eigen::VectorXd mass) { mass_ = std::move(mass); }
+  // Reference characteristic length of element e [m].
+  double characteristic_length(int e) const { return length_[e]; }
 
   // The smallest stable time step l_e / c_e over the elements, at the
   // current displacement `u` (the reference one when null) and, when

@@ -430,8 +430,9 @@ struct ExplicitSpec {
   // energy it held are accounted for); 0: none, else > 0.
   double erosion_strain = 0;
   // DYNAMIC_RELAXATION: converged when the largest out-of-balance force is
-  // below this fraction of the largest reaction or load and the kinetic
-  // energy below it times the internal energy; 0: 1e-4.
+  // below this fraction of the largest reaction or load, and the estimated
+  // distance to the answer (from the rate at which the steps shrink) below
+  // it times the largest displacement; 0: 1e-4.
   double relaxation_tolerance = 0;
 };
 
