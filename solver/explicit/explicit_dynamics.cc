@@ -168,7 +168,30 @@ Status SolveExplicitDynamic(const SceneSpec& scene, const Model& model, PhaseClo
     const bool sample = !sensors.empty() && t >= next_sample - 1e-3 * dt;
     const bool output = t >= next_output - 1e-3 * dt || last;
     tled.RecordStress(last);
-    const TledEvaluation eval = tled.InternalForce(u, v, &f_int);
+    TledEvaluation eval = tled.InternalForce(u, v, &f_int);
+    // Erosion: elements strained past the limit, or inverted, leave.
+    if (options.erosion_strain > 0) {
+      bool eroded_now = false;
+      for (int e = 0; e < tled.num_elements(); ++e) {
+        if (tled.eroded(e)) continue;
+        const Eigen::Matrix3d f = tled.DeformationGradient(e);
+        if (f.determinant() > 0 && LargestPrincipalStrain(f) <= options.erosion_strain) continue;
+        energy.eroded_elements += tled.Erode(e);
+        ++run.eroded_elements;
+        run.eroded_mass_kg += tled.material(e).density * tled.reference_volume(e);
+        eroded_now = true;
+      }
+      if (eroded_now) {
+        orphan.assign(n_nodes, 0);
+        for (int n : tled.OrphanNodes()) {
+          orphan[n] = 1;
+          // The node leaves: its kinetic energy with it.
+          energy.orphan_kinetic += 0.5 * node_mass(n) * v.segment<3>(3 * n).squaredNorm();
+          v.segment<3>(3 * n).setZero();
+        }
+        eval = tled.InternalForce(u, v, &f_int);  // without the eroded elements
+      }
+    }
     if (eval.inverted_element >= 0) {
       return Status::Numerical(Format(
           "explicit dynamics stopped at step %lld, t = %.6g s: %s inverted (det F <= 0)%s",
@@ -179,29 +202,6 @@ Status SolveExplicitDynamic(const SceneSpec& scene, const Model& model, PhaseClo
                 "or a slower load)"));
     }
     energy.hourglass = eval.hourglass_energy;
-    // Erosion.
-    if (options.erosion_strain > 0) {
-      bool eroded_now = false;
-      for (int e = 0; e < tled.num_elements(); ++e) {
-        if (tled.eroded(e)) continue;
-        if (LargestPrincipalStrain(tled.DeformationGradient(e)) > options.erosion_strain) {
-          energy.eroded_elements += tled.Erode(e);
-          ++run.eroded_elements;
-          run.eroded_mass_kg += tled.material(e).density * tled.reference_volume(e);
-          eroded_now = true;
-        }
-      }
-      if (eroded_now) {
-        orphan.assign(n_nodes, 0);
-        for (int n : tled.OrphanNodes()) {
-          orphan[n] = 1;
-          // The node leaves: its kinetic energy with it.
-          energy.orphan_kinetic += 0.5 * node_mass(n) * v.segment<3>(3 * n).squaredNorm();
-          v.segment<3>(3 * n).setZero();
-        }
-        tled.InternalForce(u, v, &f_int);  // without the eroded elements
-      }
-    }
     const double amplitude = curve.Amplitude(t);
     if (setup.has_loads) {
       f_ext = amplitude * (setup.loads->follows_deformation() ? setup.loads->Force(u)

@@ -135,10 +135,11 @@ void CollectFaceSetNodes(FaceSet* set) {
 }
 
 FaceSet FacesWhere(const Mesh& mesh, const FaceSet& set,
-                   const std::function<bool(const Eigen::Vector3d& x)>& keep) {
+                   const std::function<bool(const Eigen::Vector3d& x)>& keep, bool complement) {
   const auto kept = [&](const auto& face) {
-    return std::all_of(face.begin(), face.end(),
-                       [&](int node) { return keep(mesh.nodes.row(node).transpose()); });
+    return complement != std::all_of(face.begin(), face.end(), [&](int node) {
+             return keep(mesh.nodes.row(node).transpose());
+           });
   };
   FaceSet patch;
   for (std::size_t t = 0; t < set.triangles.size(); ++t) {

@@ -79,8 +79,11 @@ void CollectFaceSetNodes(FaceSet* set);
 // The faces of `set` all of whose corners `keep` accepts (given the node's
 // position [m]), with their mid-edge nodes on a quadratic mesh; `nodes`
 // lists what they touch.
+// With `complement`, the other faces of `set` instead (those with some
+// corner `keep` refuses).
 FaceSet FacesWhere(const Mesh& mesh, const FaceSet& set,
-                   const std::function<bool(const Eigen::Vector3d& x)>& keep);
+                   const std::function<bool(const Eigen::Vector3d& x)>& keep,
+                   bool complement = false);
 
 // The faces of `set` whose corners all lie within `radius` of `centre` [m]
 // (a patch of it, e.g. where a punch presses), with their mid-edge nodes

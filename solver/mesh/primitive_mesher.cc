@@ -54,6 +54,28 @@ DiskDivisions DiskCounts(double radius, double h) {
   return {std::max(2, Divisions(radius, h)), Divisions(0.5 * radius, h)};
 }
 
+// The quads of `s` whose centroid lies at y <= 0, the points renumbered
+// (a disk cut with an even n: along grid lines).
+Section LowerHalf(const Section& s) {
+  Section half;
+  std::vector<int> index(s.points.size(), -1);
+  for (const auto& q : s.quads) {
+    double y = 0;
+    for (int a : q) y += s.points[a].y();
+    if (y > 0) continue;
+    std::array<int, 4> kept;
+    for (int k = 0; k < 4; ++k) {
+      if (index[q[k]] < 0) {
+        index[q[k]] = static_cast<int>(half.points.size());
+        half.points.push_back(s.points[q[k]]);
+      }
+      kept[k] = index[q[k]];
+    }
+    half.quads.push_back(kept);
+  }
+  return half;
+}
+
 Section DiskSection(double radius, DiskDivisions d) {
   Section s;
   const int n = d.n;
@@ -443,7 +465,8 @@ int64_t EstimateElementCount(const GeometrySpec& geometry, const MeshSpec& optio
   } else if (geometry.kind == GeometrySpec::Kind::kCylinder) {
     const double n = std::max(2.0, std::ceil(geometry.cylinder.radius_mm / h));
     const double m = std::ceil(0.5 * geometry.cylinder.radius_mm / h);
-    count = per_cell * (n * n + 4 * n * m) * std::ceil(geometry.cylinder.height_mm / h);
+    count = per_cell * (n * n + 4 * n * m) * std::ceil(geometry.cylinder.height_mm / h) *
+            (geometry.cylinder.half ? 0.5 : 1.0);
   } else if (geometry.kind == GeometrySpec::Kind::kSphericalShell) {
     const SphericalShellSpec& s = geometry.spherical_shell;
     const double n = ShellDivisions(s, h),
@@ -517,20 +540,28 @@ Mesh BuildPrimitiveMesh(const GeometrySpec& geometry, const MeshSpec& options, M
                          (hex ? " layers, hexahedra" : " layers, each cell cut into 6 tetrahedra");
   } else {
     const double r = geometry.cylinder.radius_mm, height = geometry.cylinder.height_mm;
-    const DiskDivisions d = DiskCounts(r, h);
+    const bool half = geometry.cylinder.half;
+    DiskDivisions d = DiskCounts(r, h);
+    if (half) d.n += d.n % 2;  // the cut y = 0 then runs along grid lines
     const int nz = Divisions(height, h);
-    mesh = Extrude(DiskSection(r, d), height, nz, hex);
+    const Section disk = DiskSection(r, d);
+    mesh = Extrude(half ? LowerHalf(disk) : disk, height, nz, hex);
     const double eps = 1e-9 * std::max(r, height) * kMm;
     const double rm = r * kMm, hm = height * kMm;
-    ClassifyFaces({"bottom", "top", "side"},
-                  {[=](const Eigen::Vector3d& x) { return x.z() < eps; },
-                   [=](const Eigen::Vector3d& x) { return x.z() > hm - eps; },
-                   [=](const Eigen::Vector3d& x) { return x.head<2>().norm() > rm - eps; }},
-                  &mesh);
+    std::vector<std::string> names = {"bottom", "top", "side"};
+    std::vector<std::function<bool(const Eigen::Vector3d&)>> tests = {
+        [=](const Eigen::Vector3d& x) { return x.z() < eps; },
+        [=](const Eigen::Vector3d& x) { return x.z() > hm - eps; },
+        [=](const Eigen::Vector3d& x) { return x.head<2>().norm() > rm - eps; }};
+    if (half) {
+      names.push_back("cut");
+      tests.push_back([=](const Eigen::Vector3d& x) { return x.y() > -eps; });
+    }
+    ClassifyFaces(names, tests, &mesh);
     stats->description =
-        "O-grid cross-section (central square " + std::to_string(d.n) + " x " +
-        std::to_string(d.n) + ", ring of " + std::to_string(d.m) + " layers) extruded in " +
-        std::to_string(nz) +
+        std::string(half ? "half " : "") + "O-grid cross-section (central square " +
+        std::to_string(d.n) + " x " + std::to_string(d.n) + ", ring of " + std::to_string(d.m) +
+        " layers) extruded in " + std::to_string(nz) +
         (hex ? " layers of hexahedra" : " layers, each prism cut into 3 tetrahedra");
   }
   return mesh;

@@ -87,13 +87,22 @@ Status CutPatches(const GeometrySpec& g, Mesh* mesh) {
     const Eigen::Vector3d normal(p.plane_normal[0], p.plane_normal[1], p.plane_normal[2]);
     // A node within a nanometre of the plane counts as on the kept side.
     const double on_plane = 1e-9 * normal.norm();
-    FaceSet patch = FacesWhere(*mesh, parent, [&](const Eigen::Vector3d& x) {
-      return (!p.ball || (x - centre).norm() <= p.radius_mm * kMm) &&
-             (!p.half_space || (x - point).dot(normal) >= -on_plane);
-    });
+    FaceSet patch = FacesWhere(
+        *mesh, parent,
+        [&](const Eigen::Vector3d& x) {
+          return (!p.ball || (x - centre).norm() <= p.radius_mm * kMm) &&
+                 (!p.half_space || (x - point).dot(normal) >= -on_plane);
+        },
+        p.invert);
     if (!patch.triangles.empty() || !patch.quads.empty()) {
       mesh->face_sets[p.name] = std::move(patch);
       continue;
+    }
+    if (p.invert) {
+      return Status::InvalidArgument(
+          path + ".invert", Format("patch '%s' holds no face of '%s': its ball or half-space "
+                                   "covers the whole set",
+                                   p.name.c_str(), p.set.c_str()));
     }
     if (!p.ball) {
       return Status::InvalidArgument(

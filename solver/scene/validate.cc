@@ -474,6 +474,7 @@ std::vector<std::string> FaceSetNames(const GeometrySpec& geometry) {
       break;
     case GeometrySpec::Kind::kCylinder:
       names = {"bottom", "top", "side"};
+      if (geometry.cylinder.half) names.push_back("cut");
       break;
     case GeometrySpec::Kind::kSphericalShell:
       names = {"inner", "outer", "x0", "y0", "z0"};
@@ -504,6 +505,9 @@ int PlaneNormalAxis(const GeometrySpec& geometry, const std::string& set) {
     return -1;
   }
   if (set == "bottom" || set == "top") return geometry.kind == GeometrySpec::Kind::kNone ? -1 : 2;
+  if (geometry.kind == GeometrySpec::Kind::kCylinder && geometry.cylinder.half && set == "cut") {
+    return 1;
+  }
   if (geometry.kind != GeometrySpec::Kind::kBox) return -1;
   if (set == "x_min" || set == "x_max") return 0;
   if (set == "y_min" || set == "y_max") return 1;

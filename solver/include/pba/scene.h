@@ -21,6 +21,9 @@ struct BoxSpec {
 struct CylinderSpec {
   double radius_mm = 0;  // [mm]
   double height_mm = 0;  // [mm], axis along z, bottom centre at the origin
+  // Only the half y <= 0 (e.g. a gel half-cylinder whose flat face, the
+  // face set `cut` in the plane y = 0, faces up along +y).
+  bool half = false;
 };
 
 // One octant (x, y, z >= 0) of a thick spherical shell centred at the
@@ -73,6 +76,9 @@ struct PatchSpec {
   bool half_space = false;
   std::array<double, 3> plane_point_mm{0, 0, 0};  // a point of the plane [mm]
   std::array<double, 3> plane_normal{0, 0, 0};    // towards the kept side; any length, non-zero
+  // Keep the faces the ball and half-space would drop instead (e.g. a
+  // plate's face with a hole: the set less a ball).
+  bool invert = false;
 
   static PatchSpec Ball(std::string name, std::string set, std::array<double, 3> centre_mm,
                         double radius_mm) {
@@ -560,7 +566,7 @@ struct SceneSpec {
 };
 
 // Face set names a geometry defines (box: bottom top x_min x_max y_min y_max;
-// cylinder: bottom top side; spherical shell: inner outer x0 y0 z0, the last
+// cylinder: bottom top side, and cut for a half cylinder; spherical shell: inner outer x0 y0 z0, the last
 // three the cut planes x = 0, y = 0, z = 0; ellipsoid, atlas: surface),
 // then its patches' names.
 std::vector<std::string> FaceSetNames(const GeometrySpec& geometry);

@@ -269,6 +269,42 @@ TEST(PrimitiveMesherTest, HexCylinderVolumeConvergesAndBricksArePositive) {
   EXPECT_LT(previous_error, 0.01);
 }
 
+TEST(PrimitiveMesherTest, HalfCylinderIsTheLowerHalfWithAFlatCut) {
+  GeometrySpec g;
+  g.kind = GeometrySpec::Kind::kCylinder;
+  g.cylinder.radius_mm = 10;
+  g.cylinder.height_mm = 20;
+  g.cylinder.half = true;
+  const double exact = 0.5 * std::numbers::pi * 10e-3 * 10e-3 * 20e-3;
+  for (ElementType element : {ElementType::kTet4, ElementType::kHex8}) {
+    MeshSpec options;
+    options.element = element;
+    options.element_size_mm = 1.5;  // an odd central division, made even
+    MeshStats stats;
+    const Mesh mesh = BuildPrimitiveMesh(g, options, &stats);
+    double min_volume, min_jacobian, volume;
+    if (element == ElementType::kHex8) {
+      volume = HexTotalVolume(mesh, &min_volume, &min_jacobian);
+      ExpectHexConforming(mesh);
+    } else {
+      volume = TotalVolume(mesh, &min_volume);
+      ExpectConforming(mesh);
+    }
+    EXPECT_GT(min_volume, 0);
+    EXPECT_NEAR(volume, exact, 0.01 * exact);
+    for (int node = 0; node < mesh.num_nodes(); ++node) {
+      EXPECT_LE(mesh.nodes(node, 1), 1e-12) << "node " << node << " above the cut";
+    }
+    // The cut is the rectangle 2 R x H in the plane y = 0.
+    const FaceSet& cut = mesh.face_sets.at("cut");
+    EXPECT_NEAR(FaceSetArea(mesh, cut), 2 * 10e-3 * 20e-3, 1e-12);
+    for (int node : cut.nodes) EXPECT_NEAR(mesh.nodes(node, 1), 0, 1e-15);
+    EXPECT_EQ(PlaneNormalAxis(g, "cut"), 1);
+    EXPECT_NEAR(mesh.num_elements(), EstimateElementCount(g, options),
+                0.2 * EstimateElementCount(g, options));
+  }
+}
+
 TEST(PrimitiveMesherTest, HexShellVolumeIsCloseAndBricksArePositive) {
   GeometrySpec g;
   g.kind = GeometrySpec::Kind::kSphericalShell;

@@ -306,3 +306,41 @@ TEST(ModelBuilderAtlas, AStructureSetIsAnAtlasSource) {
 
 }  // namespace
 }  // namespace pba
+
+namespace pba {
+namespace {
+
+// An inverted patch is its set less the ball: a plate's face with a hole.
+TEST(ModelBuilderPatches, InvertedBallIsTheSetLessTheBall) {
+  SceneSpec s;
+  s.geometry.kind = GeometrySpec::Kind::kBox;
+  s.geometry.box.size_mm = {10, 10, 10};
+  s.mesh.element_size_mm = 1;
+  PatchSpec hole = PatchSpec::Ball("hole", "top", {5, 5, 10}, 2);
+  PatchSpec plate = hole;
+  plate.name = "plate";
+  plate.invert = true;
+  s.geometry.patches = {hole, plate};
+  s.material.kind = MaterialSpec::Kind::kLinearElastic;
+  s.material.linear_elastic = {1000, 0.3};
+  s.boundary_conditions = {testing::Condition("bottom", BoundaryConditionSpec::Kind::kFixed)};
+  Model model;
+  const Status status = BuildModel(s, &model);
+  ASSERT_TRUE(status.ok()) << status.ToString();
+  const Mesh& mesh = model.mesh;
+  const FaceSet& top = mesh.face_sets.at("top");
+  const FaceSet& in = mesh.face_sets.at("hole");
+  const FaceSet& out = mesh.face_sets.at("plate");
+  EXPECT_EQ(in.triangles.size() + out.triangles.size(), top.triangles.size());
+  EXPECT_NEAR(FaceSetArea(mesh, in) + FaceSetArea(mesh, out), FaceSetArea(mesh, top), 1e-15);
+  // Every plate face has a corner outside the hole.
+  for (const auto& t : out.triangles) {
+    bool outside = false;
+    for (int n : t)
+      outside |= (mesh.nodes.row(n).transpose() - Eigen::Vector3d(5e-3, 5e-3, 10e-3)).norm() > 2e-3;
+    EXPECT_TRUE(outside);
+  }
+}
+
+}  // namespace
+}  // namespace pba
