@@ -50,6 +50,18 @@ Eigen::Vector3d Centroid(const Mesh& mesh, int e) {
   return TetCorners(mesh, e).colwise().mean().transpose();
 }
 
+// The zero-phase filtered signal of a body that was at rest before the
+// record began: `lead` copies of the first sample go before it (what the
+// sensor read before t = 0), so that the filter starts from the true
+// history rather than a reflection of the record; they are dropped again.
+std::vector<double> FilterFromRest(const ButterworthLowPass& filter,
+                                   const std::vector<double>& raw, std::size_t lead) {
+  std::vector<double> padded(lead, raw.front());
+  padded.insert(padded.end(), raw.begin(), raw.end());
+  const std::vector<double> smooth = filter.FilterZeroPhase(padded);
+  return std::vector<double>(smooth.begin() + static_cast<std::ptrdiff_t>(lead), smooth.end());
+}
+
 }  // namespace
 
 double LargestPrincipalStrain(const Eigen::Matrix3d& f) {
@@ -146,6 +158,12 @@ Status SensorArray::Finish(int order, double cutoff_hz, Solution* solution) cons
                  order, cutoff_hz, rate, designed.message().c_str()));
     }
   }
+  // Samples of rest put before the record: the filter's settling time,
+  // about order / (2 pi fc), three times over.
+  const std::size_t lead =
+      filtered ? static_cast<std::size_t>(std::ceil(3 * order / (2 * M_PI * cutoff_hz) /
+                                                    ((time_.back() - time_.front()) / (n - 1))))
+               : 0;
   std::vector<std::string>& columns = solution->sensor_columns;
   columns = {"time_s"};
   std::vector<std::vector<double>> series;
@@ -160,7 +178,7 @@ Status SensorArray::Finish(int order, double cutoff_hz, Solution* solution) cons
   for (std::size_t i = 0; i < sensors_.size(); ++i) {
     for (const Quantity& q : quantities) {
       const std::vector<double>& raw = (*q.values)[i];
-      const std::vector<double> smooth = filtered ? filter.FilterZeroPhase(raw) : raw;
+      const std::vector<double> smooth = filtered ? FilterFromRest(filter, raw, lead) : raw;
       columns.push_back(sensors_[i].name + " " + q.column);
       columns.push_back(sensors_[i].name + " " + q.column + " filtered");
       SensorPeak peak;

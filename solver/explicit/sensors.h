@@ -31,7 +31,8 @@ class SensorArray {
   // velocity v [m/s].
   void Sample(double t, const TledModel& model, const Eigen::VectorXd& v);
   // Filters the samples (order, cutoff [Hz]; the rate is that of the
-  // samples) and fills solution->sensor_columns / sensor_rows and the
+  // samples; the body at rest before t = 0, so the record starts from a
+  // history of its first value, not a reflection) and fills solution->sensor_columns / sensor_rows and the
   // summary's sensor_peaks.
   Status Finish(int order, double cutoff_hz, Solution* solution) const;
 
