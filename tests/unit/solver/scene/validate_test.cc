@@ -565,7 +565,7 @@ INSTANTIATE_TEST_SUITE_P(
                ToLinearStatic(s);
                s->contacts = contacts;
              },
-             "contacts", "NONLINEAR_STATIC or QUASI_STATIC"},
+             "contacts", "NONLINEAR_STATIC, QUASI_STATIC or EXPLICIT_DYNAMIC"},
         // The quasi-static analysis and its time.
         Case{"quasi_static_linear_material",
              [](SceneSpec* s) {
