@@ -142,18 +142,27 @@ bool ParseHistoryCsv(const std::string& text, HistoryTable* table, std::string* 
 bool ParsePlotSpec(const YAML::Node& node, PlotSpec* spec, std::string* error) {
   *spec = PlotSpec();
   if (!node.IsMap()) {
-    *error = "expected a map {x: COLUMN, y: [COLUMN, ...], title: TEXT, scale_y: NUMBER}";
+    *error =
+        "expected a map {file: FILE, x: COLUMN, y: [COLUMN, ...], title: TEXT, scale_y: NUMBER}";
     return false;
   }
   for (const auto& entry : node) {
     const std::string key = entry.first.Scalar();
-    if (key != "x" && key != "y" && key != "title" && key != "scale_y") {
-      *error = "unknown key '" + key + "' (a plot has x, y, title, scale_y)";
+    if (key != "file" && key != "x" && key != "y" && key != "title" && key != "scale_y") {
+      *error = "unknown key '" + key + "' (a plot has file, x, y, title, scale_y)";
       return false;
     }
   }
+  if (node["file"]) {
+    const std::string file = node["file"].IsScalar() ? node["file"].Scalar() : "";
+    if (file != "history.csv" && file != "sensors.csv") {
+      *error = "file: expected history.csv (the default) or sensors.csv";
+      return false;
+    }
+    spec->file = file;
+  }
   if (!node["x"] || !node["x"].IsScalar() || node["x"].Scalar().empty()) {
-    *error = "x: the column of history.csv on the x axis is required (e.g. time_s)";
+    *error = "x: the column of " + spec->file + " on the x axis is required (e.g. time_s)";
     return false;
   }
   spec->x = node["x"].Scalar();
@@ -163,14 +172,15 @@ bool ParsePlotSpec(const YAML::Node& node, PlotSpec* spec, std::string* error) {
   } else if (y && y.IsSequence()) {
     for (const auto& column : y) {
       if (!column.IsScalar() || column.Scalar().empty()) {
-        *error = "y: expected column names of history.csv";
+        *error = "y: expected column names of " + spec->file;
         return false;
       }
       spec->y.push_back(column.Scalar());
     }
   }
   if (spec->y.empty()) {
-    *error = "y: one or more columns of history.csv are required (e.g. [\"reaction top z [N]\"])";
+    *error =
+        "y: one or more columns of " + spec->file + " are required (e.g. [\"reaction top z [N]\"])";
     return false;
   }
   if (node["title"]) {
@@ -212,8 +222,8 @@ bool AddHistorySeries(const PlotSpec& spec, const std::string& member, const His
     for (size_t c = 0; c < table.columns.size(); ++c) {
       has += (c ? ", " : "") + Quoted(table.columns[c]);
     }
-    *error = "member " + Quoted(member) + ": its history.csv has no column " + Quoted(column) +
-             "; its columns: " + (has.empty() ? "none" : has);
+    *error = "member " + Quoted(member) + ": its " + spec.file + " has no column " +
+             Quoted(column) + "; its columns: " + (has.empty() ? "none" : has);
     return false;
   }
   const std::vector<double>& x = table.values[table.Column(spec.x)];

@@ -1,7 +1,8 @@
 // The pure part of a batch's `plot:` section: reading a job's history.csv
-// (one header row of column names, one row of numbers per time step), the
-// section itself, and turning one member's history into line-plot series.
-// No I/O beyond the caller's text, no server.
+// or sensors.csv (one header row of column names, one row of numbers per
+// time step or sample), the section itself, and turning one member's
+// history into line-plot series. No I/O beyond the caller's text, no
+// server.
 #pragma once
 
 #include <yaml-cpp/yaml.h>
@@ -30,14 +31,16 @@ bool ParseHistoryCsv(const std::string& text, HistoryTable* table, std::string* 
 
 // A batch's `plot:` section.
 struct PlotSpec {
-  bool enabled = false;        // the batch has one
-  std::string x;               // a history column
-  std::vector<std::string> y;  // one or more history columns
-  std::string title;           // "" -> the batch's name
-  double scale_y = 1;          // every y value is multiplied by it
+  bool enabled = false;              // the batch has one
+  std::string file = "history.csv";  // the result file drawn: history.csv or sensors.csv
+  std::string x;                     // a column of that file
+  std::vector<std::string> y;        // one or more columns of it
+  std::string title;                 // "" -> the batch's name
+  double scale_y = 1;                // every y value is multiplied by it
 };
 
-// Reads {x: COLUMN, y: COLUMN or [COLUMN, ...], title: TEXT, scale_y: NUMBER}.
+// Reads {file: history.csv or sensors.csv, x: COLUMN, y: COLUMN or [COLUMN,
+// ...], title: TEXT, scale_y: NUMBER}; file is optional (history.csv).
 // False with *error naming the key that does not fit (without the "plot"
 // prefix, e.g. "y: expected ...").
 bool ParsePlotSpec(const YAML::Node& node, PlotSpec* spec, std::string* error);

@@ -225,9 +225,11 @@ int RunBatch(Connection& connection, const BatchArgs& args) {
     std::fprintf(stderr, "pba: %s\n", error.c_str());
     return kExitInvalid;
   }
-  // Only QUASI_STATIC jobs write the history a plot draws: refused before
-  // anything runs rather than after the whole batch.
-  if (batch.plot.enabled && !args.no_plot && !MembersWriteHistory(batch.members, &error)) {
+  // Only some analyses write the file a plot draws (history.csv: the
+  // time-stepping ones; sensors.csv: EXPLICIT_DYNAMIC with sensors): refused
+  // before anything runs rather than after the whole batch.
+  if (batch.plot.enabled && !args.no_plot &&
+      !MembersWritePlotFile(batch.members, batch.plot.file, &error)) {
     std::fprintf(stderr, "pba: %s: %s\n", args.file.c_str(), error.c_str());
     return kExitInvalid;
   }
@@ -316,10 +318,12 @@ int RunBatch(Connection& connection, const BatchArgs& args) {
     std::printf("Table written to %s\n", out.c_str());
   }
   if (batch.plot.enabled && !args.no_plot) {
-    // Beside the batch file: its histories; beside the table: the picture.
+    // Beside the batch file: its histories (or sensor samples); beside the
+    // table: the picture.
     const std::string stem = fs::path(args.file).stem().string();
     BatchPlotOptions plot;
-    plot.histories = fs::path(args.file).parent_path() / (stem + "_histories");
+    plot.histories = fs::path(args.file).parent_path() /
+                     (stem + (batch.plot.file == "sensors.csv" ? "_sensors" : "_histories"));
     plot.png = out.parent_path() / (stem + ".png");
     plot.default_title = batch.name;
     plot.quiet = json;

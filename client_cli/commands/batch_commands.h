@@ -13,8 +13,9 @@
 //     - results.max_displacement_mm
 //     - results.reactions[0].force_n[2]
 //     - performance.wall_time_s
-//   plot:                             # optional (QUASI_STATIC): every member's history
-//     x: time_s                       # a column of history.csv
+//   plot:                             # optional: every member's history
+//     file: history.csv               # or sensors.csv (default history.csv)
+//     x: time_s                       # a column of that file
 //     y: ["reaction top z [N]"]       # one or more columns
 //     title: "Three speeds"           # default: the batch's name
 //     scale_y: -1                     # every y value times this (default 1)
@@ -25,10 +26,12 @@
 // (the message names the member and the field) before anything is
 // submitted.
 //
-// With plot, every member must be QUASI_STATIC (the analysis that writes a
-// history.csv; checked before anything is submitted, unless --no-plot). After the members
-// have ended, each succeeded member's history.csv is fetched into
-// FILE-stem_histories/MEMBER.csv beside the batch file (the member's name
+// With plot, every member must write the file drawn (checked before anything
+// is submitted, unless --no-plot): history.csv is written by QUASI_STATIC,
+// EXPLICIT_DYNAMIC and DYNAMIC_RELAXATION, sensors.csv by EXPLICIT_DYNAMIC
+// with outputs.sensors. After the members have ended, each succeeded
+// member's file is fetched into FILE-stem_histories/MEMBER.csv (sensors.csv:
+// FILE-stem_sensors/MEMBER.csv) beside the batch file (the member's name
 // with characters other than letters, digits and "._-=,+" made "_"; a file
 // already there with the job's checksum is kept, so a rerun of a finished
 // batch downloads nothing new), and

@@ -15,8 +15,6 @@ namespace pba::cli {
 namespace fs = std::filesystem;
 namespace {
 
-constexpr const char* kHistory = "history.csv";
-
 // A member's name as a file name: characters other than letters, digits and
 // "._-=,+" become "_" (so "/" and spaces never reach the path), and a name
 // taken already gets "-2", "-3", ...
@@ -38,8 +36,9 @@ void Say(bool quiet, const std::string& line) {
   std::fprintf(quiet ? stderr : stdout, "%s\n", line.c_str());
 }
 
-// The member's history.csv in `target`: kept when it is there with the
-// job's checksum, else downloaded. *fetched says which.
+// The member's result file (history.csv or sensors.csv) in `target`: kept
+// when it is there with the job's checksum, else downloaded. *fetched says
+// which.
 int FetchHistory(Connection& connection, const RunMember& m, const v1::ResultFile& file,
                  const fs::path& target, bool* fetched) {
   *fetched = false;
@@ -49,11 +48,11 @@ int FetchHistory(Connection& connection, const RunMember& m, const v1::ResultFil
   *fetched = true;
   const std::string id = m.job_id;
   return DownloadTo(connection, target, file.size_bytes(), file.sha256(),
-                    std::string(kHistory) + " of member '" + m.name + "' (job " + id + ")",
+                    file.name() + " of member '" + m.name + "' (job " + id + ")",
                     [&](grpc::ClientContext* context, int64_t offset) {
                       v1::DownloadResultRequest request;
                       request.set_job_id(id);
-                      request.set_file(kHistory);
+                      request.set_file(file.name());
                       request.set_offset(offset);
                       return connection.jobs().DownloadResult(context, request);
                     });
@@ -68,13 +67,34 @@ std::string ReadText(const fs::path& path) {
 
 }  // namespace
 
-bool MembersWriteHistory(const std::vector<RunMember>& members, std::string* error) {
+bool MembersWritePlotFile(const std::vector<RunMember>& members, const std::string& file,
+                          std::string* error) {
+  const bool sensors = file == "sensors.csv";
   for (const RunMember& m : members) {
-    if (m.scene.analysis().type() == v1::Analysis::QUASI_STATIC) continue;
+    const v1::Analysis::Type type = m.scene.analysis().type();
+    if (sensors) {
+      if (type != v1::Analysis::EXPLICIT_DYNAMIC) {
+        *error = "member '" + m.name +
+                 "': plot: only an EXPLICIT_DYNAMIC analysis writes the sensors.csv a plot "
+                 "draws; this member's analysis.type is " +
+                 v1::Analysis::Type_Name(type);
+        return false;
+      }
+      if (m.scene.outputs().sensors().empty()) {
+        *error = "member '" + m.name +
+                 "': plot: its scene has no outputs.sensors, so it writes no sensors.csv";
+        return false;
+      }
+      continue;
+    }
+    if (type == v1::Analysis::QUASI_STATIC || type == v1::Analysis::EXPLICIT_DYNAMIC ||
+        type == v1::Analysis::DYNAMIC_RELAXATION) {
+      continue;
+    }
     *error = "member '" + m.name +
-             "': plot: only a QUASI_STATIC analysis writes the history.csv a plot draws; this "
-             "member's analysis.type is " +
-             v1::Analysis::Type_Name(m.scene.analysis().type());
+             "': plot: only a QUASI_STATIC, EXPLICIT_DYNAMIC or DYNAMIC_RELAXATION analysis "
+             "writes the history.csv a plot draws; this member's analysis.type is " +
+             v1::Analysis::Type_Name(type);
     return false;
   }
   return true;
@@ -106,16 +126,17 @@ int DrawBatchPlot(Connection& connection, const PlotSpec& spec,
     }
     const v1::ResultFile* file = nullptr;
     for (const v1::ResultFile& f : m.job.result_files()) {
-      if (f.name() == kHistory) file = &f;
+      if (f.name() == spec.file) file = &f;
     }
     if (file == nullptr) {
       std::string has;
       for (const v1::ResultFile& f : m.job.result_files())
         has += (has.empty() ? "" : ", ") + f.name();
       std::fprintf(stderr,
-                   "pba: plot: member '%s' (job %s) has no %s (its result files: %s); only a "
-                   "QUASI_STATIC job writes one. No plot written.\n",
-                   m.name.c_str(), m.job_id.c_str(), kHistory, has.empty() ? "none" : has.c_str());
+                   "pba: plot: member '%s' (job %s) has no %s (its result files: %s). No plot "
+                   "written.\n",
+                   m.name.c_str(), m.job_id.c_str(), spec.file.c_str(),
+                   has.empty() ? "none" : has.c_str());
       return kExitInvalid;
     }
     const fs::path target = options.histories / (stem + ".csv");

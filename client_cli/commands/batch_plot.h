@@ -1,6 +1,7 @@
 // The picture at the end of `pba batch run` when the batch file has a
-// `plot:` section (history_plot.h): every succeeded member's history.csv
-// fetched into a folder, and one PNG line plot of all of them.
+// `plot:` section (history_plot.h): every succeeded member's history.csv (or
+// sensors.csv, as the section's file says) fetched into a folder, and one
+// PNG line plot of all of them.
 #pragma once
 
 #include <filesystem>
@@ -20,7 +21,8 @@ struct BatchPlotOptions {
   bool quiet = false;               // messages to stderr (stdout is JSON)
 };
 
-// Fetches the history.csv of every member that succeeded (reusing a file
+// Fetches the spec.file (history.csv or sensors.csv) of every member that
+// succeeded (reusing a file
 // already in options.histories whose checksum is the job's), warns about
 // each member left out because it did not succeed, and draws one series per
 // member and y column into options.png, printing its path. kExitOk (also
@@ -31,8 +33,11 @@ struct BatchPlotOptions {
 int DrawBatchPlot(Connection& connection, const PlotSpec& spec,
                   const std::vector<RunMember>& members, const BatchPlotOptions& options);
 
-// Whether every member's scene writes a history (QUASI_STATIC); false with
-// *error naming the first member that does not.
-bool MembersWriteHistory(const std::vector<RunMember>& members, std::string* error);
+// Whether every member's scene writes `file`: history.csv (QUASI_STATIC,
+// EXPLICIT_DYNAMIC, DYNAMIC_RELAXATION) or sensors.csv (EXPLICIT_DYNAMIC
+// with outputs.sensors); false with *error naming the first member that
+// does not.
+bool MembersWritePlotFile(const std::vector<RunMember>& members, const std::string& file,
+                          std::string* error);
 
 }  // namespace pba::cli

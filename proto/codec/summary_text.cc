@@ -92,6 +92,56 @@ std::string ProfileLines(const v1::Results& r) {
   return out;
 }
 
+// An explicit run: its steps, energies, erosion, impactor stiffness and
+// speed; a dynamic relaxation's convergence.
+std::string ExplicitRunLines(const v1::Results& r) {
+  if (!r.has_explicit_run() || !r.explicit_run().ran()) return "";
+  const v1::ExplicitRun& e = r.explicit_run();
+  std::string out = Format(
+      "  explicit           %lld steps to %.4g s, stable step %.3g s, first %.3g s, last %.3g s, "
+      "%d reductions\n",
+      static_cast<long long>(e.steps()), e.end_time_s(), e.stable_step_s(), e.first_step_s(),
+      e.last_step_s(), e.step_reductions());
+  if (!e.controlling_element().empty()) {
+    out += "    controlling      " + e.controlling_element() + "\n";
+  }
+  out += Format(
+      "    energy J         kinetic %.4g, internal %.4g, hourglass %.4g, contact %.4g, damping "
+      "%.4g, eroded %.4g, external work %.4g\n",
+      e.kinetic_j(), e.internal_j(), e.hourglass_j(), e.contact_j(), e.damping_j(), e.eroded_j(),
+      e.external_work_j());
+  out += Format("    energy balance   largest error %.2g %% of the largest energy\n",
+                100.0 * e.max_energy_error());
+  if (e.eroded_elements() > 0) {
+    out += Format("    eroded           %d elements, %.4g kg\n", e.eroded_elements(),
+                  e.eroded_mass_kg());
+  }
+  if (e.contact_stiffness_max_n_per_m() > 0) {
+    out += Format("    impactor penalty %.3g .. %.3g N/m per node\n",
+                  e.contact_stiffness_min_n_per_m(), e.contact_stiffness_max_n_per_m());
+  }
+  out += Format("    speed            %.3g element updates/s\n", e.element_updates_per_s());
+  // Only dynamic relaxation converges (or leaves a residual).
+  if (e.converged() || e.relative_residual() > 0) {
+    out += Format("    relaxation       %s, out-of-balance force %.2e (relative)\n",
+                  e.converged() ? "converged" : "NOT converged", e.relative_residual());
+  }
+  return out;
+}
+
+// Per sensor and quantity: the raw and the filtered peak and when.
+std::string SensorPeakTable(const v1::Results& r) {
+  if (r.sensor_peaks().empty()) return "";
+  std::string out = Format("  %-18s %-14s %12s %12s %12s %12s\n", "sensor", "quantity", "peak raw",
+                           "at s", "filtered", "at s");
+  for (const v1::SensorPeak& p : r.sensor_peaks()) {
+    out += Format("    %-16s %-14s %12.4g %12.4g %12.4g %12.4g\n", p.sensor().c_str(),
+                  p.quantity().c_str(), p.peak_raw(), p.time_raw_s(), p.peak_filtered(),
+                  p.time_filtered_s());
+  }
+  return out;
+}
+
 }  // namespace
 
 std::string FormatSummary(const v1::Summary& summary) {
@@ -121,7 +171,9 @@ std::string FormatSummary(const v1::Summary& summary) {
     out += Format("  reaction %-9s (%.6g, %.6g, %.6g) N\n", reaction.set().c_str(),
                   reaction.force_n(0), reaction.force_n(1), reaction.force_n(2));
   }
-  if (!r.has_convergence()) {
+  if (r.has_explicit_run() && r.explicit_run().ran()) {
+    out += ExplicitRunLines(r);
+  } else if (!r.has_convergence()) {
     out += Format("  linear residual    %.2e (relative)\n", r.relative_residual());
   } else {
     const v1::Convergence& c = r.convergence();
@@ -149,6 +201,7 @@ std::string FormatSummary(const v1::Summary& summary) {
     out += TimeStepLine(c);
   }
   out += ContactTable(r);
+  out += SensorPeakTable(r);
   out += StructureTable(r);
   out += ProfileLines(r);
   out += Format("Wall time    %.3f s on %d thread(s):", p.wall_time_s(), p.threads());

@@ -112,6 +112,33 @@ Status MaterialFromProto(const v1::Material& material, const std::string& path, 
   return Status::Ok();
 }
 
+void ExplicitRunToProto(const ExplicitSummary& run, v1::Results* results) {
+  v1::ExplicitRun* e = results->mutable_explicit_run();
+  e->set_ran(run.ran);
+  e->set_steps(run.steps);
+  e->set_end_time_s(run.end_time_s);
+  e->set_stable_step_s(run.stable_step_s);
+  e->set_first_step_s(run.first_step_s);
+  e->set_last_step_s(run.last_step_s);
+  e->set_step_reductions(run.step_reductions);
+  e->set_controlling_element(run.controlling_element);
+  e->set_kinetic_j(run.kinetic_j);
+  e->set_internal_j(run.internal_j);
+  e->set_hourglass_j(run.hourglass_j);
+  e->set_contact_j(run.contact_j);
+  e->set_damping_j(run.damping_j);
+  e->set_eroded_j(run.eroded_j);
+  e->set_external_work_j(run.external_work_j);
+  e->set_max_energy_error(run.max_energy_error);
+  e->set_eroded_elements(run.eroded_elements);
+  e->set_eroded_mass_kg(run.eroded_mass_kg);
+  e->set_contact_stiffness_min_n_per_m(run.contact_stiffness_min_n_per_m);
+  e->set_contact_stiffness_max_n_per_m(run.contact_stiffness_max_n_per_m);
+  e->set_element_updates_per_s(run.element_updates_per_s);
+  e->set_converged(run.converged);
+  e->set_relative_residual(run.relative_residual);
+}
+
 }  // namespace
 
 Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec) {
@@ -131,6 +158,7 @@ Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec) {
       spec->geometry.kind = GeometrySpec::Kind::kCylinder;
       spec->geometry.cylinder.radius_mm = geometry.cylinder().radius_mm();
       spec->geometry.cylinder.height_mm = geometry.cylinder().height_mm();
+      spec->geometry.cylinder.half = geometry.cylinder().half();
       break;
     case v1::Geometry::kSphericalShell:
       spec->geometry.kind = GeometrySpec::Kind::kSphericalShell;
@@ -175,6 +203,7 @@ Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec) {
                                     "coordinates (x, y, z) in mm", &out.centre_mm));
     }
     out.half_space = p.plane_point_mm_size() > 0 || p.plane_normal_size() > 0;
+    out.invert = p.invert();
     if (out.half_space) {
       PBA_RETURN_IF_ERROR(CopyThree(p.plane_point_mm(), path + ".plane_point_mm",
                                     "coordinates (x, y, z) in mm", &out.plane_point_mm));
@@ -278,6 +307,14 @@ Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec) {
                                       "components (x, y, z) in Pa", &out.traction_pa));
         break;
       }
+      case v1::BoundaryCondition::kVelocity: {
+        out.kind = BoundaryConditionSpec::Kind::kVelocity;
+        const auto& v = bc.velocity();
+        if (v.has_x_m_per_s()) out.velocity_m_per_s[0] = v.x_m_per_s();
+        if (v.has_y_m_per_s()) out.velocity_m_per_s[1] = v.y_m_per_s();
+        if (v.has_z_m_per_s()) out.velocity_m_per_s[2] = v.z_m_per_s();
+        break;
+      }
       case v1::BoundaryCondition::KIND_NOT_SET:
         break;  // ValidateScene names it
     }
@@ -302,6 +339,12 @@ Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec) {
         break;
       case v1::Contact::PLANE:
         out.shape = ContactSpec::Shape::kPlane;
+        break;
+      case v1::Contact::CYLINDER_FLAT:
+        out.shape = ContactSpec::Shape::kCylinderFlat;
+        break;
+      case v1::Contact::CYLINDER_ROUNDED:
+        out.shape = ContactSpec::Shape::kCylinderRounded;
         break;
       default:
         return Status::InvalidArgument(path + ".shape",
@@ -347,6 +390,12 @@ Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec) {
     case v1::Analysis::QUASI_STATIC:
       spec->analysis.type = AnalysisSpec::Type::kQuasiStatic;
       break;
+    case v1::Analysis::EXPLICIT_DYNAMIC:
+      spec->analysis.type = AnalysisSpec::Type::kExplicitDynamic;
+      break;
+    case v1::Analysis::DYNAMIC_RELAXATION:
+      spec->analysis.type = AnalysisSpec::Type::kDynamicRelaxation;
+      break;
     default:
       return Status::InvalidArgument(
           "analysis.type", "unknown analysis type " + std::to_string(scene.analysis().type()));
@@ -386,6 +435,21 @@ Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec) {
   for (const v1::CurvePoint& point : time.curve()) {
     t.curve.emplace_back(point.time_s(), point.amplitude());
   }
+
+  const v1::ExplicitDynamics& explicit_dynamics = scene.analysis().explicit_dynamics();
+  ExplicitSpec& e = spec->analysis.explicit_dynamics;
+  e.time_step_factor = explicit_dynamics.time_step_factor();
+  if (explicit_dynamics.has_bulk_viscosity_linear()) {
+    e.bulk_viscosity_linear = explicit_dynamics.bulk_viscosity_linear();
+  }
+  if (explicit_dynamics.has_bulk_viscosity_quadratic()) {
+    e.bulk_viscosity_quadratic = explicit_dynamics.bulk_viscosity_quadratic();
+  }
+  e.mass_damping_per_s = explicit_dynamics.mass_damping_per_s();
+  e.hourglass_coefficient = explicit_dynamics.hourglass_coefficient();
+  e.output_interval_s = explicit_dynamics.output_interval_s();
+  e.erosion_strain = explicit_dynamics.erosion_strain();
+  e.relaxation_tolerance = explicit_dynamics.relaxation_tolerance();
 
   const auto& fields = scene.outputs().fields();
   if (!fields.empty()) {
@@ -437,6 +501,19 @@ Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec) {
     out.points = p.points();
     spec->outputs.profiles.push_back(std::move(out));
   }
+  for (int i = 0; i < scene.outputs().sensors_size(); ++i) {
+    const v1::Sensor& sensor = scene.outputs().sensors(i);
+    SensorSpec out;
+    out.name = sensor.name();
+    PBA_RETURN_IF_ERROR(CopyThree(sensor.position_mm(),
+                                  "outputs.sensors[" + std::to_string(i) + "].position_mm",
+                                  "coordinates (x, y, z) in mm", &out.position_mm));
+    out.radius_mm = sensor.radius_mm();
+    spec->outputs.sensors.push_back(std::move(out));
+  }
+  spec->outputs.sensor_interval_s = scene.outputs().sensor_interval_s();
+  spec->outputs.filter_cutoff_hz = scene.outputs().filter_cutoff_hz();
+  spec->outputs.filter_order = scene.outputs().filter_order();
   return Status::Ok();
 }
 
@@ -538,6 +615,16 @@ v1::Summary SummaryToProto(const Summary& summary) {
     p->set_max_stress_along_pa(profile.max_stress_along_pa);
     p->set_at_distance_mm(profile.at_distance_mm);
     for (double x : profile.at_mm) p->add_at_mm(x);
+  }
+  if (summary.explicit_run.ran) ExplicitRunToProto(summary.explicit_run, results);
+  for (const SensorPeak& peak : summary.sensor_peaks) {
+    v1::SensorPeak* p = results->add_sensor_peaks();
+    p->set_sensor(peak.sensor);
+    p->set_quantity(peak.quantity);
+    p->set_peak_raw(peak.peak_raw);
+    p->set_time_raw_s(peak.time_raw_s);
+    p->set_peak_filtered(peak.peak_filtered);
+    p->set_time_filtered_s(peak.time_filtered_s);
   }
 
   v1::Performance* performance = out.mutable_performance();

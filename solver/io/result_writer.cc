@@ -234,6 +234,32 @@ Status WriteProfiles(const Solution& solution, const std::filesystem::path& dir)
   return Status::Ok();
 }
 
+// sensors.csv of an EXPLICIT_DYNAMIC run with sensors: the header its
+// columns (time_s, then per sensor its raw and filtered quantities), one row
+// per sample; 9 significant digits, enough for samples microseconds apart
+// over seconds; a value that is not finite is an empty cell.
+Status WriteSensors(const Solution& solution, const std::filesystem::path& dir) {
+  const auto& columns = solution.sensor_columns;
+  std::string csv;
+  for (std::size_t c = 0; c < columns.size(); ++c) csv += (c ? "," : "") + CsvField(columns[c]);
+  csv += "\n";
+  char number[32];
+  for (const auto& row : solution.sensor_rows) {
+    if (row.size() != columns.size()) {
+      return Status::Internal("sensors.csv: a row of " + std::to_string(row.size()) +
+                              " values under " + std::to_string(columns.size()) + " columns");
+    }
+    for (std::size_t c = 0; c < row.size(); ++c) {
+      if (c) csv += ",";
+      if (!std::isfinite(row[c])) continue;
+      std::snprintf(number, sizeof number, "%.9g", row[c]);
+      csv += number;
+    }
+    csv += "\n";
+  }
+  return AtomicWriteText(dir / "sensors.csv", csv);
+}
+
 }  // namespace
 
 Status WriteResultFiles(const SceneSpec& scene, Solution* solution,
@@ -305,6 +331,7 @@ Status WriteResultFiles(const SceneSpec& scene, Solution* solution,
 
   if (!solution->history.empty()) PBA_RETURN_IF_ERROR(WriteHistory(*solution, dir));
   PBA_RETURN_IF_ERROR(WriteProfiles(*solution, dir));
+  if (!solution->sensor_columns.empty()) PBA_RETURN_IF_ERROR(WriteSensors(*solution, dir));
 
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

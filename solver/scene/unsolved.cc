@@ -7,8 +7,18 @@ Status RefuseUnsupportedFields(const SceneSpec& scene, const std::string& action
     return Status::FailedPrecondition(field + ": " + what + " is not " + action +
                                       " by this version");
   };
-  if (scene.analysis.type == AnalysisSpec::Type::kQuasiStatic) {
-    return refuse("analysis.type", "QUASI_STATIC");
+  switch (scene.analysis.type) {
+    case AnalysisSpec::Type::kLinearStatic:
+    case AnalysisSpec::Type::kNonlinearStatic:
+      break;
+    case AnalysisSpec::Type::kQuasiStatic:
+      return refuse("analysis.type", "QUASI_STATIC");
+    // One static step cannot hold them: an explicit dynamic step, or the
+    // damped run to rest (the static answer is NONLINEAR_STATIC's).
+    case AnalysisSpec::Type::kExplicitDynamic:
+      return refuse("analysis.type", "EXPLICIT_DYNAMIC");
+    case AnalysisSpec::Type::kDynamicRelaxation:
+      return refuse("analysis.type", "DYNAMIC_RELAXATION");
   }
   if (!scene.material_library.empty()) return refuse("material_library", "the tissue library");
   if (!scene.region_materials.empty()) {

@@ -413,15 +413,13 @@ Status ValidateAnalysis(const AnalysisSpec& analysis, const MaterialSpec& materi
   }
   PBA_RETURN_IF_ERROR(scene_checks::ValidateTime(analysis));
   if (analysis.type == AnalysisSpec::Type::kLinearStatic) return Status::Ok();
-  // Both finite-strain analyses: Newton on a hyperelastic model.
+  // Every finite-strain analysis (Newton or explicit) on a hyperelastic model.
   if (!material.hyperelastic()) {
-    return Status::InvalidArgument(
-        "material", std::string("a ") +
-                        (analysis.type == AnalysisSpec::Type::kQuasiStatic ? "quasi-static"
-                                                                           : "nonlinear static") +
-                        " analysis needs a hyperelastic material (neo_hookean, "
-                        "mooney_rivlin, polynomial or ogden); linear_elastic is for "
-                        "LINEAR_STATIC");
+    return Status::InvalidArgument("material",
+                                   std::string(scene_checks::AnalysisTypeName(analysis.type)) +
+                                       " needs a hyperelastic material (neo_hookean, "
+                                       "mooney_rivlin, polynomial or ogden); linear_elastic is for "
+                                       "LINEAR_STATIC");
   }
   const NonlinearOptionsSpec& n = analysis.nonlinear;
   if (n.increments < 0 || n.increments > 10000) {
@@ -555,8 +553,12 @@ Status ValidateScene(const SceneSpec& scene) {
   PBA_RETURN_IF_ERROR(ValidateAnalysis(scene.analysis, scene.material));
   PBA_RETURN_IF_ERROR(ValidateRegionMaterials(scene));
   PBA_RETURN_IF_ERROR(scene_checks::ValidateInclusions(scene));
+  PBA_RETURN_IF_ERROR(scene_checks::ValidateExplicit(scene));
 
-  if (scene.boundary_conditions.empty()) {
+  // In dynamics a free body is fine: its inertia holds it (an impactor may
+  // strike a body held by nothing).
+  const bool dynamic = scene.analysis.type == AnalysisSpec::Type::kExplicitDynamic;
+  if (scene.boundary_conditions.empty() && !dynamic) {
     return Status::InvalidArgument("boundary_conditions",
                                    "no boundary conditions: the body is free to move; hold at "
                                    "least one face (for example {set: bottom, fixed: {}})");
@@ -573,11 +575,10 @@ Status ValidateScene(const SceneSpec& scene) {
                                                         "'; this geometry has: " + JoinNames(sets));
     }
     switch (bc.kind) {
-      case BoundaryConditionSpec::Kind::kVelocity:
-        break;
       case BoundaryConditionSpec::Kind::kNone:
-        return Status::InvalidArgument(
-            path, "no condition given: set fixed, displacement, symmetry, pressure or traction");
+        return Status::InvalidArgument(path,
+                                       "no condition given: set fixed, displacement, symmetry, "
+                                       "pressure, traction or velocity");
       case BoundaryConditionSpec::Kind::kPressure:
         if (!std::isfinite(bc.pressure_pa)) {
           return Status::InvalidArgument(
@@ -607,6 +608,9 @@ Status ValidateScene(const SceneSpec& scene) {
         held[axis] = true;
         break;
       }
+      case BoundaryConditionSpec::Kind::kVelocity:
+        PBA_RETURN_IF_ERROR(scene_checks::CheckVelocity(bc, scene.analysis.type, path));
+        break;
       case BoundaryConditionSpec::Kind::kDisplacement: {
         bool any = false;
         static const char* kNames[3] = {"x_mm", "y_mm", "z_mm"};
@@ -650,10 +654,9 @@ Status ValidateScene(const SceneSpec& scene) {
   PBA_RETURN_IF_ERROR(scene_checks::ValidateBuoyancy(scene.gravity));
   std::string free;
   for (int c = 0; c < 3; ++c) {
-    if (scene.analysis.type == AnalysisSpec::Type::kExplicitDynamic) break;
     if (!held[c]) free += std::string(free.empty() ? "" : ", ") + "xyz"[c];
   }
-  if (!free.empty()) {
+  if (!free.empty() && !dynamic) {
     return Status::InvalidArgument("boundary_conditions",
                                    "no condition holds the body in direction " + free +
                                        ", so it could slide away; fix or prescribe that component "

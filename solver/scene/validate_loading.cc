@@ -1,6 +1,5 @@
 // The scene checks of time, rigid contacts, inclusions, buoyancy and line
-// profiles; every
-// failure names its field path.
+// profiles; every failure names its field path.
 #include "scene/validate_loading.h"
 
 #include <algorithm>
@@ -36,22 +35,37 @@ Status CheckFiniteThree(const std::array<double, 3>& values, const std::string& 
 
 Status ValidateTime(const AnalysisSpec& analysis) {
   const TimeSpec& t = analysis.time;
-  if (analysis.type != AnalysisSpec::Type::kQuasiStatic &&
-      analysis.type != AnalysisSpec::Type::kExplicitDynamic) {
+  const bool dynamic = analysis.type == AnalysisSpec::Type::kExplicitDynamic;
+  if (analysis.type != AnalysisSpec::Type::kQuasiStatic && !dynamic) {
     const bool given = t.end_time_s != 0 || t.initial_step_s != 0 || t.min_step_s != 0 ||
                        t.max_step_s != 0 || !t.curve.empty();
     if (given) {
       return Status::InvalidArgument(
-          "analysis.time", std::string("a time section or curve belongs to a QUASI_STATIC "
-                                       "analysis; this one is ") +
+          "analysis.time", std::string("a time section or curve belongs to a QUASI_STATIC or "
+                                       "EXPLICIT_DYNAMIC analysis; this one is ") +
                                AnalysisTypeName(analysis.type));
     }
     return Status::Ok();
   }
   if (!PositiveFinite(t.end_time_s)) {
-    return Status::InvalidArgument(
-        "analysis.time.end_time_s",
-        "a quasi-static analysis needs a positive end time in s, got " + Number(t.end_time_s));
+    return Status::InvalidArgument("analysis.time.end_time_s",
+                                   std::string(AnalysisTypeName(analysis.type)) +
+                                       " needs a positive end time in s, got " +
+                                       Number(t.end_time_s));
+  }
+  if (dynamic) {
+    // The explicit step is the stable one times time_step_factor: no
+    // adaptive steps to bound.
+    const std::pair<const char*, double> unused[] = {{"initial_step_s", t.initial_step_s},
+                                                     {"min_step_s", t.min_step_s},
+                                                     {"max_step_s", t.max_step_s}};
+    for (const auto& [name, value] : unused) {
+      if (value == 0) continue;
+      return Status::InvalidArgument(
+          std::string("analysis.time.") + name,
+          "not used by EXPLICIT_DYNAMIC: the step comes from the stability limit (scaled by "
+          "analysis.explicit_dynamics.time_step_factor); leave it out");
+    }
   }
   // Given steps (0 picks a default) must nest: min <= initial <= max <= end.
   const std::pair<const char*, double> steps[] = {{"min_step_s", t.min_step_s},
@@ -166,12 +180,18 @@ Status ValidateInclusions(const SceneSpec& scene) {
 }
 
 Status ValidateContacts(const SceneSpec& scene) {
-  if (!scene.contacts.empty() && !FiniteStrain(scene.analysis.type) &&
-      scene.analysis.type != AnalysisSpec::Type::kExplicitDynamic) {
+  const AnalysisSpec::Type type = scene.analysis.type;
+  const bool impact = type == AnalysisSpec::Type::kExplicitDynamic;
+  if (!scene.contacts.empty() && type == AnalysisSpec::Type::kDynamicRelaxation) {
+    return Status::InvalidArgument("contacts[0]",
+                                   "rigid contact is not supported by DYNAMIC_RELAXATION yet; "
+                                   "NONLINEAR_STATIC solves the same static problem with it");
+  }
+  if (!scene.contacts.empty() && !FiniteStrain(type) && !impact) {
     return Status::InvalidArgument(
-        "contacts", std::string("rigid contact needs a NONLINEAR_STATIC or QUASI_STATIC "
-                                "analysis; this one is ") +
-                        AnalysisTypeName(scene.analysis.type));
+        "contacts", std::string("rigid contact needs a NONLINEAR_STATIC, QUASI_STATIC or "
+                                "EXPLICIT_DYNAMIC analysis; this one is ") +
+                        AnalysisTypeName(type));
   }
   for (std::size_t i = 0; i < scene.contacts.size(); ++i) {
     const ContactSpec& c = scene.contacts[i];
@@ -189,16 +209,17 @@ Status ValidateContacts(const SceneSpec& scene) {
     }
     PBA_RETURN_IF_ERROR(CheckFaceSet(scene.geometry, c.set, path + ".set"));
     if (c.shape == ContactSpec::Shape::kNone) {
-      return Status::InvalidArgument(path + ".shape",
-                                     "no shape given: FLAT_PUNCH, SPHERE or PLANE");
+      return Status::InvalidArgument(
+          path + ".shape",
+          "no shape given: FLAT_PUNCH, SPHERE, PLANE, CYLINDER_FLAT or CYLINDER_ROUNDED");
     }
     PBA_RETURN_IF_ERROR(CheckFiniteThree(c.position_mm, path + ".position_mm", " of mm"));
     PBA_RETURN_IF_ERROR(CheckFiniteThree(c.motion_mm, path + ".motion_mm", " of mm"));
-    if ((c.shape == ContactSpec::Shape::kFlatPunch || c.shape == ContactSpec::Shape::kSphere) &&
-        !PositiveFinite(c.radius_mm)) {
+    if (c.shape != ContactSpec::Shape::kPlane && !PositiveFinite(c.radius_mm)) {
       return Status::InvalidArgument(
           path + ".radius_mm",
-          "a flat punch or a sphere needs a positive radius in mm, got " + Number(c.radius_mm));
+          "a flat punch, a sphere or a cylinder needs a positive radius in mm, got " +
+              Number(c.radius_mm));
     }
     PBA_RETURN_IF_ERROR(CheckFiniteThree(c.axis, path + ".axis", ""));
     if (c.axis[0] == 0 && c.axis[1] == 0 && c.axis[2] == 0) {
@@ -210,6 +231,19 @@ Status ValidateContacts(const SceneSpec& scene) {
           path + ".friction",
           "the Coulomb coefficient must lie in [0, 0.5] (0: frictionless), got " +
               Number(c.friction));
+    }
+    if (impact && c.friction != 0) {
+      return Status::InvalidArgument(
+          path + ".friction",
+          "friction is not modelled in EXPLICIT_DYNAMIC (an impactor is frictionless): leave it "
+          "0, got " +
+              Number(c.friction));
+    }
+    if (impact && c.start_touching) {
+      return Status::InvalidArgument(
+          path + ".start_touching",
+          "not available in EXPLICIT_DYNAMIC: place the impactor with position_mm; it moves by "
+          "motion_mm times a(t)");
     }
     if (!NonNegativeFinite(c.penalty_factor)) {
       return Status::InvalidArgument(

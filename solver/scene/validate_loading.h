@@ -1,6 +1,7 @@
 // Scene checks of the time of a QUASI_STATIC analysis, the rigid contacts,
 // the inclusions, the buoyancy of gravity and the line profiles
-// (validate_loading.cc), and the helpers they share with the rest of
+// (validate_loading.cc), of the explicit analyses (validate_explicit.cc),
+// and the helpers they share with the rest of
 // ValidateScene (validate.cc). Internal to the scene checks; every failure
 // names its field path.
 #pragma once
@@ -18,7 +19,8 @@ std::string Number(double value);
 bool PositiveFinite(double value);
 // "a, b, c"
 std::string JoinNames(const std::vector<std::string>& names);
-// "LINEAR_STATIC", "NONLINEAR_STATIC" or "QUASI_STATIC", as a scene names it.
+// "LINEAR_STATIC", "NONLINEAR_STATIC", "QUASI_STATIC", "EXPLICIT_DYNAMIC" or
+// "DYNAMIC_RELAXATION", as a scene names it.
 const char* AnalysisTypeName(AnalysisSpec::Type type);
 
 // True for "surface:<structure>" and "interface:<a>|<b>" on an atlas.
@@ -40,7 +42,8 @@ Status CheckFaceSet(const GeometrySpec& geometry, const std::string& set, const 
 Status CheckExtraMaterial(const MaterialSpec& material, const MaterialSpec& scene_material,
                           const std::string& path);
 
-// analysis.time: required and checked for QUASI_STATIC, refused elsewhere.
+// analysis.time: required and checked for QUASI_STATIC, end and curve only
+// for EXPLICIT_DYNAMIC, refused elsewhere.
 Status ValidateTime(const AnalysisSpec& analysis);
 // gravity.fluid_density_kg_per_m3 and gravity.fluid_level_mm.
 Status ValidateBuoyancy(const GravitySpec& gravity);
@@ -50,5 +53,15 @@ Status ValidateInclusions(const SceneSpec& scene);
 Status ValidateContacts(const SceneSpec& scene);
 // outputs.profiles[i]: names (unique, fit for a file name), ends, points.
 Status ValidateProfiles(const OutputSpec& outputs);
+
+// The explicit analyses (validate_explicit.cc): analysis.explicit_dynamics
+// (refused in an analysis that does not use a field), the elements and
+// materials EXPLICIT_DYNAMIC and DYNAMIC_RELAXATION take, formulation, and
+// outputs.sensors with their sampling and filter (EXPLICIT_DYNAMIC only).
+Status ValidateExplicit(const SceneSpec& scene);
+// boundary_conditions[i].velocity at `path` (the condition's): in an
+// EXPLICIT_DYNAMIC analysis only, at least one component, each finite.
+Status CheckVelocity(const BoundaryConditionSpec& bc, AnalysisSpec::Type type,
+                     const std::string& path);
 
 }  // namespace pba::scene_checks

@@ -41,6 +41,24 @@ outputs:
   reaction_sets: [top]
 )";
 
+// The box struck: EXPLICIT_DYNAMIC with two sensors (its solve needs the
+// explicit engine; the tests below only check it before submitting).
+constexpr const char* kExplicitScene = R"(name: struck-box
+geometry: {box: {size_mm: [10, 10, 10]}}
+mesh: {element_size_mm: 5}
+material: {density_kg_per_m3: 1040, neo_hookean: {shear_modulus_pa: 1000, bulk_modulus_pa: 1.0e5}}
+boundary_conditions:
+  - {set: bottom, fixed: {}}
+  - {set: top, velocity: {z_m_per_s: -1}}
+analysis:
+  type: EXPLICIT_DYNAMIC
+  time: {end_time_s: 0.001}
+outputs:
+  sensors:
+    - {name: centre, position_mm: [5, 5, 5]}
+    - {name: low, position_mm: [5, 5, 2]}
+)";
+
 // How many pixels of `image` have exactly `colour`.
 long CountColour(const RgbImage& image, const std::array<uint8_t, 3>& colour) {
   long n = 0;
@@ -56,6 +74,7 @@ class CliBatchPlotTest : public ServerTest {
   void SetUp() override {
     ServerTest::SetUp();
     std::ofstream(dir_.path() / "box.yaml") << kScene;
+    std::ofstream(dir_.path() / "struck_scene.yaml") << kExplicitScene;
   }
 
   // A batch file `stem`.yaml of the box with the given members and plot.
@@ -156,13 +175,59 @@ TEST_F(CliBatchPlotTest, AStaticMemberIsRefusedBeforeSubmitting) {
                  kTopForce, std::string(PBA_EXAMPLES_DIR) + "/quickstart.yaml")
                .string()});
   EXPECT_EQ(run.exit_code, kInvalid) << run.out << run.err;
-  EXPECT_NE(run.err.find("member 'static': plot: only a QUASI_STATIC analysis"), std::string::npos)
+  EXPECT_NE(run.err.find("member 'static': plot: only a QUASI_STATIC, EXPLICIT_DYNAMIC or "
+                         "DYNAMIC_RELAXATION analysis"),
+            std::string::npos)
       << run.err;
   EXPECT_EQ(JobCount(), 0u);
   // Without the picture the same batch is fine.
   const RunResult checked =
       Pba({"batch", "run", (dir_.path() / "static.yaml").string(), "--no-plot", "--dry-run"});
   EXPECT_EQ(checked.exit_code, 0) << checked.out << checked.err;
+}
+
+// plot: {file: sensors.csv} draws the sensors' samples: every member must be
+// EXPLICIT_DYNAMIC with sensors, checked before anything is submitted; such
+// members pass the checks (--dry-run: the explicit engine is not needed),
+// and their history.csv may be drawn as well.
+TEST_F(CliBatchPlotTest, ASensorPlotNeedsExplicitMembersWithSensors) {
+  const std::string members = "members:\n  - {name: one, set: {mesh.element_size_mm: 5}}\n";
+  const std::string sensors =
+      "plot: {file: sensors.csv, x: time_s, y: [\"centre pressure [Pa]\"]}\n";
+  RunResult run = Pba({"batch", "run", Batch("quasi", members, sensors).string(), "--dry-run"});
+  EXPECT_EQ(run.exit_code, kInvalid) << run.out << run.err;
+  EXPECT_NE(run.err.find("member 'one': plot: only an EXPLICIT_DYNAMIC analysis writes the "
+                         "sensors.csv"),
+            std::string::npos)
+      << run.err;
+
+  run = Pba({"batch", "run", Batch("struck", members, sensors, "struck_scene.yaml").string(),
+             "--dry-run"});
+  EXPECT_EQ(run.exit_code, 0) << run.out << run.err;
+  EXPECT_NE(run.out.find("1 members; nothing submitted"), std::string::npos) << run.out;
+
+  const std::string energy = "plot: {x: time_s, y: [kinetic_j]}\n";
+  run = Pba({"batch", "run", Batch("energy", members, energy, "struck_scene.yaml").string(),
+             "--dry-run"});
+  EXPECT_EQ(run.exit_code, 0) << run.out << run.err;
+
+  // A member whose sensors are taken away writes no sensors.csv.
+  const std::string bare = "members:\n  - {name: bare, set: {outputs.sensors: []}}\n";
+  run = Pba(
+      {"batch", "run", Batch("bare", bare, sensors, "struck_scene.yaml").string(), "--dry-run"});
+  EXPECT_EQ(run.exit_code, kInvalid) << run.out << run.err;
+  EXPECT_NE(run.err.find("member 'bare': plot: its scene has no outputs.sensors"),
+            std::string::npos)
+      << run.err;
+
+  run = Pba({"batch", "run",
+             Batch("odd", members, "plot: {file: result.h5, x: time_s, y: [a]}\n").string(),
+             "--dry-run"});
+  EXPECT_EQ(run.exit_code, kInvalid) << run.out << run.err;
+  EXPECT_NE(run.err.find("plot: file: expected history.csv (the default) or sensors.csv"),
+            std::string::npos)
+      << run.err;
+  EXPECT_EQ(JobCount(), 0u);
 }
 
 // A member that fails is left out with a warning; the others are drawn and

@@ -360,7 +360,7 @@ struct BoundaryConditionSpec {
   // kDisplacement: prescribed x, y, z components [mm]; nullopt = free.
   std::array<std::optional<double>, 3> displacement_mm;
   // kVelocity: prescribed x, y, z components [m/s] at a(t) = 1; nullopt = free.
-  std::array<std::optional<double>, 3> velocity_m_per_s;
+  std::array<std::optional<double>, 3> velocity_m_per_s{};
   double pressure_pa = 0;                      // kPressure [Pa]
   std::array<double, 3> traction_pa{0, 0, 0};  // kTraction, x y z [Pa]
 

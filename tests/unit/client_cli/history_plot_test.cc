@@ -93,8 +93,12 @@ TEST(PlotSpecTest, ReadsTheSection) {
   EXPECT_EQ(s.scale_y, -1);
   EXPECT_EQ(PlotYLabel(s), "-1 * (contact punch z [N], amplitude)");
 
+  EXPECT_EQ(s.file, "history.csv");
+
   const PlotSpec one = Spec("{x: time_s, y: amplitude}");
   EXPECT_EQ(one.y, std::vector<std::string>{"amplitude"});
+  const PlotSpec sensors = Spec("{file: sensors.csv, x: time_s, y: 'centre pressure [Pa]'}");
+  EXPECT_EQ(sensors.file, "sensors.csv");
   EXPECT_EQ(one.scale_y, 1);
   EXPECT_EQ(PlotYLabel(one), "amplitude");
 }
@@ -110,6 +114,10 @@ TEST(PlotSpecTest, NamesTheKeyThatDoesNotFit) {
   EXPECT_EQ(SpecError("{x: time_s, y: a, scale_y: 0}").rfind("scale_y: ", 0), 0u);
   EXPECT_EQ(SpecError("{x: time_s, y: a, scale_y: twice}").rfind("scale_y: ", 0), 0u);
   EXPECT_EQ(SpecError("{x: time_s, y: a, title: [a]}").rfind("title: ", 0), 0u);
+  EXPECT_EQ(SpecError("{file: result.h5, x: time_s, y: a}").rfind("file: ", 0), 0u);
+  EXPECT_EQ(SpecError("{file: [sensors.csv], x: time_s, y: a}").rfind("file: ", 0), 0u);
+  EXPECT_NE(SpecError("{file: sensors.csv, y: a}").find("column of sensors.csv"),
+            std::string::npos);
 }
 
 TEST(HistorySeriesTest, OneSeriesPerMemberAndColumnScaled) {

@@ -244,6 +244,81 @@ TEST(YamlCodecTest, ProfilesRoundTrip) {
       << error.ToString();
 }
 
+// An impact: the explicit controls (a bulk viscosity given as 0 is given),
+// a piston's velocity, a bolt and two sensors.
+constexpr const char* kExplicitScene = R"(
+name: impact
+geometry: {box: {size_mm: [10, 10, 20]}}
+mesh: {element: HEX8}
+material: {density_kg_per_m3: 1040, neo_hookean: {shear_modulus_pa: 1000, bulk_modulus_pa: 1e6}}
+boundary_conditions:
+  - {set: bottom, velocity: {z_m_per_s: 2.5}}
+contacts:
+  - {name: bolt, set: top, shape: CYLINDER_ROUNDED, position_mm: [5, 5, 21], radius_mm: 2,
+     motion_mm: [0, 0, -5]}
+analysis:
+  type: EXPLICIT_DYNAMIC
+  time: {end_time_s: 0.002, curve: [{time_s: 0, amplitude: 0}, {time_s: 0.001, amplitude: 1}]}
+  explicit_dynamics:
+    time_step_factor: 0.6
+    bulk_viscosity_quadratic: 0
+    mass_damping_per_s: 10
+    hourglass_coefficient: 0.1
+    output_interval_s: 1.0e-5
+    erosion_strain: 1.5
+outputs:
+  sensors:
+    - {name: centre, position_mm: [5, 5, 10]}
+    - {name: low, position_mm: [5, 5, 2], radius_mm: 1.5}
+  sensor_interval_s: 2.0e-6
+  filter_cutoff_hz: 5000
+  filter_order: 4
+)";
+
+TEST(YamlCodecTest, ExplicitSceneKeysRoundTrip) {
+  v1::Scene scene;
+  ParseError error;
+  ASSERT_TRUE(ParseYaml(kExplicitScene, &scene, &error)) << error.ToString();
+  EXPECT_EQ(scene.analysis().type(), v1::Analysis::EXPLICIT_DYNAMIC);
+  const v1::ExplicitDynamics& e = scene.analysis().explicit_dynamics();
+  EXPECT_EQ(e.time_step_factor(), 0.6);
+  EXPECT_FALSE(e.has_bulk_viscosity_linear());
+  ASSERT_TRUE(e.has_bulk_viscosity_quadratic());
+  EXPECT_EQ(e.bulk_viscosity_quadratic(), 0.0);
+  EXPECT_EQ(e.mass_damping_per_s(), 10.0);
+  EXPECT_EQ(e.hourglass_coefficient(), 0.1);
+  EXPECT_EQ(e.output_interval_s(), 1e-5);
+  EXPECT_EQ(e.erosion_strain(), 1.5);
+  EXPECT_EQ(e.relaxation_tolerance(), 0.0);
+  ASSERT_EQ(scene.boundary_conditions_size(), 1);
+  const v1::Velocity& v = scene.boundary_conditions(0).velocity();
+  EXPECT_FALSE(v.has_x_m_per_s());
+  ASSERT_TRUE(v.has_z_m_per_s());
+  EXPECT_EQ(v.z_m_per_s(), 2.5);
+  ASSERT_EQ(scene.contacts_size(), 1);
+  EXPECT_EQ(scene.contacts(0).shape(), v1::Contact::CYLINDER_ROUNDED);
+  ASSERT_EQ(scene.outputs().sensors_size(), 2);
+  EXPECT_EQ(scene.outputs().sensors(1).name(), "low");
+  EXPECT_EQ(scene.outputs().sensors(1).position_mm(2), 2.0);
+  EXPECT_EQ(scene.outputs().sensors(1).radius_mm(), 1.5);
+  EXPECT_EQ(scene.outputs().sensor_interval_s(), 2e-6);
+  EXPECT_EQ(scene.outputs().filter_cutoff_hz(), 5000.0);
+  EXPECT_EQ(scene.outputs().filter_order(), 4);
+
+  v1::Scene again;
+  ASSERT_TRUE(ParseYaml(ToJson(scene), &again, &error)) << error.ToString();
+  EXPECT_EQ(scene.SerializeAsString(), again.SerializeAsString());
+  // The lower-case spellings of the new enum values, as of the old ones.
+  ASSERT_TRUE(ParseYaml(
+      "analysis: {type: dynamic_relaxation}\ncontacts: [{shape: cylinder_flat}]\n", &scene, &error))
+      << error.ToString();
+  EXPECT_EQ(scene.analysis().type(), v1::Analysis::DYNAMIC_RELAXATION);
+  EXPECT_EQ(scene.contacts(0).shape(), v1::Contact::CYLINDER_FLAT);
+  // A misspelt key names its path.
+  EXPECT_FALSE(ParseYaml("analysis: {explicit_dynamics: {time_step: 0.5}}\n", &scene, &error));
+  EXPECT_EQ(error.field, "analysis.explicit_dynamics.time_step");
+}
+
 TEST(YamlCodecTest, FluidLevelZeroIsGiven) {
   v1::Scene scene;
   ParseError error;

@@ -151,6 +151,25 @@ boundary_conditions:
   EXPECT_EQ(status.field(), "geometry.patches[0].centre_mm") << status.ToString();
 }
 
+TEST(SceneFromProto, HalfCylinderAndInvertedPatch) {
+  v1::Scene scene;
+  codec::ParseError error;
+  ASSERT_TRUE(codec::ParseYaml(R"(
+geometry:
+  cylinder: {radius_mm: 23.5, height_mm: 25, half: true}
+  patches:
+    - {name: plate, set: cut, centre_mm: [0, 0, 25], radius_mm: 1.5, invert: true}
+)",
+                               &scene, &error))
+      << error.ToString();
+  SceneSpec s;
+  ASSERT_TRUE(SceneFromProto(scene, &s).ok());
+  EXPECT_TRUE(s.geometry.cylinder.half);
+  ASSERT_EQ(s.geometry.patches.size(), 1u);
+  EXPECT_TRUE(s.geometry.patches[0].invert);
+  EXPECT_TRUE(s.geometry.patches[0].ball);
+}
+
 TEST(SceneFromProto, Atlas) {
   v1::Scene scene;
   codec::ParseError error;

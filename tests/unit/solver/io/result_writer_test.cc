@@ -2,6 +2,7 @@
 #include <hdf5.h>
 #include <stdlib.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <regex>
@@ -284,6 +285,29 @@ TEST_F(ResultWriterTest, LeavesOutFieldsNotAskedFor) {
   EXPECT_TRUE(Dims(file, "/fields/stress").empty());
   EXPECT_FALSE(Dims(file, "/fields/displacement").empty());
   H5Fclose(file);
+}
+
+// An explicit run's sensor samples go to sensors.csv, header first, 9
+// significant digits, a value that is not finite an empty cell; a solution
+// without sensors writes none.
+TEST_F(ResultWriterTest, SensorSamplesGoToSensorsCsv) {
+  const SceneSpec scene = Scene();
+  Solution solution = TwoQuadraticTets();
+  ASSERT_TRUE(WriteResultFiles(scene, &solution, dir_).ok());
+  EXPECT_FALSE(fs::exists(dir_ / "sensors.csv"));
+
+  solution.sensor_columns = {"time_s", "s1 pressure [Pa]", "s1 pressure filtered [Pa]",
+                             "s1 speed [m/s]", "s1 speed filtered [m/s]"};
+  solution.sensor_rows = {{0, 0, 0, 0, 0}, {1.23456789012e-6, 1500.5, 1400.25, 2.5, NAN}};
+  ASSERT_TRUE(WriteResultFiles(scene, &solution, dir_).ok());
+  EXPECT_EQ(ReadText(dir_ / "sensors.csv"),
+            "time_s,s1 pressure [Pa],s1 pressure filtered [Pa],s1 speed [m/s],s1 speed "
+            "filtered [m/s]\n"
+            "0,0,0,0,0\n"
+            "1.23456789e-06,1500.5,1400.25,2.5,\n");
+
+  solution.sensor_rows.push_back({1});  // a short row is a bug upstream
+  EXPECT_EQ(WriteResultFiles(scene, &solution, dir_).code(), Status::Code::kInternal);
 }
 
 TEST_F(ResultWriterTest, UnwritableDirectoryIsAnIoError) {

@@ -565,7 +565,7 @@ INSTANTIATE_TEST_SUITE_P(
                ToLinearStatic(s);
                s->contacts = contacts;
              },
-             "contacts", "NONLINEAR_STATIC or QUASI_STATIC"},
+             "contacts", "NONLINEAR_STATIC, QUASI_STATIC or EXPLICIT_DYNAMIC"},
         // The quasi-static analysis and its time.
         Case{"quasi_static_linear_material",
              [](SceneSpec* s) {
@@ -573,7 +573,7 @@ INSTANTIATE_TEST_SUITE_P(
                s->region_materials.clear();
                s->inclusions.clear();
              },
-             "material", "quasi-static analysis needs a hyperelastic material"},
+             "material", "QUASI_STATIC needs a hyperelastic material"},
         Case{"end_time_zero", [](SceneSpec* s) { s->analysis.time.end_time_s = 0; },
              "analysis.time.end_time_s", "positive end time"},
         Case{"end_time_infinite", [](SceneSpec* s) { s->analysis.time.end_time_s = INFINITY; },
@@ -600,9 +600,11 @@ INSTANTIATE_TEST_SUITE_P(
              "analysis.time.curve[2].time_s", "increase strictly"},
         Case{"curve_amplitude_nan", [](SceneSpec* s) { s->analysis.time.curve[1].second = NAN; },
              "analysis.time.curve[1].amplitude", "finite"},
-        Case{"time_on_a_nonlinear_static_analysis",
-             [](SceneSpec* s) { s->analysis.type = AnalysisSpec::Type::kNonlinearStatic; },
-             "analysis.time", "belongs to a QUASI_STATIC analysis; this one is NONLINEAR_STATIC"},
+        Case{
+            "time_on_a_nonlinear_static_analysis",
+            [](SceneSpec* s) { s->analysis.type = AnalysisSpec::Type::kNonlinearStatic; },
+            "analysis.time",
+            "belongs to a QUASI_STATIC or EXPLICIT_DYNAMIC analysis; this one is NONLINEAR_STATIC"},
         Case{"curve_on_a_linear_analysis",
              [](SceneSpec* s) {
                ToLinearStatic(s);
