@@ -2,13 +2,19 @@
 // 3): gel of inner diameter 47 mm and width 50 mm in a rigid container, a
 // 1.5 mm plate on its flat top with a hole for a 2 mm bolt driven 5 mm in
 // at 100 m/s; pressure sensors in the gel at 0, 30 and 60 degrees from the
-// entry point. The measured peaks fall with the angle, 0 > 30 > 60; the
-// model must order them the same way. Half the gel is modelled: the plane
-// through the bolt's axis across the width is a symmetry plane.
+// entry point, 15 mm from it. The measured peaks fall with the angle,
+// 0 > 30 > 60; the model must order the first pulse the same way (the
+// first 20 us: the front crosses the 15 mm in 10 us), and a faster bolt
+// must press harder. Half the gel is modelled: the plane through the
+// bolt's axis across the width is a symmetry plane. The container is
+// rigid and the elements are 0.5 mm, half the bolt's radius (at 1 mm the
+// bolt is one node wide and radiates as a point: 30 and 60 degrees come
+// out equal). A 10 kHz filter needs a record of hundreds of microseconds;
+// over that time the sealed container's pressure rise dominates and the
+// three sensors read alike (docs/scenes.md).
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <cstdlib>
 #include <numbers>
 #include <string>
 
@@ -51,42 +57,44 @@ SceneSpec Gel(double size_mm, double speed) {
   bolt.motion_mm = {0, -5, 0};
   s.contacts = {bolt};
   s.analysis.type = AnalysisSpec::Type::kExplicitDynamic;
-  const double end_s = getenv("T") ? atof(getenv("T")) : 100e-6, travel_s = 5e-3 / speed;
+  const double end_s = 20e-6, travel_s = 5e-3 / speed;
   s.analysis.time.end_time_s = end_s;
-  s.analysis.time.curve = {{0, 0}, {travel_s, 1}, {end_s, 1}};
+  s.analysis.time.curve = {{0, 0}, {travel_s, 1}};
+  if (end_s > travel_s) s.analysis.time.curve.push_back({end_s, 1});
   s.analysis.explicit_dynamics.erosion_strain = 1.0;
   for (int degrees : {0, 30, 60}) {
     const double a = degrees * std::numbers::pi / 180;
     SensorSpec sensor;
     sensor.name = "deg" + std::to_string(degrees);
     sensor.position_mm = {15 * std::sin(a), -15 * std::cos(a), 24.9};
-    sensor.radius_mm = getenv("R") ? atof(getenv("R")) : 0;
+    sensor.radius_mm = 1;
     s.outputs.sensors.push_back(sensor);
   }
   return s;
 }
 
-TEST(ExplicitGel, PeakPressureFallsWithTheAngleFromTheEntry) {
+TEST(ExplicitGel, FirstPulsePeakFallsWithTheAngleFromTheEntry) {
+  double previous_peak = 0;
   for (double speed : {100.0, 128.0}) {
     Solution solution;
-    const Status status = SolveScene(Gel(getenv("H") ? atof(getenv("H")) : 1.0, speed), SolveOptions(), &solution);
+    const Status status = SolveScene(Gel(0.5, speed), SolveOptions(), &solution);
     ASSERT_TRUE(status.ok()) << status.field() << ": " << status.message();
     const ExplicitSummary& run = solution.summary.explicit_run;
-    for (std::size_t k = 0; k < solution.sensor_rows.size(); k += 20) {
-      const auto& r = solution.sensor_rows[k];
-      std::printf("T %.1f %.0f %.0f %.0f | %.0f %.0f %.0f\n", r[0]*1e6, r[1]/1e3, r[7]/1e3, r[13]/1e3, r[2]/1e3, r[8]/1e3, r[14]/1e3);
-    }
     double peak[3] = {0, 0, 0};
     for (const SensorPeak& p : solution.summary.sensor_peaks) {
       if (p.quantity != "pressure_pa") continue;
       const int k = p.sensor == "deg0" ? 0 : p.sensor == "deg30" ? 1 : 2;
-      peak[k] = p.peak_filtered;
-      std::printf("%s raw %.4g kPa at %.3g us, filtered %.4g kPa at %.3g us\n", p.sensor.c_str(), p.peak_raw/1e3, p.time_raw_s*1e6, p.peak_filtered/1e3, p.time_filtered_s*1e6);
+      peak[k] = p.peak_raw;
     }
-    std::printf("%g m/s: %lld steps, %d elements eroded, balance %.3g %%; filtered peaks 0/30/60 "
-                "deg: %.4g / %.4g / %.4g kPa\n",
-                speed, static_cast<long long>(run.steps), run.eroded_elements,
-                100 * run.max_energy_error, peak[0] / 1e3, peak[1] / 1e3, peak[2] / 1e3);
+    std::printf(
+        "%g m/s: %lld steps, %d elements eroded, balance %.3g %%; first-pulse peaks "
+        "0/30/60 deg: %.4g / %.4g / %.4g kPa\n",
+        speed, static_cast<long long>(run.steps), run.eroded_elements, 100 * run.max_energy_error,
+        peak[0] / 1e3, peak[1] / 1e3, peak[2] / 1e3);
+    if (speed > 100) {
+      EXPECT_GT(peak[0], previous_peak);
+    }
+    previous_peak = peak[0];
     EXPECT_GT(peak[0], peak[1]);
     EXPECT_GT(peak[1], peak[2]);
     EXPECT_GT(peak[2], 0);
