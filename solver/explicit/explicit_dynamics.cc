@@ -14,6 +14,7 @@
 #include "explicit/impactor.h"
 #include "explicit/sensors.h"
 #include "explicit/tled_model.h"
+#include "signal/butterworth.h"
 
 namespace pba {
 namespace {
@@ -115,8 +116,24 @@ Status SolveExplicitDynamic(const SceneSpec& scene, const Model& model, PhaseClo
   // Sensors.
   SensorArray sensors;
   PBA_RETURN_IF_ERROR(SensorArray::Locate(scene.outputs.sensors, mesh, tled, &sensors));
+  // The sensors record every step; their table is resampled every
+  // sample_interval and filtered at that rate, checked now rather than
+  // after the run.
   const double sample_interval =
-      scene.outputs.sensor_interval_s > 0 ? scene.outputs.sensor_interval_s : std::max(1e-6, dt);
+      scene.outputs.sensor_interval_s > 0 ? scene.outputs.sensor_interval_s : 1e-6;
+  const int filter_order = scene.outputs.filter_order > 0 ? scene.outputs.filter_order : 4;
+  const double cutoff_hz =
+      scene.outputs.filter_cutoff_hz > 0 ? scene.outputs.filter_cutoff_hz : 1e4;
+  if (!sensors.empty()) {
+    ButterworthLowPass filter;
+    if (!ButterworthLowPass::Design(filter_order, cutoff_hz, 1 / sample_interval, &filter).ok()) {
+      return Status::InvalidArgument(
+          "outputs.filter_cutoff_hz",
+          Format("the sensors' filter (order %d, cutoff %g Hz) does not fit the sampling "
+                 "interval %g s: the cutoff must lie below half the sampling rate",
+                 filter_order, cutoff_hz, sample_interval));
+    }
+  }
   const double output_interval =
       options.output_interval_s > 0 ? options.output_interval_s : end_time / 100;
   // At most this many frames of the displacement go into result.h5.
@@ -140,7 +157,7 @@ Status SolveExplicitDynamic(const SceneSpec& scene, const Model& model, PhaseClo
                       factor, stable0 * 1e6));
   Eigen::VectorXd u = Eigen::VectorXd::Zero(n_dofs), v = Eigen::VectorXd::Zero(n_dofs);
   Eigen::VectorXd f_int(n_dofs), f_ext = Eigen::VectorXd::Zero(n_dofs),
-                                 f_contact = Eigen::VectorXd::Zero(n_dofs), v_at_step;
+                                 f_contact = Eigen::VectorXd::Zero(n_dofs);
   std::vector<char> orphan;
   const std::vector<PrescribedDof>& prescribed = setup.prescribed;
   // Start: prescribed displacements at a(0), velocities at a(0).
@@ -154,7 +171,7 @@ Status SolveExplicitDynamic(const SceneSpec& scene, const Model& model, PhaseClo
   const double alpha = options.mass_damping_per_s;
   Energies energy;
   for (int i = 0; i < n_dofs; ++i) energy.initial_kinetic += 0.5 * node_mass(i / 3) * v(i) * v(i);
-  double t = 0, dt_prev = 0, next_sample = 0, next_output = 0, next_frame = 0;
+  double t = 0, dt_prev = 0, next_output = 0, next_frame = 0;
   std::vector<Eigen::Vector3d> body_force_prev(impactors.size(), Eigen::Vector3d::Zero());
   std::vector<Eigen::Vector3d> centre_prev(impactors.size());
   for (std::size_t k = 0; k < impactors.size(); ++k)
@@ -165,7 +182,6 @@ Status SolveExplicitDynamic(const SceneSpec& scene, const Model& model, PhaseClo
   bool last = false;
   while (true) {
     // Forces at t^n.
-    const bool sample = !sensors.empty() && t >= next_sample - 1e-3 * dt;
     const bool output = t >= next_output - 1e-3 * dt || last;
     tled.RecordStress(last);
     TledEvaluation eval = tled.InternalForce(u, v, &f_int);
@@ -256,7 +272,7 @@ Status SolveExplicitDynamic(const SceneSpec& scene, const Model& model, PhaseClo
     const double dt_mid = 0.5 * (dt_prev + dt_next);
     const double a_half = curve.Amplitude(t + 0.5 * dt_next);
     const double a_next = curve.Amplitude(t + dt_next);
-    if (sample) v_at_step = v;
+    sensors.Before(v);
     double w_int_a = 0, w_int_b = 0, w_ext_a = 0, w_ext_b = 0, w_damp_a = 0, w_damp_b = 0,
            w_c_a = 0, w_c_b = 0, kinetic = 0;
     bool finite = true;
@@ -326,11 +342,7 @@ Status SolveExplicitDynamic(const SceneSpec& scene, const Model& model, PhaseClo
           energy.External(), factor > 1 ? " (the time step factor is above 1)" : "", dt * 1e6,
           factor));
     }
-    if (sample) {
-      v_at_step = 0.5 * (v_at_step + v);
-      sensors.Sample(t, tled, v_at_step);
-      next_sample += sample_interval;
-    }
+    sensors.Sample(t, tled, v);
     if (output) {
       std::vector<double> row = {t,
                                  dt_next,
@@ -376,9 +388,7 @@ Status SolveExplicitDynamic(const SceneSpec& scene, const Model& model, PhaseClo
     solution->step_load_factor.push_back(curve.Amplitude(t));
     for (int i = 0; i < n_dofs; ++i) solution->step_displacement_mm.push_back(u(i) / kMm);
   }
-  PBA_RETURN_IF_ERROR(sensors.Finish(
-      scene.outputs.filter_order > 0 ? scene.outputs.filter_order : 4,
-      scene.outputs.filter_cutoff_hz > 0 ? scene.outputs.filter_cutoff_hz : 1e4, solution));
+  PBA_RETURN_IF_ERROR(sensors.Finish(filter_order, cutoff_hz, sample_interval, solution));
   run.steps = step;
   run.end_time_s = t;
   run.last_step_s = dt;

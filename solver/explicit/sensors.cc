@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
 
 #include "core/format.h"
 #include "fem/hex8.h"
@@ -54,8 +55,8 @@ Eigen::Vector3d Centroid(const Mesh& mesh, int e) {
 // record began: `lead` copies of the first sample go before it (what the
 // sensor read before t = 0), so that the filter starts from the true
 // history rather than a reflection of the record; they are dropped again.
-std::vector<double> FilterFromRest(const ButterworthLowPass& filter,
-                                   const std::vector<double>& raw, std::size_t lead) {
+std::vector<double> FilterFromRest(const ButterworthLowPass& filter, const std::vector<double>& raw,
+                                   std::size_t lead) {
   std::vector<double> padded(lead, raw.front());
   padded.insert(padded.end(), raw.begin(), raw.end());
   const std::vector<double> smooth = filter.FilterZeroPhase(padded);
@@ -123,18 +124,30 @@ Status SensorArray::Locate(const std::vector<SensorSpec>& specs, const Mesh& mes
   return Status::Ok();
 }
 
+void SensorArray::Before(const Eigen::VectorXd& v) {
+  velocity_before_.clear();
+  for (const Sensor& s : sensors_) {
+    for (int n : s.nodes) {
+      for (int c = 0; c < 3; ++c) velocity_before_.push_back(v(3 * n + c));
+    }
+  }
+}
+
 void SensorArray::Sample(double t, const TledModel& model, const Eigen::VectorXd& v) {
+  if (sensors_.empty()) return;
   time_.push_back(t);
+  std::size_t k = 0;
   for (std::size_t i = 0; i < sensors_.size(); ++i) {
     const Sensor& s = sensors_[i];
     double pressure = 0, strain = 0;
-    for (std::size_t k = 0; k < s.elements.size(); ++k) {
-      const int e = s.elements[k];
-      pressure += s.weights[k] * model.pressure(e);
-      strain += s.weights[k] * LargestPrincipalStrain(model.DeformationGradient(e));
+    for (std::size_t e = 0; e < s.elements.size(); ++e) {
+      pressure += s.weights[e] * model.pressure(s.elements[e]);
+      strain += s.weights[e] * LargestPrincipalStrain(model.DeformationGradient(s.elements[e]));
     }
     Eigen::Vector3d velocity = Eigen::Vector3d::Zero();
-    for (int n : s.nodes) velocity += v.segment<3>(3 * n);
+    for (int n : s.nodes) {
+      for (int c = 0; c < 3; ++c, ++k) velocity(c) += 0.5 * (velocity_before_[k] + v(3 * n + c));
+    }
     velocity /= static_cast<double>(s.nodes.size());
     pressure_[i].push_back(pressure);
     speed_[i].push_back(velocity.norm());
@@ -142,27 +155,38 @@ void SensorArray::Sample(double t, const TledModel& model, const Eigen::VectorXd
   }
 }
 
-Status SensorArray::Finish(int order, double cutoff_hz, Solution* solution) const {
-  if (sensors_.empty()) return Status::Ok();
-  const std::size_t n = time_.size();
+Status SensorArray::Finish(int order, double cutoff_hz, double interval, Solution* solution) const {
+  if (sensors_.empty() || time_.empty()) return Status::Ok();
+  // The uniform times, and for each the step record's bracket.
+  std::vector<double> grid;
+  for (std::size_t k = 0; k * interval <= time_.back() * (1 + 1e-12); ++k) {
+    grid.push_back(k * interval);
+  }
+  const std::size_t n = grid.size();
+  const auto resample = [&](const std::vector<double>& record) {
+    std::vector<double> out(n);
+    std::size_t j = 0;
+    for (std::size_t k = 0; k < n; ++k) {
+      while (j + 1 < time_.size() && time_[j + 1] < grid[k]) ++j;
+      if (j + 1 >= time_.size() || grid[k] <= time_[j]) {
+        out[k] = record[std::min(j, record.size() - 1)];
+        continue;
+      }
+      const double w = (grid[k] - time_[j]) / (time_[j + 1] - time_[j]);
+      out[k] = (1 - w) * record[j] + w * record[j + 1];
+    }
+    return out;
+  };
   ButterworthLowPass filter;
   const bool filtered = n >= 2;
   if (filtered) {
-    const double rate = (n - 1) / (time_.back() - time_.front());
-    const Status designed = ButterworthLowPass::Design(order, cutoff_hz, rate, &filter);
-    if (!designed.ok()) {
-      return Status::InvalidArgument(
-          "outputs.filter_cutoff_hz",
-          Format("the sensors' filter (order %d, cutoff %g Hz) does not fit the sampling rate "
-                 "%g Hz: %s",
-                 order, cutoff_hz, rate, designed.message().c_str()));
-    }
+    PBA_RETURN_IF_ERROR(ButterworthLowPass::Design(order, cutoff_hz, 1 / interval, &filter));
   }
   // Samples of rest put before the record: the filter's settling time,
   // about order / (2 pi fc), three times over.
   const std::size_t lead =
-      filtered ? static_cast<std::size_t>(std::ceil(3 * order / (2 * M_PI * cutoff_hz) /
-                                                    ((time_.back() - time_.front()) / (n - 1))))
+      filtered ? static_cast<std::size_t>(
+                     std::ceil(3 * order / (2 * std::numbers::pi * cutoff_hz) / interval))
                : 0;
   std::vector<std::string>& columns = solution->sensor_columns;
   columns = {"time_s"};
@@ -177,21 +201,20 @@ Status SensorArray::Finish(int order, double cutoff_hz, Solution* solution) cons
                                  {"strain", "strain", &strain_}};
   for (std::size_t i = 0; i < sensors_.size(); ++i) {
     for (const Quantity& q : quantities) {
-      const std::vector<double>& raw = (*q.values)[i];
+      const std::vector<double> raw = resample((*q.values)[i]);
       const std::vector<double> smooth = filtered ? FilterFromRest(filter, raw, lead) : raw;
       columns.push_back(sensors_[i].name + " " + q.column);
       columns.push_back(sensors_[i].name + " " + q.column + " filtered");
       SensorPeak peak;
       peak.sensor = sensors_[i].name;
       peak.quantity = q.key;
-      peak.peak_raw = peak.peak_filtered = -std::numeric_limits<double>::infinity();
+      peak.peak_raw = raw[0], peak.peak_filtered = smooth[0];
       for (std::size_t k = 0; k < n; ++k) {
-        if (raw[k] > peak.peak_raw) peak.peak_raw = raw[k], peak.time_raw_s = time_[k];
+        if (raw[k] > peak.peak_raw) peak.peak_raw = raw[k], peak.time_raw_s = grid[k];
         if (smooth[k] > peak.peak_filtered) {
-          peak.peak_filtered = smooth[k], peak.time_filtered_s = time_[k];
+          peak.peak_filtered = smooth[k], peak.time_filtered_s = grid[k];
         }
       }
-      if (n == 0) peak.peak_raw = peak.peak_filtered = 0;
       solution->summary.sensor_peaks.push_back(peak);
       series.push_back(raw);
       series.push_back(smooth);
@@ -201,7 +224,7 @@ Status SensorArray::Finish(int order, double cutoff_hz, Solution* solution) cons
   for (std::size_t k = 0; k < n; ++k) {
     std::vector<double>& row = solution->sensor_rows[k];
     row.reserve(1 + series.size());
-    row.push_back(time_[k]);
+    row.push_back(grid[k]);
     for (const std::vector<double>& s : series) row.push_back(s[k]);
   }
   return Status::Ok();

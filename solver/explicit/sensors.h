@@ -27,14 +27,18 @@ class SensorArray {
 
   bool empty() const { return sensors_.empty(); }
   std::size_t samples() const { return time_.size(); }
-  // Records one sample at time t from the model's last evaluation and the
-  // velocity v [m/s].
+  // Keeps the sensors' nodal velocities v^(n-1/2) before a step's update.
+  void Before(const Eigen::VectorXd& v);
+  // Records the state at time t^n from the model's evaluation at t^n and
+  // v^(n+1/2) (the velocity the mean of the half steps around t^n).
   void Sample(double t, const TledModel& model, const Eigen::VectorXd& v);
-  // Filters the samples (order, cutoff [Hz]; the rate is that of the
-  // samples; the body at rest before t = 0, so the record starts from a
-  // history of its first value, not a reflection) and fills solution->sensor_columns / sensor_rows and the
-  // summary's sensor_peaks.
-  Status Finish(int order, double cutoff_hz, Solution* solution) const;
+  // Resamples the record every `interval` [s] from t = 0 (linear
+  // interpolation between steps), filters it at that rate (order, cutoff
+  // [Hz]; the body at rest before t = 0, so the record starts from a
+  // history of its first value, not a reflection) and fills
+  // solution->sensor_columns / sensor_rows and the summary's sensor_peaks
+  // (the raw peaks from the resampled record).
+  Status Finish(int order, double cutoff_hz, double interval, Solution* solution) const;
 
  private:
   struct Sensor {
@@ -45,6 +49,7 @@ class SensorArray {
   };
   std::vector<Sensor> sensors_;
   std::vector<double> time_;
+  std::vector<double> velocity_before_;  // per sensor node, 3 each, in order
   // Per sensor: pressure, speed, strain series.
   std::vector<std::vector<double>> pressure_, speed_, strain_;
 };
