@@ -155,7 +155,8 @@ std::string FormatSummary(const v1::Summary& summary) {
          " mesh: " + std::to_string(m.nodes()) + " nodes, " + std::to_string(m.elements()) +
          " elements, " + std::to_string(m.dofs()) + " unknowns\n";
   out += "Material     " + m.material() + "\n";
-  out += "Analysis     " + m.analysis() + ", " + m.linear_solver() + "\n";
+  out += "Analysis     " + m.analysis() +
+         (m.linear_solver().empty() ? std::string() : ", " + m.linear_solver()) + "\n";
   for (const auto& note : m.notes()) out += "Note         " + note + "\n";
   out += "Results\n";
   std::string at;

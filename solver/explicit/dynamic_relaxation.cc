@@ -176,6 +176,9 @@ Status SolveDynamicRelaxation(const SceneSpec& scene, const Model& model, PhaseC
   run.element_updates_per_s =
       loop_s > 0 ? static_cast<double>(step) * tled.num_elements() / loop_s : 0;
   summary.relative_residual = residual;
+  summary.error.note =
+      "dynamic relaxation does not estimate the discretisation error; compare meshes with pba "
+      "study convergence";
   summary.analysis = "dynamic relaxation (explicit, total Lagrangian, adaptive damping)";
   summary.notes.push_back(
       Format("dynamic relaxation: converged in %lld steps (loads ramped over the first %d), "

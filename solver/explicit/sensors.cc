@@ -72,6 +72,13 @@ double LargestPrincipalStrain(const Eigen::Matrix3d& f) {
   return eig.eigenvalues()(2);
 }
 
+double LargestPrincipalStrainMagnitude(const Eigen::Matrix3d& f) {
+  const Eigen::Matrix3d e = 0.5 * (f.transpose() * f - Eigen::Matrix3d::Identity());
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
+  eig.computeDirect(e, Eigen::EigenvaluesOnly);
+  return eig.eigenvalues().cwiseAbs().maxCoeff();
+}
+
 Status SensorArray::Locate(const std::vector<SensorSpec>& specs, const Mesh& mesh,
                            const TledModel& model, SensorArray* out) {
   *out = SensorArray();
@@ -142,7 +149,8 @@ void SensorArray::Sample(double t, const TledModel& model, const Eigen::VectorXd
     double pressure = 0, strain = 0;
     for (std::size_t e = 0; e < s.elements.size(); ++e) {
       pressure += s.weights[e] * model.pressure(s.elements[e]);
-      strain += s.weights[e] * LargestPrincipalStrain(model.DeformationGradient(s.elements[e]));
+      strain +=
+          s.weights[e] * LargestPrincipalStrainMagnitude(model.DeformationGradient(s.elements[e]));
     }
     Eigen::Vector3d velocity = Eigen::Vector3d::Zero();
     for (int n : s.nodes) {

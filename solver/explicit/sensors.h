@@ -1,8 +1,8 @@
 // Sensors of an explicit analysis (outputs.sensors): the pressure
 // -tr(sigma)/3, the speed |v| and the largest principal Green-Lagrange
-// strain at points (or small balls) of the body, sampled at a fixed rate,
-// then low-pass filtered without phase shift (signal/butterworth.h) and
-// reduced to peaks.
+// strain in magnitude (a compression counts) at points (or small balls) of the body, sampled at a
+// fixed rate, then low-pass filtered without phase shift (signal/butterworth.h) and reduced to
+// peaks.
 #pragma once
 
 #include <Eigen/Core>
@@ -54,7 +54,9 @@ class SensorArray {
   std::vector<std::vector<double>> pressure_, speed_, strain_;
 };
 
-// Largest principal value of the Green-Lagrange strain of F.
+// Largest principal value of the Green-Lagrange strain of F, and the
+// largest magnitude of the three.
 double LargestPrincipalStrain(const Eigen::Matrix3d& f);
+double LargestPrincipalStrainMagnitude(const Eigen::Matrix3d& f);
 
 }  // namespace pba

@@ -179,7 +179,6 @@ Status TledModel::Build(const Mesh& mesh, std::vector<TledMaterial> materials,
       t.group_start_.push_back(static_cast<int>(t.group_corner_.size()));
     }
     t.group_pressure_.assign(members.size(), 0.0);
-    t.group_j_.assign(members.size(), 1.0);
   }
   // Relaxation history.
   t.history_start_.assign(ne, -1);
@@ -312,11 +311,10 @@ void TledModel::AverageNodalPressure() {
       sum_v += volume_[e];
     }
     if (sum_v == 0) {
-      group_pressure_[g] = 0, group_j_[g] = 1;
+      group_pressure_[g] = 0;
       continue;
     }
     const double j = sum_vj / sum_v;
-    group_j_[g] = j;
     const TledMaterial& m = materials_[group_material_[g]];
     group_pressure_[g] = m.neo_hookean ? m.bulk * (j - 1) : m.model->Volumetric(j).first;
   }
@@ -500,23 +498,40 @@ Vector6d TledModel::CauchyStress(int e) const {
   return Eigen::Map<const Vector6d>(&stress_[6 * static_cast<std::size_t>(e)]);
 }
 
-double TledModel::Erode(int e) {
+void TledModel::Erode(int e) {
   if (eroded_.empty()) eroded_.assign(num_elements_, 0);
-  if (eroded_[e]) return 0;
   eroded_[e] = 1;
-  const Eigen::Matrix3d f = DeformationGradient(e);
-  if (!IsAdmissible(f)) return 0;
-  const HyperelasticMaterial& m = *material(e).model;
-  double w = m.Energy(f);
-  if (anp_) {
-    // The volumetric energy is the nodes', sum_n V_n U(J_n): the element
-    // holds a quarter of its volume's share at each corner.
+}
+
+double TledModel::StoredEnergy() const {
+  double total = 0;
+#pragma omp parallel for schedule(static) reduction(+ : total)
+  for (int e = 0; e < num_elements_; ++e) {
+    if (eroded(e) || !(j_[e] > 0)) continue;
+    const Eigen::Matrix3d f = DeformationGradient(e);
+    const HyperelasticMaterial& m = *material(e).model;
+    double w = 0;
     m.Isochoric(f, &w, nullptr, nullptr);
-    for (int a = 0; a < 4; ++a) {
-      w += 0.25 * m.Volumetric(group_j_[corner_group_[4 * e + a]]).value;
-    }
+    if (!anp_) w += m.Volumetric(j_[e]).value;
+    if (std::isfinite(w)) total += w * volume_[e];
   }
-  return std::isfinite(w) ? w * volume_[e] : 0;
+  if (!anp_) return total;
+  const int groups = static_cast<int>(group_material_.size());
+#pragma omp parallel for schedule(static) reduction(+ : total)
+  for (int g = 0; g < groups; ++g) {
+    double sum_vj = 0, sum_v = 0;
+    for (int k = group_start_[g]; k < group_start_[g + 1]; ++k) {
+      const int e = group_corner_[k] / npe_;
+      if (eroded(e)) continue;
+      sum_vj += volume_[e] * j_[e];
+      sum_v += volume_[e];
+    }
+    if (sum_v == 0) continue;
+    // The group's volume V_n: a quarter of each of its elements'.
+    const double u = materials_[group_material_[g]].model->Volumetric(sum_vj / sum_v).value;
+    if (std::isfinite(u)) total += 0.25 * sum_v * u;
+  }
+  return total;
 }
 
 std::vector<int> TledModel::OrphanNodes() const {

@@ -138,9 +138,16 @@ class TledModel {
   void RecordStress(bool on) { record_stress_ = on; }
   Vector6d CauchyStress(int e) const;
 
-  // Erosion: removes element e from the force evaluation. Its strain
-  // energy at the last evaluation is returned [J].
-  double Erode(int e);
+  // Erosion: removes element e from the force evaluation.
+  void Erode(int e);
+  // The strain energy stored at the last evaluation's deformation, the
+  // eroded elements left out [J]: sum_e V0 W_iso(F_e) plus the volumetric
+  // energy, sum_n V_n U(J_n) over the nodal groups with average nodal
+  // pressure (not a sum over elements: removing one changes its
+  // neighbours' J_n, which is why erosion is accounted for by the change
+  // of this total), else sum_e V0 U(J_e). The isochoric part is the
+  // elastic one (a relaxing material's viscous history is not counted).
+  double StoredEnergy() const;
   bool eroded(int e) const { return !eroded_.empty() && eroded_[e]; }
   // Nodes none of whose elements remain (after erosion).
   std::vector<int> OrphanNodes() const;
@@ -175,10 +182,8 @@ class TledModel {
   bool anp_ = false;
   std::vector<int> corner_group_;
   std::vector<int> group_start_, group_corner_;
-  std::vector<double> group_weight_;  // V0_e / sum V0 per corner of a group
   std::vector<int> group_material_;
   std::vector<double> group_pressure_;
-  std::vector<double> group_j_;  // J_n of each group
   // Per element, from the last evaluation.
   std::vector<double> f_;         // 9 per element
   std::vector<double> j_;         // det F

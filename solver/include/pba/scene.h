@@ -496,7 +496,7 @@ struct ProfileSpec {
 // A point (or a small ball) inside the body at which an EXPLICIT_DYNAMIC
 // analysis samples its fields through time (sensors.csv, docs/results.md):
 // the pressure -tr(sigma)/3 [Pa], the velocity [m/s] and the largest
-// principal Green-Lagrange strain, raw and low-pass filtered.
+// principal Green-Lagrange strain in magnitude, raw and low-pass filtered.
 struct SensorSpec {
   std::string name;  // letters, digits, '_' and '-'; unique
   std::array<double, 3> position_mm{0, 0, 0};  // reference configuration [mm]
