@@ -175,11 +175,15 @@ Status TledModel::Build(const Mesh& mesh, std::vector<TledMaterial> materials,
     }
     t.group_start_.assign(1, 0);
     for (const std::vector<int>& g : members) {
-      t.group_corner_.insert(t.group_corner_.end(), g.begin(), g.end());
-      t.group_start_.push_back(static_cast<int>(t.group_corner_.size()));
+      for (int c : g) t.group_element_.push_back(c / npe);
+      t.group_start_.push_back(static_cast<int>(t.group_element_.size()));
     }
     t.group_pressure_.assign(members.size(), 0.0);
+    t.group_volume_.assign(members.size(), 0.0);
+    for (int g = 0; g < static_cast<int>(members.size()); ++g) t.SumGroupVolume(g);
+    t.volume_ratio_.assign(ne, 0.0);
   }
+  for (const TledMaterial& m : t.materials_) t.wave_speed_.push_back(m.WaveSpeed());
   // Relaxation history.
   t.history_start_.assign(ne, -1);
   std::size_t history = 0;
@@ -276,14 +280,24 @@ void TledModel::SetTimeStep(double dt) {
   }
 }
 
-void TledModel::ComputeDeformation(const Eigen::VectorXd& u) {
+void TledModel::SumGroupVolume(int g) {
+  double sum_v = 0;
+  for (int k = group_start_[g]; k < group_start_[g + 1]; ++k) {
+    const int e = group_element_[k];
+    if (!eroded(e)) sum_v += volume_[e];
+  }
+  group_volume_[g] = sum_v;
+}
+
+void TledModel::VolumeRatios(const Eigen::VectorXd& u) {
   const double* ud = u.data();
 #pragma omp for schedule(static)
   for (int e = 0; e < num_elements_; ++e) {
-    const int* nodes = &conn_[npe_ * static_cast<std::size_t>(e)];
-    const double* g = &grad_[3 * npe_ * static_cast<std::size_t>(e)];
+    // Four corners: F as in ElementForces<4>, in the same order.
+    const int* nodes = &conn_[4 * static_cast<std::size_t>(e)];
+    const double* g = &grad_[12 * static_cast<std::size_t>(e)];
     double f[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
-    for (int a = 0; a < npe_; ++a) {
+    for (int a = 0; a < 4; ++a) {
       const double* ua = ud + 3 * nodes[a];
       const double* ga = g + 3 * a;
       for (int i = 0; i < 3; ++i) {
@@ -292,10 +306,9 @@ void TledModel::ComputeDeformation(const Eigen::VectorXd& u) {
         f[3 * i + 2] += ua[i] * ga[2];
       }
     }
-    double* fe = &f_[9 * static_cast<std::size_t>(e)];
-    for (int k = 0; k < 9; ++k) fe[k] = f[k];
-    j_[e] = f[0] * (f[4] * f[8] - f[5] * f[7]) - f[1] * (f[3] * f[8] - f[5] * f[6]) +
-            f[2] * (f[3] * f[7] - f[4] * f[6]);
+    const double j = f[0] * (f[4] * f[8] - f[5] * f[7]) - f[1] * (f[3] * f[8] - f[5] * f[6]) +
+                     f[2] * (f[3] * f[7] - f[4] * f[6]);
+    volume_ratio_[e] = volume_[e] * j;
   }
 }
 
@@ -303,16 +316,15 @@ void TledModel::AverageNodalPressure() {
   const int groups = static_cast<int>(group_pressure_.size());
 #pragma omp for schedule(static)
   for (int g = 0; g < groups; ++g) {
-    double sum_vj = 0, sum_v = 0;
-    for (int k = group_start_[g]; k < group_start_[g + 1]; ++k) {
-      const int e = group_corner_[k] / npe_;
-      if (eroded(e)) continue;
-      sum_vj += volume_[e] * j_[e];
-      sum_v += volume_[e];
-    }
+    const double sum_v = group_volume_[g];
     if (sum_v == 0) {
       group_pressure_[g] = 0;
       continue;
+    }
+    double sum_vj = 0;
+    for (int k = group_start_[g]; k < group_start_[g + 1]; ++k) {
+      const int e = group_element_[k];
+      if (!eroded(e)) sum_vj += volume_ratio_[e];
     }
     const double j = sum_vj / sum_v;
     const TledMaterial& m = materials_[group_material_[g]];
@@ -320,6 +332,7 @@ void TledModel::AverageNodalPressure() {
   }
 }
 
+template <int kNpe>
 void TledModel::ElementForces(const Eigen::VectorXd& u, const Eigen::VectorXd& v,
                               TledEvaluation* eval) {
   const double c1 = options_.bulk_viscosity_linear, c2 = options_.bulk_viscosity_quadratic;
@@ -330,25 +343,41 @@ void TledModel::ElementForces(const Eigen::VectorXd& u, const Eigen::VectorXd& v
   int inverted = std::numeric_limits<int>::max();
 #pragma omp for schedule(static) nowait
   for (int e = 0; e < num_elements_; ++e) {
-    double* force = &force_[3 * npe_ * static_cast<std::size_t>(e)];
-    const double* fe = &f_[9 * static_cast<std::size_t>(e)];
-    const double j = j_[e];
+    const int* nodes = &conn_[kNpe * static_cast<std::size_t>(e)];
+    const double* g = &grad_[3 * kNpe * static_cast<std::size_t>(e)];
+    // F = I + sum_a u_a (x) dN_a/dX, and J, stored for the accessors and
+    // the stable step; F is not read back.
+    double fe[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+    for (int a = 0; a < kNpe; ++a) {
+      const double* ua = ud + 3 * nodes[a];
+      const double* ga = g + 3 * a;
+      for (int i = 0; i < 3; ++i) {
+        fe[3 * i + 0] += ua[i] * ga[0];
+        fe[3 * i + 1] += ua[i] * ga[1];
+        fe[3 * i + 2] += ua[i] * ga[2];
+      }
+    }
+    const double j = fe[0] * (fe[4] * fe[8] - fe[5] * fe[7]) -
+                     fe[1] * (fe[3] * fe[8] - fe[5] * fe[6]) +
+                     fe[2] * (fe[3] * fe[7] - fe[4] * fe[6]);
+    std::copy(fe, fe + 9, &f_[9 * static_cast<std::size_t>(e)]);
+    j_[e] = j;
+    double* force = &force_[3 * kNpe * static_cast<std::size_t>(e)];
     if (eroded(e) || !(j > 0) || !std::isfinite(j)) {
-      std::fill(force, force + 3 * npe_, 0.0);
+      std::fill(force, force + 3 * kNpe, 0.0);
       if (!eroded(e)) inverted = std::min(inverted, e);
       continue;
     }
-    const int* nodes = &conn_[npe_ * static_cast<std::size_t>(e)];
-    const double* g = &grad_[3 * npe_ * static_cast<std::size_t>(e)];
-    const TledMaterial& m = materials_[material_of_[e]];
+    const int mi = material_of_[e];
+    const TledMaterial& m = materials_[mi];
     double cof[9];
     Cofactor(fe, cof);
     // Pressure U'(J): the element's, or the mean of its corners' groups.
     double p;
-    if (anp_) {
+    if (kNpe == 4 && anp_) {
       p = 0;
-      for (int a = 0; a < npe_; ++a) p += group_pressure_[corner_group_[npe_ * e + a]];
-      p /= npe_;
+      for (int a = 0; a < kNpe; ++a) p += group_pressure_[corner_group_[kNpe * e + a]];
+      p /= kNpe;
     } else {
       p = m.neo_hookean ? m.bulk * (j - 1) : m.model->Volumetric(j).first;
     }
@@ -356,7 +385,7 @@ void TledModel::ElementForces(const Eigen::VectorXd& u, const Eigen::VectorXd& v
     double q = 0;
     if (c1 > 0 || c2 > 0) {
       double rate = 0;
-      for (int a = 0; a < npe_; ++a) {
+      for (int a = 0; a < kNpe; ++a) {
         const double* va = vd + 3 * nodes[a];
         const double* ga = g + 3 * a;
         for (int i = 0; i < 3; ++i) {
@@ -366,7 +395,7 @@ void TledModel::ElementForces(const Eigen::VectorXd& u, const Eigen::VectorXd& v
       rate /= j;
       if (rate < 0) {
         const double l = length_[e] * std::cbrt(j);
-        q = m.density * l * (c2 * l * rate * rate - c1 * m.WaveSpeed() * rate);
+        q = m.density * l * (c2 * l * rate * rate - c1 * wave_speed_[mi] * rate);
       }
     }
     double pk[9];  // first Piola-Kirchhoff stress, row-major
@@ -382,7 +411,7 @@ void TledModel::ElementForces(const Eigen::VectorXd& u, const Eigen::VectorXd& v
       m.model->Isochoric(f, nullptr, &s_iso, nullptr);
       if (history_start_[e] >= 0) {
         // S_visc = g_inf S_iso + sum_k H_k; H_k advances over the step.
-        const ViscousStep& step = steps_[material_of_[e]];
+        const ViscousStep& step = steps_[mi];
         double* hist = &history_[history_start_[e]];
         Eigen::Map<Vector6d> s_old(hist);
         const Vector6d ds = s_iso - s_old;
@@ -419,16 +448,16 @@ void TledModel::ElementForces(const Eigen::VectorXd& u, const Eigen::VectorXd& v
       out[3] = s[5], out[4] = s[2], out[5] = s[1];
     }
     const double v0 = volume_[e];
-    for (int a = 0; a < npe_; ++a) {
+    for (int a = 0; a < kNpe; ++a) {
       const double* ga = g + 3 * a;
       for (int i = 0; i < 3; ++i) {
         force[3 * a + i] = v0 * (pk[3 * i] * ga[0] + pk[3 * i + 1] * ga[1] + pk[3 * i + 2] * ga[2]);
       }
     }
-    if (npe_ == 8 && options_.hourglass > 0) {
+    if (kNpe == 8 && options_.hourglass > 0) {
       const double* gamma = &gamma_[32 * static_cast<std::size_t>(e)];
       double hq[4][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
-      for (int a = 0; a < 8; ++a) {
+      for (int a = 0; a < kNpe; ++a) {
         const double* ua = ud + 3 * nodes[a];
         for (int alpha = 0; alpha < 4; ++alpha) {
           for (int i = 0; i < 3; ++i) hq[alpha][i] += gamma[4 * a + alpha] * ua[i];
@@ -440,7 +469,7 @@ void TledModel::ElementForces(const Eigen::VectorXd& u, const Eigen::VectorXd& v
         for (int i = 0; i < 3; ++i) sq += hq[alpha][i] * hq[alpha][i];
       }
       hourglass += 0.5 * k * sq;
-      for (int a = 0; a < 8; ++a) {
+      for (int a = 0; a < kNpe; ++a) {
         for (int i = 0; i < 3; ++i) {
           double sum = 0;
           for (int alpha = 0; alpha < 4; ++alpha) sum += gamma[4 * a + alpha] * hq[alpha][i];
@@ -480,9 +509,15 @@ TledEvaluation TledModel::InternalForce(const Eigen::VectorXd& u, const Eigen::V
   f_int->resize(3 * static_cast<Eigen::Index>(num_nodes_));
 #pragma omp parallel
   {
-    ComputeDeformation(u);
-    if (anp_) AverageNodalPressure();
-    ElementForces(u, v, &eval);
+    if (anp_) {
+      VolumeRatios(u);
+      AverageNodalPressure();
+    }
+    if (npe_ == 4) {
+      ElementForces<4>(u, v, &eval);
+    } else {
+      ElementForces<8>(u, v, &eval);
+    }
     Gather(f_int);
   }
   return eval;
@@ -502,6 +537,10 @@ double TledModel::Erode(int e) {
   if (eroded_.empty()) eroded_.assign(num_elements_, 0);
   if (eroded_[e]) return 0;
   eroded_[e] = 1;
+  if (anp_) {
+    for (int a = 0; a < npe_; ++a)
+      SumGroupVolume(corner_group_[npe_ * static_cast<std::size_t>(e) + a]);
+  }
   const Eigen::Matrix3d f = DeformationGradient(e);
   if (!IsAdmissible(f)) return 0;
   const double w = material(e).model->Energy(f);
