@@ -8,6 +8,7 @@
 #include <limits>
 
 #include "core/format.h"
+#include "explicit/cube_root.h"
 #include "fem/hex8.h"
 #include "fem/tet4.h"
 
@@ -382,6 +383,8 @@ void TledModel::ElementForces(const Eigen::VectorXd& u, const Eigen::VectorXd& v
       p = m.neo_hookean ? m.bulk * (j - 1) : m.model->Volumetric(j).first;
     }
     // Bulk viscosity from tr D = (dF/dt : cof F) / J.
+    // J^(1/3): J^-2/3 for the deviatoric stress and the current length.
+    const double cbrt_j = CubeRoot(j);
     double q = 0;
     if (c1 > 0 || c2 > 0) {
       double rate = 0;
@@ -394,7 +397,7 @@ void TledModel::ElementForces(const Eigen::VectorXd& u, const Eigen::VectorXd& v
       }
       rate /= j;
       if (rate < 0) {
-        const double l = length_[e] * std::cbrt(j);
+        const double l = length_[e] * cbrt_j;
         q = m.density * l * (c2 * l * rate * rate - c1 * wave_speed_[mi] * rate);
       }
     }
@@ -402,7 +405,7 @@ void TledModel::ElementForces(const Eigen::VectorXd& u, const Eigen::VectorXd& v
     if (m.neo_hookean) {
       double i1 = 0;
       for (int k = 0; k < 9; ++k) i1 += fe[k] * fe[k];
-      const double a = m.mu / std::cbrt(j * j);
+      const double a = m.mu / (cbrt_j * cbrt_j);
       const double b = p - q - a * i1 / (3 * j);
       for (int k = 0; k < 9; ++k) pk[k] = a * fe[k] + b * cof[k];
     } else {
