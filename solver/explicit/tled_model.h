@@ -157,6 +157,12 @@ class TledModel {
   // kNpe: nodes per element (4 or 8), so that the corner loops unroll.
   template <int kNpe>
   void ElementForces(const Eigen::VectorXd& u, const Eigen::VectorXd& v, TledEvaluation* eval);
+  template <int kNpe>
+  void ElementForce(int e, const double* ud, const double* vd, double* hourglass, int* inverted);
+  static constexpr int kBlock = 8;
+  template <int kNpe>
+  bool NeoHookeanBlock(int e0, const double* ud, const double* vd, double* hourglass);
+  void HourglassForces(int e, const double* ud, double* force, double* hourglass) const;
   void Gather(Eigen::VectorXd* f_int) const;
   void SumGroupVolume(int g);
 
