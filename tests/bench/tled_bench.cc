@@ -15,6 +15,9 @@
 // smooth velocity that compresses about half the elements, so that every
 // path (nodal pressure, bulk viscosity, hourglass control) runs.
 //
+// parallel_check, measured after each row, says whether the machine gave
+// the benchmark both cores (ParallelCheck).
+//
 // Rates: mean_updates_per_s over all the row's evaluations, and
 // best_updates_per_s of the fastest one (from which the implied bandwidth and
 // its fraction of the triad's, itself the best of 20 passes).
@@ -170,6 +173,32 @@ double TriadBandwidth(int threads) {
   return cached[threads];
 }
 
+// The speed-up of a loop of pure arithmetic (independent multiply-add
+// chains, no memory traffic) from 1 to 2 threads, the best of 3 tries each:
+// about 2 when both cores were the benchmark's, about 1 when another process
+// held one (a shared machine), which the rows' 2-thread figures then show.
+double ParallelCheck() {
+  const auto seconds = [](int threads) {
+    omp_set_num_threads(threads);
+    double best = 1e30;
+    for (int rep = 0; rep < 3; ++rep) {
+      const auto t0 = std::chrono::steady_clock::now();
+      double sum = 0;
+#pragma omp parallel for schedule(static) reduction(+ : sum)
+      for (int chain = 0; chain < 8; ++chain) {
+        double x = 1 + chain;
+        for (int i = 0; i < 5'000'000; ++i) x = x * 1.0000001 + 1e-9;
+        sum += x;
+      }
+      benchmark::DoNotOptimize(sum);
+      best = std::min(best,
+                      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    }
+    return best;
+  };
+  return seconds(1) / seconds(2);
+}
+
 // Arguments: threads.
 void BM_Triad(benchmark::State& state) {
   const int threads = static_cast<int>(state.range(0));
@@ -211,6 +240,7 @@ void BM_InternalForce(benchmark::State& state) {
   state.counters["implied_GB_per_s"] = best * bytes / 1e9;
   state.counters["triad_GB_per_s"] = triad / 1e9;
   state.counters["of_triad"] = best * bytes / triad;
+  state.counters["parallel_check"] = ParallelCheck();
 }
 
 BENCHMARK(BM_Triad)->ArgName("threads")->Arg(1)->Arg(2)->Iterations(1)->UseRealTime();
