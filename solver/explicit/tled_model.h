@@ -44,9 +44,9 @@
 // node-to-corner list: no two threads ever write the same number, and the
 // sum is in the same order on any number of threads. One evaluation is one
 // parallel region of at most three passes over the elements: V0 J for the
-// nodal averages (TET4_ANP only), F, stress and forces in one (F is not
-// stored and read back), and the gather per node (docs/performance.md,
-// "Explicit dynamics").
+// nodal averages (TET4_ANP only); F, stress and forces in one (F is stored
+// for the accessors, not read back), neo-Hookean elements eight at a time;
+// and the gather per node (docs/performance.md, "Explicit dynamics").
 #pragma once
 
 #include <Eigen/Core>
@@ -152,11 +152,17 @@ class TledModel {
 
  private:
   TledModel() = default;
+  // The passes of InternalForce, each an `omp for` inside its one parallel
+  // region: V0 J per element (TET4_ANP), the nodal pressures, the element
+  // forces, the gather.
   void VolumeRatios(const Eigen::VectorXd& u);
   void AverageNodalPressure();
   // kNpe: nodes per element (4 or 8), so that the corner loops unroll.
   template <int kNpe>
   void ElementForces(const Eigen::VectorXd& u, const Eigen::VectorXd& v, TledEvaluation* eval);
+  // One element of any material, and kBlock neo-Hookean ones with the same
+  // arithmetic in the same order (false, having stored at most F and J, when
+  // the block holds another kind of element); tled_model_test runs both.
   template <int kNpe>
   void ElementForce(int e, const double* ud, const double* vd, double* hourglass, int* inverted);
   static constexpr int kBlock = 8;
@@ -164,6 +170,7 @@ class TledModel {
   bool NeoHookeanBlock(int e0, const double* ud, const double* vd, double* hourglass);
   void HourglassForces(int e, const double* ud, double* force, double* hourglass) const;
   void Gather(Eigen::VectorXd* f_int) const;
+  // group_volume_[g] from the elements not eroded.
   void SumGroupVolume(int g);
 
   const Mesh* mesh_ = nullptr;
