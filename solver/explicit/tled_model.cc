@@ -8,6 +8,7 @@
 #include <limits>
 
 #include "core/format.h"
+#include "explicit/cube_root.h"
 #include "fem/hex8.h"
 #include "fem/tet4.h"
 
@@ -175,11 +176,15 @@ Status TledModel::Build(const Mesh& mesh, std::vector<TledMaterial> materials,
     }
     t.group_start_.assign(1, 0);
     for (const std::vector<int>& g : members) {
-      t.group_corner_.insert(t.group_corner_.end(), g.begin(), g.end());
-      t.group_start_.push_back(static_cast<int>(t.group_corner_.size()));
+      for (int c : g) t.group_element_.push_back(c / npe);
+      t.group_start_.push_back(static_cast<int>(t.group_element_.size()));
     }
     t.group_pressure_.assign(members.size(), 0.0);
+    t.group_volume_.assign(members.size(), 0.0);
+    for (int g = 0; g < static_cast<int>(members.size()); ++g) t.SumGroupVolume(g);
+    t.volume_ratio_.assign(ne, 0.0);
   }
+  for (const TledMaterial& m : t.materials_) t.wave_speed_.push_back(m.WaveSpeed());
   // Relaxation history.
   t.history_start_.assign(ne, -1);
   std::size_t history = 0;
@@ -276,14 +281,24 @@ void TledModel::SetTimeStep(double dt) {
   }
 }
 
-void TledModel::ComputeDeformation(const Eigen::VectorXd& u) {
+void TledModel::SumGroupVolume(int g) {
+  double sum_v = 0;
+  for (int k = group_start_[g]; k < group_start_[g + 1]; ++k) {
+    const int e = group_element_[k];
+    if (!eroded(e)) sum_v += volume_[e];
+  }
+  group_volume_[g] = sum_v;
+}
+
+void TledModel::VolumeRatios(const Eigen::VectorXd& u) {
   const double* ud = u.data();
 #pragma omp for schedule(static)
   for (int e = 0; e < num_elements_; ++e) {
-    const int* nodes = &conn_[npe_ * static_cast<std::size_t>(e)];
-    const double* g = &grad_[3 * npe_ * static_cast<std::size_t>(e)];
+    // Four corners: F as in ElementForces<4>, in the same order.
+    const int* nodes = &conn_[4 * static_cast<std::size_t>(e)];
+    const double* g = &grad_[12 * static_cast<std::size_t>(e)];
     double f[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
-    for (int a = 0; a < npe_; ++a) {
+    for (int a = 0; a < 4; ++a) {
       const double* ua = ud + 3 * nodes[a];
       const double* ga = g + 3 * a;
       for (int i = 0; i < 3; ++i) {
@@ -292,10 +307,9 @@ void TledModel::ComputeDeformation(const Eigen::VectorXd& u) {
         f[3 * i + 2] += ua[i] * ga[2];
       }
     }
-    double* fe = &f_[9 * static_cast<std::size_t>(e)];
-    for (int k = 0; k < 9; ++k) fe[k] = f[k];
-    j_[e] = f[0] * (f[4] * f[8] - f[5] * f[7]) - f[1] * (f[3] * f[8] - f[5] * f[6]) +
-            f[2] * (f[3] * f[7] - f[4] * f[6]);
+    const double j = f[0] * (f[4] * f[8] - f[5] * f[7]) - f[1] * (f[3] * f[8] - f[5] * f[6]) +
+                     f[2] * (f[3] * f[7] - f[4] * f[6]);
+    volume_ratio_[e] = volume_[e] * j;
   }
 }
 
@@ -303,16 +317,15 @@ void TledModel::AverageNodalPressure() {
   const int groups = static_cast<int>(group_pressure_.size());
 #pragma omp for schedule(static)
   for (int g = 0; g < groups; ++g) {
-    double sum_vj = 0, sum_v = 0;
-    for (int k = group_start_[g]; k < group_start_[g + 1]; ++k) {
-      const int e = group_corner_[k] / npe_;
-      if (eroded(e)) continue;
-      sum_vj += volume_[e] * j_[e];
-      sum_v += volume_[e];
-    }
+    const double sum_v = group_volume_[g];
     if (sum_v == 0) {
       group_pressure_[g] = 0;
       continue;
+    }
+    double sum_vj = 0;
+    for (int k = group_start_[g]; k < group_start_[g + 1]; ++k) {
+      const int e = group_element_[k];
+      if (!eroded(e)) sum_vj += volume_ratio_[e];
     }
     const double j = sum_vj / sum_v;
     const TledMaterial& m = materials_[group_material_[g]];
@@ -320,132 +333,301 @@ void TledModel::AverageNodalPressure() {
   }
 }
 
+// The hourglass forces of brick e, added to its buffer `force`, and their
+// energy to *hourglass.
+void TledModel::HourglassForces(int e, const double* ud, double* force, double* hourglass) const {
+  const double* gamma = &gamma_[32 * static_cast<std::size_t>(e)];
+  double hq[4][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
+  for (int a = 0; a < 8; ++a) {
+    const double* ua = ud + 3 * conn_[8 * static_cast<std::size_t>(e) + a];
+    for (int alpha = 0; alpha < 4; ++alpha) {
+      for (int i = 0; i < 3; ++i) hq[alpha][i] += gamma[4 * a + alpha] * ua[i];
+    }
+  }
+  const double k = hourglass_k_[e];
+  double sq = 0;
+  for (int alpha = 0; alpha < 4; ++alpha) {
+    for (int i = 0; i < 3; ++i) sq += hq[alpha][i] * hq[alpha][i];
+  }
+  *hourglass += 0.5 * k * sq;
+  for (int a = 0; a < 8; ++a) {
+    for (int i = 0; i < 3; ++i) {
+      double sum = 0;
+      for (int alpha = 0; alpha < 4; ++alpha) sum += gamma[4 * a + alpha] * hq[alpha][i];
+      force[3 * a + i] += k * sum;
+    }
+  }
+}
+
+// One element, any material: F and J (stored), stress, pressure and the
+// force buffer; an eroded or inverted element gets no forces.
+template <int kNpe>
+void TledModel::ElementForce(int e, const double* ud, const double* vd, double* hourglass,
+                             int* inverted) {
+  const double c1 = options_.bulk_viscosity_linear, c2 = options_.bulk_viscosity_quadratic;
+  const int* nodes = &conn_[kNpe * static_cast<std::size_t>(e)];
+  const double* g = &grad_[3 * kNpe * static_cast<std::size_t>(e)];
+  // F = I + sum_a u_a (x) dN_a/dX, and J, stored for the accessors and
+  // the stable step; F is not read back.
+  double fe[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+  for (int a = 0; a < kNpe; ++a) {
+    const double* ua = ud + 3 * nodes[a];
+    const double* ga = g + 3 * a;
+    for (int i = 0; i < 3; ++i) {
+      fe[3 * i + 0] += ua[i] * ga[0];
+      fe[3 * i + 1] += ua[i] * ga[1];
+      fe[3 * i + 2] += ua[i] * ga[2];
+    }
+  }
+  const double j = fe[0] * (fe[4] * fe[8] - fe[5] * fe[7]) -
+                   fe[1] * (fe[3] * fe[8] - fe[5] * fe[6]) +
+                   fe[2] * (fe[3] * fe[7] - fe[4] * fe[6]);
+  std::copy(fe, fe + 9, &f_[9 * static_cast<std::size_t>(e)]);
+  j_[e] = j;
+  double* force = &force_[3 * kNpe * static_cast<std::size_t>(e)];
+  if (eroded(e) || !(j > 0) || !std::isfinite(j)) {
+    std::fill(force, force + 3 * kNpe, 0.0);
+    if (!eroded(e)) *inverted = std::min(*inverted, e);
+    return;
+  }
+  const int mi = material_of_[e];
+  const TledMaterial& m = materials_[mi];
+  double cof[9];
+  Cofactor(fe, cof);
+  // Pressure U'(J): the element's, or the mean of its corners' groups.
+  double p;
+  if (kNpe == 4 && anp_) {
+    p = 0;
+    for (int a = 0; a < kNpe; ++a) p += group_pressure_[corner_group_[kNpe * e + a]];
+    p /= kNpe;
+  } else {
+    p = m.neo_hookean ? m.bulk * (j - 1) : m.model->Volumetric(j).first;
+  }
+  // J^(1/3): J^-2/3 for the deviatoric stress and the current length.
+  const double cbrt_j = CubeRoot(j);
+  // Bulk viscosity from tr D = (dF/dt : cof F) / J.
+  double q = 0;
+  if (c1 > 0 || c2 > 0) {
+    double rate = 0;
+    for (int a = 0; a < kNpe; ++a) {
+      const double* va = vd + 3 * nodes[a];
+      const double* ga = g + 3 * a;
+      for (int i = 0; i < 3; ++i) {
+        rate += va[i] * (ga[0] * cof[3 * i] + ga[1] * cof[3 * i + 1] + ga[2] * cof[3 * i + 2]);
+      }
+    }
+    rate /= j;
+    if (rate < 0) {
+      const double l = length_[e] * cbrt_j;
+      q = m.density * l * (c2 * l * rate * rate - c1 * wave_speed_[mi] * rate);
+    }
+  }
+  double pk[9];  // first Piola-Kirchhoff stress, row-major
+  if (m.neo_hookean) {
+    double i1 = 0;
+    for (int k = 0; k < 9; ++k) i1 += fe[k] * fe[k];
+    const double a = m.mu / (cbrt_j * cbrt_j);
+    const double b = p - q - a * i1 / (3 * j);
+    for (int k = 0; k < 9; ++k) pk[k] = a * fe[k] + b * cof[k];
+  } else {
+    const Eigen::Matrix3d f = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(fe);
+    Vector6d s_iso;
+    m.model->Isochoric(f, nullptr, &s_iso, nullptr);
+    if (history_start_[e] >= 0) {
+      // S_visc = g_inf S_iso + sum_k H_k; H_k advances over the step.
+      const ViscousStep& step = steps_[mi];
+      double* hist = &history_[history_start_[e]];
+      Eigen::Map<Vector6d> s_old(hist);
+      const Vector6d ds = s_iso - s_old;
+      Vector6d s_visc = m.relaxation.LongTermFactor() * s_iso;
+      for (std::size_t k = 0; k < step.decay.size(); ++k) {
+        Eigen::Map<Vector6d> hk(hist + 6 * (k + 1));
+        hk = step.decay[k] * hk + step.weight[k] * ds;
+        s_visc += hk;
+      }
+      s_old = s_iso;
+      s_iso = s_visc;
+    }
+    const Eigen::Matrix3d p_iso = f * VoigtToSymmetric(s_iso);
+    for (int i = 0; i < 3; ++i) {
+      for (int k = 0; k < 3; ++k) pk[3 * i + k] = p_iso(i, k) + (p - q) * cof[3 * i + k];
+    }
+  }
+  // Pressure -tr(sigma)/3 = -(P : F) / (3 J), less the viscosity's q.
+  double pf = 0;
+  for (int k = 0; k < 9; ++k) pf += pk[k] * fe[k];
+  pressure_[e] = -pf / (3 * j) - q;
+  if (record_stress_) {
+    // sigma = P F^T / J + q I (the stress without the viscosity).
+    double s[9];
+    for (int i = 0; i < 3; ++i) {
+      for (int k = 0; k < 3; ++k) {
+        s[3 * i + k] = (pk[3 * i] * fe[3 * k] + pk[3 * i + 1] * fe[3 * k + 1] +
+                        pk[3 * i + 2] * fe[3 * k + 2]) /
+                       j;
+      }
+    }
+    double* out = &stress_[6 * static_cast<std::size_t>(e)];
+    out[0] = s[0] + q, out[1] = s[4] + q, out[2] = s[8] + q;
+    out[3] = s[5], out[4] = s[2], out[5] = s[1];
+  }
+  const double v0 = volume_[e];
+  for (int a = 0; a < kNpe; ++a) {
+    const double* ga = g + 3 * a;
+    for (int i = 0; i < 3; ++i) {
+      force[3 * a + i] = v0 * (pk[3 * i] * ga[0] + pk[3 * i + 1] * ga[1] + pk[3 * i + 2] * ga[2]);
+    }
+  }
+  if (kNpe == 8 && options_.hourglass > 0) HourglassForces(e, ud, force, hourglass);
+}
+
+// kBlock neo-Hookean elements from e0 at once, with the arithmetic of
+// ElementForce element by element in the same order, but each step over the
+// block in the inner loop: kBlock independent chains of operations where
+// one element alone is a chain of dependent ones (the sums of F, cof F : dF,
+// I1 and P : F, and the divisions), so that the core overlaps them and the
+// compiler may use vector registers. False, leaving the block to
+// ElementForce, when an element is eroded, not admissible (J <= 0) or of
+// another material.
+template <int kNpe>
+bool TledModel::NeoHookeanBlock(int e0, const double* ud, const double* vd, double* hourglass) {
+  constexpr int kB = kBlock;
+  double mu[kB], bulk[kB], density[kB], speed[kB];
+  for (int b = 0; b < kB; ++b) {
+    const int e = e0 + b;
+    const int mi = material_of_[e];
+    const TledMaterial& m = materials_[mi];
+    if (eroded(e) || !m.neo_hookean) return false;
+    mu[b] = m.mu, bulk[b] = m.bulk, density[b] = m.density, speed[b] = wave_speed_[mi];
+  }
+  const int* nodes = &conn_[kNpe * static_cast<std::size_t>(e0)];
+  const double* grad = &grad_[3 * kNpe * static_cast<std::size_t>(e0)];
+  double f[9][kB], cof[9][kB], j[kB];
+  for (int b = 0; b < kB; ++b) {
+    const int* nb = nodes + kNpe * b;
+    const double* g = grad + 3 * kNpe * b;
+    double fe[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+    for (int a = 0; a < kNpe; ++a) {
+      const double* ua = ud + 3 * nb[a];
+      const double* ga = g + 3 * a;
+      for (int i = 0; i < 3; ++i) {
+        fe[3 * i + 0] += ua[i] * ga[0];
+        fe[3 * i + 1] += ua[i] * ga[1];
+        fe[3 * i + 2] += ua[i] * ga[2];
+      }
+    }
+    for (int k = 0; k < 9; ++k) f[k][b] = fe[k];
+    std::copy(fe, fe + 9, &f_[9 * static_cast<std::size_t>(e0 + b)]);
+  }
+  for (int b = 0; b < kB; ++b) {
+    j[b] = f[0][b] * (f[4][b] * f[8][b] - f[5][b] * f[7][b]) -
+           f[1][b] * (f[3][b] * f[8][b] - f[5][b] * f[6][b]) +
+           f[2][b] * (f[3][b] * f[7][b] - f[4][b] * f[6][b]);
+    j_[e0 + b] = j[b];
+  }
+  for (int b = 0; b < kB; ++b) {
+    if (!(j[b] > 0) || !std::isfinite(j[b])) return false;
+  }
+  for (int b = 0; b < kB; ++b) {
+    cof[0][b] = f[4][b] * f[8][b] - f[5][b] * f[7][b];
+    cof[1][b] = f[5][b] * f[6][b] - f[3][b] * f[8][b];
+    cof[2][b] = f[3][b] * f[7][b] - f[4][b] * f[6][b];
+    cof[3][b] = f[2][b] * f[7][b] - f[1][b] * f[8][b];
+    cof[4][b] = f[0][b] * f[8][b] - f[2][b] * f[6][b];
+    cof[5][b] = f[1][b] * f[6][b] - f[0][b] * f[7][b];
+    cof[6][b] = f[1][b] * f[5][b] - f[2][b] * f[4][b];
+    cof[7][b] = f[2][b] * f[3][b] - f[0][b] * f[5][b];
+    cof[8][b] = f[0][b] * f[4][b] - f[1][b] * f[3][b];
+  }
+  double p[kB], cbrt_j[kB], q[kB];
+  if (kNpe == 4 && anp_) {
+    const int* groups = &corner_group_[kNpe * static_cast<std::size_t>(e0)];
+    for (int b = 0; b < kB; ++b) {
+      p[b] = 0;
+      for (int a = 0; a < kNpe; ++a) p[b] += group_pressure_[groups[kNpe * b + a]];
+      p[b] /= kNpe;
+    }
+  } else {
+    for (int b = 0; b < kB; ++b) p[b] = bulk[b] * (j[b] - 1);
+  }
+  for (int b = 0; b < kB; ++b) cbrt_j[b] = CubeRoot(j[b]);
+  const double c1 = options_.bulk_viscosity_linear, c2 = options_.bulk_viscosity_quadratic;
+  for (int b = 0; b < kB; ++b) q[b] = 0;
+  if (c1 > 0 || c2 > 0) {
+    double rate[kB];
+    for (int b = 0; b < kB; ++b) {
+      const int* nb = nodes + kNpe * b;
+      const double* g = grad + 3 * kNpe * b;
+      rate[b] = 0;
+      for (int a = 0; a < kNpe; ++a) {
+        const double* va = vd + 3 * nb[a];
+        const double* ga = g + 3 * a;
+        for (int i = 0; i < 3; ++i) {
+          rate[b] += va[i] * (ga[0] * cof[3 * i][b] + ga[1] * cof[3 * i + 1][b] +
+                              ga[2] * cof[3 * i + 2][b]);
+        }
+      }
+    }
+    for (int b = 0; b < kB; ++b) {
+      rate[b] /= j[b];
+      if (rate[b] < 0) {
+        const double l = length_[e0 + b] * cbrt_j[b];
+        q[b] = density[b] * l * (c2 * l * rate[b] * rate[b] - c1 * speed[b] * rate[b]);
+      }
+    }
+  }
+  // P = a F + (p - q - a I1 / (3 J)) cof F, a = mu J^-2/3.
+  double i1[kB], pk[9][kB], pf[kB];
+  for (int b = 0; b < kB; ++b) i1[b] = 0;
+  for (int k = 0; k < 9; ++k) {
+    for (int b = 0; b < kB; ++b) i1[b] += f[k][b] * f[k][b];
+  }
+  for (int b = 0; b < kB; ++b) {
+    const double a = mu[b] / (cbrt_j[b] * cbrt_j[b]);
+    const double c = p[b] - q[b] - a * i1[b] / (3 * j[b]);
+    for (int k = 0; k < 9; ++k) pk[k][b] = a * f[k][b] + c * cof[k][b];
+  }
+  for (int b = 0; b < kB; ++b) pf[b] = 0;
+  for (int k = 0; k < 9; ++k) {
+    for (int b = 0; b < kB; ++b) pf[b] += pk[k][b] * f[k][b];
+  }
+  for (int b = 0; b < kB; ++b) pressure_[e0 + b] = -pf[b] / (3 * j[b]) - q[b];
+  double* force = &force_[3 * kNpe * static_cast<std::size_t>(e0)];
+  for (int b = 0; b < kB; ++b) {
+    const double v0 = volume_[e0 + b];
+    const double* g = grad + 3 * kNpe * b;
+    for (int a = 0; a < kNpe; ++a) {
+      const double* ga = g + 3 * a;
+      for (int i = 0; i < 3; ++i) {
+        force[3 * kNpe * b + 3 * a + i] =
+            v0 * (pk[3 * i][b] * ga[0] + pk[3 * i + 1][b] * ga[1] + pk[3 * i + 2][b] * ga[2]);
+      }
+    }
+  }
+  if (kNpe == 8 && options_.hourglass > 0) {
+    for (int b = 0; b < kB; ++b) {
+      HourglassForces(e0 + b, ud, force + 3 * kNpe * b, hourglass);
+    }
+  }
+  return true;
+}
+
+template <int kNpe>
 void TledModel::ElementForces(const Eigen::VectorXd& u, const Eigen::VectorXd& v,
                               TledEvaluation* eval) {
-  const double c1 = options_.bulk_viscosity_linear, c2 = options_.bulk_viscosity_quadratic;
   const double* vd = v.data();
   const double* ud = u.data();
   // This thread's share; `eval` (shared) receives the sums.
   double hourglass = 0;
   int inverted = std::numeric_limits<int>::max();
+  const int blocks = (num_elements_ + kBlock - 1) / kBlock;
 #pragma omp for schedule(static) nowait
-  for (int e = 0; e < num_elements_; ++e) {
-    double* force = &force_[3 * npe_ * static_cast<std::size_t>(e)];
-    const double* fe = &f_[9 * static_cast<std::size_t>(e)];
-    const double j = j_[e];
-    if (eroded(e) || !(j > 0) || !std::isfinite(j)) {
-      std::fill(force, force + 3 * npe_, 0.0);
-      if (!eroded(e)) inverted = std::min(inverted, e);
-      continue;
-    }
-    const int* nodes = &conn_[npe_ * static_cast<std::size_t>(e)];
-    const double* g = &grad_[3 * npe_ * static_cast<std::size_t>(e)];
-    const TledMaterial& m = materials_[material_of_[e]];
-    double cof[9];
-    Cofactor(fe, cof);
-    // Pressure U'(J): the element's, or the mean of its corners' groups.
-    double p;
-    if (anp_) {
-      p = 0;
-      for (int a = 0; a < npe_; ++a) p += group_pressure_[corner_group_[npe_ * e + a]];
-      p /= npe_;
-    } else {
-      p = m.neo_hookean ? m.bulk * (j - 1) : m.model->Volumetric(j).first;
-    }
-    // Bulk viscosity from tr D = (dF/dt : cof F) / J.
-    double q = 0;
-    if (c1 > 0 || c2 > 0) {
-      double rate = 0;
-      for (int a = 0; a < npe_; ++a) {
-        const double* va = vd + 3 * nodes[a];
-        const double* ga = g + 3 * a;
-        for (int i = 0; i < 3; ++i) {
-          rate += va[i] * (ga[0] * cof[3 * i] + ga[1] * cof[3 * i + 1] + ga[2] * cof[3 * i + 2]);
-        }
-      }
-      rate /= j;
-      if (rate < 0) {
-        const double l = length_[e] * std::cbrt(j);
-        q = m.density * l * (c2 * l * rate * rate - c1 * m.WaveSpeed() * rate);
-      }
-    }
-    double pk[9];  // first Piola-Kirchhoff stress, row-major
-    if (m.neo_hookean) {
-      double i1 = 0;
-      for (int k = 0; k < 9; ++k) i1 += fe[k] * fe[k];
-      const double a = m.mu / std::cbrt(j * j);
-      const double b = p - q - a * i1 / (3 * j);
-      for (int k = 0; k < 9; ++k) pk[k] = a * fe[k] + b * cof[k];
-    } else {
-      const Eigen::Matrix3d f = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(fe);
-      Vector6d s_iso;
-      m.model->Isochoric(f, nullptr, &s_iso, nullptr);
-      if (history_start_[e] >= 0) {
-        // S_visc = g_inf S_iso + sum_k H_k; H_k advances over the step.
-        const ViscousStep& step = steps_[material_of_[e]];
-        double* hist = &history_[history_start_[e]];
-        Eigen::Map<Vector6d> s_old(hist);
-        const Vector6d ds = s_iso - s_old;
-        Vector6d s_visc = m.relaxation.LongTermFactor() * s_iso;
-        for (std::size_t k = 0; k < step.decay.size(); ++k) {
-          Eigen::Map<Vector6d> hk(hist + 6 * (k + 1));
-          hk = step.decay[k] * hk + step.weight[k] * ds;
-          s_visc += hk;
-        }
-        s_old = s_iso;
-        s_iso = s_visc;
-      }
-      const Eigen::Matrix3d p_iso = f * VoigtToSymmetric(s_iso);
-      for (int i = 0; i < 3; ++i) {
-        for (int k = 0; k < 3; ++k) pk[3 * i + k] = p_iso(i, k) + (p - q) * cof[3 * i + k];
-      }
-    }
-    // Pressure -tr(sigma)/3 = -(P : F) / (3 J), less the viscosity's q.
-    double pf = 0;
-    for (int k = 0; k < 9; ++k) pf += pk[k] * fe[k];
-    pressure_[e] = -pf / (3 * j) - q;
-    if (record_stress_) {
-      // sigma = P F^T / J + q I (the stress without the viscosity).
-      double s[9];
-      for (int i = 0; i < 3; ++i) {
-        for (int k = 0; k < 3; ++k) {
-          s[3 * i + k] = (pk[3 * i] * fe[3 * k] + pk[3 * i + 1] * fe[3 * k + 1] +
-                          pk[3 * i + 2] * fe[3 * k + 2]) /
-                         j;
-        }
-      }
-      double* out = &stress_[6 * static_cast<std::size_t>(e)];
-      out[0] = s[0] + q, out[1] = s[4] + q, out[2] = s[8] + q;
-      out[3] = s[5], out[4] = s[2], out[5] = s[1];
-    }
-    const double v0 = volume_[e];
-    for (int a = 0; a < npe_; ++a) {
-      const double* ga = g + 3 * a;
-      for (int i = 0; i < 3; ++i) {
-        force[3 * a + i] = v0 * (pk[3 * i] * ga[0] + pk[3 * i + 1] * ga[1] + pk[3 * i + 2] * ga[2]);
-      }
-    }
-    if (npe_ == 8 && options_.hourglass > 0) {
-      const double* gamma = &gamma_[32 * static_cast<std::size_t>(e)];
-      double hq[4][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
-      for (int a = 0; a < 8; ++a) {
-        const double* ua = ud + 3 * nodes[a];
-        for (int alpha = 0; alpha < 4; ++alpha) {
-          for (int i = 0; i < 3; ++i) hq[alpha][i] += gamma[4 * a + alpha] * ua[i];
-        }
-      }
-      const double k = hourglass_k_[e];
-      double sq = 0;
-      for (int alpha = 0; alpha < 4; ++alpha) {
-        for (int i = 0; i < 3; ++i) sq += hq[alpha][i] * hq[alpha][i];
-      }
-      hourglass += 0.5 * k * sq;
-      for (int a = 0; a < 8; ++a) {
-        for (int i = 0; i < 3; ++i) {
-          double sum = 0;
-          for (int alpha = 0; alpha < 4; ++alpha) sum += gamma[4 * a + alpha] * hq[alpha][i];
-          force[3 * a + i] += k * sum;
-        }
+  for (int block = 0; block < blocks; ++block) {
+    const int e0 = block * kBlock;
+    if (record_stress_ || e0 + kBlock > num_elements_ ||
+        !NeoHookeanBlock<kNpe>(e0, ud, vd, &hourglass)) {
+      for (int e = e0; e < std::min(e0 + kBlock, num_elements_); ++e) {
+        ElementForce<kNpe>(e, ud, vd, &hourglass, &inverted);
       }
     }
   }
@@ -480,9 +662,15 @@ TledEvaluation TledModel::InternalForce(const Eigen::VectorXd& u, const Eigen::V
   f_int->resize(3 * static_cast<Eigen::Index>(num_nodes_));
 #pragma omp parallel
   {
-    ComputeDeformation(u);
-    if (anp_) AverageNodalPressure();
-    ElementForces(u, v, &eval);
+    if (anp_) {
+      VolumeRatios(u);
+      AverageNodalPressure();
+    }
+    if (npe_ == 4) {
+      ElementForces<4>(u, v, &eval);
+    } else {
+      ElementForces<8>(u, v, &eval);
+    }
     Gather(f_int);
   }
   return eval;
@@ -501,6 +689,11 @@ Vector6d TledModel::CauchyStress(int e) const {
 void TledModel::Erode(int e) {
   if (eroded_.empty()) eroded_.assign(num_elements_, 0);
   eroded_[e] = 1;
+  if (anp_) {
+    for (int a = 0; a < npe_; ++a) {
+      SumGroupVolume(corner_group_[npe_ * static_cast<std::size_t>(e) + a]);
+    }
+  }
 }
 
 double TledModel::StoredEnergy() const {
@@ -521,7 +714,7 @@ double TledModel::StoredEnergy() const {
   for (int g = 0; g < groups; ++g) {
     double sum_vj = 0, sum_v = 0;
     for (int k = group_start_[g]; k < group_start_[g + 1]; ++k) {
-      const int e = group_corner_[k] / npe_;
+      const int e = group_element_[k];
       if (eroded(e)) continue;
       sum_vj += volume_[e] * j_[e];
       sum_v += volume_[e];

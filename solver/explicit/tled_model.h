@@ -42,7 +42,11 @@
 // gradients, volume, material), written element by element into a force
 // buffer of the element's own, then gathered per node through a
 // node-to-corner list: no two threads ever write the same number, and the
-// sum is in the same order on any number of threads.
+// sum is in the same order on any number of threads. One evaluation is one
+// parallel region of at most three passes over the elements: V0 J for the
+// nodal averages (TET4_ANP only); F, stress and forces in one (F is stored
+// for the accessors, not read back), neo-Hookean elements eight at a time;
+// and the gather per node (docs/performance.md, "Explicit dynamics").
 #pragma once
 
 #include <Eigen/Core>
@@ -159,15 +163,32 @@ class TledModel {
 
  private:
   TledModel() = default;
-  void ComputeDeformation(const Eigen::VectorXd& u);
+  // The passes of InternalForce, each an `omp for` inside its one parallel
+  // region: V0 J per element (TET4_ANP), the nodal pressures, the element
+  // forces, the gather.
+  void VolumeRatios(const Eigen::VectorXd& u);
   void AverageNodalPressure();
+  // kNpe: nodes per element (4 or 8), so that the corner loops unroll.
+  template <int kNpe>
   void ElementForces(const Eigen::VectorXd& u, const Eigen::VectorXd& v, TledEvaluation* eval);
+  // One element of any material, and kBlock neo-Hookean ones with the same
+  // arithmetic in the same order (false, having stored at most F and J, when
+  // the block holds another kind of element); tled_model_test runs both.
+  template <int kNpe>
+  void ElementForce(int e, const double* ud, const double* vd, double* hourglass, int* inverted);
+  static constexpr int kBlock = 8;
+  template <int kNpe>
+  bool NeoHookeanBlock(int e0, const double* ud, const double* vd, double* hourglass);
+  void HourglassForces(int e, const double* ud, double* force, double* hourglass) const;
   void Gather(Eigen::VectorXd* f_int) const;
+  // group_volume_[g] from the elements not eroded.
+  void SumGroupVolume(int g);
 
   const Mesh* mesh_ = nullptr;
   int num_elements_ = 0, num_nodes_ = 0, npe_ = 4;
   TledOptions options_;
   std::vector<TledMaterial> materials_;
+  std::vector<double> wave_speed_;  // per material, TledMaterial::WaveSpeed() [m/s]
   std::vector<int> material_of_;
   std::vector<int> conn_;            // npe per element
   std::vector<double> grad_;         // 3 npe per element: dN_a/dX_j at a * 3 + j [1/m]
@@ -178,12 +199,15 @@ class TledModel {
   Eigen::VectorXd mass_;
   std::vector<int> node_start_, node_corner_;
   // Average nodal pressure: the group (node, material) of each corner, and
-  // each group's corners (CSR) with their volume weights.
+  // each group's elements (CSR) with the sum of their V0 (the elements not
+  // eroded).
   bool anp_ = false;
   std::vector<int> corner_group_;
-  std::vector<int> group_start_, group_corner_;
+  std::vector<int> group_start_, group_element_;
+  std::vector<double> group_volume_;  // sum V0 [m^3]
   std::vector<int> group_material_;
   std::vector<double> group_pressure_;
+  std::vector<double> volume_ratio_;  // V0 J per element, from the first pass [m^3]
   // Per element, from the last evaluation.
   std::vector<double> f_;         // 9 per element
   std::vector<double> j_;         // det F
