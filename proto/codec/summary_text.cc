@@ -116,6 +116,11 @@ std::string ExplicitRunLines(const v1::Results& r) {
     out += Format("    eroded           %d elements, %.4g kg\n", e.eroded_elements(),
                   e.eroded_mass_kg());
   }
+  if (e.mass_scaled_elements() > 0) {
+    out += Format("    mass scaling     %d elements, %.3g kg added to %.4g kg (%.3g %%)\n",
+                  e.mass_scaled_elements(), e.added_mass_kg(), e.model_mass_kg(),
+                  e.model_mass_kg() > 0 ? 100 * e.added_mass_kg() / e.model_mass_kg() : 0.0);
+  }
   if (e.contact_stiffness_max_n_per_m() > 0) {
     out += Format("    impactor penalty %.3g .. %.3g N/m per node\n",
                   e.contact_stiffness_min_n_per_m(), e.contact_stiffness_max_n_per_m());

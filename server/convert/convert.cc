@@ -135,6 +135,9 @@ void ExplicitRunToProto(const ExplicitSummary& run, v1::Results* results) {
   e->set_contact_stiffness_min_n_per_m(run.contact_stiffness_min_n_per_m);
   e->set_contact_stiffness_max_n_per_m(run.contact_stiffness_max_n_per_m);
   e->set_element_updates_per_s(run.element_updates_per_s);
+  e->set_mass_scaled_elements(run.mass_scaled_elements);
+  e->set_added_mass_kg(run.added_mass_kg);
+  e->set_model_mass_kg(run.model_mass_kg);
   e->set_converged(run.converged);
   e->set_relative_residual(run.relative_residual);
 }
@@ -450,6 +453,7 @@ Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec) {
   e.output_interval_s = explicit_dynamics.output_interval_s();
   e.erosion_strain = explicit_dynamics.erosion_strain();
   e.relaxation_tolerance = explicit_dynamics.relaxation_tolerance();
+  e.mass_scaling_step_s = explicit_dynamics.mass_scaling_step_s();
 
   const auto& fields = scene.outputs().fields();
   if (!fields.empty()) {

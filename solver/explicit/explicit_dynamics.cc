@@ -76,6 +76,18 @@ Status SolveExplicitDynamic(const SceneSpec& scene, const Model& model, PhaseClo
   const TimeCurve curve(scene.analysis.time);
   const double end_time = curve.end_s();
   const double factor = setup.time_step_factor;
+  ExplicitSummary& run = summary.explicit_run;
+  if (options.mass_scaling_step_s > 0) {
+    const TledModel::MassScaling scaled = tled.ScaleMass(options.mass_scaling_step_s / factor);
+    run.mass_scaled_elements = scaled.elements;
+    run.added_mass_kg = scaled.added_mass;
+    run.model_mass_kg = scaled.model_mass;
+    summary.notes.push_back(Format(
+        "mass scaling: %d elements whose stable step was below %.3g us took mass, %.3g kg added "
+        "to %.4g kg (%.3g %%)",
+        scaled.elements, options.mass_scaling_step_s / factor * 1e6, scaled.added_mass,
+        scaled.model_mass, 100 * scaled.added_mass / scaled.model_mass));
+  }
   int controlling = -1;
   double length = 0;
   const double stable0 = tled.StableTimeStep(nullptr, nullptr, &controlling, &length);
@@ -86,7 +98,6 @@ Status SolveExplicitDynamic(const SceneSpec& scene, const Model& model, PhaseClo
   }
   double dt = factor * stable0;
   tled.SetTimeStep(dt);
-  ExplicitSummary& run = summary.explicit_run;
   run.ran = true;
   run.stable_step_s = stable0;
   run.first_step_s = dt;

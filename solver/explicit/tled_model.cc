@@ -238,7 +238,7 @@ double TledModel::StableTimeStep(const Eigen::VectorXd* u, const Eigen::VectorXd
           l = CharacteristicLength<8>(x, j_[e] * volume_[e]);
         }
       }
-      const double c = material(e).WaveSpeed();
+      const double c = material(e).WaveSpeed() * (speed_scale_.empty() ? 1.0 : speed_scale_[e]);
       double q = 0;
       if (v != nullptr) {
         // tr D = dJ/dt / J = (dF/dt : cof F) / J.
@@ -270,6 +270,25 @@ double TledModel::StableTimeStep(const Eigen::VectorXd* u, const Eigen::VectorXd
   if (element != nullptr) *element = best_e;
   if (length != nullptr) *length = best_l;
   return best;
+}
+
+TledModel::MassScaling TledModel::ScaleMass(double min_stable_step) {
+  MassScaling out;
+  for (int e = 0; e < num_elements_; ++e) out.model_mass += material(e).density * volume_[e];
+  speed_scale_.assign(num_elements_, 1.0);
+  for (int e = 0; e < num_elements_; ++e) {
+    const double step = length_[e] / material(e).WaveSpeed();
+    if (step >= min_stable_step) continue;
+    // rho' = rho (min / step)^2 makes l / c' = min.
+    const double ratio = min_stable_step / step;
+    const double added = material(e).density * volume_[e] * (ratio * ratio - 1);
+    for (int a = 0; a < npe_; ++a)
+      mass_(conn_[npe_ * static_cast<std::size_t>(e) + a]) += added / npe_;
+    speed_scale_[e] = 1 / ratio;
+    out.added_mass += added;
+    ++out.elements;
+  }
+  return out;
 }
 
 void TledModel::SetTimeStep(double dt) {

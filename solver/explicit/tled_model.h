@@ -122,6 +122,17 @@ class TledModel {
   double StableTimeStep(const Eigen::VectorXd* u, const Eigen::VectorXd* v, int* element,
                         double* length) const;
 
+  // Selective mass scaling: every element whose stable step l / c is below
+  // `min_stable_step` [s] takes the density that makes it that step, its
+  // added mass shared among its corners; StableTimeStep then sees the
+  // scaled wave speeds (the bulk viscosity keeps the true density).
+  struct MassScaling {
+    int elements = 0;
+    double added_mass = 0;  // [kg]
+    double model_mass = 0;  // before [kg]
+  };
+  MassScaling ScaleMass(double min_stable_step);
+
   // Sets the step length used by the relaxation's internal variables;
   // call before the first evaluation and whenever the step changes.
   void SetTimeStep(double dt);
@@ -197,6 +208,7 @@ class TledModel {
   std::vector<double> gamma_;        // hexahedra: 32 per element, gamma_{a alpha} at a * 4 + alpha
   std::vector<double> hourglass_k_;  // hexahedra [N/m]
   Eigen::VectorXd mass_;
+  std::vector<double> speed_scale_;  // per element c' / c after mass scaling (empty: 1)
   std::vector<int> node_start_, node_corner_;
   // Average nodal pressure: the group (node, material) of each corner, and
   // each group's elements (CSR) with the sum of their V0 (the elements not

@@ -75,6 +75,10 @@ std::string OutOfRange(const std::string& name, double value, const TimeSpec& ti
     if (value < 0) {
       return "must be a non-negative strain (0: no erosion), got " + Number(value);
     }
+  } else if (name == "mass_scaling_step_s") {
+    if (value < 0) {
+      return "must be a non-negative number of s (0: no mass scaling), got " + Number(value);
+    }
   } else if (name == "relaxation_tolerance") {
     if (value < 0 || value >= 0.1) {
       return "must lie in [0, 0.1) (0 for the default 1e-4), got " + Number(value);
@@ -97,6 +101,7 @@ Status ValidateControls(const AnalysisSpec& analysis) {
       {"hourglass_coefficient", e.hourglass_coefficient != 0, e.hourglass_coefficient, true, true},
       {"output_interval_s", e.output_interval_s != 0, e.output_interval_s, true, false},
       {"erosion_strain", e.erosion_strain != 0, e.erosion_strain, true, false},
+      {"mass_scaling_step_s", e.mass_scaling_step_s != 0, e.mass_scaling_step_s, true, false},
       {"relaxation_tolerance", e.relaxation_tolerance != 0, e.relaxation_tolerance, false, true},
   };
   for (const ExplicitField& f : fields) {

@@ -431,6 +431,11 @@ struct ExplicitSpec {
   // Energy balance, history.csv rows and result frames every this many
   // seconds; 0: end_time_s / 100.
   double output_interval_s = 0;
+  // Selective mass scaling: an element whose stable step is below this
+  // [s] takes the density that makes its step this one (a sliver of an
+  // atlas mesh would otherwise set the step of the whole run); the mass
+  // added is reported. 0: none, else > 0. EXPLICIT_DYNAMIC only.
+  double mass_scaling_step_s = 0;
   // Element erosion: an element whose largest principal Green-Lagrange
   // strain exceeds this is removed (its mass and the kinetic and internal
   // energy it held are accounted for); 0: none, else > 0.

@@ -177,6 +177,11 @@ struct ExplicitSummary {
   double max_energy_error = 0;
   int eroded_elements = 0;
   double eroded_mass_kg = 0;
+  // Selective mass scaling: elements given mass, the mass added and the
+  // model's mass before it [kg].
+  int mass_scaled_elements = 0;
+  double added_mass_kg = 0;
+  double model_mass_kg = 0;
   // Penalty stiffness of the impactors, per node [N/m]: the smallest and
   // largest over the contact nodes.
   double contact_stiffness_min_n_per_m = 0;
