@@ -42,6 +42,7 @@ struct Energies {
   Work internal, external, damping, contact_nodes;
   double kinetic = 0, hourglass = 0, eroded_elements = 0, orphan_kinetic = 0;
   double initial_kinetic = 0;  // of the velocities given at t = 0
+  double mass_scaling = 0;     // kinetic energy of mass added during the run
   double body_work = 0;        // impactors' work on the tissue
   double Internal() const { return internal.total - hourglass - eroded_elements; }
   double Contact() const { return body_work - contact_nodes.total; }
@@ -49,7 +50,7 @@ struct Energies {
   double Eroded() const { return eroded_elements + orphan_kinetic; }
   double Error() const {
     return std::abs(kinetic + Internal() + hourglass + Contact() + damping.total + Eroded() -
-                    External() - initial_kinetic);
+                    External() - initial_kinetic - mass_scaling);
   }
   double Scale() const {
     return std::max({std::abs(External()), kinetic, std::abs(internal.total)});
@@ -273,8 +274,16 @@ Status SolveExplicitDynamic(const SceneSpec& scene, const Model& model, PhaseClo
     if (step > 0 && step % kStepCheckInterval == 0) {
       int e = -1;
       double l = 0;
+      if (options.mass_scaling_step_s > 0) {
+        // Crushed elements take mass rather than shrink the step.
+        const TledModel::MassScaling scaled =
+            tled.RescaleMass(u, v, options.mass_scaling_step_s / factor);
+        run.mass_scaled_elements += scaled.elements;
+        run.added_mass_kg += scaled.added_mass;
+        energy.mass_scaling += scaled.added_kinetic;
+      }
       const double stable = tled.StableTimeStep(&u, &v, &e, &l);
-      if (factor * stable < dt) {
+      if (factor * stable < dt * (1 - 1e-12)) {
         dt = factor * stable;
         tled.SetTimeStep(dt);
         ++run.step_reductions;

@@ -205,12 +205,56 @@ Status TledModel::Build(const Mesh& mesh, std::vector<TledMaterial> materials,
   return Status::Ok();
 }
 
+double TledModel::ElementStableStep(int e, const Eigen::VectorXd* u, const Eigen::VectorXd* v,
+                                    double* length) const {
+  const double c1 = options_.bulk_viscosity_linear, c2 = options_.bulk_viscosity_quadratic;
+  double l = length_[e];
+  if (u != nullptr) {
+    // The current length, from the current corners.
+    if (npe_ == 4) {
+      Eigen::Matrix<double, 4, 3> x;
+      for (int a = 0; a < 4; ++a) {
+        const int n = conn_[4 * e + a];
+        x.row(a) = mesh_->nodes.row(n) + u->segment<3>(3 * n).transpose();
+      }
+      l = CharacteristicLength<4>(x, j_[e] * volume_[e]);
+    } else {
+      Eigen::Matrix<double, 8, 3> x;
+      for (int a = 0; a < 8; ++a) {
+        const int n = conn_[8 * e + a];
+        x.row(a) = mesh_->nodes.row(n) + u->segment<3>(3 * n).transpose();
+      }
+      l = CharacteristicLength<8>(x, j_[e] * volume_[e]);
+    }
+  }
+  const double c = material(e).WaveSpeed() * (speed_scale_.empty() ? 1.0 : speed_scale_[e]);
+  double q = 0;
+  if (v != nullptr) {
+    // tr D = dJ/dt / J = (dF/dt : cof F) / J.
+    const double* g = &grad_[3 * npe_ * static_cast<std::size_t>(e)];
+    double fdot[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
+    for (int a = 0; a < npe_; ++a) {
+      const int n = conn_[npe_ * e + a];
+      for (int i = 0; i < 3; ++i) {
+        for (int j = 0; j < 3; ++j) fdot[3 * i + j] += (*v)(3 * n + i) * g[3 * a + j];
+      }
+    }
+    double cof[9];
+    Cofactor(&f_[9 * static_cast<std::size_t>(e)], cof);
+    double rate = 0;
+    for (int k = 0; k < 9; ++k) rate += fdot[k] * cof[k];
+    rate /= j_[e];
+    if (rate < 0) q = c1 * c + c2 * l * -rate;
+  }
+  *length = l;
+  return q > 0 ? l / (q + std::sqrt(q * q + c * c)) : l / c;
+}
+
 double TledModel::StableTimeStep(const Eigen::VectorXd* u, const Eigen::VectorXd* v, int* element,
                                  double* length) const {
   double best = std::numeric_limits<double>::infinity();
   int best_e = -1;
   double best_l = 0;
-  const double c1 = options_.bulk_viscosity_linear, c2 = options_.bulk_viscosity_quadratic;
 #pragma omp parallel
   {
     double local = std::numeric_limits<double>::infinity();
@@ -219,45 +263,8 @@ double TledModel::StableTimeStep(const Eigen::VectorXd* u, const Eigen::VectorXd
 #pragma omp for schedule(static) nowait
     for (int e = 0; e < num_elements_; ++e) {
       if (eroded(e)) continue;
-      double l = length_[e];
-      if (u != nullptr) {
-        // The current length, from the current corners.
-        if (npe_ == 4) {
-          Eigen::Matrix<double, 4, 3> x;
-          for (int a = 0; a < 4; ++a) {
-            const int n = conn_[4 * e + a];
-            x.row(a) = mesh_->nodes.row(n) + u->segment<3>(3 * n).transpose();
-          }
-          l = CharacteristicLength<4>(x, j_[e] * volume_[e]);
-        } else {
-          Eigen::Matrix<double, 8, 3> x;
-          for (int a = 0; a < 8; ++a) {
-            const int n = conn_[8 * e + a];
-            x.row(a) = mesh_->nodes.row(n) + u->segment<3>(3 * n).transpose();
-          }
-          l = CharacteristicLength<8>(x, j_[e] * volume_[e]);
-        }
-      }
-      const double c = material(e).WaveSpeed() * (speed_scale_.empty() ? 1.0 : speed_scale_[e]);
-      double q = 0;
-      if (v != nullptr) {
-        // tr D = dJ/dt / J = (dF/dt : cof F) / J.
-        const double* g = &grad_[3 * npe_ * static_cast<std::size_t>(e)];
-        double fdot[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
-        for (int a = 0; a < npe_; ++a) {
-          const int n = conn_[npe_ * e + a];
-          for (int i = 0; i < 3; ++i) {
-            for (int j = 0; j < 3; ++j) fdot[3 * i + j] += (*v)(3 * n + i) * g[3 * a + j];
-          }
-        }
-        double cof[9];
-        Cofactor(&f_[9 * static_cast<std::size_t>(e)], cof);
-        double rate = 0;
-        for (int k = 0; k < 9; ++k) rate += fdot[k] * cof[k];
-        rate /= j_[e];
-        if (rate < 0) q = c1 * c + c2 * l * -rate;
-      }
-      const double dt = q > 0 ? l / (q + std::sqrt(q * q + c * c)) : l / c;
+      double l = 0;
+      const double dt = ElementStableStep(e, u, v, &l);
       if (!(dt >= local)) {
         local = dt, local_e = e, local_l = l;
       }
@@ -270,6 +277,38 @@ double TledModel::StableTimeStep(const Eigen::VectorXd* u, const Eigen::VectorXd
   if (element != nullptr) *element = best_e;
   if (length != nullptr) *length = best_l;
   return best;
+}
+
+TledModel::MassScaling TledModel::RescaleMass(const Eigen::VectorXd& u, const Eigen::VectorXd& v,
+                                              double min_stable_step) {
+  MassScaling out;
+  if (speed_scale_.empty()) speed_scale_.assign(num_elements_, 1.0);
+  std::vector<double> steps(num_elements_, std::numeric_limits<double>::infinity());
+#pragma omp parallel for schedule(static)
+  for (int e = 0; e < num_elements_; ++e) {
+    if (eroded(e)) continue;
+    double l = 0;
+    steps[e] = ElementStableStep(e, &u, &v, &l);
+  }
+  for (int e = 0; e < num_elements_; ++e) {
+    // A thousandth of slack, so that an element does not take mass for
+    // every rounding of its step.
+    if (!(steps[e] < min_stable_step * (1 - 1e-3))) continue;
+    // The step scales as 1 / c, so as sqrt(rho): rho' = rho (min / step)^2
+    // (the bulk viscosity's share of the step taken along, a little more).
+    const double ratio = min_stable_step / steps[e];
+    const double mass = material(e).density * volume_[e] / (speed_scale_[e] * speed_scale_[e]);
+    const double added = mass * (ratio * ratio - 1);
+    for (int a = 0; a < npe_; ++a) {
+      const int n = conn_[npe_ * static_cast<std::size_t>(e) + a];
+      mass_(n) += added / npe_;
+      out.added_kinetic += 0.5 * added / npe_ * v.segment<3>(3 * n).squaredNorm();
+    }
+    speed_scale_[e] /= ratio;
+    out.added_mass += added;
+    ++out.elements;
+  }
+  return out;
 }
 
 TledModel::MassScaling TledModel::ScaleMass(double min_stable_step) {

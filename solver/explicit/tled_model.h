@@ -128,10 +128,17 @@ class TledModel {
   // scaled wave speeds (the bulk viscosity keeps the true density).
   struct MassScaling {
     int elements = 0;
-    double added_mass = 0;  // [kg]
-    double model_mass = 0;  // before [kg]
+    double added_mass = 0;     // [kg]
+    double model_mass = 0;     // before [kg]
+    double added_kinetic = 0;  // RescaleMass: 1/2 dm |v|^2 of the mass added [J]
   };
   MassScaling ScaleMass(double min_stable_step);
+  // The same during a run, at displacement u and velocity v: elements
+  // crushed below the step (their current length shrinks, and the bulk
+  // viscosity shortens it further) take mass instead of shrinking the step
+  // of the whole run, as LS-DYNA's DT2MS does.
+  MassScaling RescaleMass(const Eigen::VectorXd& u, const Eigen::VectorXd& v,
+                          double min_stable_step);
 
   // Sets the step length used by the relaxation's internal variables;
   // call before the first evaluation and whenever the step changes.
@@ -174,6 +181,10 @@ class TledModel {
 
  private:
   TledModel() = default;
+  // Element e's stable step at (u, v) (reference when null); *length its
+  // characteristic length.
+  double ElementStableStep(int e, const Eigen::VectorXd* u, const Eigen::VectorXd* v,
+                           double* length) const;
   // The passes of InternalForce, each an `omp for` inside its one parallel
   // region: V0 J per element (TET4_ANP), the nodal pressures, the element
   // forces, the gather.

@@ -153,17 +153,25 @@ TEST(ExplicitWave, MassScalingSlowsTheScaledElementsWave) {
   SceneSpec scene = Column(ElementType::kHex8, 0.5, 100e-6);
   scene.analysis.explicit_dynamics.mass_scaling_step_s =
       2 * plain.summary.explicit_run.first_step_s;
+  // A gentle piston and no linear bulk viscosity: the elements' steps stay
+  // where the scaling put them (a compressing element's step shrinks, and
+  // during the run it would take more mass, as a crushed one should).
+  scene.boundary_conditions[0].velocity_m_per_s[2] = 1;
+  scene.analysis.explicit_dynamics.bulk_viscosity_linear = 0;
   Solution solution;
   const Status status = SolveScene(scene, SolveOptions(), &solution);
   ASSERT_TRUE(status.ok()) << status.message();
   const ExplicitSummary& run = solution.summary.explicit_run;
   EXPECT_NEAR(run.first_step_s / plain.summary.explicit_run.first_step_s, 2, 1e-9);
-  EXPECT_EQ(run.mass_scaled_elements, static_cast<int>(solution.summary.elements));
-  EXPECT_NEAR(run.added_mass_kg / run.model_mass_kg, 3, 1e-9);
+  // Every element at the start; during the run the elements the front
+  // compresses take a little more (their steps shrink by the compression
+  // and the bulk viscosity).
+  EXPECT_GE(run.mass_scaled_elements, static_cast<int>(solution.summary.elements));
+  EXPECT_NEAR(run.added_mass_kg / run.model_mass_kg, 3, 0.03);
   const int p20 = Column(solution, "z20 pressure [Pa]"),
             p60 = Column(solution, "z60 pressure [Pa]");
   // Half the speed; the plateau doubles, rho' c' v = 4 rho (c / 2) v.
-  const double plateau = 2 * kDensity * WaveSpeed() * kPiston;
+  const double plateau = 2 * kDensity * WaveSpeed() * 1.0;
   const double speed =
       40e-3 / (Arrival(solution, p60, plateau / 2) - Arrival(solution, p20, plateau / 2));
   std::printf("mass-scaled column: %d elements, %.3g kg added to %.3g kg, wave speed %.2f m/s\n",
