@@ -73,7 +73,11 @@ Status SolveScene(const SceneSpec& scene, const SolveOptions& options, Solution*
   // threads (its compile-time default); on fewer cores that oversubscribes
   // and the factorisations of a Newton solve spend their time waking
   // threads. Dynamic teams let the runtime give it what the machine has.
-  omp_set_dynamic(1);
+  // The explicit analyses have no factorisation, and a dynamic team would
+  // shrink to one thread as soon as the solve itself loads the machine.
+  const bool explicit_engine = scene.analysis.type == AnalysisSpec::Type::kExplicitDynamic ||
+                               scene.analysis.type == AnalysisSpec::Type::kDynamicRelaxation;
+  omp_set_dynamic(explicit_engine ? 0 : 1);
   *solution = Solution();
   Summary& summary = solution->summary;
   PhaseClock clock(options, &summary.phases);

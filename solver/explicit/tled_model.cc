@@ -182,7 +182,7 @@ Status TledModel::Build(const Mesh& mesh, std::vector<TledMaterial> materials,
     t.group_pressure_.assign(members.size(), 0.0);
     t.group_volume_.assign(members.size(), 0.0);
     for (int g = 0; g < static_cast<int>(members.size()); ++g) t.SumGroupVolume(g);
-    t.volume_ratio_.assign(ne, 0.0);
+    t.volume_ratio_ = t.volume_;  // J = 1 until evaluated
   }
   for (const TledMaterial& m : t.materials_) t.wave_speed_.push_back(m.WaveSpeed());
   // Relaxation history.
@@ -352,6 +352,8 @@ void TledModel::VolumeRatios(const Eigen::VectorXd& u) {
   const double* ud = u.data();
 #pragma omp for schedule(static)
   for (int e = 0; e < num_elements_; ++e) {
+    // An eroded element keeps the V0 J it had when it went (see Erode).
+    if (eroded(e)) continue;
     // Four corners: F as in ElementForces<4>, in the same order.
     const int* nodes = &conn_[4 * static_cast<std::size_t>(e)];
     const double* g = &grad_[12 * static_cast<std::size_t>(e)];
@@ -383,7 +385,7 @@ void TledModel::AverageNodalPressure() {
     double sum_vj = 0;
     for (int k = group_start_[g]; k < group_start_[g + 1]; ++k) {
       const int e = group_element_[k];
-      if (!eroded(e)) sum_vj += volume_ratio_[e];
+      sum_vj += volume_ratio_[e];
     }
     const double j = sum_vj / sum_v;
     const TledMaterial& m = materials_[group_material_[g]];
@@ -747,11 +749,6 @@ Vector6d TledModel::CauchyStress(int e) const {
 void TledModel::Erode(int e) {
   if (eroded_.empty()) eroded_.assign(num_elements_, 0);
   eroded_[e] = 1;
-  if (anp_) {
-    for (int a = 0; a < npe_; ++a) {
-      SumGroupVolume(corner_group_[npe_ * static_cast<std::size_t>(e) + a]);
-    }
-  }
 }
 
 double TledModel::StoredEnergy() const {
@@ -773,8 +770,7 @@ double TledModel::StoredEnergy() const {
     double sum_vj = 0, sum_v = 0;
     for (int k = group_start_[g]; k < group_start_[g + 1]; ++k) {
       const int e = group_element_[k];
-      if (eroded(e)) continue;
-      sum_vj += volume_[e] * j_[e];
+      sum_vj += volume_ratio_[e];  // an eroded element's, frozen
       sum_v += volume_[e];
     }
     if (sum_v == 0) continue;

@@ -160,15 +160,20 @@ class TledModel {
   void RecordStress(bool on) { record_stress_ = on; }
   Vector6d CauchyStress(int e) const;
 
-  // Erosion: removes element e from the force evaluation.
+  // Erosion: removes element e from the force evaluation. With average
+  // nodal pressure its V0 J stays in its corners' nodal averages, frozen
+  // at its value when it went: removing it outright would move their J_n
+  // at once, and with a bulk modulus a million times the shear modulus
+  // that jump stores far more energy than the impact brought in. The
+  // nodes thus keep the element's last volume as a filler of fixed size.
   void Erode(int e);
-  // The strain energy stored at the last evaluation's deformation, the
-  // eroded elements left out [J]: sum_e V0 W_iso(F_e) plus the volumetric
+  // The strain energy stored at the last evaluation's deformation [J]:
+  // sum_e V0 W_iso(F_e) over the elements not eroded, plus the volumetric
   // energy, sum_n V_n U(J_n) over the nodal groups with average nodal
-  // pressure (not a sum over elements: removing one changes its
-  // neighbours' J_n, which is why erosion is accounted for by the change
-  // of this total), else sum_e V0 U(J_e). The isochoric part is the
-  // elastic one (a relaxing material's viscous history is not counted).
+  // pressure (eroded elements' frozen V0 J included), else sum_e V0 U(J_e).
+  // Erosion is accounted for by the drop of this total. The isochoric part
+  // is the elastic one (a relaxing material's viscous history is not
+  // counted).
   double StoredEnergy() const;
   bool eroded(int e) const { return !eroded_.empty() && eroded_[e]; }
   // Nodes none of whose elements remain (after erosion).

@@ -134,13 +134,13 @@ Reference Evaluate(const TledModel& t, const Mesh& mesh, const std::vector<TledM
     r.f[e] = f;
     j[e] = f.determinant();
   }
-  // J_n per (node, material) over the elements that remain.
+  // J_n per (node, material); an eroded element's V0 J stays frozen at its
+  // value when it went (here before any evaluation: J = 1).
   std::map<std::pair<int, int>, std::pair<double, double>> groups;
   for (int e = 0; e < ne; ++e) {
-    if (t.eroded(e)) continue;
     for (int a = 0; a < npe; ++a) {
       auto& g = groups[{t.element_nodes(e)[a], material_of[e]}];
-      g.first += volume[e] * j[e], g.second += volume[e];
+      g.first += volume[e] * (t.eroded(e) ? 1.0 : j[e]), g.second += volume[e];
     }
   }
   for (int e = 0; e < ne; ++e) {
@@ -256,7 +256,7 @@ void Check(ElementType element, bool erode) {
 TEST(TledModel, Tet4AnpForcesAreThoseOfTheFormulas) { Check(ElementType::kTet4Anp, false); }
 TEST(TledModel, Tet4ForcesAreThoseOfTheFormulas) { Check(ElementType::kTet4, false); }
 TEST(TledModel, Hex8ForcesAreThoseOfTheFormulas) { Check(ElementType::kHex8, false); }
-TEST(TledModel, ErodedElementsLeaveTheForcesAndTheNodalPressures) {
+TEST(TledModel, ErodedElementsLeaveTheForcesAndFreezeTheirNodalVolumes) {
   Check(ElementType::kTet4Anp, true);
   Check(ElementType::kHex8, true);
 }
