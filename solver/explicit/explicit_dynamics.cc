@@ -42,7 +42,7 @@ struct Energies {
   Work internal, external, damping, contact_nodes;
   double kinetic = 0, hourglass = 0, eroded_elements = 0, orphan_kinetic = 0;
   double initial_kinetic = 0;  // of the velocities given at t = 0
-  double mass_scaling = 0;     // kinetic energy of mass added during the run
+  double mass_scaling = 0;     // kinetic energy change by mass added during the run (<= 0)
   double body_work = 0;        // impactors' work on the tissue
   double Internal() const { return internal.total - hourglass - eroded_elements; }
   double Contact() const { return body_work - contact_nodes.total; }
@@ -277,7 +277,7 @@ Status SolveExplicitDynamic(const SceneSpec& scene, const Model& model, PhaseClo
       if (options.mass_scaling_step_s > 0) {
         // Crushed elements take mass rather than shrink the step.
         const TledModel::MassScaling scaled =
-            tled.RescaleMass(u, v, options.mass_scaling_step_s / factor);
+            tled.RescaleMass(u, &v, options.mass_scaling_step_s / factor);
         run.mass_scaled_elements += scaled.elements;
         run.added_mass_kg += scaled.added_mass;
         energy.mass_scaling += scaled.added_kinetic;
@@ -444,6 +444,12 @@ Status SolveExplicitDynamic(const SceneSpec& scene, const Model& model, PhaseClo
       run.controlling_element.c_str(), run.step_reductions, setup.options.bulk_viscosity_linear,
       setup.options.bulk_viscosity_quadratic,
       alpha > 0 ? Format("; mass damping %g 1/s", alpha).c_str() : ""));
+  if (energy.mass_scaling != 0) {
+    summary.notes.push_back(Format(
+        "mass scaling during the run: %d element scalings, %.3g kg in all; the nodes kept their "
+        "momentum, losing %.3g J of kinetic energy (part of the balance)",
+        run.mass_scaled_elements, run.added_mass_kg, -energy.mass_scaling));
+  }
   summary.notes.push_back(Format(
       "energy at the end: kinetic %.4g J, internal %.4g J, hourglass %.3g J, contact %.3g J, "
       "damping %.3g J, eroded %.3g J, external work %.4g J; balance error at most %.3g %%",

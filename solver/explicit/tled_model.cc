@@ -279,7 +279,7 @@ double TledModel::StableTimeStep(const Eigen::VectorXd* u, const Eigen::VectorXd
   return best;
 }
 
-TledModel::MassScaling TledModel::RescaleMass(const Eigen::VectorXd& u, const Eigen::VectorXd& v,
+TledModel::MassScaling TledModel::RescaleMass(const Eigen::VectorXd& u, Eigen::VectorXd* v,
                                               double min_stable_step) {
   MassScaling out;
   if (speed_scale_.empty()) speed_scale_.assign(num_elements_, 1.0);
@@ -288,7 +288,7 @@ TledModel::MassScaling TledModel::RescaleMass(const Eigen::VectorXd& u, const Ei
   for (int e = 0; e < num_elements_; ++e) {
     if (eroded(e)) continue;
     double l = 0;
-    steps[e] = ElementStableStep(e, &u, &v, &l);
+    steps[e] = ElementStableStep(e, &u, v, &l);
   }
   for (int e = 0; e < num_elements_; ++e) {
     // A thousandth of slack, so that an element does not take mass for
@@ -300,9 +300,15 @@ TledModel::MassScaling TledModel::RescaleMass(const Eigen::VectorXd& u, const Ei
     const double mass = material(e).density * volume_[e] / (speed_scale_[e] * speed_scale_[e]);
     const double added = mass * (ratio * ratio - 1);
     for (int a = 0; a < npe_; ++a) {
+      // The node keeps its momentum: m v = (m + dm) v'. Its kinetic energy
+      // falls by m dm / (m + dm) |v|^2 / 2, as in a plastic collision.
       const int n = conn_[npe_ * static_cast<std::size_t>(e) + a];
-      mass_(n) += added / npe_;
-      out.added_kinetic += 0.5 * added / npe_ * v.segment<3>(3 * n).squaredNorm();
+      const double m = mass_(n), dm = added / npe_;
+      const Eigen::Vector3d before = v->segment<3>(3 * n);
+      v->segment<3>(3 * n) = before * (m / (m + dm));
+      mass_(n) += dm;
+      out.added_kinetic +=
+          0.5 * (m + dm) * v->segment<3>(3 * n).squaredNorm() - 0.5 * m * before.squaredNorm();
     }
     speed_scale_[e] /= ratio;
     out.added_mass += added;

@@ -130,15 +130,15 @@ class TledModel {
     int elements = 0;
     double added_mass = 0;     // [kg]
     double model_mass = 0;     // before [kg]
-    double added_kinetic = 0;  // RescaleMass: 1/2 dm |v|^2 of the mass added [J]
+    double added_kinetic = 0;  // RescaleMass: the change of kinetic energy (<= 0) [J]
   };
   MassScaling ScaleMass(double min_stable_step);
-  // The same during a run, at displacement u and velocity v: elements
+  // The same during a run, at displacement u and velocity *v: elements
   // crushed below the step (their current length shrinks, and the bulk
   // viscosity shortens it further) take mass instead of shrinking the step
-  // of the whole run, as LS-DYNA's DT2MS does.
-  MassScaling RescaleMass(const Eigen::VectorXd& u, const Eigen::VectorXd& v,
-                          double min_stable_step);
+  // of the whole run, as LS-DYNA's DT2MS does. Their nodes keep their
+  // momentum (*v is scaled down), so kinetic energy is lost, never made.
+  MassScaling RescaleMass(const Eigen::VectorXd& u, Eigen::VectorXd* v, double min_stable_step);
 
   // Sets the step length used by the relaxation's internal variables;
   // call before the first evaluation and whenever the step changes.
