@@ -270,19 +270,23 @@ Status SolveExplicitDynamic(const SceneSpec& scene, const Model& model, PhaseClo
       }
     }
     if (last) break;
-    // The next step: shrink if the current elements need it.
-    if (step > 0 && step % kStepCheckInterval == 0) {
+    // The next step: shrink if the current elements need it. An impactor
+    // crushes the elements at its tip within a few steps, so with one the
+    // check is made every step.
+    if (step > 0 && (!impactors.empty() || step % kStepCheckInterval == 0)) {
       int e = -1;
       double l = 0;
+      double stable;
       if (options.mass_scaling_step_s > 0) {
         // Crushed elements take mass rather than shrink the step.
         const TledModel::MassScaling scaled =
-            tled.RescaleMass(u, &v, options.mass_scaling_step_s / factor);
+            tled.RescaleMass(u, &v, options.mass_scaling_step_s / factor, &stable, &e, &l);
         run.mass_scaled_elements += scaled.elements;
         run.added_mass_kg += scaled.added_mass;
         energy.mass_scaling += scaled.added_kinetic;
+      } else {
+        stable = tled.StableTimeStep(&u, &v, &e, &l);
       }
-      const double stable = tled.StableTimeStep(&u, &v, &e, &l);
       if (factor * stable < dt * (1 - 1e-12)) {
         dt = factor * stable;
         tled.SetTimeStep(dt);

@@ -280,7 +280,8 @@ double TledModel::StableTimeStep(const Eigen::VectorXd* u, const Eigen::VectorXd
 }
 
 TledModel::MassScaling TledModel::RescaleMass(const Eigen::VectorXd& u, Eigen::VectorXd* v,
-                                              double min_stable_step) {
+                                              double min_stable_step, double* stable_step,
+                                              int* element, double* length) {
   MassScaling out;
   if (speed_scale_.empty()) speed_scale_.assign(num_elements_, 1.0);
   std::vector<double> steps(num_elements_, std::numeric_limits<double>::infinity());
@@ -313,7 +314,18 @@ TledModel::MassScaling TledModel::RescaleMass(const Eigen::VectorXd& u, Eigen::V
     speed_scale_[e] /= ratio;
     out.added_mass += added;
     ++out.elements;
+    // Its step now (the bulk viscosity's share does not scale with c).
+    double l = 0;
+    steps[e] = ElementStableStep(e, &u, v, &l);
   }
+  // The smallest step after the scaling, as StableTimeStep would find it.
+  *stable_step = std::numeric_limits<double>::infinity();
+  *element = -1;
+  for (int e = 0; e < num_elements_; ++e) {
+    if (steps[e] < *stable_step) *stable_step = steps[e], *element = e;
+  }
+  *length = 0;
+  if (*element >= 0) ElementStableStep(*element, &u, v, length);
   return out;
 }
 

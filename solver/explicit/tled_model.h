@@ -138,7 +138,10 @@ class TledModel {
   // viscosity shortens it further) take mass instead of shrinking the step
   // of the whole run, as LS-DYNA's DT2MS does. Their nodes keep their
   // momentum (*v is scaled down), so kinetic energy is lost, never made.
-  MassScaling RescaleMass(const Eigen::VectorXd& u, Eigen::VectorXd* v, double min_stable_step);
+  // *stable_step, *element and *length are then what StableTimeStep(&u, v)
+  // would return.
+  MassScaling RescaleMass(const Eigen::VectorXd& u, Eigen::VectorXd* v, double min_stable_step,
+                          double* stable_step, int* element, double* length);
 
   // Sets the step length used by the relaxation's internal variables;
   // call before the first evaluation and whenever the step changes.
