@@ -21,9 +21,10 @@
 // difference's limit of 2 for factor <= 10; no area enters, so a node
 // exposed by erosion is held as well as a surface node.
 //
-// Energies: the body does the work W = sum F_body . dc over the steps
-// (external work); the tissue nodes receive sum f . du; the difference is
-// the contact energy (the springs' stored energy and any numerical loss).
+// Energies (kept by the time loop): the body does the work W = -sum F_body
+// . dc over the steps (external work); the tissue nodes receive sum f .
+// du; the difference is the contact energy (the springs' stored energy and
+// any numerical loss).
 #pragma once
 
 #include <Eigen/Core>
@@ -39,9 +40,7 @@ namespace pba {
 struct ImpactorState {
   Eigen::Vector3d force_on_body = Eigen::Vector3d::Zero();  // [N]
   double peak_force = 0;                                    // largest |force| [N]
-  double work = 0;         // by the body on the tissue: sum F . dc [J]
-  double node_work = 0;    // received by the nodes: sum f . du [J]
-  double penetration = 0;  // deepest node now [m]
+  double penetration = 0;                                   // deepest node now [m]
   int nodes_in_contact = 0;
 };
 
@@ -64,8 +63,6 @@ class Impactor {
                  const std::vector<char>& skip, Eigen::VectorXd* f);
   const std::string& name() const { return name_; }
   const ImpactorState& state() const { return state_; }
-  // The works are the time loop's to accumulate.
-  ImpactorState& mutable_state() { return state_; }
   // The body's reference point at amplitude a [m].
   Eigen::Vector3d Centre(double a) const { return position_ + a * motion_; }
   double min_stiffness() const { return k_min_; }
