@@ -27,13 +27,17 @@ Status SolveDynamicRelaxation(const SceneSpec& scene, const Model& model, PhaseC
   PBA_RETURN_IF_ERROR(MakeExplicitSetup(scene, model, &setup));
   TledModel& tled = *setup.tled;
   const int n_dofs = 3 * mesh.num_nodes();
-  // Fictitious masses: every element's stable step 1 / 0.9.
+  // Fictitious masses: every element's stable step 1 / factor (the scene's
+  // time_step_factor, else 0.9).
   constexpr double dt = 1;
+  const double factor = scene.analysis.explicit_dynamics.time_step_factor > 0
+                            ? scene.analysis.explicit_dynamics.time_step_factor
+                            : 0.9;
   Eigen::VectorXd mass = Eigen::VectorXd::Zero(mesh.num_nodes());
   for (int e = 0; e < tled.num_elements(); ++e) {
     const TledMaterial& m = tled.material(e);
     const double l = tled.characteristic_length(e);
-    const double rho = (m.bulk + 4 * m.mu / 3) * (dt / (0.9 * l)) * (dt / (0.9 * l));
+    const double rho = (m.bulk + 4 * m.mu / 3) * (dt / (factor * l)) * (dt / (factor * l));
     const int npe = tled.nodes_per_element();
     for (int a = 0; a < npe; ++a) {
       mass(tled.element_nodes(e)[a]) += rho * tled.reference_volume(e) / npe;

@@ -5,8 +5,9 @@
 // 2009; Underwood, in Computational Methods for Transient Analysis, 1983).
 //
 // The masses are fictitious: each element's density is chosen so that its
-// stable step is the same, rho_e = (K + 4 mu / 3)(dt / (0.9 l_e))^2 with
-// dt = 1 (the answer does not depend on them), which equalises the
+// stable step is the same, rho_e = (K + 4 mu / 3)(dt / (f l_e))^2 with
+// dt = 1 and f the time_step_factor (0.9 unless given; the answer does not
+// depend on the masses), which equalises the
 // elements' frequencies. The loads and prescribed displacements are
 // ramped to their full value over the first steps, then held; the motion
 // is damped at c = 2 omega_min, omega_min^2 estimated every step by the

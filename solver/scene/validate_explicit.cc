@@ -93,10 +93,11 @@ Status ValidateControls(const AnalysisSpec& analysis) {
   const ExplicitSpec& e = analysis.explicit_dynamics;
   const ExplicitField fields[] = {
       {"time_step_factor", e.time_step_factor != 0, e.time_step_factor, true, true},
+      // Dynamic relaxation damps on its own: no bulk viscosity.
       {"bulk_viscosity_linear", e.bulk_viscosity_linear.has_value(),
-       e.bulk_viscosity_linear.value_or(0), true, true},
+       e.bulk_viscosity_linear.value_or(0), true, false},
       {"bulk_viscosity_quadratic", e.bulk_viscosity_quadratic.has_value(),
-       e.bulk_viscosity_quadratic.value_or(0), true, true},
+       e.bulk_viscosity_quadratic.value_or(0), true, false},
       {"mass_damping_per_s", e.mass_damping_per_s != 0, e.mass_damping_per_s, true, false},
       {"hourglass_coefficient", e.hourglass_coefficient != 0, e.hourglass_coefficient, true, true},
       {"output_interval_s", e.output_interval_s != 0, e.output_interval_s, true, false},

@@ -419,7 +419,8 @@ struct ExplicitSpec {
   // Bulk viscosity (von Neumann-Richtmyer with a linear term, as in LS-DYNA):
   // q = rho l (q_quadratic l tr(D)^2 - q_linear c tr(D)) while the element
   // compresses (tr(D) < 0), added to its pressure. Unset: 0.06 and 1.5;
-  // 0 turns a term off.
+  // 0 turns a term off. EXPLICIT_DYNAMIC only (dynamic relaxation damps on
+  // its own).
   std::optional<double> bulk_viscosity_linear;
   std::optional<double> bulk_viscosity_quadratic;
   // Mass-proportional damping C = alpha M [1/s], >= 0 (EXPLICIT_DYNAMIC;
