@@ -13,6 +13,13 @@ Vector6d GreenLagrangeVoigt(const Eigen::Matrix3d& f) {
   return e;
 }
 
+Vector6d AlmansiVoigt(const Eigen::Matrix3d& f) {
+  Vector6d e =
+      SymmetricToVoigt(0.5 * (Eigen::Matrix3d::Identity() - (f * f.transpose()).inverse()));
+  e.tail<3>() *= 2;
+  return e;
+}
+
 void ElementResponse::Isochoric(const Eigen::Matrix3d& f, double* energy, Vector6d* stress,
                                 Matrix6d* tangent) const {
   const double scale = alpha_ * volume_factor_;

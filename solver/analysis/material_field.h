@@ -136,5 +136,8 @@ PronySeries ReduceRelaxation(const PronySeries& series, double relaxed_below_s,
 
 // Green-Lagrange strain of F, Voigt with engineering shear.
 Vector6d GreenLagrangeVoigt(const Eigen::Matrix3d& f);
+// Euler-Almansi strain of F, (I - (F F^T)^-1) / 2, Voigt with engineering
+// shear.
+Vector6d AlmansiVoigt(const Eigen::Matrix3d& f);
 
 }  // namespace pba

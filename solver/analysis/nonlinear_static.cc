@@ -95,10 +95,8 @@ PointFields FieldsAt(const HyperelasticMaterial& material, const Eigen::Matrix3d
                      std::optional<double> pressure = std::nullopt, double volume_ratio = 0) {
   PointFields p;
   p.j = f.determinant();
-  const Eigen::Matrix3d identity = Eigen::Matrix3d::Identity();
   p.green = GreenLagrangeVoigt(f);
-  p.almansi = SymmetricToVoigt(0.5 * (identity - (f * f.transpose()).inverse()));
-  p.almansi.tail<3>() *= 2;
+  p.almansi = AlmansiVoigt(f);
   if (pressure) {
     double w;
     material.Isochoric(f, &w, &p.pk2, nullptr);

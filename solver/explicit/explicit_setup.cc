@@ -107,10 +107,8 @@ void FillExplicitFields(const TledModel& tled, Solution* solution, double* max_s
     if (tled.eroded(e)) continue;
     const Eigen::Matrix3d f = tled.DeformationGradient(e);
     const double j = f.determinant();
-    const Eigen::Matrix3d identity = Eigen::Matrix3d::Identity();
     const Vector6d green = GreenLagrangeVoigt(f);
-    Vector6d almansi = SymmetricToVoigt(0.5 * (identity - (f * f.transpose()).inverse()));
-    almansi.tail<3>() *= 2;
+    const Vector6d almansi = AlmansiVoigt(f);
     const Vector6d cauchy = tled.CauchyStress(e);
     const Eigen::Matrix3d finv = f.inverse();
     const Vector6d pk2 = SymmetricToVoigt(j * finv * VoigtToSymmetric(cauchy) * finv.transpose());

@@ -65,18 +65,22 @@ std::vector<double> FilterFromRest(const ButterworthLowPass& filter, const std::
 
 }  // namespace
 
-double LargestPrincipalStrain(const Eigen::Matrix3d& f) {
+namespace {
+
+// The principal Green-Lagrange strains of F, ascending.
+Eigen::Vector3d PrincipalStrains(const Eigen::Matrix3d& f) {
   const Eigen::Matrix3d e = 0.5 * (f.transpose() * f - Eigen::Matrix3d::Identity());
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
   eig.computeDirect(e, Eigen::EigenvaluesOnly);
-  return eig.eigenvalues()(2);
+  return eig.eigenvalues();
 }
 
+}  // namespace
+
+double LargestPrincipalStrain(const Eigen::Matrix3d& f) { return PrincipalStrains(f)(2); }
+
 double LargestPrincipalStrainMagnitude(const Eigen::Matrix3d& f) {
-  const Eigen::Matrix3d e = 0.5 * (f.transpose() * f - Eigen::Matrix3d::Identity());
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
-  eig.computeDirect(e, Eigen::EigenvaluesOnly);
-  return eig.eigenvalues().cwiseAbs().maxCoeff();
+  return PrincipalStrains(f).cwiseAbs().maxCoeff();
 }
 
 Status SensorArray::Locate(const std::vector<SensorSpec>& specs, const Mesh& mesh,

@@ -504,7 +504,7 @@ struct ProfileSpec {
 // the pressure -tr(sigma)/3 [Pa], the velocity [m/s] and the largest
 // principal Green-Lagrange strain in magnitude, raw and low-pass filtered.
 struct SensorSpec {
-  std::string name;  // letters, digits, '_' and '-'; unique
+  std::string name;                            // letters, digits, '_' and '-'; unique
   std::array<double, 3> position_mm{0, 0, 0};  // reference configuration [mm]
   // 0: the element holding the point (velocity: its nodes' mean); else the
   // volume-weighted mean of the elements whose centroid lies within it.
@@ -572,9 +572,9 @@ struct SceneSpec {
 };
 
 // Face set names a geometry defines (box: bottom top x_min x_max y_min y_max;
-// cylinder: bottom top side, and cut for a half cylinder; spherical shell: inner outer x0 y0 z0, the last
-// three the cut planes x = 0, y = 0, z = 0; ellipsoid, atlas: surface),
-// then its patches' names.
+// cylinder: bottom top side, and cut for a half cylinder; spherical shell: inner outer x0 y0 z0,
+// the last three the cut planes x = 0, y = 0, z = 0; ellipsoid, atlas: surface), then its patches'
+// names.
 std::vector<std::string> FaceSetNames(const GeometrySpec& geometry);
 
 // The axis (0 = x, 1 = y, 2 = z) normal to a planar face set (or a patch of
