@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace pba::codec {
@@ -163,6 +164,17 @@ std::string FormatSummary(const v1::Summary& summary) {
   out += "Analysis     " + m.analysis() +
          (m.linear_solver().empty() ? std::string() : ", " + m.linear_solver()) + "\n";
   for (const auto& note : m.notes()) out += "Note         " + note + "\n";
+  if (!m.options().empty()) {
+    // Sorted by field path, so the line reads the same on every run.
+    std::vector<std::pair<std::string, std::string>> options(m.options().begin(),
+                                                             m.options().end());
+    std::sort(options.begin(), options.end());
+    std::string line;
+    for (const auto& [name, value] : options) {
+      line += (line.empty() ? "" : ", ") + name + " = " + value;
+    }
+    out += "Options      " + line + "\n";
+  }
   out += "Results\n";
   std::string at;
   if (r.max_displacement_at_mm_size() == 3) {

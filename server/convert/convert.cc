@@ -260,6 +260,7 @@ Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec) {
       return Status::InvalidArgument("formulation",
                                      "unknown formulation " + std::to_string(scene.formulation()));
   }
+  spec->formulation_tolerance = scene.formulation_tolerance();
   for (int i = 0; i < scene.region_materials_size(); ++i) {
     const v1::RegionMaterial& r = scene.region_materials(i);
     RegionMaterialSpec& out = spec->region_materials.emplace_back();
@@ -543,6 +544,7 @@ v1::Summary SummaryToProto(const Summary& summary) {
   modelled->set_analysis(summary.analysis);
   modelled->set_linear_solver(summary.linear_solver);
   for (const auto& note : summary.notes) modelled->add_notes(note);
+  for (const auto& [name, value] : summary.options) (*modelled->mutable_options())[name] = value;
   for (const ModelDecision& d : summary.decisions) {
     v1::ModelDecision* out = modelled->add_decisions();
     out->set_aspect(d.aspect);
@@ -558,6 +560,8 @@ v1::Summary SummaryToProto(const Summary& summary) {
     r->set_reduced_coarse_s(summary.reduction.reduced_coarse_s);
     r->set_full_coarse_s(summary.reduction.full_coarse_s);
     r->set_note(summary.reduction.note);
+    r->set_kept(summary.reduction.kept);
+    r->set_tolerance(summary.reduction.tolerance);
   }
 
   v1::Results* results = out.mutable_results();

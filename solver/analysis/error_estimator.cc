@@ -1,6 +1,8 @@
 #include "analysis/error_estimator.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 
 #include "assembly/assembler.h"
 #include "fem/hex8.h"
@@ -22,6 +24,51 @@ ErrorEstimateResult Finish(std::vector<double> eta2, std::vector<double> u2, dou
   result.element_energy2 = std::move(u2);
   return result;
 }
+
+// Where the recovered stress is kept: one slot per node within one material,
+// so that the recovered field is continuous inside a material and free to
+// jump across the interface between two, where only the traction is
+// continuous (averaging across it would report the jump of the tangential
+// stress as discretisation error). One material: the slot is the node.
+class RecoverySlots {
+ public:
+  // `nodes(e)` gives element e's node indices.
+  template <typename Nodes>
+  RecoverySlots(const Mesh& mesh, const ElasticityField& elasticity, const Nodes& nodes)
+      : materials_(elasticity.num_materials()), elasticity_(elasticity) {
+    const int ne = mesh.num_elements();
+    if (materials_ == 1) {
+      size_ = mesh.num_nodes();
+      return;
+    }
+    for (int e = 0; e < ne; ++e) {
+      for (int a : nodes(e)) keys_.push_back(Key(a, elasticity.material_of(e)));
+    }
+    std::sort(keys_.begin(), keys_.end());
+    keys_.erase(std::unique(keys_.begin(), keys_.end()), keys_.end());
+    size_ = static_cast<int>(keys_.size());
+  }
+
+  int size() const { return size_; }
+  // The slot of node `node` of element `e`.
+  int Of(int node, int e) const {
+    if (materials_ == 1) return node;
+    const std::uint64_t key = Key(node, elasticity_.material_of(e));
+    return static_cast<int>(std::lower_bound(keys_.begin(), keys_.end(), key) - keys_.begin());
+  }
+
+ private:
+  std::uint64_t Key(int node, int material) const {
+    return static_cast<std::uint64_t>(node) * static_cast<std::uint64_t>(materials_) +
+           static_cast<std::uint64_t>(material);
+  }
+  int materials_;
+  const ElasticityField& elasticity_;
+  int size_ = 0;
+  std::vector<std::uint64_t> keys_;  // sorted node * materials + material
+};
+
+using NodalStress = Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor>;
 
 }  // namespace
 
@@ -49,21 +96,23 @@ std::vector<RegionError> ErrorByRegion(const Mesh& mesh, const ErrorEstimateResu
 }
 
 ErrorEstimateResult EstimateZzError(const Mesh& mesh, const std::vector<double>& stress,
-                                    const std::vector<double>& volume, const Matrix6d& compliance) {
-  const int n = mesh.num_nodes();
+                                    const std::vector<double>& volume,
+                                    const ElasticityField& elasticity) {
   const int ne = mesh.num_elements();
-  // Volume-weighted nodal averages. Serial: a scatter, and cheap next to the solve.
-  Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor> nodal =
-      Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor>::Zero(n, 6);
-  Eigen::VectorXd weight = Eigen::VectorXd::Zero(n);
+  // Volume-weighted averages at each node, within each material. Serial: a
+  // scatter, and cheap next to the solve.
+  const RecoverySlots slots(mesh, elasticity, [&](int e) { return mesh.tets[e]; });
+  NodalStress nodal = NodalStress::Zero(slots.size(), 6);
+  Eigen::VectorXd weight = Eigen::VectorXd::Zero(slots.size());
   for (int e = 0; e < ne; ++e) {
     const Eigen::Map<const Vector6d> s(&stress[6 * e]);
     for (int a : mesh.tets[e]) {
-      nodal.row(a) += volume[e] * s.transpose();
-      weight(a) += volume[e];
+      const int slot = slots.Of(a, e);
+      nodal.row(slot) += volume[e] * s.transpose();
+      weight(slot) += volume[e];
     }
   }
-  for (int a = 0; a < n; ++a) {
+  for (int a = 0; a < slots.size(); ++a) {
     if (weight(a) > 0) nodal.row(a) /= weight(a);
   }
 
@@ -78,13 +127,14 @@ ErrorEstimateResult EstimateZzError(const Mesh& mesh, const std::vector<double>&
     for (int q = 0; q < 4; ++q) {
       Vector6d recovered = Vector6d::Zero();
       for (int a = 0; a < 4; ++a) {
-        recovered += (a == q ? kAlpha : kBeta) * nodal.row(mesh.tets[e][a]).transpose();
+        recovered +=
+            (a == q ? kAlpha : kBeta) * nodal.row(slots.Of(mesh.tets[e][a], e)).transpose();
       }
       const Vector6d diff = recovered - sh;
-      sum += 0.25 * volume[e] * diff.dot(compliance * diff);
+      sum += 0.25 * volume[e] * diff.dot(elasticity.Compliance(e) * diff);
     }
     eta2[e] = sum;
-    u2[e] = volume[e] * sh.dot(compliance * sh);
+    u2[e] = volume[e] * sh.dot(elasticity.Compliance(e) * sh);
     error2 += sum;
     energy2 += u2[e];
   }
@@ -100,11 +150,11 @@ namespace {
 //   `xi` and `weight`; Jacobian(mesh, e, xi) -> det J.
 template <typename Element>
 ErrorEstimateResult EstimateZzRecovered(const Mesh& mesh, const ElementStress& stress,
-                                        const Matrix6d& compliance) {
+                                        const ElasticityField& elasticity) {
   constexpr int kN = Element::kNodes;
-  const int n = mesh.num_nodes(), ne = mesh.num_elements();
+  const int ne = mesh.num_elements();
   // The stresses each element gives at its nodes, computed in parallel, then
-  // averaged node by node, weighted by element volume (a serial scatter,
+  // averaged node by node within each material, weighted by element volume (a serial scatter,
   // cheap next to the solve).
   std::vector<Eigen::Matrix<double, kN, 6>> at_nodes(ne);
   std::vector<double> volume(ne, 0.0);
@@ -113,17 +163,18 @@ ErrorEstimateResult EstimateZzRecovered(const Mesh& mesh, const ElementStress& s
     for (const auto& q : Element::Rule()) volume[e] += q.weight * Element::Jacobian(mesh, e, q.xi);
     for (int a = 0; a < kN; ++a) at_nodes[e].row(a) = stress(e, Element::NodeXi(a)).transpose();
   }
-  Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor> nodal =
-      Eigen::Matrix<double, Eigen::Dynamic, 6, Eigen::RowMajor>::Zero(n, 6);
-  Eigen::VectorXd weight = Eigen::VectorXd::Zero(n);
+  const RecoverySlots slots(mesh, elasticity, [&](int e) { return Element::Nodes(mesh, e); });
+  NodalStress nodal = NodalStress::Zero(slots.size(), 6);
+  Eigen::VectorXd weight = Eigen::VectorXd::Zero(slots.size());
   for (int e = 0; e < ne; ++e) {
     const auto nodes = Element::Nodes(mesh, e);
     for (int a = 0; a < kN; ++a) {
-      nodal.row(nodes[a]) += volume[e] * at_nodes[e].row(a);
-      weight(nodes[a]) += volume[e];
+      const int slot = slots.Of(nodes[a], e);
+      nodal.row(slot) += volume[e] * at_nodes[e].row(a);
+      weight(slot) += volume[e];
     }
   }
-  for (int a = 0; a < n; ++a) {
+  for (int a = 0; a < slots.size(); ++a) {
     if (weight(a) > 0) nodal.row(a) /= weight(a);
   }
 
@@ -137,11 +188,13 @@ ErrorEstimateResult EstimateZzRecovered(const Mesh& mesh, const ElementStress& s
       const double dv = q.weight * Element::Jacobian(mesh, e, q.xi);
       const auto shape = Element::Shape(q.xi);
       Vector6d recovered = Vector6d::Zero();
-      for (int a = 0; a < kN; ++a) recovered += shape(a) * nodal.row(nodes[a]).transpose();
+      for (int a = 0; a < kN; ++a) {
+        recovered += shape(a) * nodal.row(slots.Of(nodes[a], e)).transpose();
+      }
       const Vector6d sh = stress(e, q.xi);
       const Vector6d diff = recovered - sh;
-      sum += dv * diff.dot(compliance * diff);
-      energy += dv * sh.dot(compliance * sh);
+      sum += dv * diff.dot(elasticity.Compliance(e) * diff);
+      energy += dv * sh.dot(elasticity.Compliance(e) * sh);
     }
     eta2[e] = sum;
     u2[e] = energy;
@@ -188,13 +241,13 @@ struct Hex8Traits {
 }  // namespace
 
 ErrorEstimateResult EstimateZzErrorTet10(const Mesh& mesh, const ElementStress& stress,
-                                         const Matrix6d& compliance) {
-  return EstimateZzRecovered<Tet10Traits>(mesh, stress, compliance);
+                                         const ElasticityField& elasticity) {
+  return EstimateZzRecovered<Tet10Traits>(mesh, stress, elasticity);
 }
 
 ErrorEstimateResult EstimateZzErrorHex8(const Mesh& mesh, const ElementStress& stress,
-                                        const Matrix6d& compliance) {
-  return EstimateZzRecovered<Hex8Traits>(mesh, stress, compliance);
+                                        const ElasticityField& elasticity) {
+  return EstimateZzRecovered<Hex8Traits>(mesh, stress, elasticity);
 }
 
 }  // namespace pba

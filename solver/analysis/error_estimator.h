@@ -4,8 +4,8 @@
 // continuous field sigma* by volume-weighted nodal averaging; the error of
 // element e is estimated in the energy norm,
 //   eta_e^2 = integral over e of (sigma* - sigma_h) : C : (sigma* - sigma_h) dV
-// (C the compliance), by a 4-point rule exact for the quadratic integrand;
-// the relative error is eta = sqrt(sum eta_e^2 / (sum eta_e^2 + ||u||_E^2)),
+// (C the compliance of the element's own material), by a 4-point rule exact for the quadratic
+// integrand; the relative error is eta = sqrt(sum eta_e^2 / (sum eta_e^2 + ||u||_E^2)),
 // ||u||_E^2 = integral sigma_h : C : sigma_h dV = 2 x strain energy
 // (Zienkiewicz & Zhu 1987, Int. J. Numer. Meth. Eng. 24:337).
 #pragma once
@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "fem/tet4.h"
+#include "material/linear_elastic.h"
 #include "mesh/mesh.h"
 
 namespace pba {
@@ -40,9 +41,12 @@ struct RegionError {
 std::vector<RegionError> ErrorByRegion(const Mesh& mesh, const ErrorEstimateResult& estimate,
                                        const std::string& body);
 
-// `stress` is elements x 6 (Voigt), `volume` per element [m^3].
+// `stress` is elements x 6 (Voigt), `volume` per element [m^3]; each
+// element's error and energy are measured with its own material's
+// compliance, `elasticity.Compliance(e)`.
 ErrorEstimateResult EstimateZzError(const Mesh& mesh, const std::vector<double>& stress,
-                                    const std::vector<double>& volume, const Matrix6d& compliance);
+                                    const std::vector<double>& volume,
+                                    const ElasticityField& elasticity);
 
 // The same estimate for 10-node tetrahedra (a quadratic mesh), whose stress
 // varies within the element: `stress(e, xi)` is the finite-element stress
@@ -53,12 +57,12 @@ ErrorEstimateResult EstimateZzError(const Mesh& mesh, const std::vector<double>&
 // `stress` is called concurrently.
 using ElementStress = std::function<Vector6d(int element, const Eigen::Vector3d& xi)>;
 ErrorEstimateResult EstimateZzErrorTet10(const Mesh& mesh, const ElementStress& stress,
-                                         const Matrix6d& compliance);
+                                         const ElasticityField& elasticity);
 
 // The same for 8-node hexahedra (a hexahedral mesh): nodal averages at the
 // 8 corners, trilinear interpolation, the 2 x 2 x 2 rule; `stress(e, xi)`
 // with xi in [-1, 1]^3 (fem/hex8.h).
 ErrorEstimateResult EstimateZzErrorHex8(const Mesh& mesh, const ElementStress& stress,
-                                        const Matrix6d& compliance);
+                                        const ElasticityField& elasticity);
 
 }  // namespace pba

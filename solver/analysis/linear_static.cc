@@ -1,6 +1,7 @@
 // LINEAR_STATIC: small-strain linear elasticity on 4- or 10-node tetrahedra
 // or 8-node hexahedra (B-bar), K_ff u_f = f_f - K_fp u_p, with a
 // Zienkiewicz-Zhu error estimate.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -13,6 +14,7 @@
 #include "material/factory.h"
 #include "material/linear_elastic.h"
 #include "mesh/quadratic.h"
+#include "scene/materials.h"
 
 namespace pba {
 namespace {
@@ -59,33 +61,38 @@ ElementRecovery RecoverElement(const std::array<int, N>& nodes,
 
 }  // namespace
 
-Status SolveLinearStatic(const SceneSpec& scene, const Model& model, PhaseClock* clock_ptr,
-                         Solution* solution, StaticResult* result) {
+Status SolveLinearStatic(const Problem& problem, PhaseClock* clock_ptr, Solution* solution,
+                         StaticResult* result) {
   PhaseClock& clock = *clock_ptr;
+  const Model& model = problem.model;
   Summary& summary = solution->summary;
   const Mesh& mesh = model.mesh;
   const DofMap& dofs = model.dofs;
   auto cancelled = [&] {
     return Status::Cancelled("cancelled during " + summary.phases.back().phase);
   };
-  // In the global frame; an orthotropic material's axes are already applied.
-  const Matrix6d d = ElasticityMatrix(scene.material);
+  // Each element's own material, in the global frame (an orthotropic
+  // material's axes already applied).
+  const ElasticityField elasticity = MakeElasticityField(model.materials);
   clock.Begin("assemble", 0.05, 0.25,
               Format("assembling %d elements, %d unknowns", mesh.num_elements(), dofs.num_free()));
   const auto colours = ColourElements(mesh);
   LinearSystem system;
   // Bricks with the plain B (full integration) instead of B-bar.
-  const bool full_bricks = scene.mesh.element == ElementType::kHex8Full;
+  const bool full_bricks = problem.element == ElementType::kHex8Full;
   const auto keep_going = [&](double f) {
     clock.Update(f);
     return !clock.cancelled();
   };
   PBA_RETURN_IF_ERROR(
-      mesh.quadratic() ? AssembleLinearSystemTet10(mesh, d, dofs, colours, keep_going, &system)
-      : full_bricks    ? AssembleLinearSystemHex8Full(mesh, d, dofs, colours, keep_going, &system)
-      : mesh.hexahedral() ? AssembleLinearSystemHex8(mesh, d, dofs, colours, keep_going, &system)
-                          : AssembleLinearSystem(mesh, d, dofs, colours, keep_going, &system));
-  const ExternalLoads loads = BuildLoads(scene, model);
+      mesh.quadratic()
+          ? AssembleLinearSystemTet10(mesh, elasticity, dofs, colours, keep_going, &system)
+      : full_bricks
+          ? AssembleLinearSystemHex8Full(mesh, elasticity, dofs, colours, keep_going, &system)
+      : mesh.hexahedral()
+          ? AssembleLinearSystemHex8(mesh, elasticity, dofs, colours, keep_going, &system)
+          : AssembleLinearSystem(mesh, elasticity, dofs, colours, keep_going, &system));
+  const ExternalLoads loads = BuildLoads(problem);
   Eigen::VectorXd external;
   if (!loads.empty()) {
     external = loads.Force(Eigen::VectorXd::Zero(dofs.num_dofs()));
@@ -99,7 +106,7 @@ Status SolveLinearStatic(const SceneSpec& scene, const Model& model, PhaseClock*
   }
   clock.End();
 
-  auto solver = CreateLinearSolver(scene.analysis.linear_solver);
+  auto solver = CreateLinearSolver(problem.linear_solver);
   Eigen::VectorXd u_free;
   double residual = 0;
   if (dofs.num_free() > 0) {
@@ -148,7 +155,7 @@ Status SolveLinearStatic(const SceneSpec& scene, const Model& model, PhaseClock*
               *dv = g.volume[q];
               return Tet10StrainDisplacement(g.grad[q]);
             },
-            d, &internal);
+            elasticity.D(e), &internal);
       } else if (mesh.hexahedral()) {
         const Hex8Geometry g = ComputeHex8Geometry(Hex8Coordinates(mesh, e));
         r = RecoverElement<8>(
@@ -158,7 +165,7 @@ Status SolveLinearStatic(const SceneSpec& scene, const Model& model, PhaseClock*
               return full_bricks ? Hex8StrainDisplacement(g.grad[q])
                                  : Hex8StrainDisplacementBar(g.grad[q], g.mean_grad);
             },
-            d, &internal);
+            elasticity.D(e), &internal);
       } else {
         const Tet4Geometry g = ComputeTet4Geometry(TetCorners(mesh, e));
         r = RecoverElement<4>(
@@ -167,7 +174,7 @@ Status SolveLinearStatic(const SceneSpec& scene, const Model& model, PhaseClock*
               *dv = g.volume;
               return StrainDisplacement(g);
             },
-            d, &internal);
+            elasticity.D(e), &internal);
       }
       Eigen::Map<Vector6d>(&solution->strain[6 * e]) = r.strain;
       Eigen::Map<Vector6d>(&solution->stress_pa[6 * e]) = r.stress;
@@ -181,23 +188,24 @@ Status SolveLinearStatic(const SceneSpec& scene, const Model& model, PhaseClock*
 
   clock.Begin("estimate", 0.9, 0.95, "Zienkiewicz-Zhu error estimate");
   const ErrorEstimateResult estimate =
-      mesh.quadratic() ? EstimateZzErrorTet10(
-                             mesh,
-                             [&](int e, const Eigen::Vector3d& xi) -> Vector6d {
-                               return d * Tet10Strain(Tet10Coordinates(mesh, e),
-                                                      GatherElementTet10(mesh, e, u), xi);
-                             },
-                             ComplianceMatrix(scene.material))
-      : mesh.hexahedral()
-          ? EstimateZzErrorHex8(
+      mesh.quadratic()
+          ? EstimateZzErrorTet10(
                 mesh,
                 [&](int e, const Eigen::Vector3d& xi) -> Vector6d {
-                  const Hex8Nodes x = Hex8Coordinates(mesh, e);
-                  const Vector24d ue = GatherElementHex8(mesh, e, u);
-                  return d * (full_bricks ? Hex8StrainFull(x, ue, xi) : Hex8Strain(x, ue, xi));
+                  return elasticity.D(e) *
+                         Tet10Strain(Tet10Coordinates(mesh, e), GatherElementTet10(mesh, e, u), xi);
                 },
-                ComplianceMatrix(scene.material))
-          : EstimateZzError(mesh, solution->stress_pa, volume, ComplianceMatrix(scene.material));
+                elasticity)
+      : mesh.hexahedral() ? EstimateZzErrorHex8(
+                                mesh,
+                                [&](int e, const Eigen::Vector3d& xi) -> Vector6d {
+                                  const Hex8Nodes x = Hex8Coordinates(mesh, e);
+                                  const Vector24d ue = GatherElementHex8(mesh, e, u);
+                                  return elasticity.D(e) * (full_bricks ? Hex8StrainFull(x, ue, xi)
+                                                                        : Hex8Strain(x, ue, xi));
+                                },
+                                elasticity)
+                          : EstimateZzError(mesh, solution->stress_pa, volume, elasticity);
   solution->error_indicator = estimate.element_share;
   summary.error.estimated = true;
   summary.error.method =
@@ -214,9 +222,12 @@ Status SolveLinearStatic(const SceneSpec& scene, const Model& model, PhaseClock*
   clock.Update(1.0);
   clock.End();
 
-  summary.analysis = scene.material.hyperelastic()
-                         ? "linear static (small strain, the material's initial moduli)"
-                         : "linear static (small strain)";
+  const bool initial_moduli =
+      std::any_of(model.materials.specs.begin(), model.materials.specs.end(),
+                  [](const MaterialSpec& m) { return m.hyperelastic(); });
+  summary.analysis = initial_moduli ? "linear static (small strain, the materials' initial moduli)"
+                                    : "linear static (small strain)";
+  for (const std::string& note : model.materials.notes) summary.notes.push_back(note);
   summary.linear_solver = solver_name;
   if (max_strain > kSmallStrainLimit) {
     summary.notes.push_back(

@@ -109,15 +109,15 @@ PointFields FieldsAt(const HyperelasticMaterial& material, const Eigen::Matrix3d
   return p;
 }
 
-NewtonOptions OptionsOf(const NonlinearOptionsSpec& spec) {
+NewtonOptions OptionsOf(const NonlinearOptions& nonlinear) {
   NewtonOptions options;
-  if (spec.increments > 0) options.initial_increments = spec.increments;
-  if (spec.max_iterations > 0) options.max_iterations = spec.max_iterations;
-  if (spec.residual_tolerance > 0) options.residual_tolerance = spec.residual_tolerance;
-  if (spec.displacement_tolerance > 0) options.displacement_tolerance = spec.displacement_tolerance;
-  if (spec.min_increment > 0) options.min_increment = spec.min_increment;
+  options.initial_increments = nonlinear.increments;
+  options.max_iterations = nonlinear.max_iterations;
+  options.residual_tolerance = nonlinear.residual_tolerance;
+  options.displacement_tolerance = nonlinear.displacement_tolerance;
+  options.min_increment = nonlinear.min_increment;
   options.max_increment = std::max(options.max_increment, 1.0 / options.initial_increments);
-  options.line_search = spec.line_search;
+  options.line_search = nonlinear.line_search;
   return options;
 }
 
@@ -125,27 +125,17 @@ NewtonOptions OptionsOf(const NonlinearOptionsSpec& spec) {
 
 namespace {
 
-// The scene's rigid contacts, each placed touching the tissue when it asks
-// (noted in `notes`). The penalty is DefaultContactPenalty of the tissue's
-// shear modulus over the finest element size (an atlas's region of
-// interest is where a punch presses), the default tolerance 1 % of it.
-Status MakeContacts(const SceneSpec& scene, const Mesh& mesh, double shear_modulus_pa,
+// The problem's rigid contacts, each placed touching the tissue when it
+// asks (noted in `notes`). The penalty is DefaultContactPenalty of the
+// tissue's shear modulus over the finest element size (an atlas's region
+// of interest is where a punch presses).
+Status MakeContacts(const Problem& problem, double shear_modulus_pa,
                     std::vector<std::unique_ptr<RigidContact>>* contacts,
                     std::vector<std::string>* notes) {
-  const AtlasSpec& atlas = scene.geometry.atlas;
-  const double element_size =
-      (scene.geometry.kind == GeometrySpec::Kind::kAtlas && atlas.roi_radius_mm > 0
-           ? std::min(atlas.roi_element_size_mm, EffectiveElementSize(scene.geometry, scene.mesh))
-           : EffectiveElementSize(scene.geometry, scene.mesh)) *
-      1e-3;
-  for (std::size_t k = 0; k < scene.contacts.size(); ++k) {
-    const ContactSpec& c = scene.contacts[k];
-    RigidBody rigid;
-    rigid.shape = c.shape;
-    rigid.position = Eigen::Vector3d(c.position_mm.data()) * 1e-3;
-    rigid.axis = Eigen::Vector3d(c.axis.data()).normalized();
-    rigid.radius = c.radius_mm * 1e-3;
-    rigid.motion = Eigen::Vector3d(c.motion_mm.data()) * 1e-3;
+  const Mesh& mesh = problem.model.mesh;
+  for (std::size_t k = 0; k < problem.contacts.size(); ++k) {
+    const Contact& c = problem.contacts[k];
+    RigidBody rigid = c.body;
     const FaceSet& set = mesh.face_sets.at(c.set);
     if (c.start_touching) {
       const Status placed = PlaceTouching(mesh, set, &rigid);
@@ -157,29 +147,29 @@ Status MakeContacts(const SceneSpec& scene, const Mesh& mesh, double shear_modul
                               c.name.c_str(), rigid.position.x() * 1e3, rigid.position.y() * 1e3,
                               rigid.position.z() * 1e3));
     }
-    const double penalty = DefaultContactPenalty(shear_modulus_pa, element_size,
-                                                 c.penalty_factor > 0 ? c.penalty_factor : 100);
-    const double tolerance =
-        c.penetration_tolerance_mm > 0 ? c.penetration_tolerance_mm * 1e-3 : 0.01 * element_size;
-    contacts->push_back(
-        std::make_unique<RigidContact>(mesh, set, rigid, penalty, c.friction, tolerance));
+    const double penalty =
+        DefaultContactPenalty(shear_modulus_pa, problem.finest_element_size_m, c.penalty_factor);
+    contacts->push_back(std::make_unique<RigidContact>(mesh, set, rigid, penalty, c.friction,
+                                                       c.penetration_tolerance_m));
   }
   return Status::Ok();
 }
 
 // Both finite-strain analyses: NONLINEAR_STATIC ramps the loads with the
 // load factor, QUASI_STATIC follows them through time.
-Status SolveFiniteStrain(const SceneSpec& scene, const Model& model, PhaseClock* clock_ptr,
-                         Solution* solution, StaticResult* result) {
+Status SolveFiniteStrain(const Problem& problem, PhaseClock* clock_ptr, Solution* solution,
+                         StaticResult* result) {
   PhaseClock& clock = *clock_ptr;
   Summary& summary = solution->summary;
+  const Model& model = problem.model;
   const Mesh& mesh = model.mesh;
   const DofMap& dofs = model.dofs;
-  const bool timed = scene.analysis.type == AnalysisSpec::Type::kQuasiStatic;
-  const std::unique_ptr<MaterialField> field = MakeMaterialField(model.materials, scene.analysis);
-  const bool plain = scene.mesh.element == ElementType::kTet4;
-  const bool full_bricks = scene.mesh.element == ElementType::kHex8Full;
-  const bool tet10_md = scene.mesh.element == ElementType::kTet10Md;
+  const bool timed = problem.analysis == AnalysisSpec::Type::kQuasiStatic;
+  const std::unique_ptr<MaterialField> field =
+      MakeMaterialField(model.materials, problem.relaxed_below_s, problem.frozen_above_s);
+  const bool plain = problem.element == ElementType::kTet4;
+  const bool full_bricks = problem.element == ElementType::kHex8Full;
+  const bool tet10_md = problem.element == ElementType::kTet10Md;
   const bool one_point = !mesh.quadratic() && !mesh.hexahedral();
   summary.element_type = tet10_md            ? "TET10_MD"
                          : mesh.quadratic()  ? "TET10"
@@ -188,12 +178,10 @@ Status SolveFiniteStrain(const SceneSpec& scene, const Model& model, PhaseClock*
                          : plain             ? "TET4"
                                              : "TET4_ANP";
   if (!one_point && ((timed && field->viscous()) || field->grows())) {
-    return Status::InvalidArgument(
-        "mesh.element",
-        std::string(field->grows() ? "growth" : "viscoelastic relaxation") +
-            " is modelled on 4-node tetrahedra (TET4_ANP, TET4), whose one integration point "
-            "keeps the history; this scene uses " +
-            summary.element_type);
+    // ValidateScene refuses these (scene_checks::ValidateHistoryElements).
+    return Status::Internal(std::string(field->grows() ? "growth" : "viscoelastic relaxation") +
+                            " reached a " + summary.element_type +
+                            " model, which keeps no history");
   }
   if (!timed && field->viscous()) {
     summary.notes.push_back(
@@ -209,27 +197,29 @@ Status SolveFiniteStrain(const SceneSpec& scene, const Model& model, PhaseClock*
                                         : MakeAverageNodalPressureTet4Model(mesh, *field);
   std::vector<std::unique_ptr<RigidContact>> contacts;
   PBA_RETURN_IF_ERROR(
-      MakeContacts(scene, mesh, field->Base(0).ShearModulus(), &contacts, &summary.notes));
+      MakeContacts(problem, field->Base(0).ShearModulus(), &contacts, &summary.notes));
   std::vector<const RigidContact*> contact_views;
   std::vector<std::pair<std::string, const RigidContact*>> named_contacts;
   for (std::size_t i = 0; i < contacts.size(); ++i) {
     contact_views.push_back(contacts[i].get());
-    named_contacts.emplace_back(scene.contacts[i].name, contacts[i].get());
+    named_contacts.emplace_back(problem.contacts[i].name, contacts[i].get());
   }
   const std::unique_ptr<FiniteStrainModel> touching =
       contacts.empty() ? nullptr : WithContact(*body, contact_views);
   const FiniteStrainModel& solid = touching ? *touching : *body;
 
-  auto solver = CreateLinearSolver(scene.analysis.linear_solver);
-  NewtonOptions options = OptionsOf(scene.analysis.nonlinear);
+  auto solver = CreateLinearSolver(problem.linear_solver);
+  NewtonOptions options = OptionsOf(problem.nonlinear);
   // Time: the load factor is t / T and the loads follow a(t); a static
   // analysis is the ramp a = load factor with instantaneous steps.
-  const TimeCurve curve(timed ? scene.analysis.time : TimeSpec{1.0, 0, 0, 0, {}});
+  TimeOptions unit_ramp;
+  unit_ramp.end_s = 1;
+  const TimeCurve curve(timed ? problem.time : unit_ramp);
   const double duration = curve.end_s();
   const auto amplitude = [&](double load) {
     return timed ? curve.Amplitude(load * duration) : load;
   };
-  if (timed) summary.notes.push_back(SetTimeSteps(scene.analysis.time, curve, *field, &options));
+  if (timed) summary.notes.push_back(SetTimeSteps(problem.time, curve, *field, &options));
   options.amplitude = amplitude;
   options.begin_increment = [&](double from, double to) {
     field->BeginStep(timed ? (to - from) * duration : 0.0, amplitude(to));
@@ -244,8 +234,8 @@ Status SolveFiniteStrain(const SceneSpec& scene, const Model& model, PhaseClock*
     };
   }
   std::vector<double> peak_contact_force(contacts.size(), 0.0);
-  const ExternalLoads loads = BuildLoads(scene, model);
-  const HistoryRecorder history(scene, model, timed ? duration : 0.0, named_contacts);
+  const ExternalLoads loads = BuildLoads(problem);
+  const HistoryRecorder history(problem, timed ? duration : 0.0, named_contacts);
   options.on_increment = [&](double load, const Eigen::VectorXd& u) {
     solution->step_load_factor.push_back(timed ? amplitude(load) : load);
     if (timed) solution->step_time_s.push_back(load * duration);
@@ -263,7 +253,7 @@ Status SolveFiniteStrain(const SceneSpec& scene, const Model& model, PhaseClock*
   const SolveOptions& solve_options = clock.options();
   std::vector<RigidContact*> contact_state;
   for (auto& contact : contacts) contact_state.push_back(contact.get());
-  Checkpointer checkpoints(solve_options, scene.name, duration, mesh, dofs, field.get(),
+  Checkpointer checkpoints(solve_options, problem.name, duration, mesh, dofs, field.get(),
                            contact_state);
   NewtonReport report;
   if (timed && checkpoints.restarts()) {
@@ -415,7 +405,7 @@ Status SolveFiniteStrain(const SceneSpec& scene, const Model& model, PhaseClock*
   for (std::size_t i = 0; i < contacts.size(); ++i) {
     const ContactMeasure m = contacts[i]->Measure(u);
     ContactSummary c;
-    c.name = scene.contacts[i].name;
+    c.name = problem.contacts[i].name;
     for (int k = 0; k < 3; ++k) c.force_n[k] = m.force(k);
     c.peak_force_n = peak_contact_force[i];
     c.area_mm2 = m.area * 1e6;
@@ -439,6 +429,8 @@ Status SolveFiniteStrain(const SceneSpec& scene, const Model& model, PhaseClock*
     if (IsAdmissible(f)) return field->At(e).Stress(f);
     return Eigen::Map<const Vector6d>(&solution->pk2_stress_pa[6 * static_cast<std::size_t>(e)]);
   };
+  // Each element's stress measured with its own material's initial compliance.
+  const ElasticityField elasticity = MakeElasticityField(model.materials);
   const ErrorEstimateResult estimate =
       mesh.quadratic()
           ? EstimateZzErrorTet10(
@@ -453,7 +445,7 @@ Status SolveFiniteStrain(const SceneSpec& scene, const Model& model, PhaseClock*
                   return stress_or_mean(
                       e, MeanDilatationF(f, MeanDilatation(ComputeTet10Geometry(x), ue)));
                 },
-                ComplianceMatrix(scene.material))
+                elasticity)
       : mesh.hexahedral()
           ? EstimateZzErrorHex8(
                 mesh,
@@ -467,9 +459,8 @@ Status SolveFiniteStrain(const SceneSpec& scene, const Model& model, PhaseClock*
                   return stress_or_mean(
                       e, MeanDilatationF(f, MeanDilatation(ComputeHex8Geometry(x), ue)));
                 },
-                ComplianceMatrix(scene.material))
-          : EstimateZzError(mesh, solution->pk2_stress_pa, volume,
-                            ComplianceMatrix(scene.material));
+                elasticity)
+          : EstimateZzError(mesh, solution->pk2_stress_pa, volume, elasticity);
   solution->error_indicator = estimate.element_share;
   summary.error.estimated = true;
   summary.error.method =
@@ -532,14 +523,14 @@ Status SolveFiniteStrain(const SceneSpec& scene, const Model& model, PhaseClock*
 
 }  // namespace
 
-Status SolveNonlinearStatic(const SceneSpec& scene, const Model& model, PhaseClock* clock,
-                            Solution* solution, StaticResult* result) {
-  return SolveFiniteStrain(scene, model, clock, solution, result);
+Status SolveNonlinearStatic(const Problem& problem, PhaseClock* clock, Solution* solution,
+                            StaticResult* result) {
+  return SolveFiniteStrain(problem, clock, solution, result);
 }
 
-Status SolveQuasiStatic(const SceneSpec& scene, const Model& model, PhaseClock* clock,
-                        Solution* solution, StaticResult* result) {
-  return SolveFiniteStrain(scene, model, clock, solution, result);
+Status SolveQuasiStatic(const Problem& problem, PhaseClock* clock, Solution* solution,
+                        StaticResult* result) {
+  return SolveFiniteStrain(problem, clock, solution, result);
 }
 
 }  // namespace pba

@@ -11,6 +11,7 @@
 
 #include "fem/hex8.h"
 #include "fem/tet10.h"
+#include "scene/problem.h"
 
 namespace pba {
 namespace {
@@ -19,7 +20,6 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 // How far outside an element (in natural coordinates) a point may lie and
 // still count as inside: a point on a face or on the body's surface is found.
 constexpr double kInsideTolerance = 1e-7;
-constexpr int kDefaultPoints = 50;
 
 // Column order of a profile table; kColumns names them with their units.
 enum Column {
@@ -66,7 +66,7 @@ bool InsideTetrahedron(const Eigen::Vector3d& xi, double tolerance) {
 }  // namespace
 
 int ProfilePointCount(const ProfileSpec& profile) {
-  return profile.points == 0 ? kDefaultPoints : profile.points;
+  return profile.points == 0 ? OutputOptions::kProfilePoints : profile.points;
 }
 
 ElementLocator::ElementLocator(const std::vector<double>& nodes_mm,
@@ -237,10 +237,9 @@ Eigen::VectorXd ElementLocator::ShapeFunctions(const Eigen::Vector3d& xi) const 
   return n;
 }
 
-Status SampleProfiles(const SceneSpec& scene, const Solution& solution,
+Status SampleProfiles(const std::vector<ProfileSpec>& profiles, const Solution& solution,
                       std::vector<ProfileTable>* tables) {
   tables->clear();
-  const auto& profiles = scene.outputs.profiles;
   if (profiles.empty()) return Status::Ok();
   const int npe = solution.nodes_per_element;
   const std::size_t nodes = solution.nodes_mm.size() / 3;

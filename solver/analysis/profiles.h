@@ -72,7 +72,7 @@ class ElementLocator {
   std::vector<int64_t> cell_elements_;  // element indices, ascending per cell
 };
 
-// Samples every line of scene.outputs.profiles from `solution` (fields at
+// Samples every line of `profiles` (outputs.profiles) from `solution` (fields at
 // the end of the analysis) into one table each, in order. Columns:
 // distance_mm, x_mm, y_mm, z_mm (the point, reference configuration),
 // ux_mm, uy_mm, uz_mm (displacement interpolated with the element's shape
@@ -85,7 +85,7 @@ class ElementLocator {
 // with e the Euler-Almansi strain of a finite-strain analysis or the small
 // strain of a linear one. A point in no element has NaN past its position.
 // Returns kInternal when the solution's connectivity is malformed.
-Status SampleProfiles(const SceneSpec& scene, const Solution& solution,
+Status SampleProfiles(const std::vector<ProfileSpec>& profiles, const Solution& solution,
                       std::vector<ProfileTable>* tables);
 
 // Per table: points, points inside, the largest |stress_along_pa| and where.

@@ -10,8 +10,6 @@
 namespace pba {
 namespace {
 
-bool IsFinite(const Eigen::Vector3d& v) { return v.allFinite(); }
-
 // Area of the bilinear quad through `x` [m^2]: |x_,xi x x_,eta| integrated
 // by the 2 x 2 Gauss rule (exact for a flat parallelogram).
 double QuadArea(const Eigen::Matrix<double, 4, 3>& x) {
@@ -61,28 +59,6 @@ class ContactModel : public FiniteStrainModel {
 };
 
 }  // namespace
-
-Status RigidBody::Validate(const std::string& path) const {
-  using Shape = ContactSpec::Shape;
-  if (shape != Shape::kFlatPunch && shape != Shape::kSphere && shape != Shape::kPlane) {
-    return Status::InvalidArgument(
-        path + ".shape", shape == Shape::kCylinderFlat || shape == Shape::kCylinderRounded
-                             ? "CYLINDER_FLAT and CYLINDER_ROUNDED are impactors of an "
-                               "EXPLICIT_DYNAMIC analysis; a static one takes FLAT_PUNCH, SPHERE "
-                               "or PLANE"
-                             : "give FLAT_PUNCH, SPHERE or PLANE");
-  }
-  if (!IsFinite(position)) return Status::InvalidArgument(path + ".position", "not finite");
-  if (!IsFinite(motion)) return Status::InvalidArgument(path + ".motion", "not finite");
-  if (shape != Shape::kSphere && !(IsFinite(axis) && axis.norm() > 0)) {
-    return Status::InvalidArgument(path + ".axis",
-                                   "must be a non-zero direction (into the tissue)");
-  }
-  if (shape != Shape::kPlane && !(std::isfinite(radius) && radius > 0)) {
-    return Status::InvalidArgument(path + ".radius", Format("must be positive (got %g m)", radius));
-  }
-  return Status::Ok();
-}
 
 RigidContact::RigidContact(const Mesh& mesh, const FaceSet& set, RigidBody body, double penalty,
                            double friction, double tolerance)

@@ -62,27 +62,10 @@
 #include "assembly/assembler.h"
 #include "assembly/dof_map.h"
 #include "mesh/mesh.h"
-#include "pba/scene.h"
 #include "pba/status.h"
+#include "scene/rigid_body.h"
 
 namespace pba {
-
-// A rigid body in solver units.
-struct RigidBody {
-  ContactSpec::Shape shape = ContactSpec::Shape::kNone;
-  Eigen::Vector3d position = Eigen::Vector3d::Zero();  // [m], at amplitude 0
-  // Unit direction into the tissue (FLAT_PUNCH, PLANE); normalised by
-  // RigidContact, so any non-zero length is accepted.
-  Eigen::Vector3d axis = Eigen::Vector3d(0, 0, -1);
-  double radius = 0;                                 // [m], FLAT_PUNCH and SPHERE: > 0
-  Eigen::Vector3d motion = Eigen::Vector3d::Zero();  // [m], displacement at amplitude 1
-
-  // InvalidArgument naming `path` + ".shape", ".axis", ".radius",
-  // ".position" or ".motion" when the body is not usable: no shape, an axis
-  // of zero (or non-finite) length for FLAT_PUNCH and PLANE, a radius <= 0
-  // for FLAT_PUNCH and SPHERE, a non-finite position or motion.
-  Status Validate(const std::string& path = "contact") const;
-};
 
 // Moves `body` along its axis (towards the tissue or back) so that it just
 // touches the nearest node of `set` at amplitude 0, no node penetrating:
@@ -203,6 +186,7 @@ std::unique_ptr<FiniteStrainModel> WithContact(const FiniteStrainModel& body,
 // displacement, while the tangent stays well conditioned (its contact
 // entries at most ~100 times the elements'); the Uzawa loop removes the
 // rest down to the tolerance.
-double DefaultContactPenalty(double shear_modulus_pa, double element_size_m, double factor = 100);
+double DefaultContactPenalty(double shear_modulus_pa, double element_size_m,
+                             double factor = kImplicitPenaltyFactor);
 
 }  // namespace pba

@@ -1,4 +1,4 @@
-// The static analyses SolveScene dispatches to. Each fills the element
+// The static analyses SolveProblem dispatches to. Each fills the element
 // fields of `solution` and the analysis-specific parts of its summary, and
 // returns the displacement and internal force from which SolveScene derives
 // the shared results (nodal fields, reactions, maxima).
@@ -9,7 +9,7 @@
 
 #include "core/phase_clock.h"
 #include "pba/solve.h"
-#include "scene/model_builder.h"
+#include "scene/problem.h"
 
 namespace pba {
 
@@ -25,17 +25,17 @@ struct StaticResult {
 
 // Small-strain linear elasticity, K u = f (hyperelastic models enter with
 // their initial moduli).
-Status SolveLinearStatic(const SceneSpec& scene, const Model& model, PhaseClock* clock,
-                         Solution* solution, StaticResult* result);
+Status SolveLinearStatic(const Problem& problem, PhaseClock* clock, Solution* solution,
+                         StaticResult* result);
 
 // Finite strain, total Lagrangian, Newton-Raphson with load stepping.
-Status SolveNonlinearStatic(const SceneSpec& scene, const Model& model, PhaseClock* clock,
-                            Solution* solution, StaticResult* result);
+Status SolveNonlinearStatic(const Problem& problem, PhaseClock* clock, Solution* solution,
+                            StaticResult* result);
 
-// Finite strain through time (scene.analysis.time): loads, motions and
+// Finite strain through time (problem.time): loads, motions and
 // growth follow the time curve, viscoelastic materials relax, rigid bodies
 // touch the tissue; every converged step goes into the history.
-Status SolveQuasiStatic(const SceneSpec& scene, const Model& model, PhaseClock* clock,
-                        Solution* solution, StaticResult* result);
+Status SolveQuasiStatic(const Problem& problem, PhaseClock* clock, Solution* solution,
+                        StaticResult* result);
 
 }  // namespace pba

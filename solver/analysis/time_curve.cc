@@ -4,7 +4,7 @@
 
 namespace pba {
 
-TimeCurve::TimeCurve(const TimeSpec& time) : end_s_(time.end_time_s) {
+TimeCurve::TimeCurve(const TimeOptions& time) : end_s_(time.end_s) {
   if (time.curve.empty()) {
     t_ = {0, end_s_};
     a_ = {0, 1};

@@ -1,17 +1,17 @@
-// The amplitude a(t) of a QUASI_STATIC analysis (scene.analysis.time) and
+// The amplitude a(t) of an analysis through time (Problem::time) and
 // the step bounds it implies.
 #pragma once
 
 #include <vector>
 
-#include "pba/scene.h"
+#include "scene/problem.h"
 
 namespace pba {
 
 class TimeCurve {
  public:
-  // `time` must be validated (end_time_s > 0, increasing curve times).
-  explicit TimeCurve(const TimeSpec& time);
+  // `time` must be validated (end_s > 0, increasing curve times).
+  explicit TimeCurve(const TimeOptions& time);
 
   double end_s() const { return end_s_; }
   // a(t): piecewise linear through the curve's points, the first value

@@ -11,12 +11,12 @@ namespace pba {
 
 constexpr double kMm = 1e-3;
 
-std::string SetTimeSteps(const TimeSpec& time, const TimeCurve& curve, const MaterialField& field,
-                         NewtonOptions* options) {
+std::string SetTimeSteps(const TimeOptions& time, const TimeCurve& curve,
+                         const MaterialField& field, NewtonOptions* options) {
   const double duration = curve.end_s();
-  const double initial = time.initial_step_s > 0 ? time.initial_step_s : duration / 20;
-  const double smallest = time.min_step_s > 0 ? time.min_step_s : duration * 1e-6;
-  const double largest = time.max_step_s > 0 ? time.max_step_s : duration / 5;
+  const double initial = time.initial_step_s;
+  const double smallest = time.min_step_s;
+  const double largest = time.max_step_s;
   // A term a thousand times faster than the loading follows it with a lag
   // of tau times the rate, which the exact exponential update gives at any
   // step; one slower than the analysis hardly moves. The others are
@@ -87,27 +87,12 @@ StructureDisplacement StructureProbe::Measure(std::size_t i, const Eigen::Vector
   return out;
 }
 
-Status CheckStructureNames(const SceneSpec& scene, const Mesh& mesh) {
-  const auto& names = scene.outputs.structure_displacements;
-  for (std::size_t i = 0; i < names.size(); ++i) {
-    if (names[i] == "*") continue;
-    if (std::find(mesh.region_names.begin(), mesh.region_names.end(), names[i]) ==
-        mesh.region_names.end()) {
-      return Status::InvalidArgument(
-          Format("outputs.structure_displacements[%zu]", i),
-          "the model has no structure named \"" + names[i] +
-              "\" (names as in the atlas's colour table or an inclusion's name)");
-    }
-  }
-  return Status::Ok();
-}
-
-HistoryRecorder::HistoryRecorder(const SceneSpec& scene, const Model& model, double duration_s,
+HistoryRecorder::HistoryRecorder(const Problem& problem, double duration_s,
                                  std::vector<std::pair<std::string, const RigidContact*>> contacts)
-    : mesh_(model.mesh),
+    : mesh_(problem.model.mesh),
       duration_s_(duration_s),
-      reaction_sets_(ReactionSetNames(scene)),
-      structures_(scene.outputs.structure_displacements, model.mesh),
+      reaction_sets_(problem.outputs.reaction_sets),
+      structures_(problem.outputs.structure_displacements, problem.model.mesh),
       contacts_(std::move(contacts)) {
   columns_ = {"time_s", "amplitude"};
   for (const std::string& set : reaction_sets_) {

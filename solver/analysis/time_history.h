@@ -14,7 +14,7 @@
 #include "analysis/rigid_contact.h"
 #include "analysis/time_curve.h"
 #include "pba/solve.h"
-#include "scene/model_builder.h"
+#include "scene/problem.h"
 
 namespace pba {
 
@@ -26,8 +26,8 @@ namespace pba {
 // terms follow the load with a lag the exact exponential update gives at
 // any step, slower ones hardly relax). Sets `options` and returns a note
 // for the summary.
-std::string SetTimeSteps(const TimeSpec& time, const TimeCurve& curve, const MaterialField& field,
-                         NewtonOptions* options);
+std::string SetTimeSteps(const TimeOptions& time, const TimeCurve& curve,
+                         const MaterialField& field, NewtonOptions* options);
 
 // The nodes of each reported structure with their volume weights.
 class StructureProbe {
@@ -44,15 +44,12 @@ class StructureProbe {
   std::vector<std::vector<std::pair<int, double>>> nodes_;  // (node, weight), weights sum to 1
 };
 
-// Fails naming outputs.structure_displacements[i] when the model has no
-// region of that name.
-Status CheckStructureNames(const SceneSpec& scene, const Mesh& mesh);
-
 // Rows of history.csv.
 class HistoryRecorder {
  public:
-  // `contacts` (named as in scene.contacts) must outlive the recorder.
-  HistoryRecorder(const SceneSpec& scene, const Model& model, double duration_s,
+  // `problem` and `contacts` (named as in problem.contacts) must outlive
+  // the recorder.
+  HistoryRecorder(const Problem& problem, double duration_s,
                   std::vector<std::pair<std::string, const RigidContact*>> contacts = {});
   // Appends the row of a converged step at load factor `load` (t = load T)
   // to solution->history, setting solution->history_columns on the first.

@@ -293,11 +293,11 @@ Status AssembleSystemHex8(const Mesh& mesh, const DofMap& dofs,
       system);
 }
 
-Status AssembleLinearSystem(const Mesh& mesh, const Matrix6d& d, const DofMap& dofs,
+Status AssembleLinearSystem(const Mesh& mesh, const ElasticityField& elasticity, const DofMap& dofs,
                             const std::vector<std::vector<int>>& colours,
                             const std::function<bool(double)>& keep_going, LinearSystem* system) {
   const ElementKernel kernel = [&](int e, Matrix12d* k, Vector12d* f) {
-    *k = Tet4Stiffness(ComputeTet4Geometry(TetCorners(mesh, e)), d);
+    *k = Tet4Stiffness(ComputeTet4Geometry(TetCorners(mesh, e)), elasticity.D(e));
     f->setZero();
     return true;
   };
@@ -306,12 +306,12 @@ Status AssembleLinearSystem(const Mesh& mesh, const Matrix6d& d, const DofMap& d
   return AssembleSystem(mesh, dofs, colours, kernel, options, keep_going, system);
 }
 
-Status AssembleLinearSystemTet10(const Mesh& mesh, const Matrix6d& d, const DofMap& dofs,
-                                 const std::vector<std::vector<int>>& colours,
+Status AssembleLinearSystemTet10(const Mesh& mesh, const ElasticityField& elasticity,
+                                 const DofMap& dofs, const std::vector<std::vector<int>>& colours,
                                  const std::function<bool(double)>& keep_going,
                                  LinearSystem* system) {
   const Tet10ElementKernel kernel = [&](int e, Matrix30d* k, Vector30d* f) {
-    *k = Tet10Stiffness(Tet10Coordinates(mesh, e), d);
+    *k = Tet10Stiffness(Tet10Coordinates(mesh, e), elasticity.D(e));
     f->setZero();
     return true;
   };
@@ -324,12 +324,12 @@ namespace {
 
 // The small-strain hexahedral assembly with element stiffness `stiffness`
 // (Hex8Stiffness or Hex8StiffnessFull), prescribed values lifted.
-Status AssembleLinearHex8(const Mesh& mesh, const Matrix6d& d,
+Status AssembleLinearHex8(const Mesh& mesh, const ElasticityField& elasticity,
                           Matrix24d (*stiffness)(const Hex8Nodes&, const Matrix6d&),
                           const DofMap& dofs, const std::vector<std::vector<int>>& colours,
                           const std::function<bool(double)>& keep_going, LinearSystem* system) {
   const Hex8ElementKernel kernel = [&](int e, Matrix24d* k, Vector24d* f) {
-    *k = stiffness(Hex8Coordinates(mesh, e), d);
+    *k = stiffness(Hex8Coordinates(mesh, e), elasticity.D(e));
     f->setZero();
     return true;
   };
@@ -340,18 +340,19 @@ Status AssembleLinearHex8(const Mesh& mesh, const Matrix6d& d,
 
 }  // namespace
 
-Status AssembleLinearSystemHex8(const Mesh& mesh, const Matrix6d& d, const DofMap& dofs,
-                                const std::vector<std::vector<int>>& colours,
+Status AssembleLinearSystemHex8(const Mesh& mesh, const ElasticityField& elasticity,
+                                const DofMap& dofs, const std::vector<std::vector<int>>& colours,
                                 const std::function<bool(double)>& keep_going,
                                 LinearSystem* system) {
-  return AssembleLinearHex8(mesh, d, Hex8Stiffness, dofs, colours, keep_going, system);
+  return AssembleLinearHex8(mesh, elasticity, Hex8Stiffness, dofs, colours, keep_going, system);
 }
 
-Status AssembleLinearSystemHex8Full(const Mesh& mesh, const Matrix6d& d, const DofMap& dofs,
+Status AssembleLinearSystemHex8Full(const Mesh& mesh, const ElasticityField& elasticity,
+                                    const DofMap& dofs,
                                     const std::vector<std::vector<int>>& colours,
                                     const std::function<bool(double)>& keep_going,
                                     LinearSystem* system) {
-  return AssembleLinearHex8(mesh, d, Hex8StiffnessFull, dofs, colours, keep_going, system);
+  return AssembleLinearHex8(mesh, elasticity, Hex8StiffnessFull, dofs, colours, keep_going, system);
 }
 
 }  // namespace pba

@@ -14,6 +14,7 @@
 #include "fem/hex8.h"
 #include "fem/tet10.h"
 #include "fem/tet4.h"
+#include "material/linear_elastic.h"
 #include "mesh/mesh.h"
 #include "pba/status.h"
 
@@ -108,31 +109,33 @@ Status AssembleSystemHex8(const Mesh& mesh, const DofMap& dofs,
                           const Hex8ElementKernel& kernel, const AssemblyOptions& options,
                           const std::function<bool(double)>& keep_going, LinearSystem* system);
 
-// Assembles K_ff and the right-hand side for elasticity matrix `d`.
+// Assembles K_ff and the right-hand side for the elasticity of each element,
+// `elasticity.D(e)`.
 // `keep_going(fraction)` is called between colours; returning false stops
 // the assembly with Status::Cancelled.
-Status AssembleLinearSystem(const Mesh& mesh, const Matrix6d& d, const DofMap& dofs,
+Status AssembleLinearSystem(const Mesh& mesh, const ElasticityField& elasticity, const DofMap& dofs,
                             const std::vector<std::vector<int>>& colours,
                             const std::function<bool(double)>& keep_going, LinearSystem* system);
 
 // AssembleLinearSystem for a quadratic mesh: small-strain 10-node elements
 // (Tet10Stiffness), prescribed values lifted to the right-hand side.
-Status AssembleLinearSystemTet10(const Mesh& mesh, const Matrix6d& d, const DofMap& dofs,
-                                 const std::vector<std::vector<int>>& colours,
+Status AssembleLinearSystemTet10(const Mesh& mesh, const ElasticityField& elasticity,
+                                 const DofMap& dofs, const std::vector<std::vector<int>>& colours,
                                  const std::function<bool(double)>& keep_going,
                                  LinearSystem* system);
 
 // AssembleLinearSystem for a hexahedral mesh: small-strain 8-node elements
 // with B-bar mean dilatation (Hex8Stiffness), prescribed values lifted to
 // the right-hand side.
-Status AssembleLinearSystemHex8(const Mesh& mesh, const Matrix6d& d, const DofMap& dofs,
-                                const std::vector<std::vector<int>>& colours,
+Status AssembleLinearSystemHex8(const Mesh& mesh, const ElasticityField& elasticity,
+                                const DofMap& dofs, const std::vector<std::vector<int>>& colours,
                                 const std::function<bool(double)>& keep_going,
                                 LinearSystem* system);
 
 // The same with the plain, fully integrated brick (Hex8StiffnessFull, C3D8
 // of Abaqus and CalculiX), which locks as nu -> 1/2.
-Status AssembleLinearSystemHex8Full(const Mesh& mesh, const Matrix6d& d, const DofMap& dofs,
+Status AssembleLinearSystemHex8Full(const Mesh& mesh, const ElasticityField& elasticity,
+                                    const DofMap& dofs,
                                     const std::vector<std::vector<int>>& colours,
                                     const std::function<bool(double)>& keep_going,
                                     LinearSystem* system);

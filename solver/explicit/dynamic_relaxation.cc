@@ -18,21 +18,19 @@ constexpr int64_t kMaxSteps = 200000;
 
 }  // namespace
 
-Status SolveDynamicRelaxation(const SceneSpec& scene, const Model& model, PhaseClock* clock,
-                              Solution* solution, StaticResult* result) {
-  const Mesh& mesh = model.mesh;
+Status SolveDynamicRelaxation(const Problem& problem, PhaseClock* clock, Solution* solution,
+                              StaticResult* result) {
+  const Mesh& mesh = problem.model.mesh;
   Summary& summary = solution->summary;
   clock->Begin("setup", 0.05, 0.1, "explicit model, fictitious masses");
   ExplicitSetup setup;
-  PBA_RETURN_IF_ERROR(MakeExplicitSetup(scene, model, &setup));
+  PBA_RETURN_IF_ERROR(MakeExplicitSetup(problem, &setup));
   TledModel& tled = *setup.tled;
   const int n_dofs = 3 * mesh.num_nodes();
   // Fictitious masses: every element's stable step 1 / factor (the scene's
-  // time_step_factor, else 0.9).
+  // time_step_factor, else ExplicitOptions::kRelaxationTimeStepFactor).
   constexpr double dt = 1;
-  const double factor = scene.analysis.explicit_dynamics.time_step_factor > 0
-                            ? scene.analysis.explicit_dynamics.time_step_factor
-                            : 0.9;
+  const double factor = problem.explicit_dynamics.time_step_factor;
   Eigen::VectorXd mass = Eigen::VectorXd::Zero(mesh.num_nodes());
   for (int e = 0; e < tled.num_elements(); ++e) {
     const TledMaterial& m = tled.material(e);
@@ -45,9 +43,7 @@ Status SolveDynamicRelaxation(const SceneSpec& scene, const Model& model, PhaseC
   }
   tled.SetLumpedMass(mass);
   tled.SetTimeStep(dt);
-  const double tolerance = scene.analysis.explicit_dynamics.relaxation_tolerance > 0
-                               ? scene.analysis.explicit_dynamics.relaxation_tolerance
-                               : 1e-4;
+  const double tolerance = problem.explicit_dynamics.relaxation_tolerance;
   solution->history_columns = {"step",    "amplitude",       "relative_residual", "estimated_error",
                                "kinetic", "damping_per_step"};
   clock->End();

@@ -64,17 +64,17 @@ std::string ElementName(const Mesh& mesh, int e) {
 
 }  // namespace
 
-Status SolveExplicitDynamic(const SceneSpec& scene, const Model& model, PhaseClock* clock,
-                            Solution* solution, StaticResult* result) {
-  const Mesh& mesh = model.mesh;
+Status SolveExplicitDynamic(const Problem& problem, PhaseClock* clock, Solution* solution,
+                            StaticResult* result) {
+  const Mesh& mesh = problem.model.mesh;
   Summary& summary = solution->summary;
-  ExplicitSpec options = scene.analysis.explicit_dynamics;
+  const ExplicitOptions& options = problem.explicit_dynamics;
   clock->Begin("setup", 0.05, 0.1, "explicit model: masses, gradients, stable step");
   ExplicitSetup setup;
-  PBA_RETURN_IF_ERROR(MakeExplicitSetup(scene, model, &setup));
+  PBA_RETURN_IF_ERROR(MakeExplicitSetup(problem, &setup));
   TledModel& tled = *setup.tled;
   const int n_nodes = mesh.num_nodes(), n_dofs = 3 * n_nodes;
-  const TimeCurve curve(scene.analysis.time);
+  const TimeCurve curve(problem.time);
   const double end_time = curve.end_s();
   const double factor = setup.time_step_factor;
   ExplicitSummary& run = summary.explicit_run;
@@ -108,7 +108,7 @@ Status SolveExplicitDynamic(const SceneSpec& scene, const Model& model, PhaseClo
 
   // Impactors.
   std::vector<Impactor> impactors;
-  for (const ContactSpec& c : scene.contacts) {
+  for (const Contact& c : problem.contacts) {
     std::vector<int> candidates = mesh.face_sets.at(c.set).nodes;
     if (options.erosion_strain > 0) {
       candidates.resize(n_nodes);
@@ -127,27 +127,15 @@ Status SolveExplicitDynamic(const SceneSpec& scene, const Model& model, PhaseClo
   }
   // Sensors.
   SensorArray sensors;
-  PBA_RETURN_IF_ERROR(SensorArray::Locate(scene.outputs.sensors, mesh, tled, &sensors));
+  const SensorOptions& sensing = problem.outputs.sensors;
+  PBA_RETURN_IF_ERROR(SensorArray::Locate(sensing.sensors, mesh, tled, &sensors));
   // The sensors record every step; their table is resampled every
-  // sample_interval and filtered at that rate, checked now rather than
-  // after the run.
-  const double sample_interval =
-      scene.outputs.sensor_interval_s > 0 ? scene.outputs.sensor_interval_s : 1e-6;
-  const int filter_order = scene.outputs.filter_order > 0 ? scene.outputs.filter_order : 4;
-  const double cutoff_hz =
-      scene.outputs.filter_cutoff_hz > 0 ? scene.outputs.filter_cutoff_hz : 1e4;
-  if (!sensors.empty()) {
-    ButterworthLowPass filter;
-    if (!ButterworthLowPass::Design(filter_order, cutoff_hz, 1 / sample_interval, &filter).ok()) {
-      return Status::InvalidArgument(
-          "outputs.filter_cutoff_hz",
-          Format("the sensors' filter (order %d, cutoff %g Hz) does not fit the sampling "
-                 "interval %g s: the cutoff must lie below half the sampling rate",
-                 filter_order, cutoff_hz, sample_interval));
-    }
-  }
-  const double output_interval =
-      options.output_interval_s > 0 ? options.output_interval_s : end_time / 100;
+  // interval_s and filtered at that rate (the filter was checked with the
+  // scene, SensorOptions::Validate).
+  const double sample_interval = sensing.interval_s;
+  const int filter_order = sensing.filter_order;
+  const double cutoff_hz = sensing.filter_cutoff_hz;
+  const double output_interval = options.output_interval_s;
   // At most this many frames of the displacement go into result.h5.
   const int max_frames = static_cast<int>(std::clamp<double>(
       2.5e8 / (24.0 * std::max(1, n_nodes)), 2, 1 + std::ceil(end_time / output_interval)));
@@ -390,7 +378,7 @@ Status SolveExplicitDynamic(const SceneSpec& scene, const Model& model, PhaseClo
       solution->history.push_back(std::move(row));
       next_output += output_interval;
     }
-    if (t >= next_frame - 1e-3 * dt && scene.outputs.displacement) {
+    if (t >= next_frame - 1e-3 * dt && problem.outputs.displacement) {
       solution->step_time_s.push_back(t);
       solution->step_load_factor.push_back(amplitude);
       for (int i = 0; i < n_dofs; ++i) {
@@ -413,7 +401,7 @@ Status SolveExplicitDynamic(const SceneSpec& scene, const Model& model, PhaseClo
 
   clock->Begin("recover", 0.9, 0.95, "end state, sensors, energies");
   // The end state, written as the last frame and row.
-  if (scene.outputs.displacement) {
+  if (problem.outputs.displacement) {
     solution->step_time_s.push_back(t);
     solution->step_load_factor.push_back(curve.Amplitude(t));
     for (int i = 0; i < n_dofs; ++i) solution->step_displacement_mm.push_back(u(i) / kMm);

@@ -27,11 +27,11 @@
 #include "analysis/static_analysis.h"
 #include "core/phase_clock.h"
 #include "pba/solve.h"
-#include "scene/model_builder.h"
+#include "scene/problem.h"
 
 namespace pba {
 
-Status SolveExplicitDynamic(const SceneSpec& scene, const Model& model, PhaseClock* clock,
-                            Solution* solution, StaticResult* result);
+Status SolveExplicitDynamic(const Problem& problem, PhaseClock* clock, Solution* solution,
+                            StaticResult* result);
 
 }  // namespace pba

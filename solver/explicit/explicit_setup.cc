@@ -9,40 +9,31 @@
 
 namespace pba {
 
-Status MakeExplicitSetup(const SceneSpec& scene, const Model& model, ExplicitSetup* out) {
+Status MakeExplicitSetup(const Problem& problem, ExplicitSetup* out) {
+  const Model& model = problem.model;
   const Mesh& mesh = model.mesh;
-  if (mesh.quadratic() || scene.mesh.element == ElementType::kHex8Full) {
-    return Status::InvalidArgument(
-        "mesh.element",
-        "the explicit engine takes TET4_ANP, TET4 or HEX8 (one point with "
-        "hourglass control), not 10-node tetrahedra or fully integrated bricks");
+  const bool relaxation = problem.analysis == AnalysisSpec::Type::kDynamicRelaxation;
+  // ValidateScene refuses the elements and materials the engine does not
+  // take (scene_checks::ValidateExplicit).
+  if (mesh.quadratic() || problem.element == ElementType::kHex8Full) {
+    return Status::Internal(std::string("the explicit engine was given ") +
+                            ElementName(problem.element) + " elements");
   }
-  for (std::size_t i = 0; i < scene.inclusions.size(); ++i) {
-    if (scene.inclusions[i].growth_strain != 0) {
-      return Status::InvalidArgument(Format("inclusions[%zu].growth_strain", i),
-                                     "growth is not modelled by the explicit engine; use "
-                                     "QUASI_STATIC for a growing inclusion");
-    }
-  }
-  const ExplicitSpec& spec = scene.analysis.explicit_dynamics;
+  const ExplicitOptions& spec = problem.explicit_dynamics;
   TledOptions& options = out->options;
-  options.average_nodal_pressure = scene.mesh.element != ElementType::kTet4;
-  // Dynamic relaxation damps on its own and wants the elastic answer.
-  const bool relaxation = scene.analysis.type == AnalysisSpec::Type::kDynamicRelaxation;
-  options.bulk_viscosity_linear = relaxation ? 0 : spec.bulk_viscosity_linear.value_or(0.06);
-  options.bulk_viscosity_quadratic = relaxation ? 0 : spec.bulk_viscosity_quadratic.value_or(1.5);
-  options.hourglass = spec.hourglass_coefficient > 0 ? spec.hourglass_coefficient : 0.05;
-  out->time_step_factor = spec.time_step_factor > 0 ? spec.time_step_factor : 0.7;
+  options.average_nodal_pressure = problem.element != ElementType::kTet4;
+  options.bulk_viscosity_linear = spec.bulk_viscosity_linear;
+  options.bulk_viscosity_quadratic = spec.bulk_viscosity_quadratic;
+  options.hourglass = spec.hourglass_coefficient;
+  out->time_step_factor = spec.time_step_factor;
 
   const SceneMaterials& materials = model.materials;
   std::vector<TledMaterial> tled_materials;
   for (std::size_t m = 0; m < materials.specs.size(); ++m) {
     const MaterialSpec& ms = materials.specs[m];
-    if (!ms.hyperelastic()) {
-      return Status::InvalidArgument("material",
-                                     "the explicit engine needs hyperelastic "
-                                     "materials; " +
-                                         materials.labels[m] + " is not");
+    if (!ms.hyperelastic() || materials.growth_strain[m] != 0) {
+      return Status::Internal("the explicit engine was given " + materials.labels[m] +
+                              ", which is not a hyperelastic material without growth");
     }
     TledMaterial t;
     t.model = MakeHyperelasticMaterial(ms);
@@ -60,36 +51,28 @@ Status MakeExplicitSetup(const SceneSpec& scene, const Model& model, ExplicitSet
 
   // Prescribed motion, the conditions in order (a later one wins).
   out->prescribed.assign(3 * static_cast<std::size_t>(mesh.num_nodes()), PrescribedDof());
-  for (const BoundaryConditionSpec& bc : scene.boundary_conditions) {
-    if (bc.is_load()) continue;
-    const int normal = bc.kind == BoundaryConditionSpec::Kind::kSymmetry
-                           ? PlaneNormalAxis(scene.geometry, bc.set)
-                           : -1;
-    for (int node : mesh.face_sets.at(bc.set).nodes) {
+  for (const Motion& motion : problem.motions) {
+    for (int node : mesh.face_sets.at(motion.set).nodes) {
       for (int c = 0; c < 3; ++c) {
         PrescribedDof& p = out->prescribed[3 * node + c];
-        switch (bc.kind) {
-          case BoundaryConditionSpec::Kind::kFixed:
+        switch (motion.kind) {
+          case Motion::Kind::kFixed:
             p = {PrescribedDof::kDisplacement, 0.0};
             break;
-          case BoundaryConditionSpec::Kind::kSymmetry:
-            if (c == normal) p = {PrescribedDof::kDisplacement, 0.0};
+          case Motion::Kind::kSymmetry:
+            if (c == motion.normal_axis) p = {PrescribedDof::kDisplacement, 0.0};
             break;
-          case BoundaryConditionSpec::Kind::kDisplacement:
-            if (bc.displacement_mm[c]) {
-              p = {PrescribedDof::kDisplacement, *bc.displacement_mm[c] * 1e-3};
-            }
+          case Motion::Kind::kDisplacement:
+            if (motion.value[c]) p = {PrescribedDof::kDisplacement, *motion.value[c]};
             break;
-          case BoundaryConditionSpec::Kind::kVelocity:
-            if (bc.velocity_m_per_s[c]) p = {PrescribedDof::kVelocity, *bc.velocity_m_per_s[c]};
-            break;
-          default:
+          case Motion::Kind::kVelocity:
+            if (motion.value[c]) p = {PrescribedDof::kVelocity, *motion.value[c]};
             break;
         }
       }
     }
   }
-  out->loads = std::make_unique<ExternalLoads>(BuildLoads(scene, model));
+  out->loads = std::make_unique<ExternalLoads>(BuildLoads(problem));
   out->has_loads = !out->loads->empty();
   return Status::Ok();
 }

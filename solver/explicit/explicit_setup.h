@@ -1,5 +1,5 @@
 // What the explicit analyses (EXPLICIT_DYNAMIC, DYNAMIC_RELAXATION) make of
-// a scene before their time loop: the TLED elements with every element's
+// a problem before their time loop: the TLED elements with every element's
 // material, the prescribed motion of every unknown and the loads.
 #pragma once
 
@@ -8,9 +8,8 @@
 
 #include "analysis/external_loads.h"
 #include "explicit/tled_model.h"
-#include "pba/scene.h"
 #include "pba/solve.h"
-#include "scene/model_builder.h"
+#include "scene/problem.h"
 
 namespace pba {
 
@@ -28,7 +27,7 @@ struct ExplicitSetup {
   std::vector<PrescribedDof> prescribed;  // 3 per node
   std::unique_ptr<ExternalLoads> loads;   // pressure, traction, gravity at a(t) = 1
   bool has_loads = false;
-  double time_step_factor = 0.7;
+  double time_step_factor = ExplicitOptions::kTimeStepFactor;
 };
 
 // The finite-strain fields (strain, Almansi strain, Cauchy and second
@@ -37,10 +36,10 @@ struct ExplicitSetup {
 // Green-Lagrange component.
 void FillExplicitFields(const TledModel& tled, Solution* solution, double* max_strain);
 
-// Builds the setup of a validated scene on its model. DYNAMIC_RELAXATION
-// takes the instantaneous elastic materials and no bulk viscosity. Fails naming the
-// field for what the engine cannot take: 10-node elements or full
-// hexahedra (mesh.element), growing inclusions (inclusions[i].growth_strain).
-Status MakeExplicitSetup(const SceneSpec& scene, const Model& model, ExplicitSetup* out);
+// Builds the setup of a problem. DYNAMIC_RELAXATION takes the instantaneous
+// elastic materials (its options carry no bulk viscosity). What the engine
+// cannot take (10-node elements, full hexahedra, growth) the scene's
+// validation refuses; reaching it here is an internal error.
+Status MakeExplicitSetup(const Problem& problem, ExplicitSetup* out);
 
 }  // namespace pba

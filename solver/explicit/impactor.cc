@@ -8,12 +8,6 @@
 namespace pba {
 namespace {
 
-constexpr double kMm = 1e-3;
-
-Eigen::Vector3d FromArray(const std::array<double, 3>& a, double scale) {
-  return Eigen::Vector3d(a[0], a[1], a[2]) * scale;
-}
-
 // Radial unit vector of r off the axis d (any perpendicular when on it).
 Eigen::Vector3d Radial(const Eigen::Vector3d& r, const Eigen::Vector3d& d, double* rho) {
   const Eigen::Vector3d off = r - r.dot(d) * d;
@@ -26,16 +20,16 @@ Eigen::Vector3d Radial(const Eigen::Vector3d& r, const Eigen::Vector3d& d, doubl
 
 }  // namespace
 
-Impactor::Impactor(const ContactSpec& spec, std::vector<int> candidates,
-                   const Eigen::VectorXd& mass, double dt)
-    : name_(spec.name),
-      shape_(spec.shape),
-      position_(FromArray(spec.position_mm, kMm)),
-      axis_(FromArray(spec.axis, 1).normalized()),
-      motion_(FromArray(spec.motion_mm, kMm)),
-      radius_(spec.radius_mm * kMm),
+Impactor::Impactor(const Contact& contact, std::vector<int> candidates, const Eigen::VectorXd& mass,
+                   double dt)
+    : name_(contact.name),
+      shape_(contact.body.shape),
+      position_(contact.body.position),
+      axis_(contact.body.axis.normalized()),
+      motion_(contact.body.motion),
+      radius_(contact.body.radius),
       nodes_(std::move(candidates)) {
-  const double factor = spec.penalty_factor > 0 ? spec.penalty_factor : 1;
+  const double factor = contact.penalty_factor;
   k_.resize(nodes_.size());
   k_min_ = std::numeric_limits<double>::infinity();
   k_max_ = 0;

@@ -1,5 +1,5 @@
 // Rigid impactors of an explicit analysis: bodies whose motion is
-// prescribed (scene.contacts, moved by motion times a(t)), pushing tissue
+// prescribed (Problem::contacts, moved by motion times a(t)), pushing tissue
 // nodes out of themselves by a penalty (node-to-rigid-surface).
 //
 // Geometry, with c the body's current reference point and d its unit axis
@@ -32,8 +32,8 @@
 #include <vector>
 
 #include "mesh/mesh.h"
-#include "pba/scene.h"
 #include "pba/status.h"
+#include "scene/problem.h"
 
 namespace pba {
 
@@ -46,10 +46,10 @@ struct ImpactorState {
 
 class Impactor {
  public:
-  // From a validated contact of the scene (mm in the spec, m here).
-  // `candidates`: the nodes it may push (the contact's set, and every node
-  // when elements may erode). `mass`: lumped nodal masses; dt: the step.
-  Impactor(const ContactSpec& spec, std::vector<int> candidates, const Eigen::VectorXd& mass,
+  // From a resolved contact of the problem. `candidates`: the nodes it may
+  // push (the contact's set, and every node when elements may erode).
+  // `mass`: lumped nodal masses; dt: the step.
+  Impactor(const Contact& contact, std::vector<int> candidates, const Eigen::VectorXd& mass,
            double dt);
 
   // Penetration of point x into the body with reference point c: returns

@@ -100,7 +100,7 @@ Status SensorArray::Locate(const std::vector<SensorSpec>& specs, const Mesh& mes
         if ((Centroid(mesh, e) - p).norm() <= r) s.elements.push_back(e);
       }
       if (s.elements.empty()) {
-        return Status::InvalidArgument(
+        return Status::FailedPrecondition(
             path + ".radius_mm",
             Format("sensor %s: no element's centroid lies within %g mm of (%g, %g, %g) mm; "
                    "enlarge the radius or move the sensor into the body",
@@ -112,7 +112,7 @@ Status SensorArray::Locate(const std::vector<SensorSpec>& specs, const Mesh& mes
         if (Contains(mesh, e, p)) s.elements.push_back(e);
       }
       if (s.elements.empty()) {
-        return Status::InvalidArgument(
+        return Status::FailedPrecondition(
             path + ".position_mm",
             Format("sensor %s at (%g, %g, %g) mm lies outside the body", spec.name.c_str(),
                    spec.position_mm[0], spec.position_mm[1], spec.position_mm[2]));

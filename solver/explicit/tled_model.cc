@@ -61,16 +61,15 @@ double TledMaterial::WaveSpeed() const { return std::sqrt((bulk + 4 * mu / 3) / 
 Status TledModel::Build(const Mesh& mesh, std::vector<TledMaterial> materials,
                         std::vector<int> material_of, const TledOptions& options,
                         std::unique_ptr<TledModel>* out) {
+  // A scene's validation refuses both (scene_checks::ValidateExplicit).
   if (mesh.quadratic()) {
-    return Status::InvalidArgument("mesh.element",
-                                   "the explicit engine takes 4-node tetrahedra or 8-node "
-                                   "hexahedra, not 10-node tetrahedra");
+    return Status::Internal(
+        "the explicit engine takes 4-node tetrahedra or 8-node hexahedra, not 10-node tetrahedra");
   }
   for (std::size_t m = 0; m < materials.size(); ++m) {
     if (!(materials[m].density > 0)) {
-      return Status::InvalidArgument(
-          "material.density_kg_per_m3",
-          "material " + materials[m].name + " has no density; an explicit analysis needs its mass");
+      return Status::Internal("the explicit engine was given material " + materials[m].name +
+                              ", which has no density");
     }
   }
   std::unique_ptr<TledModel> model(new TledModel());
@@ -108,7 +107,7 @@ Status TledModel::Build(const Mesh& mesh, std::vector<TledMaterial> materials,
       const Hex8Geometry g = ComputeHex8Geometry(x);
       volume = g.element_volume;
       if (!(g.min_jacobian > 0)) {
-        return Status::InvalidArgument(
+        return Status::FailedPrecondition(
             "mesh",
             Format("hexahedron %d is inverted or degenerate (det J %g)", e, g.min_jacobian));
       }
@@ -133,7 +132,7 @@ Status TledModel::Build(const Mesh& mesh, std::vector<TledMaterial> materials,
       const Tet4Geometry g = ComputeTet4Geometry(x);
       volume = g.volume;
       if (!(volume > 0)) {
-        return Status::InvalidArgument(
+        return Status::FailedPrecondition(
             "mesh", Format("tetrahedron %d is inverted or degenerate (volume %g m^3)", e, volume));
       }
       for (int a = 0; a < 4; ++a) {

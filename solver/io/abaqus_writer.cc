@@ -1,5 +1,7 @@
 // Abaqus/CalculiX input deck of a scene's model, so the same problem can be
 // run in a peer code (CalculiX: `ccx -i model`). SI units: m, N, Pa.
+#include "io/abaqus_writer.h"
+
 #include <algorithm>
 #include <cstdio>
 #include <fstream>
@@ -8,8 +10,7 @@
 #include "material/linear_elastic.h"
 #include "mesh/quadratic.h"
 #include "pba/solve.h"
-#include "scene/model_builder.h"
-#include "scene/unsolved.h"
+#include "scene/problem.h"
 
 namespace pba {
 namespace {
@@ -98,25 +99,22 @@ std::string MaterialCards(const MaterialSpec& m) {
 
 }  // namespace
 
-Status ExportAbaqusInput(const SceneSpec& scene, const std::filesystem::path& file) {
-  PBA_RETURN_IF_ERROR(ValidateScene(scene));
-  PBA_RETURN_IF_ERROR(RefuseUnsupportedFields(scene, "exported"));
-  Model model;
-  PBA_RETURN_IF_ERROR(BuildModel(scene, &model));
+Status WriteAbaqusDeck(const Problem& problem, const std::filesystem::path& file) {
+  const Model& model = problem.model;
   const Mesh& mesh = model.mesh;
   std::ofstream out(file, std::ios::trunc);
   if (!out) return Status::Io("cannot write " + file.string());
   char line[160];
-  out << "** PBA " << SolverVersion() << " model of scene '" << scene.name << "'\n"
+  out << "** PBA " << SolverVersion() << " model of scene '" << problem.name << "'\n"
       << "** Units: m, N, Pa. Node and element numbers are PBA's indices + 1.\n"
       << "*HEADING\n"
-      << (scene.name.empty() ? "pba model" : scene.name) << "\n*NODE, NSET=NALL\n";
+      << (problem.name.empty() ? "pba model" : problem.name) << "\n*NODE, NSET=NALL\n";
   for (int i = 0; i < mesh.num_nodes(); ++i) {
     std::snprintf(line, sizeof line, "%d, %.13g, %.13g, %.13g\n", i + 1, mesh.nodes(i, 0),
                   mesh.nodes(i, 1), mesh.nodes(i, 2));
     out << line;
   }
-  if (scene.mesh.element == ElementType::kTet10Md) {
+  if (problem.element == ElementType::kTet10Md) {
     out << "** PBA solves this scene with TET10_MD (10-node, mean dilatation); CalculiX has no\n"
            "** mean-dilatation 10-node element, so C3D10 here is the plain element, which locks\n"
            "** when nearly incompressible: set mesh.element: TET10 to compare the same discrete\n"
@@ -125,13 +123,12 @@ Status ExportAbaqusInput(const SceneSpec& scene, const std::filesystem::path& fi
     out << "** PBA solves this scene with TET10; C3D10 is the same element (the same 10 nodes in\n"
            "** the same order, the same 4-point rule), so both codes answer one discrete "
            "problem.\n";
-  } else if (scene.mesh.element == ElementType::kHex8) {
+  } else if (problem.element == ElementType::kHex8) {
     out << "** PBA solves this scene with HEX8 (mean dilatation); C3D8 is fully integrated and\n"
            "** locks when nearly incompressible: set mesh.element: HEX8_FULL to compare the same\n"
            "** discrete problem.\n";
-  } else if (scene.analysis.type == AnalysisSpec::Type::kNonlinearStatic &&
-             (scene.mesh.element == ElementType::kTet4Anp ||
-              scene.mesh.element == ElementType::kDefault)) {
+  } else if (problem.analysis == AnalysisSpec::Type::kNonlinearStatic &&
+             problem.element == ElementType::kTet4Anp) {
     out << "** PBA solves this scene with TET4_ANP (average nodal pressure); C3D4 is the plain\n"
            "** tetrahedron, which locks when nearly incompressible: set mesh.element: TET4 (or\n"
            "** TET10, C3D10) to compare the same discrete problem.\n";
@@ -158,24 +155,37 @@ Status ExportAbaqusInput(const SceneSpec& scene, const std::filesystem::path& fi
     out << "*NSET, NSET=" << Upper(name) << "\n";
     WriteIdList(out, set.nodes);
   }
-  // An orthotropic model's axes as a rectangular system: local 1 through
-  // point a, the 1-2 plane through point b (the orthonormalised axes, so the
-  // deck's Gram-Schmidt is PBA's).
-  const bool oriented = scene.material.kind == MaterialSpec::Kind::kOrthotropicElastic;
-  if (oriented) {
-    const OrthotropicElasticParams& p = scene.material.orthotropic_elastic;
-    const Eigen::Matrix3d q = MaterialFrame(p.axis_1, p.axis_2);
-    out << "*ORIENTATION, NAME=MATERIAL_AXES, SYSTEM=RECTANGULAR\n"
-        << DataLines({q(0, 0), q(1, 0), q(2, 0), q(0, 1), q(1, 1), q(2, 1)});
+  // One element set, material and section per material of the model (the
+  // scene's, a region's, an inclusion's, a library entry's); an orthotropic
+  // model's axes as a rectangular system: local 1 through point a, the 1-2
+  // plane through point b (the orthonormalised axes, so the deck's
+  // Gram-Schmidt is PBA's).
+  const SceneMaterials& materials = model.materials;
+  std::vector<std::vector<int>> elements_of(materials.specs.size());
+  for (int e = 0; e < mesh.num_elements(); ++e) {
+    elements_of[materials.of_element[e]].push_back(e);
   }
-  out << "*MATERIAL, NAME=TISSUE\n"
-      << MaterialCards(scene.material) << "*SOLID SECTION, ELSET=EALL, MATERIAL=TISSUE"
-      << (oriented ? ", ORIENTATION=MATERIAL_AXES" : "") << "\n";
-  if (scene.analysis.type == AnalysisSpec::Type::kNonlinearStatic) {
+  for (std::size_t k = 0; k < materials.specs.size(); ++k) {
+    if (elements_of[k].empty()) continue;
+    const MaterialSpec& spec = materials.specs[k];
+    const std::string name = "TISSUE" + (k == 0 ? std::string() : "_" + std::to_string(k));
+    out << "** " << materials.labels[k] << "\n*ELSET, ELSET=" << name << "\n";
+    WriteIdList(out, elements_of[k]);
+    const bool oriented = spec.kind == MaterialSpec::Kind::kOrthotropicElastic;
+    if (oriented) {
+      const OrthotropicElasticParams& p = spec.orthotropic_elastic;
+      const Eigen::Matrix3d q = MaterialFrame(p.axis_1, p.axis_2);
+      out << "*ORIENTATION, NAME=AXES_" << name << ", SYSTEM=RECTANGULAR\n"
+          << DataLines({q(0, 0), q(1, 0), q(2, 0), q(0, 1), q(1, 1), q(2, 1)});
+    }
+    out << "*MATERIAL, NAME=" << name << "\n"
+        << MaterialCards(spec) << "*SOLID SECTION, ELSET=" << name << ", MATERIAL=" << name
+        << (oriented ? ", ORIENTATION=AXES_" + name : std::string()) << "\n";
+  }
+  if (problem.analysis == AnalysisSpec::Type::kNonlinearStatic) {
     // Geometric nonlinearity, automatic incrementation from the same first
     // increment PBA takes.
-    const int increments =
-        scene.analysis.nonlinear.increments > 0 ? scene.analysis.nonlinear.increments : 5;
+    const int increments = problem.nonlinear.increments;
     std::snprintf(line, sizeof line, "%.13g, 1.0, 1e-5, %.13g\n", 1.0 / increments,
                   std::max(0.5, 1.0 / increments));
     // Field convergence controls as tight as PBA's own (relative residual
@@ -200,8 +210,8 @@ Status ExportAbaqusInput(const SceneSpec& scene, const std::filesystem::path& fi
   // edges); with NLGEOM CalculiX makes it a follower load, as PBA does.
   static const int kFaceOpposite[4] = {3, 4, 2, 1};  // corner (0-based) -> face label
   bool dload = false;
-  for (const BoundaryConditionSpec& bc : scene.boundary_conditions) {
-    if (bc.kind != BoundaryConditionSpec::Kind::kPressure || bc.pressure_pa == 0) continue;
+  for (const SurfaceLoad& bc : problem.surface_loads) {
+    if (bc.kind != SurfaceLoad::Kind::kPressure || bc.pressure_pa == 0) continue;
     if (!dload) out << "*DLOAD\n";
     dload = true;
     const FaceSet& set = mesh.face_sets.at(bc.set);
@@ -224,7 +234,7 @@ Status ExportAbaqusInput(const SceneSpec& scene, const std::filesystem::path& fi
   // Tractions and gravity as the nodal forces PBA turns them into (exact for
   // uniform loads; on a 10-node mesh the consistent forces, mid-edge nodes
   // included).
-  const ExternalLoads loads = BuildLoads(scene, model);
+  const ExternalLoads loads = BuildLoads(problem);
   bool cload = false;
   for (int dof = 0; dof < model.dofs.num_dofs(); ++dof) {
     const double f = loads.dead_force()(dof);
@@ -234,7 +244,7 @@ Status ExportAbaqusInput(const SceneSpec& scene, const std::filesystem::path& fi
     std::snprintf(line, sizeof line, "%d, %d, %.13g\n", dof / 3 + 1, dof % 3 + 1, f);
     out << line;
   }
-  for (const auto& name : ReactionSetNames(scene)) {
+  for (const auto& name : problem.outputs.reaction_sets) {
     out << "*NODE PRINT, NSET=" << Upper(name) << ", TOTALS=ONLY\nRF\n";
   }
   out << "*NODE PRINT, NSET=NALL\nU\n*NODE FILE\nU\n*EL FILE\nS\n*END STEP\n";

@@ -1,4 +1,6 @@
 // result.h5 (HDF5 C API) and result.xdmf (XDMF 3, the ParaView view of it).
+#include "io/result_writer.h"
+
 #include <algorithm>
 #include <cctype>
 #include <chrono>
@@ -58,16 +60,16 @@ std::string RowSlab(const std::string& path, size_t first, size_t rows, size_t r
 }
 
 // The final fields as XDMF attributes of one grid.
-std::string FieldAttributes(const SceneSpec& scene, const Solution& s) {
+std::string FieldAttributes(const OutputOptions& outputs, const Solution& s) {
   const size_t nodes = s.nodes_mm.size() / 3, elements = s.tets.size() / s.nodes_per_element;
   const std::string nn = std::to_string(nodes), ne = std::to_string(elements);
   std::string x;
-  if (scene.outputs.displacement) {
+  if (outputs.displacement) {
     x += "      <Attribute Name=\"displacement\" AttributeType=\"Vector\" Center=\"Node\">\n       "
          " " +
          Item(nn + " 3", "/fields/displacement") + "\n      </Attribute>\n";
   }
-  if (scene.outputs.von_mises) {
+  if (outputs.von_mises) {
     x += "      <Attribute Name=\"von_mises\" AttributeType=\"Scalar\" Center=\"Cell\">\n        " +
          Item(ne, "/fields/von_mises") + "\n      </Attribute>\n";
   }
@@ -77,33 +79,34 @@ std::string FieldAttributes(const SceneSpec& scene, const Solution& s) {
          Item(ne, "/fields/error_indicator") + "\n      </Attribute>\n";
   }
   static const char* kComponents[6] = {"xx", "yy", "zz", "yz", "xz", "xy"};
-  for (int c = 0; c < 6 && scene.outputs.stress; ++c) {
+  for (int c = 0; c < 6 && outputs.stress; ++c) {
     x += ComponentAttribute(std::string("stress_") + kComponents[c], "/fields/stress", c, elements);
   }
-  for (int c = 0; c < 6 && scene.outputs.strain; ++c) {
+  for (int c = 0; c < 6 && outputs.strain; ++c) {
     x += ComponentAttribute(std::string("strain_") + kComponents[c], "/fields/strain", c, elements);
   }
   // Finite-strain fields (nonlinear analyses only).
-  for (int c = 0; c < 6 && scene.outputs.pk2_stress && !s.pk2_stress_pa.empty(); ++c) {
+  for (int c = 0; c < 6 && outputs.pk2_stress && !s.pk2_stress_pa.empty(); ++c) {
     x += ComponentAttribute(std::string("pk2_stress_") + kComponents[c], "/fields/pk2_stress", c,
                             elements);
   }
-  for (int c = 0; c < 6 && scene.outputs.almansi_strain && !s.almansi_strain.empty(); ++c) {
+  for (int c = 0; c < 6 && outputs.almansi_strain && !s.almansi_strain.empty(); ++c) {
     x += ComponentAttribute(std::string("almansi_strain_") + kComponents[c],
                             "/fields/almansi_strain", c, elements);
   }
-  if (scene.outputs.jacobian && !s.jacobian.empty()) {
+  if (outputs.jacobian && !s.jacobian.empty()) {
     x += "      <Attribute Name=\"jacobian\" AttributeType=\"Scalar\" Center=\"Cell\">\n        " +
          Item(ne, "/fields/jacobian") + "\n      </Attribute>\n";
   }
   return x;
 }
 
-std::string XdmfText(const SceneSpec& scene, const Solution& s) {
+std::string XdmfText(const std::string& scene_name, const OutputOptions& outputs,
+                     const Solution& s) {
   const size_t nodes = s.nodes_mm.size() / 3, elements = s.tets.size() / s.nodes_per_element;
   const std::string nn = std::to_string(nodes), ne = std::to_string(elements);
   const std::string npe = std::to_string(s.nodes_per_element);
-  const std::string name = scene.name.empty() ? "result" : scene.name;
+  const std::string name = scene_name.empty() ? "result" : scene_name;
   // NodesPerElement only for the quadratic cell, where it restates the type;
   // 4-node files stay as they were.
   const std::string per_element =
@@ -121,7 +124,7 @@ std::string XdmfText(const SceneSpec& scene, const Solution& s) {
   const size_t steps = s.step_load_factor.size();
   if (steps == 0) {
     x += "    <Grid Name=\"" + name + "\" GridType=\"Uniform\">\n" + mesh +
-         FieldAttributes(scene, s) + "    </Grid>\n";
+         FieldAttributes(outputs, s) + "    </Grid>\n";
   } else {
     // A temporal collection over the load increments (time = load factor):
     // the displacement of every increment, all fields at the last.
@@ -133,8 +136,8 @@ std::string XdmfText(const SceneSpec& scene, const Solution& s) {
       x += "    <Grid Name=\"increment " + std::to_string(k + 1) +
            "\" GridType=\"Uniform\">\n      <Time Value=\"" + time + "\" />\n" + mesh;
       if (k + 1 == steps) {
-        x += FieldAttributes(scene, s);
-      } else if (scene.outputs.displacement) {
+        x += FieldAttributes(outputs, s);
+      } else if (outputs.displacement) {
         x += "      <Attribute Name=\"displacement\" AttributeType=\"Vector\" Center=\"Node\">\n"
              "        " +
              RowSlab("/steps/displacement", k * nodes, nodes, steps * nodes, 3) +
@@ -262,8 +265,8 @@ Status WriteSensors(const Solution& solution, const std::filesystem::path& dir) 
 
 }  // namespace
 
-Status WriteResultFiles(const SceneSpec& scene, Solution* solution,
-                        const std::filesystem::path& dir) {
+Status WriteResults(const std::string& scene_name, const OutputOptions& outputs, Solution* solution,
+                    const std::filesystem::path& dir) {
   const auto start = std::chrono::steady_clock::now();
   const int npe = solution->nodes_per_element;
   if ((npe != 4 && npe != 10 && npe != 8) || solution->tets.size() % npe != 0) {
@@ -276,7 +279,7 @@ Status WriteResultFiles(const SceneSpec& scene, Solution* solution,
     H5Writer w(h5);
     if (!w.ok()) return Status::Io("cannot create " + h5.string());
     WriteStringAttribute(w.file(), "pba_version", SolverVersion());
-    WriteStringAttribute(w.file(), "scene_name", scene.name);
+    WriteStringAttribute(w.file(), "scene_name", scene_name);
     w.Group("/mesh");
     w.Group("/fields");
     w.Dataset("/mesh/nodes", solution->nodes_mm, 3, "mm", "x y z");
@@ -288,29 +291,29 @@ Status WriteResultFiles(const SceneSpec& scene, Solution* solution,
                          : "node indices, 0-based");
     w.Attribute("/mesh/tets", "element_type", ElementTypeName(npe));
     const std::string voigt = "xx yy zz yz xz xy";
-    if (scene.outputs.displacement)
+    if (outputs.displacement)
       w.Dataset("/fields/displacement", solution->displacement_mm, 3, "mm", "x y z");
-    if (scene.outputs.stress) w.Dataset("/fields/stress", solution->stress_pa, 6, "Pa", voigt);
-    if (scene.outputs.strain) {
+    if (outputs.stress) w.Dataset("/fields/stress", solution->stress_pa, 6, "Pa", voigt);
+    if (outputs.strain) {
       w.Dataset("/fields/strain", solution->strain, 6, "1", voigt + " (engineering shear)");
     }
-    if (scene.outputs.von_mises) w.Dataset("/fields/von_mises", solution->von_mises_pa, 0, "Pa");
+    if (outputs.von_mises) w.Dataset("/fields/von_mises", solution->von_mises_pa, 0, "Pa");
     const bool finite_strain = !solution->jacobian.empty();
-    if (finite_strain && scene.outputs.pk2_stress) {
+    if (finite_strain && outputs.pk2_stress) {
       w.Dataset("/fields/pk2_stress", solution->pk2_stress_pa, 6, "Pa",
                 voigt + ", second Piola-Kirchhoff, reference configuration");
     }
-    if (finite_strain && scene.outputs.almansi_strain) {
+    if (finite_strain && outputs.almansi_strain) {
       w.Dataset("/fields/almansi_strain", solution->almansi_strain, 6, "1",
                 voigt + " (engineering shear), Euler-Almansi, current configuration");
     }
-    if (finite_strain && scene.outputs.jacobian) {
+    if (finite_strain && outputs.jacobian) {
       w.Dataset("/fields/jacobian", solution->jacobian, 0, "1", "J = det F, volume ratio");
     }
     if (!solution->error_indicator.empty()) {
       w.Dataset("/fields/error_indicator", solution->error_indicator, 0, "1");
     }
-    if (!solution->step_load_factor.empty() && scene.outputs.displacement) {
+    if (!solution->step_load_factor.empty() && outputs.displacement) {
       // One record per converged load increment: the path to the answer.
       w.Group("/steps");
       w.Dataset("/steps/load_factor", solution->step_load_factor, 0, "1",
@@ -325,7 +328,7 @@ Status WriteResultFiles(const SceneSpec& scene, Solution* solution,
   }
   const std::filesystem::path xdmf = dir / "result.xdmf";
   std::ofstream out(xdmf, std::ios::trunc);
-  out << XdmfText(scene, *solution);
+  out << XdmfText(scene_name, outputs, *solution);
   out.close();
   if (!out) return Status::Io("cannot write " + xdmf.string());
 

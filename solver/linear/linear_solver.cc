@@ -2,13 +2,25 @@
 
 namespace pba {
 
-std::unique_ptr<LinearSolver> CreateLinearSolver(AnalysisSpec::LinearSolver kind) {
+const char* LinearSolverOptions::KindName() const {
   switch (kind) {
-    case AnalysisSpec::LinearSolver::kEigenLdlt:
+    case Kind::kEigenLdlt:
+      return "EIGEN_LDLT";
+    case Kind::kPcg:
+      return "PCG";
+    case Kind::kCholmod:
+      break;
+  }
+  return "CHOLMOD";
+}
+
+std::unique_ptr<LinearSolver> CreateLinearSolver(const LinearSolverOptions& options) {
+  switch (options.kind) {
+    case LinearSolverOptions::Kind::kEigenLdlt:
       return CreateEigenLdltSolver();
-    case AnalysisSpec::LinearSolver::kPcg:
+    case LinearSolverOptions::Kind::kPcg:
       return CreatePcgSolver();
-    case AnalysisSpec::LinearSolver::kCholmod:
+    case LinearSolverOptions::Kind::kCholmod:
       break;
   }
   return CreateCholmodSolver();

@@ -7,7 +7,6 @@
 #include <memory>
 #include <string>
 
-#include "pba/scene.h"
 #include "pba/status.h"
 
 namespace pba {
@@ -25,7 +24,20 @@ class LinearSolver {
   virtual std::unique_ptr<LinearSolver> NewOfSameKind() const = 0;
 };
 
-std::unique_ptr<LinearSolver> CreateLinearSolver(AnalysisSpec::LinearSolver kind);
+// Which backend an implicit analysis factorises with (analysis.linear_solver).
+struct LinearSolverOptions {
+  enum class Kind {
+    kCholmod,    // supernodal sparse Cholesky (SuiteSparse), the default
+    kEigenLdlt,  // Eigen's simplicial LDL^T, the fallback
+    kPcg,        // conjugate gradients with incomplete Cholesky (CreatePcgSolver)
+  };
+  Kind kind = Kind::kCholmod;
+
+  // "CHOLMOD", "EIGEN_LDLT" or "PCG": the scene's name for the kind.
+  const char* KindName() const;
+};
+
+std::unique_ptr<LinearSolver> CreateLinearSolver(const LinearSolverOptions& options);
 
 // The backends (linear/cholmod_solver.cc, linear/eigen_ldlt_solver.cc,
 // linear/pcg_solver.cc).

@@ -3,7 +3,10 @@
 #include <Eigen/Geometry>
 #include <Eigen/LU>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <string>
+#include <utility>
 
 #include "material/hyperelastic.h"
 
@@ -50,6 +53,23 @@ Matrix6d IsotropicCompliance(double e, double nu) {
     c(i + 3, i + 3) = 2 * (1 + nu) / e;
   }
   return c;
+}
+
+ElasticityField::ElasticityField(std::vector<Matrix6d> d, std::vector<Matrix6d> compliance,
+                                 std::vector<int> of_element)
+    : d_(std::move(d)), compliance_(std::move(compliance)), of_element_(std::move(of_element)) {
+  bool valid = d_.size() == compliance_.size() && !d_.empty();
+  for (int k : of_element_) valid = valid && k >= 0 && k < static_cast<int>(d_.size());
+  if (!valid) {
+    std::fprintf(stderr,
+                 "ElasticityField: %zu matrices, %zu compliances, a material out of range\n",
+                 d_.size(), compliance_.size());
+    std::abort();
+  }
+}
+
+ElasticityField ElasticityField::Uniform(const Matrix6d& d, int elements) {
+  return ElasticityField({d}, {d.inverse()}, std::vector<int>(elements, 0));
 }
 
 Status OrthotropicElasticParams::Validate(const std::string& path) const {

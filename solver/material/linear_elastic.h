@@ -5,6 +5,7 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <vector>
 
 #include "fem/tet4.h"
 #include "pba/scene.h"
@@ -51,6 +52,31 @@ Matrix6d StressRotation(const Eigen::Matrix3d& frame);
 // M^-1 the Bond matrix of Q^T), so that S_global = D_global^-1 when S = D^-1.
 Matrix6d RotateElasticity(const Matrix6d& d_material, const Eigen::Matrix3d& frame);
 Matrix6d RotateCompliance(const Matrix6d& s_material, const Eigen::Matrix3d& frame);
+
+// The small-strain elasticity of every element of a model: one elasticity
+// matrix D [Pa] and compliance S = D^-1 [1/Pa] per distinct material, both in
+// the global frame, and the material of each element. Assembly, recovery
+// and the energy norms of the error estimators all read it, so a body of
+// several materials (regions, inclusions, a tissue library) is one model in
+// each of them.
+class ElasticityField {
+ public:
+  // `d[k]` and `compliance[k]` of material k; `of_element[e]` in range.
+  ElasticityField(std::vector<Matrix6d> d, std::vector<Matrix6d> compliance,
+                  std::vector<int> of_element);
+  // Every element with elasticity `d` (compliance by inversion).
+  static ElasticityField Uniform(const Matrix6d& d, int elements);
+
+  const Matrix6d& D(int e) const { return d_[of_element_[e]]; }
+  const Matrix6d& Compliance(int e) const { return compliance_[of_element_[e]]; }
+  int num_elements() const { return static_cast<int>(of_element_.size()); }
+  int num_materials() const { return static_cast<int>(d_.size()); }
+  int material_of(int e) const { return of_element_[e]; }
+
+ private:
+  std::vector<Matrix6d> d_, compliance_;
+  std::vector<int> of_element_;
+};
 
 // von Mises equivalent stress of a Voigt stress vector [Pa].
 double VonMises(const Vector6d& stress);

@@ -29,6 +29,29 @@ std::vector<std::pair<std::string, const MaterialSpec*>> NamedMaterials(const Sc
 
 }  // namespace
 
+AutoFormulationOptions AutoFormulationOptions::FromScene(const SceneSpec& scene) {
+  AutoFormulationOptions options;
+  options.written_tolerance = scene.formulation_tolerance;
+  options.auto_formulation = scene.formulation == Formulation::kAuto;
+  if (scene.formulation_tolerance != 0) options.tolerance = scene.formulation_tolerance;
+  return options;
+}
+
+Status AutoFormulationOptions::Validate() const {
+  if (written_tolerance == 0) return Status::Ok();
+  if (!auto_formulation) {
+    return Status::InvalidArgument(
+        "formulation_tolerance",
+        "applies only to formulation: AUTO (the scene is solved as written)");
+  }
+  if (!(written_tolerance > 0 && written_tolerance < 1)) {
+    return Status::InvalidArgument(
+        "formulation_tolerance",
+        "must be a fraction between 0 and 1 (0.01 is 1 %), got " + FormatNumber(written_tolerance));
+  }
+  return Status::Ok();
+}
+
 void ReduceViscoelasticity(const SceneSpec& scene, SceneSpec* reduced,
                            std::vector<ModelDecision>* decisions) {
   bool any = !scene.material_library.empty();
@@ -40,7 +63,7 @@ void ReduceViscoelasticity(const SceneSpec& scene, SceneSpec* reduced,
         {"viscoelasticity", "instantaneous modulus", "a static analysis has no time to relax in"});
     return;
   }
-  const double loading = TimeCurve(scene.analysis.time).ShortestLoading();
+  const double loading = TimeCurve(TimeOptions::FromSpec(scene.analysis.time)).ShortestLoading();
   const double relaxed = loading / 100, frozen = 100 * scene.analysis.time.end_time_s;
   reduced->analysis.relaxed_below_s = relaxed;
   reduced->analysis.frozen_above_s = frozen;

@@ -14,6 +14,23 @@ namespace pba {
 // Strain (largest component magnitude) above which finite strain is kept.
 constexpr double kFiniteStrainThreshold = 0.02;
 
+// The options of `formulation: AUTO`, defaults applied.
+struct AutoFormulationOptions {
+  // The largest relative difference between the reduced and the full
+  // model, on meshes twice as coarse, at which the reduced one is kept
+  // (scene field formulation_tolerance; 0 there: this default).
+  double tolerance = 0.01;
+
+  static AutoFormulationOptions FromScene(const SceneSpec& scene);
+  // Names formulation_tolerance when it is out of range, or given without
+  // formulation: AUTO (where nothing would read it).
+  Status Validate() const;
+
+  // What the scene wrote, for Validate(): 0 when it was left out.
+  double written_tolerance = 0;
+  bool auto_formulation = false;
+};
+
 // The relaxation a QUASI_STATIC scene resolves: terms 100 times faster
 // than its shortest loading segment (a stretch of the time curve where the
 // amplitude changes) relax within it; terms 100 times slower than the

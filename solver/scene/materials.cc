@@ -133,6 +133,15 @@ Status ResolveMaterials(const SceneSpec& scene, const Mesh& mesh, SceneMaterials
   return Status::Ok();
 }
 
+ElasticityField MakeElasticityField(const SceneMaterials& materials) {
+  std::vector<Matrix6d> d, compliance;
+  for (const MaterialSpec& spec : materials.specs) {
+    d.push_back(ElasticityMatrix(spec));
+    compliance.push_back(ComplianceMatrix(spec));
+  }
+  return ElasticityField(std::move(d), std::move(compliance), materials.of_element);
+}
+
 PronySeries RelaxationOf(const ViscoelasticSpec& spec) {
   switch (spec.form) {
     case ViscoelasticSpec::Form::kProny:
@@ -148,14 +157,13 @@ PronySeries RelaxationOf(const ViscoelasticSpec& spec) {
 }
 
 std::unique_ptr<MaterialField> MakeMaterialField(const SceneMaterials& materials,
-                                                 const AnalysisSpec& analysis) {
+                                                 double relaxed_below_s, double frozen_above_s) {
   std::vector<MaterialField::Entry> entries;
   for (std::size_t k = 0; k < materials.specs.size(); ++k) {
     MaterialField::Entry entry;
     entry.material = MakeHyperelasticMaterial(materials.specs[k]);
-    entry.relaxation =
-        ReduceRelaxation(RelaxationOf(materials.specs[k].viscoelastic), analysis.relaxed_below_s,
-                         analysis.frozen_above_s, &entry.isochoric_scale);
+    entry.relaxation = ReduceRelaxation(RelaxationOf(materials.specs[k].viscoelastic),
+                                        relaxed_below_s, frozen_above_s, &entry.isochoric_scale);
     entry.growth_strain = materials.growth_strain[k];
     entry.name = materials.labels[k];
     entries.push_back(std::move(entry));

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "analysis/material_field.h"
+#include "material/linear_elastic.h"
 #include "mesh/mesh.h"
 #include "pba/scene.h"
 
@@ -39,10 +40,16 @@ Status CutInclusions(const SceneSpec& scene, Mesh* mesh);
 Status ResolveMaterials(const SceneSpec& scene, const Mesh& mesh, SceneMaterials* out);
 
 // The material field of resolved (hyperelastic) materials, their
-// relaxation reduced to what `analysis` resolves (relaxed_below_s,
-// frozen_above_s; see ReduceRelaxation).
+// relaxation reduced to what the analysis resolves (terms faster than
+// relaxed_below_s relaxed, slower than frozen_above_s when > 0 frozen; see
+// ReduceRelaxation).
 std::unique_ptr<MaterialField> MakeMaterialField(const SceneMaterials& materials,
-                                                 const AnalysisSpec& analysis);
+                                                 double relaxed_below_s, double frozen_above_s);
+
+// The small-strain elasticity of every element (material/linear_elastic.h):
+// linear models as they are, hyperelastic ones with their initial moduli,
+// orthotropic ones in the global frame.
+ElasticityField MakeElasticityField(const SceneMaterials& materials);
 
 // The relaxation of a material spec as a normalised Prony series (no terms:
 // elastic).

@@ -366,6 +366,24 @@ Status BuildAtlasMesh(const SceneSpec& scene, const BuildModelOptions& cache, Me
   return Status::Ok();
 }
 
+// The structures whose displacement is reported, checked against the
+// regions the mesh has (a label volume's names are known only once it is
+// read).
+Status CheckStructureNames(const SceneSpec& scene, const Mesh& mesh) {
+  const auto& names = scene.outputs.structure_displacements;
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    if (names[i] == "*") continue;
+    if (std::find(mesh.region_names.begin(), mesh.region_names.end(), names[i]) ==
+        mesh.region_names.end()) {
+      return Status::FailedPrecondition(
+          Format("outputs.structure_displacements[%zu]", i),
+          "the model has no structure named \"" + names[i] +
+              "\" (names as in the atlas's colour table or an inclusion's name)");
+    }
+  }
+  return Status::Ok();
+}
+
 }  // namespace
 
 Status BuildModel(const SceneSpec& scene, Model* out, const BuildModelOptions& options) {

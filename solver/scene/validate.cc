@@ -12,6 +12,9 @@
 #include "mesh/primitive_mesher.h"
 #include "mesh/region_faces.h"
 #include "pba/scene.h"
+#include "scene/formulation.h"
+#include "scene/materials.h"
+#include "scene/problem.h"
 #include "scene/validate_loading.h"
 
 namespace pba {
@@ -421,26 +424,67 @@ Status ValidateAnalysis(const AnalysisSpec& analysis, const MaterialSpec& materi
                                        "mooney_rivlin, polynomial or ogden); linear_elastic is for "
                                        "LINEAR_STATIC");
   }
-  const NonlinearOptionsSpec& n = analysis.nonlinear;
-  if (n.increments < 0 || n.increments > 10000) {
-    return Status::InvalidArgument(
-        "analysis.nonlinear.increments",
-        "must lie in 1..10000 (0 for the default 5), got " + std::to_string(n.increments));
+  // The Newton controls as they will run, defaults applied (0 selects one).
+  PBA_RETURN_IF_ERROR(NonlinearOptions::FromSpec(analysis.nonlinear).Validate());
+  return Status::Ok();
+}
+
+// Relaxation through time and growth keep a history per element, which
+// only the one-point 4-node tetrahedra (TET4, TET4_ANP) keep in the
+// implicit analyses: a QUASI_STATIC scene with a relaxing material, or any
+// scene with a growing inclusion, on another element is refused here, not
+// minutes into the solve.
+Status ValidateHistoryElements(const SceneSpec& scene) {
+  const ElementType element = scene.mesh.element;
+  const AnalysisSpec::Type type = scene.analysis.type;
+  if (element == ElementType::kDefault || element == ElementType::kTet4 ||
+      element == ElementType::kTet4Anp || type == AnalysisSpec::Type::kExplicitDynamic ||
+      type == AnalysisSpec::Type::kDynamicRelaxation) {
+    return Status::Ok();
   }
-  if (n.max_iterations < 0 || n.max_iterations > 1000) {
+  const auto refuse = [&](const std::string& what, const std::string& field) {
     return Status::InvalidArgument(
-        "analysis.nonlinear.max_iterations",
-        "must lie in 1..1000 (0 for the default 20), got " + std::to_string(n.max_iterations));
+        field, what +
+                   " is modelled on 4-node tetrahedra (TET4_ANP, TET4), whose one integration "
+                   "point keeps the history; this scene's mesh.element is " +
+                   ElementName(element));
+  };
+  for (std::size_t i = 0; i < scene.inclusions.size(); ++i) {
+    if (scene.inclusions[i].growth_strain != 0) {
+      return refuse("growth", "inclusions[" + std::to_string(i) + "].growth_strain");
+    }
   }
-  const std::pair<const char*, double> fractions[] = {
-      {"residual_tolerance", n.residual_tolerance},
-      {"displacement_tolerance", n.displacement_tolerance},
-      {"min_increment", n.min_increment}};
-  for (const auto& [name, value] : fractions) {
-    if (!std::isfinite(value) || value < 0 || value >= 1) {
-      return Status::InvalidArgument(
-          std::string("analysis.nonlinear.") + name,
-          "must lie in [0, 1) (0 for the default), got " + Number(value));
+  if (type != AnalysisSpec::Type::kQuasiStatic) return Status::Ok();
+  // A material relaxes in this analysis when a term survives the window
+  // the analysis resolves (formulation AUTO may have folded or dropped some).
+  const auto relaxes = [&](const MaterialSpec& m) {
+    double scale = 1;
+    return !ReduceRelaxation(RelaxationOf(m.viscoelastic), scene.analysis.relaxed_below_s,
+                             scene.analysis.frozen_above_s, &scale)
+                .g.empty();
+  };
+  if (relaxes(scene.material)) return refuse("viscoelastic relaxation", "material.viscoelastic");
+  for (std::size_t i = 0; i < scene.region_materials.size(); ++i) {
+    if (relaxes(scene.region_materials[i].material)) {
+      return refuse("viscoelastic relaxation",
+                    "region_materials[" + std::to_string(i) + "].material.viscoelastic");
+    }
+  }
+  for (std::size_t i = 0; i < scene.inclusions.size(); ++i) {
+    if (relaxes(scene.inclusions[i].material)) {
+      return refuse("viscoelastic relaxation",
+                    "inclusions[" + std::to_string(i) + "].material.viscoelastic");
+    }
+  }
+  if (!scene.material_library.empty()) {
+    // Any structure of the built-in table the library gives a relaxing
+    // material (whichever of them the atlas keeps).
+    for (const ColourEntry& entry : ColourTable::Builtin().entries()) {
+      MaterialSpec m;
+      if (LibraryMaterial(scene.material_library, entry.name, &m, nullptr).ok() && relaxes(m)) {
+        return refuse("viscoelastic relaxation (of the tissue library's " + entry.name + ")",
+                      "material_library");
+      }
     }
   }
   return Status::Ok();
@@ -553,7 +597,9 @@ Status ValidateScene(const SceneSpec& scene) {
   PBA_RETURN_IF_ERROR(ValidateAnalysis(scene.analysis, scene.material));
   PBA_RETURN_IF_ERROR(ValidateRegionMaterials(scene));
   PBA_RETURN_IF_ERROR(scene_checks::ValidateInclusions(scene));
+  PBA_RETURN_IF_ERROR(ValidateHistoryElements(scene));
   PBA_RETURN_IF_ERROR(scene_checks::ValidateExplicit(scene));
+  PBA_RETURN_IF_ERROR(AutoFormulationOptions::FromScene(scene).Validate());
 
   // In dynamics a free body is fine: its inertia holds it (an impactor may
   // strike a body held by nothing).

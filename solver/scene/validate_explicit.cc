@@ -10,6 +10,7 @@
 
 #include "atlas/colour_table.h"
 #include "material/tissue_library.h"
+#include "scene/problem.h"
 #include "scene/validate_loading.h"
 
 namespace pba::scene_checks {
@@ -17,9 +18,7 @@ namespace {
 
 using Type = AnalysisSpec::Type;
 
-// The sensors' sampling interval when outputs.sensor_interval_s is 0 [s]
-// (scene.h; the engine takes the time step instead when that is longer).
-constexpr double kDefaultSensorIntervalS = 1e-6;
+constexpr double kDefaultSensorIntervalS = SensorOptions::kIntervalS;
 
 bool NonNegativeFinite(double value) { return std::isfinite(value) && value >= 0; }
 
@@ -48,9 +47,9 @@ std::string OutOfRange(const std::string& name, double value, const TimeSpec& ti
   if (!std::isfinite(value)) return "must be a finite number, got " + Number(value);
   if (name == "time_step_factor") {
     if (value < 0 || value > 2) {
-      return "must lie in (0, 2] (0 for the default 0.7; above 1 the integration is unstable), "
-             "got " +
-             Number(value);
+      return "must lie in (0, 2] (0 for the default " + Number(ExplicitOptions::kTimeStepFactor) +
+             ", or " + Number(ExplicitOptions::kRelaxationTimeStepFactor) +
+             " for DYNAMIC_RELAXATION; above 1 the integration is unstable), got " + Number(value);
     }
   } else if (name == "bulk_viscosity_linear" || name == "bulk_viscosity_quadratic") {
     if (value < 0 || value > 10) {
@@ -61,11 +60,13 @@ std::string OutOfRange(const std::string& name, double value, const TimeSpec& ti
     if (value < 0) return "must be a non-negative number of 1/s (0: none), got " + Number(value);
   } else if (name == "hourglass_coefficient") {
     if (value < 0 || value > 0.5) {
-      return "must lie in [0, 0.5] (0 for the default 0.05), got " + Number(value);
+      return "must lie in [0, 0.5] (0 for the default " +
+             Number(ExplicitOptions::kHourglassCoefficient) + "), got " + Number(value);
     }
   } else if (name == "output_interval_s") {
     if (value < 0) {
-      return "must be a non-negative number of s (0 for end_time_s / 100), got " + Number(value);
+      return "must be a non-negative number of s (0 for end_time_s / " +
+             Number(1 / ExplicitOptions::kOutputIntervalFraction) + "), got " + Number(value);
     }
     if (time.end_time_s > 0 && value > time.end_time_s) {
       return "must not exceed analysis.time.end_time_s (" + Number(time.end_time_s) + " s), got " +
@@ -81,7 +82,8 @@ std::string OutOfRange(const std::string& name, double value, const TimeSpec& ti
     }
   } else if (name == "relaxation_tolerance") {
     if (value < 0 || value >= 0.1) {
-      return "must lie in [0, 0.1) (0 for the default 1e-4), got " + Number(value);
+      return "must lie in [0, 0.1) (0 for the default " +
+             Number(ExplicitOptions::kRelaxationTolerance) + "), got " + Number(value);
     }
   }
   return "";
@@ -183,16 +185,16 @@ Status ValidateSensors(const SceneSpec& scene) {
     return Status::InvalidArgument(
         "outputs.sensor_interval_s",
         "must be a non-negative number of s below analysis.time.end_time_s (" + Number(end) +
-            " s; 0 for 1e-6 s), got " + Number(interval));
+            " s; 0 for " + Number(kDefaultSensorIntervalS) + " s), got " + Number(interval));
   }
   if (outputs.filter_order < 0 || outputs.filter_order > 10) {
-    return Status::InvalidArgument(
-        "outputs.filter_order",
-        "must lie in 1..10 (0 for the default 4), got " + std::to_string(outputs.filter_order));
+    return Status::InvalidArgument("outputs.filter_order",
+                                   "must lie in 1..10 (0 for the default " +
+                                       std::to_string(SensorOptions::kFilterOrder) + "), got " +
+                                       std::to_string(outputs.filter_order));
   }
   // Below the Nyquist frequency of the samples (of the default interval when
-  // none is given; the engine may sample more coarsely when its step is
-  // longer, and then checks again).
+  // none is given).
   const double nyquist = 1 / (2 * (interval > 0 ? interval : kDefaultSensorIntervalS));
   const double cutoff = outputs.filter_cutoff_hz;
   if (!NonNegativeFinite(cutoff) || (cutoff > 0 && cutoff >= nyquist)) {
@@ -200,9 +202,13 @@ Status ValidateSensors(const SceneSpec& scene) {
         "outputs.filter_cutoff_hz",
         "must be a non-negative number of Hz below half the sampling rate (" + Number(nyquist) +
             " Hz for samples every " + Number(interval > 0 ? interval : kDefaultSensorIntervalS) +
-            " s; 0 for the default 10 kHz), got " + Number(cutoff));
+            " s; 0 for the default " + Number(SensorOptions::kFilterCutoffHz) + " Hz), got " +
+            Number(cutoff));
   }
-  return Status::Ok();
+  // The filter the engine designs, with every default applied (a default
+  // cutoff may not fit a coarse interval the scene chose).
+  if (outputs.sensors.empty()) return Status::Ok();
+  return ResolveOutputs(scene).sensors.Validate();
 }
 
 // A material EXPLICIT_DYNAMIC can move: it needs a mass.

@@ -54,7 +54,7 @@ constexpr const char* kElementNames[] = {"TET4_ANP", "TET4", "HEX8"};
 constexpr int kCellsPerEdge[] = {36, 36, 66};
 
 struct Case {
-  Model model;
+  Problem problem;
   ExplicitSetup setup;
   Eigen::VectorXd u, v, f;
 };
@@ -80,16 +80,15 @@ Case& CaseOf(int k) {
   s.boundary_conditions = {bottom};
   s.analysis.type = AnalysisSpec::Type::kExplicitDynamic;
   s.analysis.time.end_time_s = 1e-3;
-  Status status = ValidateScene(s);
-  if (status.ok()) status = BuildModel(s, &c->model);
-  if (status.ok()) status = MakeExplicitSetup(s, c->model, &c->setup);
+  Status status = BuildProblem(s, BuildModelOptions(), &c->problem);
+  if (status.ok()) status = MakeExplicitSetup(c->problem, &c->setup);
   if (!status.ok()) {
     std::fprintf(stderr, "tled_bench: %s\n", status.ToString().c_str());
     std::exit(1);
   }
   // u_i = 0.02 L sin(pi (X_i + X_(i+1)) / L), v_i = cos(2 pi X_i / L + i)
   // [m/s]: div v changes sign across the cube.
-  const auto& x = c->model.mesh.nodes;
+  const auto& x = c->problem.model.mesh.nodes;
   const double l = edge * 1e-3, pi = std::numbers::pi;
   c->u.resize(3 * x.rows());
   c->v.resize(3 * x.rows());

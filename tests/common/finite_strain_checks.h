@@ -174,7 +174,7 @@ inline double TopReaction(const Mesh& mesh, const Eigen::VectorXd& force) {
 inline double NewtonTopReaction(const FiniteStrainModel& model, const Mesh& mesh,
                                 const DofMap& dofs, NewtonReport* report,
                                 Eigen::VectorXd* u = nullptr) {
-  const auto solver = CreateLinearSolver(AnalysisSpec::LinearSolver::kCholmod);
+  const auto solver = CreateLinearSolver(LinearSolverOptions{});
   Eigen::VectorXd solution;
   const Status status = SolveNewtonStatic(
       model, dofs, NewtonOptions(), solver.get(), [](const NewtonProgress&) { return true; },
@@ -379,7 +379,7 @@ inline void ExpectInversionReported(const FiniteStrainModel& model, const Mesh& 
 // prescribed ones included. A failed solve is a test failure and gives NaN.
 inline double UniaxialPatchError(const Mesh& mesh, const DofMap& dofs, const LinearSystem& system,
                                  double nu, double strain) {
-  const auto solver = CreateLinearSolver(AnalysisSpec::LinearSolver::kCholmod);
+  const auto solver = CreateLinearSolver(LinearSolverOptions{});
   Eigen::VectorXd u_free;
   if (!solver->Factorize(system.k).ok() || !solver->Solve(system.rhs, &u_free).ok()) {
     ADD_FAILURE() << "the patch test's system did not solve";

@@ -1,6 +1,8 @@
 // Hard cases: bad input through SolveScene. Each is refused before any work
-// with kInvalidArgument naming the culprit field (or kFailedPrecondition,
-// naming the free motion, when the supports leave a rigid-body mode).
+// with kInvalidArgument naming the culprit field, or, for what only the mesh
+// or the atlas's files can tell, with kFailedPrecondition naming it (a patch
+// holding no face, a structure the atlas lacks, a rigid-body mode the
+// supports leave).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -60,6 +62,8 @@ TEST_P(BadInputTest, IsRefusedNamingTheCulprit) {
 const std::string kShear = "material.neo_hookean.shear_modulus_pa";
 const std::string kBulk = "material.neo_hookean.bulk_modulus_pa";
 constexpr auto kInvalid = Status::Code::kInvalidArgument;
+// A scene that validates fails later only for what the mesh shows.
+constexpr auto kMeshed = Status::Code::kFailedPrecondition;
 
 INSTANTIATE_TEST_SUITE_P(
     Cases, BadInputTest,
@@ -147,7 +151,7 @@ INSTANTIATE_TEST_SUITE_P(
                   s->geometry.patches = {PatchSpec::Ball("pad", "top", {5, 5, 10}, 2)};
                   s->boundary_conditions[1].set = "pad";
                 },
-                kInvalid, "geometry.patches[0].radius_mm", "at least 5"},
+                kMeshed, "geometry.patches[0].radius_mm", "at least 5"},
         // An atlas structure the atlas does not have: only building the
         // atlas can tell.
         BadCase{"atlas_structure_unknown",
@@ -157,7 +161,7 @@ INSTANTIATE_TEST_SUITE_P(
                   s->geometry.atlas.structures = {"Amygdala"};
                   s->boundary_conditions = {Condition("surface", K::kFixed)};
                 },
-                kInvalid, "geometry.atlas.structures[0]", "Amygdala"},
+                kMeshed, "geometry.atlas.structures[0]", "Amygdala"},
         BadCase{"atlas_label_volume_missing",
                 [](SceneSpec* s) {
                   s->geometry.kind = GeometrySpec::Kind::kAtlas;

@@ -145,8 +145,8 @@ TEST_P(DegenerateElementsTest, LinearSolveIsExactOrNamesTheElement) {
   const DofMap dofs = Rollers(mesh, strain * height);
   LinearSystem system;
   const Status assembled = AssembleLinearSystem(
-      mesh, IsotropicElasticity(3000, nu), dofs, ColourElements(mesh), [](double) { return true; },
-      &system);
+      mesh, ElasticityField::Uniform(IsotropicElasticity(3000, nu), mesh.num_elements()), dofs,
+      ColourElements(mesh), [](double) { return true; }, &system);
   if (!assembled.ok()) {
     EXPECT_NE(assembled.message().find("element"), std::string::npos) << assembled.message();
     return;

@@ -91,7 +91,8 @@ double RelativeL2Error(Element element, int cells, const Manufactured& m) {
     }
   }
   dofs.Finalize();
-  const Matrix6d d = IsotropicElasticity(kE, kNu);
+  const ElasticityField d =
+      ElasticityField::Uniform(IsotropicElasticity(kE, kNu), mesh.num_elements());
   const auto colours = ColourElements(mesh);
   const auto keep_going = [](double) { return true; };
   LinearSystem system;

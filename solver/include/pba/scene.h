@@ -569,6 +569,10 @@ struct SceneSpec {
   AnalysisSpec analysis;
   OutputSpec outputs;
   Formulation formulation = Formulation::kAsWritten;
+  // kAuto: a reduced model is kept only when, on meshes twice as coarse,
+  // its results differ from the full model's by at most this fraction;
+  // otherwise the scene is solved as written. 0: 0.01 (1 %), else in (0, 1).
+  double formulation_tolerance = 0;
 };
 
 // Face set names a geometry defines (box: bottom top x_min x_max y_min y_max;

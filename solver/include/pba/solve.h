@@ -8,6 +8,7 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "pba/scene.h"
@@ -127,6 +128,10 @@ struct ModelDecision {
 // same scene on meshes twice as coarse, once reduced and once in full.
 struct ReductionEstimate {
   bool estimated = false;
+  // Whether the reduced model was solved: only when estimated and the
+  // difference is within `tolerance`; otherwise the scene as written was.
+  bool kept = false;
+  double tolerance = 0;            // formulation_tolerance as run (fraction)
   double relative_difference = 0;  // largest over the compared quantities
   std::string quantity;            // the one that differed most
   double reduced_coarse_s = 0;     // wall times of the two coarse runs [s]
@@ -208,6 +213,9 @@ struct Summary {
   std::string analysis;       // "linear static (small strain)"
   std::string linear_solver;  // "CHOLMOD supernodal Cholesky"
   std::vector<std::string> notes;
+  // Every option the analysis ran with, defaults included, as (scene field
+  // path, value with its unit), e.g. ("analysis.nonlinear.increments", "5").
+  std::vector<std::pair<std::string, std::string>> options;
   // Key results.
   double max_displacement_mm = 0;
   std::array<double, 3> max_displacement_at_mm{0, 0, 0};

@@ -34,6 +34,11 @@ class Status {
   static Status FailedPrecondition(std::string message) {
     return Status(Code::kFailedPrecondition, std::move(message));
   }
+  // A valid input the mesh made from it cannot honour (a sensor outside the
+  // meshed body, a patch that holds no face): `field` names the input.
+  static Status FailedPrecondition(std::string field, std::string message) {
+    return Status(Code::kFailedPrecondition, std::move(message), std::move(field));
+  }
   static Status Numerical(std::string message) {
     return Status(Code::kNumerical, std::move(message));
   }

@@ -118,7 +118,7 @@ TEST(Profiles, UniaxialStressAlongTheLineEverywhereAndEmptyOutside) {
     // Along x through the inside, beyond both ends: x from -2 to 10 mm.
     const SceneSpec along_x = WithProfile(Line("x", {-2, 3.1, 4.7}, {10, 3.1, 4.7}, 25));
     std::vector<ProfileTable> tables;
-    ASSERT_TRUE(SampleProfiles(along_x, s, &tables).ok());
+    ASSERT_TRUE(SampleProfiles(along_x.outputs.profiles, s, &tables).ok());
     ASSERT_EQ(tables.size(), 1u);
     const ProfileTable& t = tables[0];
     ASSERT_EQ(t.columns.size(), 11u);
@@ -149,7 +149,7 @@ TEST(Profiles, UniaxialStressAlongTheLineEverywhereAndEmptyOutside) {
 
     // A diagonal in the x-y plane: sigma cos^2(45 deg), strain likewise.
     const SceneSpec diagonal = WithProfile(Line("d", {1, 1, 5}, {5, 5, 5}, 0));
-    ASSERT_TRUE(SampleProfiles(diagonal, s, &tables).ok());
+    ASSERT_TRUE(SampleProfiles(diagonal.outputs.profiles, s, &tables).ok());
     ASSERT_EQ(tables[0].rows.size(), 50u);  // 0 points: 50
     for (const auto& row : tables[0].rows) {
       EXPECT_NEAR(row[7], sigma / 2, 1e-9);
@@ -173,7 +173,9 @@ TEST(Profiles, ShearComponentsAndTheAlmansiStrain) {
   }
   std::vector<ProfileTable> tables;
   ASSERT_TRUE(
-      SampleProfiles(WithProfile(Line("s", {0.2, 0.2, 1}, {1.8, 1.8, 1}, 5)), s, &tables).ok());
+      SampleProfiles(WithProfile(Line("s", {0.2, 0.2, 1}, {1.8, 1.8, 1}, 5)).outputs.profiles, s,
+                     &tables)
+          .ok());
   for (const auto& row : tables[0].rows) {
     EXPECT_NEAR(row[7], 100, 1e-9);    // 2 sigma_xy t_x t_y, t_x t_y = 1/2
     EXPECT_NEAR(row[8], 0, 1e-12);     // no mean stress
@@ -190,7 +192,9 @@ TEST(Profiles, APointOnASharedFaceTakesTheMeanOfItsElements) {
   s.von_mises_pa = {100, 300};
   std::vector<ProfileTable> tables;
   ASSERT_TRUE(
-      SampleProfiles(WithProfile(Line("x", {0.5, 0.5, 0.5}, {1.5, 0.5, 0.5}, 3)), s, &tables).ok());
+      SampleProfiles(WithProfile(Line("x", {0.5, 0.5, 0.5}, {1.5, 0.5, 0.5}, 3)).outputs.profiles,
+                     s, &tables)
+          .ok());
   ASSERT_EQ(tables[0].rows.size(), 3u);
   EXPECT_NEAR(tables[0].rows[0][7], 100, 1e-12);
   EXPECT_NEAR(tables[0].rows[1][7], 200, 1e-12);  // x = 1, the shared face
@@ -221,7 +225,7 @@ TEST(Profiles, LinearDisplacementIsInterpolatedExactly) {
     }
     std::vector<ProfileTable> tables;
     const SceneSpec scene = WithProfile(Line("x", {0.8, 2.9, 2.2}, {7.4, 2.9, 2.2}, 101));
-    ASSERT_TRUE(SampleProfiles(scene, s, &tables).ok());
+    ASSERT_TRUE(SampleProfiles(scene.outputs.profiles, s, &tables).ok());
     int inside = 0;
     for (const auto& row : tables[0].rows) {
       if (std::isnan(row[4])) continue;
@@ -239,8 +243,9 @@ TEST(Profiles, FastOnAHundredThousandElements) {
   ASSERT_GT(s.tets.size() / 4, 100000u);
   const auto start = std::chrono::steady_clock::now();
   std::vector<ProfileTable> tables;
-  ASSERT_TRUE(
-      SampleProfiles(WithProfile(Line("d", {0, 0, 0}, {26, 26, 25}, 1000)), s, &tables).ok());
+  ASSERT_TRUE(SampleProfiles(WithProfile(Line("d", {0, 0, 0}, {26, 26, 25}, 1000)).outputs.profiles,
+                             s, &tables)
+                  .ok());
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   int inside = 0;

@@ -194,7 +194,7 @@ Status SolveWithContacts(const FiniteStrainModel& model, const DofMap& dofs,
     for (RigidContact* c : contacts) c->Commit(state);
     if (each) each(state);
   };
-  const auto solver = CreateLinearSolver(AnalysisSpec::LinearSolver::kCholmod);
+  const auto solver = CreateLinearSolver(LinearSolverOptions{});
   return SolveNewtonStatic(
       model, dofs, options, solver.get(), [](const NewtonProgress&) { return true; }, u, report);
 }

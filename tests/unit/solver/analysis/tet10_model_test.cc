@@ -153,8 +153,8 @@ TEST(AssembleLinearSystemTet10, UniaxialStressIsExact) {
   const DofMap dofs = testing::UniaxialDofs(mesh, delta);
   LinearSystem system;
   ASSERT_TRUE(AssembleLinearSystemTet10(
-                  mesh, IsotropicElasticity(e, nu), dofs, ColourElements(mesh),
-                  [](double) { return true; }, &system)
+                  mesh, ElasticityField::Uniform(IsotropicElasticity(e, nu), mesh.num_elements()),
+                  dofs, ColourElements(mesh), [](double) { return true; }, &system)
                   .ok());
   const double worst = testing::UniaxialPatchError(mesh, dofs, system, nu, delta / height);
   EXPECT_LT(worst, 1e-10 * delta);

@@ -44,9 +44,12 @@ Model Block(ElementType element) {
 Status Assemble(const Mesh& mesh, const Matrix6d& d, const DofMap& dofs, LinearSystem* system) {
   const auto colours = ColourElements(mesh);
   const auto keep_going = [](double) { return true; };
-  return mesh.quadratic()    ? AssembleLinearSystemTet10(mesh, d, dofs, colours, keep_going, system)
-         : mesh.hexahedral() ? AssembleLinearSystemHex8(mesh, d, dofs, colours, keep_going, system)
-                             : AssembleLinearSystem(mesh, d, dofs, colours, keep_going, system);
+  const ElasticityField elasticity = ElasticityField::Uniform(d, mesh.num_elements());
+  return mesh.quadratic()
+             ? AssembleLinearSystemTet10(mesh, elasticity, dofs, colours, keep_going, system)
+         : mesh.hexahedral()
+             ? AssembleLinearSystemHex8(mesh, elasticity, dofs, colours, keep_going, system)
+             : AssembleLinearSystem(mesh, elasticity, dofs, colours, keep_going, system);
 }
 
 // Same size, pattern (outer and inner indices) and values, compared exactly.

@@ -47,10 +47,12 @@ TEST(PcgSolver, MatchesCholmodOnAnAssembledStiffness) {
   Model model;
   ASSERT_TRUE(BuildModel(scene, &model).ok());
   LinearSystem system;
-  ASSERT_TRUE(AssembleLinearSystem(
-                  model.mesh, IsotropicElasticity(3000, 0.45), model.dofs,
-                  ColourElements(model.mesh), [](double) { return true; }, &system)
-                  .ok());
+  ASSERT_TRUE(
+      AssembleLinearSystem(
+          model.mesh,
+          ElasticityField::Uniform(IsotropicElasticity(3000, 0.45), model.mesh.num_elements()),
+          model.dofs, ColourElements(model.mesh), [](double) { return true; }, &system)
+          .ok());
   ASSERT_GT(system.k.rows(), 1000);
 
   const auto cholmod = CreateCholmodSolver();
@@ -146,10 +148,12 @@ TEST(PcgSolver, UnheldBodyEndsWithAClearErrorNotNan) {
   Model model;
   ASSERT_TRUE(BuildModel(scene, &model).ok());
   LinearSystem system;
-  ASSERT_TRUE(AssembleLinearSystem(
-                  model.mesh, IsotropicElasticity(3000, 0.45), model.dofs,
-                  ColourElements(model.mesh), [](double) { return true; }, &system)
-                  .ok());
+  ASSERT_TRUE(
+      AssembleLinearSystem(
+          model.mesh,
+          ElasticityField::Uniform(IsotropicElasticity(3000, 0.45), model.mesh.num_elements()),
+          model.dofs, ColourElements(model.mesh), [](double) { return true; }, &system)
+          .ok());
   ASSERT_EQ(system.k.rows(), 3 * model.mesh.num_nodes());
   // A load along z on every node: the rigid translation takes it all.
   Eigen::VectorXd b = Eigen::VectorXd::Zero(system.k.rows());
