@@ -171,12 +171,7 @@ Status SolveFiniteStrain(const Problem& problem, PhaseClock* clock_ptr, Solution
   const bool full_bricks = problem.element == ElementType::kHex8Full;
   const bool tet10_md = problem.element == ElementType::kTet10Md;
   const bool one_point = !mesh.quadratic() && !mesh.hexahedral();
-  summary.element_type = tet10_md            ? "TET10_MD"
-                         : mesh.quadratic()  ? "TET10"
-                         : full_bricks       ? "HEX8_FULL"
-                         : mesh.hexahedral() ? "HEX8"
-                         : plain             ? "TET4"
-                                             : "TET4_ANP";
+  summary.element_type = ElementName(problem.element);
   if (!one_point && ((timed && field->viscous()) || field->grows())) {
     // ValidateScene refuses these (scene_checks::ValidateHistoryElements).
     return Status::Internal(std::string(field->grows() ? "growth" : "viscoelastic relaxation") +

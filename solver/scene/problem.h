@@ -230,7 +230,5 @@ ExternalLoads BuildLoads(const Problem& problem);
 // (scene field path, value with its unit): what the summary echoes.
 std::vector<std::pair<std::string, std::string>> EffectiveOptions(const Problem& problem);
 
-// "TET4_ANP", "HEX8_FULL", ... of a resolved element.
-const char* ElementName(ElementType element);
 
 }  // namespace pba

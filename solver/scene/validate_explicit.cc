@@ -288,11 +288,8 @@ Status ValidateExplicit(const SceneSpec& scene) {
   const ElementType e = scene.mesh.element;
   if (e != ElementType::kDefault && e != ElementType::kTet4 && e != ElementType::kTet4Anp &&
       e != ElementType::kHex8) {
-    const char* name = e == ElementType::kTet10     ? "TET10"
-                       : e == ElementType::kTet10Md ? "TET10_MD"
-                                                    : "HEX8_FULL";
     return Status::InvalidArgument(
-        "mesh.element", std::string(name) + " is not implemented by the explicit engine; " +
+        "mesh.element", std::string(ElementName(e)) + " is not implemented by the explicit engine; " +
                             AnalysisTypeName(type) +
                             " takes TET4_ANP (the default), TET4 or HEX8 (one-point, with "
                             "hourglass control)");

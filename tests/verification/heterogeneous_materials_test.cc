@@ -125,26 +125,6 @@ Solution MustSolve(const SceneSpec& scene) {
   return solution;
 }
 
-const char* ElementName(ElementType e) {
-  switch (e) {
-    case ElementType::kTet4:
-      return "TET4";
-    case ElementType::kTet4Anp:
-      return "TET4_ANP";
-    case ElementType::kTet10:
-      return "TET10";
-    case ElementType::kTet10Md:
-      return "TET10_MD";
-    case ElementType::kHex8:
-      return "HEX8";
-    case ElementType::kHex8Full:
-      return "HEX8_FULL";
-    case ElementType::kDefault:
-      break;
-  }
-  return "DEFAULT";
-}
-
 const char* AnalysisName(Type t) {
   switch (t) {
     case Type::kLinearStatic:

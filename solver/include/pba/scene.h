@@ -138,6 +138,11 @@ inline bool IsHexahedral(ElementType e) {
   return e == ElementType::kHex8 || e == ElementType::kHex8Full;
 }
 
+// The scene's name of an element type, as in mesh.element: "TET4",
+// "TET4_ANP", "TET10", "TET10_MD", "HEX8", "HEX8_FULL" ("DEFAULT" for
+// kDefault).
+const char* ElementName(ElementType element);
+
 struct MeshSpec {
   ElementType element = ElementType::kDefault;
   // Target edge length of the structured grid [mm]; 0 picks a twentieth of the
