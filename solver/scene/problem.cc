@@ -186,6 +186,13 @@ Status NonlinearOptions::Validate() const {
           Format("must lie in [0, 1) (0 for the default %g), got %g", f.fallback, f.value));
     }
   }
+  if (min_increment < kMinIncrementFloor) {
+    return Status::InvalidArgument(
+        "analysis.nonlinear.min_increment",
+        Format("must be at least %g (0 for the default %g): a smaller increment underflows "
+               "before it can give up, got %g",
+               kMinIncrementFloor, defaults.min_increment, min_increment));
+  }
   return Status::Ok();
 }
 

@@ -37,7 +37,10 @@ struct NonlinearOptions {
   int max_iterations = 20;               // Newton iterations per increment, 1..1000
   double residual_tolerance = 1e-8;      // relative force residual, (0, 1)
   double displacement_tolerance = 1e-8;  // relative displacement correction, (0, 1)
-  double min_increment = 1e-4;           // smallest load-factor increment, (0, 1)
+  double min_increment = 1e-4;           // smallest load-factor increment, [1e-12, 1)
+  // Below this a cut-back increment would shrink until the arithmetic
+  // underflows and then creep on for minutes instead of giving up.
+  static constexpr double kMinIncrementFloor = 1e-12;
   bool line_search = true;
 
   // From analysis.nonlinear (0: the default); Validate names the field.
@@ -229,6 +232,5 @@ ExternalLoads BuildLoads(const Problem& problem);
 // Every option the problem's analysis runs with, defaults included, as
 // (scene field path, value with its unit): what the summary echoes.
 std::vector<std::pair<std::string, std::string>> EffectiveOptions(const Problem& problem);
-
 
 }  // namespace pba
