@@ -9,7 +9,6 @@
 #include <optional>
 #include <string>
 
-#include "analysis/time_history.h"
 #include "atlas/atlas_build.h"
 #include "atlas/structure_set.h"
 #include "core/format.h"

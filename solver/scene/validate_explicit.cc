@@ -289,7 +289,8 @@ Status ValidateExplicit(const SceneSpec& scene) {
   if (e != ElementType::kDefault && e != ElementType::kTet4 && e != ElementType::kTet4Anp &&
       e != ElementType::kHex8) {
     return Status::InvalidArgument(
-        "mesh.element", std::string(ElementName(e)) + " is not implemented by the explicit engine; " +
+        "mesh.element", std::string(ElementName(e)) +
+                            " is not implemented by the explicit engine; " +
                             AnalysisTypeName(type) +
                             " takes TET4_ANP (the default), TET4 or HEX8 (one-point, with "
                             "hourglass control)");
