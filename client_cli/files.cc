@@ -2,9 +2,11 @@
 
 #include <fcntl.h>
 #include <openssl/evp.h>
+#include <stdio.h>  // renameat2
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <cstdio>
 #include <fstream>
 #include <vector>
@@ -52,7 +54,11 @@ std::string Sha256File(const std::filesystem::path& path) {
 bool WriteFileAtomically(const std::filesystem::path& path, const std::string& content,
                          unsigned mode) {
   const std::filesystem::path temp = path.string() + ".tmp" + std::to_string(::getpid());
-  const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_TRUNC, mode);
+  // A leftover of a crashed run with this pid goes first; O_EXCL and
+  // O_NOFOLLOW then make sure what is written is a new file of ours, not
+  // a planted link's target.
+  ::unlink(temp.c_str());
+  const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, mode);
   if (fd < 0) return false;
   // open() honours the umask; the mode asked for is what the file gets.
   bool ok = ::fchmod(fd, mode) == 0;
@@ -67,6 +73,55 @@ bool WriteFileAtomically(const std::filesystem::path& path, const std::string& c
   if (ok) ok = std::rename(temp.c_str(), path.c_str()) == 0;
   if (!ok) ::unlink(temp.c_str());
   return ok;
+}
+
+std::string UnsafeFileNameReason(const std::string& name) {
+  if (name.empty()) return "it is empty";
+  if (name == "." || name == "..") return "it names a directory, not a file";
+  if (name.size() > kMaxFileNameBytes) {
+    return "it is " + std::to_string(name.size()) + " bytes long (at most " +
+           std::to_string(kMaxFileNameBytes) + ")";
+  }
+  for (unsigned char c : name) {
+    if (c == '/' || c == '\\') return "it has a directory separator ('/' or '\\')";
+    if (c == 0) return "it has a NUL byte";
+    if (c < 0x20 || c == 0x7f) return "it has a control character";
+  }
+  return "";
+}
+
+std::string QuotedName(const std::string& name) {
+  std::string out = "\"";
+  for (unsigned char c : name) {
+    if (c < 0x20 || c == 0x7f || c == '"' || c == '\\') {
+      char escaped[8];
+      std::snprintf(escaped, sizeof escaped, "\\x%02x", c);
+      out += escaped;
+    } else {
+      out += static_cast<char>(c);
+    }
+  }
+  return out + "\"";
+}
+
+std::string FoldCase(const std::string& name) {
+  std::string folded = name;
+  for (char& c : folded) {
+    if (c >= 'A' && c <= 'Z') c = static_cast<char>(c - 'A' + 'a');
+  }
+  return folded;
+}
+
+bool RenameNoReplace(const std::filesystem::path& from, const std::filesystem::path& to) {
+  if (::renameat2(AT_FDCWD, from.c_str(), AT_FDCWD, to.c_str(), RENAME_NOREPLACE) == 0) {
+    return true;
+  }
+  if (errno != EINVAL && errno != ENOSYS) return false;
+  // A file system without RENAME_NOREPLACE: link() refuses an existing
+  // name too, and the source is then unlinked.
+  if (::link(from.c_str(), to.c_str()) != 0) return false;
+  ::unlink(from.c_str());
+  return true;
 }
 
 }  // namespace pba::cli

@@ -8,6 +8,7 @@
 #include "commands/atlas_commands.h"
 #include "commands/batch_commands.h"
 #include "commands/job_commands.h"
+#include "commands/project_commands.h"
 #include "commands/study_commands.h"
 #include "connection.h"
 #include "credentials.h"
@@ -75,6 +76,7 @@ int main(int argc, char** argv) {
   CLI::App* fetch_cmd = job->add_subcommand("fetch", "Download a finished job's result files");
   fetch_cmd->add_option("id", fetch.id, "Job id")->required();
   fetch_cmd->add_option("-o,--out", fetch.out_dir, "Directory to write into (created)")->required();
+  fetch_cmd->add_flag("--force", fetch.force, "Replace files of the same names already there");
 
   // --- identity ---
   LoginArgs login;
@@ -124,6 +126,10 @@ int main(int argc, char** argv) {
   project_role->add_option("project", project_name, "Project")->required();
   project_role->add_option("user", user, "User")->required();
   project_role->add_option("role", role, "viewer, editor or admin")->required();
+  CLI::App* project_remove = project->add_subcommand(
+      "remove-member", "Remove a user from a project, releasing their locks (admins only)");
+  project_remove->add_option("project", project_name, "Project")->required();
+  project_remove->add_option("user", user, "User")->required();
 
   // --- atlas ---
   CLI::App* atlas = app.add_subcommand("atlas", "Share and edit atlas structures");
@@ -169,6 +175,9 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   atlas_checkout->add_flag("--hold", checkout.hold,
                            "Stay running and keep the lease alive until Ctrl-C, then unlock");
+  atlas_checkout->add_flag("--force", checkout.force,
+                           "Overwrite FILE even when it holds changes the server does not have "
+                           "(by default they are kept as FILE.mine)");
   CheckoutArgs lock_args;
   CLI::App* atlas_lock = atlas->add_subcommand(
       "lock", "Lock a structure without downloading it (no one else may change it)");
@@ -370,6 +379,7 @@ int main(int argc, char** argv) {
   if (*project_create) return CreateProject(connection, name, create_request_id);
   if (*project_list) return ListProjects(connection, page);
   if (*project_role) return SetRole(connection, project_name, user, role);
+  if (*project_remove) return RemoveMember(connection, project_name, user);
   if (*atlas_list) return ListStructures(connection, target.project, page);
   if (*atlas_show) return ShowStructure(connection, target);
   if (*atlas_history) return History(connection, target, page);

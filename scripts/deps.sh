@@ -13,6 +13,7 @@ packages=(
   libyaml-cpp-dev libcli11-dev libspdlog-dev libfmt-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   calculix-ccx
+  python3-meshio python3-h5py python3-paraview
   libssl-dev
   gnuplot-nox
   openssl

@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <csignal>
 #include <cstdio>
@@ -287,6 +288,7 @@ int CreateStructure(Connection& connection, const CreateStructureArgs& args) {
   auto context = connection.UnaryContext();
   grpc::Status status = connection.atlas().CreateStructure(context.get(), request, &revision);
   if (!status.ok()) {
+    DiscardUpload(connection, upload_id);
     return connection.Fail("creating " + args.target.project + "/" + args.target.structure, status,
                            kExitConflict);
   }
@@ -317,6 +319,48 @@ int AcquireLock(Connection& connection, const CheckoutArgs& args, v1::Lock* lock
   return kExitOk;
 }
 
+// Whether the structure has a revision with this content: one of its 100
+// newest (the head is the newest).
+bool ServerHasContent(Connection& connection, const StructureArgs& target,
+                      const std::string& sha256) {
+  v1::ListRevisionsRequest request;
+  request.set_project(target.project);
+  request.set_structure(target.structure);
+  request.set_page_size(100);
+  v1::ListRevisionsResponse response;
+  auto context = connection.UnaryContext();
+  if (!connection.atlas().ListRevisions(context.get(), request, &response).ok()) return false;
+  return std::any_of(response.revisions().begin(), response.revisions().end(),
+                     [&](const v1::Revision& r) { return r.content_sha256() == sha256; });
+}
+
+// Before a checkout writes `out`: a file there whose content the server
+// does not have (an edit whose commit was refused, as after a stale base;
+// or any file of the user's) is moved aside to OUT.mine (OUT.mine.2, ...
+// when that is taken), not overwritten; *kept names where. Content the
+// server has is simply replaced, and so is anything with `force`.
+int KeepLocalEdit(Connection& connection, const StructureArgs& target, const std::string& out,
+                  bool force, std::string* kept) {
+  kept->clear();
+  std::error_code ec;
+  if (force || !fs::is_regular_file(fs::symlink_status(out, ec))) return kExitOk;
+  const std::string sha256 = Sha256File(out);
+  if (!sha256.empty() && ServerHasContent(connection, target, sha256)) return kExitOk;
+  for (int n = 1; n < 100; ++n) {
+    const std::string aside = out + ".mine" + (n == 1 ? "" : "." + std::to_string(n));
+    if (RenameNoReplace(out, aside)) {
+      *kept = aside;
+      return kExitOk;
+    }
+    if (errno != EEXIST) break;
+  }
+  std::fprintf(stderr,
+               "pba: %s holds changes the server does not have and cannot be moved aside; keep it "
+               "elsewhere, or pass --force to overwrite it\n",
+               out.c_str());
+  return kExitConflict;
+}
+
 }  // namespace
 
 int Checkout(Connection& connection, const CheckoutArgs& args) {
@@ -333,7 +377,19 @@ int Checkout(Connection& connection, const CheckoutArgs& args) {
     return give_back(code);
   const std::string out =
       args.out.empty() ? args.target.structure + Extension(head.format()) : args.out;
-  if (int code = DownloadRevision(connection, head, out); code != kExitOk) return give_back(code);
+  std::string kept;
+  if (int code = KeepLocalEdit(connection, args.target, out, args.force, &kept); code != kExitOk) {
+    return give_back(code);
+  }
+  if (!kept.empty()) {
+    std::fprintf(stderr,
+                 "pba: %s held changes the server does not have (an edit not committed?); kept "
+                 "them as %s. Redo them on revision %lld in %s.\n",
+                 out.c_str(), kept.c_str(), static_cast<long long>(head.number()), out.c_str());
+  }
+  if (int code = DownloadRevision(connection, head, out, /*overwrite=*/true); code != kExitOk) {
+    return give_back(code);
+  }
   CheckoutState state{connection.options().server,
                       args.target.project,
                       args.target.structure,
@@ -446,7 +502,10 @@ int Commit(Connection& connection, const CommitArgs& args) {
   {
     auto context = connection.UnaryContext();
     grpc::Status status = connection.atlas().CommitStructure(context.get(), request, &revision);
-    if (!status.ok()) return connection.Fail("committing " + what, status, kExitConflict);
+    if (!status.ok()) {
+      DiscardUpload(connection, upload_id);
+      return connection.Fail("committing " + what, status, kExitConflict);
+    }
   }
   // The revision has landed. A lock that is no longer held (this is a rerun
   // whose first run gave it back, or the lease lapsed and was taken over) is
@@ -609,7 +668,9 @@ int Download(Connection& connection, const DownloadArgs& args) {
     return code;
   const std::string out =
       args.out.empty() ? args.target.structure + Extension(revision.format()) : args.out;
-  if (int code = DownloadRevision(connection, revision, out); code != kExitOk) return code;
+  if (int code = DownloadRevision(connection, revision, out, /*overwrite=*/true); code != kExitOk) {
+    return code;
+  }
   if (connection.options().json) {
     PrintJson(revision);
   } else {

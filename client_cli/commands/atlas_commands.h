@@ -53,6 +53,9 @@ struct CheckoutArgs {
   std::string out;  // default NAME.<extension of its format>
   int lease_s = 300;
   bool hold = false;
+  // Replace an `out` holding content the server does not have (by default
+  // it is kept as OUT.mine).
+  bool force = false;
 };
 
 struct CommitArgs {

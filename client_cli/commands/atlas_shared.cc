@@ -16,6 +16,15 @@ namespace {
 constexpr int64_t kUploadChunkBytes = 1 << 20;  // the API's largest chunk
 }  // namespace
 
+void DiscardUpload(Connection& connection, const std::string& upload_id) {
+  if (upload_id.empty()) return;
+  v1::DiscardUploadRequest request;
+  request.set_upload_id(upload_id);
+  v1::DiscardUploadResponse response;
+  auto context = connection.UnaryContext();
+  connection.atlas().DiscardUpload(context.get(), request, &response);
+}
+
 // Uploads `file` (BeginUpload, then WriteUpload from where the server says
 // it is, retried up to three times); *upload_id names the complete upload.
 int UploadFile(Connection& connection, const std::string& file, std::string* upload_id) {
@@ -46,7 +55,10 @@ int UploadFile(Connection& connection, const std::string& file, std::string* upl
       get.set_upload_id(upload.id());
       auto context = connection.UnaryContext();
       grpc::Status status = connection.atlas().GetUpload(context.get(), get, &upload);
-      if (!status.ok()) return connection.Fail("resuming the upload of " + file, status);
+      if (!status.ok()) {
+        DiscardUpload(connection, upload.id());
+        return connection.Fail("resuming the upload of " + file, status);
+      }
     }
     in.clear();
     in.seekg(upload.received_bytes());
@@ -60,6 +72,9 @@ int UploadFile(Connection& connection, const std::string& file, std::string* upl
       in.read(buffer.data(), n);
       if (in.gcount() != n) {
         std::fprintf(stderr, "pba: %s changed while it was being uploaded\n", file.c_str());
+        writer->WritesDone();
+        writer->Finish();
+        DiscardUpload(connection, upload.id());
         return kExitError;
       }
       v1::UploadChunk chunk;
@@ -75,6 +90,7 @@ int UploadFile(Connection& connection, const std::string& file, std::string* upl
     if (last.ok()) upload = result;
   }
   if (upload.received_bytes() < size) {
+    DiscardUpload(connection, upload.id());
     return connection.Fail("uploading " + file,
                            last.ok() ? grpc::Status(grpc::UNKNOWN, "incomplete") : last);
   }
@@ -149,11 +165,12 @@ void MoreHint(const std::string& next, const std::string& command) {
 
 // Downloads a revision's geometry into `out` (transfer.h: resumed, checked
 // against the revision's SHA-256).
-int DownloadRevision(Connection& connection, const v1::Revision& revision, const fs::path& out) {
+int DownloadRevision(Connection& connection, const v1::Revision& revision, const fs::path& out,
+                     bool overwrite) {
   return DownloadTo(connection, out, revision.size_bytes(), revision.content_sha256(),
                     revision.project() + "/" + revision.structure() + " revision " +
                         std::to_string(revision.number()),
-                    [&](grpc::ClientContext* context, int64_t offset) {
+                    overwrite, [&](grpc::ClientContext* context, int64_t offset) {
                       v1::DownloadGeometryRequest request;
                       request.set_project(revision.project());
                       request.set_structure(revision.structure());

@@ -20,6 +20,10 @@ std::string RequestIdOr(const std::string& given);
 // Uploads `file` (BeginUpload, then WriteUpload from where the server says
 // it is, retried up to three times); *upload_id names the complete upload.
 int UploadFile(Connection& connection, const std::string& file, std::string* upload_id);
+// Tells the server to drop an upload this command abandons (DiscardUpload),
+// so that it stops counting against the user's upload quota; best effort:
+// a failure is ignored (the upload expires after a day anyway).
+void DiscardUpload(Connection& connection, const std::string& upload_id);
 
 std::string RoleText(v1::Role role);
 // "contours_json", "nifti", "stl", "obj", "vtk"; "-" when unset.
@@ -32,9 +36,10 @@ std::string ColourText(const v1::Colour& c);
 void MoreHint(const std::string& next, const std::string& command);
 
 // Downloads a revision's geometry into `out` (transfer.h: resumed, checked
-// against the revision's SHA-256).
+// against the revision's SHA-256, links not followed; an existing `out`
+// replaced only with `overwrite`).
 int DownloadRevision(Connection& connection, const v1::Revision& revision,
-                     const std::filesystem::path& out);
+                     const std::filesystem::path& out, bool overwrite);
 
 // Revision `number` of `target` (0: the head); the exit code.
 int GetHead(Connection& connection, const StructureArgs& target, int64_t number,

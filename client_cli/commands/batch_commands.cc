@@ -7,12 +7,15 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <set>
+#include <sstream>
 
 #include "codec/yaml_codec.h"
 #include "commands/batch_plot.h"
 #include "commands/batch_shared.h"
 #include "commands/job_commands.h"
+#include "core/yaml_guard.h"
 #include "exit_codes.h"
 #include "files.h"
 #include "output.h"
@@ -34,6 +37,31 @@ struct Batch {
   PlotSpec plot;  // the picture of the members' histories, when enabled
 };
 
+// YAML::LoadFile with aliases and oversized texts refused first: the
+// members' copies of a tree of nested aliases expand it (core/yaml_guard.h).
+bool LoadBoundedYaml(const std::string& file, YAML::Node* node, std::string* error) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) {
+    *error = file + ": cannot read (no such file or not readable)";
+    return false;
+  }
+  std::ostringstream text;
+  text << in.rdbuf();
+  const YamlProblem problem = FindYamlProblem(text.str());
+  if (!problem.message.empty()) {
+    *error = file + (problem.line > 0 ? ":" + std::to_string(problem.line) : "") + ": " +
+             problem.message;
+    return false;
+  }
+  try {
+    *node = YAML::Load(text.str());
+  } catch (const YAML::Exception& e) {
+    *error = file + ": " + e.what();
+    return false;
+  }
+  return true;
+}
+
 std::string LastName(const std::string& path) {
   const size_t dot = path.rfind('.');
   return dot == std::string::npos ? path : path.substr(dot + 1);
@@ -43,12 +71,7 @@ std::string LastName(const std::string& path) {
 // naming the file, the member and the field.
 bool LoadBatch(const std::string& file, Batch* batch, std::string* error) {
   YAML::Node root;
-  try {
-    root = YAML::LoadFile(file);
-  } catch (const YAML::Exception& e) {
-    *error = file + ": " + e.what();
-    return false;
-  }
+  if (!LoadBoundedYaml(file, &root, error)) return false;
   if (!root.IsMap()) {
     *error = file + ": a batch is a map with scene, sweep or members, and outputs";
     return false;
@@ -170,12 +193,7 @@ bool LoadBatch(const std::string& file, Batch* batch, std::string* error) {
   }
 
   YAML::Node base;
-  try {
-    base = YAML::LoadFile(batch->scene_file.string());
-  } catch (const YAML::Exception& e) {
-    *error = batch->scene_file.string() + ": " + e.what();
-    return false;
-  }
+  if (!LoadBoundedYaml(batch->scene_file.string(), &base, error)) return false;
   const std::string base_name = base["name"] ? base["name"].Scalar() : batch->name;
   for (const auto& [name, values] : members) {
     RunMember member;

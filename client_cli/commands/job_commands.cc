@@ -6,11 +6,13 @@
 #include <filesystem>
 #include <fstream>
 #include <random>
+#include <set>
 
 #include "codec/summary_text.h"
 #include "codec/yaml_codec.h"
 #include "commands/atlas_shared.h"
 #include "exit_codes.h"
+#include "files.h"
 #include "output.h"
 #include "transfer.h"
 
@@ -142,9 +144,9 @@ int ReportEnd(Connection& connection, const std::string& id) {
 
 // Downloads one result file into dir/name (transfer.h: resumed, checked).
 int DownloadFile(Connection& connection, const std::string& id, const v1::ResultFile& file,
-                 const fs::path& dir) {
+                 const fs::path& dir, bool overwrite) {
   return DownloadTo(connection, dir / file.name(), file.size_bytes(), file.sha256(),
-                    file.name() + " of job " + id,
+                    file.name() + " of job " + id, overwrite,
                     [&](grpc::ClientContext* context, int64_t offset) {
                       v1::DownloadResultRequest request;
                       request.set_job_id(id);
@@ -181,7 +183,7 @@ int SubmitJob(Connection& connection, const SubmitArgs& args) {
   codec::ParseError error;
   if (!codec::ReadYamlFile(args.file, request.mutable_scene(), &error)) {
     std::fprintf(stderr, "pba: invalid scene: %s\n", error.ToString().c_str());
-    return error.field.empty() && error.line == 0 ? kExitError : kExitInvalid;
+    return error.unreadable ? kExitError : kExitInvalid;
   }
   if (!args.snapshot.empty() && !ParseSnapshotRef(args.snapshot, request.mutable_snapshot())) {
     return kExitUsage;
@@ -296,6 +298,26 @@ int FetchJob(Connection& connection, const FetchArgs& args) {
     }
     return ExitForState(job.state());
   }
+  // The server names the files; every name is checked before anything is
+  // written, so a hostile or broken server cannot write outside the
+  // directory, nor two files into one.
+  std::set<std::string> names;
+  for (const auto& file : job.result_files()) {
+    if (const std::string why = UnsafeFileNameReason(file.name()); !why.empty()) {
+      std::fprintf(stderr,
+                   "pba: the server named a result file of job %s %s, which is not a plain file "
+                   "name (%s); nothing was written\n",
+                   args.id.c_str(), QuotedName(file.name()).c_str(), why.c_str());
+      return kExitInvalid;
+    }
+    if (!names.insert(FoldCase(file.name())).second) {
+      std::fprintf(stderr,
+                   "pba: the server named two result files of job %s %s (names that differ only "
+                   "in case are one file on some systems); nothing was written\n",
+                   args.id.c_str(), QuotedName(file.name()).c_str());
+      return kExitInvalid;
+    }
+  }
   const fs::path dir = args.out_dir;
   std::error_code ec;
   fs::create_directories(dir, ec);
@@ -303,8 +325,26 @@ int FetchJob(Connection& connection, const FetchArgs& args) {
     std::fprintf(stderr, "pba: cannot create %s: %s\n", dir.c_str(), ec.message().c_str());
     return kExitError;
   }
+  if (!args.force) {
+    // Refused before the first download, not halfway through.
+    std::string present;
+    for (const auto& file : job.result_files()) {
+      if (fs::symlink_status(dir / file.name(), ec).type() != fs::file_type::not_found) {
+        present += (present.empty() ? "" : ", ") + file.name();
+      }
+    }
+    if (!present.empty()) {
+      std::fprintf(stderr,
+                   "pba: %s already holds %s; not overwriting (pass --force to replace them, or "
+                   "fetch into another directory)\n",
+                   dir.c_str(), present.c_str());
+      return kExitConflict;
+    }
+  }
   for (const auto& file : job.result_files()) {
-    if (int result = DownloadFile(connection, args.id, file, dir); result != kExitOk) return result;
+    if (int result = DownloadFile(connection, args.id, file, dir, args.force); result != kExitOk) {
+      return result;
+    }
   }
   if (connection.options().json) {
     PrintJson(job);

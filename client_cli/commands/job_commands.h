@@ -35,6 +35,7 @@ struct ListArgs {
 struct FetchArgs {
   std::string id;
   std::string out_dir;
+  bool force = false;  // replace files already in out_dir
 };
 
 int SubmitJob(Connection& connection, const SubmitArgs& args);

@@ -1,4 +1,7 @@
-// `pba login`, `logout`, `whoami` and `pba project ...` (atlas_commands.h).
+// `pba login`, `logout`, `whoami` and `pba project ...` (atlas_commands.h,
+// project_commands.h).
+#include "commands/project_commands.h"
+
 #include <cstdio>
 #include <fstream>
 
@@ -143,6 +146,27 @@ int SetRole(Connection& connection, const std::string& project, const std::strin
   } else {
     std::printf("%s is %s in %s\n", member.user().c_str(), RoleText(member.role()).c_str(),
                 member.project().c_str());
+  }
+  return kExitOk;
+}
+
+int RemoveMember(Connection& connection, const std::string& project, const std::string& user) {
+  v1::RemoveMemberRequest request;
+  request.set_project(project);
+  request.set_user(user);
+  v1::RemoveMemberResponse response;
+  auto context = connection.UnaryContext();
+  grpc::Status status = connection.atlas().RemoveMember(context.get(), request, &response);
+  if (!status.ok()) {
+    return connection.Fail("removing " + user + " from " + project, status, kExitConflict);
+  }
+  if (connection.options().json) {
+    PrintJson(response);
+    return kExitOk;
+  }
+  std::printf("%s is no longer a member of %s\n", user.c_str(), project.c_str());
+  for (const std::string& structure : response.released_locks()) {
+    std::printf("released their lock on %s\n", structure.c_str());
   }
   return kExitOk;
 }

@@ -1,10 +1,18 @@
 // `pba atlas snapshot ...`, `tag`, `audit` and `watch` (atlas_commands.h).
 #include <google/protobuf/struct.pb.h>
+#include <sys/stat.h>
 
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
 #include <cstdio>
+#include <cstdlib>
+#include <cstring>
 #include <filesystem>
+#include <map>
+#include <set>
+#include <string>
+#include <vector>
 
 #include "codec/yaml_codec.h"
 #include "commands/atlas_commands.h"
@@ -15,6 +23,18 @@
 
 namespace pba::cli {
 namespace fs = std::filesystem;
+namespace {
+
+constexpr char kManifestName[] = "manifest.json";
+
+// The process's umask (reading it means setting it; set straight back).
+mode_t CurrentUmask() {
+  const mode_t mask = ::umask(0);
+  ::umask(mask);
+  return mask;
+}
+
+}  // namespace
 
 int CreateSnapshot(Connection& connection, const std::string& project, const std::string& name,
                    const std::string& request_id) {
@@ -83,6 +103,83 @@ int ShowSnapshot(Connection& connection, const std::string& project, const std::
   return kExitOk;
 }
 
+namespace {
+
+// The file a member of an export gets: its name and its format's
+// extension, as exports always had ("Putamen.json"), so that the files
+// people know stay where they were. A name that would be the manifest's
+// (a structure named "manifest") or another member's, ignoring case (one
+// file on macOS and Windows), gets "_2", "_3", ... before the extension:
+// "manifest_2.json". The manifest says which file is whose, so readers
+// never guess. False (with *why) when the structure's name, which the
+// server sent, cannot be a file name.
+bool ExportFileName(const std::string& structure, const std::string& extension,
+                    std::set<std::string>* taken, std::string* file, std::string* why) {
+  // The name itself too: ".." + ".json" would be a plain file name, but a
+  // server that sends ".." for a structure is not to be trusted with paths.
+  *why = UnsafeFileNameReason(structure);
+  if (!why->empty()) return false;
+  for (int n = 1; n < 1000; ++n) {
+    const std::string candidate =
+        (n == 1 ? structure : structure + "_" + std::to_string(n)) + extension;
+    *why = UnsafeFileNameReason(candidate);
+    if (!why->empty()) return false;
+    if (taken->insert(FoldCase(candidate)).second) {
+      *file = candidate;
+      return true;
+    }
+  }
+  *why = "too many structures share its name";
+  return false;
+}
+
+// Why the members of an export (their revisions, in order) would not make
+// a structure set pba-solve and pba-atlas read; "" when they would. A set
+// needs each structure's colour to be its own and not black, 0,0,0 (the
+// background; solver/atlas/structure_set.h), which the store does not ask
+// (a structure created without --colour is 0,0,0; a job against the
+// snapshot moves a repeated colour aside for its build, but an export is
+// the snapshot as pinned). Names the structures and what to change.
+std::string ExportColourProblem(const std::string& project,
+                                const std::vector<v1::Revision>& revisions) {
+  std::map<std::string, std::string> owner;  // colour -> first structure with it
+  for (const v1::Revision& revision : revisions) {
+    const v1::Colour& colour = revision.metadata().colour();
+    const std::string name = QuotedName(revision.structure());
+    const std::string set_colour =
+        "pba atlas set -p " + QuotedName(project) + " " + name + " --colour R,G,B";
+    if (colour.r() == 0 && colour.g() == 0 && colour.b() == 0) {
+      return "structure " + name +
+             " has no colour (0,0,0 is the background's); give it one with: " + set_colour;
+    }
+    const auto [it, first] = owner.emplace(ColourText(colour), name);
+    if (!first) {
+      return "structures " + it->second + " and " + name + " share the colour " + it->first +
+             "; give " + name + " another with: " + set_colour;
+    }
+  }
+  return "";
+}
+
+// Removes the staging directory this export made, unless it was moved
+// into place. Only ever what mkdtemp created: nothing of the user's.
+class StagingCleanup {
+ public:
+  explicit StagingCleanup(fs::path path) : path_(std::move(path)) {}
+  ~StagingCleanup() {
+    std::error_code ec;
+    if (!path_.empty()) fs::remove_all(path_, ec);
+  }
+  StagingCleanup(const StagingCleanup&) = delete;
+  StagingCleanup& operator=(const StagingCleanup&) = delete;
+  void Release() { path_.clear(); }
+
+ private:
+  fs::path path_;
+};
+
+}  // namespace
+
 int ExportSnapshot(Connection& connection, const std::string& project, const std::string& which,
                    const std::string& dir) {
   std::error_code ec;
@@ -99,24 +196,59 @@ int ExportSnapshot(Connection& connection, const std::string& project, const std
     grpc::Status status = connection.atlas().GetSnapshot(context.get(), request, &snapshot);
     if (!status.ok()) return connection.Fail("snapshot " + which + " of " + project, status);
   }
-  // Written beside the target and renamed into place: whole or absent.
-  const fs::path target = fs::absolute(dir);
-  const fs::path staging = target.string() + ".part";
-  fs::remove_all(staging, ec);
-  fs::create_directories(staging, ec);
-  if (ec) {
-    std::fprintf(stderr, "pba: cannot create %s: %s\n", staging.c_str(), ec.message().c_str());
-    return kExitError;
-  }
-  google::protobuf::ListValue manifest_structures;
+  // Every member's revision and file name first: a name that cannot be a
+  // file is refused before anything is written.
+  std::vector<v1::Revision> revisions;
+  std::vector<std::string> files;
+  std::set<std::string> taken = {FoldCase(kManifestName)};
   for (const auto& member : snapshot.members()) {
     v1::Revision revision;
     const StructureArgs structure{project, member.structure()};
     if (int code = GetHead(connection, structure, member.revision(), &revision); code != kExitOk) {
       return code;
     }
-    const std::string file = member.structure() + Extension(revision.format());
-    if (int code = DownloadRevision(connection, revision, staging / file); code != kExitOk) {
+    std::string file, why;
+    if (!ExportFileName(member.structure(), Extension(revision.format()), &taken, &file, &why)) {
+      std::fprintf(stderr,
+                   "pba: snapshot %s of %s has a structure named %s, which cannot be a file name "
+                   "(%s); nothing was written\n",
+                   which.c_str(), project.c_str(), QuotedName(member.structure()).c_str(),
+                   why.c_str());
+      return kExitInvalid;
+    }
+    revisions.push_back(std::move(revision));
+    files.push_back(std::move(file));
+  }
+  if (const std::string problem = ExportColourProblem(project, revisions); !problem.empty()) {
+    std::fprintf(stderr,
+                 "pba: snapshot %s of %s cannot be exported as a structure set (each structure "
+                 "needs a colour of its own, or pba-solve and pba-atlas refuse the set): %s; "
+                 "then snapshot again and export that; nothing was written\n",
+                 which.c_str(), project.c_str(), problem.c_str());
+    return kExitInvalid;
+  }
+  // Written into a fresh directory beside the target and renamed into
+  // place: whole or absent. mkdtemp gives a name no one else has, so
+  // nothing already there is reused or removed.
+  fs::path target = fs::absolute(dir).lexically_normal();
+  if (target.filename().empty()) target = target.parent_path();
+  fs::create_directories(target.parent_path(), ec);
+  std::string pattern =
+      (target.parent_path() / ("." + target.filename().string() + ".pba-export-XXXXXX")).string();
+  if (::mkdtemp(pattern.data()) == nullptr) {
+    std::fprintf(stderr, "pba: cannot create a directory beside %s: %s\n", target.c_str(),
+                 std::strerror(errno));
+    return kExitError;
+  }
+  const fs::path staging = pattern;
+  StagingCleanup cleanup(staging);
+  google::protobuf::ListValue manifest_structures;
+  for (int i = 0; i < snapshot.members_size(); ++i) {
+    const auto& member = snapshot.members(i);
+    const v1::Revision& revision = revisions[static_cast<size_t>(i)];
+    const std::string& file = files[static_cast<size_t>(i)];
+    if (int code = DownloadRevision(connection, revision, staging / file, /*overwrite=*/false);
+        code != kExitOk) {
       return code;
     }
     auto& entry = *manifest_structures.add_values()->mutable_struct_value()->mutable_fields();
@@ -137,17 +269,19 @@ int ExportSnapshot(Connection& connection, const std::string& project, const std
   fields["snapshot"].set_number_value(static_cast<double>(snapshot.id()));
   fields["snapshot_name"].set_string_value(snapshot.name());
   *fields["structures"].mutable_list_value() = manifest_structures;
-  if (!WriteFileAtomically(staging / "manifest.json", codec::ToJson(manifest))) {
-    std::fprintf(stderr, "pba: cannot write %s\n", (staging / "manifest.json").c_str());
+  if (!WriteFileAtomically(staging / kManifestName, codec::ToJson(manifest))) {
+    std::fprintf(stderr, "pba: cannot write %s\n", (staging / kManifestName).c_str());
     return kExitError;
   }
-  fs::remove(target, ec);  // an empty directory, if any
-  fs::rename(staging, target, ec);
-  if (ec) {
-    std::fprintf(stderr, "pba: cannot move %s into place: %s\n", target.c_str(),
-                 ec.message().c_str());
+  // rename() takes the place of an empty directory, and refuses anything
+  // else that appeared meanwhile (a file, a directory with files, a link).
+  if (::chmod(staging.c_str(), 0755 & ~CurrentUmask()) != 0 ||
+      std::rename(staging.c_str(), target.c_str()) != 0) {
+    std::fprintf(stderr, "pba: cannot move the export into %s: %s\n", target.c_str(),
+                 std::strerror(errno));
     return kExitError;
   }
+  cleanup.Release();
   if (connection.options().json) {
     PrintJson(manifest);
   } else {

@@ -133,17 +133,19 @@ bool BuildStudy(const StudyArgs& args, Study* study, std::string* error) {
     *error = "--snapshot: expected PROJECT/SNAPSHOT (an id or a tag)";
     return false;
   }
+  // The codec's read first: it refuses aliases (core/yaml_guard.h), which
+  // the members' clones of `base` below would expand.
+  v1::Scene scene;
+  codec::ParseError parse;
+  if (!codec::ReadYamlFile(args.scene, &scene, &parse)) {
+    *error = parse.ToString();
+    return false;
+  }
   YAML::Node base;
   try {
     base = YAML::LoadFile(args.scene);
   } catch (const YAML::Exception& e) {
     *error = args.scene + ": " + e.what();
-    return false;
-  }
-  v1::Scene scene;
-  codec::ParseError parse;
-  if (!codec::ReadYamlFile(args.scene, &scene, &parse)) {
-    *error = parse.ToString();
     return false;
   }
   study->name = scene.name().empty() ? fs::path(args.scene).stem().string() : scene.name();

@@ -12,8 +12,14 @@
 #include <limits>
 #include <sstream>
 
+#include "core/yaml_guard.h"
+
 namespace pba::codec {
 namespace {
+
+// A scene is a few kilobytes; these bounds leave room for generated ones
+// (studies, batches) and keep a hostile one from costing gigabytes.
+const YamlLimits kSceneYamlLimits{size_t{16} << 20, 1'000'000, 64};
 
 using google::protobuf::Descriptor;
 using google::protobuf::EnumDescriptor;
@@ -291,6 +297,16 @@ std::string ParseError::ToString() const {
 }
 
 bool ParseYaml(std::string_view text, Message* message, ParseError* error) {
+  // Aliases and oversized texts are refused before loading: walking a tree
+  // of nested aliases visits each reference again (yaml_guard.h), and a
+  // scene of a few hundred bytes ran the client out of memory.
+  const YamlProblem problem = FindYamlProblem(text, kSceneYamlLimits);
+  if (!problem.message.empty()) {
+    error->field.clear();
+    error->line = problem.line;
+    error->message = problem.message;
+    return false;
+  }
   YAML::Node root;
   try {
     root = YAML::Load(std::string(text));
@@ -313,6 +329,7 @@ bool ReadYamlFile(const std::filesystem::path& path, Message* message, ParseErro
   std::ifstream in(path, std::ios::binary);
   if (!in) {
     error->field.clear();
+    error->unreadable = true;
     error->message = "cannot read " + path.string() + ": no such file or not readable";
     return false;
   }

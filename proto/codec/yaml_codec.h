@@ -17,6 +17,7 @@ struct ParseError {
   int line = 0;         // 1-based; 0 when unknown
   std::string field;    // dotted path, e.g. "boundary_conditions[1].set"; empty for the whole text
   std::string message;  // what is wrong
+  bool unreadable = false;  // the file could not be read at all (not the text's fault)
   // "scene.yaml:12: boundary_conditions[1].set: ..." with the parts that are known.
   std::string ToString() const;
 };

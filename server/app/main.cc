@@ -1,13 +1,22 @@
 // pba-server: the PBA gRPC server.
 //
 //   pba-server --data DIR [--listen HOST:PORT] [--solver PATH] [--max-running N]
-//              [--log-level LEVEL]
-//   pba-server admin create-user NAME --data DIR
+//              [--log-level LEVEL] [--tls-cert PEM --tls-key PEM] [--insecure]
+//   pba-server admin create-user NAME [--server-admin] --data DIR
+//   pba-server admin disable-user NAME --data DIR
+//   pba-server admin enable-user NAME --data DIR
 //
-// The second form creates an atlas user offline (the server may be running)
-// and prints its token once on stdout; only its hash is kept. On the first
-// start the server creates the user "admin" itself, with the token in
+// The admin forms work offline on the data directory (the server may be
+// running: it reads users from the database on every call, so a disabled
+// user's token is refused from their next call on). create-user prints the
+// new token once on stdout; only its hash is kept. On the first start the
+// server creates the user "admin" itself, a server admin, with the token in
 // DIR/admin.token.
+//
+// Everything runs under umask 077 and the data directory is made 0700:
+// the database, blobs, uploads and job files are the server user's alone.
+// Plaintext on an address that is not loopback is refused unless
+// --insecure (pba_server.h).
 //
 // Prints "pba-server listening on HOST:PORT" once it accepts calls and writes
 // DIR/server.json ({"address": ..., "pid": ...}) for scripts; SIGTERM or
@@ -15,6 +24,7 @@
 #include <signal.h>
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
@@ -34,20 +44,51 @@ namespace {
 
 namespace fs = std::filesystem;
 
-int CreateUser(const std::string& data_dir, const std::string& name) {
+// The data directory's store, opened by an admin command (and the
+// directory made private, as the server makes it).
+pba::Status OpenStore(const std::string& data_dir, std::unique_ptr<pba::AtlasStore>* store) {
+  PBA_RETURN_IF_ERROR(pba::AtlasStore::Open(data_dir, store));
+  return pba::RestrictDataDir(data_dir);
+}
+
+int CreateUser(const std::string& data_dir, const std::string& name, bool server_admin) {
   std::unique_ptr<pba::AtlasStore> store;
-  pba::Status status = pba::AtlasStore::Open(data_dir, &store);
+  pba::Status status = OpenStore(data_dir, &store);
   std::string token;
-  if (status.ok()) status = store->CreateUser(name, &token);
+  if (status.ok()) status = store->CreateUser(name, &token, server_admin);
   if (!status.ok()) {
     std::cerr << "pba-server admin create-user: " << status.ToString() << std::endl;
     return 1;
   }
-  std::cerr << "created atlas user '" << name
+  std::cerr << "created " << (server_admin ? "server admin" : "atlas user") << " '" << name
             << "'; its token follows (shown only now; send it as "
                "'authorization: Bearer <token>')"
             << std::endl;
   std::cout << token << std::endl;
+  return 0;
+}
+
+int SetDisabled(const std::string& data_dir, const std::string& name, bool disabled) {
+  const char* command = disabled ? "disable-user" : "enable-user";
+  std::unique_ptr<pba::AtlasStore> store;
+  pba::Status status = OpenStore(data_dir, &store);
+  bool changed = false;
+  if (status.ok()) status = store->SetUserDisabled(name, disabled, &changed);
+  if (!status.ok()) {
+    std::cerr << "pba-server admin " << command << ": " << status.ToString() << std::endl;
+    return 1;
+  }
+  const char* state = disabled ? "disabled" : "enabled";
+  if (!changed) {
+    std::cerr << "user '" << name << "' was already " << state << std::endl;
+  } else if (disabled) {
+    std::cerr << "disabled user '" << name
+              << "': their token is refused from their next call on, also by a running server; "
+                 "their locks stay until their leases lapse or a project admin breaks them"
+              << std::endl;
+  } else {
+    std::cerr << "enabled user '" << name << "' again: their token works again" << std::endl;
+  }
   return 0;
 }
 
@@ -60,6 +101,9 @@ fs::path DefaultSolver() {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // Before anything is created: every file of the data directory (and of
+  // the solves this starts, which inherit it) is the server user's alone.
+  ::umask(077);
   CLI::App app{"pba-server: runs PBA simulation jobs behind a gRPC API"};
   std::string data_dir;
   std::string listen = "127.0.0.1:50051";
@@ -85,7 +129,11 @@ int main(int argc, char** argv) {
   app.add_option("--tls-cert", tls_cert,
                  "PEM certificate (chain) to serve TLS with; needs --tls-key");
   app.add_option("--tls-key", tls_key, "PEM private key of --tls-cert");
-  int64_t max_job_time_s = 0;
+  bool insecure = false;
+  app.add_flag("--insecure", insecure,
+               "Allow plaintext on an address that is not loopback (tokens then cross the "
+               "network in the clear)");
+  int64_t max_job_time_s = pba::kDefaultMaxJobTime.count();
   app.add_option("--max-job-time", max_job_time_s,
                  "Wall-clock limit of a job [s]; a job may ask for less; 0: none")
       ->check(CLI::NonNegativeNumber)
@@ -95,9 +143,14 @@ int main(int argc, char** argv) {
                  "Starts of a job (restarts re-queue running jobs) before it is given up")
       ->check(CLI::Range(1, 100))
       ->capture_default_str();
-  double solver_memory_gib = 0;
+  double solver_memory_gib = -1;
   app.add_option("--solver-memory", solver_memory_gib,
-                 "Address-space limit of each pba-solve [GiB]; 0: none")
+                 "Address-space limit of each pba-solve [GiB]; 0: none (default: 3/4 of the "
+                 "physical memory divided by --max-running)")
+      ->check(CLI::NonNegativeNumber);
+  double upload_quota_gib = 4;
+  app.add_option("--upload-quota", upload_quota_gib,
+                 "Bytes one user's unfinished uploads may announce together [GiB]; 0: no quota")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   double keep_results_days = 30;
@@ -113,8 +166,21 @@ int main(int argc, char** argv) {
   std::string admin_data_dir;
   create_user->add_option("name", new_user, "The user's name")->required();
   create_user->add_option("--data", admin_data_dir, "Data directory")->required();
+  bool server_admin = false;
+  create_user->add_flag("--server-admin", server_admin,
+                        "A server admin: sees and cancels every job, of every project");
+  CLI::App* disable_user = admin->add_subcommand(
+      "disable-user", "Refuse a user's token from their next call on (also a running server's)");
+  disable_user->add_option("name", new_user, "The user's name")->required();
+  disable_user->add_option("--data", admin_data_dir, "Data directory")->required();
+  CLI::App* enable_user =
+      admin->add_subcommand("enable-user", "Accept a disabled user's token again");
+  enable_user->add_option("name", new_user, "The user's name")->required();
+  enable_user->add_option("--data", admin_data_dir, "Data directory")->required();
   CLI11_PARSE(app, argc, argv);
-  if (create_user->parsed()) return CreateUser(admin_data_dir, new_user);
+  if (create_user->parsed()) return CreateUser(admin_data_dir, new_user, server_admin);
+  if (disable_user->parsed()) return SetDisabled(admin_data_dir, new_user, true);
+  if (enable_user->parsed()) return SetDisabled(admin_data_dir, new_user, false);
   if (data_dir.empty()) {
     std::cerr << "--data is required\n" << app.help() << std::flush;
     return 2;
@@ -133,6 +199,9 @@ int main(int argc, char** argv) {
   pthread_sigmask(SIG_BLOCK, &shutdown_signals, nullptr);
   // A client vanishing mid-write must not kill the server.
   signal(SIGPIPE, SIG_IGN);
+  // Past a file-size limit (ulimit -f) a write must fail with EFBIG and
+  // become an error naming the file, not end the server.
+  signal(SIGXFSZ, SIG_IGN);
 
   pba::ServerOptions options;
   options.data_dir = data_dir;
@@ -142,9 +211,13 @@ int main(int argc, char** argv) {
   options.atlas_cache_gib = atlas_cache_gib;
   options.tls_cert = tls_cert;
   options.tls_key = tls_key;
+  options.insecure = insecure;
   options.max_job_time = std::chrono::seconds(max_job_time_s);
   options.max_attempts = max_attempts;
-  options.max_solver_memory_bytes = static_cast<int64_t>(solver_memory_gib * (1LL << 30));
+  options.max_solver_memory_bytes = solver_memory_gib < 0
+                                        ? pba::DefaultSolverMemoryBytes(max_running)
+                                        : static_cast<int64_t>(solver_memory_gib * (1LL << 30));
+  options.upload_quota_bytes = static_cast<int64_t>(upload_quota_gib * (1LL << 30));
   options.keep_results = std::chrono::seconds(static_cast<int64_t>(keep_results_days * 86400));
   // Parallel solves share the cores rather than each taking all of them.
   if (max_running > 1) {
@@ -166,8 +239,16 @@ int main(int argc, char** argv) {
   if (!written.ok()) spdlog::warn("cannot write server.json: {}", written.ToString());
   std::cout << "pba-server listening on " << server->address() << std::endl;
   if (!tls_cert.empty()) spdlog::info("TLS with the certificate {}", tls_cert);
+  if (tls_cert.empty() && !pba::IsLoopbackListen(listen)) {
+    spdlog::warn("--insecure: serving plaintext on {}; tokens cross the network in the clear",
+                 listen);
+  }
   spdlog::info("serving jobs from {} with solver {}", fs::absolute(data_dir).string(),
                options.solver.string());
+  // The effective limits, defaults included (0: none).
+  spdlog::info("limits: --max-job-time {} s, --solver-memory {:.2f} GiB, --upload-quota {:.2f} GiB",
+               max_job_time_s, static_cast<double>(options.max_solver_memory_bytes) / (1LL << 30),
+               upload_quota_gib);
 
   int signal_number = 0;
   while (sigwait(&shutdown_signals, &signal_number) != 0) {

@@ -1,12 +1,17 @@
 #include "app/pba_server.h"
 
+#include <arpa/inet.h>
 #include <fcntl.h>
 #include <grpcpp/ext/proto_server_reflection_plugin.h>
 #include <grpcpp/grpcpp.h>
 #include <grpcpp/health_check_service_interface.h>
+#include <grpcpp/resource_quota.h>
 #include <spdlog/spdlog.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <cstring>
 #include <fstream>
@@ -29,6 +34,39 @@ Status CheckSolver(const fs::path& solver) {
   return Status::Ok();
 }
 
+bool IsLoopbackListen(const std::string& listen) {
+  if (listen.rfind("unix:", 0) == 0 || listen.rfind("unix-abstract:", 0) == 0) return true;
+  std::string host;
+  if (!listen.empty() && listen.front() == '[') {
+    const size_t close = listen.find(']');
+    if (close == std::string::npos) return false;
+    host = listen.substr(1, close - 1);
+  } else {
+    const size_t colon = listen.rfind(':');
+    if (colon == std::string::npos) return false;
+    host = listen.substr(0, colon);
+  }
+  std::transform(host.begin(), host.end(), host.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (host == "localhost") return true;
+  in_addr v4{};
+  if (::inet_pton(AF_INET, host.c_str(), &v4) == 1) return (ntohl(v4.s_addr) >> 24) == 127;
+  in6_addr v6{};
+  if (::inet_pton(AF_INET6, host.c_str(), &v6) == 1) {
+    if (IN6_IS_ADDR_LOOPBACK(&v6)) return true;
+    return IN6_IS_ADDR_V4MAPPED(&v6) && v6.s6_addr[12] == 127;
+  }
+  return false;
+}
+
+Status RestrictDataDir(const fs::path& data_dir) {
+  if (::chmod(data_dir.c_str(), 0700) != 0) {
+    return Status::Io("cannot make " + data_dir.string() +
+                      " private (mode 0700): " + std::strerror(errno));
+  }
+  return Status::Ok();
+}
+
 Status CreateFirstAdmin(AtlasStore& store, const std::string& user, const fs::path& token_file,
                         bool* created) {
   *created = false;
@@ -47,7 +85,7 @@ Status CreateFirstAdmin(AtlasStore& store, const std::string& user, const fs::pa
     return Status::Io("cannot create " + token_file.string() + ": " + std::strerror(errno));
   }
   std::string token;
-  Status status = store.CreateUser(user, &token);
+  Status status = store.CreateUser(user, &token, /*server_admin=*/true);
   if (status.ok()) {
     const std::string line = token + "\n";
     size_t done = 0;
@@ -72,6 +110,9 @@ Status CreateFirstAdmin(AtlasStore& store, const std::string& user, const fs::pa
 
 namespace {
 
+// Threads gRPC may use for calls at once (see the ResourceQuota below).
+constexpr int kMaxServerThreads = 512;
+
 // A PEM file's text; kInvalidArgument naming `field` when it cannot be read
 // or holds no "-----BEGIN ...<kind>-----" block.
 Status ReadPem(const fs::path& path, const char* field, const char* kind, std::string* pem) {
@@ -87,16 +128,42 @@ Status ReadPem(const fs::path& path, const char* field, const char* kind, std::s
   return Status::Ok();
 }
 
+// The executor's may_run: a job whose owner was disabled while it waited in
+// the queue (or before a restart re-queued it) does not run. Jobs stored
+// before owners were kept have none, and run.
+Status OwnerMayRun(AtlasStore& users, const v1::Job& job) {
+  if (job.owner().empty()) return Status::Ok();
+  bool disabled = false;
+  PBA_RETURN_IF_ERROR(users.IsUserDisabled(job.owner(), &disabled));
+  if (disabled) {
+    return Status::FailedPrecondition("not started: its owner '" + job.owner() +
+                                      "' was disabled (pba-server admin disable-user)");
+  }
+  return Status::Ok();
+}
+
 }  // namespace
 
 Status PbaServer::Start(const ServerOptions& options, std::unique_ptr<PbaServer>* out) {
   std::unique_ptr<PbaServer> server(new PbaServer());
   server->options_ = options;
+  // Tokens travel in every call's metadata: in plaintext they are for this
+  // machine only, unless the operator says otherwise.
+  if (options.tls_cert.empty() && options.tls_key.empty() && !options.insecure &&
+      !IsLoopbackListen(options.listen)) {
+    return Status::InvalidArgument(
+        "listen", options.listen +
+                      " is not a loopback address, and without TLS every token would cross the "
+                      "network in the clear: give --tls-cert and --tls-key, listen on "
+                      "127.0.0.1, [::1], localhost or a unix: socket, or pass --insecure to "
+                      "accept that");
+  }
   std::error_code ec;
   server->options_.data_dir = fs::absolute(options.data_dir, ec);
   const fs::path& data_dir = server->options_.data_dir;
   fs::create_directories(data_dir / "jobs", ec);
   if (ec) return Status::Io("cannot create " + (data_dir / "jobs").string() + ": " + ec.message());
+  PBA_RETURN_IF_ERROR(RestrictDataDir(data_dir));
   PBA_RETURN_IF_ERROR(CheckSolver(options.solver));
   // TLS material is read before anything is opened: a bad path is named at
   // once, not after the stores are up.
@@ -129,6 +196,7 @@ Status PbaServer::Start(const ServerOptions& options, std::unique_ptr<PbaServer>
                  swept_blobs.removed_bytes);
   }
   PBA_RETURN_IF_ERROR(UploadStore::Open(data_dir / "uploads", &server->uploads_));
+  server->uploads_->set_quota_bytes(options.upload_quota_bytes);
   int swept = 0;
   PBA_RETURN_IF_ERROR(server->uploads_->Sweep(&swept));
   if (swept > 0) spdlog::info("removed {} expired or stray upload files", swept);
@@ -156,6 +224,8 @@ Status PbaServer::Start(const ServerOptions& options, std::unique_ptr<PbaServer>
   server->atlas_jobs_ =
       std::make_unique<AtlasJobs>(*server->atlas_store_, server->atlas_hub_, *server->store_);
   executor_options.preparation = server->atlas_jobs_.get();
+  AtlasStore* users = server->atlas_store_.get();
+  executor_options.may_run = [users](const v1::Job& job) { return OwnerMayRun(*users, job); };
   AtlasJobs* atlas_jobs = server->atlas_jobs_.get();
   server->hub_.SetStateListener(
       [atlas_jobs](const v1::JobEvent& event) { atlas_jobs->PublishJobEvent(event); });
@@ -168,6 +238,13 @@ Status PbaServer::Start(const ServerOptions& options, std::unique_ptr<PbaServer>
   grpc::EnableDefaultHealthCheckService(true);
   grpc::reflection::InitProtoReflectionServerBuilderPlugin();
   grpc::ServerBuilder builder;
+  // gRPC's synchronous server would otherwise start a thread for every call
+  // in flight without bound (each open Watch holds one); past this many a
+  // new call is answered RESOURCE_EXHAUSTED at once, and the per-user
+  // stream limits (stream_slots.h) keep one user from taking them all.
+  grpc::ResourceQuota quota("pba-server");
+  quota.SetMaxThreads(kMaxServerThreads);
+  builder.SetResourceQuota(quota);
   int port = 0;
   std::shared_ptr<grpc::ServerCredentials> credentials = grpc::InsecureServerCredentials();
   if (!options.tls_cert.empty()) {
@@ -188,6 +265,12 @@ Status PbaServer::Start(const ServerOptions& options, std::unique_ptr<PbaServer>
   const size_t colon = options.listen.rfind(':');
   server->address_ = options.listen.substr(0, colon) + ":" + std::to_string(port);
   server->executor_->Start();
+  // Per service, so that a probe can ask for the one it needs (the default
+  // service "" is SERVING already).
+  if (auto* health = server->server_->GetHealthCheckService()) {
+    health->SetServingStatus(v1::JobService::service_full_name(), true);
+    health->SetServingStatus(v1::AtlasService::service_full_name(), true);
+  }
   *out = std::move(server);
   return Status::Ok();
 }
@@ -201,6 +284,7 @@ void PbaServer::Shutdown() {
   // deadline), then unary calls get their drain time.
   hub_.Shutdown();
   atlas_hub_.Shutdown();
+  if (atlas_service_ != nullptr) atlas_service_->Stop();
   if (server_ != nullptr) {
     if (auto* health = server_->GetHealthCheckService()) health->Shutdown();
     server_->Shutdown(std::chrono::system_clock::now() + options_.drain);

@@ -4,9 +4,19 @@
 // server.json; tests start it in-process.
 //
 // First start: when the atlas store has no user, Start() creates the user
-// "admin" and writes its token to <data>/admin.token (mode 0600, created
-// exclusively, fsynced) and logs where it is. Only the atlas service asks
-// for tokens; the job service does not (yet).
+// "admin", a server admin (job_service.h), and writes its token to
+// <data>/admin.token (mode 0600, created exclusively, fsynced) and logs
+// where it is. Every service asks for tokens (call_auth.h).
+//
+// Trust boundaries (docs/design.md): Start() refuses to listen without TLS
+// on anything but loopback (127.0.0.0/8, ::1, localhost) or a unix socket
+// unless ServerOptions::insecure says so, since tokens travel in every
+// call's metadata. The data directory is made 0700; main() sets the umask
+// to 077 before anything is created, so every file the server and its
+// solves write is 0600 (a library does not set process-wide state, so
+// in-process tests keep their own umask). Health: the default service
+// ("") and one status per service (pba.v1.JobService, pba.v1.AtlasService)
+// are SERVING once Start() returns, NOT_SERVING from Shutdown() on.
 #pragma once
 
 #include <grpcpp/server.h>
@@ -48,8 +58,11 @@ struct ServerOptions {
   // TLS: PEM certificate chain and private key. Both set: the server speaks
   // only TLS; both empty: plaintext (fine on loopback); one alone is an error.
   std::filesystem::path tls_cert, tls_key;
+  // Allows plaintext on an address that is not loopback (IsLoopbackListen);
+  // without it Start() refuses that.
+  bool insecure = false;
   // A job's wall-clock limit (ExecutorOptions::max_job_time); 0: none.
-  std::chrono::seconds max_job_time{0};
+  std::chrono::seconds max_job_time{kDefaultMaxJobTime};
   // Starts of a job before it is given up (ExecutorOptions::max_attempts).
   int max_attempts = 3;
   // Address-space limit of each pba-solve [bytes]; 0: none.
@@ -57,6 +70,9 @@ struct ServerOptions {
   // How long a finished job's folder is kept (ExecutorOptions::keep_results);
   // 0: forever.
   std::chrono::seconds keep_results{0};
+  // Bytes one user's open uploads may announce together
+  // (UploadStore::set_quota_bytes); 0: no quota.
+  int64_t upload_quota_bytes = 0;
 };
 
 class PbaServer {
@@ -103,10 +119,21 @@ class PbaServer {
   bool shut_down_ = false;
 };
 
+// Whether `listen` (a gRPC server address) can only be reached from this
+// machine: "unix:..." and "unix-abstract:..." sockets, and HOST:PORT whose
+// HOST is "localhost" or an address in 127.0.0.0/8 or ::1 (also
+// IPv4-mapped, [::ffff:127.x.y.z]). Anything else, a wildcard or a name
+// included, is not.
+bool IsLoopbackListen(const std::string& listen);
+
+// Makes `data_dir` (which must exist) 0700: it holds the tokens' hashes,
+// the admin's token and everyone's geometry and results.
+Status RestrictDataDir(const std::filesystem::path& data_dir);
+
 // Checks that `solver` is an executable regular file.
 Status CheckSolver(const std::filesystem::path& solver);
 
-// If `store` has no user, creates `user` and writes its token (and a
+// If `store` has no user, creates `user` (a server admin) and writes its token (and a
 // newline) to `token_file`, created with O_CREAT | O_EXCL and mode 0600 and
 // fsynced; *created says whether it did. A token file left from an earlier
 // database that has no users is replaced.

@@ -11,7 +11,10 @@
 //                                    per structure (structure_split.h)
 //
 // The output directory appears whole or not at all (StagingDir; SplitAtlas
-// for split, which refuses a directory that is there and not empty).
+// for split, which refuses a directory that is there and not empty). plates
+// and build refuse a non-empty one too, and with --force replace only an
+// earlier result of theirs (CheckOutput): never a file, a link, or a
+// directory holding anything they do not write.
 // Exit codes: 0 success; 2 invalid input or command line; 3 the input cannot
 // be meshed as given; 4 I/O error; 1 internal error.
 
@@ -19,6 +22,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <optional>
 #include <sstream>
@@ -55,6 +59,42 @@ int Fail(const Status& status) {
   }
 }
 
+bool EndsWith(const std::string& text, const std::string& end) {
+  return text.size() >= end.size() && text.compare(text.size() - end.size(), end.size(), end) == 0;
+}
+
+// Whether `entry` of an output directory is something `plates` or `build`
+// writes there (an earlier result): its mesh, reports and label volume, the
+// plates/ and pictures/ folders holding nothing but their kinds of file.
+bool WrittenByPbaAtlas(const std::filesystem::directory_entry& entry) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const std::string name = entry.path().filename().string();
+  if (entry.is_symlink(ec)) return false;
+  if (entry.is_regular_file(ec)) {
+    for (const char* known : {"labels.nii.gz", "quality.txt", "quality.csv", "quality.json",
+                              "validation.txt", "validation.csv", "validation.json"}) {
+      if (name == known) return true;
+    }
+    return name.rfind("atlas.", 0) == 0;
+  }
+  if (!entry.is_directory(ec) || (name != "plates" && name != "pictures")) return false;
+  for (const fs::directory_entry& inner : fs::directory_iterator(entry.path(), ec)) {
+    const std::string file = inner.path().filename().string();
+    if (inner.is_symlink(ec) || !inner.is_regular_file(ec)) return false;
+    if (!EndsWith(file, ".png") &&
+        (name == "pictures" || (!EndsWith(file, ".csv") && !EndsWith(file, ".json")))) {
+      return false;
+    }
+  }
+  return !ec;
+}
+
+// Whether a result may go to `out` (CheckOutputDir with WrittenByPbaAtlas).
+Status CheckOutput(const std::filesystem::path& out, bool force) {
+  return CheckOutputDir(out, force, "pba-atlas", WrittenByPbaAtlas);
+}
+
 // A report in its three forms, <stem>.txt, .csv and .json.
 Status WriteReport(const std::filesystem::path& dir, const std::string& stem,
                    const ReportTable& table) {
@@ -65,10 +105,11 @@ Status WriteReport(const std::filesystem::path& dir, const std::string& stem,
   return AtomicWriteText(dir / (stem + ".json"), FormatReportTable(table, TableFormat::kJson));
 }
 
-int RunPlates(const std::string& out_dir, double voxel_mm) {
+int RunPlates(const std::string& out_dir, double voxel_mm, bool force) {
   SyntheticAtlasOptions options;
   options.voxel_size_mm = voxel_mm;
   if (Status s = options.Validate(); !s.ok()) return Fail(s);
+  if (Status s = CheckOutput(out_dir, force); !s.ok()) return Fail(s);
   const LabelVolume atlas = MakeSyntheticAtlas(options);
   StagingDir staging;
   if (Status s = StagingDir::Create(out_dir, &staging); !s.ok()) return Fail(s);
@@ -138,10 +179,11 @@ int RunSplit(const SplitOptions& options, const std::string& out_dir) {
 using Pictures = std::optional<AtlasPictureOptions>;
 
 int RunBuild(AtlasBuildOptions options, const Pictures& pictures, const std::string& out_dir,
-             TableFormat format) {
+             TableFormat format, bool force) {
   if (pictures) {
     if (Status s = pictures->Validate(); !s.ok()) return Fail(s);
   }
+  if (Status s = CheckOutput(out_dir, force); !s.ok()) return Fail(s);
   StagingDir staging;
   if (Status s = StagingDir::Create(out_dir, &staging); !s.ok()) return Fail(s);
   if (options.source == AtlasBuildOptions::Source::kSynthetic) {
@@ -264,8 +306,12 @@ int main(int argc, char** argv) {
       "colour-coded axial plates and a NIfTI label volume");
   plates
       ->add_option("-o,--out", out_dir,
-                   "Output directory (created; an older result there is replaced)")
+                   "Output directory (created; must not exist or be empty, or with --force hold "
+                   "an earlier result)")
       ->required();
+  bool force = false;
+  plates->add_flag("--force", force,
+                   "Replace an earlier result at --out (never a directory with other files)");
   plates->add_option("--voxel-mm", voxel_mm, "Voxel edge of the painted atlas [mm]");
 
   pba::AtlasBuildOptions build_options;
@@ -278,8 +324,11 @@ int main(int argc, char** argv) {
       "through the mesh) and, from plates, validation.{txt,csv,json}");
   build
       ->add_option("-o,--out", out_dir,
-                   "Output directory (created; an older result there is replaced)")
+                   "Output directory (created; must not exist or be empty, or with --force hold "
+                   "an earlier result)")
       ->required();
+  build->add_flag("--force", force,
+                  "Replace an earlier result at --out (never a directory with other files)");
   auto* plates_option = build->add_option("--plates", plates_dir,
                                           "Plate directory (plates.json, PNGs, colour table)");
   auto* labels_option =
@@ -391,7 +440,7 @@ int main(int argc, char** argv) {
     return code == 0 ? 0 : pba::kExitInvalid;
   }
   try {
-    if (plates->parsed()) return pba::RunPlates(out_dir, voxel_mm);
+    if (plates->parsed()) return pba::RunPlates(out_dir, voxel_mm, force);
     if (split->parsed()) {
       if (!split_plates.empty()) {
         split_options.source.source = pba::AtlasBuildOptions::Source::kPlates;
@@ -426,7 +475,7 @@ int main(int argc, char** argv) {
                                                             : pba::TableFormat::kText;
     pba::Pictures pictures;
     if (!no_pictures) pictures = picture_options;
-    return pba::RunBuild(build_options, pictures, out_dir, format);
+    return pba::RunBuild(build_options, pictures, out_dir, format, force);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "pba-atlas: internal error: %s\n", e.what());
     return pba::kExitInternal;

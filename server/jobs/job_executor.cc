@@ -5,6 +5,7 @@
 #include <signal.h>
 #include <spdlog/fmt/fmt.h>
 #include <spdlog/spdlog.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cstdio>
@@ -45,6 +46,8 @@ void LogStateChange(const v1::JobEvent& event) {
 
 // Removes what an earlier attempt left: a complete result of a run whose end
 // was never recorded, and pba-solve's hidden staging siblings (.result.*).
+// pba-solve's --out is then always new (it replaces an earlier result only
+// with --force, which the server never passes).
 Status ClearFolder(const fs::path& dir) {
   std::error_code ec;
   fs::create_directories(dir, ec);
@@ -61,6 +64,24 @@ Status ClearFolder(const fs::path& dir) {
   }
   if (ec) return Status::Io("cannot list " + dir.string() + ": " + ec.message());
   return Status::Ok();
+}
+
+// pba-solve's hidden staging siblings of result/ (.result.partial-PID,
+// .result.old-PID), left when a solve ends without its own cleanup: its
+// cancel watchdog exits at once, even while the result is being written
+// (pba_solve_main.cc), and a SIGKILL (past the grace, the time limit) or
+// the address-space limit leaves no chance either. Called once pba-solve
+// has exited.
+void RemoveStagingLeftovers(const fs::path& dir) {
+  std::error_code ec;
+  for (const fs::directory_entry& entry : fs::directory_iterator(dir, ec)) {
+    if (entry.path().filename().string().rfind(".result.", 0) != 0) continue;
+    std::error_code remove_ec;
+    fs::remove_all(entry.path(), remove_ec);
+    if (remove_ec) {
+      spdlog::warn("cannot remove {}: {}", entry.path().string(), remove_ec.message());
+    }
+  }
 }
 
 // The job's folder, ready for pba-solve: inputs staged (by `preparation`,
@@ -132,6 +153,14 @@ std::string FailureReason(const v1::SolveEvent* error, const ProcessExit& exit) 
 }
 
 }  // namespace
+
+int64_t DefaultSolverMemoryBytes(int max_running) {
+  const long pages = ::sysconf(_SC_PHYS_PAGES);
+  const long page_size = ::sysconf(_SC_PAGE_SIZE);
+  if (pages <= 0 || page_size <= 0) return 0;
+  const int64_t physical = static_cast<int64_t>(pages) * page_size;
+  return physical / 4 * 3 / std::max(1, max_running);
+}
 
 // Shared between the worker that runs a job and Cancel()/Stop(); every field
 // is guarded by JobExecutor::mutex_.
@@ -284,6 +313,7 @@ void JobExecutor::Execute(const v1::Job& job, const v1::JobEvent& started, Run& 
       std::error_code ec;
       fs::remove_all(dir / staged, ec);
     }
+    RemoveStagingLeftovers(dir);
     if (outcome.message.empty()) {
       outcome.message = outcome.state == v1::Job::SUCCEEDED ? "succeeded" : outcome.error;
     }
@@ -325,6 +355,11 @@ void JobExecutor::Execute(const v1::Job& job, const v1::JobEvent& started, Run& 
     return fail("started " + std::to_string(job.attempts() - 1) +
                 " times without finishing (the server stopped during each run); not started "
                 "again");
+  }
+  if (options_.may_run) {
+    if (const Status allowed = options_.may_run(job); !allowed.ok()) {
+      return fail(allowed.ToString());
+    }
   }
   std::vector<std::string> input;
   const Status prepared = PrepareFolder(job, dir, options_.preparation, &input);

@@ -14,6 +14,9 @@
 // more than `max_attempts` times (re-queued by restarts) is FAILED without
 // running again.
 //
+// Before a claimed job is staged, `may_run` (when set) may refuse it: the
+// job is FAILED with its reason and never runs.
+//
 // Jobs on the atlas store (a scene against a snapshot, an atlas import)
 // need more than their scene: a JobPreparation stages their inputs before
 // pba-solve runs and completes them after (an import's structures are
@@ -23,6 +26,7 @@
 #include <chrono>
 #include <condition_variable>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -71,6 +75,19 @@ class Executor {
   virtual void Stop() = 0;
 };
 
+// pba-server's default wall-clock limit of a job (--max-job-time): a day,
+// longer than any solve the examples or the benchmarks run, short enough
+// that a job stuck in a loop frees its runner.
+inline constexpr std::chrono::seconds kDefaultMaxJobTime{24 * 3600};
+
+// pba-server's default address-space limit of each pba-solve
+// (--solver-memory): three quarters of the physical memory shared among
+// the `max_running` solves that may run at once, so that together they
+// leave the server and the system a quarter; a solve past it fails with
+// an out-of-memory error instead of pushing the machine into swap or the
+// OOM killer. 0 when the physical memory cannot be read (no limit).
+int64_t DefaultSolverMemoryBytes(int max_running);
+
 struct ExecutorOptions {
   // Job folders are created in data_dir/jobs/<id>/.
   std::filesystem::path data_dir;
@@ -89,12 +106,14 @@ struct ExecutorOptions {
   // jobs queued by anything that does not call Wake()).
   std::chrono::milliseconds idle_poll{1000};
   // The wall-clock limit of a job: a job's own timeout_s when it is
-  // smaller; 0: none.
-  std::chrono::seconds max_job_time{0};
+  // smaller; 0: none. The default (kDefaultMaxJobTime) keeps a runaway job
+  // from holding a runner forever.
+  std::chrono::seconds max_job_time{kDefaultMaxJobTime};
   // A job is started at most this many times (a start is an attempt; a
   // restart of the server re-queues the jobs it was running).
   int max_attempts = 3;
   // The address-space limit of each pba-solve [bytes]; 0: none.
+  // pba-server's default is DefaultSolverMemoryBytes(max_running).
   int64_t max_solver_memory_bytes = 0;
   // A finished job's folder (result files, log) is removed this long after
   // it ended, at start and then hourly; the job stays listed, its files
@@ -102,6 +121,11 @@ struct ExecutorOptions {
   std::chrono::seconds keep_results{0};
   // Stages and completes jobs on the atlas store; nullptr: scenes only.
   JobPreparation* preparation = nullptr;
+  // Asked about each job a worker claims, before anything is staged for it:
+  // an error FAILS the job with that message instead of running it
+  // (pba-server refuses the jobs of a user disabled while they waited in
+  // the queue). Empty: every job runs.
+  std::function<Status(const v1::Job& job)> may_run;
 };
 
 class JobExecutor : public Executor {

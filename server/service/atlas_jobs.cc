@@ -31,27 +31,33 @@ bool IsVolumeFile(const std::string& name) {
   return EndsWith(name, ".nii") || EndsWith(name, ".nii.gz") || EndsWith(name, ".nrrd");
 }
 
-// A file name for a structure's geometry in a staged structure set.
-std::string FileNameFor(const std::string& structure, GeometryFormat format, bool gzipped) {
+// The file name stem of a structure's geometry in a staged structure set:
+// the name with characters other than [A-Za-z0-9._-] as '_'.
+std::string FileStemFor(const std::string& structure) {
   std::string stem;
   for (char c : structure) {
     const bool keep = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
                       c == '-' || c == '.' || c == '_';
     stem.push_back(keep ? c : '_');
   }
+  return stem;
+}
+
+// The extension the readers go by.
+std::string ExtensionFor(GeometryFormat format, bool gzipped) {
   switch (format) {
     case GeometryFormat::kContoursJson:
-      return stem + ".json";
+      return ".json";
     case GeometryFormat::kNifti:
-      return stem + (gzipped ? ".nii.gz" : ".nii");
+      return gzipped ? ".nii.gz" : ".nii";
     case GeometryFormat::kStl:
-      return stem + ".stl";
+      return ".stl";
     case GeometryFormat::kObj:
-      return stem + ".obj";
+      return ".obj";
     case GeometryFormat::kVtk:
-      return stem + ".vtk";
+      return ".vtk";
   }
-  return stem;
+  return "";
 }
 
 // "<group>: <name>" names (the thalamic nuclei of the built-in atlas) go
@@ -208,13 +214,15 @@ Status AtlasJobs::StageSnapshot(const v1::Job& job, const fs::path& dir, v1::Sce
   StructureSet set;
   set.project = ref.project();
   set.snapshot = id;
-  std::set<std::string> used;
+  // Two names that map to one file name ("a b" and "a_b", "Foo" and
+  // "foo") get a number, and a structure named "manifest" does not take
+  // the manifest's name.
+  StructureFileNames names;
   std::set<uint32_t> colours;
   for (const SnapshotFile& file : files) {
     const Revision& r = file.revision;
-    std::string name = FileNameFor(r.structure, r.format, HasGzipMagic(file.blob));
-    // Two names that map to one file name ("a b" and "a_b") get a number.
-    for (int n = 2; !used.insert(name).second; ++n) name = std::to_string(n) + "_" + name;
+    const std::string name =
+        names.Take(FileStemFor(r.structure), ExtensionFor(r.format, HasGzipMagic(file.blob)));
     fs::copy_file(file.blob, set_dir / name, fs::copy_options::overwrite_existing, ec);
     if (ec) return Status::Io("cannot copy the geometry of " + r.structure + ": " + ec.message());
     StructureEntry entry;

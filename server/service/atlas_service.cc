@@ -30,6 +30,13 @@ grpc::Status Fail(const char* rpc, const Status& status) {
   if (status.code() == Status::Code::kInvalidArgument && status.field() == "offset") {
     result = grpc::Status(grpc::StatusCode::OUT_OF_RANGE, status.ToString());
   }
+  // Nor RESOURCE_EXHAUSTED: UploadStore marks a Begin past the caller's
+  // quota by the field "upload_quota", DiffRevisions a busy server by
+  // "diff_slots" (geometry_diff.h).
+  if (status.code() == Status::Code::kFailedPrecondition &&
+      (status.field() == "upload_quota" || status.field() == "diff_slots")) {
+    result = grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED, status.ToString());
+  }
   spdlog::warn("{}: code {} {}", rpc, static_cast<int>(result.error_code()),
                result.error_message());
   return result;
@@ -170,6 +177,26 @@ grpc::Status AtlasServiceImpl::SetRole(grpc::ServerContext* context,
   return grpc::Status::OK;
 }
 
+grpc::Status AtlasServiceImpl::RemoveMember(grpc::ServerContext* context,
+                                            const v1::RemoveMemberRequest* request,
+                                            v1::RemoveMemberResponse* response) {
+  constexpr char kRpc[] = "RemoveMember";
+  std::string user;
+  grpc::Status auth = Authenticate(kRpc, context, &user);
+  if (!auth.ok()) return auth;
+  std::vector<std::string> released;
+  std::lock_guard lock(change_mutex_);
+  const Status status = store_.RemoveMember(user, request->project(), request->user(), &released);
+  if (!status.ok()) return Fail(kRpc, status);
+  // Watchers learn the locks are gone as they would from BreakLock.
+  for (const std::string& structure : released) {
+    Publish(v1::AtlasEvent::LOCK_BROKEN, request->project(), structure, 0, 0, user,
+            "lock of " + request->user() + " released: they were removed from the project");
+    response->add_released_locks(structure);
+  }
+  return grpc::Status::OK;
+}
+
 // --- uploads ---------------------------------------------------------------
 
 grpc::Status AtlasServiceImpl::BeginUpload(grpc::ServerContext* context,
@@ -227,6 +254,26 @@ grpc::Status AtlasServiceImpl::GetUpload(grpc::ServerContext* context,
   return grpc::Status::OK;
 }
 
+grpc::Status AtlasServiceImpl::DiscardUpload(grpc::ServerContext* context,
+                                             const v1::DiscardUploadRequest* request,
+                                             v1::DiscardUploadResponse*) {
+  constexpr char kRpc[] = "DiscardUpload";
+  std::string user;
+  grpc::Status auth = Authenticate(kRpc, context, &user);
+  if (!auth.ok()) return auth;
+  Status status = Status::Ok();
+  if (request->upload_id().empty()) {
+    status = Status::InvalidArgument("upload_id", "must not be empty");
+  } else if (!UploadStore::IsWellFormedId(request->upload_id())) {
+    status = Status::InvalidArgument("upload_id", "is not an upload id (32 characters 0-9 a-f)");
+  }
+  // Another user's upload is left alone and, like one already gone, not an
+  // error (existence is not revealed).
+  if (status.ok()) status = uploads_.Remove(user, request->upload_id());
+  if (!status.ok()) return Fail(kRpc, status);
+  return grpc::Status::OK;
+}
+
 // --- structures ------------------------------------------------------------
 
 grpc::Status AtlasServiceImpl::CreateStructure(grpc::ServerContext* context,
@@ -251,6 +298,9 @@ grpc::Status AtlasServiceImpl::CreateStructure(grpc::ServerContext* context,
   create.format = format;
   create.message = request->message();
   create.request_id = request->request_id();
+  // Rights before the upload is read: a caller who may not create here
+  // must not get the server to parse what they uploaded.
+  if (status.ok()) status = store_.CheckRole(user, ref.project, Role::kEditor);
   // A retry of a create that landed is answered before its upload is looked
   // at: the first create consumed it.
   Revision revision;
@@ -416,18 +466,27 @@ grpc::Status AtlasServiceImpl::CommitStructure(grpc::ServerContext* context,
   if (status.ok() && commit.lock_id.empty()) {
     status = Status::InvalidArgument("lock_id", "required: acquire the structure's lock first");
   }
-  std::unique_ptr<MappedFile> content;
-  if (status.ok()) status = TakeUpload(user, request->upload_id(), commit.format, &content);
+  // Rights before the upload is read (see CreateStructure); then a retry of
+  // a commit that landed is answered without its upload, which the first
+  // commit consumed (atlas.proto promises so).
+  if (status.ok()) status = store_.CheckRole(user, commit.structure.project, Role::kEditor);
+  Revision revision;
+  bool replayed = false;
   if (status.ok()) {
+    status = store_.FindCommit(user, commit.structure, commit.request_id, &revision, &replayed);
+  }
+  std::unique_ptr<MappedFile> content;
+  if (status.ok() && !replayed) {
+    status = TakeUpload(user, request->upload_id(), commit.format, &content);
+  }
+  if (status.ok() && !replayed) {
     status = CheckLockedNeighbours(store_, user, commit.structure, commit.format, content->path());
   }
   if (!status.ok()) return Fail(kRpc, status);
-  commit.geometry = content->bytes();
-  commit.geometry_file = content.get();
-  Revision revision;
-  {
+  if (!replayed) {
+    commit.geometry = content->bytes();
+    commit.geometry_file = content.get();
     std::lock_guard lock(change_mutex_);
-    bool replayed = false;
     status = store_.Commit(user, commit, &revision, &replayed);
     if (!status.ok()) return Fail(kRpc, status);
     if (!replayed) {
@@ -436,8 +495,10 @@ grpc::Status AtlasServiceImpl::CommitStructure(grpc::ServerContext* context,
     }
   }
   content.reset();
-  const Status removed = uploads_.Remove(user, request->upload_id());
-  if (!removed.ok()) spdlog::warn("{}: {}", kRpc, removed.ToString());
+  if (!request->upload_id().empty()) {
+    const Status removed = uploads_.Remove(user, request->upload_id());
+    if (!removed.ok()) spdlog::warn("{}: {}", kRpc, removed.ToString());
+  }
   RevisionToProto(revision, response);
   return grpc::Status::OK;
 }
@@ -619,12 +680,26 @@ grpc::Status AtlasServiceImpl::DiffRevisions(grpc::ServerContext* context,
     for (double z : distance.only_in_b_z_mm) contours->add_only_in_to_z_mm(z);
   }
   if (a.content_sha256 != b.content_sha256) {
+    // The caller gone or the server stopping ends the wait for a slot and
+    // the comparison between its phases.
+    const auto cancelled = [&] { return context->IsCancelled() || stopping_.load(); };
+    const auto give_up = [&](const Status& why) {
+      if (stopping_.load()) {
+        return Fail(kRpc, grpc::StatusCode::UNAVAILABLE,
+                    "the server is shutting down; compare again once it is back");
+      }
+      return Fail(kRpc, why);
+    };
     ShapeComparison shapes;
-    status =
-        CompareRevisionShapes(a.format, geometry_a, b.format, geometry_b, kDiffVoxelMm, &shapes);
-    if (!status.ok()) return Fail(kRpc, status);
+    status = diff_slots_.Acquire(cancelled, kDiffPatience);
+    if (!status.ok()) return give_up(status);
+    status = CompareRevisionShapes(a.format, geometry_a, b.format, geometry_b, kDiffVoxelMm,
+                                   kMaxDiffVoxels, cancelled, &shapes);
+    diff_slots_.Release();
+    if (!status.ok()) return give_up(status);
     v1::ShapeDiff* shape = response->mutable_shape();
-    shape->set_voxel_mm(kDiffVoxelMm);
+    // Coarser than kDiffVoxelMm when the shapes' box would pass the budget.
+    shape->set_voxel_mm(shapes.overlap.voxel_mm);
     shape->set_from_volume_mm3(shapes.overlap.a_mm3);
     shape->set_to_volume_mm3(shapes.overlap.b_mm3);
     shape->set_shared_volume_mm3(shapes.overlap.overlap_mm3);
@@ -800,18 +875,31 @@ grpc::Status AtlasServiceImpl::Watch(grpc::ServerContext* context, const v1::Wat
                                      grpc::ServerWriter<v1::AtlasEvent>* writer) {
   constexpr char kRpc[] = "Watch";
   std::string user;
-  grpc::Status auth = Authenticate(kRpc, context, &user);
-  if (!auth.ok()) return auth;
   const std::string& project = request->project();
-  Role role = Role::kViewer;
-  bool member = false;
-  const Status status = store_.RoleOf(project, user, &role, &member);
-  if (!status.ok()) return Fail(kRpc, status);
-  if (!member) {
-    return Fail(
-        kRpc, grpc::StatusCode::PERMISSION_DENIED,
-        "user '" + user + "' is not a member of project '" + project + "'; watching needs viewer");
+  // Checked when the stream opens and every kWatchRecheck while it is open:
+  // a long watch must not outlive the caller's rights (a user disabled or a
+  // member removed since it opened loses it, as in WatchJob).
+  const auto may_watch = [&]() -> grpc::Status {
+    if (grpc::Status auth = Authenticate(kRpc, context, &user); !auth.ok()) return auth;
+    Role role = Role::kViewer;
+    bool member = false;
+    const Status status = store_.RoleOf(project, user, &role, &member);
+    if (!status.ok()) return Fail(kRpc, status);
+    if (!member) {
+      return Fail(kRpc, grpc::StatusCode::PERMISSION_DENIED,
+                  "user '" + user + "' is not a member of project '" + project +
+                      "'; watching needs viewer");
+    }
+    return grpc::Status::OK;
+  };
+  if (grpc::Status allowed = may_watch(); !allowed.ok()) return allowed;
+  const StreamSlots::Ticket slot = watch_slots_.TryAcquire(user);
+  if (!slot.held()) {
+    return Fail(kRpc, grpc::StatusCode::RESOURCE_EXHAUSTED,
+                "user '" + user + "' already has " + std::to_string(kMaxWatchesPerUser) +
+                    " Watch streams open; close one first");
   }
+  auto checked = std::chrono::steady_clock::now();
   // Subscribed before READY goes out: nothing published after READY is missed.
   const std::unique_ptr<AtlasEventHub::Subscription> subscription = hub_.Subscribe(project);
   v1::AtlasEvent ready;
@@ -824,6 +912,10 @@ grpc::Status AtlasServiceImpl::Watch(grpc::ServerContext* context, const v1::Wat
   std::vector<v1::AtlasEvent> events;
   while (true) {
     if (context->IsCancelled()) return grpc::Status(grpc::StatusCode::CANCELLED, "watch cancelled");
+    if (std::chrono::steady_clock::now() - checked >= kWatchRecheck) {
+      checked = std::chrono::steady_clock::now();
+      if (grpc::Status allowed = may_watch(); !allowed.ok()) return allowed;
+    }
     bool overrun = false;
     if (!subscription->Next(kWatchPoll, &events, &overrun)) {
       if (overrun) {

@@ -11,7 +11,9 @@
 // Events: every change that succeeds publishes one AtlasEvent for its
 // project. Changes and their publication happen under one mutex, so watchers
 // see events in the order the store applied them (the store serialises its
-// writes anyway, so this costs no concurrency the store had).
+// writes anyway, so this costs no concurrency the store had). An open Watch
+// re-checks its caller every kWatchRecheck: a user disabled since it opened
+// ends it UNAUTHENTICATED, a member removed PERMISSION_DENIED.
 //
 // Uploads are consumed by CreateStructure and CommitStructure: the complete
 // upload file is mapped read-only (never copied onto the heap), checked
@@ -21,10 +23,12 @@
 // is removed. A create or commit refused before the blob is stored (a
 // failing check, stale base, lock, rights) keeps the upload whole, so the
 // client can retry with it. One that fails after (a database error) has
-// consumed it: begin again. A replayed create (same request_id) needs no
-// upload: one named is removed unused.
+// consumed it: begin again. A replayed create or commit (same request_id)
+// needs no upload: one named is removed unused. The caller's role in the
+// project is checked before an upload is read or parsed.
 #pragma once
 
+#include <atomic>
 #include <chrono>
 #include <memory>
 #include <mutex>
@@ -32,6 +36,8 @@
 
 #include "pba/v1/atlas.grpc.pb.h"
 #include "service/atlas_event_hub.h"
+#include "service/diff_slots.h"
+#include "service/stream_slots.h"
 #include "store/atlas_store.h"
 #include "store/upload_store.h"
 
@@ -40,11 +46,27 @@ namespace pba {
 class AtlasServiceImpl final : public v1::AtlasService::Service {
  public:
   static constexpr std::chrono::milliseconds kWatchPoll{250};
+  // How often an open Watch stream checks again that its caller is still
+  // enabled and still a member of the project (as WatchJob does).
+  static constexpr std::chrono::milliseconds kWatchRecheck{2000};
+  // Watch streams one user may hold open at once (stream_slots.h).
+  static constexpr int kMaxWatchesPerUser = 64;
   static constexpr size_t kChunkBytes = 1 << 20;
   static constexpr int64_t kDefaultLeaseSeconds = 300;
   static constexpr int64_t kMaxLeaseSeconds = 3600;
 
+  // Shape comparisons (DiffRevisions) run at once; more wait their turn
+  // up to kDiffPatience, then are RESOURCE_EXHAUSTED.
+  static constexpr int kMaxConcurrentDiffs = 2;
+  static constexpr std::chrono::milliseconds kDiffPatience{30000};
+
   AtlasServiceImpl(AtlasStore& store, UploadStore& uploads, AtlasEventHub& hub);
+
+  // The server is stopping: waiting and not yet started shape comparisons
+  // give up (UNAVAILABLE), so that shutdown waits for none but those
+  // already voxelising (seconds, by the voxel budget). Called before the
+  // gRPC server's Shutdown().
+  void Stop() { stopping_.store(true); }
 
   grpc::Status WhoAmI(grpc::ServerContext* context, const v1::WhoAmIRequest* request,
                       v1::User* response) override;
@@ -54,6 +76,8 @@ class AtlasServiceImpl final : public v1::AtlasService::Service {
                             v1::ListProjectsResponse* response) override;
   grpc::Status SetRole(grpc::ServerContext* context, const v1::SetRoleRequest* request,
                        v1::Member* response) override;
+  grpc::Status RemoveMember(grpc::ServerContext* context, const v1::RemoveMemberRequest* request,
+                            v1::RemoveMemberResponse* response) override;
 
   grpc::Status BeginUpload(grpc::ServerContext* context, const v1::BeginUploadRequest* request,
                            v1::Upload* response) override;
@@ -62,6 +86,8 @@ class AtlasServiceImpl final : public v1::AtlasService::Service {
                            v1::Upload* response) override;
   grpc::Status GetUpload(grpc::ServerContext* context, const v1::GetUploadRequest* request,
                          v1::Upload* response) override;
+  grpc::Status DiscardUpload(grpc::ServerContext* context, const v1::DiscardUploadRequest* request,
+                             v1::DiscardUploadResponse* response) override;
 
   grpc::Status CreateStructure(grpc::ServerContext* context,
                                const v1::CreateStructureRequest* request,
@@ -131,6 +157,9 @@ class AtlasServiceImpl final : public v1::AtlasService::Service {
   AtlasEventHub& hub_;
   // Held from a change in the store until its event is published.
   std::mutex change_mutex_;
+  std::atomic<bool> stopping_{false};
+  DiffSlots diff_slots_{kMaxConcurrentDiffs};
+  StreamSlots watch_slots_{kMaxWatchesPerUser};
 };
 
 }  // namespace pba

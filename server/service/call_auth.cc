@@ -19,7 +19,8 @@ bool StartsWithBearer(std::string_view value) {
 
 }  // namespace
 
-Status CallUser(AtlasStore& users, const grpc::ServerContext& context, std::string* user) {
+Status CallUser(AtlasStore& users, const grpc::ServerContext& context, std::string* user,
+                bool* server_admin) {
   const auto& metadata = context.client_metadata();
   const auto it = metadata.find("authorization");
   if (it == metadata.end()) {
@@ -30,7 +31,7 @@ Status CallUser(AtlasStore& users, const grpc::ServerContext& context, std::stri
   if (!StartsWithBearer(value)) {
     return Status::Unauthenticated("the authorization metadata must be 'Bearer <token>'");
   }
-  return users.Authenticate(std::string(value.substr(kBearer.size())), user);
+  return users.Authenticate(std::string(value.substr(kBearer.size())), user, server_admin);
 }
 
 }  // namespace pba

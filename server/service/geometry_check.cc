@@ -44,18 +44,40 @@ std::string Gunzip(std::string_view gz, size_t want) {
 // is composed with), from a temporary file as nifti1_io reads only files:
 // an integer mask, at least one voxel non-zero, those voxels' centres within
 // kMaxAtlasCoordinateMm of the origin.
+// A temporary file, removed when it goes out of scope whatever happens
+// (a failed read of a large upload once left its copy behind).
+class TemporaryFile {
+ public:
+  explicit TemporaryFile(const std::string& suffix) {
+    std::string pattern =
+        (std::filesystem::temp_directory_path() / "pba-geometry-XXXXXX").string() + suffix;
+    fd_ = mkstemps(pattern.data(), static_cast<int>(suffix.size()));
+    if (fd_ >= 0) path_ = pattern;
+  }
+  ~TemporaryFile() {
+    if (fd_ >= 0) close(fd_);
+    std::error_code ignored;
+    if (!path_.empty()) std::filesystem::remove(path_, ignored);
+  }
+  TemporaryFile(const TemporaryFile&) = delete;
+  TemporaryFile& operator=(const TemporaryFile&) = delete;
+  int fd() const { return fd_; }
+  const std::string& path() const { return path_; }
+
+ private:
+  int fd_ = -1;
+  std::string path_;
+};
+
 Status CheckNiftiData(const std::string& field, std::string_view content, bool gzipped) {
-  std::string pattern = (std::filesystem::temp_directory_path() / "pba-geometry-XXXXXX").string() +
-                        (gzipped ? ".nii.gz" : ".nii");
-  const int suffix = gzipped ? 7 : 4;
-  const int fd = mkstemps(pattern.data(), suffix);
-  if (fd < 0) return Status::Io("cannot create a temporary file to read the NIfTI data");
-  const Status written = WriteAll(fd, content.data(), content.size(), pattern);
-  close(fd);
   LabelVolume volume;
-  Status read = written.ok() ? ReadNifti(pattern, &volume) : written;
-  std::error_code ec;
-  std::filesystem::remove(pattern, ec);
+  Status read;
+  {
+    const TemporaryFile file(gzipped ? ".nii.gz" : ".nii");
+    if (file.fd() < 0) return Status::Io("cannot create a temporary file to read the NIfTI data");
+    read = WriteAll(file.fd(), content.data(), content.size(), file.path());
+    if (read.ok()) read = ReadNifti(file.path(), &volume);
+  }
   if (!read.ok()) {
     if (read.code() != Status::Code::kInvalidArgument) return read;
     return Status::InvalidArgument(field, "NIfTI: " + read.message());
@@ -133,11 +155,8 @@ Status CheckSurface(std::string_view field, GeometryFormat format, std::string_v
   return ReadSurface(content, as, std::string(field), &surface);
 }
 
-}  // namespace
-
-Status CheckGeometryContent(std::string_view field, GeometryFormat format,
-                            std::string_view content) {
-  if (content.empty()) return Status::InvalidArgument(std::string(field), "must not be empty");
+// In this process: what the bounded child runs.
+Status CheckContent(std::string_view field, GeometryFormat format, std::string_view content) {
   switch (format) {
     case GeometryFormat::kContoursJson:
       return CheckContoursJson(field, content);
@@ -149,6 +168,18 @@ Status CheckGeometryContent(std::string_view field, GeometryFormat format,
       return CheckSurface(field, format, content);
   }
   return Status::InvalidArgument(std::string(field), "unknown geometry format");
+}
+
+}  // namespace
+
+Status CheckGeometryContent(std::string_view field, GeometryFormat format, std::string_view content,
+                            const ChildLimits& limits) {
+  if (content.empty()) return Status::InvalidArgument(std::string(field), "must not be empty");
+  ChildOutcome outcome;
+  PBA_RETURN_IF_ERROR(RunInBoundedChild(
+      limits, [&](std::string*) { return CheckContent(field, format, content); }, &outcome));
+  return OutcomeStatus(outcome, limits, std::string(field),
+                       "the " + std::string(GeometryFormatName(format)) + " file");
 }
 
 }  // namespace pba

@@ -19,17 +19,25 @@
 // passes here can be meshed.
 // Overlap with neighbours others hold locked is checked apart
 // (overlap_check.h). Not checked: self-intersecting polygons and surfaces.
+//
+// The check runs in a child process under `limits` (bounded_child.h): the
+// readers refuse sizes a header announces but the file does not hold, and
+// the child's address-space and wall-time limits catch whatever they miss.
+// Past a limit the answer is kInvalidArgument ("the nifti file needs more
+// than 1024 MiB to check", "... took longer than 30 s to check"). No
+// temporary file outlives the check.
 #pragma once
 
 #include <string_view>
 
 #include "pba/status.h"
+#include "service/bounded_child.h"
 #include "store/atlas_types.h"
 
 namespace pba {
 
 // kInvalidArgument (field `field`) saying what is wrong.
-Status CheckGeometryContent(std::string_view field, GeometryFormat format,
-                            std::string_view content);
+Status CheckGeometryContent(std::string_view field, GeometryFormat format, std::string_view content,
+                            const ChildLimits& limits = {});
 
 }  // namespace pba

@@ -8,6 +8,9 @@
 #include <limits>
 #include <tuple>
 
+#include "atlas/label_volume.h"
+#include "atlas/label_volume_io.h"
+#include "io/surface_io.h"
 #include "store/atomic_file.h"
 
 namespace pba {
@@ -114,8 +117,122 @@ ContoursDistance DistanceBetween(const Contours& contours_a, const Contours& con
   return result;
 }
 
+namespace {
+
+// The box of one geometry [mm], grown to take it in.
+Status AddBox(GeometryFormat format, std::string_view bytes, const char* field, Eigen::Vector3d* lo,
+              Eigen::Vector3d* hi) {
+  const auto add = [&](const Eigen::Vector3d& p) {
+    *lo = lo->cwiseMin(p);
+    *hi = hi->cwiseMax(p);
+  };
+  switch (format) {
+    case GeometryFormat::kContoursJson: {
+      Contours contours;
+      PBA_RETURN_IF_ERROR(ParseContoursJson(bytes, field, &contours));
+      for (const ContourPlate& plate : contours.plates) {
+        for (const auto& polygon : plate.polygons) {
+          for (const Point& p : polygon) add({p.x(), p.y(), plate.z_mm});
+        }
+      }
+      return Status::Ok();
+    }
+    case GeometryFormat::kNifti: {
+      // The header's grid is enough, but the reader takes a file and reads
+      // it whole; a mask's bytes were bounded by the upload.
+      std::string pattern = (fs::temp_directory_path() / "pba-diff-box-XXXXXX").string();
+      if (::mkdtemp(pattern.data()) == nullptr) {
+        return Status::Io("cannot create a scratch directory");
+      }
+      const bool gzip = bytes.size() >= 2 && static_cast<unsigned char>(bytes[0]) == 0x1f &&
+                        static_cast<unsigned char>(bytes[1]) == 0x8b;
+      const fs::path file = fs::path(pattern) / (gzip ? "mask.nii.gz" : "mask.nii");
+      Status status = WriteFileAtomically(file, bytes);
+      LabelVolume mask;
+      if (status.ok()) status = ReadNifti(file, &mask);
+      std::error_code ignored;
+      fs::remove_all(pattern, ignored);
+      if (!status.ok()) return Status::InvalidArgument(field, status.message());
+      const Eigen::Vector3d half = mask.spacing_mm().cwiseAbs() / 2;
+      for (int corner = 0; corner < 8; ++corner) {
+        Eigen::Vector3d p;
+        for (int axis = 0; axis < 3; ++axis) {
+          p[axis] = (corner >> axis & 1) ? mask.dims()[axis] - 1 : 0;
+        }
+        add(mask.origin_mm() + mask.spacing_mm().cwiseProduct(p) - half);
+        add(mask.origin_mm() + mask.spacing_mm().cwiseProduct(p) + half);
+      }
+      return Status::Ok();
+    }
+    case GeometryFormat::kStl:
+    case GeometryFormat::kObj:
+    case GeometryFormat::kVtk: {
+      StructureFormat structure_format = StructureFormat::kStl;
+      ParseStructureFormat(GeometryFormatName(format), &structure_format);
+      TriangleSurface surface;
+      PBA_RETURN_IF_ERROR(ReadSurface(bytes, structure_format, field, &surface));
+      for (const Eigen::Vector3d& p : surface.points) add(p);
+      return Status::Ok();
+    }
+  }
+  return Status::Internal("unknown geometry format");
+}
+
+}  // namespace
+
+Status DiffGridVoxels(GeometryFormat format_a, std::string_view a, GeometryFormat format_b,
+                      std::string_view b, double voxel_mm, double* voxels) {
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
+  Eigen::Vector3d hi = -lo;
+  PBA_RETURN_IF_ERROR(AddBox(format_a, a, "from", &lo, &hi));
+  PBA_RETURN_IF_ERROR(AddBox(format_b, b, "to", &lo, &hi));
+  if (!(lo.array() <= hi.array()).all()) {
+    *voxels = 0;
+    return Status::Ok();
+  }
+  // As ComposeStructureSet lays its grid: two voxels of margin each side,
+  // one more for the rounding of either end (and one for a plate's loft).
+  constexpr int kMargin = 2;
+  *voxels = 1;
+  for (int axis = 0; axis < 3; ++axis) {
+    *voxels *= std::ceil((hi[axis] - lo[axis]) / voxel_mm) + 2 * kMargin + 3;
+  }
+  return Status::Ok();
+}
+
+Status ChooseDiffVoxel(GeometryFormat format_a, std::string_view a, GeometryFormat format_b,
+                       std::string_view b, double voxel_mm, int64_t max_voxels, double* chosen_mm) {
+  double at_base = 0;
+  PBA_RETURN_IF_ERROR(DiffGridVoxels(format_a, a, format_b, b, voxel_mm, &at_base));
+  *chosen_mm = voxel_mm;
+  if (at_base <= static_cast<double>(max_voxels)) return Status::Ok();
+  static constexpr double kSteps[] = {1, 1.25, 1.5, 2, 2.5, 3, 4, 5, 6, 8};
+  for (double decade = 1; decade <= 1e6; decade *= 10) {
+    for (double step : kSteps) {
+      const double v = voxel_mm * step * decade;
+      if (v <= voxel_mm) continue;
+      double voxels = 0;
+      PBA_RETURN_IF_ERROR(DiffGridVoxels(format_a, a, format_b, b, v, &voxels));
+      if (voxels <= static_cast<double>(max_voxels)) {
+        *chosen_mm = v;
+        return Status::Ok();
+      }
+    }
+  }
+  return Status::Internal("no voxel size fits the comparison's voxel budget");
+}
+
 Status CompareRevisionShapes(GeometryFormat format_a, std::string_view a, GeometryFormat format_b,
-                             std::string_view b, double voxel_mm, ShapeComparison* comparison) {
+                             std::string_view b, double base_voxel_mm, int64_t max_voxels,
+                             const std::function<bool()>& cancelled, ShapeComparison* comparison) {
+  const auto stop = [&](const char* phase) {
+    return Status::Cancelled(std::string("the comparison was cancelled ") + phase);
+  };
+  if (cancelled && cancelled()) return stop("before it started");
+  double voxel_mm = base_voxel_mm;
+  PBA_RETURN_IF_ERROR(
+      ChooseDiffVoxel(format_a, a, format_b, b, base_voxel_mm, max_voxels, &voxel_mm));
+  if (cancelled && cancelled()) return stop("after sizing its grid");
   std::string pattern = (fs::temp_directory_path() / "pba-diff-XXXXXX").string();
   if (::mkdtemp(pattern.data()) == nullptr) return Status::Io("cannot create a scratch directory");
   const fs::path dir = pattern;
@@ -127,6 +244,7 @@ Status CompareRevisionShapes(GeometryFormat format_a, std::string_view a, Geomet
     ParseStructureFormat(GeometryFormatName(format), &geometry->format);
     if (status.ok()) status = WriteFileAtomically(geometry->file, bytes);
   }
+  if (status.ok() && cancelled && cancelled()) status = stop("before voxelising");
   if (status.ok()) status = CompareShapes(ga, gb, voxel_mm, comparison);
   std::error_code ignored;
   fs::remove_all(dir, ignored);

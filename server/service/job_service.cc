@@ -155,9 +155,46 @@ Status JobServiceImpl::CheckSubmit(const std::string& user, const v1::SubmitJobR
 }
 
 grpc::Status JobServiceImpl::Authenticate(const char* rpc, const grpc::ServerContext& context,
-                                          std::string* user) {
-  const Status status = CallUser(users_, context, user);
+                                          Caller* caller) {
+  const Status status = CallUser(users_, context, &caller->user, &caller->server_admin);
   if (!status.ok()) return Error(rpc, ToGrpcStatus(status));
+  return grpc::Status::OK;
+}
+
+Status JobServiceImpl::MaySee(const Caller& caller, const v1::Job& job, bool* visible) {
+  *visible = true;
+  if (caller.server_admin || job.owner() == caller.user) return Status::Ok();
+  // The project a job belongs to: its snapshot's, or the one it imports into.
+  const std::string& project =
+      !job.snapshot().project().empty() ? job.snapshot().project() : job.atlas_import().project();
+  if (project.empty()) return Status::Ok();
+  Role role = Role::kViewer;
+  bool member = false;
+  const Status status = users_.RoleOf(project, caller.user, &role, &member);
+  // Projects are never deleted; a job naming none that exists is no one's.
+  if (status.code() == Status::Code::kNotFound) {
+    *visible = false;
+    return Status::Ok();
+  }
+  PBA_RETURN_IF_ERROR(status);
+  *visible = member;
+  return Status::Ok();
+}
+
+grpc::Status JobServiceImpl::LoadVisibleJob(const char* rpc, const Caller& caller,
+                                            const std::string& id, JobView view, v1::Job* job) {
+  bool found = false;
+  Status status = store_.GetJob(id, view, job, &found);
+  if (!status.ok()) return StoreError(rpc, status);
+  if (!found) return JobNotFound(rpc, id);
+  bool visible = false;
+  status = MaySee(caller, *job, &visible);
+  if (!status.ok()) return StoreError(rpc, status);
+  if (!visible) {
+    // Logged as any NOT_FOUND, with who asked, for the operator only.
+    spdlog::info("{}: job {} is hidden from {}", rpc, id, caller.user);
+    return JobNotFound(rpc, id);
+  }
   return grpc::Status::OK;
 }
 
@@ -174,8 +211,9 @@ void JobServiceImpl::OverlayLive(v1::Job* job) const {
 grpc::Status JobServiceImpl::SubmitJob(grpc::ServerContext* context,
                                        const v1::SubmitJobRequest* request, v1::Job* response) {
   constexpr char kRpc[] = "SubmitJob";
-  std::string user;
-  if (grpc::Status auth = Authenticate(kRpc, *context, &user); !auth.ok()) return auth;
+  Caller caller;
+  if (grpc::Status auth = Authenticate(kRpc, *context, &caller); !auth.ok()) return auth;
+  const std::string& user = caller.user;
   if (request->request_id().size() > kMaxRequestIdLength) {
     return Error(kRpc, grpc::StatusCode::INVALID_ARGUMENT,
                  "request_id: at most " + std::to_string(kMaxRequestIdLength) + " characters");
@@ -242,13 +280,11 @@ grpc::Status JobServiceImpl::SubmitJob(grpc::ServerContext* context,
 grpc::Status JobServiceImpl::GetJob(grpc::ServerContext* context, const v1::GetJobRequest* request,
                                     v1::Job* response) {
   constexpr char kRpc[] = "GetJob";
-  std::string user;
-  if (grpc::Status auth = Authenticate(kRpc, *context, &user); !auth.ok()) return auth;
+  Caller caller;
+  if (grpc::Status auth = Authenticate(kRpc, *context, &caller); !auth.ok()) return auth;
   if (request->id().empty()) return Error(kRpc, grpc::StatusCode::INVALID_ARGUMENT, "id: required");
-  bool found = false;
-  const Status status = store_.GetJob(request->id(), JobView::kFull, response, &found);
-  if (!status.ok()) return StoreError(kRpc, status);
-  if (!found) return JobNotFound(kRpc, request->id());
+  grpc::Status loaded = LoadVisibleJob(kRpc, caller, request->id(), JobView::kFull, response);
+  if (!loaded.ok()) return loaded;
   OverlayLive(response);
   return grpc::Status::OK;
 }
@@ -256,12 +292,15 @@ grpc::Status JobServiceImpl::GetJob(grpc::ServerContext* context, const v1::GetJ
 grpc::Status JobServiceImpl::ListJobs(grpc::ServerContext* context,
                                       const v1::ListJobsRequest* request,
                                       v1::ListJobsResponse* response) {
-  std::string user;
-  if (grpc::Status auth = Authenticate("ListJobs", *context, &user); !auth.ok()) return auth;
+  Caller caller;
+  if (grpc::Status auth = Authenticate("ListJobs", *context, &caller); !auth.ok()) return auth;
   std::vector<v1::Job> jobs;
   std::string next_page_token;
+  JobReader reader;
+  reader.user = caller.user;
+  reader.all = caller.server_admin;
   const Status status =
-      store_.ListJobs(request->page_size(), request->page_token(), &jobs, &next_page_token);
+      store_.ListJobs(reader, request->page_size(), request->page_token(), &jobs, &next_page_token);
   if (!status.ok()) return StoreError("ListJobs", status);
   for (v1::Job& job : jobs) {
     OverlayLive(&job);
@@ -274,20 +313,20 @@ grpc::Status JobServiceImpl::ListJobs(grpc::ServerContext* context,
 grpc::Status JobServiceImpl::CancelJob(grpc::ServerContext* context,
                                        const v1::CancelJobRequest* request, v1::Job* response) {
   constexpr char kRpc[] = "CancelJob";
-  std::string user;
-  if (grpc::Status auth = Authenticate(kRpc, *context, &user); !auth.ok()) return auth;
+  Caller caller;
+  if (grpc::Status auth = Authenticate(kRpc, *context, &caller); !auth.ok()) return auth;
   if (request->id().empty()) return Error(kRpc, grpc::StatusCode::INVALID_ARGUMENT, "id: required");
   bool found = false;
   {
-    // Only the owner cancels (jobs stored before owners were kept have none).
+    // The owner or a server admin cancels (jobs stored before owners were
+    // kept have none: anyone who sees them may).
     v1::Job job;
-    const Status loaded = store_.GetJob(request->id(), JobView::kBasic, &job, &found);
-    if (!loaded.ok()) return StoreError(kRpc, loaded);
-    if (!found) return JobNotFound(kRpc, request->id());
-    if (!job.owner().empty() && job.owner() != user) {
+    grpc::Status loaded = LoadVisibleJob(kRpc, caller, request->id(), JobView::kBasic, &job);
+    if (!loaded.ok()) return loaded;
+    if (!caller.server_admin && !job.owner().empty() && job.owner() != caller.user) {
       return Error(kRpc, grpc::StatusCode::PERMISSION_DENIED,
                    "job " + request->id() + " was submitted by " + job.owner() +
-                       "; only they can cancel it");
+                       "; only they or a server admin can cancel it");
     }
   }
   const Status status = executor_.Cancel(request->id(), response, &found);
@@ -301,18 +340,25 @@ grpc::Status JobServiceImpl::WatchJob(grpc::ServerContext* context,
                                       const v1::WatchJobRequest* request,
                                       grpc::ServerWriter<v1::JobEvent>* writer) {
   constexpr char kRpc[] = "WatchJob";
-  std::string user;
-  if (grpc::Status auth = Authenticate(kRpc, *context, &user); !auth.ok()) return auth;
+  Caller caller;
+  if (grpc::Status auth = Authenticate(kRpc, *context, &caller); !auth.ok()) return auth;
   const std::string& id = request->id();
   if (id.empty()) return Error(kRpc, grpc::StatusCode::INVALID_ARGUMENT, "id: required");
   if (request->after_sequence() < 0) {
     return Error(kRpc, grpc::StatusCode::INVALID_ARGUMENT, "after_sequence: must not be negative");
   }
   v1::Job job;
-  bool found = false;
-  Status status = store_.GetJob(id, JobView::kBasic, &job, &found);
-  if (!status.ok()) return StoreError(kRpc, status);
-  if (!found) return JobNotFound(kRpc, id);
+  if (grpc::Status loaded = LoadVisibleJob(kRpc, caller, id, JobView::kBasic, &job); !loaded.ok()) {
+    return loaded;
+  }
+  const StreamSlots::Ticket slot = watch_slots_.TryAcquire(caller.user);
+  if (!slot.held()) {
+    return Error(kRpc, grpc::StatusCode::RESOURCE_EXHAUSTED,
+                 "user '" + caller.user + "' already has " + std::to_string(kMaxWatchesPerUser) +
+                     " WatchJob streams open; close one first");
+  }
+  Status status;
+  auto checked = std::chrono::steady_clock::now();
   // All events of a job that was already terminal are stored: once those are
   // sent there is nothing left to wait for, even if the terminal one was
   // before after_sequence.
@@ -323,6 +369,14 @@ grpc::Status JobServiceImpl::WatchJob(grpc::ServerContext* context,
     if (context->IsCancelled()) return grpc::Status(grpc::StatusCode::CANCELLED, "watch cancelled");
     if (hub_.shutting_down()) {
       return grpc::Status(grpc::StatusCode::UNAVAILABLE, "the server is shutting down");
+    }
+    if (std::chrono::steady_clock::now() - checked >= kWatchRecheck) {
+      // A long watch must not outlive the caller's rights: a user disabled
+      // or a member removed since the stream opened loses it.
+      checked = std::chrono::steady_clock::now();
+      if (grpc::Status auth = Authenticate(kRpc, *context, &caller); !auth.ok()) return auth;
+      grpc::Status loaded = LoadVisibleJob(kRpc, caller, id, JobView::kBasic, &job);
+      if (!loaded.ok()) return loaded;
     }
     const uint64_t version = hub_.version();
     std::vector<v1::JobEvent> stored;
@@ -348,8 +402,8 @@ grpc::Status JobServiceImpl::DownloadResult(grpc::ServerContext* context,
                                             const v1::DownloadResultRequest* request,
                                             grpc::ServerWriter<v1::DataChunk>* writer) {
   constexpr char kRpc[] = "DownloadResult";
-  std::string user;
-  if (grpc::Status auth = Authenticate(kRpc, *context, &user); !auth.ok()) return auth;
+  Caller caller;
+  if (grpc::Status auth = Authenticate(kRpc, *context, &caller); !auth.ok()) return auth;
   const std::string& id = request->job_id();
   if (id.empty()) return Error(kRpc, grpc::StatusCode::INVALID_ARGUMENT, "job_id: required");
   if (request->offset() < 0) {
@@ -359,9 +413,10 @@ grpc::Status JobServiceImpl::DownloadResult(grpc::ServerContext* context,
   bool found = false;
   // The id becomes part of a path below; only ids we could have made pass.
   if (!IsWellFormedJobId(id)) return JobNotFound(kRpc, id);
-  Status status = store_.GetJob(id, JobView::kBasic, &job, &found);
-  if (!status.ok()) return StoreError(kRpc, status);
-  if (!found) return JobNotFound(kRpc, id);
+  if (grpc::Status loaded = LoadVisibleJob(kRpc, caller, id, JobView::kBasic, &job); !loaded.ok()) {
+    return loaded;
+  }
+  Status status;
   if (job.state() != v1::Job::SUCCEEDED) {
     std::string message =
         "job " + id + " is " + v1::Job::State_Name(job.state()) + ", not SUCCEEDED";

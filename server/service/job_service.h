@@ -2,8 +2,16 @@
 // request, translates it into a JobStore / JobExecutor call and returns; the
 // work itself happens in the executor's workers.
 //
-// Every call is authenticated (call_auth.h); every user sees every job, and
-// only a job's owner (the user who submitted it) may cancel it.
+// Every call is authenticated (call_auth.h). Who sees a job (job.proto):
+// a job on a project of the atlas store (against one of its snapshots, or
+// importing into it) is seen by the project's members, its owner and
+// server admins; a job on no project by every user. A job the caller may
+// not see is NOT_FOUND in every handler, word for word as an unknown id, so
+// that ids cannot be probed; ListJobs filters in the store's query, so its
+// pages stay full. A job's owner or a server admin may cancel it. Rights
+// are read from the store on every call (a member removed, or a user
+// disabled, loses access at their next call; a WatchJob stream re-checks
+// every kWatchRecheck).
 //
 // A submit carries a scene, optionally against a snapshot of the atlas
 // store (viewer role on its project), or an atlas import (editor role; its
@@ -19,10 +27,12 @@
 
 #include <chrono>
 #include <filesystem>
+#include <string>
 
 #include "jobs/job_event_hub.h"
 #include "jobs/job_executor.h"
 #include "pba/v1/job.grpc.pb.h"
+#include "service/stream_slots.h"
 #include "store/atlas_store.h"
 #include "store/job_store.h"
 #include "store/upload_store.h"
@@ -32,6 +42,11 @@ namespace pba {
 class JobServiceImpl final : public v1::JobService::Service {
  public:
   static constexpr std::chrono::milliseconds kWatchPoll{250};
+  // How often an open WatchJob stream checks again that its caller is still
+  // enabled and may still see the job.
+  static constexpr std::chrono::milliseconds kWatchRecheck{2000};
+  // WatchJob streams one user may hold open at once (stream_slots.h).
+  static constexpr int kMaxWatchesPerUser = 64;
   static constexpr size_t kChunkBytes = 1 << 20;
   static constexpr char kDefaultResultFile[] = "result.h5";
 
@@ -59,8 +74,18 @@ class JobServiceImpl final : public v1::JobService::Service {
  private:
   // Replaces the stored phase/progress of a running job by the live one.
   void OverlayLive(v1::Job* job) const;
+  struct Caller {
+    std::string user;
+    bool server_admin = false;
+  };
   // The caller, or UNAUTHENTICATED (logged).
-  grpc::Status Authenticate(const char* rpc, const grpc::ServerContext& context, std::string* user);
+  grpc::Status Authenticate(const char* rpc, const grpc::ServerContext& context, Caller* caller);
+  // Whether `caller` may see `job` (loaded with at least JobView::kBasic).
+  Status MaySee(const Caller& caller, const v1::Job& job, bool* visible);
+  // Loads job `id` if `caller` may see it; NOT_FOUND (logged) otherwise,
+  // the same for a job that does not exist.
+  grpc::Status LoadVisibleJob(const char* rpc, const Caller& caller, const std::string& id,
+                              JobView view, v1::Job* job);
 
   // The submit's checks beyond the scene: snapshot, import, priority, time
   // limit; *job gets what they resolve to.
@@ -72,6 +97,7 @@ class JobServiceImpl final : public v1::JobService::Service {
   AtlasStore& users_;
   UploadStore& uploads_;
   const std::filesystem::path data_dir_;
+  StreamSlots watch_slots_{kMaxWatchesPerUser};
 };
 
 }  // namespace pba

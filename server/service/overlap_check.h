@@ -11,6 +11,7 @@
 #include <string>
 
 #include "pba/status.h"
+#include "service/bounded_child.h"
 #include "store/atlas_store.h"
 
 namespace pba {
@@ -19,8 +20,11 @@ inline constexpr double kOverlapVoxelMm = 1.0;
 inline constexpr double kOverlapTolerance = 0.01;
 
 // kFailedPrecondition naming the neighbour, its holder and the overlap;
-// a neighbour whose geometry cannot be read is skipped (logged).
+// a neighbour whose geometry cannot be read is skipped (logged). The
+// measuring runs in a child process under `limits` (bounded_child.h); past
+// them the answer is kFailedPrecondition saying which limit.
 Status CheckLockedNeighbours(AtlasStore& store, const std::string& user, const StructureRef& ref,
-                             GeometryFormat format, const std::filesystem::path& file);
+                             GeometryFormat format, const std::filesystem::path& file,
+                             const ChildLimits& limits = {});
 
 }  // namespace pba

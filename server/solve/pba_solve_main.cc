@@ -2,10 +2,41 @@
 // The server runs every job through it in a child process; scripted users
 // call it directly.
 //
+// The result directory appears whole or not at all (StagingDir). What is at
+// --out is checked before the solve (CheckOutputDir): nothing, an empty
+// directory, or with --force an earlier result of pba-solve; never a file,
+// a link or a directory holding anything pba-solve does not write. The
+// server runs each job into a fresh folder.
+//
 // Exit codes: 0 success; 2 invalid scene or command line; 3 the solve broke
 // down or the scene cannot be solved as posed; 4 I/O error; 5 cancelled
 // (SIGTERM/SIGINT); 1 internal error.
+//
+// Cancel: SIGTERM or SIGINT sets the flag the solver looks at (assembly,
+// every conjugate-gradient and Newton iteration, explicit steps, dynamic
+// relaxation), so a cancelled solve normally ends with its own "cancelled
+// during ..." error. Some phases cannot look: a CHOLMOD or Eigen
+// factorisation, CGAL's mesh refinement of an atlas, a library writing a
+// file. A watchdog therefore ends the process with exit code 5 kCancelGrace
+// after the signal if it is still running, so a cancel never waits for
+// the server's SIGKILL. Nothing is lost that was kept: results reach --out
+// only by the staging directory's final rename.
+//
+// The two signals are blocked in every thread and taken by the watchdog
+// (sigtimedwait), not by a handler: METIS, which CHOLMOD's ordering calls,
+// installs its own SIGTERM handler while it runs and longjmps out of itself
+// on the signal, so a cancel during the ordering was swallowed and the
+// solve ran on to its end. OpenBLAS starts its threads from a library
+// constructor, before main, with the mask they inherit then; so main
+// blocks the signals and executes the program again once
+// (BlockCancelSignals), and every thread of the new image has them blocked.
+//
+// SIGXFSZ is ignored: past a file-size limit (ulimit -f) a write fails with
+// EFBIG and the solve ends with an I/O error naming the file, instead of the
+// process dying without a word.
 
+#include <signal.h>
+#include <time.h>
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
@@ -14,10 +45,12 @@
 #include <csignal>
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "atlas/structure_split.h"
@@ -45,6 +78,62 @@ std::atomic<bool> g_cancel{false};
 static_assert(std::atomic<bool>::is_always_lock_free, "the signal handler needs a lock-free flag");
 
 extern "C" void OnSignal(int) { g_cancel.store(true); }
+
+// The signals that cancel a solve.
+sigset_t CancelSignals() {
+  sigset_t set;
+  sigemptyset(&set);
+  sigaddset(&set, SIGTERM);
+  sigaddset(&set, SIGINT);
+  return set;
+}
+
+// Blocks the cancel signals, and unless they were blocked already (the
+// image this exec made) executes the program again with them blocked (see
+// the top of the file). One that arrives in between stays pending across
+// the exec. Should the exec fail, the program runs on as it is: OnSignal
+// then takes the signals in the threads that do not block them.
+void BlockCancelSignals(char** argv) {
+  sigset_t current;
+  ::sigprocmask(SIG_SETMASK, nullptr, &current);
+  if (sigismember(&current, SIGTERM) == 1 && sigismember(&current, SIGINT) == 1) return;
+  const sigset_t cancel = CancelSignals();
+  ::sigprocmask(SIG_BLOCK, &cancel, nullptr);
+  // By its own path, not /proc/self/exe, so that the process keeps its
+  // name ("pba-solve" in ps, and to the server's tests).
+  char self[4096];
+  const ssize_t n = ::readlink("/proc/self/exe", self, sizeof self - 1);
+  if (n > 0) {
+    self[n] = '\0';
+    ::execv(self, argv);
+  }
+  ::execv("/proc/self/exe", argv);
+}
+
+// How long a cancelled solve may take to stop by itself before the
+// watchdog ends it: well under the second a cancel is promised in, well
+// over an assembly chunk or a CG iteration on a large mesh.
+constexpr std::chrono::milliseconds kCancelGrace{600};
+
+// Takes the cancel signals, sets the flag, and ends the process
+// kCancelGrace later (see the top of the file). A detached thread that
+// only waits and reads the flag: no lock is taken, so it cannot deadlock
+// with the solve it ends.
+void StartCancelWatchdog() {
+  std::thread([] {
+    const sigset_t cancel = CancelSignals();
+    const timespec poll = {0, 25'000'000};
+    while (!g_cancel.load()) {
+      if (::sigtimedwait(&cancel, nullptr, &poll) > 0) g_cancel.store(true);
+    }
+    std::this_thread::sleep_for(kCancelGrace);
+    static constexpr char kMessage[] =
+        "pba-solve: cancelled; the current phase cannot stop by itself (a direct "
+        "factorisation, mesh refinement or a file being written), so the process ends here\n";
+    [[maybe_unused]] const ssize_t ignored = ::write(STDERR_FILENO, kMessage, sizeof kMessage - 1);
+    std::_Exit(kExitCancelled);
+  }).detach();
+}
 
 enum class ProgressMode { kJson, kText, kNone };
 
@@ -136,6 +225,35 @@ class Reporter {
   ProgressMode mode_;
 };
 
+// Whether `entry` of an output directory is something pba-solve writes
+// there (an earlier result): summary.json, result.h5 and .xdmf,
+// history.csv and .png, sensors.csv, profile_<name>.csv, and an import's
+// structures/ folder holding nothing but structure files (.json, .nii.gz).
+bool WrittenByPbaSolve(const std::filesystem::directory_entry& entry) {
+  namespace fs = std::filesystem;
+  const auto ends_with = [](const std::string& text, const std::string& end) {
+    return text.size() >= end.size() &&
+           text.compare(text.size() - end.size(), end.size(), end) == 0;
+  };
+  std::error_code ec;
+  const std::string name = entry.path().filename().string();
+  if (entry.is_symlink(ec)) return false;
+  if (entry.is_regular_file(ec)) {
+    for (const char* known : {"summary.json", "result.h5", "result.xdmf", "history.csv",
+                              "history.png", "sensors.csv"}) {
+      if (name == known) return true;
+    }
+    return name.rfind("profile_", 0) == 0 && ends_with(name, ".csv");
+  }
+  if (!entry.is_directory(ec) || name != "structures") return false;
+  for (const fs::directory_entry& inner : fs::directory_iterator(entry.path(), ec)) {
+    const std::string file = inner.path().filename().string();
+    if (inner.is_symlink(ec) || !inner.is_regular_file(ec)) return false;
+    if (!ends_with(file, ".json") && !ends_with(file, ".nii.gz")) return false;
+  }
+  return !ec;
+}
+
 Status WriteText(const std::filesystem::path& path, const std::string& text) {
   std::ofstream out(path, std::ios::binary | std::ios::trunc);
   out << text;
@@ -157,10 +275,16 @@ struct CheckpointFlags {
   std::string restart;  // a checkpoint.h5 to continue from; empty: from t = 0
 };
 
-int Run(const std::string& scene_path, const std::string& out_dir, const std::string& inp_path,
-        ProgressMode mode, int threads, const AtlasCacheFlags& cache,
+int Run(const std::string& scene_path, const std::string& out_dir, bool force,
+        const std::string& inp_path, ProgressMode mode, int threads, const AtlasCacheFlags& cache,
         const CheckpointFlags& checkpoint) {
   Reporter reporter(mode);
+  // Before anything is solved: a solve of hours must not end in a refusal.
+  if (!out_dir.empty()) {
+    if (Status s = CheckOutputDir(out_dir, force, "pba-solve", WrittenByPbaSolve); !s.ok()) {
+      return reporter.Error(s);
+    }
+  }
 
   v1::Scene scene;
   codec::ParseError parse_error;
@@ -231,8 +355,11 @@ struct ImportArgs {
   std::vector<std::string> structures;
 };
 
-int RunImport(const ImportArgs& args, const std::string& out_dir, ProgressMode mode) {
+int RunImport(const ImportArgs& args, const std::string& out_dir, bool force, ProgressMode mode) {
   Reporter reporter(mode);
+  if (Status s = CheckOutputDir(out_dir, force, "pba-solve", WrittenByPbaSolve); !s.ok()) {
+    return reporter.Error(s);
+  }
   const auto start = std::chrono::steady_clock::now();
   SplitOptions options;
   if (args.kind == "synthetic") {
@@ -283,6 +410,8 @@ int RunImport(const ImportArgs& args, const std::string& out_dir, ProgressMode m
 }  // namespace pba
 
 int main(int argc, char** argv) {
+  // First, before anything is printed or started.
+  pba::BlockCancelSignals(argv);
   CLI::App app{"pba-solve: run one PBA scene and write result.h5, result.xdmf and summary.json"};
   app.set_version_flag("--version", std::string("pba-solve ") + pba::SolverVersion());
   std::string scene_path;
@@ -303,7 +432,11 @@ int main(int argc, char** argv) {
                  "--import-atlas: keep only this structure (repeatable; group prefixes allowed)");
   std::string inp_path;
   app.add_option("-o,--out", out_dir,
-                 "Result directory (created; an older result there is replaced)");
+                 "Result directory (created; must not exist or be empty, or with --force hold "
+                 "an earlier result)");
+  bool force = false;
+  app.add_flag("--force", force,
+               "Replace an earlier result at --out (never a directory with other files)");
   app.add_option("--export-inp", inp_path,
                  "Write the model as an Abaqus input deck that CalculiX runs (SI units); "
                  "without --out, export only");
@@ -341,6 +474,8 @@ int main(int argc, char** argv) {
 
   std::signal(SIGTERM, pba::OnSignal);
   std::signal(SIGINT, pba::OnSignal);
+  std::signal(SIGXFSZ, SIG_IGN);
+  pba::StartCancelWatchdog();
 
   pba::ProgressMode mode = pba::ProgressMode::kJson;
   if (progress == "text" || (progress == "auto" && ::isatty(STDOUT_FILENO))) {
@@ -354,7 +489,7 @@ int main(int argc, char** argv) {
         std::fprintf(stderr, "pba-solve: --import-atlas takes --out DIR and no scene\n");
         return pba::kExitInvalid;
       }
-      return pba::RunImport(import, out_dir, mode);
+      return pba::RunImport(import, out_dir, force, mode);
     }
     if (scene_path.empty()) {
       std::fprintf(stderr, "pba-solve: a scene file is required\n");
@@ -365,7 +500,7 @@ int main(int argc, char** argv) {
                    "pba-solve: --out DIR is required (or --export-inp FILE to export only)\n");
       return pba::kExitInvalid;
     }
-    return pba::Run(scene_path, out_dir, inp_path, mode, threads, cache, checkpoint);
+    return pba::Run(scene_path, out_dir, force, inp_path, mode, threads, cache, checkpoint);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "pba-solve: internal error: %s\n", e.what());
     return pba::kExitInternal;

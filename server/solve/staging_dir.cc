@@ -24,6 +24,46 @@ std::string Hidden(const fs::path& destination, const char* what) {
 
 }  // namespace
 
+Status CheckOutputDir(const fs::path& out, bool force, const std::string& tool,
+                      const OutputEntryTest& ours) {
+  std::error_code ec;
+  const fs::file_status status = fs::symlink_status(out, ec);
+  if (status.type() == fs::file_type::not_found) return Status::Ok();
+  if (fs::is_symlink(status)) {
+    return Status::InvalidArgument("--out", out.string() + " is a symbolic link; " + tool +
+                                                " writes a new directory there, so name one "
+                                                "that does not exist");
+  }
+  if (!fs::is_directory(status)) {
+    return Status::InvalidArgument(
+        "--out", out.string() + " is a file, not a directory " + tool +
+                     " wrote; not replacing it (name a directory that does not exist)");
+  }
+  std::string foreign;
+  bool empty = true;
+  for (const fs::directory_entry& entry : fs::directory_iterator(out, ec)) {
+    empty = false;
+    if (!ours(entry)) {
+      foreign = entry.path().filename().string();
+      break;
+    }
+  }
+  if (ec) return Status::Io("cannot list " + out.string() + ": " + ec.message());
+  if (empty) return Status::Ok();
+  if (!foreign.empty()) {
+    return Status::InvalidArgument("--out", out.string() + " holds '" + foreign + "', which " +
+                                                tool +
+                                                " did not write; not replacing the directory, "
+                                                "even with --force (name a new one)");
+  }
+  if (!force) {
+    return Status::InvalidArgument("--out", out.string() + " holds an earlier " + tool +
+                                                " result; pass --force to replace it, or name a "
+                                                "new directory");
+  }
+  return Status::Ok();
+}
+
 Status StagingDir::Create(const fs::path& destination, StagingDir* out) {
   fs::path dest = fs::absolute(destination).lexically_normal();
   if (dest.filename().empty()) dest = dest.parent_path();

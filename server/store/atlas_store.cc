@@ -243,7 +243,7 @@ Status AtlasStore::AppendRevision(const Caller& caller, const StructureRef& ref,
 
 // --- users and rights ----------------------------------------------------
 
-Status AtlasStore::CreateUser(const std::string& name, std::string* token) {
+Status AtlasStore::CreateUser(const std::string& name, std::string* token, bool server_admin) {
   PBA_RETURN_IF_ERROR(CheckName("user", name));
   std::lock_guard lock(mutex_);
   Transaction transaction(*db_);
@@ -258,25 +258,33 @@ Status AtlasStore::CreateUser(const std::string& name, std::string* token) {
   PBA_RETURN_IF_ERROR(RandomHex(kTokenBytes, &secret));
   PBA_RETURN_IF_ERROR(Sha256Hex(secret, &hash));
   PBA_RETURN_IF_ERROR(
-      db_->Prepare("INSERT INTO users (name, token_sha256, created_us) VALUES (?, ?, ?)", &stmt));
-  PBA_RETURN_IF_ERROR(stmt.Bind(1, name).Bind(2, hash).Bind(3, clock_()).Run());
+      db_->Prepare("INSERT INTO users (name, token_sha256, created_us, server_admin) "
+                   "VALUES (?, ?, ?, ?)",
+                   &stmt));
+  PBA_RETURN_IF_ERROR(stmt.Bind(1, name)
+                          .Bind(2, hash)
+                          .Bind(3, clock_())
+                          .Bind(4, int64_t{server_admin ? 1 : 0})
+                          .Run());
   stmt = Statement();
-  PBA_RETURN_IF_ERROR(
-      Audit(std::nullopt, std::nullopt, "user.create", "users/" + name, std::nullopt, ""));
+  PBA_RETURN_IF_ERROR(Audit(std::nullopt, std::nullopt, "user.create", "users/" + name,
+                            std::nullopt, server_admin ? "server admin" : ""));
   PBA_RETURN_IF_ERROR(transaction.Commit());
   *token = std::move(secret);
   return Status::Ok();
 }
 
-Status AtlasStore::Authenticate(const std::string& token, std::string* user) {
+Status AtlasStore::Authenticate(const std::string& token, std::string* user, bool* server_admin) {
   // Tokens have the shape of a SHA-256 hex string (32 random bytes in hex).
   if (!IsSha256Hex(token)) return Status::Unauthenticated("malformed access token");
   std::string hash;
   PBA_RETURN_IF_ERROR(Sha256Hex(token, &hash));
   std::lock_guard lock(mutex_);
+  // Read on every call, never cached: a user disabled offline (pba-server
+  // admin disable-user) is refused from the next call on.
   Statement stmt;
   PBA_RETURN_IF_ERROR(
-      db_->Prepare("SELECT name, disabled FROM users WHERE token_sha256 = ?", &stmt));
+      db_->Prepare("SELECT name, disabled, server_admin FROM users WHERE token_sha256 = ?", &stmt));
   bool row = false;
   PBA_RETURN_IF_ERROR(stmt.Bind(1, hash).Step(&row));
   if (!row) return Status::Unauthenticated("unknown access token");
@@ -284,6 +292,7 @@ Status AtlasStore::Authenticate(const std::string& token, std::string* user) {
     return Status::Unauthenticated("user " + Quoted(stmt.ColumnText(0)) + " is disabled");
   }
   *user = stmt.ColumnText(0);
+  if (server_admin != nullptr) *server_admin = stmt.ColumnInt(2) != 0;
   return Status::Ok();
 }
 
@@ -305,25 +314,19 @@ Status AtlasStore::SetRole(const std::string& admin, const std::string& project,
   PBA_RETURN_IF_ERROR(transaction.status());
   Caller caller;
   PBA_RETURN_IF_ERROR(Enter(admin, project, Role::kAdmin, &caller));
-  Statement stmt;
-  PBA_RETURN_IF_ERROR(db_->Prepare("SELECT id FROM users WHERE name = ?", &stmt));
-  bool row = false;
-  PBA_RETURN_IF_ERROR(stmt.Bind(1, member).Step(&row));
-  if (!row) return Status::NotFound("user " + Quoted(member) + " does not exist");
-  const int64_t member_id = stmt.ColumnInt(0);
-  PBA_RETURN_IF_ERROR(
-      db_->Prepare("SELECT role FROM members WHERE project = ? AND user = ?", &stmt));
-  PBA_RETURN_IF_ERROR(stmt.Bind(1, caller.project).Bind(2, member_id).Step(&row));
-  const std::string old_role = row ? stmt.ColumnText(0) : "(none)";
+  int64_t member_id = 0;
+  std::string old_role;
+  PBA_RETURN_IF_ERROR(FindMember(caller.project, member, &member_id, &old_role));
+  if (old_role.empty()) old_role = "(none)";
   if (old_role == "admin" && role != Role::kAdmin) {
-    PBA_RETURN_IF_ERROR(
-        db_->Prepare("SELECT COUNT(*) FROM members WHERE project = ? AND role = 'admin'", &stmt));
-    PBA_RETURN_IF_ERROR(stmt.Bind(1, caller.project).Step(&row));
-    if (stmt.ColumnInt(0) <= 1) {
+    int64_t admins = 0;
+    PBA_RETURN_IF_ERROR(CountAdmins(caller.project, &admins));
+    if (admins <= 1) {
       return Status::FailedPrecondition(Quoted(member) + " is the last admin of project " +
                                         Quoted(project) + "; make another member admin first");
     }
   }
+  Statement stmt;
   PBA_RETURN_IF_ERROR(
       db_->Prepare("INSERT INTO members (project, user, role) VALUES (?, ?, ?) "
                    "ON CONFLICT (project, user) DO UPDATE SET role = excluded.role",
@@ -508,26 +511,13 @@ Status AtlasStore::Commit(const std::string& user, const CommitRequest& request,
   Caller caller;
   StructureRow structure;
   PBA_RETURN_IF_ERROR(EnterStructure(user, ref, Role::kEditor, &caller, &structure));
-  if (!request.request_id.empty()) {
-    // A retry of a commit that landed: its revision, nothing written.
-    Statement stmt;
-    PBA_RETURN_IF_ERROR(db_->Prepare(
-        "SELECT number, author FROM structure_revisions WHERE structure = ? AND request_id = ?",
-        &stmt));
-    bool row = false;
-    PBA_RETURN_IF_ERROR(stmt.Bind(1, structure.id).Bind(2, request.request_id).Step(&row));
-    if (row) {
-      const int64_t number = stmt.ColumnInt(0);
-      const int64_t author = stmt.ColumnInt(1);
-      stmt = Statement();
-      if (author != caller.user) {
-        return Status::AlreadyExists("request_id: another user's commit of " + Describe(ref) +
-                                     " carried this request id");
-      }
-      bool found = false;
-      if (replayed != nullptr) *replayed = true;
-      return ReadRevision(ref, structure.id, number, revision, &found);
-    }
+  // A retry of a commit that landed: its revision, nothing written.
+  bool earlier = false;
+  PBA_RETURN_IF_ERROR(
+      FindCommitRequest(caller, ref, structure.id, request.request_id, revision, &earlier));
+  if (earlier) {
+    if (replayed != nullptr) *replayed = true;
+    return Status::Ok();
   }
   PBA_RETURN_IF_ERROR(CheckWrite(caller, ref, structure, request.lock_id, request.base_revision));
   Revision head;

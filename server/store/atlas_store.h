@@ -12,8 +12,14 @@
 //   viewer  reads (structures, history, revisions, snapshots, audit)
 //   editor  also creates structures, locks, commits, edits metadata,
 //           reverts, snapshots and tags
-//   admin   also sets roles and breaks locks
+//   admin   also sets roles, removes members and breaks locks
 // The creator of a project is its first admin.
+//
+// Users: a user is created with a token (CreateUser), may be disabled and
+// enabled again by the operator (SetUserDisabled; offline, through
+// pba-server admin), and may be a server admin: not a project role but a
+// server-wide one, which sees and cancels every job (job_service.h). The
+// store does not act on it: no project right follows from it.
 //
 // Editing rules (docs ARCHITECTURE "Collaboration rules"):
 // - Geometry changes (Commit, Revert) need the structure's lock, held with an
@@ -45,10 +51,11 @@
 // another user's key never collides. The geometry is not compared (a retry
 // may come after its upload was consumed), only the other arguments.
 //
-// Implemented in four files: atlas_store.cc (users, roles, structures,
+// Implemented in six files: atlas_store.cc (users, roles, structures,
 // revisions), atlas_store_creates.cc (projects, structures, request ids),
-// atlas_store_locks.cc and atlas_store_snapshots.cc (snapshots, tags, the
-// audit listing).
+// atlas_store_locks.cc, atlas_store_snapshots.cc (snapshots, tags, the
+// audit listing), atlas_store_import.cc and atlas_store_users.cc (disabling
+// users, removing members, role checks, commits by request id).
 #pragma once
 
 #include <cstdint>
@@ -149,10 +156,24 @@ class AtlasStore {
   // --- users and rights ---------------------------------------------------
   // Creates a user and sets *token to its access token (64 hex characters).
   // The token is returned only here: the store keeps only its SHA-256.
-  Status CreateUser(const std::string& name, std::string* token);
-  // The user a token belongs to; kUnauthenticated for an unknown token or a
-  // disabled user (the message never echoes the token).
-  Status Authenticate(const std::string& token, std::string* user);
+  // `server_admin`: see "Users" above.
+  Status CreateUser(const std::string& name, std::string* token, bool server_admin = false);
+  // The user a token belongs to, and (when `server_admin` is given) whether
+  // they are a server admin; kUnauthenticated for an unknown token or a
+  // disabled user (the message never echoes the token). Reads the database
+  // on every call (no cache), so a user disabled by another process is
+  // refused from their next call on.
+  Status Authenticate(const std::string& token, std::string* user, bool* server_admin = nullptr);
+  // Disables `name` (their token is refused, as is every call naming them as
+  // the acting user) or enables them again; kNotFound for an unknown user.
+  // Their memberships, revisions and jobs stay; locks they hold stay until
+  // their lease lapses or a project admin breaks them. Audited when it
+  // changes anything (*changed, when given, says whether it did).
+  Status SetUserDisabled(const std::string& name, bool disabled, bool* changed = nullptr);
+  // Whether `name` is disabled now (read from the database, as
+  // Authenticate); kNotFound for an unknown user. The job queue asks it
+  // before a job starts: a disabled user's queued jobs do not run.
+  Status IsUserDisabled(const std::string& name, bool* disabled);
   // How many users exist (disabled ones included): the server creates its
   // first admin when there are none.
   Status CountUsers(int64_t* count);
@@ -163,6 +184,18 @@ class AtlasStore {
   // last admin cannot be demoted (the project would have no one to manage it).
   Status SetRole(const std::string& admin, const std::string& project, const std::string& member,
                  Role role);
+  // Removes `member` from `project`; `admin` must be an admin there.
+  // kNotFound when they are not a member; the last admin cannot be removed
+  // (kFailedPrecondition, as SetRole). Locks `member` holds on the
+  // project's structures are released in the same transaction (each audited
+  // as lock.break); *released_locks names their structures.
+  Status RemoveMember(const std::string& admin, const std::string& project,
+                      const std::string& member, std::vector<std::string>* released_locks);
+  // OK when `user` (enabled) has at least `minimum` in `project`; otherwise
+  // what Enter() says (kPermissionDenied naming the role needed, kNotFound
+  // for no such project). Changes nothing: for a service to refuse a call
+  // before it reads or parses what the call uploaded.
+  Status CheckRole(const std::string& user, const std::string& project, Role minimum);
   // `user`'s role in `project`; *is_member false (and *role untouched) if none.
   Status RoleOf(const std::string& project, const std::string& user, Role* role, bool* is_member);
   // The projects `user` is a member of, by creation. Paging as JobStore:
@@ -221,6 +254,13 @@ class AtlasStore {
   // returned for a repeated request_id (nothing was written).
   Status Commit(const std::string& user, const CommitRequest& request, Revision* revision,
                 bool* replayed = nullptr);
+  // The revision an earlier Commit() by `user` with `request_id` made on
+  // `ref` (*found), checked as Commit checks rights (editor); another
+  // user's is kAlreadyExists. Lets the service answer a retried commit
+  // without its upload, which the first commit consumed. An empty
+  // request_id finds nothing.
+  Status FindCommit(const std::string& user, const StructureRef& ref, const std::string& request_id,
+                    Revision* revision, bool* found);
   // Changes metadata if `etag` is the structure's current metadata etag
   // (else kAborted naming the current one). *new_etag is the etag after.
   Status UpdateMetadata(const std::string& user, const StructureRef& ref, const std::string& etag,
@@ -327,6 +367,12 @@ class AtlasStore {
   Status ActingUser(const std::string& name, int64_t* id);
   // Checks `user`'s role in `project` is at least `minimum`.
   Status Enter(const std::string& user, const std::string& project, Role minimum, Caller* caller);
+  // `member`'s user id and role name in `project` ("" when not a member);
+  // kNotFound when there is no such user. SetRole and RemoveMember.
+  Status FindMember(int64_t project, const std::string& member, int64_t* member_id,
+                    std::string* role);
+  // How many admins `project` has (the last one stays).
+  Status CountAdmins(int64_t project, int64_t* count);
   Status FindStructure(const Caller& caller, const StructureRef& ref, StructureRow* row);
   // Enter() into ref.project, then FindStructure(): every per-structure call
   // starts so.
@@ -340,6 +386,10 @@ class AtlasStore {
   // naming the head otherwise).
   Status CheckWrite(const Caller& caller, const StructureRef& ref, const StructureRow& structure,
                     const std::string& lock_id, int64_t base_revision);
+  // The revision the caller's commit with `request_id` made on `structure`
+  // (*found); another user's is kAlreadyExists; empty finds nothing.
+  Status FindCommitRequest(const Caller& caller, const StructureRef& ref, int64_t structure,
+                           const std::string& request_id, Revision* revision, bool* found);
   // A create's request id row, when `user` has one for `request_id`.
   struct CreateRequestRow {
     std::string kind;  // project, structure, snapshot

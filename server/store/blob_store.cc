@@ -106,12 +106,13 @@ Status BlobStore::PutFile(const MappedFile& file, std::string* hash) {
   fs::create_directories(path.parent_path(), ec);
   if (ec) return Status::Io("cannot create " + path.parent_path().string() + ": " + ec.message());
   // The upload's chunks were written without fsync: the content must be on
-  // disk before any name says it is there. Blobs are read by anyone who may
-  // read the data directory, as WriteFileAtomically's copies are.
+  // disk before any name says it is there. Blobs, like every file of the
+  // data directory, are the server user's alone (0600): geometry may be
+  // unpublished work (docs/design.md, "Trust boundaries").
   if (::fsync(file.fd()) != 0) {
     return Status::Io("cannot flush " + file.path().string() + ": " + std::strerror(errno));
   }
-  ::fchmod(file.fd(), 0644);
+  ::fchmod(file.fd(), 0600);
   // The path must still name the file that was hashed: a name is only ever
   // given to bytes whose hash was checked. Otherwise (never seen: uploads
   // are created exclusively and only appended to) the checked bytes are

@@ -180,10 +180,13 @@ Status JobStore::CreateJob(const NewJob& request, v1::Job* job, bool* created) {
 
   std::string name = scene.name().empty() ? "unnamed" : scene.name();
   if (request.atlas_import != nullptr) name = "import into " + request.atlas_import->project();
+  // The project the job belongs to decides who sees it (JobReader).
+  const std::string& project = request.atlas_import != nullptr ? request.atlas_import->project()
+                                                               : request.snapshot.project();
   PBA_RETURN_IF_ERROR(
       db_->Prepare("INSERT INTO jobs (id, request_id, name, state, scene, create_time_us, owner, "
-                   "priority, timeout_s, snapshot_project, snapshot, atlas_import) "
-                   "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
+                   "priority, timeout_s, snapshot_project, snapshot, atlas_import, project) "
+                   "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
                    &stmt));
   stmt.Bind(1, id);
   if (request_id.empty()) {
@@ -205,6 +208,7 @@ Status JobStore::CreateJob(const NewJob& request, v1::Job* job, bool* created) {
   } else {
     stmt.BindNull(12);
   }
+  stmt.Bind(13, project);
   PBA_RETURN_IF_ERROR(stmt.Run());
   stmt = Statement();
   PBA_RETURN_IF_ERROR(InsertEvent(MakeEvent(id, 1, v1::Job::QUEUED, "", 0, "queued")));
@@ -268,6 +272,13 @@ Status JobStore::LoadResultFiles(const std::string& id, v1::Job* job) {
 
 Status JobStore::ListJobs(int page_size, const std::string& page_token, std::vector<v1::Job>* jobs,
                           std::string* next_page_token) {
+  JobReader everything;
+  everything.all = true;
+  return ListJobs(everything, page_size, page_token, jobs, next_page_token);
+}
+
+Status JobStore::ListJobs(const JobReader& reader, int page_size, const std::string& page_token,
+                          std::vector<v1::Job>* jobs, std::string* next_page_token) {
   if (page_size < 0) return Status::InvalidArgument("page_size", "must not be negative");
   if (page_size == 0) page_size = kDefaultPageSize;
   page_size = std::min(page_size, kMaxPageSize);
@@ -284,12 +295,21 @@ Status JobStore::ListJobs(int page_size, const std::string& page_token, std::vec
 
   std::lock_guard lock(mutex_);
   Statement stmt;
-  PBA_RETURN_IF_ERROR(db_->Prepare(std::string("SELECT ") + kJobColumns +
-                                       ", number FROM jobs WHERE number < ? "
-                                       "ORDER BY number DESC LIMIT ?",
-                                   &stmt));
+  // Filtered in the query, so that a page holds page_size jobs the reader
+  // sees, however many hidden ones lie between them. Membership is read from
+  // the atlas store's tables (the same database) in the same statement.
+  PBA_RETURN_IF_ERROR(db_->Prepare(
+      std::string("SELECT ") + kJobColumns +
+          ", number FROM jobs WHERE number < ?1 AND (?3 OR project = '' OR owner = ?4 OR "
+          "project IN (SELECT p.name FROM members m JOIN projects p ON p.id = m.project "
+          "JOIN users u ON u.id = m.user WHERE u.name = ?4)) "
+          "ORDER BY number DESC LIMIT ?2",
+      &stmt));
   // One row more than asked tells whether another page follows.
-  stmt.Bind(1, before).Bind(2, int64_t{page_size} + 1);
+  stmt.Bind(1, before)
+      .Bind(2, int64_t{page_size} + 1)
+      .Bind(3, int64_t{reader.all ? 1 : 0})
+      .Bind(4, reader.user);
   std::vector<int64_t> numbers;
   while (true) {
     bool row = false;

@@ -45,6 +45,15 @@ struct NewJob {
   std::function<Status(const std::string& id)> before_commit;
 };
 
+// Who lists jobs (job.proto, "Who sees a job"): `user` sees the jobs on no
+// project, their own, and those on projects they are a member of (by the
+// atlas store's members, read from the same database); `all` (a server
+// admin) sees every job.
+struct JobReader {
+  std::string user;
+  bool all = false;
+};
+
 // How a run ended, for FinishRun().
 struct RunOutcome {
   v1::Job::State state = v1::Job::FAILED;  // SUCCEEDED, FAILED or CANCELLED
@@ -84,8 +93,13 @@ class JobStore {
   Status FindByRequestId(const std::string& request_id, const std::string& owner, v1::Job* job,
                          bool* found);
 
-  // Newest first. `page_size` 0 means kDefaultPageSize; larger than
-  // kMaxPageSize is capped. An unparsable token is kInvalidArgument.
+  // The jobs `reader` sees, newest first. `page_size` 0 means
+  // kDefaultPageSize; larger than kMaxPageSize is capped. An unparsable
+  // token is kInvalidArgument. A page holds page_size jobs the reader sees
+  // (hidden ones are skipped in the query, not dropped from a page).
+  Status ListJobs(const JobReader& reader, int page_size, const std::string& page_token,
+                  std::vector<v1::Job>* jobs, std::string* next_page_token);
+  // Every job (a reader with `all`).
   Status ListJobs(int page_size, const std::string& page_token, std::vector<v1::Job>* jobs,
                   std::string* next_page_token);
 

@@ -265,6 +265,23 @@ ALTER TABLE snapshots ADD COLUMN import_job TEXT;
 CREATE UNIQUE INDEX snapshots_by_import_job ON snapshots (import_job)
   WHERE import_job IS NOT NULL;
 )sql"},
+      // Trust boundaries (issue 18). Server admins see and cancel every
+      // job; the user "admin" a first start created is one (a first start
+      // makes no other name). A job's project (the snapshot's, or the one
+      // an import goes into) decides who sees it, so ListJobs can filter
+      // and page in SQL: an import's project is in its request blob, which
+      // SQL cannot read, but its name was made "import into <project>" by
+      // the submit (JobStore::CreateJob), so that fills older rows.
+      {7, "users: server admins; jobs: the project they belong to", R"sql(
+ALTER TABLE users ADD COLUMN server_admin INTEGER NOT NULL DEFAULT 0
+  CHECK (server_admin IN (0, 1));
+UPDATE users SET server_admin = 1 WHERE name = 'admin';
+ALTER TABLE jobs ADD COLUMN project TEXT NOT NULL DEFAULT '';
+UPDATE jobs SET project = snapshot_project WHERE snapshot_project != '';
+UPDATE jobs SET project = substr(name, 13)
+  WHERE project = '' AND atlas_import IS NOT NULL AND name LIKE 'import into %';
+CREATE INDEX jobs_by_project ON jobs (project, number);
+)sql"},
   };
   return kMigrations;
 }

@@ -10,6 +10,7 @@
 #include <fstream>
 #include <sstream>
 #include <system_error>
+#include <vector>
 
 #include "store/atlas_types.h"
 #include "store/atomic_file.h"
@@ -47,6 +48,7 @@ Status UploadStore::Open(const fs::path& root, std::unique_ptr<UploadStore>* out
   if (ec) return Status::Io("cannot create " + root.string() + ": " + ec.message());
   if (!clock) clock = SystemMicros;
   out->reset(new UploadStore(root, std::move(clock)));
+  (*out)->LoadIndex();
   return Status::Ok();
 }
 
@@ -58,7 +60,62 @@ bool UploadStore::IsWellFormedId(std::string_view id) {
   return true;
 }
 
+void UploadStore::LoadIndex() {
+  std::lock_guard lock(mutex_);
+  open_.clear();
+  std::error_code ec;
+  for (const fs::directory_entry& entry : fs::directory_iterator(root_, ec)) {
+    const std::string name = entry.path().filename().string();
+    if (!name.ends_with(kMetaSuffix)) continue;
+    const std::string id = name.substr(0, name.size() - std::strlen(kMetaSuffix));
+    if (!IsWellFormedId(id)) continue;
+    std::ifstream meta(entry.path());
+    std::string owner, size, sha256, expire;
+    std::getline(meta, owner);
+    std::getline(meta, size);
+    std::getline(meta, sha256);
+    std::getline(meta, expire);
+    OpenUpload upload{owner, 0, 0};
+    // A damaged one counts nothing; Load() reports it when it is used.
+    if (ParseInt(size, &upload.size_bytes) && ParseInt(expire, &upload.expire_us)) {
+      open_[id] = std::move(upload);
+    }
+  }
+}
+
+Status UploadStore::CheckQuota(const std::string& user, int64_t size_bytes) {
+  const int64_t now = clock_();
+  int64_t announced = 0;
+  int count = 0;
+  std::vector<std::string> expired;
+  for (const auto& [id, upload] : open_) {
+    if (upload.owner != user) continue;
+    if (now >= upload.expire_us) {
+      expired.push_back(id);
+      continue;
+    }
+    announced += upload.size_bytes;
+    ++count;
+  }
+  for (const std::string& id : expired) RemoveFiles(id);
+  if (count >= kMaxOpenUploads) {
+    return Status::FailedPrecondition(
+        "upload_quota", "you have " + std::to_string(count) + " open uploads, the most one user " +
+                            "may hold; finish or discard some (DiscardUpload) first");
+  }
+  if (quota_bytes_ > 0 && announced + size_bytes > quota_bytes_) {
+    return Status::FailedPrecondition(
+        "upload_quota", "your open uploads announce " + std::to_string(announced) + " bytes; " +
+                            std::to_string(size_bytes) +
+                            " more would pass the server's upload quota of " +
+                            std::to_string(quota_bytes_) +
+                            " bytes per user; finish or discard some (DiscardUpload) first");
+  }
+  return Status::Ok();
+}
+
 void UploadStore::RemoveFiles(const std::string& id) {
+  open_.erase(id);
   std::error_code ec;
   fs::remove(root_ / id, ec);
   fs::remove(root_ / (id + kMetaSuffix), ec);
@@ -114,6 +171,7 @@ Status UploadStore::Begin(const std::string& user, int64_t size_bytes, const std
   std::string id;
   PBA_RETURN_IF_ERROR(RandomHex(kIdBytes, &id));
   std::lock_guard lock(mutex_);
+  PBA_RETURN_IF_ERROR(CheckQuota(user, size_bytes));
   *info = UploadInfo();
   info->id = id;
   info->owner = user;
@@ -128,7 +186,11 @@ Status UploadStore::Begin(const std::string& user, int64_t size_bytes, const std
   std::ostringstream meta;
   meta << user << "\n" << size_bytes << "\n" << sha256 << "\n" << info->expire_us << "\n";
   const Status written = WriteFileAtomically(root_ / (id + kMetaSuffix), meta.str());
-  if (!written.ok()) RemoveFiles(id);
+  if (written.ok()) {
+    open_[id] = OpenUpload{user, size_bytes, info->expire_us};
+  } else {
+    RemoveFiles(id);
+  }
   return written;
 }
 
@@ -281,6 +343,9 @@ Status UploadStore::Sweep(int* removed) {
   }
   if (ec) return Status::Io("cannot list " + root_.string() + ": " + ec.message());
   for (const fs::path& path : doomed) {
+    std::string id = path.filename().string();
+    if (id.ends_with(kMetaSuffix)) id.resize(id.size() - std::strlen(kMetaSuffix));
+    open_.erase(id);
     if (fs::remove(path, ec)) ++*removed;
     if (ec) return Status::Io("cannot remove " + path.string() + ": " + ec.message());
   }

@@ -24,6 +24,15 @@
 // content whose hash is not the announced one kInvalidArgument (field
 // "sha256"), after which the upload is removed (it can never succeed).
 //
+// Quota: a user's open uploads (begun, not yet removed or expired) may
+// announce at most quota_bytes() together (0: no quota) and number at most
+// kMaxOpenUploads; a Begin past either is refused before any file is made,
+// as kFailedPrecondition with field "upload_quota" (the service reports it
+// as RESOURCE_EXHAUSTED). The store keeps an index of open uploads in
+// memory, read from the .meta files at Open(), so the check costs no disk
+// scan; expired uploads leave it when they are touched, swept, or when
+// their owner begins another.
+//
 // Thread-safe: one mutex around every file operation but Take()'s mapping
 // and hashing. Writes of different uploads therefore take turns; a chunk is
 // at most kMaxChunkBytes.
@@ -33,6 +42,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -57,6 +67,9 @@ class UploadStore {
   static constexpr int64_t kMaxUploadBytes = int64_t{1} << 30;
   static constexpr size_t kMaxChunkBytes = size_t{1} << 20;
   static constexpr int64_t kLifetimeMicros = 24LL * 3600 * 1000 * 1000;
+  // Open uploads one user may hold at once, whatever their size: each is two
+  // files, and 1-byte uploads would otherwise pass any byte quota.
+  static constexpr int kMaxOpenUploads = 1000;
 
   // Uploads live under `root` (normally <data>/uploads), created if absent.
   // `clock` gives microseconds since the Unix epoch (the system clock when
@@ -66,6 +79,11 @@ class UploadStore {
 
   // Whether `id` has the form of an upload id (32 characters 0-9 a-f).
   static bool IsWellFormedId(std::string_view id);
+
+  // Bytes a user's open uploads may announce together; 0 (the default): no
+  // quota. Set before the store is shared.
+  void set_quota_bytes(int64_t bytes) { quota_bytes_ = bytes; }
+  int64_t quota_bytes() const { return quota_bytes_; }
 
   // Starts an upload of `size_bytes` (1 .. kMaxUploadBytes) whose content
   // hashes to `sha256` (64 lowercase hex characters).
@@ -110,8 +128,23 @@ class UploadStore {
   // Removes an upload whose content hashes to `hash`, not the announced
   // hash: it can never succeed. Returns the refusal.
   Status Discard(const UploadInfo& info, const std::string& hash);
+  // Fills open_ from the .meta files (at Open()).
+  void LoadIndex();
+  // kFailedPrecondition (field "upload_quota") unless `user` may begin an
+  // upload of `size_bytes`; forgets (and removes) the user's expired ones
+  // first. Called with the mutex held.
+  Status CheckQuota(const std::string& user, int64_t size_bytes);
+
+  struct OpenUpload {
+    std::string owner;
+    int64_t size_bytes = 0;
+    int64_t expire_us = 0;
+  };
 
   std::mutex mutex_;
+  // Open uploads by id (see Quota above); guarded by mutex_.
+  std::map<std::string, OpenUpload> open_;
+  int64_t quota_bytes_ = 0;
   const std::filesystem::path root_;
   std::function<int64_t()> clock_;
 };

@@ -106,7 +106,10 @@ Status SolveLinearStatic(const Problem& problem, PhaseClock* clock_ptr, Solution
   }
   clock.End();
 
-  auto solver = CreateLinearSolver(problem.linear_solver);
+  // PCG looks at the cancel flag every iteration (a direct factorisation cannot).
+  LinearSolverOptions linear_solver = problem.linear_solver;
+  linear_solver.cancel = clock.options().cancel;
+  auto solver = CreateLinearSolver(linear_solver);
   Eigen::VectorXd u_free;
   double residual = 0;
   if (dofs.num_free() > 0) {

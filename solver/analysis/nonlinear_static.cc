@@ -203,7 +203,10 @@ Status SolveFiniteStrain(const Problem& problem, PhaseClock* clock_ptr, Solution
       contacts.empty() ? nullptr : WithContact(*body, contact_views);
   const FiniteStrainModel& solid = touching ? *touching : *body;
 
-  auto solver = CreateLinearSolver(problem.linear_solver);
+  // PCG looks at the cancel flag every iteration (a direct factorisation cannot).
+  LinearSolverOptions linear_solver = problem.linear_solver;
+  linear_solver.cancel = clock.options().cancel;
+  auto solver = CreateLinearSolver(linear_solver);
   NewtonOptions options = OptionsOf(problem.nonlinear);
   // Time: the load factor is t / T and the loads follow a(t); a static
   // analysis is the ramp a = load factor with instantaneous steps.

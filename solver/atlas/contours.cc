@@ -9,6 +9,8 @@
 #include <cstdio>
 #include <string>
 
+#include "core/yaml_guard.h"
+
 namespace pba {
 namespace {
 
@@ -48,6 +50,10 @@ Status ParseContoursJson(std::string_view text, const std::string& field, Contou
   const auto fail = [&field](const std::string& where, const std::string& what) {
     return Status::InvalidArgument(field, "contours JSON: " + where + ": " + what);
   };
+  // JSON has no aliases, but the parser is YAML's: a contours file of
+  // nested aliases kept the server busy for minutes (yaml_guard.h).
+  const Status bounded = CheckYamlText(text, field);
+  if (!bounded.ok()) return Status::InvalidArgument(field, "contours JSON: " + bounded.message());
   YAML::Node root;
   try {
     root = YAML::Load(std::string(text));

@@ -380,6 +380,9 @@ Status MeshLabels(const LabelFunction& label, const std::vector<std::string>& re
                                    options.box_min_mm.z(), options.box_max_mm.x(),
                                    options.box_max_mm.y(), options.box_max_mm.z());
     CGAL::Random random(options.seed);
+    // CGAL's own default generator too (initial points, random shooting):
+    // the same inputs give the same mesh in every process.
+    CGAL::get_default_random() = CGAL::Random(options.seed);
     const Domain domain(function, box, options.relative_error_bound, CGAL::Null_subdomain_index(),
                         &random);
     const SizeField cell_size{options, options.cell_size_mm};

@@ -18,6 +18,7 @@
 #include <memory>
 #include <sstream>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "core/atomic_write.h"
@@ -32,17 +33,18 @@ bool EndsWith(const std::string& s, const std::string& suffix) {
          s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
 }
 
-// Converts `count` values of type T (file order, i fastest over dims n) to
-// labels, naming the first value that is not one.
+// Converts `count` values of type T (file order, i fastest over dims n),
+// the first of them voxel `first`, into (*labels)[first, first + count),
+// naming the first value that is not a label.
 template <typename T>
-Status ToLabels(const void* data, size_t count, const std::array<int, 3>& n,
+Status ToLabels(const void* data, size_t count, size_t first, const std::array<int, 3>& n,
                 const std::string& file, std::vector<uint16_t>* labels) {
-  labels->resize(count);
   const T* values = static_cast<const T*>(data);
-  for (size_t v = 0; v < count; ++v) {
-    const T value = values[v];
+  for (size_t c = 0; c < count; ++c) {
+    const T value = values[c];
     const double x = static_cast<double>(value);
     if (!(x >= 0 && x <= 65535 && std::floor(x) == x)) {
+      const size_t v = first + c;
       const size_t i = v % n[0], j = (v / n[0]) % n[1], k = v / n[0] / n[1];
       std::ostringstream text;
       text.precision(17);
@@ -52,10 +54,13 @@ Status ToLabels(const void* data, size_t count, const std::array<int, 3>& n,
                        "0..65535)",
                        text.str().c_str(), i, j, k));
     }
-    (*labels)[v] = static_cast<uint16_t>(x);
+    (*labels)[first + c] = static_cast<uint16_t>(x);
   }
   return Status::Ok();
 }
+
+using ToLabelsFunction = Status (*)(const void*, size_t, size_t, const std::array<int, 3>&,
+                                    const std::string&, std::vector<uint16_t>*);
 
 // The volume of file-order labels (dims n) whose index -> world (RAS, mm)
 // map is world = origin + m * (i, j, k): reordered into RAS with positive
@@ -113,6 +118,32 @@ Status AxisAlignedToVolume(const std::array<int, 3>& n, const Eigen::Matrix3d& m
   return Status::Ok();
 }
 
+constexpr size_t kReadPieceBytes = size_t{1} << 20;
+
+// Voxel counts past kMaxLabelVolumeVoxels refused before any allocation.
+Status CheckVoxelCount(const std::array<int, 3>& n, const std::string& file) {
+  const double voxels = static_cast<double>(n[0]) * n[1] * n[2];
+  if (voxels > static_cast<double>(kMaxLabelVolumeVoxels)) {
+    return Status::InvalidArgument(
+        file, Format("%d x %d x %d voxels: more than the %zu (512^3) a label volume may have", n[0],
+                     n[1], n[2], kMaxLabelVolumeVoxels));
+  }
+  return Status::Ok();
+}
+
+// Whether `compressed` bytes can inflate to `wanted`: deflate expands at
+// most 1032:1, so a header announcing more is a lie, refused before the
+// data are read.
+Status CheckInflatedSize(size_t wanted, uintmax_t compressed, const std::string& file) {
+  if (static_cast<double>(wanted) > kMaxGzipRatio * static_cast<double>(compressed)) {
+    return Status::InvalidArgument(
+        file, Format("the header describes %zu bytes of data, more than %g times the %ju "
+                     "bytes of the file (gzip cannot hold that much; truncated or forged)",
+                     wanted, kMaxGzipRatio, compressed));
+  }
+  return Status::Ok();
+}
+
 Status CheckVolume(const LabelVolume& volume) {
   if (volume.num_voxels() == 0) return Status::InvalidArgument("volume", "empty label volume");
   if (!(volume.spacing_mm().minCoeff() > 0) || !volume.spacing_mm().allFinite() ||
@@ -126,6 +157,10 @@ Status CheckVolume(const LabelVolume& volume) {
 
 struct NiftiFree {
   void operator()(nifti_image* nim) const { nifti_image_free(nim); }
+};
+
+struct ZnzClose {
+  void operator()(znzFile file) const { znzclose(file); }
 };
 
 }  // namespace
@@ -222,62 +257,85 @@ Status ReadNifti(const fs::path& file, LabelVolume* volume) {
     m.diagonal() << nim->dx * scale, nim->dy * scale, nim->dz * scale;
   }
   const std::array<int, 3> n = {nim->nx, nim->ny, nim->nz};
-  const size_t count = static_cast<size_t>(n[0]) * n[1] * n[2];
-  std::vector<uint8_t> bytes(count * static_cast<size_t>(std::max(nim->nbyper, 1)));
-  znzFile fp = znzopen(nim->iname, "rb", nifti_is_gzfile(nim->iname));
-  if (znz_isnull(fp)) return Status::Io("cannot open " + std::string(nim->iname));
-  size_t got = 0;
-  if (znzseek(fp, nim->iname_offset, SEEK_SET) >= 0)
-    got = znzread(bytes.data(), 1, bytes.size(), fp);
-  znzclose(fp);
-  if (got != bytes.size()) {
+  const size_t count = static_cast<size_t>(n[0]) * n[1] * n[2];  // dims are 16-bit: no overflow
+  PBA_RETURN_IF_ERROR(CheckVoxelCount(n, path));
+  const size_t want = count * static_cast<size_t>(std::max(nim->nbyper, 1));
+  const bool gzipped = nifti_is_gzfile(nim->iname) != 0;
+  const uintmax_t file_bytes = fs::file_size(nim->iname, ec);
+  if (ec) return Status::Io("cannot read the size of " + std::string(nim->iname));
+  // Checked against the bytes present before anything is allocated: a
+  // 352-byte header can announce gigabytes.
+  const size_t offset = static_cast<size_t>(std::max<int64_t>(nim->iname_offset, 0));
+  if (!gzipped && file_bytes < offset + want) {
     return Status::InvalidArgument(
-        path, Format("data holds %zu of the %zu bytes the header describes (truncated)", got,
-                     bytes.size()));
+        path,
+        Format("data holds %zu of the %zu bytes the header describes (truncated)",
+               file_bytes > offset ? static_cast<size_t>(file_bytes - offset) : size_t{0}, want));
   }
-  if (nim->swapsize > 1 && nim->byteorder != nifti_short_order()) {
-    nifti_swap_Nbytes(count, nim->swapsize, bytes.data());
-  }
-  const void* data = bytes.data();
-  std::vector<uint16_t> labels;
-  Status converted;
+  PBA_RETURN_IF_ERROR(CheckInflatedSize(want + offset, file_bytes, path));
+  ToLabelsFunction convert = nullptr;
   switch (nim->datatype) {
     case DT_UINT8:
-      converted = ToLabels<uint8_t>(data, count, n, path, &labels);
+      convert = ToLabels<uint8_t>;
       break;
     case DT_INT8:
-      converted = ToLabels<int8_t>(data, count, n, path, &labels);
+      convert = ToLabels<int8_t>;
       break;
     case DT_INT16:
-      converted = ToLabels<int16_t>(data, count, n, path, &labels);
+      convert = ToLabels<int16_t>;
       break;
     case DT_UINT16:
-      converted = ToLabels<uint16_t>(data, count, n, path, &labels);
+      convert = ToLabels<uint16_t>;
       break;
     case DT_INT32:
-      converted = ToLabels<int32_t>(data, count, n, path, &labels);
+      convert = ToLabels<int32_t>;
       break;
     case DT_UINT32:
-      converted = ToLabels<uint32_t>(data, count, n, path, &labels);
+      convert = ToLabels<uint32_t>;
       break;
     case DT_INT64:
-      converted = ToLabels<int64_t>(data, count, n, path, &labels);
+      convert = ToLabels<int64_t>;
       break;
     case DT_UINT64:
-      converted = ToLabels<uint64_t>(data, count, n, path, &labels);
+      convert = ToLabels<uint64_t>;
       break;
     case DT_FLOAT32:
-      converted = ToLabels<float>(data, count, n, path, &labels);
+      convert = ToLabels<float>;
       break;
     case DT_FLOAT64:
-      converted = ToLabels<double>(data, count, n, path, &labels);
+      convert = ToLabels<double>;
       break;
     default:
       return Status::InvalidArgument(path,
                                      Format("datatype %d (%s) cannot hold labels", nim->datatype,
                                             nifti_datatype_string(nim->datatype)));
   }
-  PBA_RETURN_IF_ERROR(converted);
+  const size_t value_bytes = static_cast<size_t>(std::max(nim->nbyper, 1));
+  std::unique_ptr<znzptr, ZnzClose> fp(znzopen(nim->iname, "rb", gzipped));
+  if (znz_isnull(fp.get())) return Status::Io("cannot open " + std::string(nim->iname));
+  // Read and converted in pieces: memory holds the labels and one piece of
+  // the file's values, whatever their type.
+  std::vector<uint16_t> labels(count);
+  std::vector<uint8_t> piece(std::min(want, kReadPieceBytes / value_bytes * value_bytes));
+  size_t done = 0;  // bytes
+  if (znzseek(fp.get(), nim->iname_offset, SEEK_SET) >= 0) {
+    while (done < want) {
+      const size_t size = std::min(want - done, piece.size());
+      const size_t got = znzread(piece.data(), 1, size, fp.get());
+      const size_t values = got / value_bytes;
+      if (nim->swapsize > 1 && nim->byteorder != nifti_short_order()) {
+        nifti_swap_Nbytes(values, nim->swapsize, piece.data());
+      }
+      PBA_RETURN_IF_ERROR(convert(piece.data(), values, done / value_bytes, n, path, &labels));
+      done += got;
+      if (got < size) break;
+    }
+  }
+  if (done != want) {
+    return Status::InvalidArgument(
+        path,
+        Format("data holds %zu of the %zu bytes the header describes (truncated)", done, want));
+  }
   return AxisAlignedToVolume(n, m, origin, labels, path, volume);
 }
 
@@ -350,21 +408,33 @@ int NrrdTypeSize(const std::string& type, bool* is_signed) {
   return it->second.first;
 }
 
-// Inflates gzip (or zlib) data into exactly out->size() bytes.
-Status Inflate(const std::string& in, std::vector<uint8_t>* out, const std::string& file) {
+// Inflates gzip (or zlib) data into exactly `want` bytes, in pieces, so
+// that memory grows with the data actually there; more data than `want`
+// are ignored.
+Status Inflate(std::string_view in, size_t want, std::vector<uint8_t>* out,
+               const std::string& file) {
+  PBA_RETURN_IF_ERROR(CheckInflatedSize(want, in.size(), file));
   z_stream z{};
   if (inflateInit2(&z, 15 + 32) != Z_OK) return Status::Internal("inflateInit2 failed");
   z.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(in.data()));
-  z.avail_in = static_cast<uInt>(in.size());
-  z.next_out = out->data();
-  z.avail_out = static_cast<uInt>(out->size());
-  const int rc = inflate(&z, Z_FINISH);
-  const size_t produced = out->size() - z.avail_out;
+  z.avail_in = static_cast<uInt>(std::min<size_t>(in.size(), UINT32_MAX));
+  out->clear();
+  int rc = Z_OK;
+  while (out->size() < want && rc == Z_OK) {
+    const size_t old = out->size();
+    const size_t piece = std::min(want - old, kReadPieceBytes);
+    out->resize(old + piece);
+    z.next_out = out->data() + old;
+    z.avail_out = static_cast<uInt>(piece);
+    rc = inflate(&z, Z_NO_FLUSH);
+    out->resize(old + piece - z.avail_out);
+    if (rc == Z_BUF_ERROR && z.avail_out == 0) rc = Z_OK;  // only the piece was full
+  }
   inflateEnd(&z);
-  if (produced < out->size()) {
+  if (out->size() < want) {
     return Status::InvalidArgument(
-        file, Format("gzip data holds %zu of the %zu bytes the header describes (%s)", produced,
-                     out->size(), rc == Z_DATA_ERROR ? "corrupt" : "truncated"));
+        file, Format("gzip data holds %zu of the %zu bytes the header describes (%s)", out->size(),
+                     want, rc == Z_DATA_ERROR ? "corrupt" : "truncated"));
   }
   return Status::Ok();
 }
@@ -510,37 +580,38 @@ Status ReadNrrd(const fs::path& file, LabelVolume* volume) {
     }
   }
 
+  // Checked against the bytes present before anything is allocated.
+  PBA_RETURN_IF_ERROR(CheckVoxelCount(n, path));
   const size_t count = static_cast<size_t>(n[0]) * n[1] * n[2];
-  if (count > static_cast<size_t>(std::numeric_limits<int32_t>::max())) {
-    return bad("over 2^31 voxels");
-  }
-  std::vector<uint8_t> raw(count * bytes);
+  const size_t want = count * bytes;
+  const std::string_view data = std::string_view(text).substr(data_start);
+  std::vector<uint8_t> raw;
   if (encoding == "raw") {
-    if (text.size() - data_start < raw.size()) {
+    if (data.size() < want) {
       return bad(Format("data holds %zu of the %zu bytes the header describes (truncated)",
-                        text.size() - data_start, raw.size()));
+                        data.size(), want));
     }
-    std::memcpy(raw.data(), text.data() + data_start, raw.size());
+    raw.assign(data.begin(), data.begin() + want);
   } else {
-    PBA_RETURN_IF_ERROR(Inflate(text.substr(data_start), &raw, path));
+    PBA_RETURN_IF_ERROR(Inflate(data, want, &raw, path));
   }
   // To host order (little-endian hosts only: checked at compile time).
   static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "NRRD reader assumes little-endian");
   if (endian == "big" && bytes > 1) {
     for (size_t v = 0; v < count; ++v) std::reverse(&raw[v * bytes], &raw[v * bytes] + bytes);
   }
-  std::vector<uint16_t> labels;
+  std::vector<uint16_t> labels(count);
   Status converted;
   const void* d = raw.data();
   if (bytes == 1) {
-    converted = is_signed ? ToLabels<int8_t>(d, count, n, path, &labels)
-                          : ToLabels<uint8_t>(d, count, n, path, &labels);
+    converted = is_signed ? ToLabels<int8_t>(d, count, 0, n, path, &labels)
+                          : ToLabels<uint8_t>(d, count, 0, n, path, &labels);
   } else if (bytes == 2) {
-    converted = is_signed ? ToLabels<int16_t>(d, count, n, path, &labels)
-                          : ToLabels<uint16_t>(d, count, n, path, &labels);
+    converted = is_signed ? ToLabels<int16_t>(d, count, 0, n, path, &labels)
+                          : ToLabels<uint16_t>(d, count, 0, n, path, &labels);
   } else {
-    converted = is_signed ? ToLabels<int32_t>(d, count, n, path, &labels)
-                          : ToLabels<uint32_t>(d, count, n, path, &labels);
+    converted = is_signed ? ToLabels<int32_t>(d, count, 0, n, path, &labels)
+                          : ToLabels<uint32_t>(d, count, 0, n, path, &labels);
   }
   PBA_RETURN_IF_ERROR(converted);
   return AxisAlignedToVolume(n, m, origin, labels, path, volume);

@@ -30,6 +30,17 @@
 
 namespace pba {
 
+// Bounds the readers check a header against before allocating anything for
+// its data, so that a small hostile file cannot cost gigabytes: at most
+// kMaxLabelVolumeVoxels voxels (512^3, a 0.5 mm grid over a 256 mm cube);
+// the data must be present in the file (a raw file at least as long as the
+// header says, read in pieces so memory follows the bytes actually there);
+// gzip data may announce at most kMaxGzipRatio times the compressed size
+// (deflate cannot expand more than 1032:1) and are inflated in pieces, never
+// past what the header announces.
+inline constexpr size_t kMaxLabelVolumeVoxels = size_t{1} << 27;
+inline constexpr double kMaxGzipRatio = 1100;
+
 // NIfTI-1 through the NIfTI reference library (nifti1_io, Debian
 // libnifti2-dev, with znzlib for gzip). A name ending in ".nii.gz" is
 // written gzip-compressed, ".nii" plain; anything else is an error.

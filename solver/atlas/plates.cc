@@ -13,6 +13,7 @@
 #include "atlas/png_io.h"
 #include "core/atomic_write.h"
 #include "core/format.h"
+#include "core/yaml_guard.h"
 
 namespace pba {
 namespace fs = std::filesystem;
@@ -124,8 +125,11 @@ Status ReadIndex(const fs::path& dir, PlateStack* stack, std::string* colour_fil
   const auto bad = [](const std::string& field, const std::string& what) {
     return Status::InvalidArgument(std::string(kIndexFile) + ":" + field, what);
   };
+  // Aliases refused and the size capped before loading (core/yaml_guard.h).
+  std::string text;
+  PBA_RETURN_IF_ERROR(ReadYamlFileText(path, kIndexFile, &text));
   try {
-    const YAML::Node root = YAML::LoadFile(path.string());
+    const YAML::Node root = YAML::Load(text);
     if (!root.IsMap()) return bad("", "not a JSON object");
     if (!root["format"] || root["format"].as<std::string>() != kFormat) {
       return bad("format", std::string("expected \"") + kFormat + "\"");

@@ -20,6 +20,7 @@
 #include "core/atomic_write.h"
 #include "core/format.h"
 #include "core/sha256.h"
+#include "core/yaml_guard.h"
 #include "io/surface_io.h"
 
 namespace pba {
@@ -559,8 +560,12 @@ Status ReadStructureSet(const fs::path& dir, StructureSet* set) {
     return Status::InvalidArgument(field, what);
   };
   StructureSet result;
+  // Aliases refused and the size capped before loading (core/yaml_guard.h):
+  // a set may come from anyone, and its manifest is walked entry by entry.
+  std::string text;
+  PBA_RETURN_IF_ERROR(ReadYamlFileText(path, kStructureSetManifest, &text));
   try {
-    const YAML::Node root = YAML::LoadFile(path.string());
+    const YAML::Node root = YAML::Load(text);
     if (!root.IsMap()) return bad("manifest.json", "not a JSON object");
     if (root["format"] && root["format"].as<std::string>() != kManifestFormat) {
       return bad("format", std::string("expected \"") + kManifestFormat + "\"");
@@ -577,7 +582,7 @@ Status ReadStructureSet(const fs::path& dir, StructureSet* set) {
       return bad("structures", "expected a non-empty list of structures");
     }
     std::set<std::string> names;
-    std::set<std::array<uint8_t, 3>> colours;
+    std::map<std::array<uint8_t, 3>, std::string> colours;  // -> the structure that has it
     for (size_t i = 0; i < structures.size(); ++i) {
       const YAML::Node s = structures[i];
       const std::string at = Format("structures[%d]", static_cast<int>(i));
@@ -599,6 +604,9 @@ Status ReadStructureSet(const fs::path& dir, StructureSet* set) {
       if (!SafeFileName(e.file)) {
         return bad(at + ".file", who + "'" + e.file + "' is not a plain file name");
       }
+      if (e.file == kStructureSetManifest) {
+        return bad(at + ".file", who + "'" + e.file + "' is the manifest, not a structure's file");
+      }
       if (!fs::is_regular_file(dir / e.file, ec)) {
         return bad(at + ".file", who + "no file '" + e.file + "' in the set's directory");
       }
@@ -615,8 +623,11 @@ Status ReadStructureSet(const fs::path& dir, StructureSet* set) {
       if (rgb[0] == 0 && rgb[1] == 0 && rgb[2] == 0) {
         return bad(at + ".colour", who + "black (0,0,0) is the background's colour");
       }
-      if (!colours.insert({rgb[0], rgb[1], rgb[2]}).second) {
-        return bad(at + ".colour", who + "colour " + colour + " is another structure's too");
+      if (const auto [it, first] =
+              colours.emplace(std::array<uint8_t, 3>{rgb[0], rgb[1], rgb[2]}, e.name);
+          !first) {
+        return bad(at + ".colour", who + "colour " + colour + " is taken by structure '" +
+                                       it->second + "' (each needs a colour of its own)");
       }
       e.r = rgb[0];
       e.g = rgb[1];
@@ -647,7 +658,26 @@ Status ReadStructureSet(const fs::path& dir, StructureSet* set) {
   return Status::Ok();
 }
 
+std::string StructureFileNames::Take(const std::string& stem, const std::string& extension) {
+  for (int n = 1;; ++n) {
+    const std::string candidate = (n == 1 ? stem : stem + "_" + std::to_string(n)) + extension;
+    std::string folded = candidate;
+    for (char& c : folded) {
+      if (c >= 'A' && c <= 'Z') c = static_cast<char>(c - 'A' + 'a');
+    }
+    if (taken_.insert(folded).second) return candidate;
+  }
+}
+
 Status WriteStructureSet(const StructureSet& set, const fs::path& dir) {
+  for (size_t i = 0; i < set.structures.size(); ++i) {
+    const StructureEntry& e = set.structures[i];
+    if (e.file == kStructureSetManifest) {
+      return Status::InvalidArgument(
+          Format("structures[%d].file", static_cast<int>(i)),
+          "structure '" + e.name + "': its file would be overwritten by the manifest");
+    }
+  }
   std::string out = std::string("{\"format\": \"") + kManifestFormat + "\", \"version\": 1";
   if (!set.project.empty()) out += ", \"project\": " + JsonQuoted(set.project);
   if (set.snapshot != 0)

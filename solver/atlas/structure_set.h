@@ -24,6 +24,7 @@
 #include <filesystem>
 #include <map>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -60,17 +61,35 @@ struct StructureSet {
 
 inline constexpr char kStructureSetManifest[] = "manifest.json";
 
+// Hands out the file names of a set's structures, for whoever writes a set
+// (a job's staging of a snapshot, an export, a split): never the
+// manifest's own name (a structure named "manifest" would otherwise be
+// overwritten by the manifest, and its SHA-256 then fail), and never two
+// names that differ only in ASCII case (one file on macOS and Windows).
+// The manifest names each structure's file, so readers never derive it.
+class StructureFileNames {
+ public:
+  // `stem` + `extension` when that is free, else `stem` + "_2" +
+  // `extension`, "_3", ...: "manifest" + ".json" -> "manifest_2.json".
+  std::string Take(const std::string& stem, const std::string& extension);
+
+ private:
+  std::set<std::string> taken_{kStructureSetManifest};  // case-folded
+};
+
 // Whether `dir` is a directory holding a manifest.json.
 bool IsStructureSetDir(const std::filesystem::path& dir);
 
 // Reads and checks manifest.json: at least one structure; names unique and
-// well formed; colours unique and not black; files present (and matching
-// their sha256 when given). Errors are kInvalidArgument naming the entry,
-// e.g. field "structures[3].colour", or kIo for an unreadable file.
+// well formed; files plain names, present, not manifest.json itself (and
+// matching their sha256 when given); colours unique and not black. Errors are kInvalidArgument
+// naming the entry, e.g. field "structures[3].colour", or kIo for an unreadable file.
 Status ReadStructureSet(const std::filesystem::path& dir, StructureSet* set);
 
 // Writes manifest.json into `dir` atomically (the structures' files are the
-// caller's and must be there already).
+// caller's and must be there already). A structure whose file is
+// manifest.json is refused (kInvalidArgument naming it): the manifest would
+// overwrite it.
 Status WriteStructureSet(const StructureSet& set, const std::filesystem::path& dir);
 
 struct ComposeOptions {

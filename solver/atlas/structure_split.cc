@@ -8,7 +8,6 @@
 #include <fstream>
 #include <iterator>
 #include <limits>
-#include <set>
 #include <sstream>
 
 #include "atlas/contours.h"
@@ -64,30 +63,19 @@ std::string FileStem(const std::string& name) {
   return stem;
 }
 
-// Hands out file names unique regardless of case (macOS and Windows
-// file systems fold it): "Name.json", then "Name_2.json", ...
-class FileNames {
- public:
-  Status Take(const std::string& name, const std::string& extension, std::string* file) {
-    const std::string stem = FileStem(name);
-    if (stem.empty()) {
-      return Status::InvalidArgument(
-          "structures", "structure \"" + name + "\" gives no file name (nothing but dots)");
-    }
-    for (int n = 1;; ++n) {
-      const std::string candidate = (n == 1 ? stem : stem + "_" + std::to_string(n)) + extension;
-      std::string folded = candidate;
-      for (char& ch : folded) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
-      if (taken_.insert(folded).second) {
-        *file = candidate;
-        return Status::Ok();
-      }
-    }
+// A structure's file: its stem (FileStem) given out by StructureFileNames,
+// the rule every writer of a structure set follows (never the manifest's
+// name, never two names differing only in case).
+Status TakeFileName(const std::string& name, const std::string& extension,
+                    StructureFileNames* names, std::string* file) {
+  const std::string stem = FileStem(name);
+  if (stem.empty()) {
+    return Status::InvalidArgument(
+        "structures", "structure \"" + name + "\" gives no file name (nothing but dots)");
   }
-
- private:
-  std::set<std::string> taken_;
-};
+  *file = names->Take(stem, extension);
+  return Status::Ok();
+}
 
 // The manifest refuses these in a name (structure_set.h); refusing them
 // here names the structure before anything is written for it.
@@ -124,7 +112,7 @@ Status SplitPlates(const PlateStack& stack, const std::vector<std::string>& stru
   }
   std::vector<const ColourEntry*> chosen;
   PBA_RETURN_IF_ERROR(ChooseEntries(structures, stack.colours, present, &chosen));
-  FileNames names;
+  StructureFileNames names;
   for (const ColourEntry* colour : chosen) {
     if (!present[colour->label]) {
       result->absent.push_back(colour->name);
@@ -132,7 +120,7 @@ Status SplitPlates(const PlateStack& stack, const std::vector<std::string>& stru
     }
     PBA_RETURN_IF_ERROR(CheckStructureName(colour->name));
     std::string file;
-    PBA_RETURN_IF_ERROR(names.Take(colour->name, ".json", &file));
+    PBA_RETURN_IF_ERROR(TakeFileName(colour->name, ".json", &names, &file));
     const Contours contours = TraceContours(stack, colour->label);
     PBA_RETURN_IF_ERROR(AtomicWriteText(dir / file, FormatContoursJson(contours)));
     result->set.structures.push_back(EntryFor(*colour, file, StructureFormat::kContours));
@@ -171,7 +159,7 @@ Status SplitVolume(const LabelVolume& volume, const ColourTable& colours,
   }
   std::vector<const ColourEntry*> chosen;
   PBA_RETURN_IF_ERROR(ChooseEntries(structures, colours, present, &chosen));
-  FileNames names;
+  StructureFileNames names;
   for (const ColourEntry* colour : chosen) {
     if (!present[colour->label]) {
       result->absent.push_back(colour->name);
@@ -179,7 +167,7 @@ Status SplitVolume(const LabelVolume& volume, const ColourTable& colours,
     }
     PBA_RETURN_IF_ERROR(CheckStructureName(colour->name));
     std::string file;
-    PBA_RETURN_IF_ERROR(names.Take(colour->name, ".nii.gz", &file));
+    PBA_RETURN_IF_ERROR(TakeFileName(colour->name, ".nii.gz", &names, &file));
     const std::array<int, 6>& b = box[colour->label];
     const std::array<int, 3> first = {b[0] - 1, b[1] - 1, b[2] - 1};
     const std::array<int, 3> dims = {b[3] - b[0] + 3, b[4] - b[1] + 3, b[5] - b[2] + 3};

@@ -9,8 +9,9 @@
 // Colours and names come from the colour table. Structures with no pixel
 // or voxel are left out and listed in `absent`. <name> is the structure's
 // name with every character other than [A-Za-z0-9._-] made '_' and leading
-// dots dropped, made unique regardless of case with "_2", "_3", ...; a name
-// of nothing but dots is refused.
+// dots dropped, made unique regardless of case with "_2", "_3", ... and
+// never the manifest's name (StructureFileNames: a structure "manifest"
+// from plates is manifest_2.json); a name of nothing but dots is refused.
 #pragma once
 
 #include <filesystem>

@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <string>
 
@@ -27,15 +29,11 @@ void WriteIdList(std::ofstream& out, const std::vector<int>& nodes) {
   }
 }
 
-// Data lines of at most 8 values. CalculiX reads every number in a field of
-// at most 20 characters, so the deck writes 13 significant digits (at most
-// 19 characters, e.g. -1.224646799147e-18).
+// Data lines of at most 8 values, each at most kAbaqusFieldWidth characters.
 std::string DataLines(const std::vector<double>& values) {
   std::string text;
-  char number[32];
   for (std::size_t i = 0; i < values.size(); ++i) {
-    std::snprintf(number, sizeof number, "%.13g", values[i]);
-    text += number;
+    text += AbaqusNumber(values[i]);
     text += (i % 8 == 7 || i + 1 == values.size()) ? "\n" : ", ";
   }
   return text;
@@ -99,20 +97,35 @@ std::string MaterialCards(const MaterialSpec& m) {
 
 }  // namespace
 
+std::string AbaqusNumber(double value) {
+  char text[40];
+  // 15 digits give back most numbers a person typed (and %g drops trailing
+  // zeros: 0.45); computed ones may need 16 or 17.
+  int digits = 15;
+  for (; digits < 17; ++digits) {
+    std::snprintf(text, sizeof text, "%.*g", digits, value);
+    if (std::strtod(text, nullptr) == value) break;
+  }
+  for (; digits > 1; --digits) {
+    std::snprintf(text, sizeof text, "%.*g", digits, value);
+    if (std::strlen(text) <= static_cast<std::size_t>(kAbaqusFieldWidth)) return text;
+  }
+  std::snprintf(text, sizeof text, "%.1g", value);
+  return text;
+}
+
 Status WriteAbaqusDeck(const Problem& problem, const std::filesystem::path& file) {
   const Model& model = problem.model;
   const Mesh& mesh = model.mesh;
   std::ofstream out(file, std::ios::trunc);
   if (!out) return Status::Io("cannot write " + file.string());
-  char line[160];
   out << "** PBA " << SolverVersion() << " model of scene '" << problem.name << "'\n"
       << "** Units: m, N, Pa. Node and element numbers are PBA's indices + 1.\n"
       << "*HEADING\n"
       << (problem.name.empty() ? "pba model" : problem.name) << "\n*NODE, NSET=NALL\n";
   for (int i = 0; i < mesh.num_nodes(); ++i) {
-    std::snprintf(line, sizeof line, "%d, %.13g, %.13g, %.13g\n", i + 1, mesh.nodes(i, 0),
-                  mesh.nodes(i, 1), mesh.nodes(i, 2));
-    out << line;
+    out << i + 1 << ", " << AbaqusNumber(mesh.nodes(i, 0)) << ", " << AbaqusNumber(mesh.nodes(i, 1))
+        << ", " << AbaqusNumber(mesh.nodes(i, 2)) << "\n";
   }
   if (problem.element == ElementType::kTet10Md) {
     out << "** PBA solves this scene with TET10_MD (10-node, mean dilatation); CalculiX has no\n"
@@ -186,13 +199,13 @@ Status WriteAbaqusDeck(const Problem& problem, const std::filesystem::path& file
     // Geometric nonlinearity, automatic incrementation from the same first
     // increment PBA takes.
     const int increments = problem.nonlinear.increments;
-    std::snprintf(line, sizeof line, "%.13g, 1.0, 1e-5, %.13g\n", 1.0 / increments,
-                  std::max(0.5, 1.0 / increments));
+    const std::string first_and_largest = AbaqusNumber(1.0 / increments) + ", 1.0, 1e-5, " +
+                                          AbaqusNumber(std::max(0.5, 1.0 / increments)) + "\n";
     // Field convergence controls as tight as PBA's own (relative residual
     // and correction 1e-8 instead of 5e-3 and 1e-2), so both codes answer
     // the same discrete problem to the same precision.
     out << "*STEP, NLGEOM, INC=10000\n*STATIC\n"
-        << line << "*CONTROLS, PARAMETERS=FIELD\n1e-8, 1e-8\n*BOUNDARY\n";
+        << first_and_largest << "*CONTROLS, PARAMETERS=FIELD\n1e-8, 1e-8\n*BOUNDARY\n";
   } else {
     out << "*STEP\n*STATIC\n*BOUNDARY\n";
   }
@@ -200,9 +213,8 @@ Status WriteAbaqusDeck(const Problem& problem, const std::filesystem::path& file
   // conditions that overlap on shared edges.
   for (int dof = 0; dof < model.dofs.num_dofs(); ++dof) {
     if (!model.dofs.prescribed(dof)) continue;
-    std::snprintf(line, sizeof line, "%d, %d, %d, %.13g\n", dof / 3 + 1, dof % 3 + 1, dof % 3 + 1,
-                  model.dofs.prescribed_value(dof));
-    out << line;
+    out << dof / 3 + 1 << ", " << dof % 3 + 1 << ", " << dof % 3 + 1 << ", "
+        << AbaqusNumber(model.dofs.prescribed_value(dof)) << "\n";
   }
   // Pressure on element faces (C3D4 and C3D10 faces alike, by their corners:
   // S1 = 1-2-3, S2 = 1-4-2, S3 = 2-4-3, S4 = 3-4-1, i.e. the face opposite
@@ -219,16 +231,14 @@ Status WriteAbaqusDeck(const Problem& problem, const std::filesystem::path& file
       // C3D8 faces S1..S6 (mesh.h, kHex8Faces).
       for (const auto& [element, face] : QuadFaceElements(mesh, set)) {
         if (element < 0) continue;
-        std::snprintf(line, sizeof line, "%d, P%d, %.13g\n", element + 1, face + 1, bc.pressure_pa);
-        out << line;
+        out << element + 1 << ", P" << face + 1 << ", " << AbaqusNumber(bc.pressure_pa) << "\n";
       }
       continue;
     }
     for (const auto& [element, corner] : FaceElements(mesh, set)) {
       if (element < 0) continue;
-      std::snprintf(line, sizeof line, "%d, P%d, %.13g\n", element + 1, kFaceOpposite[corner],
-                    bc.pressure_pa);
-      out << line;
+      out << element + 1 << ", P" << kFaceOpposite[corner] << ", " << AbaqusNumber(bc.pressure_pa)
+          << "\n";
     }
   }
   // Tractions and gravity as the nodal forces PBA turns them into (exact for
@@ -241,8 +251,7 @@ Status WriteAbaqusDeck(const Problem& problem, const std::filesystem::path& file
     if (f == 0) continue;
     if (!cload) out << "*CLOAD\n";
     cload = true;
-    std::snprintf(line, sizeof line, "%d, %d, %.13g\n", dof / 3 + 1, dof % 3 + 1, f);
-    out << line;
+    out << dof / 3 + 1 << ", " << dof % 3 + 1 << ", " << AbaqusNumber(f) << "\n";
   }
   for (const auto& name : problem.outputs.reaction_sets) {
     out << "*NODE PRINT, NSET=" << Upper(name) << ", TOTALS=ONLY\nRF\n";

@@ -59,6 +59,35 @@ class H5Writer {
     ok_ = ok_ && group.ok();
   }
 
+  // A virtual dataset `name` (HDF5 1.10 VDS: a view, no copy) of rows
+  // [first_row, first_row + rows) and columns [first_col, first_col + cols)
+  // of the rows_total x cols_total double dataset `source` of this file
+  // (written before): 1-D of `rows` values when cols is 1, else rows x cols.
+  // For XDMF readers that take a plain DataItem but no HyperSlab (ParaView's
+  // XDMF 3 reader, meshio).
+  void View(const std::string& name, const std::string& source, hsize_t rows_total,
+            hsize_t cols_total, hsize_t first_row, hsize_t rows, hsize_t first_col, hsize_t cols,
+            const std::string& unit, const std::string& components = "") {
+    if (!ok()) return;
+    const hsize_t view_dims[2] = {rows, cols}, source_dims[2] = {rows_total, cols_total};
+    const hsize_t start[2] = {first_row, first_col};
+    Handle view_space(H5Screate_simple(cols == 1 ? 1 : 2, view_dims, nullptr), H5Sclose);
+    Handle source_space(H5Screate_simple(2, source_dims, nullptr), H5Sclose);
+    Handle properties(H5Pcreate(H5P_DATASET_CREATE), H5Pclose);
+    ok_ = view_space.ok() && source_space.ok() && properties.ok() &&
+          H5Sselect_hyperslab(source_space.get(), H5S_SELECT_SET, start, nullptr, view_dims,
+                              nullptr) >= 0 &&
+          // "." : the source is in this same file, wherever it is moved.
+          H5Pset_virtual(properties.get(), view_space.get(), ".", source.c_str(),
+                         source_space.get()) >= 0;
+    if (!ok_) return;
+    Handle dataset(H5Dcreate2(file_.get(), name.c_str(), H5T_IEEE_F64LE, view_space.get(),
+                              H5P_DEFAULT, properties.get(), H5P_DEFAULT),
+                   H5Dclose);
+    ok_ = dataset.ok() && WriteStringAttribute(dataset.get(), "unit", unit) &&
+          (components.empty() || WriteStringAttribute(dataset.get(), "components", components));
+  }
+
   // Writes rows x cols (cols = 0: a 1-D dataset of `rows`) from `data`.
   template <typename T>
   void Dataset(const std::string& name, const std::vector<T>& data, hsize_t cols,

@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "io/abaqus_writer.h"
 #include "io/mesh_export_formats.h"
 
 namespace pba::mesh_export {
@@ -62,10 +63,13 @@ std::string AbaqusText(const Mesh& mesh, const MeshExportOptions& options) {
   for (size_t r = 0; r < names.size(); ++r) {
     x += "**   " + std::to_string(r) + ", " + elsets[r] + ", " + OneLine(names[r]) + "\n";
   }
+  // Coordinates in CalculiX's 20-character fields (AbaqusNumber): the
+  // 17 digits the other formats write would stop it reading *NODE.
   x += "*NODE, NSET=NALL\n";
   for (int i = 0; i < mesh.num_nodes(); ++i) {
-    x += std::to_string(i + 1) + ", " + Number(scale * mesh.nodes(i, 0)) + ", " +
-         Number(scale * mesh.nodes(i, 1)) + ", " + Number(scale * mesh.nodes(i, 2)) + "\n";
+    x += std::to_string(i + 1) + ", " + AbaqusNumber(scale * mesh.nodes(i, 0)) + ", " +
+         AbaqusNumber(scale * mesh.nodes(i, 1)) + ", " + AbaqusNumber(scale * mesh.nodes(i, 2)) +
+         "\n";
   }
   // C3D4, C3D10 and C3D8 take the mesh's own node orders (mesh.h).
   x += std::string("*ELEMENT, TYPE=") +

@@ -68,17 +68,20 @@ std::string XdmfText(const Mesh& mesh, const std::string& h5_name,
   std::string x = "<?xml version=\"1.0\" ?>\n";
   if (!options.title.empty()) x += "<!-- " + XmlComment(options.title) + " -->\n";
   x += std::string("<!-- PBA mesh export: coordinates in ") + Unit(options) +
-       "; cell attribute 'region' indexes the region Information elements. Open in ParaView. "
+       "; cell attribute 'region' indexes the names of the regions Information element. Open in "
+       "ParaView. "
        "-->\n<Xdmf Version=\"3.0\">\n  <Domain>\n    <Grid Name=\"mesh\" GridType=\"Uniform\">\n";
-  if (!options.title.empty()) {
-    x += "      <Information Name=\"title\" Value=\"" + XmlEscape(options.title) + "\" />\n";
-  }
-  x += std::string("      <Information Name=\"unit\" Value=\"") + Unit(options) + "\" />\n";
+  // The region names in one Information element whose text is meshio's
+  // field-data map (name -> index, dimension 3): meshio reads no other
+  // form, and ParaView's readers take it as well; title and unit are in the
+  // comments above.
   const std::vector<std::string> names = RegionNames(mesh);
+  x += "      <Information Name=\"regions\" Value=\"" + std::to_string(names.size()) +
+       "\"><![CDATA[<main>";
   for (size_t r = 0; r < names.size(); ++r) {
-    x += "      <Information Name=\"region " + std::to_string(r) + "\" Value=\"" +
-         XmlEscape(names[r]) + "\" />\n";
+    x += "<map key=\"" + XmlEscape(names[r]) + "\" dim=\"3\">" + std::to_string(r) + "</map>";
   }
+  x += "</main>]]></Information>\n";
   // NodesPerElement only for the quadratic cell, as in result.xdmf.
   x += std::string("      <Topology TopologyType=\"") + TopologyType(npe) +
        "\" NumberOfElements=\"" + ne + (npe == 10 ? "\" NodesPerElement=\"10" : "") +

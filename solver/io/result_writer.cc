@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <fstream>
 #include <string>
+#include <vector>
 
 #include "core/atomic_write.h"
 #include "io/h5_writer.h"
@@ -35,28 +36,40 @@ const char* ElementTypeName(int nodes_per_element) {
   return nodes_per_element == 10 ? "TET10" : nodes_per_element == 8 ? "HEX8" : "TET4";
 }
 
-// One column of an elements x 6 dataset as a scalar cell attribute.
-std::string ComponentAttribute(const std::string& name, const std::string& path, int column,
-                               size_t rows) {
-  const std::string n = std::to_string(rows);
-  return "      <Attribute Name=\"" + name +
-         "\" AttributeType=\"Scalar\" Center=\"Cell\">\n"
-         "        <DataItem ItemType=\"HyperSlab\" Dimensions=\"" +
-         n +
-         " 1\">\n"
-         "          <DataItem Dimensions=\"3 2\" Format=\"XML\">0 " +
-         std::to_string(column) + " 1 1 " + n + " 1</DataItem>\n          " + Item(n + " 6", path) +
-         "\n        </DataItem>\n      </Attribute>\n";
+// The per-component views of an elements x 6 dataset (ComponentView) and
+// of one step's displacement rows (StepView), so that every XDMF DataItem
+// names a whole dataset: ParaView's default XDMF 3 reader skips a HyperSlab
+// ("unrecognized array type") and meshio cannot read one.
+const char* const kComponents[6] = {"xx", "yy", "zz", "yz", "xz", "xy"};
+
+std::string ComponentView(const std::string& field, int column) {
+  return "/xdmf/" + field + "_" + kComponents[column];
 }
 
-// Rows [first, first + rows) of a rows_total x cols dataset.
-std::string RowSlab(const std::string& path, size_t first, size_t rows, size_t rows_total,
-                    int cols) {
-  const std::string n = std::to_string(rows), c = std::to_string(cols);
-  return "<DataItem ItemType=\"HyperSlab\" Dimensions=\"" + n + " " + c +
-         "\">\n          <DataItem Dimensions=\"3 2\" Format=\"XML\">" + std::to_string(first) +
-         " 0 1 1 " + n + " " + c + "</DataItem>\n          " +
-         Item(std::to_string(rows_total) + " " + c, path) + "\n        </DataItem>";
+std::string StepView(size_t step) { return "/xdmf/displacement_" + std::to_string(step + 1); }
+
+// One column of an elements x 6 dataset as a scalar cell attribute.
+std::string ComponentAttribute(const std::string& field, int column, size_t rows) {
+  return "      <Attribute Name=\"" + field + "_" + kComponents[column] +
+         "\" AttributeType=\"Scalar\" Center=\"Cell\">\n        " +
+         Item(std::to_string(rows), ComponentView(field, column)) + "\n      </Attribute>\n";
+}
+
+// The elements x 6 fields of /fields written for `outputs` (the finite-strain
+// ones from nonlinear analyses only), each with its six component views.
+std::vector<const char*> TensorFields(const OutputOptions& outputs, const Solution& s) {
+  const size_t values = 6 * (s.tets.size() / s.nodes_per_element);
+  const bool finite_strain = !s.jacobian.empty();
+  std::vector<const char*> fields;
+  if (outputs.stress && s.stress_pa.size() == values) fields.push_back("stress");
+  if (outputs.strain && s.strain.size() == values) fields.push_back("strain");
+  if (finite_strain && outputs.pk2_stress && s.pk2_stress_pa.size() == values) {
+    fields.push_back("pk2_stress");
+  }
+  if (finite_strain && outputs.almansi_strain && s.almansi_strain.size() == values) {
+    fields.push_back("almansi_strain");
+  }
+  return fields;
 }
 
 // The final fields as XDMF attributes of one grid.
@@ -78,21 +91,8 @@ std::string FieldAttributes(const OutputOptions& outputs, const Solution& s) {
          "    " +
          Item(ne, "/fields/error_indicator") + "\n      </Attribute>\n";
   }
-  static const char* kComponents[6] = {"xx", "yy", "zz", "yz", "xz", "xy"};
-  for (int c = 0; c < 6 && outputs.stress; ++c) {
-    x += ComponentAttribute(std::string("stress_") + kComponents[c], "/fields/stress", c, elements);
-  }
-  for (int c = 0; c < 6 && outputs.strain; ++c) {
-    x += ComponentAttribute(std::string("strain_") + kComponents[c], "/fields/strain", c, elements);
-  }
-  // Finite-strain fields (nonlinear analyses only).
-  for (int c = 0; c < 6 && outputs.pk2_stress && !s.pk2_stress_pa.empty(); ++c) {
-    x += ComponentAttribute(std::string("pk2_stress_") + kComponents[c], "/fields/pk2_stress", c,
-                            elements);
-  }
-  for (int c = 0; c < 6 && outputs.almansi_strain && !s.almansi_strain.empty(); ++c) {
-    x += ComponentAttribute(std::string("almansi_strain_") + kComponents[c],
-                            "/fields/almansi_strain", c, elements);
+  for (const char* field : TensorFields(outputs, s)) {
+    for (int c = 0; c < 6; ++c) x += ComponentAttribute(field, c, elements);
   }
   if (outputs.jacobian && !s.jacobian.empty()) {
     x += "      <Attribute Name=\"jacobian\" AttributeType=\"Scalar\" Center=\"Cell\">\n        " +
@@ -137,11 +137,10 @@ std::string XdmfText(const std::string& scene_name, const OutputOptions& outputs
            "\" GridType=\"Uniform\">\n      <Time Value=\"" + time + "\" />\n" + mesh;
       if (k + 1 == steps) {
         x += FieldAttributes(outputs, s);
-      } else if (outputs.displacement) {
+      } else if (outputs.displacement && s.step_displacement_mm.size() == 3 * steps * nodes) {
         x += "      <Attribute Name=\"displacement\" AttributeType=\"Vector\" Center=\"Node\">\n"
              "        " +
-             RowSlab("/steps/displacement", k * nodes, nodes, steps * nodes, 3) +
-             "\n      </Attribute>\n";
+             Item(nn + " 3", StepView(k)) + "\n      </Attribute>\n";
       }
       x += "    </Grid>\n";
     }
@@ -323,6 +322,25 @@ Status WriteResults(const std::string& scene_name, const OutputOptions& outputs,
       if (!solution->step_time_s.empty()) {
         w.Dataset("/steps/time", solution->step_time_s, 0, "s", "time of each step");
       }
+    }
+    // Views for result.xdmf (ComponentView, StepView).
+    const std::vector<const char*> tensors = TensorFields(outputs, *solution);
+    const size_t elements = solution->tets.size() / npe, nodes = solution->nodes_mm.size() / 3;
+    const size_t steps = solution->step_load_factor.size();
+    const bool step_views = steps > 1 && outputs.displacement &&
+                            solution->step_displacement_mm.size() == 3 * steps * nodes;
+    if (!tensors.empty() || step_views) w.Group("/xdmf");
+    for (const std::string field : tensors) {
+      const bool stress = field.find("stress") != std::string::npos;
+      for (int c = 0; c < 6; ++c) {
+        w.View(ComponentView(field, c), "/fields/" + field, elements, 6, 0, elements, c, 1,
+               stress ? "Pa" : "1",
+               std::string("column ") + kComponents[c] + " of /fields/" + field);
+      }
+    }
+    for (size_t k = 0; step_views && k + 1 < steps; ++k) {
+      w.View(StepView(k), "/steps/displacement", steps * nodes, 3, k * nodes, nodes, 0, 3, "mm",
+             "x y z; rows of increment " + std::to_string(k + 1) + " of /steps/displacement");
     }
     if (!w.ok()) return Status::Io("cannot write " + h5.string());
   }

@@ -162,14 +162,27 @@ Status ReadVtk(const std::string& f, std::string_view content, TriangleSurface* 
       in >> n >> size;
       for (int64_t i = 0; i < n; ++i) {
         int64_t k = 0;
-        if (!(in >> k) || k < 3) {
-          return Status::InvalidArgument(f, "VTK: a polygon needs three or more points");
+        if (!(in >> k)) {
+          return Status::InvalidArgument(f, "VTK: fewer POLYGONS than announced (" +
+                                                std::to_string(i) + " of " + std::to_string(n) +
+                                                ")");
         }
-        std::vector<int> face(static_cast<size_t>(k));
-        for (int& index : face) {
+        if (k < 3) return Status::InvalidArgument(f, "VTK: a polygon needs three or more points");
+        // The announced size is checked against what exists before it is
+        // used: a 125-byte file announcing a polygon of 2^28 points cost
+        // gigabytes when the polygon was allocated up front.
+        if (k > static_cast<int64_t>(surface->points.size())) {
+          return Status::InvalidArgument(f, "VTK: a polygon of " + std::to_string(k) +
+                                                " points, but the file has only " +
+                                                std::to_string(surface->points.size()) + " points");
+        }
+        std::vector<int> face;
+        for (int64_t j = 0; j < k; ++j) {
+          int index = 0;
           if (!(in >> index) || index < 0 || index >= static_cast<int>(surface->points.size())) {
             return Status::InvalidArgument(f, "VTK: a polygon names a point that does not exist");
           }
+          face.push_back(index);
         }
         for (size_t j = 1; j + 1 < face.size(); ++j) {
           surface->triangles.push_back({face[0], face[j], face[j + 1]});

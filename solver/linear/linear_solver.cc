@@ -19,7 +19,7 @@ std::unique_ptr<LinearSolver> CreateLinearSolver(const LinearSolverOptions& opti
     case LinearSolverOptions::Kind::kEigenLdlt:
       return CreateEigenLdltSolver();
     case LinearSolverOptions::Kind::kPcg:
-      return CreatePcgSolver();
+      return CreatePcgSolver(options.cancel);
     case LinearSolverOptions::Kind::kCholmod:
       break;
   }

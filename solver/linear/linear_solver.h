@@ -4,6 +4,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
+#include <atomic>
 #include <memory>
 #include <string>
 
@@ -32,6 +33,12 @@ struct LinearSolverOptions {
     kPcg,        // conjugate gradients with incomplete Cholesky (CreatePcgSolver)
   };
   Kind kind = Kind::kCholmod;
+  // Set by the caller to stop an iterative solve early (the analysis passes
+  // SolveOptions::cancel): PCG looks at it every iteration and its Solve
+  // returns Status::Cancelled. Direct factorisations cannot be interrupted:
+  // CHOLMOD's and Eigen's run to the end once started (seconds to minutes on
+  // a large mesh) and the flag is seen after them. Not owned; may be null.
+  const std::atomic<bool>* cancel = nullptr;
 
   // "CHOLMOD", "EIGEN_LDLT" or "PCG": the scene's name for the kind.
   const char* KindName() const;
@@ -48,7 +55,8 @@ std::unique_ptr<LinearSolver> CreateEigenLdltSolver();
 // iterations. Factorize computes the preconditioner (and keeps a copy of
 // `a`); Solve fails with Status::Numerical, naming the iterations and the
 // residual reached, when the true residual ends above 1e-8. After a solve,
-// Name() carries its iteration count and residual.
-std::unique_ptr<LinearSolver> CreatePcgSolver();
+// Name() carries its iteration count and residual. A set `*cancel` (may be
+// null) ends a solve within an iteration with Status::Cancelled.
+std::unique_ptr<LinearSolver> CreatePcgSolver(const std::atomic<bool>* cancel = nullptr);
 
 }  // namespace pba

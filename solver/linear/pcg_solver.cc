@@ -7,7 +7,9 @@
 // factor of a 3D mesh grows like n^(4/3).
 #include <Eigen/IterativeLinearSolvers>
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <limits>
 #include <memory>
 
 #include "core/format.h"
@@ -42,6 +44,8 @@ constexpr double kAcceptedResidual = 1e-8;
 
 class PcgSolver final : public LinearSolver {
  public:
+  explicit PcgSolver(const std::atomic<bool>* cancel) : cancel_(cancel) {}
+
   Status Factorize(const Eigen::SparseMatrix<double>& a) override {
     // Eigen's solver keeps a reference to the matrix it was given; Newton
     // reuses an older factorisation (a modified-Newton step) after its own
@@ -58,7 +62,7 @@ class PcgSolver final : public LinearSolver {
     // never coexist with them (Newton never refactorises the solver that
     // holds its last good factorisation).
     factorized_ = false;
-    cg_.reset();
+    preconditioner_.reset();
     lower_ = Eigen::SparseMatrix<double>();
     lower_ = a.triangularView<Eigen::Lower>();
     if (!Eigen::Map<const Eigen::VectorXd>(lower_.valuePtr(), lower_.nonZeros()).allFinite()) {
@@ -76,27 +80,24 @@ class PcgSolver final : public LinearSolver {
                    static_cast<long long>(i), diagonal(i)));
       }
     }
-    // The natural ordering needs no analysis (see Cg below).
-    cg_ = std::make_unique<Cg>();
-    cg_->analyzePattern(lower_);
-    cg_->factorize(lower_);
-    if (cg_->info() != Eigen::Success) {
+    // The natural ordering needs no analysis (see Preconditioner below).
+    preconditioner_ = std::make_unique<Preconditioner>();
+    preconditioner_->compute(lower_);
+    if (preconditioner_->info() != Eigen::Success) {
       return Status::Numerical(
           "the incomplete Cholesky preconditioner could not be computed even with a diagonal "
           "shift: the stiffness matrix is far from positive definite; try analysis.linear_solver "
           "CHOLMOD");
     }
-    cg_->setTolerance(kRelativeTolerance);
-    cg_->setMaxIterations(std::max<Eigen::Index>(
-        kMinIterations, kIterationsPerUnknown * static_cast<Eigen::Index>(lower_.rows())));
+    max_iterations_ = std::max<Eigen::Index>(
+        kMinIterations, kIterationsPerUnknown * static_cast<Eigen::Index>(lower_.rows()));
     factorized_ = true;
     return Status::Ok();
   }
 
   Status Solve(const Eigen::VectorXd& b, Eigen::VectorXd* x) override {
     if (!factorized_) return Status::Internal("PCG solve without a successful Factorize");
-    *x = cg_->solve(b);
-    iterations_ = static_cast<int>(cg_->iterations());
+    PBA_RETURN_IF_ERROR(Iterate(b, x));
     const double scale = b.norm();
     residual_ = x->allFinite() ? (b - lower_.selfadjointView<Eigen::Lower>() * *x).norm() /
                                      (scale > 0 ? scale : 1.0)
@@ -125,10 +126,46 @@ class PcgSolver final : public LinearSolver {
   }
 
   std::unique_ptr<LinearSolver> NewOfSameKind() const override {
-    return std::make_unique<PcgSolver>();
+    return std::make_unique<PcgSolver>(cancel_);
   }
 
  private:
+  // Preconditioned CG from x = 0 until ||r|| <= kRelativeTolerance ||b|| or
+  // max_iterations_, as Eigen's internal::conjugate_gradient (Saad,
+  // Iterative Methods for Sparse Linear Systems, algorithm 9.1) but written
+  // out so that a cancel is seen every iteration: a solve runs hundreds of
+  // iterations, minutes on a large mesh. Sets iterations_.
+  Status Iterate(const Eigen::VectorXd& b, Eigen::VectorXd* x) {
+    const auto a = lower_.selfadjointView<Eigen::Lower>();
+    x->setZero(b.size());
+    iterations_ = 0;
+    const double b_norm2 = b.squaredNorm();
+    if (b_norm2 == 0) return Status::Ok();
+    const double threshold = std::max(kRelativeTolerance * kRelativeTolerance * b_norm2,
+                                      std::numeric_limits<double>::min());
+    Eigen::VectorXd r = b;
+    Eigen::VectorXd p = preconditioner_->solve(r);
+    Eigen::VectorXd z(b.size()), ap(b.size());
+    double rz = r.dot(p);
+    for (Eigen::Index i = 0; i < max_iterations_; ++i) {
+      if (cancel_ != nullptr && cancel_->load(std::memory_order_relaxed)) {
+        return Status::Cancelled(Format("cancelled during conjugate gradients (iteration %lld)",
+                                        static_cast<long long>(i)));
+      }
+      ap.noalias() = a * p;
+      const double alpha = rz / p.dot(ap);
+      *x += alpha * p;
+      r -= alpha * ap;
+      iterations_ = static_cast<int>(i + 1);
+      if (r.squaredNorm() < threshold) break;
+      z = preconditioner_->solve(r);
+      const double rz_old = rz;
+      rz = r.dot(z);
+      p = z + (rz / rz_old) * p;
+    }
+    return Status::Ok();
+  }
+
   Eigen::SparseMatrix<double> lower_;  // lower triangle of the last matrix factorised
   // The incomplete factor in the natural ordering, the mesh's node
   // numbering. An AMD ordering, made to limit the fill of complete factors,
@@ -136,10 +173,11 @@ class PcgSolver final : public LinearSolver {
   // unknowns: 714 against 503 per solve with TET10, 162 against 97 with
   // TET4_ANP), and with it Eigen forms a permuted copy of the whole matrix,
   // both triangles, at every factorisation.
-  using Cg = Eigen::ConjugateGradient<
-      Eigen::SparseMatrix<double>, Eigen::Lower,
-      Eigen::IncompleteCholesky<double, Eigen::Lower, Eigen::NaturalOrdering<int>>>;
-  std::unique_ptr<Cg> cg_;  // refers to lower_
+  using Preconditioner =
+      Eigen::IncompleteCholesky<double, Eigen::Lower, Eigen::NaturalOrdering<int>>;
+  std::unique_ptr<Preconditioner> preconditioner_;
+  const std::atomic<bool>* cancel_;  // not owned; may be null
+  Eigen::Index max_iterations_ = 0;
   bool factorized_ = false;
   int iterations_ = -1;  // of the last solve; -1 before the first
   double residual_ = 0;  // true relative residual of the last solve
@@ -147,6 +185,8 @@ class PcgSolver final : public LinearSolver {
 
 }  // namespace
 
-std::unique_ptr<LinearSolver> CreatePcgSolver() { return std::make_unique<PcgSolver>(); }
+std::unique_ptr<LinearSolver> CreatePcgSolver(const std::atomic<bool>* cancel) {
+  return std::make_unique<PcgSolver>(cancel);
+}
 
 }  // namespace pba

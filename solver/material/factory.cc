@@ -272,10 +272,23 @@ std::string ListOf(const std::vector<double>& values) {
   return "[" + out + "]";
 }
 
+// A parameter as the scene gave it: the shortest text that reads back as
+// the same number. %g's six digits print nu = 0.4999999 as "0.5", hiding a
+// ratio K / mu of 1e7 behind the incompressible limit.
+std::string Given(double value) {
+  char text[32];
+  for (int digits = 6; digits < 17; ++digits) {
+    std::snprintf(text, sizeof text, "%.*g", digits, value);
+    if (std::strtod(text, nullptr) == value) return text;
+  }
+  std::snprintf(text, sizeof text, "%.17g", value);
+  return text;
+}
+
 std::string DescribeModel(const MaterialSpec& m) {
   if (m.kind == MaterialSpec::Kind::kLinearElastic) {
-    return "linear elastic, E = " + FormatNumber(m.linear_elastic.youngs_modulus_pa) +
-           " Pa, nu = " + FormatNumber(m.linear_elastic.poissons_ratio);
+    return "linear elastic, E = " + Given(m.linear_elastic.youngs_modulus_pa) +
+           " Pa, nu = " + Given(m.linear_elastic.poissons_ratio);
   }
   if (m.kind == MaterialSpec::Kind::kOrthotropicElastic) {
     const OrthotropicElasticParams& p = m.orthotropic_elastic;
@@ -284,12 +297,11 @@ std::string DescribeModel(const MaterialSpec& m) {
       return "(" + FormatNumber(q(0, c)) + ", " + FormatNumber(q(1, c)) + ", " +
              FormatNumber(q(2, c)) + ")";
     };
-    return "orthotropic linear elastic, E1 = " + FormatNumber(p.e1_pa) +
-           " Pa, E2 = " + FormatNumber(p.e2_pa) + " Pa, E3 = " + FormatNumber(p.e3_pa) +
-           " Pa, nu12 = " + FormatNumber(p.nu12) + ", nu13 = " + FormatNumber(p.nu13) +
-           ", nu23 = " + FormatNumber(p.nu23) + ", G12 = " + FormatNumber(p.g12_pa) +
-           " Pa, G13 = " + FormatNumber(p.g13_pa) + " Pa, G23 = " + FormatNumber(p.g23_pa) +
-           " Pa, axis 1 = " + axis(0) + ", axis 2 = " + axis(1);
+    return "orthotropic linear elastic, E1 = " + Given(p.e1_pa) + " Pa, E2 = " + Given(p.e2_pa) +
+           " Pa, E3 = " + Given(p.e3_pa) + " Pa, nu12 = " + Given(p.nu12) +
+           ", nu13 = " + Given(p.nu13) + ", nu23 = " + Given(p.nu23) +
+           ", G12 = " + Given(p.g12_pa) + " Pa, G13 = " + Given(p.g13_pa) +
+           " Pa, G23 = " + Given(p.g23_pa) + " Pa, axis 1 = " + axis(0) + ", axis 2 = " + axis(1);
   }
   return MakeHyperelasticMaterial(m)->Describe();
 }

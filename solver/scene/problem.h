@@ -61,6 +61,13 @@ struct TimeOptions {
   static constexpr double kInitialStepFraction = 1.0 / 20;
   static constexpr double kMinStepFraction = 1e-6;
   static constexpr double kMaxStepFraction = 1.0 / 5;
+  // Floors of the given steps, as fractions of end_s (validation refuses
+  // less, naming the field): a max_step_s below a millionth of the run
+  // means over a million Newton solves (1e-300 s ran until killed); an
+  // initial or min step below a billionth means over 1e9 increments, more
+  // than the stepper counts.
+  static constexpr double kMaxStepFloorFraction = 1e-6;
+  static constexpr double kStepFloorFraction = 1e-9;
   // From analysis.time, the steps' defaults taken from end_time_s.
   static TimeOptions FromSpec(const TimeSpec& spec);
 };

@@ -9,6 +9,8 @@
 #include <set>
 #include <utility>
 
+#include "scene/problem.h"
+
 namespace pba::scene_checks {
 namespace {
 
@@ -77,6 +79,19 @@ Status ValidateTime(const AnalysisSpec& analysis) {
       return Status::InvalidArgument(
           std::string("analysis.time.") + steps[k].first,
           "must be a non-negative number of s (0 for the default), got " + Number(steps[k].second));
+    }
+  }
+  for (int k = 0; k < 3; ++k) {
+    if (steps[k].second == 0) continue;
+    const double fraction =
+        k == 2 ? TimeOptions::kMaxStepFloorFraction : TimeOptions::kStepFloorFraction;
+    if (steps[k].second < fraction * t.end_time_s) {
+      return Status::InvalidArgument(std::string("analysis.time.") + steps[k].first,
+                                     "must be at least " + Number(fraction) + " of end_time_s (" +
+                                         Number(fraction * t.end_time_s) + " s), got " +
+                                         Number(steps[k].second) + " s: smaller steps would take " +
+                                         (k == 2 ? "over a million" : "over 1e9") +
+                                         " increments (0 picks the default)");
     }
   }
   for (int k = 0; k < 3; ++k) {

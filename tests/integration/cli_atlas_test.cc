@@ -15,6 +15,7 @@
 #include <string>
 #include <thread>
 
+#include "atlas/structure_set.h"
 #include "integration/subprocess.h"
 
 namespace pba::testing {
@@ -395,6 +396,62 @@ TEST_F(CliAtlasTest, BadNamesAndViewersAreRefusedAndNothingIsWritten) {
   const RunResult none = PbaAs("alice", {"--json", "atlas", "list", "-p", "demo"});
   ASSERT_EQ(none.exit_code, 0) << none.err;
   EXPECT_EQ(none.out.find("Thalamus"), std::string::npos) << none.out;
+}
+
+// A structure set needs a colour of its own per structure, not black: the
+// store asks neither, so a snapshot whose structures share a colour, or
+// have none, is refused up front (naming the structures and the fix)
+// rather than exported as a set pba-solve and pba-atlas refuse. With the
+// colours made distinct it exports and reads back as a set.
+TEST_F(CliAtlasTest, AnExportWhoseStructuresShareAColourIsRefusedNamingBoth) {
+  SetUpPeople();
+  const fs::path contours = Write("c.json", Contours(5));
+  for (const char* name : {"Caudate", "Putamen"}) {
+    ASSERT_EQ(PbaAs("alice", {"atlas", "create", "-p", "demo", name, contours.string(), "--colour",
+                              "10,20,30"})
+                  .exit_code,
+              0);
+  }
+  const fs::path out = dir_.path() / "exports" / "set";
+  fs::create_directories(out.parent_path());
+  const auto export_snapshot = [&](const std::string& id) {
+    return PbaAs("alice", {"atlas", "snapshot", "export", "-p", "demo", id, "-o", out.string()});
+  };
+  ASSERT_EQ(PbaAs("alice", {"atlas", "snapshot", "create", "-p", "demo"}).exit_code, 0);
+  const RunResult shared = export_snapshot("1");
+  EXPECT_EQ(shared.exit_code, kInvalid) << shared.out << shared.err;
+  EXPECT_NE(shared.err.find(R"("Caudate" and "Putamen" share the colour 10,20,30)"),
+            std::string::npos)
+      << shared.err;
+  EXPECT_NE(shared.err.find(R"(pba atlas set -p "demo" "Putamen" --colour R,G,B)"),
+            std::string::npos)
+      << shared.err;
+  // Nothing written, not even a staging directory beside the target.
+  EXPECT_TRUE(fs::is_empty(out.parent_path()));
+
+  // No colour at all (created without --colour) is black, the background's.
+  ASSERT_EQ(
+      PbaAs("alice", {"atlas", "set", "-p", "demo", "Putamen", "--colour", "40,50,60"}).exit_code,
+      0);
+  ASSERT_EQ(
+      PbaAs("alice", {"atlas", "create", "-p", "demo", "Thalamus", contours.string()}).exit_code,
+      0);
+  ASSERT_EQ(PbaAs("alice", {"atlas", "snapshot", "create", "-p", "demo"}).exit_code, 0);
+  const RunResult black = export_snapshot("2");
+  EXPECT_EQ(black.exit_code, kInvalid) << black.out << black.err;
+  EXPECT_NE(black.err.find(R"("Thalamus" has no colour)"), std::string::npos) << black.err;
+  EXPECT_TRUE(fs::is_empty(out.parent_path()));
+
+  ASSERT_EQ(
+      PbaAs("alice", {"atlas", "set", "-p", "demo", "Thalamus", "--colour", "70,80,90"}).exit_code,
+      0);
+  ASSERT_EQ(PbaAs("alice", {"atlas", "snapshot", "create", "-p", "demo"}).exit_code, 0);
+  const RunResult distinct = export_snapshot("3");
+  ASSERT_EQ(distinct.exit_code, 0) << distinct.out << distinct.err;
+  StructureSet set;
+  const Status read = ReadStructureSet(out, &set);
+  ASSERT_TRUE(read.ok()) << read.ToString();
+  EXPECT_EQ(set.structures.size(), 3u);
 }
 
 }  // namespace

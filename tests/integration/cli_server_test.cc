@@ -14,6 +14,8 @@
 #include <string>
 #include <thread>
 
+#include "common/yaml_bombs.h"
+#include "integration/block_scene.h"
 #include "integration/server_fixture.h"
 #include "integration/subprocess.h"
 
@@ -29,17 +31,9 @@ constexpr int kInvalid = 5;
 constexpr int kJobFailed = 6;
 constexpr int kJobCancelled = 7;
 
-// A solve that runs for many seconds on two cores (about 400k unknowns), so
-// there is time to cancel it or kill its process.
-constexpr const char* kLongScene = R"(
-name: long-running
-geometry: {box: {size_mm: [50, 50, 50]}}
-mesh: {element_size_mm: 1}
-material: {linear_elastic: {youngs_modulus_pa: 3000, poissons_ratio: 0.45}}
-boundary_conditions:
-  - {set: bottom, fixed: {}}
-  - {set: top, displacement: {z_mm: -1}}
-)";
+// A solve that runs for many seconds, so there is time to cancel it or
+// kill its process.
+const std::string kLongScene = BlockSceneYaml("long-running", 50);
 
 class CliServerTest : public ServerTest {
  protected:
@@ -153,8 +147,9 @@ TEST_F(CliServerTest, SubmitWaitFetchRoundTrip) {
   EXPECT_NE(summary.find("\"wall_time_s\""), std::string::npos);
   EXPECT_NE(summary.find("\"error_estimate\""), std::string::npos);
 
-  // A repeated fetch replaces the files and still succeeds.
-  EXPECT_EQ(Pba({"job", "fetch", id, "-o", out.string()}).exit_code, 0);
+  // A repeated fetch does not overwrite them (exit 9) unless --force says so.
+  EXPECT_EQ(Pba({"job", "fetch", id, "-o", out.string()}).exit_code, 9);
+  EXPECT_EQ(Pba({"job", "fetch", id, "-o", out.string(), "--force"}).exit_code, 0);
 }
 
 TEST_F(CliServerTest, JsonOutputIsParseableAndPaginates) {
@@ -214,6 +209,34 @@ TEST_F(CliServerTest, BadScenesAreRejectedAndNothingIsStored) {
   ASSERT_EQ(list.exit_code, 0) << list.err;
   EXPECT_EQ(list.out.find("\"id\""), std::string::npos) << "a rejected scene was stored:\n"
                                                         << list.out;
+}
+
+// A scene of nine levels of ten aliases once aborted the client with
+// std::bad_alloc; it is refused as invalid input naming the alias.
+TEST_F(CliServerTest, AliasBombSceneIsRefusedAsInvalid) {
+  const std::string yaml = "name: bomb\n" + yaml_bombs::BillionLaughs();
+  const auto start = std::chrono::steady_clock::now();
+  const RunResult result = Pba({"job", "submit", WriteScene("bomb.yaml", yaml).string()});
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 10);
+  EXPECT_EQ(result.exit_code, kInvalid) << result.err;
+  EXPECT_NE(result.err.find("bomb.yaml:3: YAML aliases (*l0) are not accepted"), std::string::npos)
+      << result.err;
+  const RunResult list = Pba({"--json", "job", "list"});
+  ASSERT_EQ(list.exit_code, 0) << list.err;
+  EXPECT_EQ(list.out.find("\"id\""), std::string::npos) << list.out;
+}
+
+// A scene over the guard's size cap (an error with no line and no field)
+// is still the user's input at fault: exit 5, not a plain error; only a
+// file that cannot be read at all is.
+TEST_F(CliServerTest, OversizedSceneIsRefusedAsInvalid) {
+  const std::string yaml = "name: big\n# " + std::string(size_t{17} << 20, 'x') + "\n";
+  const RunResult result = Pba({"job", "submit", WriteScene("big.yaml", yaml).string()});
+  EXPECT_EQ(result.exit_code, kInvalid) << result.err;
+  EXPECT_NE(result.err.find("bytes; at most"), std::string::npos) << result.err;
+  const RunResult missing = Pba({"job", "submit", (dir_.path() / "no-such.yaml").string()});
+  EXPECT_NE(missing.exit_code, kInvalid) << missing.err;
+  EXPECT_NE(missing.exit_code, 0) << missing.err;
 }
 
 // A scripted batch: a base scene over a sweep, two jobs at a time, one table

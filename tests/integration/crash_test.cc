@@ -27,6 +27,7 @@
 #include <thread>
 #include <vector>
 
+#include "integration/block_scene.h"
 #include "integration/db_query.h"
 #include "integration/subprocess.h"
 
@@ -397,17 +398,8 @@ TEST_F(CrashTest, KilledDuringCommitsTheStoreStaysWholeAndKeepsAcknowledgedCommi
 
 // --- 2. kill -9 while a job runs ------------------------------------------
 
-// About 85k unknowns: a few seconds on two cores (880 MB), long enough to be
-// killed in its factorization.
-constexpr const char* kMediumScene = R"(
-name: crash-medium
-geometry: {box: {size_mm: [30, 30, 30]}}
-mesh: {element_size_mm: 1}
-material: {linear_elastic: {youngs_modulus_pa: 3000, poissons_ratio: 0.45}}
-boundary_conditions:
-  - {set: bottom, fixed: {}}
-  - {set: top, displacement: {z_mm: -1}}
-)";
+// Long enough to be killed in its factorization.
+const std::string kMediumScene = BlockSceneYaml("crash-medium", 30);
 
 // RunningJobIsRequeuedAfterServerCrash (cli_server_test.cc) shows the re-queue
 // and cancels; this one lets the second attempt finish and checks what it

@@ -1,16 +1,23 @@
 // pba-solve as users and the server call it: every example solves, bad input
-// exits 2 naming the field, and an interrupted solve leaves nothing behind.
+// exits 2 naming the field, an interrupted solve leaves nothing behind, and
+// --out replaces only an earlier result, with --force.
 
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <chrono>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <string>
 #include <thread>
+#include <vector>
 
+#include "common/yaml_bombs.h"
+#include "integration/block_scene.h"
 #include "integration/subprocess.h"
 
 namespace pba::testing {
@@ -90,6 +97,24 @@ TEST(PbaSolveTest, UnknownFieldNamesPathAndLine) {
   EXPECT_NE(run.err.find("material.linear_elastic.young"), std::string::npos) << run.err;
 }
 
+// Nine levels of ten aliases: a billion values from a kilobyte, refused
+// before loading (exit 2 naming the alias and its line, at once).
+TEST(PbaSolveTest, AliasBombSceneExitsTwoNamingTheAlias) {
+  TempDir dir;
+  const fs::path scene = dir.path() / "bomb.yaml";
+  const std::string text = "name: bomb\n" + yaml_bombs::BillionLaughs();
+  std::ofstream(scene) << text;
+  const auto start = std::chrono::steady_clock::now();
+  const RunResult run =
+      RunProcess({PBA_SOLVE_BIN, scene.string(), "--out", (dir.path() / "r").string()},
+                 std::chrono::seconds(30));
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 10);
+  EXPECT_EQ(run.exit_code, 2) << run.err;
+  EXPECT_NE(run.err.find("bomb.yaml:3: YAML aliases (*l0) are not accepted"), std::string::npos)
+      << run.err;
+  EXPECT_FALSE(fs::exists(dir.path() / "r"));
+}
+
 TEST(PbaSolveTest, SigtermStopsCleanlyAndWritesNothing) {
   TempDir dir;
   const fs::path scene = dir.path() / "long.yaml";
@@ -114,6 +139,78 @@ TEST(PbaSolveTest, SigtermStopsCleanlyAndWritesNothing) {
   EXPECT_FALSE(fs::exists(out));
   EXPECT_EQ(std::distance(fs::directory_iterator(dir.path()), fs::directory_iterator()), 1)
       << "a partial result was left behind";
+}
+
+// Issue 18: a cancel ends pba-solve within a second whatever it is doing.
+// SIGTERM lands `delay` after the JSON progress first names `phase`;
+// returns the seconds from the signal to the exit and the exit code
+// (-1 if it did not exit normally) and stderr.
+struct CancelRun {
+  double seconds = -1;
+  int exit_code = -1;
+  std::string err;
+};
+
+CancelRun CancelDuring(const std::string& yaml, const std::string& phase,
+                       std::chrono::milliseconds delay) {
+  TempDir dir;
+  const fs::path scene = dir.path() / "long.yaml";
+  std::ofstream(scene) << yaml;
+  const fs::path out = dir.path() / "result";
+  const fs::path err = dir.path() / "stderr.txt";
+  int pipe_fds[2];
+  if (::pipe(pipe_fds) != 0) return {};
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    ::dup2(pipe_fds[1], STDOUT_FILENO);
+    ::close(pipe_fds[0]);
+    ::freopen(err.c_str(), "w", stderr);
+    ::execl(PBA_SOLVE_BIN, PBA_SOLVE_BIN, scene.c_str(), "--out", out.c_str(), "--progress", "json",
+            static_cast<char*>(nullptr));
+    std::_Exit(127);
+  }
+  ::close(pipe_fds[1]);
+  FILE* progress = ::fdopen(pipe_fds[0], "r");
+  char line[4096];
+  const std::string wanted = "\"phase\":\"" + phase + "\"";
+  while (std::fgets(line, sizeof line, progress) != nullptr) {
+    if (std::string(line).find(wanted) != std::string::npos) break;
+  }
+  std::this_thread::sleep_for(delay);
+  const auto signalled = std::chrono::steady_clock::now();
+  ::kill(pid, SIGTERM);
+  while (std::fgets(line, sizeof line, progress) != nullptr) {
+  }
+  std::fclose(progress);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  CancelRun run;
+  run.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - signalled).count();
+  run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  std::ifstream in(err);
+  std::stringstream text;
+  text << in.rdbuf();
+  run.err = text.str();
+  return run;
+}
+
+const std::string kLongBlock = BlockSceneYaml("long-block", 50);
+
+// A CHOLMOD factorisation (a minute here) cannot look at the flag: the
+// watchdog ends the process.
+TEST(PbaSolveTest, SigtermDuringAFactorisationExitsWithinASecond) {
+  const CancelRun run = CancelDuring(kLongBlock, "factorize", std::chrono::milliseconds(500));
+  EXPECT_EQ(run.exit_code, 5) << run.err;
+  EXPECT_LT(run.seconds, 1.0) << run.err;
+}
+
+// Conjugate gradients look at it every iteration: the solve's own error.
+TEST(PbaSolveTest, SigtermDuringConjugateGradientsExitsWithinASecond) {
+  const CancelRun run = CancelDuring(std::string(kLongBlock) + "analysis: {linear_solver: PCG}\n",
+                                     "solve", std::chrono::milliseconds(500));
+  EXPECT_EQ(run.exit_code, 5) << run.err;
+  EXPECT_LT(run.seconds, 1.0) << run.err;
+  EXPECT_NE(run.err.find("conjugate gradients"), std::string::npos) << run.err;
 }
 
 TEST(PbaSolveTest, ExportOnlyWritesAnAbaqusDeck) {
@@ -209,6 +306,99 @@ TEST(PbaSolveTest, CheckpointThenRestartExtendsTheHold) {
   EXPECT_EQ(run.exit_code, 3) << run.out << run.err;
   EXPECT_NE(run.err.find("its mesh has"), std::string::npos) << run.err;
   EXPECT_FALSE(fs::exists(r3));
+}
+
+// --out DIR: what is there is replaced only when pba-solve wrote it and
+// --force says so; a file, a link, or a directory holding anything else is
+// refused (exit 2) before anything is solved, and left as it was.
+constexpr char kSmallBlock[] =
+    "geometry: {box: {size_mm: [10, 10, 10]}}\nmesh: {element_size_mm: 5}\n"
+    "material: {linear_elastic: {youngs_modulus_pa: 3000, poissons_ratio: 0.45}}\n"
+    "boundary_conditions: [{set: bottom, fixed: {}}, {set: top, displacement: {z_mm: -1}}]\n";
+
+std::string ReadAll(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+RunResult SolveInto(const fs::path& scene, const fs::path& out, bool force = false) {
+  std::vector<std::string> args = {PBA_SOLVE_BIN, scene.string(), "--out", out.string()};
+  args.insert(args.end(), {"--progress", "json"});
+  if (force) args.push_back("--force");
+  return RunProcess(args);
+}
+
+// A refusal names --out and comes before the solve: no progress at all.
+void ExpectRefused(const RunResult& run, const std::string& why) {
+  EXPECT_EQ(run.exit_code, 2) << run.out << run.err;
+  EXPECT_NE(run.err.find("--out"), std::string::npos) << run.err;
+  EXPECT_NE(run.err.find(why), std::string::npos) << run.err;
+  EXPECT_EQ(run.out.find("PROGRESS"), std::string::npos) << run.out;
+}
+
+TEST(PbaSolveOutputTest, AnEarlierResultIsReplacedOnlyWithForce) {
+  TempDir dir;
+  const fs::path scene = dir.path() / "block.yaml";
+  std::ofstream(scene) << kSmallBlock;
+  const fs::path out = dir.path() / "result";
+  const RunResult first = SolveInto(scene, out);
+  ASSERT_EQ(first.exit_code, 0) << first.out << first.err;
+  const std::string summary = ReadAll(out / "summary.json");
+
+  ExpectRefused(SolveInto(scene, out), "--force");
+  EXPECT_EQ(ReadAll(out / "summary.json"), summary);
+  const RunResult forced = SolveInto(scene, out, true);
+  EXPECT_EQ(forced.exit_code, 0) << forced.out << forced.err;
+  EXPECT_TRUE(fs::exists(out / "result.h5"));
+
+  // An empty directory is taken without --force.
+  const fs::path empty = dir.path() / "empty";
+  fs::create_directories(empty);
+  const RunResult into_empty = SolveInto(scene, empty);
+  EXPECT_EQ(into_empty.exit_code, 0) << into_empty.out << into_empty.err;
+  EXPECT_TRUE(fs::exists(empty / "summary.json"));
+}
+
+TEST(PbaSolveOutputTest, WhatPbaSolveDidNotWriteIsNeverReplaced) {
+  TempDir dir;
+  const fs::path scene = dir.path() / "block.yaml";
+  std::ofstream(scene) << kSmallBlock;
+  // A regular file.
+  const fs::path file = dir.path() / "thesis.docx";
+  std::ofstream(file) << "three years of work";
+  for (bool force : {false, true}) {
+    ExpectRefused(SolveInto(scene, file, force), "is a file");
+    EXPECT_EQ(ReadAll(file), "three years of work");
+  }
+
+  // A folder with the user's things beside an earlier result, at its top
+  // or inside the import's structures/ folder.
+  const fs::path folder = dir.path() / "results";
+  ASSERT_EQ(SolveInto(scene, folder).exit_code, 0);
+  std::ofstream(folder / "notes.txt") << "mine";
+  ExpectRefused(SolveInto(scene, folder, true), "did not write");
+  EXPECT_EQ(ReadAll(folder / "notes.txt"), "mine");
+  EXPECT_TRUE(fs::exists(folder / "result.h5"));
+  fs::remove(folder / "notes.txt");
+  fs::create_directories(folder / "structures");
+  std::ofstream(folder / "structures" / "draft.txt") << "mine too";
+  ExpectRefused(SolveInto(scene, folder, true), "did not write");
+  EXPECT_EQ(ReadAll(folder / "structures" / "draft.txt"), "mine too");
+
+  // The import's --out follows the same rule.
+  const RunResult import = RunProcess({PBA_SOLVE_BIN, "--import-atlas", "synthetic", "--out",
+                                       file.string(), "--force", "--progress", "json"});
+  ExpectRefused(import, "is a file");
+  EXPECT_EQ(ReadAll(file), "three years of work");
+
+  // A link, to a folder or anywhere.
+  const fs::path link = dir.path() / "link";
+  fs::create_directory_symlink(dir.path() / "elsewhere", link);
+  ExpectRefused(SolveInto(scene, link, true), "symbolic link");
+  EXPECT_TRUE(fs::is_symlink(link));
+  EXPECT_FALSE(fs::exists(dir.path() / "elsewhere"));
 }
 
 }  // namespace

@@ -3,6 +3,7 @@
 #include <fcntl.h>
 #include <poll.h>
 #include <signal.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -59,6 +60,18 @@ std::vector<std::string> MergedEnvironment(const std::vector<std::string>& overr
 }
 
 }  // namespace
+
+std::string FindProgram(const std::string& name) {
+  const char* path = std::getenv("PATH");
+  std::stringstream dirs(path ? path : "/usr/bin");
+  std::string dir;
+  while (std::getline(dirs, dir, ':')) {
+    if (!dir.empty() && ::access((fs::path(dir) / name).c_str(), X_OK) == 0) {
+      return (fs::path(dir) / name).string();
+    }
+  }
+  return "";
+}
 
 RunResult RunProcess(const std::vector<std::string>& argv, std::chrono::seconds timeout) {
   return RunProcess(argv, std::vector<std::string>{}, timeout);
@@ -123,6 +136,11 @@ bool ServerProcess::Start(std::string* log, const std::vector<std::string>& extr
     const int err = ::open(log_path().c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
     ::dup2(out, STDOUT_FILENO);
     ::dup2(err, STDERR_FILENO);
+    if (file_size_limit_ > 0) {
+      const rlimit limit = {static_cast<rlim_t>(file_size_limit_),
+                            static_cast<rlim_t>(file_size_limit_)};
+      ::setrlimit(RLIMIT_FSIZE, &limit);
+    }
     std::vector<std::string> argv = {binary_.string(), "--data", data_dir_.string(), "--listen",
                                      "127.0.0.1:0"};
     argv.insert(argv.end(), extra_args.begin(), extra_args.end());

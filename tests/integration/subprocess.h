@@ -5,6 +5,7 @@
 #include <sys/types.h>
 
 #include <chrono>
+#include <cstdint>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -16,6 +17,10 @@ struct RunResult {
   std::string out;
   std::string err;
 };
+
+// The path of program `name` in a directory of PATH (/usr/bin without
+// one); empty when there is none. RunProcess does not search PATH.
+std::string FindProgram(const std::string& name);
 
 // Runs `argv` to completion (killed after `timeout`), capturing stdout and stderr.
 RunResult RunProcess(const std::vector<std::string>& argv,
@@ -38,6 +43,9 @@ class ServerProcess {
   // --listen (e.g. {"--max-running", "2"}); false (with the log) if it did
   // not report its address within 20 s.
   bool Start(std::string* log, const std::vector<std::string>& extra_args = {});
+  // Starts of this server run under a file-size limit (RLIMIT_FSIZE, as
+  // `ulimit -f`) of `bytes`; 0: none (the default).
+  void set_file_size_limit(int64_t bytes) { file_size_limit_ = bytes; }
   // SIGTERM and wait; returns the exit code (-signal if killed).
   int Stop(std::chrono::seconds timeout = std::chrono::seconds(30));
   // SIGKILL and reap, like a crash.
@@ -52,6 +60,7 @@ class ServerProcess {
   std::filesystem::path data_dir_;
   pid_t pid_ = -1;
   std::string address_;
+  int64_t file_size_limit_ = 0;
 };
 
 // Children of `parent` whose command name is `name`.

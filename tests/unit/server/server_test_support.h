@@ -34,6 +34,10 @@ constexpr int kBigResultBytes = 5 * 512 * 1024;
 //   killed     kills itself with SIGKILL
 //   slow       progress, then sleeps until SIGTERM (exits 5)
 //   stubborn   ignores SIGTERM, sleeps until killed
+//   partial    half-writes a result in its hidden staging sibling
+//              (.result.partial-PID), then sleeps; SIGTERM ends it there
+//              (exit 5) without removing it, as pba-solve's cancel watchdog
+//              does
 inline std::filesystem::path WriteFakeSolver(const std::filesystem::path& dir) {
   const std::filesystem::path path = dir / "fake-pba-solve";
   std::ofstream script(path);
@@ -86,6 +90,15 @@ case "$name" in
   slow)
     trap 'exit 5' TERM
     progress mesh 0.1 "meshing"
+    i=0
+    while [ $i -lt 600 ]; do sleep 0.1; i=$((i+1)); done
+    exit 0 ;;
+  partial)
+    trap 'exit 5' TERM
+    tmp="$(dirname "$out")/.result.partial-$$"
+    mkdir -p "$tmp"
+    printf 'half' > "$tmp/result.h5"
+    progress write 0.9 "writing"
     i=0
     while [ $i -lt 600 ]; do sleep 0.1; i=$((i+1)); done
     exit 0 ;;

@@ -4,6 +4,7 @@
 
 #include <string>
 
+#include "common/yaml_bombs.h"
 #include "pba/v1/scene.pb.h"
 
 namespace pba::codec {
@@ -109,6 +110,25 @@ TEST(YamlCodecTest, SyntaxErrorGivesLine) {
   ASSERT_FALSE(ParseYaml("name: [unclosed\nmesh: {}\n", &scene, &error));
   EXPECT_NE(error.message.find("not valid YAML"), std::string::npos);
   EXPECT_GT(error.line, 0);
+}
+
+TEST(YamlCodecTest, AliasesAreRefusedNamingTheAliasAndLine) {
+  // A scene of nested aliases once ran the client out of memory.
+  const std::string bomb = yaml_bombs::BillionLaughs();
+  v1::Scene scene;
+  ParseError error;
+  EXPECT_FALSE(ParseYaml(bomb + "name: *l9\n", &scene, &error));
+  EXPECT_EQ(error.line, 2);
+  EXPECT_EQ(error.ToString().rfind("line 2: YAML aliases (*l0) are not accepted", 0), 0u)
+      << error.ToString();
+
+  // A harmless-looking one too: an anchored material reused.
+  EXPECT_FALSE(
+      ParseYaml("name: a\nmaterial: &m {linear_elastic: {youngs_modulus_pa: 5}}\n"
+                "x: *m\n",
+                &scene, &error));
+  EXPECT_EQ(error.line, 3);
+  EXPECT_NE(error.message.find("(*m)"), std::string::npos) << error.ToString();
 }
 
 TEST(YamlCodecTest, EmptyDocumentIsAnError) {

@@ -231,6 +231,33 @@ TEST_F(JobExecutorTest, CancelEscalatesToSigkill) {
   EXPECT_GE(std::chrono::steady_clock::now() - start, options_.kill_grace);
 }
 
+// A solve cancelled while it writes its result ends without removing its
+// staging directory (the watchdog of pba-solve exits at once); the job's
+// folder keeps none of it.
+TEST_F(JobExecutorTest, ACancelWhileWritingLeavesNoStagingDirectory) {
+  StartExecutor();
+  const std::string id = Submit("partial");
+  const fs::path job_dir = dir_.path() / "jobs" / id;
+  ASSERT_TRUE(WaitUntil([&] { return Get(id).phase() == "write"; }));
+  const auto staged = [&] {
+    int found = 0;
+    std::error_code ec;
+    for (const auto& entry : fs::directory_iterator(job_dir, ec)) {
+      found += entry.path().filename().string().rfind(".result.", 0) == 0;
+    }
+    return found;
+  };
+  ASSERT_EQ(staged(), 1);
+  v1::Job job;
+  bool found = false;
+  ASSERT_TRUE(executor_->Cancel(id, &job, &found).ok());
+  job = WaitForState(id, v1::Job::CANCELLED);
+  EXPECT_EQ(job.error(), "cancelled by request");
+  EXPECT_EQ(staged(), 0) << "a half-written result stays in " << job_dir;
+  EXPECT_FALSE(fs::exists(job_dir / "result"));
+  EXPECT_TRUE(fs::exists(job_dir / "solve.log"));
+}
+
 TEST_F(JobExecutorTest, StopRequeuesRunningJobs) {
   StartExecutor();
   const std::string id = Submit("slow");

@@ -8,12 +8,16 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <map>
 #include <sstream>
 
 #include "app/pba_server.h"
+#include "atlas/structure_set.h"
 #include "pba/v1/atlas.grpc.pb.h"
 #include "pba/v1/job.grpc.pb.h"
+#include "service/atlas_event_hub.h"
 #include "store/atlas_store.h"
+#include "store/job_store.h"
 #include "store/sha256.h"
 #include "unit/server/server_test_support.h"
 
@@ -228,6 +232,48 @@ TEST_F(AtlasJobsTest, StructuresSharingAColourAreStagedWithDistinctOnes) {
   manifest << manifest_file.rdbuf();
   EXPECT_NE(manifest.str().find("\"200,0,0\""), std::string::npos) << manifest.str();
   EXPECT_NE(manifest.str().find("\"200,0,1\""), std::string::npos) << manifest.str();
+}
+
+// A structure named "manifest" (a legal name) gets a file beside the
+// manifest, not the manifest's, and "putamen" one apart from "Putamen"'s
+// (one file where case is folded): the staged set reads back with every
+// SHA-256 matching, which is what pba-solve checks.
+TEST_F(AtlasJobsTest, AStructureNamedManifestIsStagedBesideTheManifest) {
+  CreateStructure("manifest", R"({"plates": [{"z_mm": 0, "polygons": [[[20, 0], [30, 0], )"
+                              R"([30, 10], [20, 10]]]}]})");
+  CreateStructure("putamen", R"({"plates": [{"z_mm": 0, "polygons": [[[40, 0], [50, 0], )"
+                             R"([50, 10], [40, 10]]]}]})");
+  v1::CreateSnapshotRequest snapshot;
+  snapshot.set_project("atlas");
+  v1::Snapshot made;
+  ASSERT_TRUE(Call(admin_, [&](grpc::ClientContext* c) {
+                return atlas_->CreateSnapshot(c, snapshot, &made);
+              }).ok());
+  std::unique_ptr<AtlasStore> store;
+  ASSERT_TRUE(AtlasStore::Open(options_.data_dir, &store).ok());
+  std::unique_ptr<JobStore> job_store;
+  ASSERT_TRUE(JobStore::Open(dir_.path() / "staging-jobs.db", &job_store).ok());
+  AtlasEventHub hub;
+  AtlasJobs staging(*store, hub, *job_store);
+  v1::Job job;
+  job.set_id("jstaging");
+  job.set_owner("admin");
+  job.mutable_snapshot()->set_project("atlas");
+  job.mutable_snapshot()->set_snapshot(std::to_string(made.id()));
+  const fs::path dir = dir_.path() / "staged";
+  fs::create_directories(dir);
+  v1::Scene scene = testing::AtlasScene("ok");
+  std::vector<std::string> input;
+  const Status staged = staging.Stage(job, dir, &scene, &input);
+  ASSERT_TRUE(staged.ok()) << staged.ToString();
+  StructureSet set;
+  const Status read = ReadStructureSet(dir / "snapshot", &set);
+  ASSERT_TRUE(read.ok()) << read.ToString();
+  std::map<std::string, std::string> files;
+  for (const StructureEntry& e : set.structures) files[e.name] = e.file;
+  EXPECT_EQ(files["manifest"], "manifest_2.json");
+  EXPECT_EQ(files["Putamen"], "Putamen.json");
+  EXPECT_EQ(files["putamen"], "putamen_2.json");
 }
 
 TEST_F(AtlasJobsTest, TheProjectsWatchersHearOfItsJobs) {

@@ -3,7 +3,9 @@
 #include "service/geometry_check.h"
 
 #include <gtest/gtest.h>
+#include <stdlib.h>
 
+#include <chrono>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -11,6 +13,7 @@
 #include <string>
 
 #include "atlas/label_volume_io.h"
+#include "common/yaml_bombs.h"
 
 namespace pba {
 namespace {
@@ -166,6 +169,76 @@ TEST(GeometryCheckTest, NiftiMasksAreReadToTheirData) {
     EXPECT_EQ(s.code(), Status::Code::kInvalidArgument);
     EXPECT_EQ(s.field(), "upload_id");
   }
+}
+
+// Contours whose polygons are nine levels of ten aliases: 10^9 points from
+// about a kilobyte, which the checker once walked for minutes.
+std::string AliasBombContours() {
+  return "pixel_size_mm: 0.5\n" + yaml_bombs::AliasLevels("[[0, 0], [10, 0], [0, 10]]", "p") +
+         "plates: [{z_mm: 0, polygons: *p9}]\n";
+}
+
+double SecondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+TEST(GeometryCheckTest, ContoursMadeOfAliasesAreRefusedAtOnce) {
+  const auto start = std::chrono::steady_clock::now();
+  const Status s =
+      CheckGeometryContent("upload_id", GeometryFormat::kContoursJson, AliasBombContours());
+  EXPECT_LT(SecondsSince(start), 5);
+  EXPECT_EQ(s.code(), Status::Code::kInvalidArgument);
+  EXPECT_EQ(s.field(), "upload_id");
+  EXPECT_NE(s.message().find("contours JSON: line 3: YAML aliases (*p0) are not accepted"),
+            std::string::npos)
+      << Message(s);
+}
+
+TEST(GeometryCheckTest, VtkAnnouncingAHugePolygonIsRefusedAtOnce) {
+  // 125 bytes announcing a polygon of 2^28 points.
+  const std::string vtk =
+      "# vtk DataFile Version 3.0\nbomb\nASCII\nDATASET POLYDATA\nPOINTS 3 float\n"
+      "0 0 0 1 0 0 0 1 0\nPOLYGONS 1 268435457\n268435456 0 1 2\n";
+  const auto start = std::chrono::steady_clock::now();
+  const Status s = CheckGeometryContent("upload_id", GeometryFormat::kVtk, vtk);
+  EXPECT_LT(SecondsSince(start), 5);
+  EXPECT_EQ(s.code(), Status::Code::kInvalidArgument);
+  EXPECT_NE(s.message().find("a polygon of 268435456 points"), std::string::npos) << Message(s);
+}
+
+// A failed check leaves nothing in TMPDIR (a refused NIfTI once left its
+// copy there for good).
+TEST(GeometryCheckTest, AFailedNiftiCheckLeavesNothingInTmpdir) {
+  const std::string whole = NiftiBytes(Eigen::Vector3d(-10, 5, 2), 5, "mask.nii");
+  std::string pattern = (std::filesystem::path(testing::TempDir()) / "tmpdir-XXXXXX").string();
+  ASSERT_NE(mkdtemp(pattern.data()), nullptr);
+  const std::filesystem::path tmpdir = pattern;
+  const char* old = getenv("TMPDIR");
+  const std::string old_tmpdir = old != nullptr ? old : "";
+  setenv("TMPDIR", tmpdir.c_str(), 1);
+
+  const Status truncated =
+      CheckGeometryContent("upload_id", GeometryFormat::kNifti, whole.substr(0, whole.size() - 7));
+  const bool empty_after_truncated = std::filesystem::is_empty(tmpdir);
+  // Past its time limit the check is killed, its copy perhaps still open.
+  ChildLimits no_time;
+  no_time.time = std::chrono::milliseconds(1);
+  const Status killed = CheckGeometryContent("upload_id", GeometryFormat::kNifti, whole, no_time);
+  const bool empty_after_killed = std::filesystem::is_empty(tmpdir);
+
+  if (old != nullptr) {
+    setenv("TMPDIR", old_tmpdir.c_str(), 1);
+  } else {
+    unsetenv("TMPDIR");
+  }
+  std::filesystem::remove_all(tmpdir);
+
+  EXPECT_NE(Message(truncated).find("truncated"), std::string::npos) << Message(truncated);
+  EXPECT_TRUE(empty_after_truncated);
+  // (A fast machine may finish the check within the millisecond.)
+  EXPECT_TRUE(killed.ok() || Message(killed).find("took longer than 0.001 s") != std::string::npos)
+      << Message(killed);
+  EXPECT_TRUE(empty_after_killed);
 }
 
 }  // namespace

@@ -303,7 +303,7 @@ TEST(AtlasStoreUpgrade, AVersionOneDatabaseIsMigratedInPlace) {
         "applied_time_us INTEGER NOT NULL);"
         "INSERT INTO schema_version VALUES (1, 'jobs, job events and result files', 0);"
         "CREATE TABLE jobs (number INTEGER PRIMARY KEY AUTOINCREMENT, id TEXT NOT NULL UNIQUE, "
-        "state TEXT NOT NULL DEFAULT 'SUCCEEDED');"
+        "name TEXT NOT NULL DEFAULT 'cube', state TEXT NOT NULL DEFAULT 'SUCCEEDED');"
         "INSERT INTO jobs (id) VALUES ('j0000000001');"));
   }
   std::unique_ptr<AtlasStore> store;

@@ -5,6 +5,8 @@
 
 #include <atomic>
 #include <fstream>
+#include <iterator>
+#include <vector>
 
 #include "store/sha256.h"
 #include "unit/server/temp_dir.h"
@@ -127,6 +129,68 @@ TEST_F(UploadStoreTest, ExpiredUploadsAreRemovedWhenTouchedOrSwept) {
   ASSERT_OK(uploads_->Sweep(&removed));
   EXPECT_EQ(removed, 2);  // the second upload's two files
   EXPECT_TRUE(fs::is_empty(dir_.path()));
+}
+
+}  // namespace
+}  // namespace pba
+
+namespace pba {
+namespace {
+
+// A user's open uploads may announce at most the quota together: past it
+// Begin is refused (field "upload_quota", RESOURCE_EXHAUSTED at the
+// service) naming the quota, before any file is made; removing (DiscardUpload)
+// or expiry frees the share; other users have their own; a reopened store
+// (a server restart) still counts what is open.
+TEST_F(UploadStoreTest, QuotaBoundsTheBytesAUserHasAnnounced) {
+  constexpr int64_t kGiB = int64_t{1} << 30;
+  uploads_->set_quota_bytes(4 * kGiB);
+  const std::string hash = Hash("x");
+  std::vector<UploadInfo> open(4);
+  for (UploadInfo& info : open) ASSERT_OK(uploads_->Begin("bob", kGiB, hash, &info));
+  const auto files = [&] {
+    return std::distance(fs::directory_iterator(dir_.path()), fs::directory_iterator());
+  };
+  const auto before = files();
+  UploadInfo refused;
+  Status status = uploads_->Begin("bob", 1, hash, &refused);
+  EXPECT_EQ(status.code(), Status::Code::kFailedPrecondition);
+  EXPECT_EQ(status.field(), "upload_quota");
+  EXPECT_NE(status.message().find("upload quota of 4294967296 bytes"), std::string::npos)
+      << status.ToString();
+  EXPECT_EQ(files(), before);
+  // Someone else is not held back by bob.
+  UploadInfo carols;
+  ASSERT_OK(uploads_->Begin("carol", kGiB, hash, &carols));
+
+  // A discarded upload frees its share.
+  ASSERT_OK(uploads_->Remove("bob", open[0].id));
+  ASSERT_OK(uploads_->Begin("bob", kGiB, hash, &open[0]));
+  EXPECT_EQ(uploads_->Begin("bob", 1, hash, &refused).field(), "upload_quota");
+
+  // A restart forgets nothing.
+  uploads_.reset();
+  ASSERT_OK(UploadStore::Open(dir_.path(), &uploads_, [this] { return now_.load(); }));
+  uploads_->set_quota_bytes(4 * kGiB);
+  EXPECT_EQ(uploads_->Begin("bob", 1, hash, &refused).field(), "upload_quota");
+
+  // Expired uploads count no more (and are removed).
+  now_ += UploadStore::kLifetimeMicros;
+  for (int i = 0; i < 4; ++i) ASSERT_OK(uploads_->Begin("bob", kGiB, hash, &refused));
+  EXPECT_FALSE(fs::exists(dir_.path() / open[1].id));
+}
+
+// Without a byte quota, the number of open uploads is still bounded (each
+// is two files).
+TEST_F(UploadStoreTest, OpenUploadsAreCountedWithoutAQuota) {
+  const std::string hash = Hash("x");
+  UploadInfo info;
+  for (int i = 0; i < UploadStore::kMaxOpenUploads; ++i) {
+    ASSERT_OK(uploads_->Begin("bob", 1, hash, &info));
+  }
+  const Status status = uploads_->Begin("bob", 1, hash, &info);
+  EXPECT_EQ(status.field(), "upload_quota");
+  EXPECT_NE(status.message().find("1000 open uploads"), std::string::npos) << status.ToString();
 }
 
 }  // namespace

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <nifti1.h>
 #include <unistd.h>
+#include <zlib.h>
 
 #include <cmath>
 #include <cstring>
@@ -11,6 +12,8 @@
 #include <sstream>
 #include <string>
 #include <vector>
+
+#include "common/bounded_run.h"
 
 namespace pba {
 namespace {
@@ -265,6 +268,106 @@ TEST_F(LabelVolumeIoTest, ReadsLpsBigEndianNrrd) {
   EXPECT_EQ(v.spacing_mm(), Eigen::Vector3d(0.5, 2, 3));
   EXPECT_EQ(v.origin_mm(), Eigen::Vector3d(10, -4, 6));
   EXPECT_EQ(v.at(1, 1, 1), 1 + 1 + 3 + 6);
+}
+
+// ---- Hostile files: sizes a header announces but the file does not hold.
+// Each read runs in a child that may map only 48 MiB more than the test
+// (common/bounded_run.h): a reader that allocates what the header announces
+// runs out of memory there instead of passing.
+
+constexpr int64_t kReadBudget = int64_t{48} << 20;
+
+// A header of dims nx x ny x nz and the given type, then `data_bytes` zeros.
+std::string HostileNifti(int nx, int ny, int nz, int datatype, int bitpix, size_t data_bytes) {
+  nifti_1_header h = Header(datatype, bitpix);
+  h.dim[1] = static_cast<int16_t>(nx);
+  h.dim[2] = static_cast<int16_t>(ny);
+  h.dim[3] = static_cast<int16_t>(nz);
+  std::string bytes(reinterpret_cast<const char*>(&h), sizeof h);
+  bytes.append(4, '\0');  // no extensions
+  bytes.append(data_bytes, '\0');
+  return bytes;
+}
+
+void WriteGzip(const fs::path& file, const std::string& bytes) {
+  gzFile out = gzopen(file.c_str(), "wb9");
+  ASSERT_NE(out, nullptr);
+  ASSERT_EQ(gzwrite(out, bytes.data(), static_cast<unsigned>(bytes.size())),
+            static_cast<int>(bytes.size()));
+  gzclose(out);
+}
+
+// The reader's status in a bounded child: kWorkTrue when it failed with
+// kInvalidArgument and a message holding `expected`.
+test::BoundedRunResult ReadFailsWith(const fs::path& file, const std::string& expected) {
+  return test::RunBounded(kReadBudget, 20, [&] {
+    LabelVolume v;
+    const Status status = ReadLabelVolume(file, "file", &v);
+    return status.code() == Status::Code::kInvalidArgument &&
+           status.message().find(expected) != std::string::npos;
+  });
+}
+
+TEST_F(LabelVolumeIoTest, NiftiHeaderAnnouncingMoreDataThanTheFileHoldsIsRefusedUpFront) {
+  // 352 bytes announcing 500^3 float64 voxels (1 GB), then 12 bytes.
+  std::ofstream(dir_ / "bomb.nii", std::ios::binary)
+      << HostileNifti(500, 500, 500, DT_FLOAT64, 64, 12);
+  EXPECT_EQ(ReadFailsWith(dir_ / "bomb.nii", "truncated"), test::kWorkTrue);
+  LabelVolume v;
+  const Status status = ReadNifti(dir_ / "bomb.nii", &v);
+  EXPECT_NE(status.message().find("data holds 12 of the 1000000000 bytes"), std::string::npos)
+      << status.ToString();
+}
+
+TEST_F(LabelVolumeIoTest, NiftiOverTheVoxelLimitIsRefused) {
+  std::ofstream(dir_ / "big.nii", std::ios::binary)
+      << HostileNifti(1024, 1024, 1024, DT_UINT8, 8, 16);
+  EXPECT_EQ(ReadFailsWith(dir_ / "big.nii", "1024 x 1024 x 1024 voxels: more than the"),
+            test::kWorkTrue);
+}
+
+TEST_F(LabelVolumeIoTest, GzipNiftiAnnouncingMoreThanDeflateCanHoldIsRefusedBeforeInflating) {
+  // 400^3 float64 (512 MB) announced; a megabyte of zeros compresses to
+  // about a kilobyte, far below what 512 MB would need.
+  WriteGzip(dir_ / "bomb.nii.gz", HostileNifti(400, 400, 400, DT_FLOAT64, 64, 1 << 20));
+  EXPECT_LT(fs::file_size(dir_ / "bomb.nii.gz"), 4096u);
+  EXPECT_EQ(ReadFailsWith(dir_ / "bomb.nii.gz", "gzip cannot hold that much"), test::kWorkTrue);
+}
+
+TEST_F(LabelVolumeIoTest, GzipNiftiIsInflatedInPiecesNotPastTheAnnouncedSize) {
+  // 300^3 uint8 (27 MB) present in full, then 200 MB of zeros the header
+  // does not describe: read within the budget (labels 2 bytes a voxel and
+  // one piece of the file's values), and the trailing data never inflated.
+  std::string bytes = HostileNifti(300, 300, 300, DT_UINT8, 8, 300 * 300 * 300);
+  bytes[sizeof(nifti_1_header) + 4 + 5] = 7;
+  WriteGzip(dir_ / "long.nii.gz", bytes);
+  EXPECT_EQ(test::RunBounded(int64_t{160} << 20, 20,
+                             [&] {
+                               LabelVolume v;
+                               return ReadNifti(dir_ / "long.nii.gz", &v).ok() &&
+                                      v.at(5, 0, 0) == 7;
+                             }),
+            test::kWorkTrue);
+}
+
+TEST_F(LabelVolumeIoTest, NrrdAnnouncingMoreDataThanItHoldsIsRefusedUpFront) {
+  // int32, 500^3: 500 MB announced.
+  std::ofstream(dir_ / "raw.nrrd", std::ios::binary)
+      << "NRRD0004\ntype: int32\ndimension: 3\nsizes: 500 500 500\nspacings: 1 1 1\n"
+         "endian: little\nencoding: raw\n\n0123456789";
+  EXPECT_EQ(ReadFailsWith(dir_ / "raw.nrrd", "truncated"), test::kWorkTrue);
+  // gzip: a few compressed bytes cannot inflate to 500 MB.
+  std::string gz_bytes;
+  {
+    WriteGzip(dir_ / "data.gz", std::string(1 << 16, '\0'));
+    std::ifstream in(dir_ / "data.gz", std::ios::binary);
+    gz_bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  std::ofstream(dir_ / "gzip.nrrd", std::ios::binary)
+      << "NRRD0004\ntype: int32\ndimension: 3\nsizes: 500 500 500\nspacings: 1 1 1\n"
+         "endian: little\nencoding: gzip\n\n"
+      << gz_bytes;
+  EXPECT_EQ(ReadFailsWith(dir_ / "gzip.nrrd", "gzip cannot hold that much"), test::kWorkTrue);
 }
 
 }  // namespace

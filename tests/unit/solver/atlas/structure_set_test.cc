@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -14,6 +15,7 @@
 #include "atlas/contours.h"
 #include "atlas/label_volume_io.h"
 #include "atlas/structure_overlap.h"
+#include "common/yaml_bombs.h"
 
 namespace pba {
 namespace {
@@ -129,6 +131,8 @@ TEST_F(StructureSetTest, ManifestErrorsNameTheEntry) {
   const Status same_colour =
       read(a + R"(, {"name": "B", "file": "b.json", "format": "stl", "colour": "10,20,30"})");
   EXPECT_EQ(same_colour.field(), "structures[1].colour");
+  EXPECT_NE(same_colour.message().find("taken by structure 'A'"), std::string::npos)
+      << same_colour.ToString();
   const Status format =
       read(R"({"name": "B", "file": "b.json", "format": "ply", "colour": "1,2,3"})");
   EXPECT_EQ(format.field(), "structures[0].format");
@@ -186,6 +190,68 @@ TEST_F(StructureSetTest, ManifestRoundTripsWithItsChecksums) {
     EXPECT_TRUE(ParseStructureFormat(StructureFormatName(f), &parsed));
     EXPECT_EQ(parsed, f);
   }
+}
+
+// A structure named "manifest" is a legal name; its file must not be the
+// manifest's, nor "Foo"'s and "foo"'s one file where case is folded.
+TEST_F(StructureSetTest, FileNamesNeverTakeTheManifestsOrDifferOnlyInCase) {
+  StructureFileNames names;
+  EXPECT_EQ(names.Take("manifest", ".json"), "manifest_2.json");
+  EXPECT_EQ(names.Take("Manifest", ".json"), "Manifest_3.json");
+  EXPECT_EQ(names.Take("manifest", ".stl"), "manifest.stl");
+  EXPECT_EQ(names.Take("Foo", ".json"), "Foo.json");
+  EXPECT_EQ(names.Take("foo", ".json"), "foo_2.json");
+  EXPECT_EQ(names.Take("foo_2", ".json"), "foo_2_2.json");
+
+  // A manifest naming itself as a structure's file is refused, naming the
+  // entry, and so is writing one.
+  StructureSet set;
+  set.structures.push_back(
+      Entry("manifest", kStructureSetManifest, StructureFormat::kContours, 10));
+  const Status written = WriteStructureSet(set, dir_);
+  EXPECT_EQ(written.code(), Status::Code::kInvalidArgument);
+  EXPECT_EQ(written.field(), "structures[0].file");
+  EXPECT_NE(written.message().find("'manifest'"), std::string::npos) << written.ToString();
+  WriteText(dir_ / kStructureSetManifest,
+            R"({"structures": [{"name": "manifest", "file": "manifest.json", )"
+            R"("format": "contours_json", "colour": "10,20,30"}]})");
+  const Status read = ReadStructureSet(dir_, &set);
+  EXPECT_EQ(read.field(), "structures[0].file");
+  EXPECT_NE(read.message().find("is the manifest"), std::string::npos) << read.ToString();
+}
+
+// Nine levels of ten aliases (the "billion laughs") as a manifest's
+// structures and as a contours file's polygons: refused before loading,
+// naming the file (the manifest) or the field (the contours) and the line.
+using yaml_bombs::AliasLevels;
+
+TEST_F(StructureSetTest, AManifestOfAliasesIsRefusedNamingTheFile) {
+  WriteText(dir_ / "a.json", "{}");
+  WriteText(dir_ / kStructureSetManifest,
+            AliasLevels(R"({"name": "A", "file": "a.json", "format": "contours_json", )"
+                        R"("colour": "10,20,30"})") +
+                "structures: *l9\n");
+  const auto start = std::chrono::steady_clock::now();
+  StructureSet set;
+  const Status read = ReadStructureSet(dir_, &set);
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 2);
+  EXPECT_EQ(read.code(), Status::Code::kInvalidArgument);
+  EXPECT_EQ(read.field(), "manifest.json");
+  EXPECT_NE(read.ToString().find("manifest.json: line 2: YAML aliases (*l0) are not accepted"),
+            std::string::npos)
+      << read.ToString();
+}
+
+TEST(ContoursJsonTest, AliasesAreRefusedBeforeLoading) {
+  const std::string bomb =
+      AliasLevels("[[0, 0], [10, 0], [0, 10]]") + "plates: [{z_mm: 0, polygons: *l9}]\n";
+  const auto start = std::chrono::steady_clock::now();
+  Contours contours;
+  const Status s = ParseContoursJson(bomb, "upload", &contours);
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 2);
+  EXPECT_EQ(s.code(), Status::Code::kInvalidArgument);
+  EXPECT_EQ(s.field(), "upload");
+  EXPECT_EQ(s.message().rfind("contours JSON: line 2: YAML aliases (*l0)", 0), 0u) << s.ToString();
 }
 
 TEST(ContoursJsonTest, NumbersRoundTripAndErrorsNameTheirPlace) {

@@ -1,6 +1,7 @@
 // Splitting an atlas into a structure set (structure_split.h): the
-// synthetic atlas into contours, a label volume into masks, and the
-// all-or-nothing output directory.
+// synthetic atlas into contours, a label volume into masks, file names that
+// would clash with the manifest or in case, and the all-or-nothing output
+// directory.
 #include "atlas/structure_split.h"
 
 #include <gtest/gtest.h>
@@ -11,6 +12,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <map>
 #include <set>
 #include <string>
 #include <tuple>
@@ -239,6 +241,55 @@ TEST_F(StructureSplitTest, LabelVolumeSplitsIntoCroppedMasksOnTheSameLattice) {
   ASSERT_EQ(result.set.structures.size(), 1u);
   EXPECT_EQ(result.set.structures[0].name, "nucleus_a");
   EXPECT_EQ(result.set.structures[0].file, "nucleus_a.nii.gz");
+}
+
+// A structure named "manifest" split from plates would be manifest.json,
+// the manifest's own name; "Foo" and "foo" would be one file on macOS and
+// Windows. Each gets a file of its own and the set reads back whole.
+TEST_F(StructureSplitTest, PlateNamesClashingWithTheManifestOrInCaseGetFilesOfTheirOwn) {
+  LabelVolume volume({20, 10, 6}, Eigen::Vector3d::Zero(), Eigen::Vector3d(1, 1, 1));
+  for (int k = 0; k < 6; ++k) {
+    for (int j = 2; j < 8; ++j) {
+      for (int i = 1; i < 18; ++i) {
+        if (i % 6 != 0) volume.set(i, j, k, static_cast<uint16_t>(i / 6 + 1));
+      }
+    }
+  }
+  ColourTable colours;
+  ASSERT_TRUE(ColourTable::FromEntries(
+                  {{1, "manifest", 200, 10, 10}, {2, "Foo", 10, 200, 10}, {3, "foo", 10, 10, 200}},
+                  &colours)
+                  .ok());
+  PlateOptions plates;
+  plates.z_mm = {1, 2, 3, 4};
+  ASSERT_TRUE(WritePlates(volume, colours, plates, root_ / "plates").ok());
+  SplitOptions options;
+  options.source.source = AtlasBuildOptions::Source::kPlates;
+  options.source.input = root_ / "plates";
+  SplitResult result;
+  const Status split = SplitAtlas(options, root_ / "set", &result);
+  ASSERT_TRUE(split.ok()) << split.ToString();
+
+  std::map<std::string, std::string> files;
+  for (const StructureEntry& entry : result.set.structures) files[entry.name] = entry.file;
+  EXPECT_EQ(files,
+            (std::map<std::string, std::string>{
+                {"manifest", "manifest_2.json"}, {"Foo", "Foo.json"}, {"foo", "foo_2.json"}}));
+  EXPECT_EQ(Entries(root_ / "set"), (std::set<std::string>{kStructureSetManifest, "manifest_2.json",
+                                                           "Foo.json", "foo_2.json"}));
+  // Readable: every file where the manifest says, its SHA-256 matching, and
+  // the set composes into the three structures.
+  StructureSet read;
+  const Status read_status = ReadStructureSet(root_ / "set", &read);
+  ASSERT_TRUE(read_status.ok()) << read_status.ToString();
+  ASSERT_EQ(read.structures.size(), 3u);
+  for (const StructureEntry& entry : read.structures) {
+    EXPECT_EQ(entry.sha256, Sha256Hex(Slurp(root_ / "set" / entry.file))) << entry.name;
+  }
+  ComposedAtlas atlas;
+  const Status composed = ComposeStructureSet(root_ / "set", read, ComposeOptions(), &atlas);
+  ASSERT_TRUE(composed.ok()) << composed.ToString();
+  EXPECT_EQ(atlas.colours.entries().size(), 3u);
 }
 
 TEST_F(StructureSplitTest, ExistingNonEmptyDirectoryIsRefusedAndLeftAlone) {

@@ -10,6 +10,8 @@
 #include <stdlib.h>
 
 #include <array>
+#include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -17,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "io/abaqus_writer.h"
 #include "mesh/primitive_mesher.h"
 #include "mesh/quadratic.h"
 
@@ -252,11 +255,12 @@ TEST_P(MeshExportTest, XdmfWithHdf5) {
   }
   ReadBack read;
   for (int r = 0; r < 2; ++r) {
-    const std::string key = "<Information Name=\"region " + std::to_string(r) + "\" Value=\"";
-    const size_t at = text.find(key);
-    ASSERT_NE(at, std::string::npos);
-    read.region_names[r] =
-        text.substr(at + key.size(), text.find('"', at + key.size()) - at - key.size());
+    // meshio's field-data map: <map key="NAME" dim="3">r</map>.
+    const std::string value = "\" dim=\"3\">" + std::to_string(r) + "</map>";
+    const size_t end = text.find(value);
+    ASSERT_NE(end, std::string::npos);
+    const size_t begin = text.rfind("key=\"", end) + 5;
+    read.region_names[r] = text.substr(begin, end - begin);
   }
   const hid_t h5 = H5Fopen((dir_.path() / "atlas.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
   ASSERT_GE(h5, 0);
@@ -506,6 +510,69 @@ TEST(MeshExportOptionsTest, AbaqusSetNamesFollowTheRules) {
   ASSERT_NE(at, std::string::npos);
   EXPECT_EQ(text.find('\n', at) - (at + 14), 80u);  // the name alone
   EXPECT_NE(text.find("*ELSET, ELSET=EALL_2\n"), std::string::npos);
+}
+
+// CalculiX reads each number of a data line in at most 20 characters; a
+// longer coordinate made it refuse atlas.inp (exit 201 on *NODE).
+TEST(AbaqusNumberTest, FitsTwentyCharactersAndKeepsWhatFits) {
+  const double extremes[] = {1e-300,
+                             -1.2345678901234567e+200,
+                             -1.2345678901234567e-200,
+                             -2.2250738585072014e-308,
+                             -4.9406564584124654e-324,
+                             -1.7976931348623157e+308,
+                             -0.00012345678901234567,
+                             -123456789012345678.0,
+                             -0.1 - 0.2,
+                             1.0 / 3.0};
+  for (double value : extremes) {
+    const std::string text = AbaqusNumber(value);
+    EXPECT_LE(text.size(), 20u) << text;
+    // 13 significant digits always fit: sign, d.dddddddddddd, e-308.
+    // strtod: std::stod refuses the subnormal ones.
+    EXPECT_NEAR(std::strtod(text.c_str(), nullptr), value, 1e-12 * std::abs(value)) << text;
+  }
+  // The shortest form that reads back, when one fits.
+  EXPECT_EQ(AbaqusNumber(0.45), "0.45");
+  EXPECT_EQ(AbaqusNumber(0.4999999), "0.4999999");
+  EXPECT_EQ(AbaqusNumber(3000), "3000");
+  EXPECT_EQ(std::stod(AbaqusNumber(1.0 / 3.0)), 1.0 / 3.0);
+  EXPECT_EQ(std::stod(AbaqusNumber(-0.1 - 0.2)), -0.1 - 0.2);
+}
+
+TEST(MeshExportOptionsTest, AbaqusFieldsFitTwentyCharactersAtExtremeCoordinates) {
+  TempDir dir;
+  Mesh mesh = TwoRegionBox(Kind::kTet10);
+  const double extremes[] = {1e-300, -1.2345678901234567e+200, -1.2345678901234567e-200,
+                             -0.12345678901234567, 1.0 / 3.0};
+  for (int i = 0; i < mesh.num_nodes(); ++i) {
+    for (int k = 0; k < 3; ++k) mesh.nodes(i, k) = extremes[(3 * i + k) % 5] * (1 + i);
+  }
+  ASSERT_TRUE(ExportMesh(mesh, dir.path() / "a.inp").ok());
+  std::istringstream in(ReadText(dir.path() / "a.inp"));
+  std::string line;
+  int node_lines = 0;
+  bool nodes = false;
+  while (std::getline(in, line)) {
+    if (line.rfind("*", 0) == 0) {
+      nodes = line == "*NODE, NSET=NALL";
+      continue;
+    }
+    std::string item;
+    std::vector<double> v;
+    for (std::istringstream fields(line); std::getline(fields, item, ',');) {
+      const std::string field = item.substr(item.find_first_not_of(' '));
+      EXPECT_LE(field.size(), 20u) << line;
+      if (nodes) v.push_back(std::strtod(field.c_str(), nullptr));
+    }
+    if (!nodes) continue;
+    const int i = static_cast<int>(v[0]) - 1;
+    ASSERT_EQ(i, node_lines++);
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_NEAR(v[1 + k], 1000 * mesh.nodes(i, k), 1e-12 * std::abs(1000 * mesh.nodes(i, k)));
+    }
+  }
+  EXPECT_EQ(node_lines, mesh.num_nodes());
 }
 
 }  // namespace

@@ -4,7 +4,10 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <string>
+
+#include "common/bounded_run.h"
 
 namespace pba {
 namespace {
@@ -64,6 +67,43 @@ TEST(SurfaceIoTest, OpenSurfacesAndOtherFormatsAreRefusedOnTheField) {
       ReadSurface("# vtk DataFile Version 3.0\nx\nBINARY\n", StructureFormat::kVtk, "f", &surface);
   EXPECT_NE(vtk.message().find("only ASCII"), std::string::npos) << vtk.ToString();
   EXPECT_FALSE(ReadSurface(ObjCube(), StructureFormat::kNifti, "f", &surface).ok());
+}
+
+// ---- Hostile VTK: counts a header announces but the file does not hold.
+// Each read runs in a child that may map only 48 MiB more than the test
+// (common/bounded_run.h): a reader that allocates what the file announces
+// runs out of memory there instead of passing.
+
+// The reader's status in a bounded child: kWorkTrue when it failed with
+// kInvalidArgument on the field and a message holding `expected`.
+test::BoundedRunResult VtkFailsWith(const std::string& vtk, const std::string& expected) {
+  return test::RunBounded(int64_t{48} << 20, 20, [&] {
+    TriangleSurface surface;
+    const Status s = ReadSurface(vtk, StructureFormat::kVtk, "upload_id", &surface);
+    return s.code() == Status::Code::kInvalidArgument && s.field() == "upload_id" &&
+           s.message().find(expected) != std::string::npos;
+  });
+}
+
+TEST(SurfaceIoTest, VtkAnnouncingMorePointsOrPolygonsThanItHoldsIsRefusedQuickly) {
+  const std::string head = "# vtk DataFile Version 3.0\nbomb\nASCII\nDATASET POLYDATA\n";
+  // A polygon of 2^28 points: a gigabyte of indices when allocated up front.
+  const std::string big_polygon =
+      head + "POINTS 3 float\n0 0 0 1 0 0 0 1 0\nPOLYGONS 1 268435457\n268435456 0 1 2\n";
+  ASSERT_LT(big_polygon.size(), 140u);
+  const auto start = std::chrono::steady_clock::now();
+  EXPECT_EQ(
+      VtkFailsWith(big_polygon, "VTK: a polygon of 268435456 points, but the file has only 3"),
+      test::kWorkTrue);
+  // Two billion points or polygons announced, a few present.
+  EXPECT_EQ(VtkFailsWith(head + "POINTS 2000000000 float\n0 0 0 1 0 0\n",
+                         "VTK: fewer POINTS than announced"),
+            test::kWorkTrue);
+  EXPECT_EQ(VtkFailsWith(head + "POINTS 3 float\n0 0 0 1 0 0 0 1 0\n"
+                                "POLYGONS 2000000000 8000000000\n3 0 1 2\n",
+                         "VTK: fewer POLYGONS than announced (1 of 2000000000)"),
+            test::kWorkTrue);
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 5);
 }
 
 }  // namespace

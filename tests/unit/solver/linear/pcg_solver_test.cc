@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/SparseCore>
+#include <atomic>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -100,6 +101,41 @@ TEST(PcgSolver, KeepsItsOwnCopyOfTheMatrix) {
   Eigen::VectorXd x;
   ASSERT_TRUE(pcg->Solve(b, &x).ok());
   EXPECT_LT((a * x - b).norm(), 1e-12 * b.norm());
+}
+
+// A cancel is seen inside the CG iteration, not only between Newton
+// iterations: a set flag ends a solve at once with Status::Cancelled, and a
+// fresh solver of the same kind looks at the same flag. Cleared, the same
+// solver solves.
+TEST(PcgSolver, CancelEndsTheIteration) {
+  const SceneSpec scene = Block(2.5, AnalysisSpec::LinearSolver::kPcg);
+  Model model;
+  ASSERT_TRUE(BuildModel(scene, &model).ok());
+  LinearSystem system;
+  ASSERT_TRUE(
+      AssembleLinearSystem(
+          model.mesh,
+          ElasticityField::Uniform(IsotropicElasticity(3000, 0.45), model.mesh.num_elements()),
+          model.dofs, ColourElements(model.mesh), [](double) { return true; }, &system)
+          .ok());
+  std::atomic<bool> cancel{true};
+  LinearSolverOptions options;
+  options.kind = LinearSolverOptions::Kind::kPcg;
+  options.cancel = &cancel;
+  const auto pcg = CreateLinearSolver(options);
+  ASSERT_TRUE(pcg->Factorize(system.k).ok());
+  Eigen::VectorXd x;
+  const Status cancelled = pcg->Solve(system.rhs, &x);
+  EXPECT_EQ(cancelled.code(), Status::Code::kCancelled) << cancelled.ToString();
+  EXPECT_NE(cancelled.message().find("conjugate gradients"), std::string::npos)
+      << cancelled.message();
+  const auto other = pcg->NewOfSameKind();
+  ASSERT_TRUE(other->Factorize(system.k).ok());
+  EXPECT_EQ(other->Solve(system.rhs, &x).code(), Status::Code::kCancelled);
+  cancel = false;
+  const Status solved = pcg->Solve(system.rhs, &x);
+  ASSERT_TRUE(solved.ok()) << solved.ToString();
+  EXPECT_LT((system.k * x - system.rhs).norm() / system.rhs.norm(), 1e-11);
 }
 
 // The 1D Laplacian (tridiagonal 2, -1) minus `shift` times the identity.

@@ -588,6 +588,18 @@ INSTANTIATE_TEST_SUITE_P(
              "analysis.time.initial_step_s", "must not exceed max_step_s (2 s)"},
         Case{"max_step_above_end", [](SceneSpec* s) { s->analysis.time.max_step_s = 20; },
              "analysis.time.max_step_s", "must not exceed end_time_s (10 s)"},
+        // A max step of 1e-300 s ran until killed; floors at 1e-6 (max) and
+        // 1e-9 (min, initial) of end_time_s (TimeOptions).
+        Case{"max_step_tiny", [](SceneSpec* s) { s->analysis.time.max_step_s = 1e-300; },
+             "analysis.time.max_step_s", "at least 1e-06 of end_time_s (1e-05 s)"},
+        Case{"initial_step_tiny",
+             [](SceneSpec* s) {
+               s->analysis.time.min_step_s = 0;
+               s->analysis.time.initial_step_s = 1e-300;
+             },
+             "analysis.time.initial_step_s", "at least 1e-09 of end_time_s (1e-08 s)"},
+        Case{"min_step_tiny", [](SceneSpec* s) { s->analysis.time.min_step_s = 1e-300; },
+             "analysis.time.min_step_s", "at least 1e-09 of end_time_s"},
         Case{"min_step_above_max_without_initial",
              [](SceneSpec* s) {
                s->analysis.time.initial_step_s = 0;
