@@ -8,10 +8,9 @@
 
 namespace pba::cli {
 
-// Lowercase hex SHA-256 of the file; "" when it cannot be read.
+// Lowercase hex SHA-256 of the file (core/sha256.h); "" when it cannot be
+// read.
 std::string Sha256File(const std::filesystem::path& path);
-// Lowercase hex SHA-256 of `text`.
-std::string Sha256Text(const std::string& text);
 
 // Writes `content` to a temporary sibling with `mode` permissions, then
 // renames it over `path`. False (errno kept) on failure, leaving `path` as

@@ -14,6 +14,7 @@
 #include <thread>
 
 #include "commands/atlas_shared.h"
+#include "core/sha256.h"
 #include "exit_codes.h"
 #include "files.h"
 #include "output.h"
@@ -492,8 +493,8 @@ int Commit(Connection& connection, const CommitArgs& args) {
   }
   // The same checkout and the same file make the same key: a commit rerun
   // after a lost reply gets the revision it made, not a refusal.
-  request.set_request_id(Sha256Text(state.lock_id + "\n" + std::to_string(state.base_revision) +
-                                    "\n" + Sha256File(args.file))
+  request.set_request_id(Sha256Hex(state.lock_id + "\n" + std::to_string(state.base_revision) +
+                                   "\n" + Sha256File(args.file))
                              .substr(0, 32));
   std::string upload_id;
   if (int code = UploadFile(connection, args.file, &upload_id); code != kExitOk) return code;

@@ -15,6 +15,7 @@
 #include "commands/batch_plot.h"
 #include "commands/batch_shared.h"
 #include "commands/job_commands.h"
+#include "core/sha256.h"
 #include "core/yaml_guard.h"
 #include "exit_codes.h"
 #include "files.h"
@@ -225,7 +226,7 @@ bool LoadBatch(const std::string& file, Batch* batch, std::string* error) {
         batch->snapshot.project().empty()
             ? ""
             : "\nsnapshot " + batch->snapshot.project() + "/" + batch->snapshot.snapshot();
-    member.request_id = Sha256Text(batch->name + "\n" + out.c_str() + on).substr(0, 32);
+    member.request_id = Sha256Hex(batch->name + "\n" + out.c_str() + on).substr(0, 32);
     batch->members.push_back(std::move(member));
     batch->values.push_back(std::move(written));
   }

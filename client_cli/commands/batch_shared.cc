@@ -9,6 +9,7 @@
 #include <thread>
 
 #include "codec/yaml_codec.h"
+#include "core/sha256.h"
 #include "exit_codes.h"
 #include "files.h"
 #include "output.h"
@@ -175,7 +176,7 @@ std::vector<size_t> ResumeMembers(Connection& connection, const RunOptions& opti
         continue;
       }
       // A new key for the retry: the old one would return the failed job.
-      if (failed) m.request_id = Sha256Text(m.request_id + it->second).substr(0, 32);
+      if (failed) m.request_id = Sha256Hex(m.request_id + it->second).substr(0, 32);
     }
     to_submit.push_back(i);
   }

@@ -14,6 +14,7 @@
 #include "codec/yaml_codec.h"
 #include "commands/batch_shared.h"
 #include "commands/job_commands.h"
+#include "core/sha256.h"
 #include "exit_codes.h"
 #include "files.h"
 #include "output.h"
@@ -222,7 +223,7 @@ bool BuildStudy(const StudyArgs& args, Study* study, std::string* error) {
     }
     // The same mesh of the same scene gets the same request id, so a rerun
     // (or a submit repeated after an interruption) finds the job made.
-    member.request_id = Sha256Text("convergence\n" + std::string(out.c_str()) + on).substr(0, 32);
+    member.request_id = Sha256Hex("convergence\n" + std::string(out.c_str()) + on).substr(0, 32);
     member.key = member.request_id;
     study->members.push_back(std::move(member));
     study->set.push_back(std::move(set));

@@ -13,7 +13,7 @@
 #include <sstream>
 #include <system_error>
 
-#include "jobs/file_digest.h"
+#include "core/sha256.h"
 #include "jobs/solver_process.h"
 #include "pba/v1/solve_event.pb.h"
 #include "store/atomic_file.h"
@@ -130,7 +130,7 @@ Status CollectResult(const fs::path& dir, v1::Summary* summary,
     file.set_name(entry.path().filename().string());
     std::string sha256;
     int64_t size = 0;
-    PBA_RETURN_IF_ERROR(Sha256File(entry.path(), &sha256, &size));
+    PBA_RETURN_IF_ERROR(FileSha256Hex(entry.path(), &sha256, &size));
     file.set_sha256(sha256);
     file.set_size_bytes(size);
     files->push_back(std::move(file));

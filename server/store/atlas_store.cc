@@ -4,10 +4,11 @@
 #include <set>
 #include <system_error>
 
+#include "core/sha256.h"
 #include "store/atlas_store_internal.h"
 #include "store/migrations.h"
 #include "store/page_token.h"
-#include "store/sha256.h"
+#include "store/random_hex.h"
 #include "store/transaction.h"
 
 namespace pba {
@@ -256,7 +257,7 @@ Status AtlasStore::CreateUser(const std::string& name, std::string* token, bool 
   std::string secret;
   std::string hash;
   PBA_RETURN_IF_ERROR(RandomHex(kTokenBytes, &secret));
-  PBA_RETURN_IF_ERROR(Sha256Hex(secret, &hash));
+  hash = Sha256Hex(secret);
   PBA_RETURN_IF_ERROR(
       db_->Prepare("INSERT INTO users (name, token_sha256, created_us, server_admin) "
                    "VALUES (?, ?, ?, ?)",
@@ -277,8 +278,7 @@ Status AtlasStore::CreateUser(const std::string& name, std::string* token, bool 
 Status AtlasStore::Authenticate(const std::string& token, std::string* user, bool* server_admin) {
   // Tokens have the shape of a SHA-256 hex string (32 random bytes in hex).
   if (!IsSha256Hex(token)) return Status::Unauthenticated("malformed access token");
-  std::string hash;
-  PBA_RETURN_IF_ERROR(Sha256Hex(token, &hash));
+  const std::string hash = Sha256Hex(token);
   std::lock_guard lock(mutex_);
   // Read on every call, never cached: a user disabled offline (pba-server
   // admin disable-user) is refused from the next call on.

@@ -10,10 +10,10 @@
 #include <string>
 #include <string_view>
 
+#include "core/sha256.h"
 #include "pba/status.h"
 #include "store/atlas_store.h"
 #include "store/atlas_types.h"
-#include "store/sha256.h"
 
 namespace pba::atlas_internal {
 
@@ -87,9 +87,7 @@ inline std::string CreateFingerprint(std::initializer_list<std::string_view> fie
   for (std::string_view field : fields) {
     text.append(std::to_string(field.size())).append(":").append(field);
   }
-  std::string hash;
-  (void)Sha256Hex(text, &hash);  // fails only if OpenSSL cannot hash at all
-  return hash;
+  return Sha256Hex(text);
 }
 
 }  // namespace pba::atlas_internal

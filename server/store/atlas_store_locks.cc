@@ -6,7 +6,7 @@
 
 #include "store/atlas_store.h"
 #include "store/atlas_store_internal.h"
-#include "store/sha256.h"
+#include "store/random_hex.h"
 #include "store/transaction.h"
 
 namespace pba {

@@ -12,8 +12,8 @@
 #include <system_error>
 #include <vector>
 
+#include "core/sha256.h"
 #include "store/atomic_file.h"
-#include "store/sha256.h"
 
 namespace pba {
 namespace fs = std::filesystem;
@@ -60,15 +60,12 @@ Status BlobStore::ReadVerified(const std::string& hash, std::string* bytes, bool
   content << in.rdbuf();
   if (in.bad()) return Status::Io("cannot read blob " + hash + " (" + path.string() + ")");
   *bytes = std::move(content).str();
-  std::string actual;
-  PBA_RETURN_IF_ERROR(Sha256Hex(*bytes, &actual));
-  *intact = actual == hash;
+  *intact = Sha256Hex(*bytes) == hash;
   return Status::Ok();
 }
 
 Status BlobStore::Put(std::string_view bytes, std::string* hash) {
-  std::string computed;
-  PBA_RETURN_IF_ERROR(Sha256Hex(bytes, &computed));
+  const std::string computed = Sha256Hex(bytes);
   std::lock_guard lock(mutex_);
   const fs::path path = PathOf(computed);
   std::error_code ec;

@@ -10,7 +10,7 @@
 #include <cerrno>
 #include <cstring>
 
-#include "store/sha256.h"
+#include "core/sha256.h"
 
 namespace pba {
 namespace {
@@ -53,26 +53,17 @@ MappedFile::~MappedFile() {
 }
 
 Status MappedFile::Sha256Hex(std::string* hex) const {
-  std::unique_ptr<EVP_MD_CTX, decltype(&EVP_MD_CTX_free)> context(EVP_MD_CTX_new(),
-                                                                  EVP_MD_CTX_free);
-  if (!context || EVP_DigestInit_ex(context.get(), EVP_sha256(), nullptr) != 1) {
-    return Status::Internal("cannot compute SHA-256");
-  }
+  pba::Sha256 sha;
   char* const base = static_cast<char*>(data_);
   for (size_t offset = 0; offset < size_; offset += kWindowBytes) {
     const size_t length = std::min(kWindowBytes, size_ - offset);
-    if (EVP_DigestUpdate(context.get(), base + offset, length) != 1) {
-      return Status::Internal("cannot compute SHA-256");
-    }
+    if (!sha.Update(base + offset, length)) break;  // Finish reports it
     // Windows start at multiples of kWindowBytes, so page-aligned.
     ::madvise(base + offset, length, MADV_DONTNEED);
   }
-  unsigned char digest[EVP_MAX_MD_SIZE];
-  unsigned int length = 0;
-  if (EVP_DigestFinal_ex(context.get(), digest, &length) != 1) {
-    return Status::Internal("cannot compute SHA-256");
-  }
-  *hex = HexOf(digest, length);
+  Sha256Digest digest{};
+  PBA_RETURN_IF_ERROR(sha.Finish(&digest));
+  *hex = HexOf(digest);
   return Status::Ok();
 }
 

@@ -12,9 +12,10 @@
 #include <system_error>
 #include <vector>
 
+#include "core/sha256.h"
 #include "store/atlas_types.h"
 #include "store/atomic_file.h"
-#include "store/sha256.h"
+#include "store/random_hex.h"
 
 namespace pba {
 namespace fs = std::filesystem;
@@ -293,8 +294,7 @@ Status UploadStore::Take(const std::string& user, const std::string& id, std::st
     content->clear();
     return Status::Io("cannot read upload " + id);
   }
-  std::string hash;
-  PBA_RETURN_IF_ERROR(Sha256Hex(*content, &hash));
+  const std::string hash = Sha256Hex(*content);
   if (hash != info.sha256) {
     content->clear();
     return Discard(info, hash);

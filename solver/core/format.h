@@ -7,12 +7,18 @@
 
 namespace pba {
 
-// Formats like snprintf; messages longer than 511 characters are cut.
+// Formats like snprintf, whatever the length: a short message from a stack
+// buffer, a longer one formatted again into a string of its exact size
+// (a message naming many structures, or a path, must never be cut).
 template <typename... Args>
 std::string Format(const char* format, Args... args) {
   char buffer[512];
-  std::snprintf(buffer, sizeof buffer, format, args...);
-  return buffer;
+  const int length = std::snprintf(buffer, sizeof buffer, format, args...);
+  if (length < 0) return "(unformattable message: " + std::string(format) + ")";
+  if (static_cast<size_t>(length) < sizeof buffer) return std::string(buffer, length);
+  std::string out(static_cast<size_t>(length), '\0');
+  std::snprintf(out.data(), out.size() + 1, format, args...);
+  return out;
 }
 
 // `s` as a JSON string literal: quoted, with '"' and the backslash escaped

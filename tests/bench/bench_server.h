@@ -17,7 +17,7 @@
 #include "app/pba_server.h"
 #include "pba/v1/atlas.grpc.pb.h"
 #include "pba/v1/job.grpc.pb.h"
-#include "store/sha256.h"
+#include "core/sha256.h"
 #include "unit/server/temp_dir.h"
 
 namespace pba::testing {
@@ -131,8 +131,7 @@ class BenchServer {
 
   grpc::Status CreateStructure(const std::string& name, v1::GeometryFormat format,
                                const std::string& content) {
-    std::string hash;
-    if (!Sha256Hex(content, &hash).ok()) return grpc::Status(grpc::StatusCode::INTERNAL, "hash");
+    const std::string hash = Sha256Hex(content);
     v1::CreateStructureRequest request;
     grpc::Status status = Upload(content, hash, request.mutable_upload_id());
     if (!status.ok()) return status;

@@ -13,12 +13,12 @@
 
 #include "app/pba_server.h"
 #include "atlas/structure_set.h"
+#include "core/sha256.h"
 #include "pba/v1/atlas.grpc.pb.h"
 #include "pba/v1/job.grpc.pb.h"
 #include "service/atlas_event_hub.h"
 #include "store/atlas_store.h"
 #include "store/job_store.h"
-#include "store/sha256.h"
 #include "unit/server/server_test_support.h"
 
 namespace pba {
@@ -77,8 +77,7 @@ class AtlasJobsTest : public ::testing::Test {
   std::string Upload(const std::string& bytes) {
     v1::BeginUploadRequest begin;
     begin.set_size_bytes(static_cast<int64_t>(bytes.size()));
-    std::string sha;
-    EXPECT_TRUE(Sha256Hex(bytes, &sha).ok());
+    const std::string sha = Sha256Hex(bytes);
     begin.set_sha256(sha);
     v1::Upload upload;
     EXPECT_TRUE(Call(admin_, [&](grpc::ClientContext* c) {

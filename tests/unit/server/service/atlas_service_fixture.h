@@ -14,8 +14,8 @@
 #include <vector>
 
 #include "app/pba_server.h"
+#include "core/sha256.h"
 #include "service/atlas_service.h"
-#include "store/sha256.h"
 #include "unit/server/server_test_support.h"
 
 namespace pba::service_test {
@@ -25,11 +25,7 @@ namespace fs = std::filesystem;
 
 constexpr size_t kMiB = 1 << 20;
 
-inline std::string Hash(const std::string& bytes) {
-  std::string hash;
-  EXPECT_TRUE(Sha256Hex(bytes, &hash).ok());
-  return hash;
-}
+inline std::string Hash(const std::string& bytes) { return Sha256Hex(bytes); }
 
 inline bool Contains(const std::string& text, const std::string& fragment) {
   return text.find(fragment) != std::string::npos;

@@ -13,12 +13,12 @@
 #include <thread>
 
 #include "app/pba_server.h"
+#include "core/sha256.h"
 #include "pba/v1/atlas.grpc.pb.h"
 #include "pba/v1/job.grpc.pb.h"
 #include "service/atlas_service.h"
 #include "service/job_service.h"
 #include "store/atlas_store.h"
-#include "store/sha256.h"
 #include "unit/server/server_test_support.h"
 
 namespace pba {
@@ -84,8 +84,7 @@ class ServerRightsTest : public ::testing::Test {
   std::string Upload(const std::string& token, const std::string& bytes) {
     v1::BeginUploadRequest begin;
     begin.set_size_bytes(static_cast<int64_t>(bytes.size()));
-    std::string sha;
-    EXPECT_TRUE(Sha256Hex(bytes, &sha).ok());
+    const std::string sha = Sha256Hex(bytes);
     begin.set_sha256(sha);
     v1::Upload upload;
     EXPECT_TRUE(Call(token, [&](grpc::ClientContext* c) {

@@ -11,10 +11,10 @@
 #include <set>
 #include <thread>
 
+#include "core/sha256.h"
 #include "store/atlas_store.h"
 #include "store/database.h"
 #include "store/migrations.h"
-#include "store/sha256.h"
 #include "unit/server/temp_dir.h"
 
 namespace pba::store_test {
@@ -26,11 +26,7 @@ constexpr int64_t kSecond = 1000 * 1000;
 // 2026-01-01T00:00:00Z: the injected clock starts here.
 constexpr int64_t kStart = 1767225600LL * kSecond;
 
-inline std::string Hash(const std::string& bytes) {
-  std::string hash;
-  EXPECT_TRUE(Sha256Hex(bytes, &hash).ok());
-  return hash;
-}
+inline std::string Hash(const std::string& bytes) { return Sha256Hex(bytes); }
 
 inline bool Contains(const std::string& text, const std::string& fragment) {
   return text.find(fragment) != std::string::npos;

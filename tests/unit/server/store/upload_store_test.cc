@@ -8,7 +8,7 @@
 #include <iterator>
 #include <vector>
 
-#include "store/sha256.h"
+#include "core/sha256.h"
 #include "unit/server/temp_dir.h"
 
 namespace pba {
@@ -21,8 +21,7 @@ constexpr int64_t kSecond = 1000 * 1000;
 constexpr int64_t kStart = 1767225600LL * kSecond;
 
 std::string Hash(const std::string& bytes) {
-  std::string hash;
-  EXPECT_TRUE(Sha256Hex(bytes, &hash).ok());
+  const std::string hash = Sha256Hex(bytes);
   return hash;
 }
 

@@ -1,0 +1,71 @@
+// pba_base: the one SHA-256 (known answers, pieces against one call, files
+// with their size) and Format, which never cuts a message.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "core/format.h"
+#include "core/sha256.h"
+
+namespace pba {
+namespace {
+
+// FIPS 180-2's examples.
+constexpr char kEmpty[] = "e3b0c44298fc1c149afbf4c8996fb92427ae41e4649b934ca495991b7852b855";
+constexpr char kAbc[] = "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad";
+
+TEST(Sha256Test, KnownAnswers) {
+  EXPECT_EQ(Sha256Hex(""), kEmpty);
+  EXPECT_EQ(Sha256Hex("abc"), kAbc);
+  EXPECT_EQ(HexOf(Sha256Of("abc", 3)), kAbc);
+  EXPECT_TRUE(IsSha256Hex(kAbc));
+  EXPECT_FALSE(IsSha256Hex(std::string(kAbc).substr(1)));
+  EXPECT_FALSE(IsSha256Hex("BA7816BF8F01CFEA414140DE5DAE2223B00361A396177A9CB410FF61F20015AD"));
+  const unsigned char bytes[] = {0x00, 0x0f, 0xa0, 0xff};
+  EXPECT_EQ(HexOf(bytes, sizeof bytes), "000fa0ff");
+}
+
+TEST(Sha256Test, PiecesGiveTheDigestOfTheWhole) {
+  std::string text;
+  for (int i = 0; i < 100000; ++i) text += static_cast<char>('a' + i % 26);
+  Sha256 sha;
+  for (size_t at = 0; at < text.size(); at += 777) {
+    ASSERT_TRUE(sha.Update(text.data() + at, std::min<size_t>(777, text.size() - at)));
+  }
+  Sha256Digest digest{};
+  ASSERT_TRUE(sha.Finish(&digest).ok());
+  EXPECT_EQ(HexOf(digest), Sha256Hex(text));
+  // A digest is taken once.
+  EXPECT_FALSE(sha.Finish(&digest).ok());
+}
+
+TEST(Sha256Test, AFileHasTheDigestOfItsBytesAndItsSize) {
+  const std::filesystem::path path =
+      std::filesystem::temp_directory_path() / ("pba-sha-" + std::to_string(::getpid()));
+  const std::string bytes(3 << 20 | 5, 'x');  // more than one read block
+  std::ofstream(path, std::ios::binary) << bytes;
+  std::string hex;
+  int64_t size = 0;
+  ASSERT_TRUE(FileSha256Hex(path, &hex, &size).ok());
+  EXPECT_EQ(hex, Sha256Hex(bytes));
+  EXPECT_EQ(size, static_cast<int64_t>(bytes.size()));
+  std::filesystem::remove(path);
+  const Status missing = FileSha256Hex(path, &hex);
+  EXPECT_EQ(missing.code(), Status::Code::kIo);
+  EXPECT_NE(missing.message().find(path.string()), std::string::npos) << missing.ToString();
+}
+
+TEST(FormatTest, ALongMessageIsNeverCut) {
+  const std::string name(2000, 'n');
+  const std::string message = Format("structure %s at %.1f mm", name.c_str(), 2.5);
+  EXPECT_EQ(message, "structure " + name + " at 2.5 mm");
+  EXPECT_EQ(Format("%d of %d", 3, 7), "3 of 7");
+  EXPECT_EQ(Format("%s", std::string(511, 'a').c_str()).size(), 511u);
+  EXPECT_EQ(Format("%s", std::string(512, 'a').c_str()).size(), 512u);
+}
+
+}  // namespace
+}  // namespace pba
