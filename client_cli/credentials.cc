@@ -7,6 +7,7 @@
 #include <map>
 #include <sstream>
 
+#include "core/atomic_write.h"
 #include "files.h"
 
 namespace pba::cli {
@@ -35,8 +36,8 @@ bool WriteAll(const std::map<std::string, std::string>& tokens, std::string* err
   }
   std::string content;
   for (const auto& [server, token] : tokens) content += server + " " + token + "\n";
-  if (!WriteFileAtomically(path, content, 0600)) {
-    *error = "cannot write " + path.string() + ": " + std::strerror(errno);
+  if (const Status written = AtomicWriteText(path, content, 0600); !written.ok()) {
+    *error = written.message();
     return false;
   }
   return true;

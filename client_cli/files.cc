@@ -10,6 +10,7 @@
 #include <fstream>
 #include <vector>
 
+#include "core/atomic_write.h"
 #include "core/sha256.h"
 
 namespace pba::cli {
@@ -21,26 +22,7 @@ std::string Sha256File(const std::filesystem::path& path) {
 
 bool WriteFileAtomically(const std::filesystem::path& path, const std::string& content,
                          unsigned mode) {
-  const std::filesystem::path temp = path.string() + ".tmp" + std::to_string(::getpid());
-  // A leftover of a crashed run with this pid goes first; O_EXCL and
-  // O_NOFOLLOW then make sure what is written is a new file of ours, not
-  // a planted link's target.
-  ::unlink(temp.c_str());
-  const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, mode);
-  if (fd < 0) return false;
-  // open() honours the umask; the mode asked for is what the file gets.
-  bool ok = ::fchmod(fd, mode) == 0;
-  size_t written = 0;
-  while (ok && written < content.size()) {
-    const ssize_t n = ::write(fd, content.data() + written, content.size() - written);
-    ok = n > 0;
-    if (ok) written += static_cast<size_t>(n);
-  }
-  ok = ok && ::fsync(fd) == 0;
-  ok = ::close(fd) == 0 && ok;
-  if (ok) ok = std::rename(temp.c_str(), path.c_str()) == 0;
-  if (!ok) ::unlink(temp.c_str());
-  return ok;
+  return AtomicWriteText(path, content, mode).ok();
 }
 
 std::string UnsafeFileNameReason(const std::string& name) {

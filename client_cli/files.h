@@ -12,9 +12,9 @@ namespace pba::cli {
 // read.
 std::string Sha256File(const std::filesystem::path& path);
 
-// Writes `content` to a temporary sibling with `mode` permissions, then
-// renames it over `path`. False (errno kept) on failure, leaving `path` as
-// it was.
+// AtomicWriteText (core/atomic_write.h) with `mode` permissions: a new
+// hidden temporary sibling, synced and renamed over `path` (a link there is
+// replaced, never followed). False on failure, leaving `path` as it was.
 bool WriteFileAtomically(const std::filesystem::path& path, const std::string& content,
                          unsigned mode = 0644);
 

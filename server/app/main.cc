@@ -36,9 +36,9 @@
 #include <thread>
 
 #include "app/pba_server.h"
+#include "core/atomic_write.h"
 #include "jobs/solver_process.h"
 #include "store/atlas_store.h"
-#include "store/atomic_file.h"
 
 namespace {
 
@@ -235,7 +235,7 @@ int main(int argc, char** argv) {
   const fs::path server_json = fs::absolute(data_dir) / "server.json";
   const std::string info =
       "{\"address\":\"" + server->address() + "\",\"pid\":" + std::to_string(::getpid()) + "}\n";
-  const pba::Status written = pba::WriteFileAtomically(server_json, info);
+  const pba::Status written = pba::AtomicWriteText(server_json, info);
   if (!written.ok()) spdlog::warn("cannot write server.json: {}", written.ToString());
   std::cout << "pba-server listening on " << server->address() << std::endl;
   if (!tls_cert.empty()) spdlog::info("TLS with the certificate {}", tls_cert);

@@ -13,10 +13,10 @@
 #include <sstream>
 #include <system_error>
 
+#include "core/atomic_write.h"
 #include "core/sha256.h"
 #include "jobs/solver_process.h"
 #include "pba/v1/solve_event.pb.h"
-#include "store/atomic_file.h"
 
 namespace pba {
 namespace fs = std::filesystem;
@@ -101,7 +101,7 @@ Status PrepareFolder(const v1::Job& job, const fs::path& dir, JobPreparation* pr
     if (!google::protobuf::util::MessageToJsonString(scene, &json, options).ok()) {
       return Status::Internal("cannot write the scene as JSON");
     }
-    PBA_RETURN_IF_ERROR(WriteFileAtomically(dir / "scene.json", json));
+    PBA_RETURN_IF_ERROR(AtomicWriteText(dir / "scene.json", json));
     input->push_back((dir / "scene.json").string());
   }
 

@@ -10,8 +10,8 @@
 
 #include "atlas/label_volume_io.h"
 #include "atlas/structure_set.h"
+#include "core/atomic_write.h"
 #include "service/geometry_check.h"
-#include "store/atomic_file.h"
 #include "store/mapped_file.h"
 
 namespace pba {
@@ -160,7 +160,7 @@ Status StageImportSource(UploadStore& uploads, const std::string& user,
     fs::create_hard_link(content->path(), partial / file.name(), ec);
     if (ec) {
       ec.clear();
-      const Status written = WriteFileAtomically(partial / file.name(), content->bytes());
+      const Status written = AtomicWriteText(partial / file.name(), content->bytes());
       if (!written.ok()) return undo(written);
     }
   }

@@ -10,8 +10,8 @@
 
 #include "atlas/label_volume.h"
 #include "atlas/label_volume_io.h"
+#include "core/atomic_write.h"
 #include "io/surface_io.h"
-#include "store/atomic_file.h"
 
 namespace pba {
 namespace fs = std::filesystem;
@@ -147,7 +147,7 @@ Status AddBox(GeometryFormat format, std::string_view bytes, const char* field, 
       const bool gzip = bytes.size() >= 2 && static_cast<unsigned char>(bytes[0]) == 0x1f &&
                         static_cast<unsigned char>(bytes[1]) == 0x8b;
       const fs::path file = fs::path(pattern) / (gzip ? "mask.nii.gz" : "mask.nii");
-      Status status = WriteFileAtomically(file, bytes);
+      Status status = AtomicWriteText(file, bytes);
       LabelVolume mask;
       if (status.ok()) status = ReadNifti(file, &mask);
       std::error_code ignored;
@@ -242,7 +242,7 @@ Status CompareRevisionShapes(GeometryFormat format_a, std::string_view a, Geomet
        {std::tuple{"a", format_a, a, &ga}, std::tuple{"b", format_b, b, &gb}}) {
     geometry->file = dir / name;
     ParseStructureFormat(GeometryFormatName(format), &geometry->format);
-    if (status.ok()) status = WriteFileAtomically(geometry->file, bytes);
+    if (status.ok()) status = AtomicWriteText(geometry->file, bytes);
   }
   if (status.ok() && cancelled && cancelled()) status = stop("before voxelising");
   if (status.ok()) status = CompareShapes(ga, gb, voxel_mm, comparison);

@@ -12,8 +12,8 @@
 #include <system_error>
 #include <vector>
 
+#include "core/atomic_write.h"
 #include "core/sha256.h"
-#include "store/atomic_file.h"
 
 namespace pba {
 namespace fs = std::filesystem;
@@ -33,9 +33,12 @@ bool IsFanOutName(const std::string& name) {
   return name.size() == 2 && IsLowerHex(name[0]) && IsLowerHex(name[1]);
 }
 
-// WriteFileAtomically names its temporary files ".<name>.tmp-<pid>".
+// AtomicWriteText's temporary files, and ".<name>.tmp-<pid>", the names an
+// earlier version of the store gave them (a data directory may still hold
+// one from a crash).
 bool IsTempName(const std::string& name) {
-  return !name.empty() && name[0] == '.' && name.find(".tmp-") != std::string::npos;
+  return IsAtomicWriteTemporary(name) ||
+         (!name.empty() && name[0] == '.' && name.find(".tmp-") != std::string::npos);
 }
 
 }  // namespace
@@ -75,7 +78,7 @@ Status BlobStore::Put(std::string_view bytes, std::string* hash) {
   }
   fs::create_directories(path.parent_path(), ec);
   if (ec) return Status::Io("cannot create " + path.parent_path().string() + ": " + ec.message());
-  PBA_RETURN_IF_ERROR(WriteFileAtomically(path, bytes));
+  PBA_RETURN_IF_ERROR(AtomicWriteText(path, bytes));
   *hash = std::move(computed);
   return Status::Ok();
 }
@@ -125,7 +128,7 @@ Status BlobStore::PutFile(const MappedFile& file, std::string* hash) {
                         std::strerror(errno));
     }
     // Across file systems a rename cannot move it: a copy, as Put() writes.
-    PBA_RETURN_IF_ERROR(WriteFileAtomically(path, file.bytes()));
+    PBA_RETURN_IF_ERROR(AtomicWriteText(path, file.bytes()));
   } else {
     SyncDirectory(path.parent_path());
     SyncDirectory(file.path().parent_path());

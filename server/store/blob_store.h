@@ -1,7 +1,7 @@
 // BlobStore: immutable content-addressed files under <data>/blobs/. A blob is
 // named by the lowercase hex SHA-256 of its content, split after two
 // characters (blobs/ab/cdef...) so no directory grows past 256 entries of
-// subdirectories. Writes go through WriteFileAtomically (temporary sibling,
+// subdirectories. Writes go through AtomicWriteText (temporary sibling,
 // fsync, rename), so a crash leaves a whole blob or none, plus at worst a
 // stray temporary file that Sweep() removes; PutFile() instead fsyncs and
 // renames the caller's own file, with the same guarantee.

@@ -12,9 +12,9 @@
 #include <system_error>
 #include <vector>
 
+#include "core/atomic_write.h"
 #include "core/sha256.h"
 #include "store/atlas_types.h"
-#include "store/atomic_file.h"
 #include "store/random_hex.h"
 
 namespace pba {
@@ -186,7 +186,7 @@ Status UploadStore::Begin(const std::string& user, int64_t size_bytes, const std
   ::close(fd);
   std::ostringstream meta;
   meta << user << "\n" << size_bytes << "\n" << sha256 << "\n" << info->expire_us << "\n";
-  const Status written = WriteFileAtomically(root_ / (id + kMetaSuffix), meta.str());
+  const Status written = AtomicWriteText(root_ / (id + kMetaSuffix), meta.str());
   if (written.ok()) {
     open_[id] = OpenUpload{user, size_bytes, info->expire_us};
   } else {

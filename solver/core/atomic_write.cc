@@ -2,6 +2,7 @@
 
 #include <fcntl.h>
 #include <stdlib.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -30,12 +31,24 @@ Status AtomicWrite(const fs::path& file, const std::string& suffix,
     unlink(temporary.c_str());
     return status;
   }
-  const int dir_fd = open(dir.c_str(), O_RDONLY | O_DIRECTORY);
-  if (dir_fd >= 0) {
-    fsync(dir_fd);  // best effort: the rename itself is done
-    close(dir_fd);
-  }
+  SyncDirectory(dir);
   return Status::Ok();
+}
+
+void SyncDirectory(const fs::path& dir) {
+  const int fd = ::open(dir.empty() ? "." : dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd >= 0) {
+    ::fsync(fd);
+    ::close(fd);
+  }
+}
+
+bool IsAtomicWriteTemporary(std::string_view name) {
+  constexpr std::string_view kMark = ".partial-";
+  if (name.size() < 2 || name[0] != '.') return false;
+  const size_t mark = name.rfind(kMark);
+  return mark != std::string_view::npos && mark > 1 &&
+         name.size() >= mark + kMark.size() + 6;  // mkstemps's six characters
 }
 
 Status WriteAll(int fd, const void* data, std::size_t size, const std::string& path) {
@@ -50,8 +63,11 @@ Status WriteAll(int fd, const void* data, std::size_t size, const std::string& p
   return Status::Ok();
 }
 
-Status AtomicWriteText(const fs::path& file, const std::string& text) {
+Status AtomicWriteText(const fs::path& file, std::string_view text, unsigned mode) {
   return AtomicWrite(file, "", [&](int fd, const std::string& temporary) {
+    if (mode != 0600 && ::fchmod(fd, mode) != 0) {
+      return Status::Io("cannot set the mode of " + temporary + ": " + std::strerror(errno));
+    }
     return WriteAll(fd, text.data(), text.size(), temporary);
   });
 }

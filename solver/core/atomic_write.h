@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <functional>
 #include <string>
+#include <string_view>
 
 #include "pba/status.h"
 
@@ -25,8 +26,20 @@ Status AtomicWrite(const std::filesystem::path& file, const std::string& suffix,
 // the error.
 Status WriteAll(int fd, const void* data, std::size_t size, const std::string& path);
 
-// AtomicWrite of a text.
-Status AtomicWriteText(const std::filesystem::path& file, const std::string& text);
+// AtomicWrite of a text. The file gets `mode` (0600, as the temporary file
+// is made, unless another is asked for; the umask does not apply): whatever
+// is at `file` is replaced, a symbolic link there included, never followed.
+Status AtomicWriteText(const std::filesystem::path& file, std::string_view text,
+                       unsigned mode = 0600);
+
+// Whether `name` is one of AtomicWrite's temporary files
+// (".NAME.partial-XXXXXX", then any suffix): what a crash between the write
+// and the rename leaves, for a sweep to remove.
+bool IsAtomicWriteTemporary(std::string_view name);
+
+// Makes a rename in `dir` durable (fsync of the directory). Best effort: the
+// rename itself has happened either way.
+void SyncDirectory(const std::filesystem::path& dir);
 
 // A new directory `dir`, whole or not at all: fill(temporary) writes into a
 // hidden directory beside it ("." + its name + ".partial-XXXXXX"), which is

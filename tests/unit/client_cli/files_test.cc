@@ -72,18 +72,27 @@ TEST(FilesTest, RenameNoReplaceRefusesAnythingThere) {
   fs::remove_all(dir);
 }
 
-TEST(FilesTest, AtomicWritesDoNotFollowAPlantedTemporaryLink) {
+TEST(FilesTest, AtomicWritesReplaceAPlantedLinkInsteadOfFollowingIt) {
   const fs::path dir =
       fs::temp_directory_path() / ("pba-files-test-link-" + std::to_string(::getpid()));
   fs::remove_all(dir);
   fs::create_directories(dir);
   std::ofstream(dir / "victim") << "precious";
-  fs::create_symlink(dir / "victim", dir / ("out.tmp" + std::to_string(::getpid())));
-  ASSERT_TRUE(WriteFileAtomically(dir / "out", "new"));
+  fs::create_symlink(dir / "victim", dir / "out");
+  ASSERT_TRUE(WriteFileAtomically(dir / "out", "new", 0640));
   std::ifstream victim(dir / "victim");
   std::stringstream text;
   text << victim.rdbuf();
   EXPECT_EQ(text.str(), "precious");
+  EXPECT_FALSE(fs::is_symlink(dir / "out"));
+  std::ifstream out(dir / "out");
+  std::stringstream written;
+  written << out.rdbuf();
+  EXPECT_EQ(written.str(), "new");
+  EXPECT_EQ(fs::status(dir / "out").permissions() & fs::perms::all,
+            fs::perms::owner_read | fs::perms::owner_write | fs::perms::group_read);
+  // Nothing else left beside it.
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir), fs::directory_iterator()), 2);
   fs::remove_all(dir);
 }
 

@@ -123,20 +123,24 @@ TEST_F(BlobStoreTest, MissingAndMalformedHashes) {
 TEST_F(BlobStoreTest, SweepRemovesUnreferencedBlobsAndStrayTemporaryFiles) {
   const std::string kept = Put("referenced");
   const std::string orphan = Put("orphan");
-  // What a crash between write and rename leaves (WriteFileAtomically's naming).
-  const fs::path stray = store_->PathOf(kept).parent_path() / ".deadbeef.tmp-12345";
+  // What a crash between write and rename leaves (AtomicWriteText's naming,
+  // and the one an earlier version of the store used).
+  const fs::path stray = store_->PathOf(kept).parent_path() / ".deadbeef.partial-Ab3xYz";
   Overwrite(stray, "half a blob");
+  const fs::path old_stray = store_->PathOf(kept).parent_path() / ".cafe.tmp-12345";
+  Overwrite(old_stray, "older");
   // A file that is neither a blob nor ours is left for a person to look at.
   Overwrite(root() / "README", "notes");
 
   BlobSweepReport report;
   ASSERT_TRUE(store_->Sweep({kept}, &report).ok());
   EXPECT_EQ(report.removed_blobs, 1);
-  EXPECT_EQ(report.removed_temp_files, 1);
+  EXPECT_EQ(report.removed_temp_files, 2);
   EXPECT_EQ(report.removed_bytes, 6);
   EXPECT_EQ(report.kept_blobs, 1);
   EXPECT_FALSE(fs::exists(store_->PathOf(orphan)));
   EXPECT_FALSE(fs::exists(stray));
+  EXPECT_FALSE(fs::exists(old_stray));
   EXPECT_TRUE(fs::exists(root() / "README"));
   std::string bytes;
   ASSERT_TRUE(store_->Get(kept, &bytes).ok());

@@ -1,5 +1,6 @@
 // pba_base: the one SHA-256 (known answers, pieces against one call, files
-// with their size) and Format, which never cuts a message.
+// with their size), the one atomic write (its mode, its temporary names)
+// and Format, which never cuts a message.
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -7,6 +8,7 @@
 #include <fstream>
 #include <string>
 
+#include "core/atomic_write.h"
 #include "core/format.h"
 #include "core/sha256.h"
 
@@ -56,6 +58,35 @@ TEST(Sha256Test, AFileHasTheDigestOfItsBytesAndItsSize) {
   const Status missing = FileSha256Hex(path, &hex);
   EXPECT_EQ(missing.code(), Status::Code::kIo);
   EXPECT_NE(missing.message().find(path.string()), std::string::npos) << missing.ToString();
+}
+
+TEST(AtomicWriteTest, ATextGetsItsModeAndLeavesNoTemporaryFile) {
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("pba-atomic-" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  namespace fs = std::filesystem;
+  ASSERT_TRUE(AtomicWriteText(dir / "private", "a").ok());
+  EXPECT_EQ(fs::status(dir / "private").permissions() & fs::perms::all,
+            fs::perms::owner_read | fs::perms::owner_write);
+  ASSERT_TRUE(AtomicWriteText(dir / "shared", "b", 0644).ok());
+  EXPECT_EQ(fs::status(dir / "shared").permissions() & fs::perms::all,
+            fs::perms::owner_read | fs::perms::owner_write | fs::perms::group_read |
+                fs::perms::others_read);
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir), fs::directory_iterator()), 2);
+  // Into a directory that does not exist: refused, nothing written.
+  const Status missing = AtomicWriteText(dir / "no" / "file", "c");
+  EXPECT_EQ(missing.code(), Status::Code::kIo);
+  fs::remove_all(dir);
+}
+
+TEST(AtomicWriteTest, ItsTemporaryNamesAreKnownForSweeps) {
+  EXPECT_TRUE(IsAtomicWriteTemporary(".abc.partial-Ab3xYz"));
+  EXPECT_TRUE(IsAtomicWriteTemporary(".result.h5.partial-Ab3xYz.h5"));
+  EXPECT_FALSE(IsAtomicWriteTemporary("abc.partial-Ab3xYz"));  // not hidden
+  EXPECT_FALSE(IsAtomicWriteTemporary(".abc.partial-Ab3"));    // no random part
+  EXPECT_FALSE(IsAtomicWriteTemporary(".partial-Ab3xYz"));     // no name
+  EXPECT_FALSE(IsAtomicWriteTemporary("0a1b2c"));
 }
 
 TEST(FormatTest, ALongMessageIsNeverCut) {
