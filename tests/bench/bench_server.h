@@ -15,9 +15,9 @@
 #include <string>
 
 #include "app/pba_server.h"
+#include "core/sha256.h"
 #include "pba/v1/atlas.grpc.pb.h"
 #include "pba/v1/job.grpc.pb.h"
-#include "core/sha256.h"
 #include "unit/server/temp_dir.h"
 
 namespace pba::testing {

@@ -26,8 +26,8 @@
 
 #include "bench/bench_server.h"
 #include "codec/yaml_codec.h"
-#include "service/geometry_check.h"
 #include "core/sha256.h"
+#include "service/geometry_check.h"
 
 namespace pba {
 namespace {
