@@ -24,13 +24,6 @@ using std::chrono::seconds;
 
 constexpr int kJobFailed = 6;
 
-std::string ReadFile(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
 // The first match of `pattern`'s group 1 in `text`, or "".
 std::string Find(const std::string& text, const std::string& pattern) {
   std::smatch match;

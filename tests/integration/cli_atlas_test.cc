@@ -28,13 +28,6 @@ constexpr int kInvalid = 5;
 constexpr int kConflict = 9;
 constexpr int kDenied = 10;
 
-std::string ReadFile(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
 // Plate contours of a small structure, as the atlas store keeps them.
 std::string Contours(double half_width_mm) {
   std::ostringstream out;

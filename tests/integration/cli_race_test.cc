@@ -46,13 +46,6 @@ constexpr int kOperations = 50;
 constexpr char kProject[] = "race";
 constexpr char kStructure[] = "Hippocampus";
 
-std::string ReadFile(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
 void WriteFile(const fs::path& path, const std::string& content) {
   std::ofstream(path, std::ios::binary | std::ios::trunc) << content;
 }

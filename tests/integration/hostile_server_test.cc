@@ -7,7 +7,6 @@
 
 #include <grpcpp/grpcpp.h>
 #include <gtest/gtest.h>
-#include <openssl/evp.h>
 
 #include <cstdio>
 #include <filesystem>
@@ -21,6 +20,7 @@
 #include <vector>
 
 #include "atlas/structure_set.h"
+#include "core/sha256.h"
 #include "integration/subprocess.h"
 #include "pba/v1/atlas.grpc.pb.h"
 #include "pba/v1/job.grpc.pb.h"
@@ -32,26 +32,6 @@ namespace fs = std::filesystem;
 constexpr int kExitError = 1;
 constexpr int kExitInvalid = 5;
 constexpr int kExitConflict = 9;
-
-std::string Sha256(const std::string& text) {
-  unsigned char digest[EVP_MAX_MD_SIZE];
-  unsigned int length = 0;
-  EVP_Digest(text.data(), text.size(), digest, &length, EVP_sha256(), nullptr);
-  std::string hex;
-  char byte[3];
-  for (unsigned int i = 0; i < length; ++i) {
-    std::snprintf(byte, sizeof byte, "%02x", digest[i]);
-    hex += byte;
-  }
-  return hex;
-}
-
-std::string ReadFile(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
 
 void WriteFile(const fs::path& path, const std::string& text) {
   std::ofstream(path, std::ios::binary | std::ios::trunc) << text;
@@ -98,7 +78,7 @@ class FakeJobs final : public v1::JobService::Service {
       v1::ResultFile* file = job->add_result_files();
       file->set_name(name);
       file->set_size_bytes(static_cast<int64_t>(content.size()));
-      file->set_sha256(Sha256(content));
+      file->set_sha256(Sha256Hex(content));
     }
     return grpc::Status::OK;
   }
@@ -194,7 +174,7 @@ class FakeAtlas final : public v1::AtlasService::Service {
     revision->set_number(1);
     revision->set_format(v1::CONTOURS_JSON);
     revision->set_size_bytes(static_cast<int64_t>(content.size()));
-    revision->set_content_sha256(Sha256(content));
+    revision->set_content_sha256(Sha256Hex(content));
     // A colour of its own per name (a structure set needs distinct ones).
     int red = 0;
     for (unsigned char c : name) red = (red * 31 + c) % 240;

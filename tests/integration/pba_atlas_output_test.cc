@@ -17,13 +17,6 @@ namespace fs = std::filesystem;
 
 constexpr int kExitInvalid = 2;
 
-std::string ReadFile(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
 RunResult Plates(const fs::path& out, bool force = false) {
   std::vector<std::string> args = {PBA_ATLAS_BIN, "plates", "-o", out.string(), "--voxel-mm", "2"};
   if (force) args.push_back("--force");

@@ -21,13 +21,6 @@ namespace pba::testing {
 namespace {
 namespace fs = std::filesystem;
 
-std::string ReadFile(const fs::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  std::ostringstream out;
-  out << in.rdbuf();
-  return out.str();
-}
-
 // The quality report's JSON: every structure has elements and a volume,
 // every tetrahedron is valid (aspect ratio finite, dihedral angle > 0), and
 // the rows' elements add up to the overall count.

@@ -19,14 +19,6 @@
 
 namespace pba::testing {
 
-// The whole file as text ("" when it cannot be read).
-inline std::string ReadFile(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
 class ServerTest : public ::testing::Test {
  protected:
   void SetUp() override {

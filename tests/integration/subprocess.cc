@@ -61,6 +61,13 @@ std::vector<std::string> MergedEnvironment(const std::vector<std::string>& overr
 
 }  // namespace
 
+std::string ReadFile(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
 std::string FindProgram(const std::string& name) {
   const char* path = std::getenv("PATH");
   std::stringstream dirs(path ? path : "/usr/bin");

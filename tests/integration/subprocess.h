@@ -18,6 +18,9 @@ struct RunResult {
   std::string err;
 };
 
+// The whole file's bytes ("" when it cannot be read).
+std::string ReadFile(const std::filesystem::path& path);
+
 // The path of program `name` in a directory of PATH (/usr/bin without
 // one); empty when there is none. RunProcess does not search PATH.
 std::string FindProgram(const std::string& name);

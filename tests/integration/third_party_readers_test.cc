@@ -18,13 +18,6 @@ namespace pba::testing {
 namespace {
 namespace fs = std::filesystem;
 
-std::string ReadFile(const fs::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  std::ostringstream out;
-  out << in.rdbuf();
-  return out.str();
-}
-
 // A python3 that imports meshio (scripts/deps.sh installs python3-meshio,
 // Debian's, for the system python3); empty if none.
 std::string MeshioPython() {

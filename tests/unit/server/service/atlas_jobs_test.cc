@@ -19,6 +19,7 @@
 #include "service/atlas_event_hub.h"
 #include "store/atlas_store.h"
 #include "store/job_store.h"
+#include "unit/server/in_process_server.h"
 #include "unit/server/server_test_support.h"
 
 namespace pba {
@@ -31,20 +32,11 @@ namespace fs = std::filesystem;
 constexpr char kContours[] =
     R"({"plates": [{"z_mm": 0, "polygons": [[[0, 0], [10, 0], [10, 10], [0, 10]]]}]})";
 
-class AtlasJobsTest : public ::testing::Test {
+class AtlasJobsTest : public testing::InProcessServerTest {
  protected:
   void SetUp() override {
-    options_.data_dir = dir_.path() / "data";
-    options_.listen = "127.0.0.1:0";
-    options_.solver = testing::WriteFakeSolver(dir_.path());
-    options_.kill_grace = std::chrono::milliseconds(1000);
-    options_.drain = std::chrono::milliseconds(2000);
-    const Status status = PbaServer::Start(options_, &server_);
-    ASSERT_TRUE(status.ok()) << status.ToString();
-    channel_ = grpc::CreateChannel(server_->address(), grpc::InsecureChannelCredentials());
-    jobs_ = v1::JobService::NewStub(channel_);
-    atlas_ = v1::AtlasService::NewStub(channel_);
-    std::ifstream(options_.data_dir / "admin.token") >> admin_;
+    InProcessServerTest::SetUp();
+    if (HasFatalFailure()) return;
     // The admin's project "atlas" with one structure and snapshot 1.
     v1::CreateProjectRequest project;
     project.set_name("atlas");
@@ -67,42 +59,13 @@ class AtlasJobsTest : public ::testing::Test {
     ASSERT_TRUE(users->CreateUser("eve", &eve_).ok());
   }
 
-  template <typename F>
-  grpc::Status Call(const std::string& token, F f) {
-    grpc::ClientContext context;
-    context.AddMetadata("authorization", "Bearer " + token);
-    return f(&context);
-  }
-
-  std::string Upload(const std::string& bytes) {
-    v1::BeginUploadRequest begin;
-    begin.set_size_bytes(static_cast<int64_t>(bytes.size()));
-    const std::string sha = Sha256Hex(bytes);
-    begin.set_sha256(sha);
-    v1::Upload upload;
-    EXPECT_TRUE(Call(admin_, [&](grpc::ClientContext* c) {
-                  return atlas_->BeginUpload(c, begin, &upload);
-                }).ok());
-    grpc::ClientContext context;
-    context.AddMetadata("authorization", "Bearer " + admin_);
-    v1::Upload done;
-    auto writer = atlas_->WriteUpload(&context, &done);
-    v1::UploadChunk chunk;
-    chunk.set_upload_id(upload.id());
-    chunk.set_data(bytes);
-    writer->Write(chunk);
-    writer->WritesDone();
-    EXPECT_TRUE(writer->Finish().ok());
-    return upload.id();
-  }
-
   void CreateStructure(const std::string& name, const std::string& contours) {
     v1::CreateStructureRequest request;
     request.set_project("atlas");
     request.set_name(name);
     request.mutable_metadata()->mutable_colour()->set_r(200);
     request.set_format(v1::CONTOURS_JSON);
-    request.set_upload_id(Upload(contours));
+    request.set_upload_id(Upload(admin_, contours));
     v1::Revision revision;
     const grpc::Status status = Call(admin_, [&](grpc::ClientContext* c) {
       return atlas_->CreateStructure(c, request, &revision);
@@ -132,13 +95,7 @@ class AtlasJobsTest : public ::testing::Test {
     return job;
   }
 
-  TempDir dir_;
-  ServerOptions options_;
-  std::unique_ptr<PbaServer> server_;
-  std::shared_ptr<grpc::Channel> channel_;
-  std::unique_ptr<v1::JobService::Stub> jobs_;
-  std::unique_ptr<v1::AtlasService::Stub> atlas_;
-  std::string admin_, eve_;
+  std::string eve_;
 };
 
 v1::SubmitJobRequest OnSnapshot(const v1::Scene& scene, const std::string& snapshot) {
@@ -312,7 +269,7 @@ v1::SubmitJobRequest Import(v1::AtlasImport::Source source,
 }
 
 TEST_F(AtlasJobsTest, AnImportIsCheckedAndARefusalLeavesNoTrace) {
-  const std::string upload = Upload("{}");
+  const std::string upload = Upload(admin_, "{}");
   struct Case {
     v1::SubmitJobRequest request;
     bool as_eve;
@@ -357,7 +314,7 @@ TEST_F(AtlasJobsTest, AnImportIsCheckedAndARefusalLeavesNoTrace) {
 }
 
 TEST_F(AtlasJobsTest, AnImportTakesItsUploadsAtOnceAndARepeatReturnsTheJob) {
-  const std::string upload = Upload("{\"plates\": []}");
+  const std::string upload = Upload(admin_, "{\"plates\": []}");
   v1::SubmitJobRequest request = Import(v1::AtlasImport::PLATES, {{"plates.json", upload}});
   request.set_request_id("import-1");
   // Keep the fake solver from running it: a queued job is enough here.

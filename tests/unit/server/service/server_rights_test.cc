@@ -19,6 +19,7 @@
 #include "service/atlas_service.h"
 #include "service/job_service.h"
 #include "store/atlas_store.h"
+#include "unit/server/in_process_server.h"
 #include "unit/server/server_test_support.h"
 
 namespace pba {
@@ -30,23 +31,14 @@ using testing::WaitUntil;
 constexpr char kContours[] =
     R"({"plates": [{"z_mm": 0, "polygons": [[[0, 0], [10, 0], [10, 10], [0, 10]]]}]})";
 
-class ServerRightsTest : public ::testing::Test {
+class ServerRightsTest : public testing::InProcessServerTest {
  protected:
   // alice (no server admin) owns project "atlas" with "Putamen" and
   // snapshot 1; bob and eve are in no project; admin is the server admin
   // of the first start.
   void SetUp() override {
-    options_.data_dir = dir_.path() / "data";
-    options_.listen = "127.0.0.1:0";
-    options_.solver = testing::WriteFakeSolver(dir_.path());
-    options_.kill_grace = std::chrono::milliseconds(1000);
-    options_.drain = std::chrono::milliseconds(2000);
-    const Status status = PbaServer::Start(options_, &server_);
-    ASSERT_TRUE(status.ok()) << status.ToString();
-    channel_ = grpc::CreateChannel(server_->address(), grpc::InsecureChannelCredentials());
-    jobs_ = v1::JobService::NewStub(channel_);
-    atlas_ = v1::AtlasService::NewStub(channel_);
-    std::ifstream(options_.data_dir / "admin.token") >> admin_;
+    InProcessServerTest::SetUp();
+    if (HasFatalFailure()) return;
     ASSERT_TRUE(AtlasStore::Open(options_.data_dir, &users_).ok());
     ASSERT_TRUE(users_->CreateUser("alice", &alice_).ok());
     ASSERT_TRUE(users_->CreateUser("bob", &bob_).ok());
@@ -72,35 +64,6 @@ class ServerRightsTest : public ::testing::Test {
     ASSERT_TRUE(Call(alice_, [&](grpc::ClientContext* c) {
                   return atlas_->CreateSnapshot(c, snapshot, &made);
                 }).ok());
-  }
-
-  template <typename F>
-  grpc::Status Call(const std::string& token, F f) {
-    grpc::ClientContext context;
-    context.AddMetadata("authorization", "Bearer " + token);
-    return f(&context);
-  }
-
-  std::string Upload(const std::string& token, const std::string& bytes) {
-    v1::BeginUploadRequest begin;
-    begin.set_size_bytes(static_cast<int64_t>(bytes.size()));
-    const std::string sha = Sha256Hex(bytes);
-    begin.set_sha256(sha);
-    v1::Upload upload;
-    EXPECT_TRUE(Call(token, [&](grpc::ClientContext* c) {
-                  return atlas_->BeginUpload(c, begin, &upload);
-                }).ok());
-    grpc::ClientContext context;
-    context.AddMetadata("authorization", "Bearer " + token);
-    v1::Upload done;
-    auto writer = atlas_->WriteUpload(&context, &done);
-    v1::UploadChunk chunk;
-    chunk.set_upload_id(upload.id());
-    chunk.set_data(bytes);
-    writer->Write(chunk);
-    writer->WritesDone();
-    EXPECT_TRUE(writer->Finish().ok());
-    return upload.id();
   }
 
   // A job of alice's on snapshot 1 of "atlas", the fake solver acting on
@@ -183,6 +146,15 @@ class ServerRightsTest : public ::testing::Test {
     return ids;
   }
 
+  // A lock on "Putamen" of project "atlas", taken as `token`.
+  grpc::Status LockPutamen(const std::string& token, v1::Lock* lock) {
+    v1::AcquireLockRequest request;
+    request.set_project("atlas");
+    request.set_structure("Putamen");
+    return Call(token,
+                [&](grpc::ClientContext* c) { return atlas_->AcquireLock(c, request, lock); });
+  }
+
   grpc::Status SetRole(const std::string& user, v1::Role role) {
     v1::SetRoleRequest request;
     request.set_project("atlas");
@@ -193,14 +165,8 @@ class ServerRightsTest : public ::testing::Test {
                 [&](grpc::ClientContext* c) { return atlas_->SetRole(c, request, &member); });
   }
 
-  TempDir dir_;
-  ServerOptions options_;
-  std::unique_ptr<PbaServer> server_;
-  std::shared_ptr<grpc::Channel> channel_;
-  std::unique_ptr<v1::JobService::Stub> jobs_;
-  std::unique_ptr<v1::AtlasService::Stub> atlas_;
   std::unique_ptr<AtlasStore> users_;  // the offline admin's view
-  std::string admin_, alice_, bob_, eve_;
+  std::string alice_, bob_, eve_;
 };
 
 TEST_F(ServerRightsTest, AJobOnAProjectIsHiddenFromOutsidersAsIfItDidNotExist) {
@@ -454,13 +420,8 @@ TEST_F(ServerRightsTest, AQueuedJobOfAUserDisabledSinceDoesNotRun) {
 
 TEST_F(ServerRightsTest, AnAdminRemovesAMemberOverTheApi) {
   ASSERT_TRUE(SetRole("bob", v1::EDITOR).ok());
-  v1::AcquireLockRequest acquire;
-  acquire.set_project("atlas");
-  acquire.set_structure("Putamen");
   v1::Lock lock;
-  ASSERT_TRUE(Call(bob_, [&](grpc::ClientContext* c) {
-                return atlas_->AcquireLock(c, acquire, &lock);
-              }).ok());
+  ASSERT_TRUE(LockPutamen(bob_, &lock).ok());
   v1::RemoveMemberRequest request;
   request.set_project("atlas");
   request.set_user("bob");
@@ -534,13 +495,8 @@ TEST_F(ServerRightsTest, AnOutsidersUploadIsNotParsedBeforeTheRoleCheck) {
 }
 
 TEST_F(ServerRightsTest, ACommitResentAfterALostReplyReturnsItsRevision) {
-  v1::AcquireLockRequest acquire;
-  acquire.set_project("atlas");
-  acquire.set_structure("Putamen");
   v1::Lock lock;
-  ASSERT_TRUE(Call(alice_, [&](grpc::ClientContext* c) {
-                return atlas_->AcquireLock(c, acquire, &lock);
-              }).ok());
+  ASSERT_TRUE(LockPutamen(alice_, &lock).ok());
   v1::CommitStructureRequest commit;
   commit.set_project("atlas");
   commit.set_structure("Putamen");
