@@ -146,6 +146,16 @@ class ServerRightsTest : public testing::InProcessServerTest {
     return ids;
   }
 
+  // `user` removed from project "atlas" by the holder of `token`.
+  grpc::Status RemoveMember(const std::string& token, const std::string& user,
+                            v1::RemoveMemberResponse* response) {
+    v1::RemoveMemberRequest request;
+    request.set_project("atlas");
+    request.set_user(user);
+    return Call(token,
+                [&](grpc::ClientContext* c) { return atlas_->RemoveMember(c, request, response); });
+  }
+
   // A lock on "Putamen" of project "atlas", taken as `token`.
   grpc::Status LockPutamen(const std::string& token, v1::Lock* lock) {
     v1::AcquireLockRequest request;
@@ -215,13 +225,8 @@ TEST_F(ServerRightsTest, AnOpenWatchEndsWhenItsWatcherIsRemovedFromTheProject) {
   const auto start = std::chrono::steady_clock::now();
   std::thread watcher([&] { watched = Watch(bob_, job.id(), &events); });
   ASSERT_TRUE(WaitUntil([&] { return events > 0; }));
-  v1::RemoveMemberRequest request;
-  request.set_project("atlas");
-  request.set_user("bob");
   v1::RemoveMemberResponse response;
-  ASSERT_TRUE(Call(alice_, [&](grpc::ClientContext* c) {
-                return atlas_->RemoveMember(c, request, &response);
-              }).ok());
+  ASSERT_TRUE(RemoveMember(alice_, "bob", &response).ok());
   watcher.join();
   EXPECT_EQ(watched.error_code(), grpc::StatusCode::NOT_FOUND) << watched.error_message();
   EXPECT_LT(std::chrono::steady_clock::now() - start,
@@ -240,13 +245,8 @@ TEST_F(ServerRightsTest, AnOpenAtlasWatchEndsWhenItsWatcherIsRemovedOrDisabled) 
   // Both streams are open (READY sent) before their rights go.
   ASSERT_TRUE(WaitUntil([&] { return bob_events > 0 && eve_events > 0; }));
 
-  v1::RemoveMemberRequest request;
-  request.set_project("atlas");
-  request.set_user("bob");
   v1::RemoveMemberResponse response;
-  ASSERT_TRUE(Call(alice_, [&](grpc::ClientContext* c) {
-                return atlas_->RemoveMember(c, request, &response);
-              }).ok());
+  ASSERT_TRUE(RemoveMember(alice_, "bob", &response).ok());
   // As `pba-server admin disable-user` does it: another process, offline.
   std::unique_ptr<AtlasStore> offline;
   ASSERT_TRUE(AtlasStore::Open(options_.data_dir, &offline).ok());
@@ -422,18 +422,9 @@ TEST_F(ServerRightsTest, AnAdminRemovesAMemberOverTheApi) {
   ASSERT_TRUE(SetRole("bob", v1::EDITOR).ok());
   v1::Lock lock;
   ASSERT_TRUE(LockPutamen(bob_, &lock).ok());
-  v1::RemoveMemberRequest request;
-  request.set_project("atlas");
-  request.set_user("bob");
   v1::RemoveMemberResponse response;
-  EXPECT_EQ(
-      Call(bob_,
-           [&](grpc::ClientContext* c) { return atlas_->RemoveMember(c, request, &response); })
-          .error_code(),
-      grpc::StatusCode::PERMISSION_DENIED);
-  ASSERT_TRUE(Call(alice_, [&](grpc::ClientContext* c) {
-                return atlas_->RemoveMember(c, request, &response);
-              }).ok());
+  EXPECT_EQ(RemoveMember(bob_, "bob", &response).error_code(), grpc::StatusCode::PERMISSION_DENIED);
+  ASSERT_TRUE(RemoveMember(alice_, "bob", &response).ok());
   EXPECT_EQ(response.released_locks_size(), 1);
   v1::GetStructureRequest get;
   get.set_project("atlas");
@@ -447,14 +438,8 @@ TEST_F(ServerRightsTest, AnAdminRemovesAMemberOverTheApi) {
                 return atlas_->GetStructure(c, get, &structure);
               }).ok());
   EXPECT_FALSE(structure.has_lock());
-  EXPECT_EQ(
-      Call(alice_,
-           [&](grpc::ClientContext* c) { return atlas_->RemoveMember(c, request, &response); })
-          .error_code(),
-      grpc::StatusCode::NOT_FOUND);
-  request.set_user("alice");
-  const grpc::Status last = Call(
-      alice_, [&](grpc::ClientContext* c) { return atlas_->RemoveMember(c, request, &response); });
+  EXPECT_EQ(RemoveMember(alice_, "bob", &response).error_code(), grpc::StatusCode::NOT_FOUND);
+  const grpc::Status last = RemoveMember(alice_, "alice", &response);
   EXPECT_EQ(last.error_code(), grpc::StatusCode::FAILED_PRECONDITION);
   EXPECT_NE(last.error_message().find("last admin"), std::string::npos);
 }
