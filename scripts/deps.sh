@@ -14,6 +14,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   calculix-ccx
   python3-meshio python3-h5py python3-paraview
+  python3 universal-ctags
   libssl-dev
   gnuplot-nox
   openssl

@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cerrno>
 #include <chrono>
@@ -10,10 +11,12 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <memory>
 #include <sstream>
 #include <thread>
 
 #include "commands/atlas_shared.h"
+#include "commands/command_context.h"
 #include "core/sha256.h"
 #include "exit_codes.h"
 #include "files.h"
@@ -755,6 +758,183 @@ int Diff(Connection& connection, const StructureArgs& target, int64_t from, int6
         shape.mean_surface_distance_mm(), shape.voxel_mm());
   }
   return kExitOk;
+}
+
+// --- registration ---------------------------------------------------------------
+
+namespace {
+
+// -p,--project and the structure's name.
+void AddTarget(const CommandContext& context, CLI::App* cmd, StructureArgs* target) {
+  context.AddProjectOption(cmd, &target->project);
+  cmd->add_option("structure", target->structure, "Structure name")->required();
+}
+
+// `pba atlas list|show|history`.
+void RegisterBrowseCommands(CLI::App& atlas, CommandContext& context) {
+  struct ListArgs {
+    std::string project;
+    PageArgs page;
+  };
+  auto list = std::make_shared<ListArgs>();
+  CLI::App* list_cmd = atlas.add_subcommand("list", "The structures of a project");
+  context.AddProjectOption(list_cmd, &list->project);
+  AddPagingOptions(list_cmd, &list->page);
+  context.Add(list_cmd,
+              [list](Connection& c) { return ListStructures(c, list->project, list->page); });
+
+  auto show = std::make_shared<StructureArgs>();
+  CLI::App* show_cmd = atlas.add_subcommand("show", "One structure: head, metadata, lock");
+  AddTarget(context, show_cmd, show.get());
+  context.Add(show_cmd, [show](Connection& c) { return ShowStructure(c, *show); });
+
+  struct HistoryArgs {
+    StructureArgs target;
+    PageArgs page;
+  };
+  auto history = std::make_shared<HistoryArgs>();
+  CLI::App* history_cmd = atlas.add_subcommand("history", "A structure's revisions, newest first");
+  AddTarget(context, history_cmd, &history->target);
+  AddPagingOptions(history_cmd, &history->page);
+  context.Add(history_cmd,
+              [history](Connection& c) { return History(c, history->target, history->page); });
+}
+
+// `pba atlas create`.
+void RegisterCreateCommand(CLI::App& atlas, CommandContext& context) {
+  auto create = std::make_shared<CreateStructureArgs>();
+  CLI::App* cmd =
+      atlas.add_subcommand("create", "Add a structure from a geometry file (revision 1)");
+  AddTarget(context, cmd, &create->target);
+  cmd->add_option("file", create->file, "Geometry: contours .json, .nii(.gz), .stl, .obj, .vtk")
+      ->required()
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--format", create->format,
+                  "contours_json, nifti, stl, obj or vtk (default: from the extension)");
+  cmd->add_option("--colour", create->colour, "Display colour R,G,B (0..255)");
+  cmd->add_option("--group", create->group, "Group path, e.g. cerebrum/basal ganglia");
+  cmd->add_option("--material", create->material, "Material parameters: JSON or @FILE");
+  cmd->add_option("-m,--message", create->message, "Why");
+  AddRequestIdOption(cmd, &create->request_id, "revision");
+  context.Add(cmd, [create](Connection& c) { return CreateStructure(c, *create); });
+}
+
+// `pba atlas checkout|lock|commit|unlock|break`: editing under a lock.
+void RegisterLockCommands(CLI::App& atlas, CommandContext& context) {
+  auto checkout = std::make_shared<CheckoutArgs>();
+  CLI::App* checkout_cmd = atlas.add_subcommand(
+      "checkout", "Lock a structure and download its head for editing (writes FILE.pba-checkout)");
+  AddTarget(context, checkout_cmd, &checkout->target);
+  checkout_cmd->add_option("-o,--out", checkout->out, "File to write (default NAME.<format>)");
+  checkout_cmd->add_option("--lease", checkout->lease_s, "Lease in seconds (renew with --hold)")
+      ->check(CLI::Range(1, 3600))
+      ->capture_default_str();
+  checkout_cmd->add_flag("--hold", checkout->hold,
+                         "Stay running and keep the lease alive until Ctrl-C, then unlock");
+  checkout_cmd->add_flag("--force", checkout->force,
+                         "Overwrite FILE even when it holds changes the server does not have "
+                         "(by default they are kept as FILE.mine)");
+  context.Add(checkout_cmd, [checkout](Connection& c) { return Checkout(c, *checkout); });
+
+  auto lock = std::make_shared<CheckoutArgs>();
+  CLI::App* lock_cmd = atlas.add_subcommand(
+      "lock", "Lock a structure without downloading it (no one else may change it)");
+  AddTarget(context, lock_cmd, &lock->target);
+  lock_cmd->add_option("--lease", lock->lease_s, "Lease in seconds (renew with --hold)")
+      ->check(CLI::Range(1, 3600))
+      ->capture_default_str();
+  lock_cmd->add_flag("--hold", lock->hold,
+                     "Stay running and keep the lease alive until Ctrl-C, then unlock");
+  context.Add(lock_cmd, [lock](Connection& c) { return LockStructure(c, *lock); });
+
+  auto commit = std::make_shared<CommitArgs>();
+  CLI::App* commit_cmd =
+      atlas.add_subcommand("commit", "Commit a checked-out file as a new revision, then unlock");
+  commit_cmd->add_option("file", commit->file, "The checked-out file")
+      ->required()
+      ->check(CLI::ExistingFile);
+  commit_cmd->add_option("-m,--message", commit->message, "Why")->required();
+  commit_cmd->add_option("--material", commit->material,
+                         "New material parameters with it: JSON or @FILE");
+  commit_cmd->add_flag("--keep-lock", commit->keep_lock, "Keep the lock to commit again");
+  context.Add(commit_cmd, [commit](Connection& c) { return Commit(c, *commit); });
+
+  auto unlock_what = std::make_shared<std::string>();
+  CLI::App* unlock_cmd = atlas.add_subcommand("unlock", "Release a lock without committing");
+  unlock_cmd->add_option("what", *unlock_what, "The checked-out file, or a lock id")->required();
+  context.Add(unlock_cmd, [unlock_what](Connection& c) { return Unlock(c, *unlock_what); });
+
+  struct BreakArgs {
+    StructureArgs target;
+    std::string reason;
+  };
+  auto broken = std::make_shared<BreakArgs>();
+  CLI::App* break_cmd =
+      atlas.add_subcommand("break", "Break someone's lock (project admins; audited)");
+  AddTarget(context, break_cmd, &broken->target);
+  break_cmd->add_option("--reason", broken->reason, "Why (recorded in the audit log)")->required();
+  context.Add(break_cmd,
+              [broken](Connection& c) { return BreakLock(c, broken->target, broken->reason); });
+}
+
+// `pba atlas revert|set`: changes that need no lock.
+void RegisterChangeCommands(CLI::App& atlas, CommandContext& context) {
+  auto revert = std::make_shared<RevertArgs>();
+  CLI::App* revert_cmd = atlas.add_subcommand(
+      "revert", "A new revision with the content of an older one (history is kept)");
+  AddTarget(context, revert_cmd, &revert->target);
+  revert_cmd->add_option("--to", revert->to, "The revision to go back to")->required();
+  revert_cmd->add_option("-m,--message", revert->message, "Why");
+  context.Add(revert_cmd, [revert](Connection& c) { return Revert(c, *revert); });
+
+  auto metadata = std::make_shared<MetadataArgs>();
+  CLI::App* set_cmd = atlas.add_subcommand(
+      "set", "Change a structure's colour, group or material (no lock needed)");
+  AddTarget(context, set_cmd, &metadata->target);
+  set_cmd->add_option("--colour", metadata->colour, "R,G,B (0..255)");
+  set_cmd->add_option("--group", metadata->group, "Group path");
+  set_cmd->add_option("--material", metadata->material, "Material parameters: JSON or @FILE");
+  set_cmd->add_option("-m,--message", metadata->message, "Why");
+  context.Add(set_cmd, [metadata](Connection& c) { return SetMetadata(c, *metadata); });
+}
+
+// `pba atlas download|diff`: reading revisions.
+void RegisterRevisionCommands(CLI::App& atlas, CommandContext& context) {
+  auto download = std::make_shared<DownloadArgs>();
+  CLI::App* download_cmd =
+      atlas.add_subcommand("download", "Download a revision's geometry (no lock)");
+  AddTarget(context, download_cmd, &download->target);
+  download_cmd->add_option("-r,--revision", download->revision, "Revision (default the head)");
+  download_cmd->add_option("-o,--out", download->out, "File to write (default NAME.<format>)");
+  context.Add(download_cmd, [download](Connection& c) { return Download(c, *download); });
+
+  struct DiffArgs {
+    StructureArgs target;
+    int64_t from = 0, to = 0;
+  };
+  auto diff = std::make_shared<DiffArgs>();
+  CLI::App* diff_cmd = atlas.add_subcommand(
+      "diff", "What changed between two revisions: material, colour, group, shape");
+  AddTarget(context, diff_cmd, &diff->target);
+  diff_cmd->add_option("--from", diff->from, "Older revision (default the head's parent)");
+  diff_cmd->add_option("--to", diff->to, "Newer revision (default the head)");
+  context.Add(diff_cmd,
+              [diff](Connection& c) { return Diff(c, diff->target, diff->from, diff->to); });
+}
+
+}  // namespace
+
+void RegisterAtlasCommands(CLI::App& app, CommandContext& context) {
+  CLI::App* atlas = AddCommandGroup(app, "atlas", "Share and edit atlas structures");
+  // In the order `pba atlas --help` lists them.
+  RegisterBrowseCommands(*atlas, context);
+  RegisterCreateCommand(*atlas, context);
+  RegisterLockCommands(*atlas, context);
+  RegisterChangeCommands(*atlas, context);
+  RegisterRevisionCommands(*atlas, context);
+  RegisterSnapshotCommands(*atlas, context);       // snapshot_commands.cc
+  RegisterImportExportCommands(*atlas, context);   // import_commands.cc
+  RegisterTagAuditWatchCommands(*atlas, context);  // snapshot_commands.cc
 }
 
 }  // namespace pba::cli

@@ -19,7 +19,24 @@
 
 #include "connection.h"
 
+namespace CLI {
+class App;
+}
+
 namespace pba::cli {
+
+class CommandContext;
+
+// Adds `pba atlas ...` to `app`: the structure commands of
+// atlas_commands.cc, then the three below.
+void RegisterAtlasCommands(CLI::App& app, CommandContext& context);
+// Adds `pba atlas snapshot create|list|show|export` to `atlas`
+// (snapshot_commands.cc).
+void RegisterSnapshotCommands(CLI::App& atlas, CommandContext& context);
+// Adds `pba atlas import|export` to `atlas` (import_commands.cc).
+void RegisterImportExportCommands(CLI::App& atlas, CommandContext& context);
+// Adds `pba atlas tag|audit|watch` to `atlas` (snapshot_commands.cc).
+void RegisterTagAuditWatchCommands(CLI::App& atlas, CommandContext& context);
 
 struct PageArgs {
   int page_size = 50;

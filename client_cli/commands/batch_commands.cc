@@ -3,17 +3,20 @@
 #include <google/protobuf/struct.pb.h>
 #include <yaml-cpp/yaml.h>
 
+#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <set>
 #include <sstream>
 
 #include "codec/yaml_codec.h"
 #include "commands/batch_plot.h"
 #include "commands/batch_shared.h"
+#include "commands/command_context.h"
 #include "commands/job_commands.h"
 #include "core/sha256.h"
 #include "core/yaml_guard.h"
@@ -68,11 +71,18 @@ std::string LastName(const std::string& path) {
   return dot == std::string::npos ? path : path.substr(dot + 1);
 }
 
-// Reads the batch file and builds every member's scene; false with a message
-// naming the file, the member and the field.
-bool LoadBatch(const std::string& file, Batch* batch, std::string* error) {
-  YAML::Node root;
-  if (!LoadBoundedYaml(file, &root, error)) return false;
+// A member before its scene is built: its name and the values it sets
+// (path, value), in the order given.
+struct MemberValues {
+  std::string name;
+  std::vector<std::pair<std::string, YAML::Node>> values;
+};
+
+// The batch file's settings: every key known; name, scene, snapshot,
+// parallel, outputs and plot into *batch. False with a message naming the
+// file and the key.
+bool ReadSettings(const std::string& file, const YAML::Node& root, Batch* batch,
+                  std::string* error) {
   if (!root.IsMap()) {
     *error = file + ": a batch is a map with scene, sweep or members, and outputs";
     return false;
@@ -126,73 +136,100 @@ bool LoadBatch(const std::string& file, Batch* batch, std::string* error) {
       return false;
     }
   }
-  // The members' values: a cartesian product, or a list.
-  std::vector<std::pair<std::string, std::vector<std::pair<std::string, YAML::Node>>>> members;
+  return true;
+}
+
+// sweep: every combination of the axes' values, each member named by its
+// values ("c10_pa=100,element_size_mm=4"); the axes' paths into
+// batch->parameters.
+bool SweepMembers(const std::string& file, const YAML::Node& sweep, Batch* batch,
+                  std::vector<MemberValues>* members, std::string* error) {
+  if (!sweep.IsMap() || sweep.size() == 0) {
+    *error = file + ": sweep: expected a map of path: [values]";
+    return false;
+  }
+  members->push_back({"", {}});
+  for (const auto& axis : sweep) {
+    const std::string path = axis.first.Scalar();
+    if (!axis.second.IsSequence() || axis.second.size() == 0) {
+      *error = file + ": sweep." + path + ": expected a non-empty list of values";
+      return false;
+    }
+    batch->parameters.push_back(path);
+    std::vector<MemberValues> next;
+    for (const MemberValues& member : *members) {
+      for (const auto& value : axis.second) {
+        MemberValues extended = member;
+        extended.name += (extended.name.empty() ? "" : ",") + LastName(path) + "=" + Scalar(value);
+        extended.values.push_back({path, value});
+        next.push_back(std::move(extended));
+      }
+    }
+    *members = std::move(next);
+  }
+  return true;
+}
+
+// members: the list as given (a member without a name is "member N"); every
+// path any member sets into batch->parameters, in order of appearance.
+bool ListedMembers(const std::string& file, const YAML::Node& list, Batch* batch,
+                   std::vector<MemberValues>* members, std::string* error) {
+  if (!list.IsSequence() || list.size() == 0) {
+    *error = file + ": members: expected a non-empty list of {name, set}";
+    return false;
+  }
+  int index = 0;
+  for (const auto& m : list) {
+    const std::string where = file + ": members[" + std::to_string(index) + "]";
+    if (!m.IsMap() || !m["set"] || !m["set"].IsMap()) {
+      *error = where + ": expected {name: ..., set: {path: value, ...}}";
+      return false;
+    }
+    MemberValues member;
+    member.name = m["name"] ? m["name"].Scalar() : "member " + std::to_string(index + 1);
+    for (const auto& v : m["set"]) {
+      const std::string path = v.first.Scalar();
+      member.values.push_back({path, v.second});
+      if (std::find(batch->parameters.begin(), batch->parameters.end(), path) ==
+          batch->parameters.end())
+        batch->parameters.push_back(path);
+    }
+    members->push_back(std::move(member));
+    ++index;
+  }
+  return true;
+}
+
+// The members' values: a cartesian product (sweep) or a list (members),
+// their names unique.
+bool ReadMembers(const std::string& file, const YAML::Node& root, Batch* batch,
+                 std::vector<MemberValues>* members, std::string* error) {
   if (root["sweep"] && root["members"]) {
     *error = file + ": give sweep or members, not both";
     return false;
   }
   if (root["sweep"]) {
-    if (!root["sweep"].IsMap() || root["sweep"].size() == 0) {
-      *error = file + ": sweep: expected a map of path: [values]";
-      return false;
-    }
-    members.push_back({"", {}});
-    for (const auto& axis : root["sweep"]) {
-      const std::string path = axis.first.Scalar();
-      if (!axis.second.IsSequence() || axis.second.size() == 0) {
-        *error = file + ": sweep." + path + ": expected a non-empty list of values";
-        return false;
-      }
-      batch->parameters.push_back(path);
-      std::vector<std::pair<std::string, std::vector<std::pair<std::string, YAML::Node>>>> next;
-      for (const auto& member : members) {
-        for (const auto& value : axis.second) {
-          auto extended = member;
-          extended.first +=
-              (extended.first.empty() ? "" : ",") + LastName(path) + "=" + Scalar(value);
-          extended.second.push_back({path, value});
-          next.push_back(std::move(extended));
-        }
-      }
-      members = std::move(next);
-    }
+    if (!SweepMembers(file, root["sweep"], batch, members, error)) return false;
   } else if (root["members"]) {
-    if (!root["members"].IsSequence() || root["members"].size() == 0) {
-      *error = file + ": members: expected a non-empty list of {name, set}";
-      return false;
-    }
-    int index = 0;
-    for (const auto& m : root["members"]) {
-      const std::string where = file + ": members[" + std::to_string(index) + "]";
-      if (!m.IsMap() || !m["set"] || !m["set"].IsMap()) {
-        *error = where + ": expected {name: ..., set: {path: value, ...}}";
-        return false;
-      }
-      std::string name = m["name"] ? m["name"].Scalar() : "member " + std::to_string(index + 1);
-      std::vector<std::pair<std::string, YAML::Node>> values;
-      for (const auto& v : m["set"]) {
-        const std::string path = v.first.Scalar();
-        values.push_back({path, v.second});
-        if (std::find(batch->parameters.begin(), batch->parameters.end(), path) ==
-            batch->parameters.end())
-          batch->parameters.push_back(path);
-      }
-      members.push_back({name, values});
-      ++index;
-    }
+    if (!ListedMembers(file, root["members"], batch, members, error)) return false;
   } else {
     *error = file + ": a batch needs sweep or members";
     return false;
   }
   std::set<std::string> names;
-  for (const auto& [name, values] : members) {
-    if (!names.insert(name).second) {
-      *error = file + ": two members are named '" + name + "'";
+  for (const MemberValues& member : *members) {
+    if (!names.insert(member.name).second) {
+      *error = file + ": two members are named '" + member.name + "'";
       return false;
     }
   }
+  return true;
+}
 
+// Each member's scene: the base scene with the member's values set, checked
+// by the codec, with a request id from its text.
+bool BuildMemberScenes(const std::string& file, const std::vector<MemberValues>& members,
+                       Batch* batch, std::string* error) {
   YAML::Node base;
   if (!LoadBoundedYaml(batch->scene_file.string(), &base, error)) return false;
   const std::string base_name = base["name"] ? base["name"].Scalar() : batch->name;
@@ -231,6 +268,17 @@ bool LoadBatch(const std::string& file, Batch* batch, std::string* error) {
     batch->values.push_back(std::move(written));
   }
   return true;
+}
+
+// Reads the batch file and builds every member's scene; false with a message
+// naming the file, the member and the field.
+bool LoadBatch(const std::string& file, Batch* batch, std::string* error) {
+  YAML::Node root;
+  if (!LoadBoundedYaml(file, &root, error)) return false;
+  if (!ReadSettings(file, root, batch, error)) return false;
+  std::vector<MemberValues> members;
+  if (!ReadMembers(file, root, batch, &members, error)) return false;
+  return BuildMemberScenes(file, members, batch, error);
 }
 
 fs::path StatePath(const std::string& file) { return file + ".pba-batch"; }
@@ -352,6 +400,21 @@ int RunBatch(Connection& connection, const BatchArgs& args) {
       return code;
   }
   return failed > 0 ? kExitJobFailed : kExitOk;
+}
+
+void RegisterBatchCommands(CLI::App& app, CommandContext& context) {
+  CLI::App* batch = AddCommandGroup(app, "batch", "Scripted batches of jobs");
+  auto args = std::make_shared<BatchArgs>();
+  CLI::App* run = batch->add_subcommand(
+      "run", "Run a base scene over parameter sweeps; one table of outputs per member");
+  run->add_option("file", args->file, "Batch file (YAML)")->required()->check(CLI::ExistingFile);
+  run->add_option("-o,--out", args->out, "CSV table (default FILE's name .csv)");
+  run->add_flag("--retry-failed", args->retry_failed,
+                "Resubmit members whose earlier job failed or was cancelled");
+  run->add_flag("--dry-run", args->dry_run, "Check the members, submit nothing");
+  run->add_flag("--no-plot", args->no_plot,
+                "Draw no picture of the members' histories (the plot section)");
+  context.Add(run, [args](Connection& c) { return RunBatch(c, *args); });
 }
 
 }  // namespace pba::cli

@@ -52,7 +52,13 @@
 
 #include "connection.h"
 
+namespace CLI {
+class App;
+}
+
 namespace pba::cli {
+
+class CommandContext;
 
 struct BatchArgs {
   std::string file;
@@ -64,5 +70,8 @@ struct BatchArgs {
 };
 
 int RunBatch(Connection& connection, const BatchArgs& args);
+
+// Adds `pba batch run` to `app`.
+void RegisterBatchCommands(CLI::App& app, CommandContext& context);
 
 }  // namespace pba::cli

@@ -1,12 +1,15 @@
 // `pba atlas import`: an atlas (the synthetic one, a plate directory or a
 // label volume) imported into a project as a job: the files are uploaded,
 // the job is submitted and followed, and the snapshot it made is printed.
+#include <CLI/CLI.hpp>
 #include <cstdio>
 #include <filesystem>
+#include <memory>
 #include <vector>
 
 #include "commands/atlas_commands.h"
 #include "commands/atlas_shared.h"
+#include "commands/command_context.h"
 #include "commands/job_commands.h"
 #include "exit_codes.h"
 #include "output.h"
@@ -92,6 +95,52 @@ int ImportAtlas(Connection& connection, const ImportArgs& args) {
 int ExportAtlas(Connection& connection, const std::string& project, const std::string& snapshot,
                 const std::string& dir) {
   return ExportSnapshot(connection, project, snapshot, dir);
+}
+
+void RegisterImportExportCommands(CLI::App& atlas, CommandContext& context) {
+  struct ImportCommandArgs {
+    ImportArgs args;
+    bool no_wait = false;
+  };
+  auto import_args = std::make_shared<ImportCommandArgs>();
+  ImportArgs& args = import_args->args;
+  CLI::App* import_cmd = atlas.add_subcommand(
+      "import", "Import an atlas into a project as a job: its structures and a snapshot of them");
+  context.AddProjectOption(import_cmd, &args.project);
+  import_cmd->add_flag("--synthetic", args.synthetic, "The built-in synthetic atlas");
+  import_cmd->add_option("--plates", args.plates, "A plate directory (plates.json)")
+      ->check(CLI::ExistingDirectory);
+  import_cmd->add_option("--labels", args.labels, "A label volume (.nii, .nii.gz, .nrrd)")
+      ->check(CLI::ExistingFile);
+  import_cmd
+      ->add_option("--colour-table", args.colour_table,
+                   "With --labels: its label table (CSV); default the built-in one")
+      ->check(CLI::ExistingFile);
+  import_cmd->add_option("--structure", args.structures,
+                         "Import only this structure (repeatable; group prefixes allowed)");
+  import_cmd->add_option("--snapshot-name", args.snapshot_name,
+                         "Name of the snapshot the import ends with");
+  import_cmd->add_option("-m,--message", args.message, "Message of the new revisions");
+  import_cmd->add_option("--request-id", args.request_id,
+                         "Idempotency key: a repeated import with it returns the same job");
+  import_cmd->add_flag("--no-wait", import_args->no_wait,
+                       "Submit and return; do not follow the job");
+  context.Add(import_cmd, [import_args](Connection& c) {
+    import_args->args.wait = !import_args->no_wait;
+    return ImportAtlas(c, import_args->args);
+  });
+
+  struct ExportArgs {
+    std::string project, which, dir;
+  };
+  auto out = std::make_shared<ExportArgs>();
+  CLI::App* export_cmd = atlas.add_subcommand(
+      "export", "Download a snapshot as a structure set (manifest.json + one file per structure)");
+  context.AddProjectOption(export_cmd, &out->project);
+  export_cmd->add_option("snapshot", out->which, "Id or tag")->required();
+  export_cmd->add_option("-o,--out", out->dir, "New directory to write")->required();
+  context.Add(export_cmd,
+              [out](Connection& c) { return ExportAtlas(c, out->project, out->which, out->dir); });
 }
 
 }  // namespace pba::cli

@@ -2,15 +2,18 @@
 
 #include <unistd.h>
 
+#include <CLI/CLI.hpp>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <random>
 #include <set>
 
 #include "codec/summary_text.h"
 #include "codec/yaml_codec.h"
 #include "commands/atlas_shared.h"
+#include "commands/command_context.h"
 #include "exit_codes.h"
 #include "files.h"
 #include "output.h"
@@ -28,7 +31,7 @@ int ExitForState(v1::Job::State state) {
     case v1::Job::FAILED:
       return kExitJobFailed;
     case v1::Job::CANCELLED:
-      return kExitJobCancelled;
+      return kExitCancelled;
     default:
       return kExitNotReady;
   }
@@ -359,6 +362,56 @@ int FetchJob(Connection& connection, const FetchArgs& args) {
       "and von Mises fields.\n",
       (dir / "result.xdmf").c_str());
   return kExitOk;
+}
+
+void RegisterJobCommands(CLI::App& app, CommandContext& context) {
+  CLI::App* job = AddCommandGroup(app, "job", "Submit, follow, cancel and fetch jobs");
+
+  auto submit = std::make_shared<SubmitArgs>();
+  CLI::App* submit_cmd = job->add_subcommand("submit", "Submit a scene file (YAML or JSON)");
+  submit_cmd->add_option("file", submit->file, "Scene file")->required()->check(CLI::ExistingFile);
+  submit_cmd->add_flag("--wait", submit->wait,
+                       "Follow the job until it ends; exit with its outcome");
+  submit_cmd->add_option(
+      "--request-id", submit->request_id,
+      "Idempotency key: a repeated submit with the same key returns the same job");
+  submit_cmd->add_option("--snapshot", submit->snapshot,
+                         "PROJECT/SNAPSHOT: build the scene's atlas from this snapshot of the "
+                         "atlas store (its id or a tag)");
+  submit_cmd->add_option("--priority", submit->priority, "Higher runs first (-100..100)")
+      ->check(CLI::Range(-100, 100));
+  submit_cmd
+      ->add_option("--timeout", submit->timeout_s,
+                   "Wall-clock limit [s] (at most the server's); 0: the server's")
+      ->check(CLI::NonNegativeNumber);
+  context.Add(submit_cmd, [submit](Connection& c) { return SubmitJob(c, *submit); });
+
+  auto list = std::make_shared<ListArgs>();
+  CLI::App* list_cmd = job->add_subcommand("list", "List jobs, newest first");
+  list_cmd->add_option("--page-size", list->page_size, "Jobs per page")->check(CLI::Range(1, 500));
+  list_cmd->add_option("--page-token", list->page_token, "Continue from a previous page");
+  list_cmd->add_flag("--all", list->all, "Fetch every page");
+  context.Add(list_cmd, [list](Connection& c) { return ListJobs(c, *list); });
+
+  // status, watch and cancel: a job id and nothing else.
+  const auto add_by_id = [&](const char* name, const char* description,
+                             int (*run)(Connection&, const std::string&)) {
+    auto id = std::make_shared<std::string>();
+    CLI::App* cmd = job->add_subcommand(name, description);
+    cmd->add_option("id", *id, "Job id")->required();
+    context.Add(cmd, [id, run](Connection& c) { return run(c, *id); });
+  };
+  add_by_id("status", "Show one job, with its summary when done", ShowJob);
+  add_by_id("watch", "Follow a job's progress until it ends", WatchJob);
+  add_by_id("cancel", "Cancel a queued or running job", CancelJob);
+
+  auto fetch = std::make_shared<FetchArgs>();
+  CLI::App* fetch_cmd = job->add_subcommand("fetch", "Download a finished job's result files");
+  fetch_cmd->add_option("id", fetch->id, "Job id")->required();
+  fetch_cmd->add_option("-o,--out", fetch->out_dir, "Directory to write into (created)")
+      ->required();
+  fetch_cmd->add_flag("--force", fetch->force, "Replace files of the same names already there");
+  context.Add(fetch_cmd, [fetch](Connection& c) { return FetchJob(c, *fetch); });
 }
 
 }  // namespace pba::cli

@@ -7,7 +7,16 @@
 #include "connection.h"
 #include "pba/v1/job.pb.h"
 
+namespace CLI {
+class App;
+}
+
 namespace pba::cli {
+
+class CommandContext;
+
+// Adds `pba job submit|list|status|watch|cancel|fetch` to `app`.
+void RegisterJobCommands(CLI::App& app, CommandContext& context);
 
 struct SubmitArgs {
   std::string file;

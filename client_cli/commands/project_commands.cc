@@ -2,11 +2,14 @@
 // project_commands.h).
 #include "commands/project_commands.h"
 
+#include <CLI/CLI.hpp>
 #include <cstdio>
 #include <fstream>
+#include <memory>
 
 #include "commands/atlas_commands.h"
 #include "commands/atlas_shared.h"
+#include "commands/command_context.h"
 #include "credentials.h"
 #include "exit_codes.h"
 #include "output.h"
@@ -169,6 +172,60 @@ int RemoveMember(Connection& connection, const std::string& project, const std::
     std::printf("released their lock on %s\n", structure.c_str());
   }
   return kExitOk;
+}
+
+void RegisterLoginCommands(CLI::App& app, CommandContext& context) {
+  auto login = std::make_shared<LoginArgs>();
+  CLI::App* login_cmd =
+      app.add_subcommand("login", "Check a token with the server and keep it for later commands");
+  login_cmd->add_option("--token", login->token, "The access token");
+  login_cmd
+      ->add_option("--token-file", login->token_file,
+                   "Read the token from a file (the server's DATA/admin.token, say)")
+      ->check(CLI::ExistingFile);
+  context.Add(login_cmd, [login](Connection& c) { return Login(c, *login); });
+  context.Add(app.add_subcommand("logout", "Forget the token kept for the server"), Logout);
+  context.Add(app.add_subcommand("whoami", "The user the kept token belongs to"), WhoAmI);
+}
+
+void RegisterProjectCommands(CLI::App& app, CommandContext& context) {
+  CLI::App* project = AddCommandGroup(app, "project", "Create and list projects, set roles");
+
+  struct CreateArgs {
+    std::string name, request_id;
+  };
+  auto create = std::make_shared<CreateArgs>();
+  CLI::App* create_cmd = project->add_subcommand("create", "Create a project (you are its admin)");
+  create_cmd->add_option("name", create->name, "Project name")->required();
+  AddRequestIdOption(create_cmd, &create->request_id, "project");
+  context.Add(create_cmd, [create](Connection& c) {
+    return CreateProject(c, create->name, create->request_id);
+  });
+
+  auto page = std::make_shared<PageArgs>();
+  CLI::App* list_cmd = project->add_subcommand("list", "Projects you are a member of");
+  AddPagingOptions(list_cmd, page.get());
+  context.Add(list_cmd, [page](Connection& c) { return ListProjects(c, *page); });
+
+  struct MemberArgs {
+    std::string project, user, role;
+  };
+  auto role = std::make_shared<MemberArgs>();
+  CLI::App* role_cmd =
+      project->add_subcommand("role", "Give a user a role in a project (admins only)");
+  role_cmd->add_option("project", role->project, "Project")->required();
+  role_cmd->add_option("user", role->user, "User")->required();
+  role_cmd->add_option("role", role->role, "viewer, editor or admin")->required();
+  context.Add(role_cmd,
+              [role](Connection& c) { return SetRole(c, role->project, role->user, role->role); });
+
+  auto remove = std::make_shared<MemberArgs>();
+  CLI::App* remove_cmd = project->add_subcommand(
+      "remove-member", "Remove a user from a project, releasing their locks (admins only)");
+  remove_cmd->add_option("project", remove->project, "Project")->required();
+  remove_cmd->add_option("user", remove->user, "User")->required();
+  context.Add(remove_cmd,
+              [remove](Connection& c) { return RemoveMember(c, remove->project, remove->user); });
 }
 
 }  // namespace pba::cli

@@ -2,6 +2,7 @@
 #include <google/protobuf/struct.pb.h>
 #include <sys/stat.h>
 
+#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cctype>
 #include <cerrno>
@@ -10,6 +11,7 @@
 #include <cstring>
 #include <filesystem>
 #include <map>
+#include <memory>
 #include <set>
 #include <string>
 #include <vector>
@@ -17,6 +19,7 @@
 #include "codec/yaml_codec.h"
 #include "commands/atlas_commands.h"
 #include "commands/atlas_shared.h"
+#include "commands/command_context.h"
 #include "exit_codes.h"
 #include "files.h"
 #include "output.h"
@@ -381,6 +384,90 @@ int Watch(Connection& connection, const std::string& project, int count) {
     return connection.Fail("watching " + project, status);
   }
   return kExitOk;
+}
+
+void RegisterSnapshotCommands(CLI::App& atlas, CommandContext& context) {
+  CLI::App* snapshot = AddCommandGroup(atlas, "snapshot", "Pin, list, show and export snapshots");
+
+  struct CreateArgs {
+    std::string project, name, request_id;
+  };
+  auto create = std::make_shared<CreateArgs>();
+  CLI::App* create_cmd =
+      snapshot->add_subcommand("create", "Pin the head of every structure of a project");
+  context.AddProjectOption(create_cmd, &create->project);
+  create_cmd->add_option("--name", create->name, "A name for it (default: its UTC time)");
+  AddRequestIdOption(create_cmd, &create->request_id, "snapshot");
+  context.Add(create_cmd, [create](Connection& c) {
+    return CreateSnapshot(c, create->project, create->name, create->request_id);
+  });
+
+  struct ListArgs {
+    std::string project;
+    PageArgs page;
+  };
+  auto list = std::make_shared<ListArgs>();
+  CLI::App* list_cmd = snapshot->add_subcommand("list", "Snapshots, newest first");
+  context.AddProjectOption(list_cmd, &list->project);
+  AddPagingOptions(list_cmd, &list->page);
+  context.Add(list_cmd,
+              [list](Connection& c) { return ListSnapshots(c, list->project, list->page); });
+
+  struct WhichArgs {
+    std::string project, which, dir;
+  };
+  auto show = std::make_shared<WhichArgs>();
+  CLI::App* show_cmd = snapshot->add_subcommand("show", "A snapshot's revisions");
+  context.AddProjectOption(show_cmd, &show->project);
+  show_cmd->add_option("snapshot", show->which, "Id or tag")->required();
+  context.Add(show_cmd,
+              [show](Connection& c) { return ShowSnapshot(c, show->project, show->which); });
+
+  auto out = std::make_shared<WhichArgs>();
+  CLI::App* export_cmd = snapshot->add_subcommand(
+      "export", "Download every structure a snapshot pins, with a manifest");
+  context.AddProjectOption(export_cmd, &out->project);
+  export_cmd->add_option("snapshot", out->which, "Id or tag")->required();
+  export_cmd->add_option("-o,--out", out->dir, "New directory to write")->required();
+  context.Add(export_cmd, [out](Connection& c) {
+    return ExportSnapshot(c, out->project, out->which, out->dir);
+  });
+}
+
+void RegisterTagAuditWatchCommands(CLI::App& atlas, CommandContext& context) {
+  struct TagArgs {
+    std::string project;
+    int64_t id = 0;
+    std::string tag;
+  };
+  auto tag = std::make_shared<TagArgs>();
+  CLI::App* tag_cmd = atlas.add_subcommand("tag", "Name a snapshot by a tag");
+  context.AddProjectOption(tag_cmd, &tag->project);
+  tag_cmd->add_option("id", tag->id, "Snapshot id")->required();
+  tag_cmd->add_option("tag", tag->tag, "Tag (not all digits)")->required();
+  context.Add(tag_cmd,
+              [tag](Connection& c) { return TagSnapshot(c, tag->project, tag->id, tag->tag); });
+
+  struct AuditArgs {
+    std::string project;
+    PageArgs page;
+  };
+  auto audit = std::make_shared<AuditArgs>();
+  CLI::App* audit_cmd = atlas.add_subcommand("audit", "Who changed what, newest first");
+  context.AddProjectOption(audit_cmd, &audit->project);
+  AddPagingOptions(audit_cmd, &audit->page);
+  context.Add(audit_cmd, [audit](Connection& c) { return Audit(c, audit->project, audit->page); });
+
+  struct WatchArgs {
+    std::string project;
+    int count = 0;
+  };
+  auto watch = std::make_shared<WatchArgs>();
+  CLI::App* watch_cmd =
+      atlas.add_subcommand("watch", "Print a project's changes as they happen (Ctrl-C stops)");
+  context.AddProjectOption(watch_cmd, &watch->project);
+  watch_cmd->add_option("--count", watch->count, "Stop after this many changes");
+  context.Add(watch_cmd, [watch](Connection& c) { return Watch(c, watch->project, watch->count); });
 }
 
 }  // namespace pba::cli

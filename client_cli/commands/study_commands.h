@@ -13,7 +13,13 @@
 
 #include "connection.h"
 
+namespace CLI {
+class App;
+}
+
 namespace pba::cli {
+
+class CommandContext;
 
 struct StudyArgs {
   std::string scene;                    // the base scene file
@@ -31,5 +37,8 @@ struct StudyArgs {
 };
 
 int RunConvergenceStudy(Connection& connection, const StudyArgs& args);
+
+// Adds `pba study convergence` to `app`.
+void RegisterStudyCommands(CLI::App& app, CommandContext& context);
 
 }  // namespace pba::cli

@@ -98,100 +98,104 @@ fs::path DefaultSolver() {
   return (ec ? fs::current_path() : self.parent_path()) / "pba-solve";
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  // Before anything is created: every file of the data directory (and of
-  // the solves this starts, which inherit it) is the server user's alone.
-  ::umask(077);
-  CLI::App app{"pba-server: runs PBA simulation jobs behind a gRPC API"};
+// The serving options as given on the command line (defaults as shown by
+// --help).
+struct ServeFlags {
   std::string data_dir;
   std::string listen = "127.0.0.1:50051";
   std::string solver;
   int max_running = 1;
+  double atlas_cache_gib = 2.0;
   std::string log_level = "info";
   std::string tls_cert, tls_key;
-  app.add_option("--data", data_dir, "Data directory (pba.db, jobs/); created if absent");
-  app.add_option("--listen", listen, "HOST:PORT to listen on; port 0 picks a free port")
+  bool insecure = false;
+  int64_t max_job_time_s = pba::kDefaultMaxJobTime.count();
+  int max_attempts = 3;
+  double solver_memory_gib = -1;  // < 0: DefaultSolverMemoryBytes
+  double upload_quota_gib = 4;
+  double keep_results_days = 30;
+};
+
+void AddServeOptions(CLI::App& app, ServeFlags* flags) {
+  app.add_option("--data", flags->data_dir, "Data directory (pba.db, jobs/); created if absent");
+  app.add_option("--listen", flags->listen, "HOST:PORT to listen on; port 0 picks a free port")
       ->capture_default_str();
-  app.add_option("--solver", solver, "pba-solve executable (default: next to pba-server)");
-  app.add_option("--max-running", max_running, "Jobs run at the same time")
+  app.add_option("--solver", flags->solver, "pba-solve executable (default: next to pba-server)");
+  app.add_option("--max-running", flags->max_running, "Jobs run at the same time")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
-  double atlas_cache_gib = 2.0;
-  app.add_option("--atlas-cache-size", atlas_cache_gib,
+  app.add_option("--atlas-cache-size", flags->atlas_cache_gib,
                  "Bound of <data>/cache/atlas, the built atlas meshes solves share [GiB]")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
-  app.add_option("--log-level", log_level, "trace, debug, info, warn, error, critical or off")
+  app.add_option("--log-level", flags->log_level,
+                 "trace, debug, info, warn, error, critical or off")
       ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "critical", "off"}))
       ->capture_default_str();
-  app.add_option("--tls-cert", tls_cert,
+  app.add_option("--tls-cert", flags->tls_cert,
                  "PEM certificate (chain) to serve TLS with; needs --tls-key");
-  app.add_option("--tls-key", tls_key, "PEM private key of --tls-cert");
-  bool insecure = false;
-  app.add_flag("--insecure", insecure,
+  app.add_option("--tls-key", flags->tls_key, "PEM private key of --tls-cert");
+  app.add_flag("--insecure", flags->insecure,
                "Allow plaintext on an address that is not loopback (tokens then cross the "
                "network in the clear)");
-  int64_t max_job_time_s = pba::kDefaultMaxJobTime.count();
-  app.add_option("--max-job-time", max_job_time_s,
+  app.add_option("--max-job-time", flags->max_job_time_s,
                  "Wall-clock limit of a job [s]; a job may ask for less; 0: none")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
-  int max_attempts = 3;
-  app.add_option("--max-attempts", max_attempts,
+  app.add_option("--max-attempts", flags->max_attempts,
                  "Starts of a job (restarts re-queue running jobs) before it is given up")
       ->check(CLI::Range(1, 100))
       ->capture_default_str();
-  double solver_memory_gib = -1;
-  app.add_option("--solver-memory", solver_memory_gib,
+  app.add_option("--solver-memory", flags->solver_memory_gib,
                  "Address-space limit of each pba-solve [GiB]; 0: none (default: 3/4 of the "
                  "physical memory divided by --max-running)")
       ->check(CLI::NonNegativeNumber);
-  double upload_quota_gib = 4;
-  app.add_option("--upload-quota", upload_quota_gib,
+  app.add_option("--upload-quota", flags->upload_quota_gib,
                  "Bytes one user's unfinished uploads may announce together [GiB]; 0: no quota")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
-  double keep_results_days = 30;
-  app.add_option("--keep-results", keep_results_days,
+  app.add_option("--keep-results", flags->keep_results_days,
                  "Days a finished job's files are kept; 0: forever")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
+}
+
+// `pba-server admin ...`: the subcommands and what they were given.
+struct AdminCommands {
+  CLI::App* create_user = nullptr;
+  CLI::App* disable_user = nullptr;
+  CLI::App* enable_user = nullptr;
+  std::string user;
+  std::string data_dir;
+  bool server_admin = false;
+};
+
+void AddAdminCommands(CLI::App& app, AdminCommands* commands) {
   CLI::App* admin = app.add_subcommand("admin", "Offline administration of the data directory");
   admin->require_subcommand(1);
   CLI::App* create_user =
       admin->add_subcommand("create-user", "Create a user and print its token once");
-  std::string new_user;
-  std::string admin_data_dir;
-  create_user->add_option("name", new_user, "The user's name")->required();
-  create_user->add_option("--data", admin_data_dir, "Data directory")->required();
-  bool server_admin = false;
-  create_user->add_flag("--server-admin", server_admin,
+  create_user->add_option("name", commands->user, "The user's name")->required();
+  create_user->add_option("--data", commands->data_dir, "Data directory")->required();
+  create_user->add_flag("--server-admin", commands->server_admin,
                         "A server admin: sees and cancels every job, of every project");
   CLI::App* disable_user = admin->add_subcommand(
       "disable-user", "Refuse a user's token from their next call on (also a running server's)");
-  disable_user->add_option("name", new_user, "The user's name")->required();
-  disable_user->add_option("--data", admin_data_dir, "Data directory")->required();
+  disable_user->add_option("name", commands->user, "The user's name")->required();
+  disable_user->add_option("--data", commands->data_dir, "Data directory")->required();
   CLI::App* enable_user =
       admin->add_subcommand("enable-user", "Accept a disabled user's token again");
-  enable_user->add_option("name", new_user, "The user's name")->required();
-  enable_user->add_option("--data", admin_data_dir, "Data directory")->required();
-  CLI11_PARSE(app, argc, argv);
-  if (create_user->parsed()) return CreateUser(admin_data_dir, new_user, server_admin);
-  if (disable_user->parsed()) return SetDisabled(admin_data_dir, new_user, true);
-  if (enable_user->parsed()) return SetDisabled(admin_data_dir, new_user, false);
-  if (data_dir.empty()) {
-    std::cerr << "--data is required\n" << app.help() << std::flush;
-    return 2;
-  }
+  enable_user->add_option("name", commands->user, "The user's name")->required();
+  enable_user->add_option("--data", commands->data_dir, "Data directory")->required();
+  commands->create_user = create_user;
+  commands->disable_user = disable_user;
+  commands->enable_user = enable_user;
+}
 
-  spdlog::set_default_logger(spdlog::stderr_color_mt("pba-server"));
-  spdlog::set_level(spdlog::level::from_str(log_level));
-
-  // Block the shutdown signals before any thread starts, so every thread
-  // inherits the mask and only sigwait() below sees them: no work happens in
-  // a signal handler. (Children unblock them again before exec.)
+// Block the shutdown signals before any thread starts, so every thread
+// inherits the mask and only sigwait() in Serve sees them: no work happens in
+// a signal handler. (Children unblock them again before exec.) Returns them.
+sigset_t BlockShutdownSignals() {
   sigset_t shutdown_signals;
   sigemptyset(&shutdown_signals);
   sigaddset(&shutdown_signals, SIGTERM);
@@ -202,29 +206,39 @@ int main(int argc, char** argv) {
   // Past a file-size limit (ulimit -f) a write must fail with EFBIG and
   // become an error naming the file, not end the server.
   signal(SIGXFSZ, SIG_IGN);
+  return shutdown_signals;
+}
 
+pba::ServerOptions ServerOptionsFromFlags(const ServeFlags& flags) {
   pba::ServerOptions options;
-  options.data_dir = data_dir;
-  options.listen = listen;
-  options.solver = solver.empty() ? DefaultSolver() : fs::path(solver);
-  options.max_running = max_running;
-  options.atlas_cache_gib = atlas_cache_gib;
-  options.tls_cert = tls_cert;
-  options.tls_key = tls_key;
-  options.insecure = insecure;
-  options.max_job_time = std::chrono::seconds(max_job_time_s);
-  options.max_attempts = max_attempts;
-  options.max_solver_memory_bytes = solver_memory_gib < 0
-                                        ? pba::DefaultSolverMemoryBytes(max_running)
-                                        : static_cast<int64_t>(solver_memory_gib * (1LL << 30));
-  options.upload_quota_bytes = static_cast<int64_t>(upload_quota_gib * (1LL << 30));
-  options.keep_results = std::chrono::seconds(static_cast<int64_t>(keep_results_days * 86400));
+  options.data_dir = flags.data_dir;
+  options.listen = flags.listen;
+  options.solver = flags.solver.empty() ? DefaultSolver() : fs::path(flags.solver);
+  options.max_running = flags.max_running;
+  options.atlas_cache_gib = flags.atlas_cache_gib;
+  options.tls_cert = flags.tls_cert;
+  options.tls_key = flags.tls_key;
+  options.insecure = flags.insecure;
+  options.max_job_time = std::chrono::seconds(flags.max_job_time_s);
+  options.max_attempts = flags.max_attempts;
+  options.max_solver_memory_bytes =
+      flags.solver_memory_gib < 0 ? pba::DefaultSolverMemoryBytes(flags.max_running)
+                                  : static_cast<int64_t>(flags.solver_memory_gib * (1LL << 30));
+  options.upload_quota_bytes = static_cast<int64_t>(flags.upload_quota_gib * (1LL << 30));
+  options.keep_results =
+      std::chrono::seconds(static_cast<int64_t>(flags.keep_results_days * 86400));
   // Parallel solves share the cores rather than each taking all of them.
-  if (max_running > 1) {
+  if (flags.max_running > 1) {
     options.solver_threads =
-        std::max(1, static_cast<int>(std::thread::hardware_concurrency()) / max_running);
+        std::max(1, static_cast<int>(std::thread::hardware_concurrency()) / flags.max_running);
   }
+  return options;
+}
 
+// Starts the server, announces it (stdout, DIR/server.json, the log) and
+// serves until one of `shutdown_signals` arrives. The exit code.
+int Serve(const ServeFlags& flags, const sigset_t& shutdown_signals) {
+  const pba::ServerOptions options = ServerOptionsFromFlags(flags);
   std::unique_ptr<pba::PbaServer> server;
   const pba::Status started = pba::PbaServer::Start(options, &server);
   if (!started.ok()) {
@@ -232,23 +246,24 @@ int main(int argc, char** argv) {
     return 1;
   }
 
-  const fs::path server_json = fs::absolute(data_dir) / "server.json";
+  const fs::path server_json = fs::absolute(flags.data_dir) / "server.json";
   const std::string info =
       "{\"address\":\"" + server->address() + "\",\"pid\":" + std::to_string(::getpid()) + "}\n";
   const pba::Status written = pba::AtomicWriteText(server_json, info);
   if (!written.ok()) spdlog::warn("cannot write server.json: {}", written.ToString());
   std::cout << "pba-server listening on " << server->address() << std::endl;
-  if (!tls_cert.empty()) spdlog::info("TLS with the certificate {}", tls_cert);
-  if (tls_cert.empty() && !pba::IsLoopbackListen(listen)) {
+  if (!flags.tls_cert.empty()) spdlog::info("TLS with the certificate {}", flags.tls_cert);
+  if (flags.tls_cert.empty() && !pba::IsLoopbackListen(flags.listen)) {
     spdlog::warn("--insecure: serving plaintext on {}; tokens cross the network in the clear",
-                 listen);
+                 flags.listen);
   }
-  spdlog::info("serving jobs from {} with solver {}", fs::absolute(data_dir).string(),
+  spdlog::info("serving jobs from {} with solver {}", fs::absolute(flags.data_dir).string(),
                options.solver.string());
   // The effective limits, defaults included (0: none).
   spdlog::info("limits: --max-job-time {} s, --solver-memory {:.2f} GiB, --upload-quota {:.2f} GiB",
-               max_job_time_s, static_cast<double>(options.max_solver_memory_bytes) / (1LL << 30),
-               upload_quota_gib);
+               flags.max_job_time_s,
+               static_cast<double>(options.max_solver_memory_bytes) / (1LL << 30),
+               flags.upload_quota_gib);
 
   int signal_number = 0;
   while (sigwait(&shutdown_signals, &signal_number) != 0) {
@@ -259,4 +274,31 @@ int main(int argc, char** argv) {
   fs::remove(server_json, ec);
   spdlog::info("stopped");
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  // Before anything is created: every file of the data directory (and of
+  // the solves this starts, which inherit it) is the server user's alone.
+  ::umask(077);
+  CLI::App app{"pba-server: runs PBA simulation jobs behind a gRPC API"};
+  ServeFlags flags;
+  AddServeOptions(app, &flags);
+  AdminCommands admin;
+  AddAdminCommands(app, &admin);
+  CLI11_PARSE(app, argc, argv);
+  if (admin.create_user->parsed())
+    return CreateUser(admin.data_dir, admin.user, admin.server_admin);
+  if (admin.disable_user->parsed()) return SetDisabled(admin.data_dir, admin.user, true);
+  if (admin.enable_user->parsed()) return SetDisabled(admin.data_dir, admin.user, false);
+  if (flags.data_dir.empty()) {
+    std::cerr << "--data is required\n" << app.help() << std::flush;
+    return 2;
+  }
+
+  spdlog::set_default_logger(spdlog::stderr_color_mt("pba-server"));
+  spdlog::set_level(spdlog::level::from_str(flags.log_level));
+  const sigset_t shutdown_signals = BlockShutdownSignals();
+  return Serve(flags, shutdown_signals);
 }

@@ -15,8 +15,9 @@
 // and build refuse a non-empty one too, and with --force replace only an
 // earlier result of theirs (CheckOutput): never a file, a link, or a
 // directory holding anything they do not write.
-// Exit codes: 0 success; 2 invalid input or command line; 3 the input cannot
-// be meshed as given; 4 I/O error; 1 internal error.
+// Exit codes: the table pba, pba-solve and pba-atlas share (core/exit_codes.h,
+// docs/cli.md "Exit codes"): 0 success; 2 bad command line; 5 invalid input;
+// 12 the input cannot be meshed as given; 13 I/O error; 1 internal error.
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
@@ -36,27 +37,16 @@
 #include "atlas/structure_split.h"
 #include "atlas/synthetic_atlas.h"
 #include "core/atomic_write.h"
+#include "core/exit_codes.h"
 #include "io/mesh_export.h"
 #include "solve/staging_dir.h"
 
 namespace pba {
 namespace {
 
-enum ExitCode { kExitOk = 0, kExitInternal = 1, kExitInvalid = 2, kExitMesh = 3, kExitIo = 4 };
-
 int Fail(const Status& status) {
   std::fprintf(stderr, "pba-atlas: error: %s\n", status.ToString().c_str());
-  switch (status.code()) {
-    case Status::Code::kInvalidArgument:
-      return kExitInvalid;
-    case Status::Code::kFailedPrecondition:
-    case Status::Code::kNumerical:
-      return kExitMesh;
-    case Status::Code::kIo:
-      return kExitIo;
-    default:
-      return kExitInternal;
-  }
+  return ExitCodeForStatus(status.code(), kExitMesh);
 }
 
 bool EndsWith(const std::string& text, const std::string& end) {
@@ -291,193 +281,227 @@ int RunBuild(AtlasBuildOptions options, const Pictures& pictures, const std::str
   return kExitOk;
 }
 
+// The command line as CLI11 fills it. The subcommands share -o and --force:
+// only one of them runs.
+struct CommandLine {
+  std::string out_dir;
+  bool force = false;
+  double voxel_mm = 1.0;  // plates
+
+  AtlasBuildOptions build;
+  std::string plates_dir, labels_file, structures_dir, colour_table, format_name = "text";
+  std::vector<std::string> structures;
+  std::vector<double> roi;  // X,Y,Z,R or empty
+  bool no_pictures = false;
+  AtlasPictureOptions pictures;
+
+  SplitOptions split;
+  std::string split_plates, split_labels, split_colour_table;
+};
+
+constexpr char kOutHelp[] =
+    "Output directory (created; must not exist or be empty, or with --force hold an earlier "
+    "result)";
+constexpr char kForceHelp[] =
+    "Replace an earlier result at --out (never a directory with other files)";
+
+CLI::App* AddPlatesCommand(CLI::App& app, CommandLine& line) {
+  CLI::App* plates = app.add_subcommand(
+      "plates",
+      "Write the built-in synthetic atlas (not anatomy, not for clinical use) as 27 "
+      "colour-coded axial plates and a NIfTI label volume");
+  plates->add_option("-o,--out", line.out_dir, kOutHelp)->required();
+  plates->add_flag("--force", line.force, kForceHelp);
+  plates->add_option("--voxel-mm", line.voxel_mm, "Voxel edge of the painted atlas [mm]");
+  return plates;
+}
+
+// build's cuts through the mesh into pictures/ (atlas_pictures.h).
+void AddPictureOptions(CLI::App* build, CommandLine& line) {
+  auto* no_pictures_flag = build->add_flag(
+      "--no-pictures", line.no_pictures,
+      "Do not write pictures/ (the plates' contact sheet and cuts through the mesh)");
+  build
+      ->add_option("--cut-z", line.pictures.axial_z_mm,
+                   "Axial cut at this z [mm] into pictures/ (repeatable; any --cut-* replaces "
+                   "the default cuts)")
+      ->excludes(no_pictures_flag);
+  build
+      ->add_option("--cut-y", line.pictures.coronal_y_mm, "Coronal cut at this y [mm] (repeatable)")
+      ->excludes(no_pictures_flag);
+  build
+      ->add_option("--cut-x", line.pictures.sagittal_x_mm,
+                   "Sagittal cut at this x [mm] (repeatable)")
+      ->excludes(no_pictures_flag);
+  build->add_option("--picture-mm", line.pictures.pixel_mm, "Pixel edge of the cuts [mm]")
+      ->excludes(no_pictures_flag);
+}
+
+// build's element sizes and mesh improvement (AtlasBuildOptions).
+void AddMeshOptions(CLI::App* build, AtlasBuildOptions& options) {
+  build->add_option("--synthetic-voxel-mm", options.synthetic_voxel_mm,
+                    "Voxel edge of the painted synthetic atlas [mm]");
+  build->add_option("--loft-voxel-mm", options.loft_voxel_mm,
+                    "Voxel edge of the volume lofted from plates [mm]");
+  build
+      ->add_option("--cell-mm", options.cell_size_mm, "Tetrahedron size inside the structures [mm]")
+      ->capture_default_str();
+  build
+      ->add_option("--facet-mm", options.facet_size_mm,
+                   "Triangle size on surfaces and interfaces [mm]")
+      ->capture_default_str();
+  build
+      ->add_option("--facets-per-section", options.facets_per_section,
+                   "Smaller facets on small structures: at most a structure's mean section "
+                   "perimeter over this [-]; 0: --facet-mm everywhere")
+      ->capture_default_str();
+  build
+      ->add_option("--improve-deg", options.improve_target_deg,
+                   "Flips and smoothing on tetrahedra whose smallest dihedral angle is below "
+                   "this [deg]; 0: none")
+      ->capture_default_str();
+  build
+      ->add_option("--odt", options.odt_iterations,
+                   "Passes of ODT smoothing before sliver removal; 0: none")
+      ->capture_default_str();
+  build->add_option("--facet-distance-mm", options.facet_distance_mm,
+                    "How far surface triangles may stray from the true surface [mm]; 0: a quarter "
+                    "of the facet size");
+}
+
+void AddBuildCommand(CLI::App& app, CommandLine& line) {
+  CLI::App* build = app.add_subcommand(
+      "build",
+      "Mesh an atlas: the synthetic one (default), a plate directory or a label volume; writes "
+      "atlas.{vtu,xdmf,msh,inp}, labels.nii.gz, quality.{txt,csv,json}, pictures/ (PNG cuts "
+      "through the mesh) and, from plates, validation.{txt,csv,json}");
+  build->add_option("-o,--out", line.out_dir, kOutHelp)->required();
+  build->add_flag("--force", line.force, kForceHelp);
+  auto* plates_option = build->add_option("--plates", line.plates_dir,
+                                          "Plate directory (plates.json, PNGs, colour table)");
+  auto* labels_option =
+      build->add_option("--labels", line.labels_file, "Label volume (.nii, .nii.gz or .nrrd)")
+          ->excludes(plates_option);
+  build
+      ->add_option("--structures", line.structures_dir,
+                   "Structure set (manifest.json and one file per structure: contours, "
+                   "NIfTI masks, closed STL/OBJ/VTK surfaces)")
+      ->excludes(plates_option)
+      ->excludes(labels_option);
+  build->add_option("--colour-table", line.colour_table,
+                    "Label table for --labels (CSV: label,name,r,g,b); default the built-in one");
+  AddMeshOptions(build, line.build);
+  build
+      ->add_option("--roi", line.roi,
+                   "Region of interest X,Y,Z,R [mm]: finer elements within R of (X, Y, Z), "
+                   "coarsening over one radius outside")
+      ->delimiter(',')
+      ->expected(4);
+  build->add_option("--roi-mm", line.build.roi_size_mm,
+                    "Element size in the region of interest [mm]; default half of --facet-mm");
+  build->add_flag("--quadratic", line.build.quadratic, "10-node tetrahedra");
+  build->add_option("--structure", line.structures,
+                    "Keep only this structure (colour-table name; repeat for several)");
+  build->add_flag("--merge-rest", line.build.merge_rest,
+                  "With --structure: mesh every other structure as one region, \"Surrounding "
+                  "tissue\", instead of dropping it");
+  AddPictureOptions(build, line);
+  build->add_option("--format", line.format_name, "Report form on stdout")
+      ->check(CLI::IsMember({"text", "csv", "json"}));
+}
+
+CLI::App* AddSplitCommand(CLI::App& app, CommandLine& line) {
+  CLI::App* split = app.add_subcommand(
+      "split",
+      "Write an atlas as a structure set: the synthetic one (default) or a plate directory as "
+      "each structure's plate contours (<name>.json), a label volume as each structure's mask "
+      "(<name>.nii.gz); with manifest.json");
+  split
+      ->add_option("-o,--out", line.out_dir,
+                   "Output directory (created; must not exist or be empty)")
+      ->required();
+  auto* split_plates_option = split->add_option(
+      "--plates", line.split_plates, "Plate directory (plates.json, PNGs, colour table)");
+  auto* split_labels_option =
+      split->add_option("--labels", line.split_labels, "Label volume (.nii, .nii.gz or .nrrd)")
+          ->excludes(split_plates_option);
+  split
+      ->add_option("--colour-table", line.split_colour_table,
+                   "Label table for --labels (CSV: label,name,r,g,b); default the built-in one")
+      ->needs(split_labels_option);
+  split->add_option("--synthetic-voxel-mm", line.split.source.synthetic_voxel_mm,
+                    "Voxel edge of the painted synthetic atlas [mm]");
+  split->add_option(
+      "--structure", line.split.structures,
+      "Only this structure (repeatable; a colour-table name, or a group such as Thalamus)");
+  return split;
+}
+
+// split with its source from the flags: plates, a label volume, else the
+// synthetic atlas.
+int RunSplitCommand(CommandLine& line) {
+  if (!line.split_plates.empty()) {
+    line.split.source.source = AtlasBuildOptions::Source::kPlates;
+    line.split.source.input = line.split_plates;
+  } else if (!line.split_labels.empty()) {
+    line.split.source.source = AtlasBuildOptions::Source::kLabelVolume;
+    line.split.source.input = line.split_labels;
+    line.split.source.colour_table = line.split_colour_table;
+  }
+  return RunSplit(line.split, line.out_dir);
+}
+
+// build with its options completed from the flags: the source, the
+// structures, the region of interest, the report form and the pictures.
+int RunBuildCommand(CommandLine& line) {
+  AtlasBuildOptions& options = line.build;
+  if (!line.plates_dir.empty()) {
+    options.source = AtlasBuildOptions::Source::kPlates;
+    options.input = line.plates_dir;
+  } else if (!line.labels_file.empty()) {
+    options.source = AtlasBuildOptions::Source::kLabelVolume;
+    options.input = line.labels_file;
+    options.colour_table = line.colour_table;
+  } else if (!line.structures_dir.empty()) {
+    options.source = AtlasBuildOptions::Source::kStructures;
+    options.input = line.structures_dir;
+  }
+  options.structures = line.structures;
+  if (!line.roi.empty()) {
+    options.roi_centre_mm = {line.roi[0], line.roi[1], line.roi[2]};
+    options.roi_radius_mm = line.roi[3];
+    if (options.roi_size_mm == 0) options.roi_size_mm = options.facet_size_mm / 2;
+  }
+  const TableFormat format = line.format_name == "csv"    ? TableFormat::kCsv
+                             : line.format_name == "json" ? TableFormat::kJson
+                                                          : TableFormat::kText;
+  Pictures pictures;
+  if (!line.no_pictures) pictures = line.pictures;
+  return RunBuild(options, pictures, line.out_dir, format, line.force);
+}
+
 }  // namespace
 }  // namespace pba
 
 int main(int argc, char** argv) {
   CLI::App app{"pba-atlas: build a physics-based brain atlas mesh from plates or labels"};
   app.require_subcommand(1);
-
-  std::string out_dir;
-  double voxel_mm = 1.0;
-  CLI::App* plates = app.add_subcommand(
-      "plates",
-      "Write the built-in synthetic atlas (not anatomy, not for clinical use) as 27 "
-      "colour-coded axial plates and a NIfTI label volume");
-  plates
-      ->add_option("-o,--out", out_dir,
-                   "Output directory (created; must not exist or be empty, or with --force hold "
-                   "an earlier result)")
-      ->required();
-  bool force = false;
-  plates->add_flag("--force", force,
-                   "Replace an earlier result at --out (never a directory with other files)");
-  plates->add_option("--voxel-mm", voxel_mm, "Voxel edge of the painted atlas [mm]");
-
-  pba::AtlasBuildOptions build_options;
-  std::string plates_dir, labels_file, structures_dir, colour_table, format_name = "text";
-  std::vector<std::string> structures;
-  CLI::App* build = app.add_subcommand(
-      "build",
-      "Mesh an atlas: the synthetic one (default), a plate directory or a label volume; writes "
-      "atlas.{vtu,xdmf,msh,inp}, labels.nii.gz, quality.{txt,csv,json}, pictures/ (PNG cuts "
-      "through the mesh) and, from plates, validation.{txt,csv,json}");
-  build
-      ->add_option("-o,--out", out_dir,
-                   "Output directory (created; must not exist or be empty, or with --force hold "
-                   "an earlier result)")
-      ->required();
-  build->add_flag("--force", force,
-                  "Replace an earlier result at --out (never a directory with other files)");
-  auto* plates_option = build->add_option("--plates", plates_dir,
-                                          "Plate directory (plates.json, PNGs, colour table)");
-  auto* labels_option =
-      build->add_option("--labels", labels_file, "Label volume (.nii, .nii.gz or .nrrd)")
-          ->excludes(plates_option);
-  build
-      ->add_option("--structures", structures_dir,
-                   "Structure set (manifest.json and one file per structure: contours, "
-                   "NIfTI masks, closed STL/OBJ/VTK surfaces)")
-      ->excludes(plates_option)
-      ->excludes(labels_option);
-  build->add_option("--colour-table", colour_table,
-                    "Label table for --labels (CSV: label,name,r,g,b); default the built-in one");
-  build->add_option("--synthetic-voxel-mm", build_options.synthetic_voxel_mm,
-                    "Voxel edge of the painted synthetic atlas [mm]");
-  build->add_option("--loft-voxel-mm", build_options.loft_voxel_mm,
-                    "Voxel edge of the volume lofted from plates [mm]");
-  build
-      ->add_option("--cell-mm", build_options.cell_size_mm,
-                   "Tetrahedron size inside the structures [mm]")
-      ->capture_default_str();
-  build
-      ->add_option("--facet-mm", build_options.facet_size_mm,
-                   "Triangle size on surfaces and interfaces [mm]")
-      ->capture_default_str();
-  build
-      ->add_option("--facets-per-section", build_options.facets_per_section,
-                   "Smaller facets on small structures: at most a structure's mean section "
-                   "perimeter over this [-]; 0: --facet-mm everywhere")
-      ->capture_default_str();
-  build
-      ->add_option("--improve-deg", build_options.improve_target_deg,
-                   "Flips and smoothing on tetrahedra whose smallest dihedral angle is below "
-                   "this [deg]; 0: none")
-      ->capture_default_str();
-  build
-      ->add_option("--odt", build_options.odt_iterations,
-                   "Passes of ODT smoothing before sliver removal; 0: none")
-      ->capture_default_str();
-  build->add_option("--facet-distance-mm", build_options.facet_distance_mm,
-                    "How far surface triangles may stray from the true surface [mm]; 0: a quarter "
-                    "of the facet size");
-  std::vector<double> roi;
-  build
-      ->add_option("--roi", roi,
-                   "Region of interest X,Y,Z,R [mm]: finer elements within R of (X, Y, Z), "
-                   "coarsening over one radius outside")
-      ->delimiter(',')
-      ->expected(4);
-  build->add_option("--roi-mm", build_options.roi_size_mm,
-                    "Element size in the region of interest [mm]; default half of --facet-mm");
-  build->add_flag("--quadratic", build_options.quadratic, "10-node tetrahedra");
-  build->add_option("--structure", structures,
-                    "Keep only this structure (colour-table name; repeat for several)");
-  build->add_flag("--merge-rest", build_options.merge_rest,
-                  "With --structure: mesh every other structure as one region, \"Surrounding "
-                  "tissue\", instead of dropping it");
-  bool no_pictures = false;
-  pba::AtlasPictureOptions picture_options;
-  auto* no_pictures_flag = build->add_flag(
-      "--no-pictures", no_pictures,
-      "Do not write pictures/ (the plates' contact sheet and cuts through the mesh)");
-  build
-      ->add_option("--cut-z", picture_options.axial_z_mm,
-                   "Axial cut at this z [mm] into pictures/ (repeatable; any --cut-* replaces "
-                   "the default cuts)")
-      ->excludes(no_pictures_flag);
-  build
-      ->add_option("--cut-y", picture_options.coronal_y_mm,
-                   "Coronal cut at this y [mm] (repeatable)")
-      ->excludes(no_pictures_flag);
-  build
-      ->add_option("--cut-x", picture_options.sagittal_x_mm,
-                   "Sagittal cut at this x [mm] (repeatable)")
-      ->excludes(no_pictures_flag);
-  build->add_option("--picture-mm", picture_options.pixel_mm, "Pixel edge of the cuts [mm]")
-      ->excludes(no_pictures_flag);
-  build->add_option("--format", format_name, "Report form on stdout")
-      ->check(CLI::IsMember({"text", "csv", "json"}));
-
-  pba::SplitOptions split_options;
-  std::string split_plates, split_labels, split_colour_table;
-  CLI::App* split = app.add_subcommand(
-      "split",
-      "Write an atlas as a structure set: the synthetic one (default) or a plate directory as "
-      "each structure's plate contours (<name>.json), a label volume as each structure's mask "
-      "(<name>.nii.gz); with manifest.json");
-  split->add_option("-o,--out", out_dir, "Output directory (created; must not exist or be empty)")
-      ->required();
-  auto* split_plates_option = split->add_option(
-      "--plates", split_plates, "Plate directory (plates.json, PNGs, colour table)");
-  auto* split_labels_option =
-      split->add_option("--labels", split_labels, "Label volume (.nii, .nii.gz or .nrrd)")
-          ->excludes(split_plates_option);
-  split
-      ->add_option("--colour-table", split_colour_table,
-                   "Label table for --labels (CSV: label,name,r,g,b); default the built-in one")
-      ->needs(split_labels_option);
-  split->add_option("--synthetic-voxel-mm", split_options.source.synthetic_voxel_mm,
-                    "Voxel edge of the painted synthetic atlas [mm]");
-  split->add_option(
-      "--structure", split_options.structures,
-      "Only this structure (repeatable; a colour-table name, or a group such as Thalamus)");
-
+  pba::CommandLine line;
+  CLI::App* plates = pba::AddPlatesCommand(app, line);
+  pba::AddBuildCommand(app, line);
+  CLI::App* split = pba::AddSplitCommand(app, line);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     const int code = app.exit(e);
-    return code == 0 ? 0 : pba::kExitInvalid;
+    return code == 0 ? pba::kExitOk : pba::kExitUsage;
   }
   try {
-    if (plates->parsed()) return pba::RunPlates(out_dir, voxel_mm, force);
-    if (split->parsed()) {
-      if (!split_plates.empty()) {
-        split_options.source.source = pba::AtlasBuildOptions::Source::kPlates;
-        split_options.source.input = split_plates;
-      } else if (!split_labels.empty()) {
-        split_options.source.source = pba::AtlasBuildOptions::Source::kLabelVolume;
-        split_options.source.input = split_labels;
-        split_options.source.colour_table = split_colour_table;
-      }
-      return pba::RunSplit(split_options, out_dir);
-    }
-    if (!plates_dir.empty()) {
-      build_options.source = pba::AtlasBuildOptions::Source::kPlates;
-      build_options.input = plates_dir;
-    } else if (!labels_file.empty()) {
-      build_options.source = pba::AtlasBuildOptions::Source::kLabelVolume;
-      build_options.input = labels_file;
-      build_options.colour_table = colour_table;
-    } else if (!structures_dir.empty()) {
-      build_options.source = pba::AtlasBuildOptions::Source::kStructures;
-      build_options.input = structures_dir;
-    }
-    build_options.structures = structures;
-    if (!roi.empty()) {
-      build_options.roi_centre_mm = {roi[0], roi[1], roi[2]};
-      build_options.roi_radius_mm = roi[3];
-      if (build_options.roi_size_mm == 0)
-        build_options.roi_size_mm = build_options.facet_size_mm / 2;
-    }
-    const pba::TableFormat format = format_name == "csv"    ? pba::TableFormat::kCsv
-                                    : format_name == "json" ? pba::TableFormat::kJson
-                                                            : pba::TableFormat::kText;
-    pba::Pictures pictures;
-    if (!no_pictures) pictures = picture_options;
-    return pba::RunBuild(build_options, pictures, out_dir, format, force);
+    if (plates->parsed()) return pba::RunPlates(line.out_dir, line.voxel_mm, line.force);
+    if (split->parsed()) return pba::RunSplitCommand(line);
+    return pba::RunBuildCommand(line);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "pba-atlas: internal error: %s\n", e.what());
-    return pba::kExitInternal;
+    return pba::kExitError;
   }
 }

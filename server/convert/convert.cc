@@ -142,43 +142,37 @@ void ExplicitRunToProto(const ExplicitSummary& run, v1::Results* results) {
   e->set_relative_residual(run.relative_residual);
 }
 
-}  // namespace
-
-Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec) {
-  *spec = SceneSpec();
-  spec->name = scene.name();
-  spec->description = scene.description();
-
-  const v1::Geometry& geometry = scene.geometry();
+// The shape and its named patches; `geometry` paths start with "geometry.".
+Status GeometryFromProto(const v1::Geometry& geometry, GeometrySpec* geometry_spec) {
   switch (geometry.shape_case()) {
     case v1::Geometry::kBox: {
       PBA_RETURN_IF_ERROR(CopyThree(geometry.box().size_mm(), "geometry.box.size_mm",
-                                    "edge lengths (x, y, z) in mm", &spec->geometry.box.size_mm));
-      spec->geometry.kind = GeometrySpec::Kind::kBox;
+                                    "edge lengths (x, y, z) in mm", &geometry_spec->box.size_mm));
+      geometry_spec->kind = GeometrySpec::Kind::kBox;
       break;
     }
     case v1::Geometry::kCylinder:
-      spec->geometry.kind = GeometrySpec::Kind::kCylinder;
-      spec->geometry.cylinder.radius_mm = geometry.cylinder().radius_mm();
-      spec->geometry.cylinder.height_mm = geometry.cylinder().height_mm();
-      spec->geometry.cylinder.half = geometry.cylinder().half();
+      geometry_spec->kind = GeometrySpec::Kind::kCylinder;
+      geometry_spec->cylinder.radius_mm = geometry.cylinder().radius_mm();
+      geometry_spec->cylinder.height_mm = geometry.cylinder().height_mm();
+      geometry_spec->cylinder.half = geometry.cylinder().half();
       break;
     case v1::Geometry::kSphericalShell:
-      spec->geometry.kind = GeometrySpec::Kind::kSphericalShell;
-      spec->geometry.spherical_shell.inner_radius_mm = geometry.spherical_shell().inner_radius_mm();
-      spec->geometry.spherical_shell.outer_radius_mm = geometry.spherical_shell().outer_radius_mm();
+      geometry_spec->kind = GeometrySpec::Kind::kSphericalShell;
+      geometry_spec->spherical_shell.inner_radius_mm = geometry.spherical_shell().inner_radius_mm();
+      geometry_spec->spherical_shell.outer_radius_mm = geometry.spherical_shell().outer_radius_mm();
       break;
     case v1::Geometry::kEllipsoid: {
       PBA_RETURN_IF_ERROR(CopyThree(geometry.ellipsoid().semi_axes_mm(),
                                     "geometry.ellipsoid.semi_axes_mm", "semi-axes (x, y, z) in mm",
-                                    &spec->geometry.ellipsoid.semi_axes_mm));
-      spec->geometry.kind = GeometrySpec::Kind::kEllipsoid;
+                                    &geometry_spec->ellipsoid.semi_axes_mm));
+      geometry_spec->kind = GeometrySpec::Kind::kEllipsoid;
       break;
     }
     case v1::Geometry::kAtlas: {
       const v1::Atlas& a = geometry.atlas();
-      AtlasSpec& out = spec->geometry.atlas;
-      spec->geometry.kind = GeometrySpec::Kind::kAtlas;
+      AtlasSpec& out = geometry_spec->atlas;
+      geometry_spec->kind = GeometrySpec::Kind::kAtlas;
       out.source = a.source();
       out.colour_table = a.colour_table();
       out.structures.assign(a.structures().begin(), a.structures().end());
@@ -198,7 +192,7 @@ Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec) {
   }
   for (int i = 0; i < geometry.patches_size(); ++i) {
     const v1::Patch& p = geometry.patches(i);
-    PatchSpec& out = spec->geometry.patches.emplace_back();
+    PatchSpec& out = geometry_spec->patches.emplace_back();
     const std::string path = "geometry.patches[" + std::to_string(i) + "]";
     out.ball = p.centre_mm_size() > 0 || p.radius_mm() != 0;
     if (out.ball) {
@@ -217,35 +211,43 @@ Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec) {
     out.set = p.set();
     out.radius_mm = p.radius_mm();
   }
+  return Status::Ok();
+}
 
-  switch (scene.mesh().element()) {
+Status MeshFromProto(const v1::MeshOptions& mesh, MeshSpec* mesh_spec) {
+  switch (mesh.element()) {
     case v1::MeshOptions::ELEMENT_TYPE_UNSPECIFIED:
-      spec->mesh.element = ElementType::kDefault;
+      mesh_spec->element = ElementType::kDefault;
       break;
     case v1::MeshOptions::TET4:
-      spec->mesh.element = ElementType::kTet4;
+      mesh_spec->element = ElementType::kTet4;
       break;
     case v1::MeshOptions::TET4_ANP:
-      spec->mesh.element = ElementType::kTet4Anp;
+      mesh_spec->element = ElementType::kTet4Anp;
       break;
     case v1::MeshOptions::TET10:
-      spec->mesh.element = ElementType::kTet10;
+      mesh_spec->element = ElementType::kTet10;
       break;
     case v1::MeshOptions::HEX8:
-      spec->mesh.element = ElementType::kHex8;
+      mesh_spec->element = ElementType::kHex8;
       break;
     case v1::MeshOptions::HEX8_FULL:
-      spec->mesh.element = ElementType::kHex8Full;
+      mesh_spec->element = ElementType::kHex8Full;
       break;
     case v1::MeshOptions::TET10_MD:
-      spec->mesh.element = ElementType::kTet10Md;
+      mesh_spec->element = ElementType::kTet10Md;
       break;
     default:
-      return Status::InvalidArgument(
-          "mesh.element", "unknown element type " + std::to_string(scene.mesh().element()));
+      return Status::InvalidArgument("mesh.element",
+                                     "unknown element type " + std::to_string(mesh.element()));
   }
-  spec->mesh.element_size_mm = scene.mesh().element_size_mm();
+  mesh_spec->element_size_mm = mesh.element_size_mm();
+  return Status::Ok();
+}
 
+// The scene's material, library and formulation, then the region materials
+// and inclusions, in that order (the first bad one is the one reported).
+Status MaterialsFromProto(const v1::Scene& scene, SceneSpec* spec) {
   PBA_RETURN_IF_ERROR(MaterialFromProto(scene.material(), "material", &spec->material));
   spec->material_library = scene.material_library();
   switch (scene.formulation()) {
@@ -279,150 +281,117 @@ Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec) {
     PBA_RETURN_IF_ERROR(MaterialFromProto(inclusion.material(), path + ".material", &out.material));
     out.growth_strain = inclusion.growth_strain();
   }
+  return Status::Ok();
+}
 
-  for (const v1::BoundaryCondition& bc : scene.boundary_conditions()) {
-    BoundaryConditionSpec out;
-    out.set = bc.set();
-    switch (bc.kind_case()) {
-      case v1::BoundaryCondition::kFixed:
-        out.kind = BoundaryConditionSpec::Kind::kFixed;
-        break;
-      case v1::BoundaryCondition::kSymmetry:
-        out.kind = BoundaryConditionSpec::Kind::kSymmetry;
-        break;
-      case v1::BoundaryCondition::kDisplacement: {
-        out.kind = BoundaryConditionSpec::Kind::kDisplacement;
-        const auto& d = bc.displacement();
-        if (d.has_x_mm()) out.displacement_mm[0] = d.x_mm();
-        if (d.has_y_mm()) out.displacement_mm[1] = d.y_mm();
-        if (d.has_z_mm()) out.displacement_mm[2] = d.z_mm();
-        break;
-      }
-      case v1::BoundaryCondition::kPressure:
-        out.kind = BoundaryConditionSpec::Kind::kPressure;
-        out.pressure_pa = bc.pressure().pressure_pa();
-        break;
-      case v1::BoundaryCondition::kTraction: {
-        out.kind = BoundaryConditionSpec::Kind::kTraction;
-        PBA_RETURN_IF_ERROR(CopyThree(bc.traction().traction_pa(),
-                                      "boundary_conditions[" +
-                                          std::to_string(spec->boundary_conditions.size()) +
-                                          "].traction.traction_pa",
-                                      "components (x, y, z) in Pa", &out.traction_pa));
-        break;
-      }
-      case v1::BoundaryCondition::kVelocity: {
-        out.kind = BoundaryConditionSpec::Kind::kVelocity;
-        const auto& v = bc.velocity();
-        if (v.has_x_m_per_s()) out.velocity_m_per_s[0] = v.x_m_per_s();
-        if (v.has_y_m_per_s()) out.velocity_m_per_s[1] = v.y_m_per_s();
-        if (v.has_z_m_per_s()) out.velocity_m_per_s[2] = v.z_m_per_s();
-        break;
-      }
-      case v1::BoundaryCondition::KIND_NOT_SET:
-        break;  // ValidateScene names it
+// One boundary condition; `path` is its field path, e.g.
+// "boundary_conditions[1]".
+Status BoundaryConditionFromProto(const v1::BoundaryCondition& bc, const std::string& path,
+                                  BoundaryConditionSpec* out) {
+  out->set = bc.set();
+  switch (bc.kind_case()) {
+    case v1::BoundaryCondition::kFixed:
+      out->kind = BoundaryConditionSpec::Kind::kFixed;
+      break;
+    case v1::BoundaryCondition::kSymmetry:
+      out->kind = BoundaryConditionSpec::Kind::kSymmetry;
+      break;
+    case v1::BoundaryCondition::kDisplacement: {
+      out->kind = BoundaryConditionSpec::Kind::kDisplacement;
+      const auto& d = bc.displacement();
+      if (d.has_x_mm()) out->displacement_mm[0] = d.x_mm();
+      if (d.has_y_mm()) out->displacement_mm[1] = d.y_mm();
+      if (d.has_z_mm()) out->displacement_mm[2] = d.z_mm();
+      break;
     }
-    spec->boundary_conditions.push_back(std::move(out));
+    case v1::BoundaryCondition::kPressure:
+      out->kind = BoundaryConditionSpec::Kind::kPressure;
+      out->pressure_pa = bc.pressure().pressure_pa();
+      break;
+    case v1::BoundaryCondition::kTraction: {
+      out->kind = BoundaryConditionSpec::Kind::kTraction;
+      PBA_RETURN_IF_ERROR(CopyThree(bc.traction().traction_pa(), path + ".traction.traction_pa",
+                                    "components (x, y, z) in Pa", &out->traction_pa));
+      break;
+    }
+    case v1::BoundaryCondition::kVelocity: {
+      out->kind = BoundaryConditionSpec::Kind::kVelocity;
+      const auto& v = bc.velocity();
+      if (v.has_x_m_per_s()) out->velocity_m_per_s[0] = v.x_m_per_s();
+      if (v.has_y_m_per_s()) out->velocity_m_per_s[1] = v.y_m_per_s();
+      if (v.has_z_m_per_s()) out->velocity_m_per_s[2] = v.z_m_per_s();
+      break;
+    }
+    case v1::BoundaryCondition::KIND_NOT_SET:
+      break;  // ValidateScene names it
   }
+  return Status::Ok();
+}
 
-  for (int i = 0; i < scene.contacts_size(); ++i) {
-    const v1::Contact& c = scene.contacts(i);
-    const std::string path = "contacts[" + std::to_string(i) + "]";
-    ContactSpec& out = spec->contacts.emplace_back();
-    out.name = c.name();
-    out.set = c.set();
-    switch (c.shape()) {
-      case v1::Contact::SHAPE_UNSPECIFIED:
-        out.shape = ContactSpec::Shape::kNone;  // ValidateScene names it
-        break;
-      case v1::Contact::FLAT_PUNCH:
-        out.shape = ContactSpec::Shape::kFlatPunch;
-        break;
-      case v1::Contact::SPHERE:
-        out.shape = ContactSpec::Shape::kSphere;
-        break;
-      case v1::Contact::PLANE:
-        out.shape = ContactSpec::Shape::kPlane;
-        break;
-      case v1::Contact::CYLINDER_FLAT:
-        out.shape = ContactSpec::Shape::kCylinderFlat;
-        break;
-      case v1::Contact::CYLINDER_ROUNDED:
-        out.shape = ContactSpec::Shape::kCylinderRounded;
-        break;
-      default:
-        return Status::InvalidArgument(path + ".shape",
-                                       "unknown contact shape " + std::to_string(c.shape()));
-    }
-    PBA_RETURN_IF_ERROR(CopyThree(c.position_mm(), path + ".position_mm",
-                                  "coordinates (x, y, z) in mm", &out.position_mm));
-    // An absent axis keeps the spec's default, pressing along -z.
-    if (!c.axis().empty()) {
-      PBA_RETURN_IF_ERROR(CopyThree(c.axis(), path + ".axis", "components (x, y, z)", &out.axis));
-    }
-    out.radius_mm = c.radius_mm();
-    // An absent motion keeps the body where it is.
-    if (!c.motion_mm().empty()) {
-      PBA_RETURN_IF_ERROR(CopyThree(c.motion_mm(), path + ".motion_mm",
-                                    "components (x, y, z) in mm", &out.motion_mm));
-    }
-    out.friction = c.friction();
-    out.penalty_factor = c.penalty_factor();
-    out.penetration_tolerance_mm = c.penetration_tolerance_mm();
-    out.start_touching = c.start_touching();
-  }
-
-  if (scene.has_gravity()) {
-    PBA_RETURN_IF_ERROR(CopyThree(scene.gravity().acceleration_m_per_s2(),
-                                  "gravity.acceleration_m_per_s2", "components (x, y, z) in m/s^2",
-                                  &spec->gravity.acceleration_m_per_s2));
-    spec->gravity.enabled = true;
-    spec->gravity.fluid_density_kg_per_m3 = scene.gravity().fluid_density_kg_per_m3();
-    if (scene.gravity().has_fluid_level_mm()) {
-      spec->gravity.fluid_level_mm = scene.gravity().fluid_level_mm();
-    }
-  }
-
-  switch (scene.analysis().type()) {
-    case v1::Analysis::TYPE_UNSPECIFIED:
-    case v1::Analysis::LINEAR_STATIC:
-      spec->analysis.type = AnalysisSpec::Type::kLinearStatic;
+// One contact body; `path` is its field path, e.g. "contacts[0]".
+Status ContactFromProto(const v1::Contact& c, const std::string& path, ContactSpec* out) {
+  out->name = c.name();
+  out->set = c.set();
+  switch (c.shape()) {
+    case v1::Contact::SHAPE_UNSPECIFIED:
+      out->shape = ContactSpec::Shape::kNone;  // ValidateScene names it
       break;
-    case v1::Analysis::NONLINEAR_STATIC:
-      spec->analysis.type = AnalysisSpec::Type::kNonlinearStatic;
+    case v1::Contact::FLAT_PUNCH:
+      out->shape = ContactSpec::Shape::kFlatPunch;
       break;
-    case v1::Analysis::QUASI_STATIC:
-      spec->analysis.type = AnalysisSpec::Type::kQuasiStatic;
+    case v1::Contact::SPHERE:
+      out->shape = ContactSpec::Shape::kSphere;
       break;
-    case v1::Analysis::EXPLICIT_DYNAMIC:
-      spec->analysis.type = AnalysisSpec::Type::kExplicitDynamic;
+    case v1::Contact::PLANE:
+      out->shape = ContactSpec::Shape::kPlane;
       break;
-    case v1::Analysis::DYNAMIC_RELAXATION:
-      spec->analysis.type = AnalysisSpec::Type::kDynamicRelaxation;
+    case v1::Contact::CYLINDER_FLAT:
+      out->shape = ContactSpec::Shape::kCylinderFlat;
+      break;
+    case v1::Contact::CYLINDER_ROUNDED:
+      out->shape = ContactSpec::Shape::kCylinderRounded;
       break;
     default:
-      return Status::InvalidArgument(
-          "analysis.type", "unknown analysis type " + std::to_string(scene.analysis().type()));
+      return Status::InvalidArgument(path + ".shape",
+                                     "unknown contact shape " + std::to_string(c.shape()));
   }
-  switch (scene.analysis().linear_solver()) {
-    case v1::Analysis::LINEAR_SOLVER_UNSPECIFIED:
-    case v1::Analysis::CHOLMOD:
-      spec->analysis.linear_solver = AnalysisSpec::LinearSolver::kCholmod;
-      break;
-    case v1::Analysis::EIGEN_LDLT:
-      spec->analysis.linear_solver = AnalysisSpec::LinearSolver::kEigenLdlt;
-      break;
-    case v1::Analysis::PCG:
-      spec->analysis.linear_solver = AnalysisSpec::LinearSolver::kPcg;
-      break;
-    default:
-      return Status::InvalidArgument(
-          "analysis.linear_solver",
-          "unknown linear solver " + std::to_string(scene.analysis().linear_solver()));
+  PBA_RETURN_IF_ERROR(CopyThree(c.position_mm(), path + ".position_mm",
+                                "coordinates (x, y, z) in mm", &out->position_mm));
+  // An absent axis keeps the spec's default, pressing along -z.
+  if (!c.axis().empty()) {
+    PBA_RETURN_IF_ERROR(CopyThree(c.axis(), path + ".axis", "components (x, y, z)", &out->axis));
   }
+  out->radius_mm = c.radius_mm();
+  // An absent motion keeps the body where it is.
+  if (!c.motion_mm().empty()) {
+    PBA_RETURN_IF_ERROR(CopyThree(c.motion_mm(), path + ".motion_mm", "components (x, y, z) in mm",
+                                  &out->motion_mm));
+  }
+  out->friction = c.friction();
+  out->penalty_factor = c.penalty_factor();
+  out->penetration_tolerance_mm = c.penetration_tolerance_mm();
+  out->start_touching = c.start_touching();
+  return Status::Ok();
+}
 
-  const v1::NonlinearOptions& nonlinear = scene.analysis().nonlinear();
-  NonlinearOptionsSpec& n = spec->analysis.nonlinear;
+// Called only when the scene has gravity; enables it.
+Status GravityFromProto(const v1::Gravity& gravity, GravitySpec* gravity_spec) {
+  PBA_RETURN_IF_ERROR(CopyThree(gravity.acceleration_m_per_s2(), "gravity.acceleration_m_per_s2",
+                                "components (x, y, z) in m/s^2",
+                                &gravity_spec->acceleration_m_per_s2));
+  gravity_spec->enabled = true;
+  gravity_spec->fluid_density_kg_per_m3 = gravity.fluid_density_kg_per_m3();
+  if (gravity.has_fluid_level_mm()) {
+    gravity_spec->fluid_level_mm = gravity.fluid_level_mm();
+  }
+  return Status::Ok();
+}
+
+// The analysis's nonlinear, time and explicit-dynamics options; these cannot
+// be refused here (ValidateScene checks their ranges).
+void AnalysisOptionsFromProto(const v1::Analysis& analysis, AnalysisSpec* analysis_spec) {
+  const v1::NonlinearOptions& nonlinear = analysis.nonlinear();
+  NonlinearOptionsSpec& n = analysis_spec->nonlinear;
   n.increments = nonlinear.increments();
   n.max_iterations = nonlinear.max_iterations();
   n.residual_tolerance = nonlinear.residual_tolerance();
@@ -430,8 +399,8 @@ Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec) {
   n.min_increment = nonlinear.min_increment();
   n.line_search = !nonlinear.has_line_search() || nonlinear.line_search();
 
-  const v1::Time& time = scene.analysis().time();
-  TimeSpec& t = spec->analysis.time;
+  const v1::Time& time = analysis.time();
+  TimeSpec& t = analysis_spec->time;
   t.end_time_s = time.end_time_s();
   t.initial_step_s = time.initial_step_s();
   t.min_step_s = time.min_step_s();
@@ -440,8 +409,8 @@ Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec) {
     t.curve.emplace_back(point.time_s(), point.amplitude());
   }
 
-  const v1::ExplicitDynamics& explicit_dynamics = scene.analysis().explicit_dynamics();
-  ExplicitSpec& e = spec->analysis.explicit_dynamics;
+  const v1::ExplicitDynamics& explicit_dynamics = analysis.explicit_dynamics();
+  ExplicitSpec& e = analysis_spec->explicit_dynamics;
   e.time_step_factor = explicit_dynamics.time_step_factor();
   if (explicit_dynamics.has_bulk_viscosity_linear()) {
     e.bulk_viscosity_linear = explicit_dynamics.bulk_viscosity_linear();
@@ -455,47 +424,96 @@ Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec) {
   e.erosion_strain = explicit_dynamics.erosion_strain();
   e.relaxation_tolerance = explicit_dynamics.relaxation_tolerance();
   e.mass_scaling_step_s = explicit_dynamics.mass_scaling_step_s();
+}
 
-  const auto& fields = scene.outputs().fields();
-  if (!fields.empty()) {
-    spec->outputs.displacement = spec->outputs.stress = spec->outputs.von_mises =
-        spec->outputs.strain = spec->outputs.pk2_stress = spec->outputs.almansi_strain =
-            spec->outputs.jacobian = false;
-    for (int i = 0; i < fields.size(); ++i) {
-      switch (fields[i]) {
-        case v1::Outputs::DISPLACEMENT:
-          spec->outputs.displacement = true;
-          break;
-        case v1::Outputs::STRESS:
-          spec->outputs.stress = true;
-          break;
-        case v1::Outputs::VON_MISES:
-          spec->outputs.von_mises = true;
-          break;
-        case v1::Outputs::STRAIN:
-          spec->outputs.strain = true;
-          break;
-        case v1::Outputs::PK2_STRESS:
-          spec->outputs.pk2_stress = true;
-          break;
-        case v1::Outputs::ALMANSI_STRAIN:
-          spec->outputs.almansi_strain = true;
-          break;
-        case v1::Outputs::JACOBIAN:
-          spec->outputs.jacobian = true;
-          break;
-        default:
-          return Status::InvalidArgument("outputs.fields[" + std::to_string(i) + "]",
-                                         "unknown output field " + std::to_string(fields[i]));
-      }
+Status AnalysisFromProto(const v1::Analysis& analysis, AnalysisSpec* analysis_spec) {
+  switch (analysis.type()) {
+    case v1::Analysis::TYPE_UNSPECIFIED:
+    case v1::Analysis::LINEAR_STATIC:
+      analysis_spec->type = AnalysisSpec::Type::kLinearStatic;
+      break;
+    case v1::Analysis::NONLINEAR_STATIC:
+      analysis_spec->type = AnalysisSpec::Type::kNonlinearStatic;
+      break;
+    case v1::Analysis::QUASI_STATIC:
+      analysis_spec->type = AnalysisSpec::Type::kQuasiStatic;
+      break;
+    case v1::Analysis::EXPLICIT_DYNAMIC:
+      analysis_spec->type = AnalysisSpec::Type::kExplicitDynamic;
+      break;
+    case v1::Analysis::DYNAMIC_RELAXATION:
+      analysis_spec->type = AnalysisSpec::Type::kDynamicRelaxation;
+      break;
+    default:
+      return Status::InvalidArgument("analysis.type",
+                                     "unknown analysis type " + std::to_string(analysis.type()));
+  }
+  switch (analysis.linear_solver()) {
+    case v1::Analysis::LINEAR_SOLVER_UNSPECIFIED:
+    case v1::Analysis::CHOLMOD:
+      analysis_spec->linear_solver = AnalysisSpec::LinearSolver::kCholmod;
+      break;
+    case v1::Analysis::EIGEN_LDLT:
+      analysis_spec->linear_solver = AnalysisSpec::LinearSolver::kEigenLdlt;
+      break;
+    case v1::Analysis::PCG:
+      analysis_spec->linear_solver = AnalysisSpec::LinearSolver::kPcg;
+      break;
+    default:
+      return Status::InvalidArgument(
+          "analysis.linear_solver",
+          "unknown linear solver " + std::to_string(analysis.linear_solver()));
+  }
+  AnalysisOptionsFromProto(analysis, analysis_spec);
+  return Status::Ok();
+}
+
+// A non-empty field list replaces the default set (every field on) by
+// exactly the fields it names.
+Status OutputFieldsFromProto(const google::protobuf::RepeatedField<int>& fields,
+                             OutputSpec* outputs) {
+  if (fields.empty()) return Status::Ok();
+  outputs->displacement = outputs->stress = outputs->von_mises = outputs->strain =
+      outputs->pk2_stress = outputs->almansi_strain = outputs->jacobian = false;
+  for (int i = 0; i < fields.size(); ++i) {
+    switch (fields[i]) {
+      case v1::Outputs::DISPLACEMENT:
+        outputs->displacement = true;
+        break;
+      case v1::Outputs::STRESS:
+        outputs->stress = true;
+        break;
+      case v1::Outputs::VON_MISES:
+        outputs->von_mises = true;
+        break;
+      case v1::Outputs::STRAIN:
+        outputs->strain = true;
+        break;
+      case v1::Outputs::PK2_STRESS:
+        outputs->pk2_stress = true;
+        break;
+      case v1::Outputs::ALMANSI_STRAIN:
+        outputs->almansi_strain = true;
+        break;
+      case v1::Outputs::JACOBIAN:
+        outputs->jacobian = true;
+        break;
+      default:
+        return Status::InvalidArgument("outputs.fields[" + std::to_string(i) + "]",
+                                       "unknown output field " + std::to_string(fields[i]));
     }
   }
-  spec->outputs.reaction_sets.assign(scene.outputs().reaction_sets().begin(),
-                                     scene.outputs().reaction_sets().end());
-  spec->outputs.structure_displacements.assign(scene.outputs().structure_displacements().begin(),
-                                               scene.outputs().structure_displacements().end());
-  for (int i = 0; i < scene.outputs().profiles_size(); ++i) {
-    const v1::Profile& p = scene.outputs().profiles(i);
+  return Status::Ok();
+}
+
+Status OutputsFromProto(const v1::Outputs& outputs, OutputSpec* outputs_spec) {
+  PBA_RETURN_IF_ERROR(OutputFieldsFromProto(outputs.fields(), outputs_spec));
+  outputs_spec->reaction_sets.assign(outputs.reaction_sets().begin(),
+                                     outputs.reaction_sets().end());
+  outputs_spec->structure_displacements.assign(outputs.structure_displacements().begin(),
+                                               outputs.structure_displacements().end());
+  for (int i = 0; i < outputs.profiles_size(); ++i) {
+    const v1::Profile& p = outputs.profiles(i);
     const std::string path = "outputs.profiles[" + std::to_string(i) + "]";
     ProfileSpec out;
     out.name = p.name();
@@ -504,22 +522,50 @@ Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec) {
     PBA_RETURN_IF_ERROR(
         CopyThree(p.to_mm(), path + ".to_mm", "coordinates (x, y, z) in mm", &out.to_mm));
     out.points = p.points();
-    spec->outputs.profiles.push_back(std::move(out));
+    outputs_spec->profiles.push_back(std::move(out));
   }
-  for (int i = 0; i < scene.outputs().sensors_size(); ++i) {
-    const v1::Sensor& sensor = scene.outputs().sensors(i);
+  for (int i = 0; i < outputs.sensors_size(); ++i) {
+    const v1::Sensor& sensor = outputs.sensors(i);
     SensorSpec out;
     out.name = sensor.name();
     PBA_RETURN_IF_ERROR(CopyThree(sensor.position_mm(),
                                   "outputs.sensors[" + std::to_string(i) + "].position_mm",
                                   "coordinates (x, y, z) in mm", &out.position_mm));
     out.radius_mm = sensor.radius_mm();
-    spec->outputs.sensors.push_back(std::move(out));
+    outputs_spec->sensors.push_back(std::move(out));
   }
-  spec->outputs.sensor_interval_s = scene.outputs().sensor_interval_s();
-  spec->outputs.filter_cutoff_hz = scene.outputs().filter_cutoff_hz();
-  spec->outputs.filter_order = scene.outputs().filter_order();
+  outputs_spec->sensor_interval_s = outputs.sensor_interval_s();
+  outputs_spec->filter_cutoff_hz = outputs.filter_cutoff_hz();
+  outputs_spec->filter_order = outputs.filter_order();
   return Status::Ok();
+}
+
+}  // namespace
+
+// Section by section in the order of the scene message; the first refusal is
+// returned and names its field path.
+Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec) {
+  *spec = SceneSpec();
+  spec->name = scene.name();
+  spec->description = scene.description();
+  PBA_RETURN_IF_ERROR(GeometryFromProto(scene.geometry(), &spec->geometry));
+  PBA_RETURN_IF_ERROR(MeshFromProto(scene.mesh(), &spec->mesh));
+  PBA_RETURN_IF_ERROR(MaterialsFromProto(scene, spec));
+  for (int i = 0; i < scene.boundary_conditions_size(); ++i) {
+    BoundaryConditionSpec out;
+    PBA_RETURN_IF_ERROR(BoundaryConditionFromProto(
+        scene.boundary_conditions(i), "boundary_conditions[" + std::to_string(i) + "]", &out));
+    spec->boundary_conditions.push_back(std::move(out));
+  }
+  for (int i = 0; i < scene.contacts_size(); ++i) {
+    PBA_RETURN_IF_ERROR(ContactFromProto(scene.contacts(i), "contacts[" + std::to_string(i) + "]",
+                                         &spec->contacts.emplace_back()));
+  }
+  if (scene.has_gravity()) {
+    PBA_RETURN_IF_ERROR(GravityFromProto(scene.gravity(), &spec->gravity));
+  }
+  PBA_RETURN_IF_ERROR(AnalysisFromProto(scene.analysis(), &spec->analysis));
+  return OutputsFromProto(scene.outputs(), &spec->outputs);
 }
 
 Status ValidateSceneProto(const v1::Scene& scene) {
@@ -667,31 +713,6 @@ v1::Summary SummaryToProto(const Summary& summary) {
   units["energy"] = "J";
   units["time"] = "s";
   return out;
-}
-
-grpc::Status ToGrpcStatus(const Status& status) {
-  switch (status.code()) {
-    case Status::Code::kOk:
-      return grpc::Status::OK;
-    case Status::Code::kInvalidArgument:
-      return grpc::Status(grpc::StatusCode::INVALID_ARGUMENT, status.ToString());
-    case Status::Code::kFailedPrecondition:
-      return grpc::Status(grpc::StatusCode::FAILED_PRECONDITION, status.ToString());
-    case Status::Code::kCancelled:
-      return grpc::Status(grpc::StatusCode::CANCELLED, status.ToString());
-    case Status::Code::kNotFound:
-      return grpc::Status(grpc::StatusCode::NOT_FOUND, status.ToString());
-    case Status::Code::kAlreadyExists:
-      return grpc::Status(grpc::StatusCode::ALREADY_EXISTS, status.ToString());
-    case Status::Code::kAborted:
-      return grpc::Status(grpc::StatusCode::ABORTED, status.ToString());
-    case Status::Code::kPermissionDenied:
-      return grpc::Status(grpc::StatusCode::PERMISSION_DENIED, status.ToString());
-    case Status::Code::kUnauthenticated:
-      return grpc::Status(grpc::StatusCode::UNAUTHENTICATED, status.ToString());
-    default:
-      return grpc::Status(grpc::StatusCode::INTERNAL, status.ToString());
-  }
 }
 
 }  // namespace pba

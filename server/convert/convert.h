@@ -2,8 +2,6 @@
 // The only place (with the server) where protobuf meets the solver.
 #pragma once
 
-#include <grpcpp/support/status.h>
-
 #include "pba/solve.h"
 #include "pba/status.h"
 #include "pba/v1/scene.pb.h"
@@ -23,12 +21,5 @@ Status ValidateSceneProto(const v1::Scene& scene);
 
 // The summary message written to summary.json.
 v1::Summary SummaryToProto(const Summary& summary);
-
-// A Status as a gRPC status: kInvalidArgument -> INVALID_ARGUMENT with
-// "field: message"; kFailedPrecondition, kCancelled, kNotFound,
-// kAlreadyExists, kAborted, kPermissionDenied and kUnauthenticated -> the
-// gRPC code of the same name; everything else (kNumerical, kIo, kInternal)
-// -> INTERNAL.
-grpc::Status ToGrpcStatus(const Status& status);
 
 }  // namespace pba

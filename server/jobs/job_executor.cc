@@ -14,6 +14,7 @@
 #include <system_error>
 
 #include "core/atomic_write.h"
+#include "core/exit_codes.h"
 #include "core/sha256.h"
 #include "jobs/solver_process.h"
 #include "pba/v1/solve_event.pb.h"
@@ -149,7 +150,11 @@ std::string FailureReason(const v1::SolveEvent* error, const ProcessExit& exit) 
     return "pba-solve was killed by signal " + std::to_string(exit.signal) + " (" +
            SignalName(exit.signal) + ")";
   }
-  return "pba-solve exited with code " + std::to_string(exit.code);
+  // Without an ERROR line (a bad command line, the cancel watchdog, a
+  // crash) the code is all there is: its meaning from the shared table.
+  const ExitCodeInfo* known = FindExitCode(exit.code);
+  return "pba-solve exited with code " + std::to_string(exit.code) +
+         (known != nullptr ? std::string(" (") + known->meaning + ")" : std::string());
 }
 
 }  // namespace
@@ -299,225 +304,298 @@ void JobExecutor::WorkerLoop() {
   }
 }
 
-void JobExecutor::Execute(const v1::Job& job, const v1::JobEvent& started, Run& run) {
-  const std::string& id = job.id();
-  const fs::path dir = options_.data_dir / "jobs" / id;
-  const fs::path result_dir = dir / "result";
-  // This worker numbers the job's events while it runs (see job_event_hub.h).
-  int64_t sequence = started.sequence();
-
-  auto finish = [&](RunOutcome outcome) {
-    // Inputs staged for the run (a snapshot's structures, an import's
-    // source) are copies of what the store keeps: not kept after it.
-    for (const char* staged : {"snapshot", "source"}) {
-      std::error_code ec;
-      fs::remove_all(dir / staged, ec);
-    }
-    RemoveStagingLeftovers(dir);
-    if (outcome.message.empty()) {
-      outcome.message = outcome.state == v1::Job::SUCCEEDED ? "succeeded" : outcome.error;
-    }
-    v1::JobEvent event;
-    const Status status = store_.FinishRun(id, sequence + 1, outcome, &event);
-    if (!status.ok()) {
-      spdlog::error("job {}: cannot record its end: {}", id, status.ToString());
-      return;
-    }
-    hub_.Publish(event);
-    LogStateChange(event);
-  };
-  auto fail = [&](const std::string& error) {
-    RunOutcome outcome;
-    outcome.state = v1::Job::FAILED;
-    outcome.error = error;
-    finish(std::move(outcome));
-  };
-  auto cancel = [&] {
-    std::error_code ec;
-    fs::remove_all(result_dir, ec);
-    RunOutcome outcome;
-    outcome.state = v1::Job::CANCELLED;
-    outcome.error = kCancelledByRequest;
-    finish(std::move(outcome));
-  };
-  auto requeue = [&] {
-    v1::JobEvent event;
-    const Status status = store_.RequeueRun(id, sequence + 1, kRequeueShutdown, &event);
-    if (!status.ok()) {
-      spdlog::error("job {}: cannot re-queue: {}", id, status.ToString());
-      return;
-    }
-    hub_.Publish(event);
-    LogStateChange(event);
-  };
-
-  if (job.attempts() > options_.max_attempts) {
-    return fail("started " + std::to_string(job.attempts() - 1) +
-                " times without finishing (the server stopped during each run); not started "
-                "again");
-  }
-  if (options_.may_run) {
-    if (const Status allowed = options_.may_run(job); !allowed.ok()) {
-      return fail(allowed.ToString());
-    }
-  }
-  std::vector<std::string> input;
-  const Status prepared = PrepareFolder(job, dir, options_.preparation, &input);
-  if (!prepared.ok()) {
-    return fail(prepared.code() == Status::Code::kIo || prepared.code() == Status::Code::kInternal
-                    ? "cannot prepare the job folder: " + prepared.ToString()
-                    : prepared.ToString());
+// One attempt at a job, run by a worker: the steps of Execute() and what they
+// share. Lives on the worker's stack for the length of the run.
+class JobExecutor::Attempt {
+ public:
+  Attempt(JobExecutor& executor, const v1::Job& job, const v1::JobEvent& started, Run& run)
+      : executor_(executor),
+        options_(executor.options_),
+        job_(job),
+        run_(run),
+        id_(job.id()),
+        dir_(options_.data_dir / "jobs" / id_),
+        result_dir_(dir_ / "result"),
+        sequence_(started.sequence()) {
+    parse_options_.ignore_unknown_fields = true;
   }
 
-  SolverCommand command;
-  command.program = options_.solver;
-  command.args = input;
-  command.args.insert(command.args.end(), {"--out", result_dir.string(), "--progress=json"});
-  command.max_address_space_bytes = options_.max_solver_memory_bytes;
-  if (options_.solver_threads > 0) {
-    command.args.push_back("--threads");
-    command.args.push_back(std::to_string(options_.solver_threads));
-  }
-  if (!options_.atlas_cache_dir.empty()) {
-    command.args.insert(command.args.end(),
-                        {"--atlas-cache", options_.atlas_cache_dir.string(), "--atlas-cache-size",
-                         fmt::format("{}", options_.atlas_cache_gib)});
-  }
-  command.stderr_log = dir / "solve.log";
-
-  SolverProcess process;
-  {
-    std::lock_guard lock(mutex_);
-    if (run.cancel_requested) return cancel();
-    if (run.stop_requested) return requeue();
-  }
-  const Status spawned = process.Start(command);
-  if (!spawned.ok()) return fail(spawned.ToString());
-  {
-    std::lock_guard lock(mutex_);
-    run.process = &process;
-    if (run.cancel_requested || run.stop_requested) run.Terminate(options_.kill_grace);
+  // Prepare the folder, start pba-solve, follow it, then collect and record
+  // the outcome. Every step that ends the job records how it ended.
+  void Execute() {
+    std::vector<std::string> input;
+    if (!Prepare(&input)) return;
+    SolverProcess process;
+    if (!Start(input, process)) return;
+    Follow(process);
+    Conclude();
   }
 
-  // The job's time limit: its own when smaller than the server's.
-  std::chrono::seconds limit = options_.max_job_time;
-  if (job.timeout_s() > 0 && (limit.count() == 0 || job.timeout_s() < limit.count())) {
-    limit = std::chrono::seconds(job.timeout_s());
-  }
-  const auto started_at = std::chrono::steady_clock::now();
-  bool timed_out = false;
-  auto escalate = [&] {
-    std::lock_guard lock(mutex_);
-    if (limit.count() > 0 && !timed_out && std::chrono::steady_clock::now() - started_at > limit) {
-      spdlog::warn("job {}: over its time limit of {} s; stopping pba-solve", id, limit.count());
-      timed_out = true;
-      run.Terminate(options_.kill_grace);
+ private:
+  // Refuses a job started too often or refused by may_run, then prepares its
+  // folder; false when the job was failed instead. *input: pba-solve's input
+  // arguments.
+  bool Prepare(std::vector<std::string>* input) {
+    if (job_.attempts() > options_.max_attempts) {
+      Fail("started " + std::to_string(job_.attempts() - 1) +
+           " times without finishing (the server stopped during each run); not started "
+           "again");
+      return false;
     }
-    if (run.term_sent && !run.kill_sent && std::chrono::steady_clock::now() >= run.kill_at) {
-      spdlog::warn("job {}: pba-solve ignored SIGTERM for {} ms; sending SIGKILL", id,
+    if (options_.may_run) {
+      if (const Status allowed = options_.may_run(job_); !allowed.ok()) {
+        Fail(allowed.ToString());
+        return false;
+      }
+    }
+    const Status prepared = PrepareFolder(job_, dir_, options_.preparation, input);
+    if (!prepared.ok()) {
+      Fail(prepared.code() == Status::Code::kIo || prepared.code() == Status::Code::kInternal
+               ? "cannot prepare the job folder: " + prepared.ToString()
+               : prepared.ToString());
+      return false;
+    }
+    return true;
+  }
+
+  SolverCommand Command(const std::vector<std::string>& input) const {
+    SolverCommand command;
+    command.program = options_.solver;
+    command.args = input;
+    command.args.insert(command.args.end(), {"--out", result_dir_.string(), "--progress=json"});
+    command.max_address_space_bytes = options_.max_solver_memory_bytes;
+    if (options_.solver_threads > 0) {
+      command.args.push_back("--threads");
+      command.args.push_back(std::to_string(options_.solver_threads));
+    }
+    if (!options_.atlas_cache_dir.empty()) {
+      command.args.insert(command.args.end(),
+                          {"--atlas-cache", options_.atlas_cache_dir.string(), "--atlas-cache-size",
+                           fmt::format("{}", options_.atlas_cache_gib)});
+    }
+    command.stderr_log = dir_ / "solve.log";
+    return command;
+  }
+
+  // Starts pba-solve unless the job was cancelled or the server is stopping;
+  // false when the job ended (or was re-queued) instead.
+  bool Start(const std::vector<std::string>& input, SolverProcess& process) {
+    const SolverCommand command = Command(input);
+    {
+      std::lock_guard lock(executor_.mutex_);
+      if (run_.cancel_requested) {
+        FinishCancelled();
+        return false;
+      }
+      if (run_.stop_requested) {
+        Requeue();
+        return false;
+      }
+    }
+    const Status spawned = process.Start(command);
+    if (!spawned.ok()) {
+      Fail(spawned.ToString());
+      return false;
+    }
+    std::lock_guard lock(executor_.mutex_);
+    run_.process = &process;
+    if (run_.cancel_requested || run_.stop_requested) run_.Terminate(options_.kill_grace);
+    return true;
+  }
+
+  // Turns pba-solve's stdout into job events until it has exited (exit_),
+  // stopping it when it runs past its time limit or ignores SIGTERM.
+  void Follow(SolverProcess& process) {
+    // The job's time limit: its own when smaller than the server's.
+    limit_ = options_.max_job_time;
+    if (job_.timeout_s() > 0 && (limit_.count() == 0 || job_.timeout_s() < limit_.count())) {
+      limit_ = std::chrono::seconds(job_.timeout_s());
+    }
+    started_at_ = std::chrono::steady_clock::now();
+    bool exited = false;
+    std::string line;
+    while (true) {
+      const SolverProcess::ReadResult read = process.ReadLine(&line, kPollInterval);
+      if (read == SolverProcess::ReadResult::kLine) {
+        HandleLine(line);
+      } else if (read == SolverProcess::ReadResult::kEnd) {
+        break;
+      } else if (process.TryWait(&exit_)) {
+        // Exited while something it started still holds stdout open: take what
+        // is already there and stop reading.
+        exited = true;
+        while (process.ReadLine(&line, std::chrono::milliseconds(0)) ==
+               SolverProcess::ReadResult::kLine) {
+          HandleLine(line);
+        }
+        break;
+      }
+      Escalate(process);
+    }
+    while (!exited && !process.TryWait(&exit_)) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+      Escalate(process);
+    }
+  }
+
+  // SIGTERM past the time limit, SIGKILL past the grace after a SIGTERM.
+  void Escalate(SolverProcess& process) {
+    std::lock_guard lock(executor_.mutex_);
+    if (limit_.count() > 0 && !timed_out_ &&
+        std::chrono::steady_clock::now() - started_at_ > limit_) {
+      spdlog::warn("job {}: over its time limit of {} s; stopping pba-solve", id_, limit_.count());
+      timed_out_ = true;
+      run_.Terminate(options_.kill_grace);
+    }
+    if (run_.term_sent && !run_.kill_sent && std::chrono::steady_clock::now() >= run_.kill_at) {
+      spdlog::warn("job {}: pba-solve ignored SIGTERM for {} ms; sending SIGKILL", id_,
                    options_.kill_grace.count());
       process.Signal(SIGKILL);
-      run.kill_sent = true;
+      run_.kill_sent = true;
     }
-  };
+  }
 
-  google::protobuf::util::JsonParseOptions parse_options;
-  parse_options.ignore_unknown_fields = true;
-  std::string stored_phase;
-  double stored_progress = 0;
-  bool have_error = false;
-  v1::SolveEvent error_event;
-  ProcessExit exit;
-  bool exited = false;
-
-  auto handle_line = [&](const std::string& line) {
+  // One stdout line: an ERROR event is kept for the failure reason, a
+  // PROGRESS event is published (and stored when it moved far enough).
+  void HandleLine(const std::string& line) {
     if (line.empty()) return;
     v1::SolveEvent solve_event;
-    if (!google::protobuf::util::JsonStringToMessage(line, &solve_event, parse_options).ok()) {
-      spdlog::debug("job {}: ignoring a stdout line that is not a SolveEvent: {}", id,
+    if (!google::protobuf::util::JsonStringToMessage(line, &solve_event, parse_options_).ok()) {
+      spdlog::debug("job {}: ignoring a stdout line that is not a SolveEvent: {}", id_,
                     line.substr(0, 200));
       return;
     }
     if (solve_event.kind() == v1::SolveEvent::ERROR) {
-      have_error = true;
-      error_event = solve_event;
+      have_error_ = true;
+      error_event_ = solve_event;
       return;
     }
     if (solve_event.kind() != v1::SolveEvent::PROGRESS) return;
     v1::JobEvent event;
-    event.set_job_id(id);
-    event.set_sequence(++sequence);
+    event.set_job_id(id_);
+    event.set_sequence(++sequence_);
     *event.mutable_time() = Now();
     event.set_state(v1::Job::RUNNING);
     event.set_phase(solve_event.phase());
     event.set_progress(std::clamp(solve_event.progress(), 0.0, 1.0));
     event.set_message(solve_event.message());
-    if (event.phase() != stored_phase ||
-        event.progress() >= stored_progress + kStoredProgressStep) {
-      const Status status = store_.RecordProgress(&event);
+    if (event.phase() != stored_phase_ ||
+        event.progress() >= stored_progress_ + kStoredProgressStep) {
+      const Status status = executor_.store_.RecordProgress(&event);
       if (status.ok()) {
-        sequence = event.sequence();
-        stored_phase = event.phase();
-        stored_progress = event.progress();
+        sequence_ = event.sequence();
+        stored_phase_ = event.phase();
+        stored_progress_ = event.progress();
       } else {
-        spdlog::warn("job {}: cannot store progress: {}", id, status.ToString());
+        spdlog::warn("job {}: cannot store progress: {}", id_, status.ToString());
       }
     }
-    hub_.Publish(event);
-  };
+    executor_.hub_.Publish(event);
+  }
 
-  std::string line;
-  while (true) {
-    const SolverProcess::ReadResult read = process.ReadLine(&line, kPollInterval);
-    if (read == SolverProcess::ReadResult::kLine) {
-      handle_line(line);
-    } else if (read == SolverProcess::ReadResult::kEnd) {
-      break;
-    } else if (process.TryWait(&exit)) {
-      // Exited while something it started still holds stdout open: take what
-      // is already there and stop reading.
-      exited = true;
-      while (process.ReadLine(&line, std::chrono::milliseconds(0)) ==
-             SolverProcess::ReadResult::kLine) {
-        handle_line(line);
-      }
-      break;
+  // pba-solve has exited: collects a success's result, or records why the
+  // run ended otherwise (cancelled, timed out, server stopping, failed).
+  void Conclude() {
+    bool cancel_requested = false;
+    bool stop_requested = false;
+    {
+      std::lock_guard lock(executor_.mutex_);
+      run_.process = nullptr;
+      cancel_requested = run_.cancel_requested;
+      stop_requested = run_.stop_requested;
     }
-    escalate();
-  }
-  while (!exited && !process.TryWait(&exit)) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    escalate();
+
+    if (cancel_requested) return FinishCancelled();
+    if (!exit_.signaled && exit_.code == 0) {
+      RunOutcome outcome;
+      const Status collected = CollectResult(result_dir_, &outcome.summary, &outcome.files);
+      if (!collected.ok()) return Fail("pba-solve succeeded but " + collected.ToString());
+      if (options_.preparation != nullptr) {
+        const Status completed = options_.preparation->Complete(job_, result_dir_, &outcome);
+        if (!completed.ok()) return Fail(completed.ToString());
+      }
+      outcome.state = v1::Job::SUCCEEDED;
+      return Finish(std::move(outcome));
+    }
+    if (timed_out_) {
+      std::error_code ec;
+      fs::remove_all(result_dir_, ec);
+      return Fail("stopped after its time limit of " + std::to_string(limit_.count()) + " s");
+    }
+    if (stop_requested) return Requeue();
+    Fail(FailureReason(have_error_ ? &error_event_ : nullptr, exit_));
   }
 
-  bool cancel_requested = false;
-  bool stop_requested = false;
-  {
-    std::lock_guard lock(mutex_);
-    run.process = nullptr;
-    cancel_requested = run.cancel_requested;
-    stop_requested = run.stop_requested;
+  void Finish(RunOutcome outcome) {
+    // Inputs staged for the run (a snapshot's structures, an import's
+    // source) are copies of what the store keeps: not kept after it.
+    for (const char* staged : {"snapshot", "source"}) {
+      std::error_code ec;
+      fs::remove_all(dir_ / staged, ec);
+    }
+    RemoveStagingLeftovers(dir_);
+    if (outcome.message.empty()) {
+      outcome.message = outcome.state == v1::Job::SUCCEEDED ? "succeeded" : outcome.error;
+    }
+    v1::JobEvent event;
+    const Status status = executor_.store_.FinishRun(id_, sequence_ + 1, outcome, &event);
+    if (!status.ok()) {
+      spdlog::error("job {}: cannot record its end: {}", id_, status.ToString());
+      return;
+    }
+    executor_.hub_.Publish(event);
+    LogStateChange(event);
   }
 
-  if (cancel_requested) return cancel();
-  if (!exit.signaled && exit.code == 0) {
+  void Fail(const std::string& error) {
     RunOutcome outcome;
-    const Status collected = CollectResult(result_dir, &outcome.summary, &outcome.files);
-    if (!collected.ok()) return fail("pba-solve succeeded but " + collected.ToString());
-    if (options_.preparation != nullptr) {
-      const Status completed = options_.preparation->Complete(job, result_dir, &outcome);
-      if (!completed.ok()) return fail(completed.ToString());
-    }
-    outcome.state = v1::Job::SUCCEEDED;
-    return finish(std::move(outcome));
+    outcome.state = v1::Job::FAILED;
+    outcome.error = error;
+    Finish(std::move(outcome));
   }
-  if (timed_out) {
+
+  void FinishCancelled() {
     std::error_code ec;
-    fs::remove_all(result_dir, ec);
-    return fail("stopped after its time limit of " + std::to_string(limit.count()) + " s");
+    fs::remove_all(result_dir_, ec);
+    RunOutcome outcome;
+    outcome.state = v1::Job::CANCELLED;
+    outcome.error = kCancelledByRequest;
+    Finish(std::move(outcome));
   }
-  if (stop_requested) return requeue();
-  fail(FailureReason(have_error ? &error_event : nullptr, exit));
+
+  void Requeue() {
+    v1::JobEvent event;
+    const Status status = executor_.store_.RequeueRun(id_, sequence_ + 1, kRequeueShutdown, &event);
+    if (!status.ok()) {
+      spdlog::error("job {}: cannot re-queue: {}", id_, status.ToString());
+      return;
+    }
+    executor_.hub_.Publish(event);
+    LogStateChange(event);
+  }
+
+  JobExecutor& executor_;
+  const ExecutorOptions& options_;
+  const v1::Job& job_;
+  Run& run_;
+  const std::string& id_;
+  const fs::path dir_;
+  const fs::path result_dir_;
+  // This worker numbers the job's events while it runs (see job_event_hub.h).
+  int64_t sequence_;
+  std::chrono::seconds limit_{0};
+  std::chrono::steady_clock::time_point started_at_;
+  bool timed_out_ = false;
+  google::protobuf::util::JsonParseOptions parse_options_;
+  std::string stored_phase_;
+  double stored_progress_ = 0;
+  bool have_error_ = false;
+  v1::SolveEvent error_event_;
+  ProcessExit exit_;
+};
+
+void JobExecutor::Execute(const v1::Job& job, const v1::JobEvent& started, Run& run) {
+  Attempt(*this, job, started, run).Execute();
 }
 
 }  // namespace pba

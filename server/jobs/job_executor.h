@@ -151,7 +151,8 @@ class JobExecutor : public Executor {
   void Stop() override;
 
  private:
-  struct Run;  // one running job, defined in the .cc
+  struct Run;     // one running job, defined in the .cc
+  class Attempt;  // the steps of Execute(), defined in the .cc
 
   void WorkerLoop();
   // ExpireResults when the last run was an hour ago or more (any worker).

@@ -44,17 +44,17 @@ std::string FileStemFor(const std::string& structure) {
 }
 
 // The extension the readers go by.
-std::string ExtensionFor(GeometryFormat format, bool gzipped) {
+std::string ExtensionFor(StructureFormat format, bool gzipped) {
   switch (format) {
-    case GeometryFormat::kContoursJson:
+    case StructureFormat::kContours:
       return ".json";
-    case GeometryFormat::kNifti:
+    case StructureFormat::kNifti:
       return gzipped ? ".nii.gz" : ".nii";
-    case GeometryFormat::kStl:
+    case StructureFormat::kStl:
       return ".stl";
-    case GeometryFormat::kObj:
+    case StructureFormat::kObj:
       return ".obj";
-    case GeometryFormat::kVtk:
+    case StructureFormat::kVtk:
       return ".vtk";
   }
   return "";
@@ -228,7 +228,7 @@ Status AtlasJobs::StageSnapshot(const v1::Job& job, const fs::path& dir, v1::Sce
     StructureEntry entry;
     entry.name = r.structure;
     entry.file = name;
-    ParseStructureFormat(GeometryFormatName(r.format), &entry.format);
+    entry.format = r.format;
     // A structure set needs a colour per structure, distinct and not black
     // (structure_set.h); the store lets two structures share one, so a
     // repeat is moved to the nearest free colour for the build.
@@ -301,7 +301,7 @@ Status AtlasJobs::Complete(const v1::Job& job, const fs::path& result_dir, RunOu
     ImportedStructure s;
     s.name = entry.name;
     s.file = set_dir / entry.file;
-    ParseGeometryFormat(StructureFormatName(entry.format), &s.format);
+    s.format = entry.format;
     s.metadata.colour = Colour{entry.r, entry.g, entry.b};
     s.metadata.group_path = entry.group_path.empty() ? GroupOf(entry.name) : entry.group_path;
     s.metadata.material_json = entry.material_json.empty() ? "{}" : entry.material_json;

@@ -41,38 +41,38 @@ Status RoleFromProto(v1::Role role, Role* out) {
   }
 }
 
-v1::GeometryFormat FormatToProto(GeometryFormat format) {
+v1::GeometryFormat FormatToProto(StructureFormat format) {
   switch (format) {
-    case GeometryFormat::kContoursJson:
+    case StructureFormat::kContours:
       return v1::CONTOURS_JSON;
-    case GeometryFormat::kNifti:
+    case StructureFormat::kNifti:
       return v1::NIFTI;
-    case GeometryFormat::kStl:
+    case StructureFormat::kStl:
       return v1::STL;
-    case GeometryFormat::kObj:
+    case StructureFormat::kObj:
       return v1::OBJ;
-    case GeometryFormat::kVtk:
+    case StructureFormat::kVtk:
       return v1::VTK;
   }
   return v1::GEOMETRY_FORMAT_UNSPECIFIED;
 }
 
-Status FormatFromProto(v1::GeometryFormat format, GeometryFormat* out) {
+Status FormatFromProto(v1::GeometryFormat format, StructureFormat* out) {
   switch (format) {
     case v1::CONTOURS_JSON:
-      *out = GeometryFormat::kContoursJson;
+      *out = StructureFormat::kContours;
       return Status::Ok();
     case v1::NIFTI:
-      *out = GeometryFormat::kNifti;
+      *out = StructureFormat::kNifti;
       return Status::Ok();
     case v1::STL:
-      *out = GeometryFormat::kStl;
+      *out = StructureFormat::kStl;
       return Status::Ok();
     case v1::OBJ:
-      *out = GeometryFormat::kObj;
+      *out = StructureFormat::kObj;
       return Status::Ok();
     case v1::VTK:
-      *out = GeometryFormat::kVtk;
+      *out = StructureFormat::kVtk;
       return Status::Ok();
     default:
       return Status::InvalidArgument("format", "must be CONTOURS_JSON, NIFTI, STL, OBJ or VTK");

@@ -20,10 +20,10 @@ v1::Role RoleToProto(Role role);
 // kInvalidArgument (field "role") for ROLE_UNSPECIFIED or an unknown value.
 Status RoleFromProto(v1::Role role, Role* out);
 
-v1::GeometryFormat FormatToProto(GeometryFormat format);
+v1::GeometryFormat FormatToProto(StructureFormat format);
 // kInvalidArgument (field "format") for GEOMETRY_FORMAT_UNSPECIFIED or an
 // unknown value.
-Status FormatFromProto(v1::GeometryFormat format, GeometryFormat* out);
+Status FormatFromProto(v1::GeometryFormat format, StructureFormat* out);
 
 void MetadataToProto(const StructureMetadata& metadata, v1::StructureMetadata* out);
 // An empty material_json becomes "{}" (no parameters).

@@ -1,8 +1,9 @@
 // AtlasServiceImpl: the pba.v1.AtlasService handlers over AtlasStore (the
 // repository), UploadStore (resumable uploads) and AtlasEventHub (Watch).
-// Each handler authenticates the caller, validates and translates the
-// request, calls the store and returns; rights, locks and etags are the
-// store's (atlas_store.h).
+// Each handler runs through Handle (handler.h), which authenticates the
+// caller and maps and logs the outcome; the handler validates and
+// translates the request and calls the store. Rights, locks and etags are
+// the store's (atlas_store.h).
 //
 // Authentication: every call carries the metadata
 // `authorization: Bearer <token>`; a missing, malformed or unknown token is
@@ -143,10 +144,11 @@ class AtlasServiceImpl final : public v1::AtlasService::Service {
                      grpc::ServerWriter<v1::AtlasEvent>* writer) override;
 
  private:
-  // The caller's user name from the bearer token; UNAUTHENTICATED otherwise.
-  grpc::Status Authenticate(const char* rpc, grpc::ServerContext* context, std::string* user);
+  // Whether `user` may watch `project` (a member of it): checked when a
+  // Watch opens and every kWatchRecheck while it is open.
+  Status MayWatch(const std::string& project, const std::string& user);
   // The verified, format-checked content of `user`'s complete upload.
-  Status TakeUpload(const std::string& user, const std::string& upload_id, GeometryFormat format,
+  Status TakeUpload(const std::string& user, const std::string& upload_id, StructureFormat format,
                     std::unique_ptr<MappedFile>* content);
   void Publish(v1::AtlasEvent::Kind kind, const std::string& project, const std::string& structure,
                int64_t revision, int64_t snapshot, const std::string& user,

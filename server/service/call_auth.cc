@@ -19,8 +19,7 @@ bool StartsWithBearer(std::string_view value) {
 
 }  // namespace
 
-Status CallUser(AtlasStore& users, const grpc::ServerContext& context, std::string* user,
-                bool* server_admin) {
+Status CallUser(AtlasStore& users, const grpc::ServerContext& context, Caller* caller) {
   const auto& metadata = context.client_metadata();
   const auto it = metadata.find("authorization");
   if (it == metadata.end()) {
@@ -31,7 +30,8 @@ Status CallUser(AtlasStore& users, const grpc::ServerContext& context, std::stri
   if (!StartsWithBearer(value)) {
     return Status::Unauthenticated("the authorization metadata must be 'Bearer <token>'");
   }
-  return users.Authenticate(std::string(value.substr(kBearer.size())), user, server_admin);
+  return users.Authenticate(std::string(value.substr(kBearer.size())), &caller->user,
+                            &caller->server_admin);
 }
 
 }  // namespace pba

@@ -14,9 +14,9 @@
 
 #include "atlas/contours.h"
 #include "atlas/label_volume_io.h"
+#include "atlas/surface_io.h"
 #include "core/atomic_write.h"
 #include "core/format.h"
-#include "io/surface_io.h"
 
 namespace pba {
 namespace {
@@ -147,24 +147,21 @@ Status CheckContoursJson(std::string_view field, std::string_view content) {
   return ParseContoursJson(content, std::string(field), &contours);
 }
 
-Status CheckSurface(std::string_view field, GeometryFormat format, std::string_view content) {
-  const StructureFormat as = format == GeometryFormat::kStl   ? StructureFormat::kStl
-                             : format == GeometryFormat::kObj ? StructureFormat::kObj
-                                                              : StructureFormat::kVtk;
+Status CheckSurface(std::string_view field, StructureFormat format, std::string_view content) {
   TriangleSurface surface;
-  return ReadSurface(content, as, std::string(field), &surface);
+  return ReadSurface(content, format, std::string(field), &surface);
 }
 
 // In this process: what the bounded child runs.
-Status CheckContent(std::string_view field, GeometryFormat format, std::string_view content) {
+Status CheckContent(std::string_view field, StructureFormat format, std::string_view content) {
   switch (format) {
-    case GeometryFormat::kContoursJson:
+    case StructureFormat::kContours:
       return CheckContoursJson(field, content);
-    case GeometryFormat::kNifti:
+    case StructureFormat::kNifti:
       return CheckNifti(field, content);
-    case GeometryFormat::kStl:
-    case GeometryFormat::kObj:
-    case GeometryFormat::kVtk:
+    case StructureFormat::kStl:
+    case StructureFormat::kObj:
+    case StructureFormat::kVtk:
       return CheckSurface(field, format, content);
   }
   return Status::InvalidArgument(std::string(field), "unknown geometry format");
@@ -172,14 +169,14 @@ Status CheckContent(std::string_view field, GeometryFormat format, std::string_v
 
 }  // namespace
 
-Status CheckGeometryContent(std::string_view field, GeometryFormat format, std::string_view content,
-                            const ChildLimits& limits) {
+Status CheckGeometryContent(std::string_view field, StructureFormat format,
+                            std::string_view content, const ChildLimits& limits) {
   if (content.empty()) return Status::InvalidArgument(std::string(field), "must not be empty");
   ChildOutcome outcome;
   PBA_RETURN_IF_ERROR(RunInBoundedChild(
       limits, [&](std::string*) { return CheckContent(field, format, content); }, &outcome));
   return OutcomeStatus(outcome, limits, std::string(field),
-                       "the " + std::string(GeometryFormatName(format)) + " file");
+                       "the " + std::string(StructureFormatName(format)) + " file");
 }
 
 }  // namespace pba

@@ -10,7 +10,7 @@
 //                  then the data through the solver's ReadNifti: integer
 //                  values, not truncated, at least one voxel non-zero, the
 //                  non-zero voxels' centres within 500 mm of the origin
-//   stl, obj, vtk  the solver's ReadSurface (io/surface_io.h): a closed
+//   stl, obj, vtk  the solver's ReadSurface (atlas/surface_io.h): a closed
 //                  surface, binary or ASCII STL, OBJ (v and f), ASCII
 //                  legacy VTK POLYDATA; at least four triangles, every
 //                  edge shared by exactly two, a non-zero enclosed volume,
@@ -37,7 +37,7 @@
 namespace pba {
 
 // kInvalidArgument (field `field`) saying what is wrong.
-Status CheckGeometryContent(std::string_view field, GeometryFormat format, std::string_view content,
-                            const ChildLimits& limits = {});
+Status CheckGeometryContent(std::string_view field, StructureFormat format,
+                            std::string_view content, const ChildLimits& limits = {});
 
 }  // namespace pba

@@ -10,8 +10,8 @@
 
 #include "atlas/label_volume.h"
 #include "atlas/label_volume_io.h"
+#include "atlas/surface_io.h"
 #include "core/atomic_write.h"
-#include "io/surface_io.h"
 
 namespace pba {
 namespace fs = std::filesystem;
@@ -120,14 +120,14 @@ ContoursDistance DistanceBetween(const Contours& contours_a, const Contours& con
 namespace {
 
 // The box of one geometry [mm], grown to take it in.
-Status AddBox(GeometryFormat format, std::string_view bytes, const char* field, Eigen::Vector3d* lo,
-              Eigen::Vector3d* hi) {
+Status AddBox(StructureFormat format, std::string_view bytes, const char* field,
+              Eigen::Vector3d* lo, Eigen::Vector3d* hi) {
   const auto add = [&](const Eigen::Vector3d& p) {
     *lo = lo->cwiseMin(p);
     *hi = hi->cwiseMax(p);
   };
   switch (format) {
-    case GeometryFormat::kContoursJson: {
+    case StructureFormat::kContours: {
       Contours contours;
       PBA_RETURN_IF_ERROR(ParseContoursJson(bytes, field, &contours));
       for (const ContourPlate& plate : contours.plates) {
@@ -137,7 +137,7 @@ Status AddBox(GeometryFormat format, std::string_view bytes, const char* field, 
       }
       return Status::Ok();
     }
-    case GeometryFormat::kNifti: {
+    case StructureFormat::kNifti: {
       // The header's grid is enough, but the reader takes a file and reads
       // it whole; a mask's bytes were bounded by the upload.
       std::string pattern = (fs::temp_directory_path() / "pba-diff-box-XXXXXX").string();
@@ -164,13 +164,11 @@ Status AddBox(GeometryFormat format, std::string_view bytes, const char* field, 
       }
       return Status::Ok();
     }
-    case GeometryFormat::kStl:
-    case GeometryFormat::kObj:
-    case GeometryFormat::kVtk: {
-      StructureFormat structure_format = StructureFormat::kStl;
-      ParseStructureFormat(GeometryFormatName(format), &structure_format);
+    case StructureFormat::kStl:
+    case StructureFormat::kObj:
+    case StructureFormat::kVtk: {
       TriangleSurface surface;
-      PBA_RETURN_IF_ERROR(ReadSurface(bytes, structure_format, field, &surface));
+      PBA_RETURN_IF_ERROR(ReadSurface(bytes, format, field, &surface));
       for (const Eigen::Vector3d& p : surface.points) add(p);
       return Status::Ok();
     }
@@ -180,7 +178,7 @@ Status AddBox(GeometryFormat format, std::string_view bytes, const char* field, 
 
 }  // namespace
 
-Status DiffGridVoxels(GeometryFormat format_a, std::string_view a, GeometryFormat format_b,
+Status DiffGridVoxels(StructureFormat format_a, std::string_view a, StructureFormat format_b,
                       std::string_view b, double voxel_mm, double* voxels) {
   Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
   Eigen::Vector3d hi = -lo;
@@ -200,7 +198,7 @@ Status DiffGridVoxels(GeometryFormat format_a, std::string_view a, GeometryForma
   return Status::Ok();
 }
 
-Status ChooseDiffVoxel(GeometryFormat format_a, std::string_view a, GeometryFormat format_b,
+Status ChooseDiffVoxel(StructureFormat format_a, std::string_view a, StructureFormat format_b,
                        std::string_view b, double voxel_mm, int64_t max_voxels, double* chosen_mm) {
   double at_base = 0;
   PBA_RETURN_IF_ERROR(DiffGridVoxels(format_a, a, format_b, b, voxel_mm, &at_base));
@@ -222,7 +220,7 @@ Status ChooseDiffVoxel(GeometryFormat format_a, std::string_view a, GeometryForm
   return Status::Internal("no voxel size fits the comparison's voxel budget");
 }
 
-Status CompareRevisionShapes(GeometryFormat format_a, std::string_view a, GeometryFormat format_b,
+Status CompareRevisionShapes(StructureFormat format_a, std::string_view a, StructureFormat format_b,
                              std::string_view b, double base_voxel_mm, int64_t max_voxels,
                              const std::function<bool()>& cancelled, ShapeComparison* comparison) {
   const auto stop = [&](const char* phase) {
@@ -241,7 +239,7 @@ Status CompareRevisionShapes(GeometryFormat format_a, std::string_view a, Geomet
   for (auto [name, format, bytes, geometry] :
        {std::tuple{"a", format_a, a, &ga}, std::tuple{"b", format_b, b, &gb}}) {
     geometry->file = dir / name;
-    ParseStructureFormat(GeometryFormatName(format), &geometry->format);
+    geometry->format = format;
     if (status.ok()) status = AtomicWriteText(geometry->file, bytes);
   }
   if (status.ok() && cancelled && cancelled()) status = stop("before voxelising");

@@ -52,13 +52,13 @@ inline constexpr int64_t kMaxDiffVoxels = int64_t{1} << 23;
 // use: their union's box with the two voxels of margin ComposeStructureSet
 // adds on each side. Errors: geometry that does not parse (kInvalidArgument
 // on "from"/"to" naming the format's complaint).
-Status DiffGridVoxels(GeometryFormat format_a, std::string_view a, GeometryFormat format_b,
+Status DiffGridVoxels(StructureFormat format_a, std::string_view a, StructureFormat format_b,
                       std::string_view b, double voxel_mm, double* voxels);
 
 // `voxel_mm`, or the first coarser of 1, 1.25, 1.5, 2, 2.5, 3, 4, 5, 6, 8
 // times a power of ten times it, whose grid (DiffGridVoxels) holds at most
 // `max_voxels`.
-Status ChooseDiffVoxel(GeometryFormat format_a, std::string_view a, GeometryFormat format_b,
+Status ChooseDiffVoxel(StructureFormat format_a, std::string_view a, StructureFormat format_b,
                        std::string_view b, double voxel_mm, int64_t max_voxels, double* chosen_mm);
 
 // Two revisions' geometry in any forms compared on voxels (CompareShapes,
@@ -70,7 +70,7 @@ Status ChooseDiffVoxel(GeometryFormat format_a, std::string_view a, GeometryForm
 // (sizing, writing, comparing); true gives Status::Cancelled. The
 // voxelisation and distance transforms themselves do not look at it: the
 // voxel budget bounds them to seconds.
-Status CompareRevisionShapes(GeometryFormat format_a, std::string_view a, GeometryFormat format_b,
+Status CompareRevisionShapes(StructureFormat format_a, std::string_view a, StructureFormat format_b,
                              std::string_view b, double voxel_mm, int64_t max_voxels,
                              const std::function<bool()>& cancelled, ShapeComparison* comparison);
 

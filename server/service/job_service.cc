@@ -9,7 +9,7 @@
 
 #include "convert/convert.h"
 #include "service/atlas_jobs.h"
-#include "service/call_auth.h"
+#include "service/handler.h"
 #include "store/job_id.h"
 
 namespace pba {
@@ -20,60 +20,13 @@ namespace {
 // UNIQUE index stays small.
 constexpr size_t kMaxRequestIdLength = 200;
 
-const char* CodeName(grpc::StatusCode code) {
-  switch (code) {
-    case grpc::StatusCode::OK:
-      return "OK";
-    case grpc::StatusCode::CANCELLED:
-      return "CANCELLED";
-    case grpc::StatusCode::INVALID_ARGUMENT:
-      return "INVALID_ARGUMENT";
-    case grpc::StatusCode::NOT_FOUND:
-      return "NOT_FOUND";
-    case grpc::StatusCode::ALREADY_EXISTS:
-      return "ALREADY_EXISTS";
-    case grpc::StatusCode::PERMISSION_DENIED:
-      return "PERMISSION_DENIED";
-    case grpc::StatusCode::UNAUTHENTICATED:
-      return "UNAUTHENTICATED";
-    case grpc::StatusCode::FAILED_PRECONDITION:
-      return "FAILED_PRECONDITION";
-    case grpc::StatusCode::OUT_OF_RANGE:
-      return "OUT_OF_RANGE";
-    case grpc::StatusCode::UNAVAILABLE:
-      return "UNAVAILABLE";
-    case grpc::StatusCode::DATA_LOSS:
-      return "DATA_LOSS";
-    case grpc::StatusCode::INTERNAL:
-      return "INTERNAL";
-    default:
-      return "ERROR";
-  }
-}
-
-// Every RPC error goes through here: one log line each.
-grpc::Status Error(const char* rpc, grpc::Status status) {
-  spdlog::warn("{}: {} {}", rpc, CodeName(status.error_code()), status.error_message());
-  return status;
-}
-
-grpc::Status Error(const char* rpc, grpc::StatusCode code, const std::string& message) {
-  return Error(rpc, grpc::Status(code, message));
-}
-
-// A store failure is the server's problem (INTERNAL) unless it blames an
-// argument or a name (ToGrpcStatus).
-grpc::Status StoreError(const char* rpc, const Status& status) {
-  return Error(rpc, ToGrpcStatus(status));
-}
-
 bool IsTerminal(v1::Job::State state) {
   return state == v1::Job::SUCCEEDED || state == v1::Job::FAILED || state == v1::Job::CANCELLED;
 }
 
-grpc::Status JobNotFound(const char* rpc, const std::string& id) {
-  return Error(rpc, grpc::StatusCode::NOT_FOUND, "job " + id + " not found");
-}
+// The same words for a job that does not exist and one the caller may not
+// see, so that ids cannot be probed.
+Status JobNotFound(const std::string& id) { return Status::NotFound("job " + id + " not found"); }
 
 }  // namespace
 
@@ -154,13 +107,6 @@ Status JobServiceImpl::CheckSubmit(const std::string& user, const v1::SubmitJobR
   return Status::Ok();
 }
 
-grpc::Status JobServiceImpl::Authenticate(const char* rpc, const grpc::ServerContext& context,
-                                          Caller* caller) {
-  const Status status = CallUser(users_, context, &caller->user, &caller->server_admin);
-  if (!status.ok()) return Error(rpc, ToGrpcStatus(status));
-  return grpc::Status::OK;
-}
-
 Status JobServiceImpl::MaySee(const Caller& caller, const v1::Job& job, bool* visible) {
   *visible = true;
   if (caller.server_admin || job.owner() == caller.user) return Status::Ok();
@@ -181,21 +127,19 @@ Status JobServiceImpl::MaySee(const Caller& caller, const v1::Job& job, bool* vi
   return Status::Ok();
 }
 
-grpc::Status JobServiceImpl::LoadVisibleJob(const char* rpc, const Caller& caller,
-                                            const std::string& id, JobView view, v1::Job* job) {
+Status JobServiceImpl::LoadVisibleJob(const char* rpc, const Caller& caller, const std::string& id,
+                                      JobView view, v1::Job* job) {
   bool found = false;
-  Status status = store_.GetJob(id, view, job, &found);
-  if (!status.ok()) return StoreError(rpc, status);
-  if (!found) return JobNotFound(rpc, id);
+  PBA_RETURN_IF_ERROR(store_.GetJob(id, view, job, &found));
+  if (!found) return JobNotFound(id);
   bool visible = false;
-  status = MaySee(caller, *job, &visible);
-  if (!status.ok()) return StoreError(rpc, status);
+  PBA_RETURN_IF_ERROR(MaySee(caller, *job, &visible));
   if (!visible) {
     // Logged as any NOT_FOUND, with who asked, for the operator only.
     spdlog::info("{}: job {} is hidden from {}", rpc, id, caller.user);
-    return JobNotFound(rpc, id);
+    return JobNotFound(id);
   }
-  return grpc::Status::OK;
+  return Status::Ok();
 }
 
 void JobServiceImpl::OverlayLive(v1::Job* job) const {
@@ -210,266 +154,256 @@ void JobServiceImpl::OverlayLive(v1::Job* job) const {
 
 grpc::Status JobServiceImpl::SubmitJob(grpc::ServerContext* context,
                                        const v1::SubmitJobRequest* request, v1::Job* response) {
-  constexpr char kRpc[] = "SubmitJob";
-  Caller caller;
-  if (grpc::Status auth = Authenticate(kRpc, *context, &caller); !auth.ok()) return auth;
-  const std::string& user = caller.user;
-  if (request->request_id().size() > kMaxRequestIdLength) {
-    return Error(kRpc, grpc::StatusCode::INVALID_ARGUMENT,
-                 "request_id: at most " + std::to_string(kMaxRequestIdLength) + " characters");
-  }
-  NewJob job;
-  const Status checked = CheckSubmit(user, *request, &job);
-  if (!checked.ok()) return Error(kRpc, ToGrpcStatus(checked));
-
-  // A repeated import returns its job before its uploads (taken the first
-  // time) are looked for.
-  if (job.atlas_import != nullptr && !job.request_id.empty()) {
-    bool found = false;
-    const Status looked = store_.FindByRequestId(job.request_id, user, response, &found);
-    if (!looked.ok()) return StoreError(kRpc, looked);
-    if (found) {
-      OverlayLive(response);
-      return grpc::Status::OK;
+  return Handle(users_, "SubmitJob", *context, [&](const Caller& caller) -> RpcStatus {
+    const std::string& user = caller.user;
+    if (request->request_id().size() > kMaxRequestIdLength) {
+      return Status::InvalidArgument(
+          "request_id", "at most " + std::to_string(kMaxRequestIdLength) + " characters");
     }
-  }
-  // An import's files are taken in before the job exists (a staging
-  // directory renamed to the job's once it has an id): a job that is queued
-  // always has its source.
-  fs::path staged;
-  if (job.atlas_import != nullptr) {
-    staged = data_dir_ / "jobs" / (".import-" + NewJobId());
-    const Status taken = StageImportSource(uploads_, user, *job.atlas_import, staged);
-    if (!taken.ok()) return Error(kRpc, ToGrpcStatus(taken));
-  }
-  if (!staged.empty()) {
-    job.before_commit = [&](const std::string& id) {
+    NewJob job;
+    PBA_RETURN_IF_ERROR(CheckSubmit(user, *request, &job));
+
+    // A repeated import returns its job before its uploads (taken the first
+    // time) are looked for.
+    if (job.atlas_import != nullptr && !job.request_id.empty()) {
+      bool found = false;
+      PBA_RETURN_IF_ERROR(store_.FindByRequestId(job.request_id, user, response, &found));
+      if (found) {
+        OverlayLive(response);
+        return Status::Ok();
+      }
+    }
+    // An import's files are taken in before the job exists (a staging
+    // directory renamed to the job's once it has an id): a job that is
+    // queued always has its source.
+    fs::path staged;
+    if (job.atlas_import != nullptr) {
+      staged = data_dir_ / "jobs" / (".import-" + NewJobId());
+      PBA_RETURN_IF_ERROR(StageImportSource(uploads_, user, *job.atlas_import, staged));
+    }
+    if (!staged.empty()) {
+      job.before_commit = [&](const std::string& id) {
+        std::error_code ec;
+        const fs::path dir = data_dir_ / "jobs" / id;
+        fs::create_directories(dir, ec);
+        if (!ec) fs::rename(staged, dir / "source", ec);
+        if (ec) return Status::Io("cannot move the import's files into place: " + ec.message());
+        return Status::Ok();
+      };
+    }
+    bool created = false;
+    const Status stored = store_.CreateJob(job, response, &created);
+    if (!staged.empty()) {
       std::error_code ec;
-      const fs::path dir = data_dir_ / "jobs" / id;
-      fs::create_directories(dir, ec);
-      if (!ec) fs::rename(staged, dir / "source", ec);
-      if (ec) return Status::Io("cannot move the import's files into place: " + ec.message());
-      return Status::Ok();
-    };
-  }
-  bool created = false;
-  const Status stored = store_.CreateJob(job, response, &created);
-  if (!staged.empty()) {
-    std::error_code ec;
-    fs::remove_all(staged, ec);  // left only when the submit failed or was a repeat
-  }
-  if (!stored.ok()) return StoreError(kRpc, stored);
-  if (created && job.atlas_import != nullptr) {
-    RemoveImportUploads(uploads_, user, *job.atlas_import);
-  }
-  if (created) {
-    spdlog::info("job {} QUEUED: {} submitted by {}", response->id(), response->name(), user);
-    v1::JobEvent queued;
-    queued.set_job_id(response->id());
-    queued.set_sequence(1);
-    *queued.mutable_time() = response->create_time();
-    queued.set_state(v1::Job::QUEUED);
-    queued.set_message("queued");
-    hub_.Publish(queued);
-    executor_.Wake();
-  }
-  OverlayLive(response);
-  return grpc::Status::OK;
+      fs::remove_all(staged, ec);  // left only when the submit failed or was a repeat
+    }
+    PBA_RETURN_IF_ERROR(stored);
+    if (created && job.atlas_import != nullptr) {
+      RemoveImportUploads(uploads_, user, *job.atlas_import);
+    }
+    if (created) {
+      spdlog::info("job {} QUEUED: {} submitted by {}", response->id(), response->name(), user);
+      v1::JobEvent queued;
+      queued.set_job_id(response->id());
+      queued.set_sequence(1);
+      *queued.mutable_time() = response->create_time();
+      queued.set_state(v1::Job::QUEUED);
+      queued.set_message("queued");
+      hub_.Publish(queued);
+      executor_.Wake();
+    }
+    OverlayLive(response);
+    return Status::Ok();
+  });
 }
 
 grpc::Status JobServiceImpl::GetJob(grpc::ServerContext* context, const v1::GetJobRequest* request,
                                     v1::Job* response) {
   constexpr char kRpc[] = "GetJob";
-  Caller caller;
-  if (grpc::Status auth = Authenticate(kRpc, *context, &caller); !auth.ok()) return auth;
-  if (request->id().empty()) return Error(kRpc, grpc::StatusCode::INVALID_ARGUMENT, "id: required");
-  grpc::Status loaded = LoadVisibleJob(kRpc, caller, request->id(), JobView::kFull, response);
-  if (!loaded.ok()) return loaded;
-  OverlayLive(response);
-  return grpc::Status::OK;
+  return Handle(users_, kRpc, *context, [&](const Caller& caller) -> RpcStatus {
+    if (request->id().empty()) return Status::InvalidArgument("id", "required");
+    PBA_RETURN_IF_ERROR(LoadVisibleJob(kRpc, caller, request->id(), JobView::kFull, response));
+    OverlayLive(response);
+    return Status::Ok();
+  });
 }
 
 grpc::Status JobServiceImpl::ListJobs(grpc::ServerContext* context,
                                       const v1::ListJobsRequest* request,
                                       v1::ListJobsResponse* response) {
-  Caller caller;
-  if (grpc::Status auth = Authenticate("ListJobs", *context, &caller); !auth.ok()) return auth;
-  std::vector<v1::Job> jobs;
-  std::string next_page_token;
-  JobReader reader;
-  reader.user = caller.user;
-  reader.all = caller.server_admin;
-  const Status status =
-      store_.ListJobs(reader, request->page_size(), request->page_token(), &jobs, &next_page_token);
-  if (!status.ok()) return StoreError("ListJobs", status);
-  for (v1::Job& job : jobs) {
-    OverlayLive(&job);
-    *response->add_jobs() = std::move(job);
-  }
-  response->set_next_page_token(next_page_token);
-  return grpc::Status::OK;
+  return Handle(users_, "ListJobs", *context, [&](const Caller& caller) -> RpcStatus {
+    std::vector<v1::Job> jobs;
+    std::string next_page_token;
+    JobReader reader;
+    reader.user = caller.user;
+    reader.all = caller.server_admin;
+    PBA_RETURN_IF_ERROR(store_.ListJobs(reader, request->page_size(), request->page_token(), &jobs,
+                                        &next_page_token));
+    for (v1::Job& job : jobs) {
+      OverlayLive(&job);
+      *response->add_jobs() = std::move(job);
+    }
+    response->set_next_page_token(next_page_token);
+    return Status::Ok();
+  });
 }
 
 grpc::Status JobServiceImpl::CancelJob(grpc::ServerContext* context,
                                        const v1::CancelJobRequest* request, v1::Job* response) {
   constexpr char kRpc[] = "CancelJob";
-  Caller caller;
-  if (grpc::Status auth = Authenticate(kRpc, *context, &caller); !auth.ok()) return auth;
-  if (request->id().empty()) return Error(kRpc, grpc::StatusCode::INVALID_ARGUMENT, "id: required");
-  bool found = false;
-  {
-    // The owner or a server admin cancels (jobs stored before owners were
-    // kept have none: anyone who sees them may).
-    v1::Job job;
-    grpc::Status loaded = LoadVisibleJob(kRpc, caller, request->id(), JobView::kBasic, &job);
-    if (!loaded.ok()) return loaded;
-    if (!caller.server_admin && !job.owner().empty() && job.owner() != caller.user) {
-      return Error(kRpc, grpc::StatusCode::PERMISSION_DENIED,
-                   "job " + request->id() + " was submitted by " + job.owner() +
-                       "; only they or a server admin can cancel it");
+  return Handle(users_, kRpc, *context, [&](const Caller& caller) -> RpcStatus {
+    if (request->id().empty()) return Status::InvalidArgument("id", "required");
+    {
+      // The owner or a server admin cancels (jobs stored before owners were
+      // kept have none: anyone who sees them may).
+      v1::Job job;
+      PBA_RETURN_IF_ERROR(LoadVisibleJob(kRpc, caller, request->id(), JobView::kBasic, &job));
+      if (!caller.server_admin && !job.owner().empty() && job.owner() != caller.user) {
+        return Status::PermissionDenied("job " + request->id() + " was submitted by " +
+                                        job.owner() +
+                                        "; only they or a server admin can cancel it");
+      }
     }
-  }
-  const Status status = executor_.Cancel(request->id(), response, &found);
-  if (!status.ok()) return StoreError(kRpc, status);
-  if (!found) return JobNotFound(kRpc, request->id());
-  OverlayLive(response);
-  return grpc::Status::OK;
+    bool found = false;
+    PBA_RETURN_IF_ERROR(executor_.Cancel(request->id(), response, &found));
+    if (!found) return JobNotFound(request->id());
+    OverlayLive(response);
+    return Status::Ok();
+  });
 }
 
 grpc::Status JobServiceImpl::WatchJob(grpc::ServerContext* context,
                                       const v1::WatchJobRequest* request,
                                       grpc::ServerWriter<v1::JobEvent>* writer) {
   constexpr char kRpc[] = "WatchJob";
-  Caller caller;
-  if (grpc::Status auth = Authenticate(kRpc, *context, &caller); !auth.ok()) return auth;
-  const std::string& id = request->id();
-  if (id.empty()) return Error(kRpc, grpc::StatusCode::INVALID_ARGUMENT, "id: required");
-  if (request->after_sequence() < 0) {
-    return Error(kRpc, grpc::StatusCode::INVALID_ARGUMENT, "after_sequence: must not be negative");
-  }
-  v1::Job job;
-  if (grpc::Status loaded = LoadVisibleJob(kRpc, caller, id, JobView::kBasic, &job); !loaded.ok()) {
-    return loaded;
-  }
-  const StreamSlots::Ticket slot = watch_slots_.TryAcquire(caller.user);
-  if (!slot.held()) {
-    return Error(kRpc, grpc::StatusCode::RESOURCE_EXHAUSTED,
-                 "user '" + caller.user + "' already has " + std::to_string(kMaxWatchesPerUser) +
-                     " WatchJob streams open; close one first");
-  }
-  Status status;
-  auto checked = std::chrono::steady_clock::now();
-  // All events of a job that was already terminal are stored: once those are
-  // sent there is nothing left to wait for, even if the terminal one was
-  // before after_sequence.
-  const bool terminal_at_start = IsTerminal(job.state());
+  return Handle(users_, kRpc, *context, [&](const Caller& caller) -> RpcStatus {
+    const std::string& id = request->id();
+    if (id.empty()) return Status::InvalidArgument("id", "required");
+    if (request->after_sequence() < 0) {
+      return Status::InvalidArgument("after_sequence", "must not be negative");
+    }
+    v1::Job job;
+    PBA_RETURN_IF_ERROR(LoadVisibleJob(kRpc, caller, id, JobView::kBasic, &job));
+    const StreamSlots::Ticket slot = watch_slots_.TryAcquire(caller.user);
+    if (!slot.held()) {
+      return grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
+                          "user '" + caller.user + "' already has " +
+                              std::to_string(kMaxWatchesPerUser) +
+                              " WatchJob streams open; close one first");
+    }
+    auto checked = std::chrono::steady_clock::now();
+    // All events of a job that was already terminal are stored: once those
+    // are sent there is nothing left to wait for, even if the terminal one
+    // was before after_sequence.
+    const bool terminal_at_start = IsTerminal(job.state());
 
-  int64_t last = request->after_sequence();
-  while (true) {
-    if (context->IsCancelled()) return grpc::Status(grpc::StatusCode::CANCELLED, "watch cancelled");
-    if (hub_.shutting_down()) {
-      return grpc::Status(grpc::StatusCode::UNAVAILABLE, "the server is shutting down");
-    }
-    if (std::chrono::steady_clock::now() - checked >= kWatchRecheck) {
-      // A long watch must not outlive the caller's rights: a user disabled
-      // or a member removed since the stream opened loses it.
-      checked = std::chrono::steady_clock::now();
-      if (grpc::Status auth = Authenticate(kRpc, *context, &caller); !auth.ok()) return auth;
-      grpc::Status loaded = LoadVisibleJob(kRpc, caller, id, JobView::kBasic, &job);
-      if (!loaded.ok()) return loaded;
-    }
-    const uint64_t version = hub_.version();
-    std::vector<v1::JobEvent> stored;
-    status = store_.ListEvents(id, last, &stored);
-    if (!status.ok()) return StoreError(kRpc, status);
-    // Stored and live events overlap; the sequence number identifies an event.
-    std::map<int64_t, v1::JobEvent> pending;
-    for (v1::JobEvent& event : hub_.Recent(id, last)) pending[event.sequence()] = std::move(event);
-    for (v1::JobEvent& event : stored) pending[event.sequence()] = std::move(event);
-    for (const auto& [sequence, event] : pending) {
-      if (!writer->Write(event)) {
-        return grpc::Status(grpc::StatusCode::CANCELLED, "the client went away");
+    int64_t last = request->after_sequence();
+    while (true) {
+      if (context->IsCancelled()) {
+        return RpcStatus::StreamEnded(grpc::StatusCode::CANCELLED, "watch cancelled");
       }
-      last = sequence;
-      if (IsTerminal(event.state())) return grpc::Status::OK;
+      if (hub_.shutting_down()) {
+        return RpcStatus::StreamEnded(grpc::StatusCode::UNAVAILABLE, "the server is shutting down");
+      }
+      if (std::chrono::steady_clock::now() - checked >= kWatchRecheck) {
+        // A long watch must not outlive the caller's rights: a user disabled
+        // or a member removed since the stream opened loses it.
+        checked = std::chrono::steady_clock::now();
+        Caller again;
+        PBA_RETURN_IF_ERROR(CallUser(users_, *context, &again));
+        PBA_RETURN_IF_ERROR(LoadVisibleJob(kRpc, again, id, JobView::kBasic, &job));
+      }
+      const uint64_t version = hub_.version();
+      std::vector<v1::JobEvent> stored;
+      PBA_RETURN_IF_ERROR(store_.ListEvents(id, last, &stored));
+      // Stored and live events overlap; the sequence number identifies an event.
+      std::map<int64_t, v1::JobEvent> pending;
+      for (v1::JobEvent& event : hub_.Recent(id, last))
+        pending[event.sequence()] = std::move(event);
+      for (v1::JobEvent& event : stored) pending[event.sequence()] = std::move(event);
+      for (const auto& [sequence, event] : pending) {
+        if (!writer->Write(event)) {
+          return RpcStatus::StreamEnded(grpc::StatusCode::CANCELLED, "the client went away");
+        }
+        last = sequence;
+        if (IsTerminal(event.state())) return Status::Ok();
+      }
+      if (terminal_at_start) return Status::Ok();
+      hub_.WaitForChange(version, kWatchPoll);
     }
-    if (terminal_at_start) return grpc::Status::OK;
-    hub_.WaitForChange(version, kWatchPoll);
-  }
+  });
 }
 
 grpc::Status JobServiceImpl::DownloadResult(grpc::ServerContext* context,
                                             const v1::DownloadResultRequest* request,
                                             grpc::ServerWriter<v1::DataChunk>* writer) {
   constexpr char kRpc[] = "DownloadResult";
-  Caller caller;
-  if (grpc::Status auth = Authenticate(kRpc, *context, &caller); !auth.ok()) return auth;
-  const std::string& id = request->job_id();
-  if (id.empty()) return Error(kRpc, grpc::StatusCode::INVALID_ARGUMENT, "job_id: required");
-  if (request->offset() < 0) {
-    return Error(kRpc, grpc::StatusCode::INVALID_ARGUMENT, "offset: must not be negative");
-  }
-  v1::Job job;
-  bool found = false;
-  // The id becomes part of a path below; only ids we could have made pass.
-  if (!IsWellFormedJobId(id)) return JobNotFound(kRpc, id);
-  if (grpc::Status loaded = LoadVisibleJob(kRpc, caller, id, JobView::kBasic, &job); !loaded.ok()) {
-    return loaded;
-  }
-  Status status;
-  if (job.state() != v1::Job::SUCCEEDED) {
-    std::string message =
-        "job " + id + " is " + v1::Job::State_Name(job.state()) + ", not SUCCEEDED";
-    if (!job.error().empty()) message += ": " + job.error();
-    return Error(kRpc, grpc::StatusCode::FAILED_PRECONDITION, message);
-  }
-  const std::string name = request->file().empty() ? kDefaultResultFile : request->file();
-  // Only names recorded in result_files are served; those come from a
-  // directory listing, so they are plain file names, never paths.
-  v1::ResultFile file;
-  status = store_.GetResultFile(id, name, &file, &found);
-  if (!status.ok()) return StoreError(kRpc, status);
-  if (!found || name.find('/') != std::string::npos || name == "." || name == "..") {
-    return Error(kRpc, grpc::StatusCode::NOT_FOUND, "job " + id + " has no result file " + name);
-  }
-  const int64_t size = file.size_bytes();
-  if (request->offset() > size) {
-    return Error(kRpc, grpc::StatusCode::OUT_OF_RANGE,
-                 "offset " + std::to_string(request->offset()) + " is past the end of " + name +
-                     " (" + std::to_string(size) + " bytes)");
-  }
-  const fs::path path = data_dir_ / "jobs" / id / "result" / name;
-  std::error_code ec;
-  const auto disk_size = fs::file_size(path, ec);
-  if (ec || static_cast<int64_t>(disk_size) != size) {
-    return Error(kRpc, grpc::StatusCode::DATA_LOSS,
-                 "result file " + path.string() + " is missing or changed since the job ended");
-  }
-  std::ifstream in(path, std::ios::binary);
-  if (!in || !in.seekg(request->offset())) {
-    return Error(kRpc, grpc::StatusCode::INTERNAL, "cannot read " + path.string());
-  }
+  return Handle(users_, kRpc, *context, [&](const Caller& caller) -> RpcStatus {
+    const std::string& id = request->job_id();
+    if (id.empty()) return Status::InvalidArgument("job_id", "required");
+    if (request->offset() < 0) {
+      // INVALID_ARGUMENT as ever: a Status on the field "offset" would be
+      // OUT_OF_RANGE (handler.h).
+      return grpc::Status(grpc::StatusCode::INVALID_ARGUMENT, "offset: must not be negative");
+    }
+    // The id becomes part of a path below; only ids we could have made pass.
+    if (!IsWellFormedJobId(id)) return JobNotFound(id);
+    v1::Job job;
+    PBA_RETURN_IF_ERROR(LoadVisibleJob(kRpc, caller, id, JobView::kBasic, &job));
+    if (job.state() != v1::Job::SUCCEEDED) {
+      std::string message =
+          "job " + id + " is " + v1::Job::State_Name(job.state()) + ", not SUCCEEDED";
+      if (!job.error().empty()) message += ": " + job.error();
+      return Status::FailedPrecondition(message);
+    }
+    const std::string name = request->file().empty() ? kDefaultResultFile : request->file();
+    // Only names recorded in result_files are served; those come from a
+    // directory listing, so they are plain file names, never paths.
+    v1::ResultFile file;
+    bool found = false;
+    PBA_RETURN_IF_ERROR(store_.GetResultFile(id, name, &file, &found));
+    if (!found || name.find('/') != std::string::npos || name == "." || name == "..") {
+      return Status::NotFound("job " + id + " has no result file " + name);
+    }
+    const int64_t size = file.size_bytes();
+    if (request->offset() > size) {
+      return grpc::Status(grpc::StatusCode::OUT_OF_RANGE,
+                          "offset " + std::to_string(request->offset()) + " is past the end of " +
+                              name + " (" + std::to_string(size) + " bytes)");
+    }
+    const fs::path path = data_dir_ / "jobs" / id / "result" / name;
+    std::error_code ec;
+    const auto disk_size = fs::file_size(path, ec);
+    if (ec || static_cast<int64_t>(disk_size) != size) {
+      return grpc::Status(
+          grpc::StatusCode::DATA_LOSS,
+          "result file " + path.string() + " is missing or changed since the job ended");
+    }
+    std::ifstream in(path, std::ios::binary);
+    if (!in || !in.seekg(request->offset()))
+      return Status::Internal("cannot read " + path.string());
 
-  int64_t offset = request->offset();
-  v1::DataChunk chunk;
-  chunk.set_total_size(size);
-  std::string buffer(kChunkBytes, '\0');
-  // One chunk even at the end of the file, so the client learns total_size.
-  do {
-    if (context->IsCancelled()) return grpc::Status(grpc::StatusCode::CANCELLED, "cancelled");
-    const int64_t want = std::min<int64_t>(kChunkBytes, size - offset);
-    in.read(buffer.data(), want);
-    if (in.gcount() != want) {
-      return Error(kRpc, grpc::StatusCode::INTERNAL, "cannot read " + path.string());
-    }
-    chunk.set_offset(offset);
-    chunk.set_data(buffer.data(), static_cast<size_t>(want));
-    if (!writer->Write(chunk)) {
-      return grpc::Status(grpc::StatusCode::CANCELLED, "the client went away");
-    }
-    offset += want;
-  } while (offset < size);
-  return grpc::Status::OK;
+    int64_t offset = request->offset();
+    v1::DataChunk chunk;
+    chunk.set_total_size(size);
+    std::string buffer(kChunkBytes, '\0');
+    // One chunk even at the end of the file, so the client learns total_size.
+    do {
+      if (context->IsCancelled()) {
+        return RpcStatus::StreamEnded(grpc::StatusCode::CANCELLED, "cancelled");
+      }
+      const int64_t want = std::min<int64_t>(kChunkBytes, size - offset);
+      in.read(buffer.data(), want);
+      if (in.gcount() != want) return Status::Internal("cannot read " + path.string());
+      chunk.set_offset(offset);
+      chunk.set_data(buffer.data(), static_cast<size_t>(want));
+      if (!writer->Write(chunk)) {
+        return RpcStatus::StreamEnded(grpc::StatusCode::CANCELLED, "the client went away");
+      }
+      offset += want;
+    } while (offset < size);
+    return Status::Ok();
+  });
 }
 
 }  // namespace pba

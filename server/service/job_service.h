@@ -1,6 +1,7 @@
-// JobServiceImpl: the pba.v1.JobService handlers. Each one validates its
-// request, translates it into a JobStore / JobExecutor call and returns; the
-// work itself happens in the executor's workers.
+// JobServiceImpl: the pba.v1.JobService handlers. Each one runs through
+// Handle (handler.h: authentication, the status mapping, the log line),
+// validates its request, translates it into a JobStore / JobExecutor call
+// and returns; the work itself happens in the executor's workers.
 //
 // Every call is authenticated (call_auth.h). Who sees a job (job.proto):
 // a job on a project of the atlas store (against one of its snapshots, or
@@ -32,6 +33,7 @@
 #include "jobs/job_event_hub.h"
 #include "jobs/job_executor.h"
 #include "pba/v1/job.grpc.pb.h"
+#include "service/call_auth.h"
 #include "service/stream_slots.h"
 #include "store/atlas_store.h"
 #include "store/job_store.h"
@@ -74,18 +76,12 @@ class JobServiceImpl final : public v1::JobService::Service {
  private:
   // Replaces the stored phase/progress of a running job by the live one.
   void OverlayLive(v1::Job* job) const;
-  struct Caller {
-    std::string user;
-    bool server_admin = false;
-  };
-  // The caller, or UNAUTHENTICATED (logged).
-  grpc::Status Authenticate(const char* rpc, const grpc::ServerContext& context, Caller* caller);
   // Whether `caller` may see `job` (loaded with at least JobView::kBasic).
   Status MaySee(const Caller& caller, const v1::Job& job, bool* visible);
-  // Loads job `id` if `caller` may see it; NOT_FOUND (logged) otherwise,
-  // the same for a job that does not exist.
-  grpc::Status LoadVisibleJob(const char* rpc, const Caller& caller, const std::string& id,
-                              JobView view, v1::Job* job);
+  // Loads job `id` if `caller` may see it; kNotFound otherwise, the same
+  // for a job that does not exist (a hidden one is logged for `rpc`).
+  Status LoadVisibleJob(const char* rpc, const Caller& caller, const std::string& id, JobView view,
+                        v1::Job* job);
 
   // The submit's checks beyond the scene: snapshot, import, priority, time
   // limit; *job gets what they resolve to.

@@ -9,18 +9,9 @@
 #include "atlas/structure_overlap.h"
 
 namespace pba {
-namespace {
-
-StructureFormat ToStructureFormat(GeometryFormat format) {
-  StructureFormat out = StructureFormat::kContours;
-  ParseStructureFormat(GeometryFormatName(format), &out);
-  return out;
-}
-
-}  // namespace
 
 Status CheckLockedNeighbours(AtlasStore& store, const std::string& user, const StructureRef& ref,
-                             GeometryFormat format, const std::filesystem::path& file,
+                             StructureFormat format, const std::filesystem::path& file,
                              const ChildLimits& limits) {
   std::vector<LockedNeighbour> neighbours;
   PBA_RETURN_IF_ERROR(store.LockedNeighbours(user, ref.project, ref.structure, &neighbours));
@@ -33,8 +24,7 @@ Status CheckLockedNeighbours(AtlasStore& store, const std::string& user, const S
     for (const LockedNeighbour& n : neighbours) {
       OverlapMeasure m;
       const Status measured =
-          MeasureOverlap({ToStructureFormat(format), file},
-                         {ToStructureFormat(n.head.format), n.blob}, kOverlapVoxelMm, &m);
+          MeasureOverlap({format, file}, {n.head.format, n.blob}, kOverlapVoxelMm, &m);
       if (!measured.ok()) {
         *skipped += n.head.structure + ": " + measured.ToString() + "\n";
         continue;

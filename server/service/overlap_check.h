@@ -24,7 +24,7 @@ inline constexpr double kOverlapTolerance = 0.01;
 // measuring runs in a child process under `limits` (bounded_child.h); past
 // them the answer is kFailedPrecondition saying which limit.
 Status CheckLockedNeighbours(AtlasStore& store, const std::string& user, const StructureRef& ref,
-                             GeometryFormat format, const std::filesystem::path& file,
+                             StructureFormat format, const std::filesystem::path& file,
                              const ChildLimits& limits = {});
 
 }  // namespace pba

@@ -8,18 +8,19 @@
 // a link or a directory holding anything pba-solve does not write. The
 // server runs each job into a fresh folder.
 //
-// Exit codes: 0 success; 2 invalid scene or command line; 3 the solve broke
-// down or the scene cannot be solved as posed; 4 I/O error; 5 cancelled
-// (SIGTERM/SIGINT); 1 internal error.
+// Exit codes: the table pba, pba-solve and pba-atlas share (core/exit_codes.h,
+// docs/cli.md "Exit codes"): 0 success; 2 bad command line; 5 invalid scene;
+// 11 the solve broke down or the scene cannot be solved as posed; 13 I/O
+// error; 7 cancelled (SIGTERM/SIGINT); 1 internal error.
 //
 // Cancel: SIGTERM or SIGINT sets the flag the solver looks at (assembly,
 // every conjugate-gradient and Newton iteration, explicit steps, dynamic
 // relaxation), so a cancelled solve normally ends with its own "cancelled
 // during ..." error. Some phases cannot look: a CHOLMOD or Eigen
 // factorisation, CGAL's mesh refinement of an atlas, a library writing a
-// file. A watchdog therefore ends the process with exit code 5 kCancelGrace
-// after the signal if it is still running, so a cancel never waits for
-// the server's SIGKILL. Nothing is lost that was kept: results reach --out
+// file. A watchdog therefore ends the process with exit code 7 (cancelled)
+// kCancelGrace after the signal if it is still running, so a cancel never
+// waits for the server's SIGKILL. Nothing is lost that was kept: results reach --out
 // only by the staging directory's final rename.
 //
 // The two signals are blocked in every thread and taken by the watchdog
@@ -57,6 +58,7 @@
 #include "codec/summary_text.h"
 #include "codec/yaml_codec.h"
 #include "convert/convert.h"
+#include "core/exit_codes.h"
 #include "pba/solve.h"
 #include "pba/v1/scene.pb.h"
 #include "pba/v1/solve_event.pb.h"
@@ -64,15 +66,6 @@
 
 namespace pba {
 namespace {
-
-enum ExitCode {
-  kExitOk = 0,
-  kExitInternal = 1,
-  kExitInvalid = 2,
-  kExitNumerical = 3,
-  kExitIo = 4,
-  kExitCancelled = 5,
-};
 
 std::atomic<bool> g_cancel{false};
 static_assert(std::atomic<bool>::is_always_lock_free, "the signal handler needs a lock-free flag");
@@ -180,7 +173,7 @@ class Reporter {
       out.set_message(status.ToString());
       Emit(out);
     }
-    return ExitFor(status.code());
+    return ExitCodeForStatus(status.code(), kExitNumerical);
   }
 
  private:
@@ -198,22 +191,6 @@ class Reporter {
         return "CANCELLED";
       default:
         return "INTERNAL";
-    }
-  }
-
-  static int ExitFor(Status::Code code) {
-    switch (code) {
-      case Status::Code::kInvalidArgument:
-        return kExitInvalid;
-      case Status::Code::kFailedPrecondition:
-      case Status::Code::kNumerical:
-        return kExitNumerical;
-      case Status::Code::kIo:
-        return kExitIo;
-      case Status::Code::kCancelled:
-        return kExitCancelled;
-      default:
-        return kExitInternal;
     }
   }
 
@@ -444,7 +421,9 @@ int main(int argc, char** argv) {
                  "Progress on stdout: json (one pba.v1.SolveEvent per line), text, none, or auto "
                  "(text on a terminal, json otherwise)")
       ->check(CLI::IsMember({"auto", "json", "text", "none"}));
-  app.add_option("--threads", threads, "Worker threads; 0 uses every core")
+  app.add_option("--threads", threads,
+                 "Threads the solve may use, its libraries' (CHOLMOD, OpenBLAS) included; 0 "
+                 "uses every core")
       ->check(CLI::NonNegativeNumber);
   pba::AtlasCacheFlags cache;
   app.add_option("--atlas-cache", cache.dir,
@@ -469,7 +448,7 @@ int main(int argc, char** argv) {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     const int code = app.exit(e);
-    return code == 0 ? 0 : pba::kExitInvalid;
+    return code == 0 ? pba::kExitOk : pba::kExitUsage;
   }
 
   std::signal(SIGTERM, pba::OnSignal);
@@ -487,22 +466,22 @@ int main(int argc, char** argv) {
     if (!import.kind.empty()) {
       if (!scene_path.empty() || out_dir.empty()) {
         std::fprintf(stderr, "pba-solve: --import-atlas takes --out DIR and no scene\n");
-        return pba::kExitInvalid;
+        return pba::kExitUsage;
       }
       return pba::RunImport(import, out_dir, force, mode);
     }
     if (scene_path.empty()) {
       std::fprintf(stderr, "pba-solve: a scene file is required\n");
-      return pba::kExitInvalid;
+      return pba::kExitUsage;
     }
     if (out_dir.empty() && inp_path.empty()) {
       std::fprintf(stderr,
                    "pba-solve: --out DIR is required (or --export-inp FILE to export only)\n");
-      return pba::kExitInvalid;
+      return pba::kExitUsage;
     }
     return pba::Run(scene_path, out_dir, force, inp_path, mode, threads, cache, checkpoint);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "pba-solve: internal error: %s\n", e.what());
-    return pba::kExitInternal;
+    return pba::kExitError;
   }
 }

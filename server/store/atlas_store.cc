@@ -52,7 +52,7 @@ void ReadRevisionRow(const Statement& stmt, const StructureRef& ref, Revision* r
   revision->kind = stmt.ColumnText(4);
   revision->message = stmt.ColumnText(5);
   revision->content_sha256 = stmt.ColumnText(6);
-  ParseGeometryFormat(stmt.ColumnText(7), &revision->format);
+  ParseStructureFormat(stmt.ColumnText(7), &revision->format);
   revision->size_bytes = stmt.ColumnInt(8);
   revision->metadata.material_json = stmt.ColumnText(9);
   revision->metadata.colour = {static_cast<int>(stmt.ColumnInt(10)),
@@ -205,7 +205,7 @@ Status AtlasStore::AppendRevision(const Caller& caller, const StructureRef& ref,
     stmt.Bind(3, structure.head_id);
   }
   stmt.Bind(4, caller.user).Bind(5, clock_()).Bind(6, kind).Bind(7, message);
-  stmt.Bind(8, content.sha256).Bind(9, GeometryFormatName(content.format));
+  stmt.Bind(8, content.sha256).Bind(9, StructureFormatName(content.format));
   stmt.Bind(10, content.size_bytes).Bind(11, content.metadata.material_json);
   stmt.Bind(12, int64_t{content.metadata.colour.r})
       .Bind(13, int64_t{content.metadata.colour.g})
@@ -234,7 +234,7 @@ Status AtlasStore::AppendRevision(const Caller& caller, const StructureRef& ref,
   stmt = Statement();
   PBA_RETURN_IF_ERROR(Audit(
       caller.user, caller.project, action, StructureTarget(ref), id,
-      "revision " + std::to_string(number) + " (" + GeometryFormatName(content.format) + ", " +
+      "revision " + std::to_string(number) + " (" + StructureFormatName(content.format) + ", " +
           std::to_string(content.size_bytes) + " bytes, " + content.sha256.substr(0, 12) + ")"));
   bool found = false;
   PBA_RETURN_IF_ERROR(ReadRevision(ref, structure.id, number, revision, &found));

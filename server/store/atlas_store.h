@@ -83,7 +83,7 @@ using MicrosClock = std::function<int64_t()>;
 struct ImportedStructure {
   std::string name;
   StructureMetadata metadata;
-  GeometryFormat format = GeometryFormat::kContoursJson;
+  StructureFormat format = StructureFormat::kContours;
   std::filesystem::path file;  // its geometry, already checked
 };
 
@@ -105,7 +105,7 @@ struct CommitRequest {
   StructureRef structure;
   std::string lock_id;
   int64_t base_revision = 0;
-  GeometryFormat format = GeometryFormat::kContoursJson;
+  StructureFormat format = StructureFormat::kContours;
   std::string_view geometry;
   // When set, `geometry` is this file's content (a verified upload), and the
   // file becomes the blob by rename instead of being copied
@@ -127,7 +127,7 @@ struct CommitRequest {
 struct NewStructure {
   StructureRef structure;
   StructureMetadata metadata;
-  GeometryFormat format = GeometryFormat::kContoursJson;
+  StructureFormat format = StructureFormat::kContours;
   std::string_view geometry;
   const MappedFile* geometry_file = nullptr;
   std::string message;     // the revision's ("created" when empty)
@@ -208,7 +208,7 @@ class AtlasStore {
   // Creates a structure with revision 1 holding `geometry`; `message` is the
   // revision's ("created" when empty).
   Status CreateStructure(const std::string& user, const StructureRef& ref,
-                         const StructureMetadata& metadata, GeometryFormat format,
+                         const StructureMetadata& metadata, StructureFormat format,
                          std::string_view geometry, Revision* revision,
                          const std::string& message = "");
   // The same with a request id and a geometry file (NewStructure).
@@ -355,7 +355,7 @@ class AtlasStore {
   // A revision's stored content, for building the next one.
   struct Content {
     std::string sha256;
-    GeometryFormat format = GeometryFormat::kContoursJson;
+    StructureFormat format = StructureFormat::kContours;
     int64_t size_bytes = 0;
     StructureMetadata metadata;
   };

@@ -19,7 +19,7 @@ using atlas_internal::Quoted;
 std::string StructureFingerprint(const NewStructure& request) {
   const StructureMetadata& m = request.metadata;
   return CreateFingerprint({request.structure.project, request.structure.structure,
-                            GeometryFormatName(request.format), std::to_string(m.colour.r),
+                            StructureFormatName(request.format), std::to_string(m.colour.r),
                             std::to_string(m.colour.g), std::to_string(m.colour.b), m.group_path,
                             m.material_json, request.message});
 }
@@ -136,7 +136,7 @@ Status AtlasStore::CreateProject(const std::string& user, const std::string& pro
 // --- structures ------------------------------------------------------------
 
 Status AtlasStore::CreateStructure(const std::string& user, const StructureRef& ref,
-                                   const StructureMetadata& metadata, GeometryFormat format,
+                                   const StructureMetadata& metadata, StructureFormat format,
                                    std::string_view geometry, Revision* revision,
                                    const std::string& message) {
   NewStructure request;

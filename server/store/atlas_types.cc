@@ -184,33 +184,6 @@ bool ParseRole(std::string_view name, Role* role) {
   return false;
 }
 
-const char* GeometryFormatName(GeometryFormat format) {
-  switch (format) {
-    case GeometryFormat::kContoursJson:
-      return "contours_json";
-    case GeometryFormat::kNifti:
-      return "nifti";
-    case GeometryFormat::kStl:
-      return "stl";
-    case GeometryFormat::kObj:
-      return "obj";
-    case GeometryFormat::kVtk:
-      return "vtk";
-  }
-  return "contours_json";
-}
-
-bool ParseGeometryFormat(std::string_view name, GeometryFormat* format) {
-  for (GeometryFormat f : {GeometryFormat::kContoursJson, GeometryFormat::kNifti,
-                           GeometryFormat::kStl, GeometryFormat::kObj, GeometryFormat::kVtk}) {
-    if (name == GeometryFormatName(f)) {
-      *format = f;
-      return true;
-    }
-  }
-  return false;
-}
-
 Status CheckName(std::string_view field, std::string_view name) {
   const std::string f(field);
   if (name.empty()) return Status::InvalidArgument(f, "must not be empty");

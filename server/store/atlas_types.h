@@ -12,6 +12,7 @@
 #include <string_view>
 #include <vector>
 
+#include "atlas/structure_format.h"
 #include "pba/status.h"
 
 namespace pba {
@@ -21,10 +22,8 @@ enum class Role { kViewer = 0, kEditor = 1, kAdmin = 2 };
 const char* RoleName(Role role);
 bool ParseRole(std::string_view name, Role* role);
 
-enum class GeometryFormat { kContoursJson, kNifti, kStl, kObj, kVtk };
-// "contours_json", "nifti", "stl", "obj", "vtk": the names stored in pba.db.
-const char* GeometryFormatName(GeometryFormat format);
-bool ParseGeometryFormat(std::string_view name, GeometryFormat* format);
+// A revision's geometry format is the solver's StructureFormat: its names
+// ("contours_json", "nifti", "stl", "obj", "vtk") are what pba.db stores.
 
 // Display colour, sRGB components 0..255.
 struct Colour {
@@ -64,7 +63,7 @@ struct Revision {
   std::string kind;     // "create", "commit", "metadata" or "revert"
   std::string message;
   std::string content_sha256;  // the geometry blob
-  GeometryFormat format = GeometryFormat::kContoursJson;
+  StructureFormat format = StructureFormat::kContours;
   int64_t size_bytes = 0;  // of the geometry blob
   StructureMetadata metadata;
 };

@@ -1,8 +1,8 @@
 #include "store/migrations.h"
 
 #include <chrono>
+#include <iterator>
 #include <string>
-#include <vector>
 
 #include "store/transaction.h"
 
@@ -18,9 +18,9 @@ struct Migration {
 // Job states are stored by their pba.v1.Job.State names so that the file
 // reads well in the sqlite3 shell. Times are microseconds since the Unix
 // epoch (UTC). `number` orders jobs by creation, independent of the clock.
-const std::vector<Migration>& Migrations() {
-  static const std::vector<Migration> kMigrations = {
-      {1, "jobs, job events and result files", R"sql(
+// Applied in this order; the last entry's version is LatestSchemaVersion().
+constexpr Migration kMigrations[] = {
+    {1, "jobs, job events and result files", R"sql(
 CREATE TABLE jobs (
   number INTEGER PRIMARY KEY AUTOINCREMENT,
   id TEXT NOT NULL UNIQUE,
@@ -56,16 +56,16 @@ CREATE TABLE result_files (
   PRIMARY KEY (job_id, name)
 ) WITHOUT ROWID;
 )sql"},
-      // The atlas store. Rows are keyed by integer ids; names are unique where
-      // clients address by them. Revisions, snapshots and the audit log are
-      // append-only (triggers refuse UPDATE and DELETE), so history cannot be
-      // rewritten even by a buggy caller. Metadata (colour, group, material)
-      // is versioned in the revisions beside the geometry, so a snapshot pins
-      // the material a job used; structures keep only the head pointer and the
-      // metadata etag. The composite foreign keys tie a revision to its own
-      // structure wherever a (revision, structure) pair is stored.
-      {2, "atlas store: users, projects, members, structures, revisions, locks, snapshots, audit",
-       R"sql(
+    // The atlas store. Rows are keyed by integer ids; names are unique where
+    // clients address by them. Revisions, snapshots and the audit log are
+    // append-only (triggers refuse UPDATE and DELETE), so history cannot be
+    // rewritten even by a buggy caller. Metadata (colour, group, material)
+    // is versioned in the revisions beside the geometry, so a snapshot pins
+    // the material a job used; structures keep only the head pointer and the
+    // metadata etag. The composite foreign keys tie a revision to its own
+    // structure wherever a (revision, structure) pair is stored.
+    {2, "atlas store: users, projects, members, structures, revisions, locks, snapshots, audit",
+     R"sql(
 CREATE TABLE users (
   id INTEGER PRIMARY KEY,
   name TEXT NOT NULL UNIQUE,
@@ -206,28 +206,28 @@ BEGIN
   SELECT RAISE(ABORT, 'the audit log is append-only');
 END;
 )sql"},
-      // Jobs carry the user who submitted them: only they may cancel one.
-      // Jobs stored before have no owner ('').
-      {3, "jobs: the submitting user", R"sql(
+    // Jobs carry the user who submitted them: only they may cancel one.
+    // Jobs stored before have no owner ('').
+    {3, "jobs: the submitting user", R"sql(
 ALTER TABLE jobs ADD COLUMN owner TEXT NOT NULL DEFAULT '';
 )sql"},
-      // A commit may carry the client's request id, so that a commit retried
-      // after a lost reply finds the revision it made instead of failing on
-      // the moved head (per structure; NULL for revisions without one).
-      {4, "structure revisions: the committing request's id", R"sql(
+    // A commit may carry the client's request id, so that a commit retried
+    // after a lost reply finds the revision it made instead of failing on
+    // the moved head (per structure; NULL for revisions without one).
+    {4, "structure revisions: the committing request's id", R"sql(
 ALTER TABLE structure_revisions ADD COLUMN request_id TEXT;
 CREATE UNIQUE INDEX structure_revisions_by_request
   ON structure_revisions (structure, request_id) WHERE request_id IS NOT NULL;
 )sql"},
-      // Creates (projects, structures, snapshots) may carry the client's
-      // request id too, so that a create retried after a lost reply returns
-      // what the first one made instead of ALREADY_EXISTS or a second
-      // snapshot. Keys are per user (another user's key never collides) and
-      // shared by the three kinds. arguments_sha256 fingerprints the
-      // request's arguments (CreateFingerprint, atlas_store_internal.h), so
-      // a key reused for different arguments is told apart from a retry.
-      // Append-only, as the rows they point at are.
-      {5, "creates: the creating request's id", R"sql(
+    // Creates (projects, structures, snapshots) may carry the client's
+    // request id too, so that a create retried after a lost reply returns
+    // what the first one made instead of ALREADY_EXISTS or a second
+    // snapshot. Keys are per user (another user's key never collides) and
+    // shared by the three kinds. arguments_sha256 fingerprints the
+    // request's arguments (CreateFingerprint, atlas_store_internal.h), so
+    // a key reused for different arguments is told apart from a retry.
+    // Append-only, as the rows they point at are.
+    {5, "creates: the creating request's id", R"sql(
 CREATE TABLE create_requests (
   user INTEGER NOT NULL REFERENCES users (id),
   request_id TEXT NOT NULL CHECK (length(request_id) BETWEEN 1 AND 200),
@@ -250,11 +250,11 @@ BEGIN
   SELECT RAISE(ABORT, 'create requests are never deleted');
 END;
 )sql"},
-      // Jobs: a priority (the queue runs the highest first), a wall-clock
-      // limit, the atlas snapshot a job ran against (or an import made), and
-      // an import's request. A snapshot made by an import names its job, so
-      // that an import finished again after a crash finds what it made.
-      {6, "jobs: priority, time limit, snapshot, atlas import", R"sql(
+    // Jobs: a priority (the queue runs the highest first), a wall-clock
+    // limit, the atlas snapshot a job ran against (or an import made), and
+    // an import's request. A snapshot made by an import names its job, so
+    // that an import finished again after a crash finds what it made.
+    {6, "jobs: priority, time limit, snapshot, atlas import", R"sql(
 ALTER TABLE jobs ADD COLUMN priority INTEGER NOT NULL DEFAULT 0;
 ALTER TABLE jobs ADD COLUMN timeout_s INTEGER NOT NULL DEFAULT 0;
 ALTER TABLE jobs ADD COLUMN snapshot_project TEXT NOT NULL DEFAULT '';
@@ -265,14 +265,14 @@ ALTER TABLE snapshots ADD COLUMN import_job TEXT;
 CREATE UNIQUE INDEX snapshots_by_import_job ON snapshots (import_job)
   WHERE import_job IS NOT NULL;
 )sql"},
-      // Trust boundaries (issue 18). Server admins see and cancel every
-      // job; the user "admin" a first start created is one (a first start
-      // makes no other name). A job's project (the snapshot's, or the one
-      // an import goes into) decides who sees it, so ListJobs can filter
-      // and page in SQL: an import's project is in its request blob, which
-      // SQL cannot read, but its name was made "import into <project>" by
-      // the submit (JobStore::CreateJob), so that fills older rows.
-      {7, "users: server admins; jobs: the project they belong to", R"sql(
+    // Trust boundaries (issue 18). Server admins see and cancel every
+    // job; the user "admin" a first start created is one (a first start
+    // makes no other name). A job's project (the snapshot's, or the one
+    // an import goes into) decides who sees it, so ListJobs can filter
+    // and page in SQL: an import's project is in its request blob, which
+    // SQL cannot read, but its name was made "import into <project>" by
+    // the submit (JobStore::CreateJob), so that fills older rows.
+    {7, "users: server admins; jobs: the project they belong to", R"sql(
 ALTER TABLE users ADD COLUMN server_admin INTEGER NOT NULL DEFAULT 0
   CHECK (server_admin IN (0, 1));
 UPDATE users SET server_admin = 1 WHERE name = 'admin';
@@ -282,9 +282,7 @@ UPDATE jobs SET project = substr(name, 13)
   WHERE project = '' AND atlas_import IS NOT NULL AND name LIKE 'import into %';
 CREATE INDEX jobs_by_project ON jobs (project, number);
 )sql"},
-  };
-  return kMigrations;
-}
+};
 
 int64_t NowMicros() {
   return std::chrono::duration_cast<std::chrono::microseconds>(
@@ -294,7 +292,7 @@ int64_t NowMicros() {
 
 }  // namespace
 
-int LatestSchemaVersion() { return Migrations().back().version; }
+int LatestSchemaVersion() { return kMigrations[std::size(kMigrations) - 1].version; }
 
 Status ReadSchemaVersion(Database& db, int* version) {
   Statement stmt;
@@ -317,7 +315,7 @@ Status ApplyMigrations(Database& db) {
                                       std::to_string(LatestSchemaVersion()) +
                                       "; use a newer pba-server");
   }
-  for (const Migration& migration : Migrations()) {
+  for (const Migration& migration : kMigrations) {
     if (migration.version <= current) continue;
     Transaction transaction(db);
     PBA_RETURN_IF_ERROR(transaction.status());

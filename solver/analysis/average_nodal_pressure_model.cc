@@ -73,11 +73,6 @@ Eigen::Matrix3d Skew(const Eigen::Vector3d& w) {
   return s;
 }
 
-// Below this many elements the passes run on one thread: starting a team
-// and its barriers would cost more than the work (a Newton solve on a small
-// mesh makes thousands of passes).
-constexpr int kParallelFrom = 2000;
-
 // One element at a state.
 struct ElementState {
   Eigen::Matrix3d f;
@@ -143,12 +138,15 @@ ScalarDerivatives GroupVolumetric(const MaterialField& field, const NodalGroups&
 
 class NodalPressureModel final : public FiniteStrainModel {
  public:
-  NodalPressureModel(const Mesh& mesh, const MaterialField& field,
+  // The passes run on `threads`, and on the calling thread below
+  // kMinParallelWork elements.
+  NodalPressureModel(const Mesh& mesh, const MaterialField& field, const ThreadContext& threads,
                      std::unique_ptr<MaterialField> owned = nullptr)
       : mesh_(mesh),
         owned_(std::move(owned)),
         field_(owned_ ? *owned_ : field),
-        parallel_(mesh.num_elements() >= kParallelFrom) {
+        threads_(threads),
+        parallel_(threads.Parallel(mesh.num_elements())) {
     const int ne = mesh.num_elements(), nn = mesh.num_nodes();
     geometry_.reserve(ne);
     reference_volume_.reserve(ne);
@@ -179,7 +177,7 @@ class NodalPressureModel final : public FiniteStrainModel {
 
     // Patch of a: the nodes of the elements around a (a included), sorted.
     std::vector<std::vector<int>> rows(nn);
-#pragma omp parallel for schedule(static) if (parallel_)
+#pragma omp parallel for schedule(static) num_threads(threads_.threads()) if (parallel_)
     for (int a = 0; a < nn; ++a) {
       for (int e : elements_of[a]) {
         rows[a].insert(rows[a].end(), mesh.tets[e].begin(), mesh.tets[e].end());
@@ -201,7 +199,7 @@ class NodalPressureModel final : public FiniteStrainModel {
 
     // Column c of K couples with every node of the patch of every node in
     // c's patch (the support of the g_a g_a^T terms that involve c).
-#pragma omp parallel for schedule(static) if (parallel_)
+#pragma omp parallel for schedule(static) num_threads(threads_.threads()) if (parallel_)
     for (int c = 0; c < nn; ++c) {
       std::vector<int> wide;
       for (int m = patch_.begin(c); m < patch_.end(c); ++m) {
@@ -217,14 +215,14 @@ class NodalPressureModel final : public FiniteStrainModel {
 
     // Lookups for the numeric passes, so they need no searching.
     patch_transpose_.resize(patch_.index.size());
-#pragma omp parallel for schedule(static) if (parallel_)
+#pragma omp parallel for schedule(static) num_threads(threads_.threads()) if (parallel_)
     for (int c = 0; c < nn; ++c) {
       for (int m = patch_.begin(c); m < patch_.end(c); ++m) {
         patch_transpose_[m] = patch_.Find(patch_.index[m], c);
       }
     }
     incidence_patch_.resize(4 * incidence_.index.size());
-#pragma omp parallel for schedule(static) if (parallel_)
+#pragma omp parallel for schedule(static) num_threads(threads_.threads()) if (parallel_)
     for (int a = 0; a < nn; ++a) {
       for (int t = incidence_.begin(a); t < incidence_.end(a); ++t) {
         const auto& tet = mesh.tets[incidence_.index[t]];
@@ -232,7 +230,7 @@ class NodalPressureModel final : public FiniteStrainModel {
       }
     }
     element_block_.resize(16 * static_cast<std::size_t>(ne));
-#pragma omp parallel for schedule(static) if (parallel_)
+#pragma omp parallel for schedule(static) num_threads(threads_.threads()) if (parallel_)
     for (int e = 0; e < ne; ++e) {
       const auto& tet = mesh.tets[e];
       for (int i = 0; i < 4; ++i) {
@@ -279,7 +277,11 @@ class NodalPressureModel final : public FiniteStrainModel {
     state->elements.resize(ne);
     if (with_tangent) state->tangents.resize(ne);
     int bad = ne;
-#pragma omp parallel for schedule(static) if (parallel_) reduction(min : bad)
+    // clang-format splits "min : bad" across the continuation.
+    // clang-format off
+#pragma omp parallel for schedule(static) reduction(min : bad) \
+    num_threads(threads_.threads()) if (parallel_)
+    // clang-format on
     for (int e = 0; e < ne; ++e) {
       const Tet4Geometry& g = geometry_[e];
       ElementState& s = state->elements[e];
@@ -323,7 +325,7 @@ class NodalPressureModel final : public FiniteStrainModel {
     const NodalGroups& groups = *groups_;
     state->nodal.assign(groups.size(), ScalarDerivatives());
     double energy = 0;
-#pragma omp parallel for schedule(static) if (parallel_) reduction(+ : energy)
+#pragma omp parallel for schedule(static) num_threads(threads_.threads()) if (parallel_) reduction(+ : energy)
     for (int a = 0; a < nn; ++a) {
       for (int g = groups.of_node.begin(a); g < groups.of_node.end(a); ++g) {
         const int group = groups.of_node.index[g];
@@ -336,7 +338,7 @@ class NodalPressureModel final : public FiniteStrainModel {
       }
     }
 
-#pragma omp parallel for schedule(static) if (parallel_) reduction(+ : energy)
+#pragma omp parallel for schedule(static) num_threads(threads_.threads()) if (parallel_) reduction(+ : energy)
     for (int e = 0; e < ne; ++e) {
       ElementState& s = state->elements[e];
       energy += s.iso_energy;
@@ -362,7 +364,7 @@ class NodalPressureModel final : public FiniteStrainModel {
   // Full internal force, node by node (a gather: no two threads write one entry).
   void GatherForce(const State& state, Eigen::VectorXd* force) const {
     const int nn = mesh_.num_nodes();
-#pragma omp parallel for schedule(static) if (parallel_)
+#pragma omp parallel for schedule(static) num_threads(threads_.threads()) if (parallel_)
     for (int a = 0; a < nn; ++a) {
       Eigen::Vector3d f = Eigen::Vector3d::Zero();
       for (int t = incidence_.begin(a); t < incidence_.end(a); ++t) {
@@ -384,7 +386,7 @@ class NodalPressureModel final : public FiniteStrainModel {
     // patch at group_patch_[g] + m - patch_.begin(a).
     std::vector<Eigen::Vector3d> g(group_patch_.back());
     std::vector<double> weight(groups.size(), 0.0);
-#pragma omp parallel for schedule(static) if (parallel_)
+#pragma omp parallel for schedule(static) num_threads(threads_.threads()) if (parallel_)
     for (int a = 0; a < nn; ++a) {
       for (int q = groups.of_node.begin(a); q < groups.of_node.end(a); ++q) {
         const int group = groups.of_node.index[q];
@@ -402,7 +404,7 @@ class NodalPressureModel final : public FiniteStrainModel {
     }
 
     std::vector<Eigen::Matrix3d> blocks(wide_.index.size());
-#pragma omp parallel for schedule(static) if (parallel_)
+#pragma omp parallel for schedule(static) num_threads(threads_.threads()) if (parallel_)
     for (int c = 0; c < nn; ++c) {
       for (int k = wide_.begin(c); k < wide_.end(c); ++k) blocks[k].setZero();
       for (int t = incidence_.begin(c); t < incidence_.end(c); ++t) {
@@ -442,7 +444,7 @@ class NodalPressureModel final : public FiniteStrainModel {
     // Free unknowns are numbered in dof order, so walking nodes and rows in
     // ascending order yields sorted columns with sorted row indices.
     std::vector<int> outer(nf + 1, 0);
-#pragma omp parallel for schedule(static) if (parallel_)
+#pragma omp parallel for schedule(static) num_threads(threads_.threads()) if (parallel_)
     for (int c = 0; c < nn; ++c) {
       int count = 0;
       for (int k = wide_.begin(c); k < wide_.end(c); ++k) count += free_of_node[wide_.index[k]];
@@ -459,7 +461,7 @@ class NodalPressureModel final : public FiniteStrainModel {
     std::copy(outer.begin(), outer.end(), k.outerIndexPtr());
     int* inner = k.innerIndexPtr();
     double* values = k.valuePtr();
-#pragma omp parallel for schedule(static) if (parallel_)
+#pragma omp parallel for schedule(static) num_threads(threads_.threads()) if (parallel_)
     for (int c = 0; c < nn; ++c) {
       for (int q = 0; q < 3; ++q) {
         const int j = dofs.free_index(3 * c + q);
@@ -479,7 +481,7 @@ class NodalPressureModel final : public FiniteStrainModel {
     }
 
     system->rhs.resize(nf);
-#pragma omp parallel for schedule(static) if (parallel_)
+#pragma omp parallel for schedule(static) num_threads(threads_.threads()) if (parallel_)
     for (int b = 0; b < nn; ++b) {
       for (int r = 0; r < 3; ++r) {
         const int i = dofs.free_index(3 * b + r);
@@ -506,7 +508,8 @@ class NodalPressureModel final : public FiniteStrainModel {
   const Mesh& mesh_;
   std::unique_ptr<MaterialField> owned_;  // a uniform field made for one material
   const MaterialField& field_;
-  const bool parallel_;  // use OpenMP threads
+  const ThreadContext threads_;
+  const bool parallel_;  // threads_.Parallel(elements)
   std::vector<Tet4Geometry> geometry_;
   std::vector<double> reference_volume_;  // V_e
   std::unique_ptr<NodalGroups> groups_;   // the nodal volumetric constraints
@@ -532,12 +535,13 @@ std::unique_ptr<FiniteStrainModel> MakeAverageNodalPressureTet4Model(
     const Mesh& mesh, const HyperelasticMaterial& material) {
   auto field = MaterialField::Uniform(material, mesh.num_elements());
   const MaterialField& view = *field;
-  return std::make_unique<NodalPressureModel>(mesh, view, std::move(field));
+  return std::make_unique<NodalPressureModel>(mesh, view, ThreadContext(), std::move(field));
 }
 
 std::unique_ptr<FiniteStrainModel> MakeAverageNodalPressureTet4Model(const Mesh& mesh,
-                                                                     const MaterialField& field) {
-  return std::make_unique<NodalPressureModel>(mesh, field);
+                                                                     const MaterialField& field,
+                                                                     const ThreadContext& threads) {
+  return std::make_unique<NodalPressureModel>(mesh, field, threads);
 }
 
 void AverageNodalPressures(const Mesh& mesh, const MaterialField& field, const Eigen::VectorXd& u,

@@ -18,7 +18,7 @@
 #include <vector>
 
 #include "analysis/finite_strain_model.h"
-#include "analysis/material_field.h"
+#include "material/material_field.h"
 
 namespace pba {
 
@@ -26,7 +26,7 @@ namespace pba {
 std::unique_ptr<FiniteStrainModel> MakeAverageNodalPressureTet4Model(
     const Mesh& mesh, const HyperelasticMaterial& material);
 
-// With a material per element (analysis/material_field.h), which must
+// With a material per element (material/material_field.h), which must
 // outlive the model; its current step is read at every evaluation. A node
 // shared by elements of different materials has one volumetric constraint
 // per material, over that material's elements around it (the pressure
@@ -34,8 +34,8 @@ std::unique_ptr<FiniteStrainModel> MakeAverageNodalPressureTet4Model(
 // the incompressible tissue around it):
 //   Pi_vol = sum_a sum_m V_am U_m(v_am / V_am),
 //   V_am, v_am = sum over the elements e ∋ a of material m of V_e / 4, v_e / 4.
-std::unique_ptr<FiniteStrainModel> MakeAverageNodalPressureTet4Model(const Mesh& mesh,
-                                                                     const MaterialField& field);
+std::unique_ptr<FiniteStrainModel> MakeAverageNodalPressureTet4Model(
+    const Mesh& mesh, const MaterialField& field, const ThreadContext& threads = ThreadContext());
 
 // Each element's pressure and volume ratio at `u` as the model sees them:
 // the means over its corners of U_m'(J_am) and of J_am = v_am / V_am, m the

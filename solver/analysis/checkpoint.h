@@ -14,10 +14,10 @@
 #include <string>
 #include <vector>
 
-#include "analysis/material_field.h"
 #include "analysis/newton_static.h"
 #include "analysis/rigid_contact.h"
 #include "assembly/dof_map.h"
+#include "material/material_field.h"
 #include "mesh/mesh.h"
 #include "pba/solve.h"
 #include "pba/status.h"

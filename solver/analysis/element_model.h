@@ -27,36 +27,33 @@
 #include <vector>
 
 #include "analysis/finite_strain_model.h"
-#include "analysis/material_field.h"
 #include "material/hyperelastic.h"
+#include "material/material_field.h"
 
 namespace pba {
 
 template <typename Element>
 class ElementModel final : public FiniteStrainModel {
  public:
-  // Below this many elements the passes run on one thread: a Newton solve
-  // on a small mesh makes many passes, and starting a team would cost more
-  // than the work.
-  static constexpr int kParallelFrom = 256;
-
   // `field` gives each element's material (only its base: these elements
   // keep no history, see MaterialField); `owned` is a field made for the
-  // model, else `field` must outlive it.
+  // model, else `field` must outlive it. The passes run on `threads`, and
+  // on the calling thread below kMinParallelWork elements.
   ElementModel(const Mesh& mesh, const MaterialField& field, Element element,
-               std::unique_ptr<MaterialField> owned = nullptr)
+               const ThreadContext& threads, std::unique_ptr<MaterialField> owned = nullptr)
       : mesh_(mesh),
         owned_(std::move(owned)),
         field_(owned_ ? *owned_ : field),
         element_(element),
-        parallel_(mesh.num_elements() >= kParallelFrom),
+        threads_(threads),
+        parallel_(threads.Parallel(mesh.num_elements())),
         colours_(ColourElements(mesh)) {
     if (mesh.num_elements() > 0 && !Element::Fits(mesh)) {
       std::fprintf(stderr, "pba: %s\n", Element::Requirement());
       std::abort();
     }
     geometry_.resize(mesh.num_elements());
-#pragma omp parallel for schedule(static) if (parallel_)
+#pragma omp parallel for schedule(static) num_threads(threads_.threads()) if (parallel_)
     for (int e = 0; e < mesh.num_elements(); ++e) {
       geometry_[e] = Element::ComputeGeometry(mesh, e);
     }
@@ -68,7 +65,8 @@ class ElementModel final : public FiniteStrainModel {
     bool ok = true;
     double total = 0;
     for (const auto& colour : colours_) {
-#pragma omp parallel for schedule(static) if (parallel_) reduction(&& : ok) reduction(+ : total)
+#pragma omp parallel for schedule(static) num_threads(threads_.threads()) if (parallel_) \
+    reduction(&& : ok) reduction(+ : total)
       for (std::size_t k = 0; k < colour.size(); ++k) {
         const int e = colour[k];
         typename Element::Result r;
@@ -100,8 +98,10 @@ class ElementModel final : public FiniteStrainModel {
       *f = -r.force;
       return true;
     };
+    AssemblyOptions threaded = options;
+    threaded.threads = threads_;
     const Status status = Element::AssembleSystem(
-        mesh_, dofs, colours_, kernel, options, [](double) { return true; }, system);
+        mesh_, dofs, colours_, kernel, threaded, [](double) { return true; }, system);
     if (status.code() != Status::Code::kNumerical) return status;
     // The assembly stops at whichever failing element a thread met first;
     // the message names the lowest one.
@@ -125,7 +125,11 @@ class ElementModel final : public FiniteStrainModel {
   int LowestInverted(const Eigen::VectorXd& u) const {
     const int ne = mesh_.num_elements();
     int lowest = ne;
-#pragma omp parallel for schedule(static) if (parallel_) reduction(min : lowest)
+    // clang-format splits "min : lowest" across the continuation.
+    // clang-format off
+#pragma omp parallel for schedule(static) reduction(min : lowest) \
+    num_threads(threads_.threads()) if (parallel_)
+    // clang-format on
     for (int e = 0; e < ne; ++e) {
       const auto& g = geometry_[e];
       bool bad = !(g.min_jacobian > 0);
@@ -146,7 +150,8 @@ class ElementModel final : public FiniteStrainModel {
   std::unique_ptr<MaterialField> owned_;
   const MaterialField& field_;
   const Element element_;
-  const bool parallel_;  // use OpenMP threads
+  const ThreadContext threads_;
+  const bool parallel_;  // threads_.Parallel(elements)
   std::vector<std::vector<int>> colours_;
   std::vector<typename Element::Geometry> geometry_;
 };
@@ -158,7 +163,8 @@ std::unique_ptr<FiniteStrainModel> MakeElementModel(const Mesh& mesh,
                                                     Element element) {
   auto field = MaterialField::Uniform(material, mesh.num_elements());
   const MaterialField& view = *field;
-  return std::make_unique<ElementModel<Element>>(mesh, view, element, std::move(field));
+  return std::make_unique<ElementModel<Element>>(mesh, view, element, ThreadContext(),
+                                                 std::move(field));
 }
 
 }  // namespace pba

@@ -97,7 +97,8 @@ std::vector<RegionError> ErrorByRegion(const Mesh& mesh, const ErrorEstimateResu
 
 ErrorEstimateResult EstimateZzError(const Mesh& mesh, const std::vector<double>& stress,
                                     const std::vector<double>& volume,
-                                    const ElasticityField& elasticity) {
+                                    const ElasticityField& elasticity,
+                                    const ThreadContext& threads) {
   const int ne = mesh.num_elements();
   // Volume-weighted averages at each node, within each material. Serial: a
   // scatter, and cheap next to the solve.
@@ -120,7 +121,8 @@ ErrorEstimateResult EstimateZzError(const Mesh& mesh, const std::vector<double>&
   constexpr double kAlpha = 0.5854101966249685, kBeta = 0.1381966011250105;
   std::vector<double> eta2(ne, 0.0), u2(ne, 0.0);
   double error2 = 0, energy2 = 0;
-#pragma omp parallel for reduction(+ : error2, energy2) schedule(static)
+#pragma omp parallel for reduction(+ : error2, energy2) schedule(static) \
+    num_threads(threads.threads()) if (threads.Parallel(ne))
   for (int e = 0; e < ne; ++e) {
     const Eigen::Map<const Vector6d> sh(&stress[6 * e]);
     double sum = 0;
@@ -150,7 +152,8 @@ namespace {
 //   `xi` and `weight`; Jacobian(mesh, e, xi) -> det J.
 template <typename Element>
 ErrorEstimateResult EstimateZzRecovered(const Mesh& mesh, const ElementStress& stress,
-                                        const ElasticityField& elasticity) {
+                                        const ElasticityField& elasticity,
+                                        const ThreadContext& threads) {
   constexpr int kN = Element::kNodes;
   const int ne = mesh.num_elements();
   // The stresses each element gives at its nodes, computed in parallel, then
@@ -158,7 +161,7 @@ ErrorEstimateResult EstimateZzRecovered(const Mesh& mesh, const ElementStress& s
   // cheap next to the solve).
   std::vector<Eigen::Matrix<double, kN, 6>> at_nodes(ne);
   std::vector<double> volume(ne, 0.0);
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) num_threads(threads.threads()) if (threads.Parallel(ne))
   for (int e = 0; e < ne; ++e) {
     for (const auto& q : Element::Rule()) volume[e] += q.weight * Element::Jacobian(mesh, e, q.xi);
     for (int a = 0; a < kN; ++a) at_nodes[e].row(a) = stress(e, Element::NodeXi(a)).transpose();
@@ -180,7 +183,8 @@ ErrorEstimateResult EstimateZzRecovered(const Mesh& mesh, const ElementStress& s
 
   std::vector<double> eta2(ne, 0.0), u2(ne, 0.0);
   double error2 = 0, energy2 = 0;
-#pragma omp parallel for reduction(+ : error2, energy2) schedule(static)
+#pragma omp parallel for reduction(+ : error2, energy2) schedule(static) \
+    num_threads(threads.threads()) if (threads.Parallel(ne))
   for (int e = 0; e < ne; ++e) {
     const auto nodes = Element::Nodes(mesh, e);
     double sum = 0, energy = 0;
@@ -241,13 +245,15 @@ struct Hex8Traits {
 }  // namespace
 
 ErrorEstimateResult EstimateZzErrorTet10(const Mesh& mesh, const ElementStress& stress,
-                                         const ElasticityField& elasticity) {
-  return EstimateZzRecovered<Tet10Traits>(mesh, stress, elasticity);
+                                         const ElasticityField& elasticity,
+                                         const ThreadContext& threads) {
+  return EstimateZzRecovered<Tet10Traits>(mesh, stress, elasticity, threads);
 }
 
 ErrorEstimateResult EstimateZzErrorHex8(const Mesh& mesh, const ElementStress& stress,
-                                        const ElasticityField& elasticity) {
-  return EstimateZzRecovered<Hex8Traits>(mesh, stress, elasticity);
+                                        const ElasticityField& elasticity,
+                                        const ThreadContext& threads) {
+  return EstimateZzRecovered<Hex8Traits>(mesh, stress, elasticity, threads);
 }
 
 }  // namespace pba

@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "core/thread_context.h"
 #include "fem/tet4.h"
 #include "material/linear_elastic.h"
 #include "mesh/mesh.h"
@@ -43,10 +44,12 @@ std::vector<RegionError> ErrorByRegion(const Mesh& mesh, const ErrorEstimateResu
 
 // `stress` is elements x 6 (Voigt), `volume` per element [m^3]; each
 // element's error and energy are measured with its own material's
-// compliance, `elasticity.Compliance(e)`.
+// compliance, `elasticity.Compliance(e)`. The estimates run on `threads`
+// (the solve's).
 ErrorEstimateResult EstimateZzError(const Mesh& mesh, const std::vector<double>& stress,
                                     const std::vector<double>& volume,
-                                    const ElasticityField& elasticity);
+                                    const ElasticityField& elasticity,
+                                    const ThreadContext& threads = ThreadContext());
 
 // The same estimate for 10-node tetrahedra (a quadratic mesh), whose stress
 // varies within the element: `stress(e, xi)` is the finite-element stress
@@ -57,12 +60,14 @@ ErrorEstimateResult EstimateZzError(const Mesh& mesh, const std::vector<double>&
 // `stress` is called concurrently.
 using ElementStress = std::function<Vector6d(int element, const Eigen::Vector3d& xi)>;
 ErrorEstimateResult EstimateZzErrorTet10(const Mesh& mesh, const ElementStress& stress,
-                                         const ElasticityField& elasticity);
+                                         const ElasticityField& elasticity,
+                                         const ThreadContext& threads = ThreadContext());
 
 // The same for 8-node hexahedra (a hexahedral mesh): nodal averages at the
 // 8 corners, trilinear interpolation, the 2 x 2 x 2 rule; `stress(e, xi)`
 // with xi in [-1, 1]^3 (fem/hex8.h).
 ErrorEstimateResult EstimateZzErrorHex8(const Mesh& mesh, const ElementStress& stress,
-                                        const ElasticityField& elasticity);
+                                        const ElasticityField& elasticity,
+                                        const ThreadContext& threads = ThreadContext());
 
 }  // namespace pba

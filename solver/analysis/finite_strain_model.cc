@@ -1,19 +1,20 @@
 #include "analysis/finite_strain_model.h"
 
-#include "analysis/material_field.h"
 #include "fem/tet4_finite_strain.h"
 #include "material/hyperelastic.h"
+#include "material/material_field.h"
 
 namespace pba {
 namespace {
 
 class Tet4Model final : public FiniteStrainModel {
  public:
-  Tet4Model(const Mesh& mesh, const MaterialField& field,
+  Tet4Model(const Mesh& mesh, const MaterialField& field, const ThreadContext& threads,
             std::unique_ptr<MaterialField> owned = nullptr)
       : mesh_(mesh),
         owned_(std::move(owned)),
         field_(owned_ ? *owned_ : field),
+        threads_(threads),
         colours_(ColourElements(mesh)) {
     geometry_.reserve(mesh.num_elements());
     for (int e = 0; e < mesh.num_elements(); ++e) {
@@ -29,8 +30,8 @@ class Tet4Model final : public FiniteStrainModel {
     for (const auto& colour : colours_) {
       // A colour too small to repay starting a team runs on one thread (a
       // Newton solve on a small mesh evaluates the force thousands of times).
-#pragma omp parallel for schedule(static) reduction(&& : ok) reduction(+ : total) \
-    if (colour.size() >= 64)
+#pragma omp parallel for schedule(static) num_threads(threads_.threads()) \
+    reduction(&& : ok) reduction(+ : total) if (threads_.Parallel(colour.size()))
       for (std::size_t k = 0; k < colour.size(); ++k) {
         const int e = colour[k];
         Tet4FiniteStrainResult r;
@@ -59,8 +60,10 @@ class Tet4Model final : public FiniteStrainModel {
       *f = -r.force;
       return true;
     };
+    AssemblyOptions threaded = options;
+    threaded.threads = threads_;
     return AssembleSystem(
-        mesh_, dofs, colours_, kernel, options, [](double) { return true; }, system);
+        mesh_, dofs, colours_, kernel, threaded, [](double) { return true; }, system);
   }
 
   std::string Describe() const override { return "TET4, total Lagrangian"; }
@@ -69,6 +72,7 @@ class Tet4Model final : public FiniteStrainModel {
   const Mesh& mesh_;
   std::unique_ptr<MaterialField> owned_;  // a uniform field made for one material
   const MaterialField& field_;
+  const ThreadContext threads_;
   std::vector<std::vector<int>> colours_;
   std::vector<Tet4Geometry> geometry_;
 };
@@ -79,17 +83,19 @@ std::unique_ptr<FiniteStrainModel> MakeTet4Model(const Mesh& mesh,
                                                  const HyperelasticMaterial& material) {
   auto field = MaterialField::Uniform(material, mesh.num_elements());
   const MaterialField& view = *field;
-  return std::make_unique<Tet4Model>(mesh, view, std::move(field));
+  return std::make_unique<Tet4Model>(mesh, view, ThreadContext(), std::move(field));
 }
 
-std::unique_ptr<FiniteStrainModel> MakeTet4Model(const Mesh& mesh, const MaterialField& field) {
-  return std::make_unique<Tet4Model>(mesh, field);
+std::unique_ptr<FiniteStrainModel> MakeTet4Model(const Mesh& mesh, const MaterialField& field,
+                                                 const ThreadContext& threads) {
+  return std::make_unique<Tet4Model>(mesh, field, threads);
 }
 
-std::vector<Eigen::Matrix3d> ElementDeformationGradients(const Mesh& mesh,
-                                                         const Eigen::VectorXd& u) {
+std::vector<Eigen::Matrix3d> ElementDeformationGradients(const Mesh& mesh, const Eigen::VectorXd& u,
+                                                         const ThreadContext& threads) {
   std::vector<Eigen::Matrix3d> f(mesh.num_elements());
-#pragma omp parallel for schedule(static) if (mesh.num_elements() >= 2000)
+#pragma omp parallel for schedule(static) \
+    num_threads(threads.threads()) if (threads.Parallel(mesh.num_elements()))
   for (int e = 0; e < mesh.num_elements(); ++e) {
     f[e] = DeformationGradient(ComputeTet4Geometry(TetCorners(mesh, e)), GatherElement(mesh, e, u));
   }

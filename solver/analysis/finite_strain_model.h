@@ -11,6 +11,7 @@
 
 #include "assembly/assembler.h"
 #include "assembly/dof_map.h"
+#include "core/thread_context.h"
 #include "mesh/mesh.h"
 #include "pba/status.h"
 
@@ -46,12 +47,14 @@ class FiniteStrainModel {
 std::unique_ptr<FiniteStrainModel> MakeTet4Model(const Mesh& mesh,
                                                  const HyperelasticMaterial& material);
 // With a material per element, read in its current step at every
-// evaluation; `field` must outlive the model.
-std::unique_ptr<FiniteStrainModel> MakeTet4Model(const Mesh& mesh, const MaterialField& field);
+// evaluation; `field` must outlive the model. The models' passes run on
+// `threads` (the solve's; the default, every thread OpenMP gives).
+std::unique_ptr<FiniteStrainModel> MakeTet4Model(const Mesh& mesh, const MaterialField& field,
+                                                 const ThreadContext& threads = ThreadContext());
 
 // The deformation gradient of every 4-node element at `u` (one point each),
 // e.g. for MaterialField::Commit.
-std::vector<Eigen::Matrix3d> ElementDeformationGradients(const Mesh& mesh,
-                                                         const Eigen::VectorXd& u);
+std::vector<Eigen::Matrix3d> ElementDeformationGradients(
+    const Mesh& mesh, const Eigen::VectorXd& u, const ThreadContext& threads = ThreadContext());
 
 }  // namespace pba

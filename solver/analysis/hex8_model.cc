@@ -56,8 +56,9 @@ std::unique_ptr<FiniteStrainModel> MakeHex8Model(const Mesh& mesh,
   return MakeElementModel(mesh, material, Hex8Element{false});
 }
 
-std::unique_ptr<FiniteStrainModel> MakeHex8Model(const Mesh& mesh, const MaterialField& field) {
-  return std::make_unique<ElementModel<Hex8Element>>(mesh, field, Hex8Element{false});
+std::unique_ptr<FiniteStrainModel> MakeHex8Model(const Mesh& mesh, const MaterialField& field,
+                                                 const ThreadContext& threads) {
+  return std::make_unique<ElementModel<Hex8Element>>(mesh, field, Hex8Element{false}, threads);
 }
 
 std::unique_ptr<FiniteStrainModel> MakeHex8FullModel(const Mesh& mesh,
@@ -65,8 +66,9 @@ std::unique_ptr<FiniteStrainModel> MakeHex8FullModel(const Mesh& mesh,
   return MakeElementModel(mesh, material, Hex8Element{true});
 }
 
-std::unique_ptr<FiniteStrainModel> MakeHex8FullModel(const Mesh& mesh, const MaterialField& field) {
-  return std::make_unique<ElementModel<Hex8Element>>(mesh, field, Hex8Element{true});
+std::unique_ptr<FiniteStrainModel> MakeHex8FullModel(const Mesh& mesh, const MaterialField& field,
+                                                     const ThreadContext& threads) {
+  return std::make_unique<ElementModel<Hex8Element>>(mesh, field, Hex8Element{true}, threads);
 }
 
 }  // namespace pba

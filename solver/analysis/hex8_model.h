@@ -22,11 +22,13 @@ namespace pba {
 // node order [m, N]. `mesh` and `material` must outlive the model.
 std::unique_ptr<FiniteStrainModel> MakeHex8Model(const Mesh& mesh,
                                                  const HyperelasticMaterial& material);
-std::unique_ptr<FiniteStrainModel> MakeHex8Model(const Mesh& mesh, const MaterialField& field);
+std::unique_ptr<FiniteStrainModel> MakeHex8Model(const Mesh& mesh, const MaterialField& field,
+                                                 const ThreadContext& threads = ThreadContext());
 
 // The fully integrated brick, on the same terms as MakeHex8Model.
 std::unique_ptr<FiniteStrainModel> MakeHex8FullModel(const Mesh& mesh,
                                                      const HyperelasticMaterial& material);
-std::unique_ptr<FiniteStrainModel> MakeHex8FullModel(const Mesh& mesh, const MaterialField& field);
+std::unique_ptr<FiniteStrainModel> MakeHex8FullModel(
+    const Mesh& mesh, const MaterialField& field, const ThreadContext& threads = ThreadContext());
 
 }  // namespace pba

@@ -59,192 +59,260 @@ ElementRecovery RecoverElement(const std::array<int, N>& nodes,
   return r;
 }
 
-}  // namespace
+// One LINEAR_STATIC solve in its steps, each one or two phases of the
+// clock; what a step makes is kept here for the next one.
+class LinearStaticRun {
+ public:
+  LinearStaticRun(const Problem& problem, PhaseClock* clock, Solution* solution)
+      : problem_(problem),
+        clock_(*clock),
+        solution_(*solution),
+        summary_(solution->summary),
+        mesh_(problem.model.mesh),
+        dofs_(problem.model.dofs),
+        elasticity_(MakeElasticityField(problem.model.materials)),
+        full_bricks_(problem.element == ElementType::kHex8Full) {}
 
-Status SolveLinearStatic(const Problem& problem, PhaseClock* clock_ptr, Solution* solution,
-                         StaticResult* result) {
-  PhaseClock& clock = *clock_ptr;
-  const Model& model = problem.model;
-  Summary& summary = solution->summary;
-  const Mesh& mesh = model.mesh;
-  const DofMap& dofs = model.dofs;
-  auto cancelled = [&] {
-    return Status::Cancelled("cancelled during " + summary.phases.back().phase);
-  };
+  // K_ff and f_f - K_fp u_p, the external loads added.
+  Status Assemble();
+  // u_f, then releases the matrix and the solver.
+  Status Solve();
+  // Element strain, stress and energy, and the internal force.
+  void Recover();
+  void EstimateError();
+  // The summary's analysis, notes and solver, and `result`.
+  void Finish(StaticResult* result);
+
+ private:
+  Status Cancelled() const {
+    return Status::Cancelled("cancelled during " + summary_.phases.back().phase);
+  }
+  // Element e's fields from u_, its internal force added to `internal`.
+  ElementRecovery RecoverOne(int e, Eigen::VectorXd* internal) const;
+
+  const Problem& problem_;
+  PhaseClock& clock_;
+  Solution& solution_;
+  Summary& summary_;
+  const Mesh& mesh_;
+  const DofMap& dofs_;
   // Each element's own material, in the global frame (an orthotropic
   // material's axes already applied).
-  const ElasticityField elasticity = MakeElasticityField(model.materials);
-  clock.Begin("assemble", 0.05, 0.25,
-              Format("assembling %d elements, %d unknowns", mesh.num_elements(), dofs.num_free()));
-  const auto colours = ColourElements(mesh);
-  LinearSystem system;
+  const ElasticityField elasticity_;
   // Bricks with the plain B (full integration) instead of B-bar.
-  const bool full_bricks = problem.element == ElementType::kHex8Full;
+  const bool full_bricks_;
+
+  std::vector<std::vector<int>> colours_;
+  LinearSystem system_;
+  Eigen::VectorXd external_;
+  std::string solver_name_;
+  Eigen::VectorXd u_free_;
+  double residual_ = 0;
+  Eigen::VectorXd u_, internal_;
+  std::vector<double> volume_;
+  double energy_ = 0, max_strain_ = 0;
+};
+
+Status LinearStaticRun::Assemble() {
+  clock_.Begin(
+      "assemble", 0.05, 0.25,
+      Format("assembling %d elements, %d unknowns", mesh_.num_elements(), dofs_.num_free()));
+  colours_ = ColourElements(mesh_);
   const auto keep_going = [&](double f) {
-    clock.Update(f);
-    return !clock.cancelled();
+    clock_.Update(f);
+    return !clock_.cancelled();
   };
+  const ThreadContext& threads = problem_.threads;
   PBA_RETURN_IF_ERROR(
-      mesh.quadratic()
-          ? AssembleLinearSystemTet10(mesh, elasticity, dofs, colours, keep_going, &system)
-      : full_bricks
-          ? AssembleLinearSystemHex8Full(mesh, elasticity, dofs, colours, keep_going, &system)
-      : mesh.hexahedral()
-          ? AssembleLinearSystemHex8(mesh, elasticity, dofs, colours, keep_going, &system)
-          : AssembleLinearSystem(mesh, elasticity, dofs, colours, keep_going, &system));
-  const ExternalLoads loads = BuildLoads(problem);
-  Eigen::VectorXd external;
+      mesh_.quadratic() ? AssembleLinearSystemTet10(mesh_, elasticity_, dofs_, colours_, keep_going,
+                                                    &system_, threads)
+      : full_bricks_ ? AssembleLinearSystemHex8Full(mesh_, elasticity_, dofs_, colours_, keep_going,
+                                                    &system_, threads)
+      : mesh_.hexahedral() ? AssembleLinearSystemHex8(mesh_, elasticity_, dofs_, colours_,
+                                                      keep_going, &system_, threads)
+                           : AssembleLinearSystem(mesh_, elasticity_, dofs_, colours_, keep_going,
+                                                  &system_, threads));
+  const ExternalLoads loads = BuildLoads(problem_);
   if (!loads.empty()) {
-    external = loads.Force(Eigen::VectorXd::Zero(dofs.num_dofs()));
-    for (int dof = 0; dof < dofs.num_dofs(); ++dof) {
-      const int f = dofs.free_index(dof);
-      if (f >= 0) system.rhs(f) += external(dof);
+    external_ = loads.Force(Eigen::VectorXd::Zero(dofs_.num_dofs()));
+    for (int dof = 0; dof < dofs_.num_dofs(); ++dof) {
+      const int f = dofs_.free_index(dof);
+      if (f >= 0) system_.rhs(f) += external_(dof);
     }
     const Eigen::Vector3d total = loads.ReferenceResultant();
-    summary.notes.push_back(
+    summary_.notes.push_back(
         Format("applied loads: resultant (%.6g, %.6g, %.6g) N", total.x(), total.y(), total.z()));
   }
-  clock.End();
+  clock_.End();
+  return Status::Ok();
+}
 
+Status LinearStaticRun::Solve() {
   // PCG looks at the cancel flag every iteration (a direct factorisation cannot).
-  LinearSolverOptions linear_solver = problem.linear_solver;
-  linear_solver.cancel = clock.options().cancel;
+  LinearSolverOptions linear_solver = problem_.linear_solver;
+  linear_solver.cancel = clock_.options().cancel;
   auto solver = CreateLinearSolver(linear_solver);
-  Eigen::VectorXd u_free;
-  double residual = 0;
-  if (dofs.num_free() > 0) {
-    clock.Begin("factorize", 0.25, 0.75,
-                Format("%s of %d unknowns, %lld stored entries", solver->Name().c_str(),
-                       dofs.num_free(), static_cast<long long>(system.k.nonZeros())));
-    PBA_RETURN_IF_ERROR(solver->Factorize(system.k));
-    clock.End();
-    if (clock.cancelled()) return cancelled();
-    clock.Begin("solve", 0.75, 0.8, "forward and back substitution");
-    PBA_RETURN_IF_ERROR(solver->Solve(system.rhs, &u_free));
-    const double scale = system.rhs.norm();
-    residual = (system.k * u_free - system.rhs).norm() / (scale > 0 ? scale : 1.0);
-    clock.End();
+  if (dofs_.num_free() > 0) {
+    clock_.Begin("factorize", 0.25, 0.75,
+                 Format("%s of %d unknowns, %lld stored entries", solver->Name().c_str(),
+                        dofs_.num_free(), static_cast<long long>(system_.k.nonZeros())));
+    PBA_RETURN_IF_ERROR(solver->Factorize(system_.k));
+    clock_.End();
+    if (clock_.cancelled()) return Cancelled();
+    clock_.Begin("solve", 0.75, 0.8, "forward and back substitution");
+    PBA_RETURN_IF_ERROR(solver->Solve(system_.rhs, &u_free_));
+    const double scale = system_.rhs.norm();
+    residual_ = (system_.k * u_free_ - system_.rhs).norm() / (scale > 0 ? scale : 1.0);
+    clock_.End();
   }
   // Recovery needs neither the matrix nor its factorisation, only the
   // solver's name (for the summary): both are released here rather than
   // held through recovery and the error estimate.
-  const std::string solver_name = solver->Name();
+  solver_name_ = solver->Name();
   solver.reset();
-  system = LinearSystem();
-  if (clock.cancelled()) return cancelled();
+  system_ = LinearSystem();
+  if (clock_.cancelled()) return Cancelled();
+  return Status::Ok();
+}
 
-  clock.Begin("recover", 0.8, 0.9, "element strain and stress, reactions");
-  Eigen::VectorXd u(dofs.num_dofs());
-  for (int dof = 0; dof < dofs.num_dofs(); ++dof) {
-    u(dof) = dofs.prescribed(dof) ? dofs.prescribed_value(dof) : u_free(dofs.free_index(dof));
+ElementRecovery LinearStaticRun::RecoverOne(int e, Eigen::VectorXd* internal) const {
+  if (mesh_.quadratic()) {
+    const Tet10Geometry g = ComputeTet10Geometry(Tet10Coordinates(mesh_, e));
+    return RecoverElement<10>(
+        Tet10NodeIndices(mesh_, e), GatherElementTet10(mesh_, e, u_), 4,
+        [&](int q, double* dv) {
+          *dv = g.volume[q];
+          return Tet10StrainDisplacement(g.grad[q]);
+        },
+        elasticity_.D(e), internal);
   }
-  const int ne = mesh.num_elements();
-  solution->strain.resize(6 * static_cast<std::size_t>(ne));
-  solution->stress_pa.resize(6 * static_cast<std::size_t>(ne));
-  solution->von_mises_pa.resize(ne);
+  if (mesh_.hexahedral()) {
+    const Hex8Geometry g = ComputeHex8Geometry(Hex8Coordinates(mesh_, e));
+    return RecoverElement<8>(
+        mesh_.hexes[e], GatherElementHex8(mesh_, e, u_), 8,
+        [&](int q, double* dv) {
+          *dv = g.volume[q];
+          return full_bricks_ ? Hex8StrainDisplacement(g.grad[q])
+                              : Hex8StrainDisplacementBar(g.grad[q], g.mean_grad);
+        },
+        elasticity_.D(e), internal);
+  }
+  const Tet4Geometry g = ComputeTet4Geometry(TetCorners(mesh_, e));
+  return RecoverElement<4>(
+      mesh_.tets[e], GatherElement(mesh_, e, u_), 1,
+      [&](int, double* dv) {
+        *dv = g.volume;
+        return StrainDisplacement(g);
+      },
+      elasticity_.D(e), internal);
+}
+
+void LinearStaticRun::Recover() {
+  clock_.Begin("recover", 0.8, 0.9, "element strain and stress, reactions");
+  u_.resize(dofs_.num_dofs());
+  for (int dof = 0; dof < dofs_.num_dofs(); ++dof) {
+    u_(dof) = dofs_.prescribed(dof) ? dofs_.prescribed_value(dof) : u_free_(dofs_.free_index(dof));
+  }
+  const int ne = mesh_.num_elements();
+  solution_.strain.resize(6 * static_cast<std::size_t>(ne));
+  solution_.stress_pa.resize(6 * static_cast<std::size_t>(ne));
+  solution_.von_mises_pa.resize(ne);
   std::vector<double> volume(ne);
-  Eigen::VectorXd internal = Eigen::VectorXd::Zero(dofs.num_dofs());
-  double energy = 0, max_strain = 0;
-  for (const auto& colour : colours) {
-#pragma omp parallel for reduction(+ : energy) reduction(max : max_strain) schedule(static)
+  Eigen::VectorXd internal = Eigen::VectorXd::Zero(dofs_.num_dofs());
+  double energy = 0, max_strain = 0;  // locals: OpenMP reduces variables, not members
+  for (const auto& colour : colours_) {
+#pragma omp parallel for reduction(+ : energy) reduction(max : max_strain) schedule(static) \
+    num_threads(problem_.threads.threads()) if (problem_.threads.Parallel(colour.size()))
     for (std::size_t k = 0; k < colour.size(); ++k) {
       const int e = colour[k];
-      ElementRecovery r;
-      if (mesh.quadratic()) {
-        const Tet10Geometry g = ComputeTet10Geometry(Tet10Coordinates(mesh, e));
-        r = RecoverElement<10>(
-            Tet10NodeIndices(mesh, e), GatherElementTet10(mesh, e, u), 4,
-            [&](int q, double* dv) {
-              *dv = g.volume[q];
-              return Tet10StrainDisplacement(g.grad[q]);
-            },
-            elasticity.D(e), &internal);
-      } else if (mesh.hexahedral()) {
-        const Hex8Geometry g = ComputeHex8Geometry(Hex8Coordinates(mesh, e));
-        r = RecoverElement<8>(
-            mesh.hexes[e], GatherElementHex8(mesh, e, u), 8,
-            [&](int q, double* dv) {
-              *dv = g.volume[q];
-              return full_bricks ? Hex8StrainDisplacement(g.grad[q])
-                                 : Hex8StrainDisplacementBar(g.grad[q], g.mean_grad);
-            },
-            elasticity.D(e), &internal);
-      } else {
-        const Tet4Geometry g = ComputeTet4Geometry(TetCorners(mesh, e));
-        r = RecoverElement<4>(
-            mesh.tets[e], GatherElement(mesh, e, u), 1,
-            [&](int, double* dv) {
-              *dv = g.volume;
-              return StrainDisplacement(g);
-            },
-            elasticity.D(e), &internal);
-      }
-      Eigen::Map<Vector6d>(&solution->strain[6 * e]) = r.strain;
-      Eigen::Map<Vector6d>(&solution->stress_pa[6 * e]) = r.stress;
-      solution->von_mises_pa[e] = VonMises(r.stress);
+      const ElementRecovery r = RecoverOne(e, &internal);
+      Eigen::Map<Vector6d>(&solution_.strain[6 * e]) = r.strain;
+      Eigen::Map<Vector6d>(&solution_.stress_pa[6 * e]) = r.stress;
+      solution_.von_mises_pa[e] = VonMises(r.stress);
       volume[e] = r.volume;
       energy += r.energy;
       max_strain = std::max(max_strain, r.max_strain);
     }
   }
-  clock.End();
+  volume_ = std::move(volume);
+  internal_ = std::move(internal);
+  energy_ = energy;
+  max_strain_ = max_strain;
+  clock_.End();
+}
 
-  clock.Begin("estimate", 0.9, 0.95, "Zienkiewicz-Zhu error estimate");
+void LinearStaticRun::EstimateError() {
+  clock_.Begin("estimate", 0.9, 0.95, "Zienkiewicz-Zhu error estimate");
   const ErrorEstimateResult estimate =
-      mesh.quadratic()
+      mesh_.quadratic()
           ? EstimateZzErrorTet10(
-                mesh,
+                mesh_,
                 [&](int e, const Eigen::Vector3d& xi) -> Vector6d {
-                  return elasticity.D(e) *
-                         Tet10Strain(Tet10Coordinates(mesh, e), GatherElementTet10(mesh, e, u), xi);
+                  return elasticity_.D(e) * Tet10Strain(Tet10Coordinates(mesh_, e),
+                                                        GatherElementTet10(mesh_, e, u_), xi);
                 },
-                elasticity)
-      : mesh.hexahedral() ? EstimateZzErrorHex8(
-                                mesh,
-                                [&](int e, const Eigen::Vector3d& xi) -> Vector6d {
-                                  const Hex8Nodes x = Hex8Coordinates(mesh, e);
-                                  const Vector24d ue = GatherElementHex8(mesh, e, u);
-                                  return elasticity.D(e) * (full_bricks ? Hex8StrainFull(x, ue, xi)
-                                                                        : Hex8Strain(x, ue, xi));
-                                },
-                                elasticity)
-                          : EstimateZzError(mesh, solution->stress_pa, volume, elasticity);
-  solution->error_indicator = estimate.element_share;
-  summary.error.estimated = true;
-  summary.error.method =
-      mesh.quadratic()    ? "Zienkiewicz-Zhu stress recovery (nodal averaging, quadratic)"
-      : mesh.hexahedral() ? "Zienkiewicz-Zhu stress recovery (nodal averaging, trilinear)"
-                          : "Zienkiewicz-Zhu stress recovery (nodal averaging)";
-  summary.error.relative_error = estimate.relative_error;
-  for (const RegionError& r : ErrorByRegion(mesh, estimate, "body")) {
-    summary.error.regions.push_back({r.name, r.elements, r.relative_error, r.share});
+                elasticity_, problem_.threads)
+      : mesh_.hexahedral()
+          ? EstimateZzErrorHex8(
+                mesh_,
+                [&](int e, const Eigen::Vector3d& xi) -> Vector6d {
+                  const Hex8Nodes x = Hex8Coordinates(mesh_, e);
+                  const Vector24d ue = GatherElementHex8(mesh_, e, u_);
+                  return elasticity_.D(e) *
+                         (full_bricks_ ? Hex8StrainFull(x, ue, xi) : Hex8Strain(x, ue, xi));
+                },
+                elasticity_, problem_.threads)
+          : EstimateZzError(mesh_, solution_.stress_pa, volume_, elasticity_, problem_.threads);
+  solution_.error_indicator = estimate.element_share;
+  summary_.error.estimated = true;
+  summary_.error.method =
+      mesh_.quadratic()    ? "Zienkiewicz-Zhu stress recovery (nodal averaging, quadratic)"
+      : mesh_.hexahedral() ? "Zienkiewicz-Zhu stress recovery (nodal averaging, trilinear)"
+                           : "Zienkiewicz-Zhu stress recovery (nodal averaging)";
+  summary_.error.relative_error = estimate.relative_error;
+  for (const RegionError& r : ErrorByRegion(mesh_, estimate, "body")) {
+    summary_.error.regions.push_back({r.name, r.elements, r.relative_error, r.share});
   }
-  summary.error.note =
+  summary_.error.note =
       "estimated discretisation error in the energy norm, relative to the solution's energy norm; "
       "refine the mesh (mesh.element_size_mm) to reduce it";
-  clock.Update(1.0);
-  clock.End();
+  clock_.Update(1.0);
+  clock_.End();
+}
 
-  const bool initial_moduli =
-      std::any_of(model.materials.specs.begin(), model.materials.specs.end(),
-                  [](const MaterialSpec& m) { return m.hyperelastic(); });
-  summary.analysis = initial_moduli ? "linear static (small strain, the materials' initial moduli)"
-                                    : "linear static (small strain)";
-  for (const std::string& note : model.materials.notes) summary.notes.push_back(note);
-  summary.linear_solver = solver_name;
-  if (max_strain > kSmallStrainLimit) {
-    summary.notes.push_back(
+void LinearStaticRun::Finish(StaticResult* result) {
+  const SceneMaterials& materials = problem_.model.materials;
+  const bool initial_moduli = std::any_of(materials.specs.begin(), materials.specs.end(),
+                                          [](const MaterialSpec& m) { return m.hyperelastic(); });
+  summary_.analysis = initial_moduli ? "linear static (small strain, the materials' initial moduli)"
+                                     : "linear static (small strain)";
+  for (const std::string& note : materials.notes) summary_.notes.push_back(note);
+  summary_.linear_solver = solver_name_;
+  if (max_strain_ > kSmallStrainLimit) {
+    summary_.notes.push_back(
         Format("the largest strain component is %.1f %%: beyond a few percent small-strain linear "
                "elasticity misjudges soft tissue, which is nonlinear and nearly incompressible; "
                "use analysis.type NONLINEAR_STATIC with a hyperelastic material",
-               100 * max_strain));
+               100 * max_strain_));
   }
-  summary.relative_residual = residual;
-  result->u = std::move(u);
-  result->internal_force = std::move(internal);
-  result->external_force = std::move(external);
-  result->strain_energy_j = energy;
-  result->max_strain = max_strain;
+  summary_.relative_residual = residual_;
+  result->u = std::move(u_);
+  result->internal_force = std::move(internal_);
+  result->external_force = std::move(external_);
+  result->strain_energy_j = energy_;
+  result->max_strain = max_strain_;
+}
+
+}  // namespace
+
+Status SolveLinearStatic(const Problem& problem, PhaseClock* clock, Solution* solution,
+                         StaticResult* result) {
+  LinearStaticRun run(problem, clock, solution);
+  PBA_RETURN_IF_ERROR(run.Assemble());
+  PBA_RETURN_IF_ERROR(run.Solve());
+  run.Recover();
+  run.EstimateError();
+  run.Finish(result);
   return Status::Ok();
 }
 

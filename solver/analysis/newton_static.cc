@@ -129,28 +129,70 @@ Status AssembleLoaded(const FiniteStrainModel& model, const Loading& loading,
   return Status::Ok();
 }
 
-}  // namespace
+// One Newton solve: the state, the two linear solvers that take turns, the
+// counters, and the steps of the increment loop.
+class NewtonRun {
+ public:
+  NewtonRun(const FiniteStrainModel& model, const ExternalLoads* loads, const DofMap& dofs,
+            const NewtonOptions& options, LinearSolver* solver,
+            const std::function<bool(const NewtonProgress&)>& keep_going, Eigen::VectorXd* u,
+            NewtonReport* report)
+      : model_(model),
+        loads_(loads),
+        dofs_(dofs),
+        options_(options),
+        solver_(solver),
+        keep_going_(keep_going),
+        u_(*u),
+        report_(*report),
+        spare_(solver->NewOfSameKind()) {}
 
-Status SolveNewtonStatic(const FiniteStrainModel& model, const DofMap& dofs,
-                         const NewtonOptions& options, LinearSolver* solver,
-                         const std::function<bool(const NewtonProgress&)>& keep_going,
-                         Eigen::VectorXd* u, NewtonReport* report) {
-  return SolveNewtonStatic(model, nullptr, dofs, options, solver, keep_going, u, report);
-}
+  Status Run();
 
-Status SolveNewtonStatic(const FiniteStrainModel& model, const ExternalLoads* loads,
-                         const DofMap& dofs, const NewtonOptions& options, LinearSolver* solver,
-                         const std::function<bool(const NewtonProgress&)>& keep_going,
-                         Eigen::VectorXd* u, NewtonReport* report) {
-  *report = NewtonReport();
-  const auto amplitude = [&](double lambda) {
-    return options.amplitude ? options.amplitude(lambda) : lambda;
+ private:
+  // What one attempt at an increment ended with.
+  struct Attempt {
+    Status status;
+    bool converged = false;
+    int iteration = 0;
+    double residual = INFINITY;
   };
-  if (options.start_u.size() > 0 && options.start_u.size() != dofs.num_dofs()) {
-    return Status::Internal(Format("the start state has %d unknowns, the model %d",
-                                   static_cast<int>(options.start_u.size()), dofs.num_dofs()));
+
+  double Amplitude(double lambda) const {
+    return options_.amplitude ? options_.amplitude(lambda) : lambda;
   }
-  *u = options.start_u.size() > 0 ? options.start_u : Eigen::VectorXd::Zero(dofs.num_dofs());
+  Status Cancelled() const {
+    return Status::Cancelled(Format("cancelled at load factor %.4g", load_));
+  }
+  Residual EvaluateAt(const Loading& loading, const Eigen::VectorXd& state) {
+    ScopedTimer timer(&report_.residual_s);
+    return Evaluate(model_, loading, dofs_, state);
+  }
+  Status SolveLinear(const LinearSystem& system, int iteration, double residual,
+                     bool near_equilibrium,
+                     const std::function<Status(LinearSystem*)>& assemble_approximate,
+                     Eigen::VectorXd* du);
+  Status SolveApproximate(const LinearSystem& system, LinearSolver* target, int iteration,
+                          double residual,
+                          const std::function<Status(LinearSystem*)>& assemble_approximate,
+                          Eigen::VectorXd* du);
+  Status Predict(double target, const Loading& loading, Eigen::VectorXd* trial,
+                 double* first_energy);
+  Attempt Increment(double target, const Loading& loading, bool* cancelled);
+  Status Correct(const Loading& loading, double first_energy, Eigen::VectorXd* trial,
+                 Attempt* attempt, bool* cancelled);
+  Status Accept(double target, const Attempt& attempt, Eigen::VectorXd* trial);
+  Status Cut(double target, const Attempt& attempt);
+
+  const FiniteStrainModel& model_;
+  const ExternalLoads* loads_;
+  const DofMap& dofs_;
+  const NewtonOptions& options_;
+  LinearSolver* solver_;
+  const std::function<bool(const NewtonProgress&)>& keep_going_;
+  Eigen::VectorXd& u_;
+  NewtonReport& report_;
+
   // Far from equilibrium the tangent may be indefinite: a nearly
   // incompressible body's predictor leaves J - 1 = O(step^2), and the
   // pressure K (J - 1) >> mu that follows destroys positive definiteness
@@ -178,252 +220,323 @@ Status SolveNewtonStatic(const FiniteStrainModel& model, const ExternalLoads* lo
   // must survive its failure, so two coexist then anyway), and a released
   // CHOLMOD solver would redo its symbolic analysis, which each solver
   // otherwise keeps for the unchanged pattern.
-  std::unique_ptr<LinearSolver> spare = solver->NewOfSameKind();
-  Eigen::SimplicialLDLT<SparseMatrix, Eigen::Lower> ldlt;
+  std::unique_ptr<LinearSolver> spare_;
+  Eigen::SimplicialLDLT<SparseMatrix, Eigen::Lower> ldlt_;
   // Negative eigenvalues of the tangent of the last step, when it was
   // factorised by LDL^T (0 after a Cholesky of the consistent tangent, -1
   // when the step used another tangent).
-  int step_negative = 0;
-  LinearSolver* good = nullptr;  // holds the last positive definite factorisation
-  SparseMatrix shifted;
-  LinearSystem approximate;
+  int step_negative_ = 0;
+  LinearSolver* good_ = nullptr;  // holds the last positive definite factorisation
+  SparseMatrix shifted_;
+  LinearSystem approximate_;
   // Consecutive iterations whose consistent tangent was not positive
   // definite: when an increment fails with the tangent still indefinite
   // close to equilibrium, the equilibrium itself may be unstable.
-  int indefinite_streak = 0;
-  const auto solve =
-      [&](const LinearSystem& system, int iteration, double residual, bool near_equilibrium,
-          const std::function<Status(LinearSystem*)>& assemble_approximate, Eigen::VectorXd* du) {
-        ScopedTimer timer(&report->linear_solve_s);
-        LinearSolver* target = good == solver ? spare.get() : solver;
-        Status status = target->Factorize(system.k);
-        if (status.ok()) {
-          good = target;
-          indefinite_streak = 0;
-          step_negative = 0;
-          return good->Solve(system.rhs, du);
-        }
-        ++indefinite_streak;
-        if (near_equilibrium && SolveIndefinite(system, &ldlt, du, &step_negative)) {
-          ++report->indefinite_iterations;
-          return Status::Ok();
-        }
-        step_negative = -1;
-        bool approximated = false;
-        {
-          // The approximate tangent's assembly counts as assembly, not solving.
-          double assembly = 0;
-          {
-            ScopedTimer assembling(&assembly);
-            approximated = assemble_approximate(&approximate).ok();
-          }
-          report->assembly_s += assembly;
-          report->linear_solve_s -= assembly;
-        }
-        if (approximated && target->Factorize(approximate.k).ok()) {
-          ++report->approximate_iterations;
-          good = target;
-          return good->Solve(system.rhs, du);
-        }
-        ++report->modified_iterations;
-        if (good != nullptr) return good->Solve(system.rhs, du);
-        const Eigen::VectorXd diagonal = system.k.diagonal().cwiseAbs();
-        for (double tau = 1e-4; tau <= 1e2; tau *= 10) {
-          shifted = system.k;
-          for (int i = 0; i < shifted.outerSize(); ++i) shifted.coeffRef(i, i) += tau * diagonal(i);
-          if (target->Factorize(shifted).ok()) return target->Solve(system.rhs, du);
-        }
-        return Status::Numerical(
-            Format("the tangent stiffness could not be made positive definite at iteration %d "
-                   "(relative residual %.3g)",
-                   iteration, residual));
-      };
-  // One tangent for the whole solve: the predictor's DofMap (`increment`
-  // below) frees the same unknowns as `dofs`, so every assembly fills the
+  int indefinite_streak_ = 0;
+  // One tangent for the whole solve: the predictor's DofMap (`increment` in
+  // Predict) frees the same unknowns as `dofs`, so every assembly fills the
   // same pattern in place (see AssembleSystem) instead of building a new
   // matrix beside the old one.
-  LinearSystem system;
-  double load = options.start_load;
+  LinearSystem system_;
+  double load_ = 0;
   // The last converged state's tangent had negative eigenvalues (the path
   // passed a bifurcation and follows the now unstable fundamental branch):
   // its indefinite tangent is then the right predictor.
-  bool unstable_branch = false;
-  double step =
-      options.start_step > 0 ? options.start_step : 1.0 / std::max(1, options.initial_increments);
-  std::string last_failure;
-  auto cancelled = [&] { return Status::Cancelled(Format("cancelled at load factor %.4g", load)); };
+  bool unstable_branch_ = false;
+  double step_ = 0;
+};
 
-  while (load < 1.0) {
-    if (!keep_going({load, 0, INFINITY})) return cancelled();
-    const double largest = options.max_increment_at
-                               ? std::max(options.min_increment, options.max_increment_at(load))
-                               : INFINITY;
-    step = std::min(step, largest);
-    // A last sliver below the smallest increment joins this one.
-    const double target = load + step >= 1.0 - 0.5 * options.min_increment ? 1.0 : load + step;
-    const Loading loading{loads, amplitude(target)};
-    if (options.begin_increment) PBA_RETURN_IF_ERROR(options.begin_increment(load, target));
+Status NewtonRun::SolveLinear(const LinearSystem& system, int iteration, double residual,
+                              bool near_equilibrium,
+                              const std::function<Status(LinearSystem*)>& assemble_approximate,
+                              Eigen::VectorXd* du) {
+  ScopedTimer timer(&report_.linear_solve_s);
+  LinearSolver* target = good_ == solver_ ? spare_.get() : solver_;
+  Status status = target->Factorize(system.k);
+  if (status.ok()) {
+    good_ = target;
+    indefinite_streak_ = 0;
+    step_negative_ = 0;
+    return good_->Solve(system.rhs, du);
+  }
+  ++indefinite_streak_;
+  if (near_equilibrium && SolveIndefinite(system, &ldlt_, du, &step_negative_)) {
+    ++report_.indefinite_iterations;
+    return Status::Ok();
+  }
+  step_negative_ = -1;
+  return SolveApproximate(system, target, iteration, residual, assemble_approximate, du);
+}
 
-    // Predictor: the tangent at the converged state carries the prescribed
-    // increment into the free unknowns.
-    const double amplitude_change = amplitude(target) - amplitude(load);
-    DofMap increment = dofs;
-    for (int dof = 0; dof < dofs.num_dofs(); ++dof) {
-      if (dofs.prescribed(dof)) {
-        increment.Prescribe(dof / 3, dof % 3, amplitude_change * dofs.prescribed_value(dof));
-      }
-    }
-    increment.Finalize();
-    AssemblyOptions lift;
-    lift.lift_prescribed = true;
-    Eigen::VectorXd trial = *u;
-    Eigen::VectorXd du;
-    // At the converged state f_int = lambda_old f_ext, so the rhs
-    // lambda_new f_ext - f_int is the load increment.
-    Status status;
+// The substitutes for a tangent that is not positive definite, in turn: the
+// tangent without initial-stress terms, the last positive definite one, a
+// shifted one.
+Status NewtonRun::SolveApproximate(const LinearSystem& system, LinearSolver* target, int iteration,
+                                   double residual,
+                                   const std::function<Status(LinearSystem*)>& assemble_approximate,
+                                   Eigen::VectorXd* du) {
+  bool approximated = false;
+  {
+    // The approximate tangent's assembly counts as assembly, not solving.
+    double assembly = 0;
     {
-      ScopedTimer timer(&report->assembly_s);
-      status = AssembleLoaded(model, loading, *u, increment, lift, &system);
+      ScopedTimer assembling(&assembly);
+      approximated = assemble_approximate(&approximate_).ok();
     }
-    if (status.ok() && dofs.num_free() > 0) {
-      status = solve(
-          system, 0, 0.0, unstable_branch,
-          [&](LinearSystem* out) {
-            AssemblyOptions definite = lift;
-            definite.drop_pressure_stiffness = true;
-            return AssembleLoaded(model, loading, *u, increment, definite, out);
-          },
-          &du);
+    report_.assembly_s += assembly;
+    report_.linear_solve_s -= assembly;
+  }
+  if (approximated && target->Factorize(approximate_.k).ok()) {
+    ++report_.approximate_iterations;
+    good_ = target;
+    return good_->Solve(system.rhs, du);
+  }
+  ++report_.modified_iterations;
+  if (good_ != nullptr) return good_->Solve(system.rhs, du);
+  const Eigen::VectorXd diagonal = system.k.diagonal().cwiseAbs();
+  for (double tau = 1e-4; tau <= 1e2; tau *= 10) {
+    shifted_ = system.k;
+    for (int i = 0; i < shifted_.outerSize(); ++i) shifted_.coeffRef(i, i) += tau * diagonal(i);
+    if (target->Factorize(shifted_).ok()) return target->Solve(system.rhs, du);
+  }
+  return Status::Numerical(
+      Format("the tangent stiffness could not be made positive definite at iteration %d "
+             "(relative residual %.3g)",
+             iteration, residual));
+}
+
+// Predictor: the tangent at the converged state carries the prescribed
+// increment into the free unknowns; *trial gets the predicted state and
+// *first_energy du_pred . K du_pred, the scale of the energy test.
+Status NewtonRun::Predict(double target, const Loading& loading, Eigen::VectorXd* trial,
+                          double* first_energy) {
+  const double amplitude_change = Amplitude(target) - Amplitude(load_);
+  DofMap increment = dofs_;
+  for (int dof = 0; dof < dofs_.num_dofs(); ++dof) {
+    if (dofs_.prescribed(dof)) {
+      increment.Prescribe(dof / 3, dof % 3, amplitude_change * dofs_.prescribed_value(dof));
     }
-    bool converged = false;
-    int iteration = 0;
-    double residual = INFINITY;
-    // Energy of the increment, du_pred . K du_pred: the scale of the energy test.
-    const double first_energy =
-        status.ok() && dofs.num_free() > 0 ? std::abs(du.dot(system.rhs)) : 0.0;
-    if (status.ok()) {
-      if (dofs.num_free() > 0) AddFree(dofs, du, 1.0, &trial);
-      for (int dof = 0; dof < dofs.num_dofs(); ++dof) {
-        if (dofs.prescribed(dof)) trial(dof) = loading.factor * dofs.prescribed_value(dof);
-      }
-      const auto evaluate = [&](const Eigen::VectorXd& state) {
-        ScopedTimer timer(&report->residual_s);
-        return Evaluate(model, loading, dofs, state);
-      };
-      Residual current = evaluate(trial);
-      residual = current.relative;
-      if (!std::isfinite(residual)) {
-        status = Status::Numerical("the predictor inverted an element");
-      } else if (dofs.num_free() == 0) {
-        converged = true;
-      }
-      int augmentations = 0;
-      int budget = options.max_iterations;
-      for (iteration = 1; status.ok() && !converged && iteration <= budget; ++iteration) {
-        if (!keep_going({load, iteration, residual})) return cancelled();
-        {
-          ScopedTimer timer(&report->assembly_s);
-          status = AssembleLoaded(model, loading, trial, dofs, AssemblyOptions(), &system);
-        }
-        if (!status.ok()) break;
-        status = solve(
-            system, iteration, residual, residual <= kIndefiniteNewtonResidual,
-            [&](LinearSystem* out) {
-              AssemblyOptions definite;
-              definite.drop_pressure_stiffness = true;
-              return AssembleLoaded(model, loading, trial, dofs, definite, out);
-            },
-            &du);
-        if (!status.ok()) break;
-        const double energy = std::abs(du.dot(current.free));
-        // Backtracking line search: halve the step while it inverts an
-        // element or raises the residual.
-        double alpha = 1.0;
-        Eigen::VectorXd next = trial;
-        AddFree(dofs, du, alpha, &next);
-        Residual candidate = evaluate(next);
-        while (options.line_search && alpha > 1.0 / 64 &&
-               !(candidate.relative < std::max(current.relative, 1e-300))) {
-          alpha *= 0.5;
-          next = trial;
-          AddFree(dofs, du, alpha, &next);
-          candidate = evaluate(next);
-        }
-        if (!std::isfinite(candidate.relative)) {
-          status = Status::Numerical("an element inverted");
-          break;
-        }
-        trial = std::move(next);
-        current = std::move(candidate);
+  }
+  increment.Finalize();
+  AssemblyOptions lift;
+  lift.lift_prescribed = true;
+  *trial = u_;
+  Eigen::VectorXd du;
+  // At the converged state f_int = lambda_old f_ext, so the rhs
+  // lambda_new f_ext - f_int is the load increment.
+  Status status;
+  {
+    ScopedTimer timer(&report_.assembly_s);
+    status = AssembleLoaded(model_, loading, u_, increment, lift, &system_);
+  }
+  if (status.ok() && dofs_.num_free() > 0) {
+    status = SolveLinear(
+        system_, 0, 0.0, unstable_branch_,
+        [&](LinearSystem* out) {
+          AssemblyOptions definite = lift;
+          definite.drop_pressure_stiffness = true;
+          return AssembleLoaded(model_, loading, u_, increment, definite, out);
+        },
+        &du);
+  }
+  *first_energy = status.ok() && dofs_.num_free() > 0 ? std::abs(du.dot(system_.rhs)) : 0.0;
+  if (!status.ok()) return status;
+  if (dofs_.num_free() > 0) AddFree(dofs_, du, 1.0, trial);
+  for (int dof = 0; dof < dofs_.num_dofs(); ++dof) {
+    if (dofs_.prescribed(dof)) (*trial)(dof) = loading.factor * dofs_.prescribed_value(dof);
+  }
+  return Status::Ok();
+}
+
+// The Newton iterations of one increment from the predicted *trial, with a
+// backtracking line search, until the convergence tests hold.
+Status NewtonRun::Correct(const Loading& loading, double first_energy, Eigen::VectorXd* trial,
+                          Attempt* attempt, bool* cancelled) {
+  Residual current = EvaluateAt(loading, *trial);
+  attempt->residual = current.relative;
+  if (!std::isfinite(attempt->residual)) {
+    return Status::Numerical("the predictor inverted an element");
+  }
+  if (dofs_.num_free() == 0) {
+    attempt->iteration = 1;  // as the loop below would count it
+    attempt->converged = true;
+    return Status::Ok();
+  }
+  Eigen::VectorXd du;
+  int augmentations = 0;
+  int budget = options_.max_iterations;
+  int& iteration = attempt->iteration;
+  double& residual = attempt->residual;
+  for (iteration = 1; iteration <= budget; ++iteration) {
+    if (!keep_going_({load_, iteration, residual})) {
+      *cancelled = true;
+      return Cancelled();
+    }
+    {
+      ScopedTimer timer(&report_.assembly_s);
+      PBA_RETURN_IF_ERROR(
+          AssembleLoaded(model_, loading, *trial, dofs_, AssemblyOptions(), &system_));
+    }
+    PBA_RETURN_IF_ERROR(SolveLinear(
+        system_, iteration, residual, residual <= kIndefiniteNewtonResidual,
+        [&](LinearSystem* out) {
+          AssemblyOptions definite;
+          definite.drop_pressure_stiffness = true;
+          return AssembleLoaded(model_, loading, *trial, dofs_, definite, out);
+        },
+        &du));
+    const double energy = std::abs(du.dot(current.free));
+    // Backtracking line search: halve the step while it inverts an element
+    // or raises the residual.
+    double alpha = 1.0;
+    Eigen::VectorXd next = *trial;
+    AddFree(dofs_, du, alpha, &next);
+    Residual candidate = EvaluateAt(loading, next);
+    while (options_.line_search && alpha > 1.0 / 64 &&
+           !(candidate.relative < std::max(current.relative, 1e-300))) {
+      alpha *= 0.5;
+      next = *trial;
+      AddFree(dofs_, du, alpha, &next);
+      candidate = EvaluateAt(loading, next);
+    }
+    if (!std::isfinite(candidate.relative)) return Status::Numerical("an element inverted");
+    *trial = std::move(next);
+    current = std::move(candidate);
+    residual = current.relative;
+    ++report_.total_iterations;
+    const double change = alpha * du.norm() / std::max(FreeNorm(dofs_, *trial), 1e-300);
+    // The residual and the correction of a nearly incompressible body have a
+    // rounding floor (K / mu up to 1e6 amplifies the error of J - 1 and the
+    // condition number); once the correction's energy is down at rounding
+    // level, no further iteration can improve the state. Measured against
+    // the increment's own energy, or the state's when the increment is tiny
+    // (after cuts).
+    const double energy_scale = std::max(first_energy, current.work);
+    const bool rounding_floor = energy <= kRoundingEnergy * energy_scale;
+    if ((residual <= options_.residual_tolerance || rounding_floor) &&
+        (change <= options_.displacement_tolerance || rounding_floor) &&
+        energy <= options_.energy_tolerance * std::max(energy_scale, 1e-300)) {
+      if (options_.augment && augmentations < options_.max_augmentations &&
+          options_.augment(*trial)) {
+        // The equations changed (e.g. contact multipliers): iterate again
+        // from this state, with a fresh iteration budget.
+        ++augmentations;
+        ++report_.augmentations;
+        budget = iteration + options_.max_iterations;
+        current = EvaluateAt(loading, *trial);
         residual = current.relative;
-        ++report->total_iterations;
-        const double change = alpha * du.norm() / std::max(FreeNorm(dofs, trial), 1e-300);
-        // The residual and the correction of a nearly incompressible body
-        // have a rounding floor (K / mu up to 1e6 amplifies the error of
-        // J - 1 and the condition number); once the correction's energy is
-        // down at rounding level, no further iteration can improve the state.
-        // Measured against the increment's own energy, or the state's when
-        // the increment is tiny (after cuts).
-        const double energy_scale = std::max(first_energy, current.work);
-        const bool rounding_floor = energy <= kRoundingEnergy * energy_scale;
-        if ((residual <= options.residual_tolerance || rounding_floor) &&
-            (change <= options.displacement_tolerance || rounding_floor) &&
-            energy <= options.energy_tolerance * std::max(energy_scale, 1e-300)) {
-          if (options.augment && augmentations < options.max_augmentations &&
-              options.augment(trial)) {
-            // The equations changed (e.g. contact multipliers): iterate again
-            // from this state, with a fresh iteration budget.
-            ++augmentations;
-            ++report->augmentations;
-            budget = iteration + options.max_iterations;
-            current = evaluate(trial);
-            residual = current.relative;
-            continue;
-          }
-          converged = true;
-          break;
-        }
-        if (residual > 1e6) {
-          status = Status::Numerical(Format("diverging (relative residual %.3g)", residual));
-          break;
-        }
+        continue;
       }
+      attempt->converged = true;
+      return Status::Ok();
     }
-    if (converged) {
-      *u = std::move(trial);
-      report->increments.push_back({target, target - load, iteration, residual, step_negative});
-      load = target;
-      unstable_branch = step_negative > 0;
-      if (options.on_increment) options.on_increment(load, *u);
-      if (iteration <= options.quick_iterations) {
-        step = std::min(step * 1.5, options.max_increment);
-      }
-      if (options.after_increment) PBA_RETURN_IF_ERROR(options.after_increment(load, step, *u));
-      continue;
-    }
-    if (status.code() == Status::Code::kCancelled) return status;
-    last_failure = status.ok() ? Format("no convergence in %d iterations (relative residual %.3g)",
-                                        iteration - 1, residual)
-                               : status.message();
-    if (status.ok() && indefinite_streak >= 3 && residual < 1e-4) {
-      last_failure += Format(
-          "; the tangent stiffness stayed indefinite for the last %d iterations although the "
-          "residual was small, so the equilibrium there may be unstable (buckling, or a "
-          "spurious mode of the element under strong compression)",
-          indefinite_streak);
-    }
-    report->cut_reasons.push_back(Format("increment %.4g -> %.4g: ", load, target) + last_failure);
-    step *= 0.5;
-    ++report->cuts;
-    if (step < options.min_increment) {
-      return Status::Numerical(
-          Format("the load could not be applied beyond %.4g of its full value: increments were cut "
-                 "below %g; last failure: ",
-                 load, options.min_increment) +
-          last_failure);
+    if (residual > 1e6) {
+      return Status::Numerical(Format("diverging (relative residual %.3g)", residual));
     }
   }
   return Status::Ok();
+}
+
+NewtonRun::Attempt NewtonRun::Increment(double target, const Loading& loading, bool* cancelled) {
+  Attempt attempt;
+  Eigen::VectorXd trial;
+  double first_energy = 0;
+  attempt.status = Predict(target, loading, &trial, &first_energy);
+  if (attempt.status.ok()) {
+    attempt.status = Correct(loading, first_energy, &trial, &attempt, cancelled);
+  }
+  if (attempt.converged) attempt.status = Accept(target, attempt, &trial);
+  return attempt;
+}
+
+Status NewtonRun::Accept(double target, const Attempt& attempt, Eigen::VectorXd* trial) {
+  u_ = std::move(*trial);
+  report_.increments.push_back(
+      {target, target - load_, attempt.iteration, attempt.residual, step_negative_});
+  load_ = target;
+  unstable_branch_ = step_negative_ > 0;
+  if (options_.on_increment) options_.on_increment(load_, u_);
+  if (attempt.iteration <= options_.quick_iterations) {
+    step_ = std::min(step_ * 1.5, options_.max_increment);
+  }
+  if (options_.after_increment) return options_.after_increment(load_, step_, u_);
+  return Status::Ok();
+}
+
+// A failed increment is halved and retried, down to min_increment.
+Status NewtonRun::Cut(double target, const Attempt& attempt) {
+  std::string last_failure =
+      attempt.status.ok() ? Format("no convergence in %d iterations (relative residual %.3g)",
+                                   attempt.iteration - 1, attempt.residual)
+                          : attempt.status.message();
+  if (attempt.status.ok() && indefinite_streak_ >= 3 && attempt.residual < 1e-4) {
+    last_failure += Format(
+        "; the tangent stiffness stayed indefinite for the last %d iterations although the "
+        "residual was small, so the equilibrium there may be unstable (buckling, or a "
+        "spurious mode of the element under strong compression)",
+        indefinite_streak_);
+  }
+  report_.cut_reasons.push_back(Format("increment %.4g -> %.4g: ", load_, target) + last_failure);
+  step_ *= 0.5;
+  ++report_.cuts;
+  if (step_ < options_.min_increment) {
+    return Status::Numerical(
+        Format("the load could not be applied beyond %.4g of its full value: increments were cut "
+               "below %g; last failure: ",
+               load_, options_.min_increment) +
+        last_failure);
+  }
+  return Status::Ok();
+}
+
+Status NewtonRun::Run() {
+  report_ = NewtonReport();
+  if (options_.start_u.size() > 0 && options_.start_u.size() != dofs_.num_dofs()) {
+    return Status::Internal(Format("the start state has %d unknowns, the model %d",
+                                   static_cast<int>(options_.start_u.size()), dofs_.num_dofs()));
+  }
+  u_ = options_.start_u.size() > 0 ? options_.start_u : Eigen::VectorXd::Zero(dofs_.num_dofs());
+  load_ = options_.start_load;
+  step_ = options_.start_step > 0 ? options_.start_step
+                                  : 1.0 / std::max(1, options_.initial_increments);
+  while (load_ < 1.0) {
+    if (!keep_going_({load_, 0, INFINITY})) return Cancelled();
+    const double largest = options_.max_increment_at
+                               ? std::max(options_.min_increment, options_.max_increment_at(load_))
+                               : INFINITY;
+    step_ = std::min(step_, largest);
+    // A last sliver below the smallest increment joins this one.
+    const double target = load_ + step_ >= 1.0 - 0.5 * options_.min_increment ? 1.0 : load_ + step_;
+    const Loading loading{loads_, Amplitude(target)};
+    if (options_.begin_increment) PBA_RETURN_IF_ERROR(options_.begin_increment(load_, target));
+    bool cancelled = false;
+    const Attempt attempt = Increment(target, loading, &cancelled);
+    if (cancelled) return attempt.status;
+    if (attempt.converged) {
+      PBA_RETURN_IF_ERROR(attempt.status);
+      continue;
+    }
+    if (attempt.status.code() == Status::Code::kCancelled) return attempt.status;
+    PBA_RETURN_IF_ERROR(Cut(target, attempt));
+  }
+  return Status::Ok();
+}
+
+}  // namespace
+
+Status SolveNewtonStatic(const FiniteStrainModel& model, const DofMap& dofs,
+                         const NewtonOptions& options, LinearSolver* solver,
+                         const std::function<bool(const NewtonProgress&)>& keep_going,
+                         Eigen::VectorXd* u, NewtonReport* report) {
+  return SolveNewtonStatic(model, nullptr, dofs, options, solver, keep_going, u, report);
+}
+
+Status SolveNewtonStatic(const FiniteStrainModel& model, const ExternalLoads* loads,
+                         const DofMap& dofs, const NewtonOptions& options, LinearSolver* solver,
+                         const std::function<bool(const NewtonProgress&)>& keep_going,
+                         Eigen::VectorXd* u, NewtonReport* report) {
+  NewtonRun run(model, loads, dofs, options, solver, keep_going, u, report);
+  return run.Run();
 }
 
 }  // namespace pba

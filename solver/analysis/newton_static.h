@@ -21,9 +21,9 @@
 #include <string>
 #include <vector>
 
-#include "analysis/external_loads.h"
 #include "analysis/finite_strain_model.h"
 #include "assembly/dof_map.h"
+#include "assembly/external_loads.h"
 #include "linear/linear_solver.h"
 #include "pba/status.h"
 

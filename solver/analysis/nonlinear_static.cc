@@ -12,12 +12,10 @@
 #include "analysis/error_estimator.h"
 #include "analysis/finite_strain_model.h"
 #include "analysis/hex8_model.h"
-#include "analysis/material_field.h"
 #include "analysis/newton_static.h"
 #include "analysis/rigid_contact.h"
 #include "analysis/static_analysis.h"
 #include "analysis/tet10_model.h"
-#include "analysis/time_curve.h"
 #include "analysis/time_history.h"
 #include "core/format.h"
 #include "fem/hex8.h"
@@ -26,9 +24,11 @@
 #include "material/factory.h"
 #include "material/hyperelastic.h"
 #include "material/linear_elastic.h"
+#include "material/material_field.h"
 #include "mesh/primitive_mesher.h"
 #include "mesh/quadratic.h"
 #include "scene/materials.h"
+#include "scene/time_curve.h"
 
 namespace pba {
 namespace {
@@ -155,182 +155,17 @@ Status MakeContacts(const Problem& problem, double shear_modulus_pa,
   return Status::Ok();
 }
 
-// Both finite-strain analyses: NONLINEAR_STATIC ramps the loads with the
-// load factor, QUASI_STATIC follows them through time.
-Status SolveFiniteStrain(const Problem& problem, PhaseClock* clock_ptr, Solution* solution,
-                         StaticResult* result) {
-  PhaseClock& clock = *clock_ptr;
-  Summary& summary = solution->summary;
-  const Model& model = problem.model;
-  const Mesh& mesh = model.mesh;
-  const DofMap& dofs = model.dofs;
-  const bool timed = problem.analysis == AnalysisSpec::Type::kQuasiStatic;
-  const std::unique_ptr<MaterialField> field =
-      MakeMaterialField(model.materials, problem.relaxed_below_s, problem.frozen_above_s);
+// The finite-strain fields of every element at the displacement u:
+// solution's strain, Almansi strain, PK2 and Cauchy stress, von Mises and J
+// (element means), *volume each element's volume, the largest
+// Green-Lagrange component returned.
+double RecoverFiniteStrainFields(const Problem& problem, const MaterialField& field,
+                                 const Eigen::VectorXd& u, Solution* solution,
+                                 std::vector<double>* volume_out) {
+  const Mesh& mesh = problem.model.mesh;
   const bool plain = problem.element == ElementType::kTet4;
   const bool full_bricks = problem.element == ElementType::kHex8Full;
   const bool tet10_md = problem.element == ElementType::kTet10Md;
-  const bool one_point = !mesh.quadratic() && !mesh.hexahedral();
-  summary.element_type = ElementName(problem.element);
-  if (!one_point && ((timed && field->viscous()) || field->grows())) {
-    // ValidateScene refuses these (scene_checks::ValidateHistoryElements).
-    return Status::Internal(std::string(field->grows() ? "growth" : "viscoelastic relaxation") +
-                            " reached a " + summary.element_type +
-                            " model, which keeps no history");
-  }
-  if (!timed && field->viscous()) {
-    summary.notes.push_back(
-        "viscoelastic relaxation is not used by a static analysis: the instantaneous "
-        "(hyperelastic) response is solved; QUASI_STATIC follows it through time");
-  }
-  for (const std::string& note : model.materials.notes) summary.notes.push_back(note);
-  const auto body = tet10_md            ? MakeTet10MdModel(mesh, *field)
-                    : mesh.quadratic()  ? MakeTet10Model(mesh, *field)
-                    : full_bricks       ? MakeHex8FullModel(mesh, *field)
-                    : mesh.hexahedral() ? MakeHex8Model(mesh, *field)
-                    : plain             ? MakeTet4Model(mesh, *field)
-                                        : MakeAverageNodalPressureTet4Model(mesh, *field);
-  std::vector<std::unique_ptr<RigidContact>> contacts;
-  PBA_RETURN_IF_ERROR(
-      MakeContacts(problem, field->Base(0).ShearModulus(), &contacts, &summary.notes));
-  std::vector<const RigidContact*> contact_views;
-  std::vector<std::pair<std::string, const RigidContact*>> named_contacts;
-  for (std::size_t i = 0; i < contacts.size(); ++i) {
-    contact_views.push_back(contacts[i].get());
-    named_contacts.emplace_back(problem.contacts[i].name, contacts[i].get());
-  }
-  const std::unique_ptr<FiniteStrainModel> touching =
-      contacts.empty() ? nullptr : WithContact(*body, contact_views);
-  const FiniteStrainModel& solid = touching ? *touching : *body;
-
-  // PCG looks at the cancel flag every iteration (a direct factorisation cannot).
-  LinearSolverOptions linear_solver = problem.linear_solver;
-  linear_solver.cancel = clock.options().cancel;
-  auto solver = CreateLinearSolver(linear_solver);
-  NewtonOptions options = OptionsOf(problem.nonlinear);
-  // Time: the load factor is t / T and the loads follow a(t); a static
-  // analysis is the ramp a = load factor with instantaneous steps.
-  TimeOptions unit_ramp;
-  unit_ramp.end_s = 1;
-  const TimeCurve curve(timed ? problem.time : unit_ramp);
-  const double duration = curve.end_s();
-  const auto amplitude = [&](double load) {
-    return timed ? curve.Amplitude(load * duration) : load;
-  };
-  if (timed) summary.notes.push_back(SetTimeSteps(problem.time, curve, *field, &options));
-  options.amplitude = amplitude;
-  options.begin_increment = [&](double from, double to) {
-    field->BeginStep(timed ? (to - from) * duration : 0.0, amplitude(to));
-    for (auto& contact : contacts) contact->SetAmplitude(amplitude(to));
-    return Status::Ok();
-  };
-  if (!contacts.empty()) {
-    options.augment = [&](const Eigen::VectorXd& u) {
-      bool changed = false;
-      for (auto& contact : contacts) changed = contact->Augment(u) || changed;
-      return changed;
-    };
-  }
-  std::vector<double> peak_contact_force(contacts.size(), 0.0);
-  const ExternalLoads loads = BuildLoads(problem);
-  const HistoryRecorder history(problem, timed ? duration : 0.0, named_contacts);
-  options.on_increment = [&](double load, const Eigen::VectorXd& u) {
-    solution->step_load_factor.push_back(timed ? amplitude(load) : load);
-    if (timed) solution->step_time_s.push_back(load * duration);
-    for (int i = 0; i < u.size(); ++i) solution->step_displacement_mm.push_back(u(i) / 1e-3);
-    if (field->viscous() && one_point) field->Commit(ElementDeformationGradients(mesh, u));
-    for (std::size_t i = 0; i < contacts.size(); ++i) {
-      contacts[i]->Commit(u);
-      peak_contact_force[i] = std::max(peak_contact_force[i], contacts[i]->Measure(u).force.norm());
-    }
-    if (timed) history.Record(solid, &loads, load, amplitude(load), u, solution);
-  };
-
-  // Checkpoints (QUASI_STATIC only): a restart takes up the state of a
-  // converged step; later ones are written after converged steps.
-  const SolveOptions& solve_options = clock.options();
-  std::vector<RigidContact*> contact_state;
-  for (auto& contact : contacts) contact_state.push_back(contact.get());
-  Checkpointer checkpoints(solve_options, problem.name, duration, mesh, dofs, field.get(),
-                           contact_state);
-  NewtonReport report;
-  if (timed && checkpoints.restarts()) {
-    PBA_RETURN_IF_ERROR(checkpoints.Restore(solution, &options, &peak_contact_force));
-    summary.notes.push_back(
-        Format("restarted from a checkpoint at t = %g s", checkpoints.restored_time_s()));
-  } else if (timed) {
-    // The history starts at t = 0 with the state before any step.
-    for (auto& contact : contacts) contact->SetAmplitude(amplitude(0));
-    field->BeginStep(0, amplitude(0));
-    history.Record(solid, &loads, 0, amplitude(0), Eigen::VectorXd::Zero(dofs.num_dofs()),
-                   solution);
-  }
-  if (timed && checkpoints.writes()) {
-    options.after_increment = [&](double load, double next_step, const Eigen::VectorXd& u) {
-      return checkpoints.AfterIncrement(load, next_step, u, *solution, report, peak_contact_force);
-    };
-  }
-  clock.Begin("newton", 0.05, 0.85,
-              timed
-                  ? Format("Newton-Raphson on %d unknowns through %g s", dofs.num_free(), duration)
-                  : Format("Newton-Raphson on %d unknowns, %d initial increments", dofs.num_free(),
-                           options.initial_increments));
-  Eigen::VectorXd u;
-  if (!loads.empty()) {
-    const Eigen::Vector3d total = loads.ReferenceResultant();
-    summary.notes.push_back(
-        Format("applied loads: resultant (%.6g, %.6g, %.6g) N on the reference configuration%s",
-               total.x(), total.y(), total.z(),
-               loads.follows_deformation() ? "; pressure follows the deformed surface" : ""));
-  }
-  const Status status = SolveNewtonStatic(
-      solid, &loads, dofs, options, solver.get(),
-      [&](const NewtonProgress& p) {
-        const std::string where = timed ? Format("t = %.4g s", p.load_factor * duration)
-                                        : Format("load factor %.3g", p.load_factor);
-        clock.Update(p.load_factor, p.iteration == 0
-                                        ? where + " reached"
-                                        : Format("%s, iteration %d, relative residual %.2g",
-                                                 where.c_str(), p.iteration, p.relative_residual));
-        return !clock.cancelled();
-      },
-      &u, &report);
-  // The factorisation (with PCG, a copy of the matrix and its incomplete
-  // factor) would otherwise stay resident through recovery and the error
-  // estimate; only the solver's name is wanted after Newton.
-  const std::string solver_name = solver->Name();
-  solver.reset();
-  checkpoints.Merge(&report);
-  summary.newton_iterations = report.total_iterations;
-  summary.increment_cuts = report.cuts;
-  summary.newton_assembly_s = report.assembly_s;
-  summary.newton_linear_solve_s = report.linear_solve_s;
-  summary.newton_residual_s = report.residual_s;
-  for (const IncrementRecord& r : report.increments) {
-    summary.increments.push_back({timed ? amplitude(r.load_factor) : r.load_factor, r.iterations,
-                                  r.relative_residual, r.negative_eigenvalues});
-    if (timed) {
-      summary.time_steps.push_back({r.load_factor * duration, r.step * duration,
-                                    amplitude(r.load_factor), r.iterations, r.relative_residual});
-    }
-  }
-  if (status.code() == Status::Code::kNumerical && timed) {
-    return Status::Numerical(
-        status.message() + Format(" (load factor = t / %g s)", duration) +
-        "; the motion or load may be too large or too fast for this mesh - try a finer mesh, "
-        "smaller steps (analysis.time.initial_step_s, min_step_s) or a smaller displacement or "
-        "load");
-  }
-  if (status.code() == Status::Code::kNumerical) {
-    return Status::Numerical(status.message() +
-                             "; the prescribed deformation or load may be too large for this "
-                             "mesh (elements invert) - try a finer mesh, more increments "
-                             "(analysis.nonlinear.increments) or a smaller displacement or load");
-  }
-  PBA_RETURN_IF_ERROR(status);
-  clock.End();
-
-  clock.Begin("recover", 0.85, 0.95, "finite-strain fields, reactions");
   const int ne = mesh.num_elements();
   solution->strain.resize(6 * static_cast<std::size_t>(ne));
   solution->almansi_strain.resize(6 * static_cast<std::size_t>(ne));
@@ -338,7 +173,8 @@ Status SolveFiniteStrain(const Problem& problem, PhaseClock* clock_ptr, Solution
   solution->pk2_stress_pa.resize(6 * static_cast<std::size_t>(ne));
   solution->von_mises_pa.resize(ne);
   solution->jacobian.resize(ne);
-  std::vector<double> volume(ne);
+  std::vector<double>& volume = *volume_out;
+  volume.assign(ne, 0.0);
   double max_strain = 0;
   // The average-nodal-pressure element's pressure and volume ratio: the
   // means over its corners of U'(J_a) and J_a, J_a = v_a / V_a the nodal
@@ -347,9 +183,13 @@ Status SolveFiniteStrain(const Problem& problem, PhaseClock* clock_ptr, Solution
   std::vector<double> element_pressure, element_volume_ratio;
   const bool nodal_pressure = !plain && !mesh.quadratic() && !mesh.hexahedral();
   if (nodal_pressure) {
-    AverageNodalPressures(mesh, *field, u, &element_pressure, &element_volume_ratio);
+    AverageNodalPressures(mesh, field, u, &element_pressure, &element_volume_ratio);
   }
-#pragma omp parallel for reduction(max : max_strain) schedule(static)
+  // clang-format splits "max : max_strain" across the continuation.
+  // clang-format off
+#pragma omp parallel for schedule(static) reduction(max : max_strain) \
+    num_threads(problem.threads.threads()) if (problem.threads.Parallel(ne))
+  // clang-format on
   for (int e = 0; e < ne; ++e) {
     // One point for a 4-node element; the volume average over the four
     // integration points for a 10-node one.
@@ -363,7 +203,7 @@ Status SolveFiniteStrain(const Problem& problem, PhaseClock* clock_ptr, Solution
       const double theta = MeanDilatation(g, ue);
       for (int q = 0; q < 8; ++q) {
         const PointFields p =
-            FieldsAt(field->At(e),
+            FieldsAt(field.At(e),
                      full_bricks ? DeformationGradientHex8(g.grad[q], ue)
                                  : MeanDilatationF(DeformationGradientHex8(g.grad[q], ue), theta));
         sum.Add(g.volume[q], p);
@@ -377,7 +217,7 @@ Status SolveFiniteStrain(const Problem& problem, PhaseClock* clock_ptr, Solution
       const double theta = tet10_md ? MeanDilatation(g, ue) : 0;
       for (int q = 0; q < 4; ++q) {
         const Eigen::Matrix3d f = DeformationGradientTet10(g.grad[q], ue);
-        const PointFields p = FieldsAt(field->At(e), tet10_md ? MeanDilatationF(f, theta) : f);
+        const PointFields p = FieldsAt(field.At(e), tet10_md ? MeanDilatationF(f, theta) : f);
         sum.Add(g.volume[q], p);
         v += g.volume[q];
         max_strain = std::max(max_strain, p.green.cwiseAbs().maxCoeff());
@@ -387,8 +227,8 @@ Status SolveFiniteStrain(const Problem& problem, PhaseClock* clock_ptr, Solution
       v = g.volume;
       const Eigen::Matrix3d f = DeformationGradient(g, GatherElement(mesh, e, u));
       sum.Add(v, nodal_pressure
-                     ? FieldsAt(field->At(e), f, element_pressure[e], element_volume_ratio[e])
-                     : FieldsAt(field->At(e), f));
+                     ? FieldsAt(field.At(e), f, element_pressure[e], element_volume_ratio[e])
+                     : FieldsAt(field.At(e), f));
       max_strain = std::max(max_strain, sum.green.cwiseAbs().maxCoeff() / v);
     }
     Eigen::Map<Vector6d>(&solution->strain[6 * e]) = sum.green / v;
@@ -399,97 +239,70 @@ Status SolveFiniteStrain(const Problem& problem, PhaseClock* clock_ptr, Solution
     solution->jacobian[e] = sum.j / v;
     volume[e] = v;
   }
-  double energy = 0;
-  for (std::size_t i = 0; i < contacts.size(); ++i) {
-    const ContactMeasure m = contacts[i]->Measure(u);
-    ContactSummary c;
-    c.name = problem.contacts[i].name;
-    for (int k = 0; k < 3; ++k) c.force_n[k] = m.force(k);
-    c.peak_force_n = peak_contact_force[i];
-    c.area_mm2 = m.area * 1e6;
-    c.max_penetration_mm = m.penetration * 1e3;
-    c.penalty_pa_per_mm = contacts[i]->penalty() * 1e-3;
-    c.augmentations = report.augmentations;
-    summary.contacts.push_back(c);
-  }
-  if (!solid.InternalForce(u, &result->internal_force, &energy)) {
-    return Status::Internal("an element inverted after a converged solve");
-  }
-  if (!loads.empty()) result->external_force = loads.Force(u);
-  clock.End();
+  return max_strain;
+}
 
-  clock.Begin("estimate", 0.95, 0.99, "Zienkiewicz-Zhu error estimate");
+// The Zienkiewicz-Zhu estimate of the second Piola-Kirchhoff stress at u,
+// measured with each element's initial compliance; solution->pk2_stress_pa
+// must hold the element means.
+ErrorEstimateResult EstimateFiniteStrainError(const Problem& problem, const MaterialField& field,
+                                              const Eigen::VectorXd& u, const Solution& solution,
+                                              const std::vector<double>& volume) {
+  const Mesh& mesh = problem.model.mesh;
+  const bool full_bricks = problem.element == ElementType::kHex8Full;
+  const bool tet10_md = problem.element == ElementType::kTet10Md;
   // The recovery samples the stress at an element's nodes, outside its
   // integration points: under heavy compression F there may be inverted
   // although the element is sound where it is integrated. There it takes
   // the element's mean stress.
   const auto stress_or_mean = [&](int e, const Eigen::Matrix3d& f) -> Vector6d {
-    if (IsAdmissible(f)) return field->At(e).Stress(f);
-    return Eigen::Map<const Vector6d>(&solution->pk2_stress_pa[6 * static_cast<std::size_t>(e)]);
+    if (IsAdmissible(f)) return field.At(e).Stress(f);
+    return Eigen::Map<const Vector6d>(&solution.pk2_stress_pa[6 * static_cast<std::size_t>(e)]);
   };
   // Each element's stress measured with its own material's initial compliance.
-  const ElasticityField elasticity = MakeElasticityField(model.materials);
-  const ErrorEstimateResult estimate =
-      mesh.quadratic()
-          ? EstimateZzErrorTet10(
-                mesh,
-                [&](int e, const Eigen::Vector3d& xi) -> Vector6d {
-                  const Tet10Nodes x = Tet10Coordinates(mesh, e);
-                  const Vector30d ue = GatherElementTet10(mesh, e, u);
-                  Tet10Nodes grad;
-                  Tet10Gradients(x, xi, &grad);
-                  const Eigen::Matrix3d f = DeformationGradientTet10(grad, ue);
-                  if (!tet10_md || !IsAdmissible(f)) return stress_or_mean(e, f);
-                  return stress_or_mean(
-                      e, MeanDilatationF(f, MeanDilatation(ComputeTet10Geometry(x), ue)));
-                },
-                elasticity)
-      : mesh.hexahedral()
-          ? EstimateZzErrorHex8(
-                mesh,
-                [&](int e, const Eigen::Vector3d& xi) -> Vector6d {
-                  const Hex8Nodes x = Hex8Coordinates(mesh, e);
-                  const Vector24d ue = GatherElementHex8(mesh, e, u);
-                  Hex8Nodes grad;
-                  Hex8Gradients(x, xi, &grad);
-                  const Eigen::Matrix3d f = DeformationGradientHex8(grad, ue);
-                  if (full_bricks || !IsAdmissible(f)) return stress_or_mean(e, f);
-                  return stress_or_mean(
-                      e, MeanDilatationF(f, MeanDilatation(ComputeHex8Geometry(x), ue)));
-                },
-                elasticity)
-          : EstimateZzError(mesh, solution->pk2_stress_pa, volume, elasticity);
-  solution->error_indicator = estimate.element_share;
-  summary.error.estimated = true;
-  summary.error.method =
-      "Zienkiewicz-Zhu recovery of the second Piola-Kirchhoff stress (nodal averaging), "
-      "measured with the initial compliance";
-  summary.error.relative_error = estimate.relative_error;
-  for (const RegionError& r : ErrorByRegion(mesh, estimate, "body")) {
-    summary.error.regions.push_back({r.name, r.elements, r.relative_error, r.share});
+  const ElasticityField elasticity = MakeElasticityField(problem.model.materials);
+  if (mesh.quadratic()) {
+    return EstimateZzErrorTet10(
+        mesh,
+        [&](int e, const Eigen::Vector3d& xi) -> Vector6d {
+          const Tet10Nodes x = Tet10Coordinates(mesh, e);
+          const Vector30d ue = GatherElementTet10(mesh, e, u);
+          Tet10Nodes grad;
+          Tet10Gradients(x, xi, &grad);
+          const Eigen::Matrix3d f = DeformationGradientTet10(grad, ue);
+          if (!tet10_md || !IsAdmissible(f)) return stress_or_mean(e, f);
+          return stress_or_mean(e, MeanDilatationF(f, MeanDilatation(ComputeTet10Geometry(x), ue)));
+        },
+        elasticity, problem.threads);
   }
-  summary.error.note =
-      "estimated discretisation error in the energy norm, relative to the solution's; at large "
-      "strain the initial-compliance norm makes it an indicator rather than a bound; refine the "
-      "mesh (mesh.element_size_mm) to reduce it";
-  clock.Update(1.0);
-  clock.End();
+  if (mesh.hexahedral()) {
+    return EstimateZzErrorHex8(
+        mesh,
+        [&](int e, const Eigen::Vector3d& xi) -> Vector6d {
+          const Hex8Nodes x = Hex8Coordinates(mesh, e);
+          const Vector24d ue = GatherElementHex8(mesh, e, u);
+          Hex8Nodes grad;
+          Hex8Gradients(x, xi, &grad);
+          const Eigen::Matrix3d f = DeformationGradientHex8(grad, ue);
+          if (full_bricks || !IsAdmissible(f)) return stress_or_mean(e, f);
+          return stress_or_mean(e, MeanDilatationF(f, MeanDilatation(ComputeHex8Geometry(x), ue)));
+        },
+        elasticity, problem.threads);
+  }
+  return EstimateZzError(mesh, solution.pk2_stress_pa, volume, elasticity, problem.threads);
+}
 
-  summary.analysis = timed ? Format(
-                                 "quasi-static through %g s (finite strain, total Lagrangian, "
-                                 "Newton-Raphson in %zu adaptive time steps)",
-                                 duration, report.increments.size())
-                           : "nonlinear static (finite strain, total Lagrangian, Newton-Raphson)";
-  summary.linear_solver = solver_name;
-  summary.notes.push_back("elements: " + solid.Describe());
+// The Newton report's notes for the summary: substitute tangents,
+// unstable equilibria, cut increments.
+void NoteNewtonReport(const NewtonReport& report, Summary* summary) {
   if (report.approximate_iterations > 0) {
-    summary.notes.push_back(
+    summary->notes.push_back(
         Format("%d Newton iteration(s) met a tangent that was not positive definite (far from "
                "equilibrium) and stepped with it less the pressure's initial-stress terms",
                report.approximate_iterations));
   }
   if (report.modified_iterations > 0) {
-    summary.notes.push_back(
+    summary->notes.push_back(
         Format("%d Newton iteration(s) met a tangent that was not positive definite (far from "
                "equilibrium) and stepped with the last positive definite one instead",
                report.modified_iterations));
@@ -500,7 +313,7 @@ Status SolveFiniteStrain(const Problem& problem, PhaseClock* clock_ptr, Solution
     most_negative = std::max(most_negative, r.negative_eigenvalues);
   }
   if (unstable > 0) {
-    summary.notes.push_back(Format(
+    summary->notes.push_back(Format(
         "%d increment(s) converged to an equilibrium whose tangent stiffness has up to %d "
         "negative eigenvalue(s): the load path passed a bifurcation (buckling, or a spurious mode "
         "of the element) and follows the fundamental branch, which is unstable there; "
@@ -508,15 +321,318 @@ Status SolveFiniteStrain(const Problem& problem, PhaseClock* clock_ptr, Solution
         unstable, most_negative, report.indefinite_iterations));
   }
   if (report.cuts > 0) {
-    summary.notes.push_back(Format("%d load increment(s) were cut back and retried; first: %s",
-                                   report.cuts, report.cut_reasons.front().c_str()));
+    summary->notes.push_back(Format("%d load increment(s) were cut back and retried; first: %s",
+                                    report.cuts, report.cut_reasons.front().c_str()));
   }
-  summary.relative_residual =
-      report.increments.empty() ? 0 : report.increments.back().relative_residual;
-  result->u = std::move(u);
-  result->strain_energy_j = energy;
-  result->max_strain = max_strain;
+}
+
+// Both finite-strain analyses: NONLINEAR_STATIC ramps the loads with the
+// load factor, QUASI_STATIC follows them through time. The run builds the
+// element model with its contacts, wires Newton's observers (history,
+// checkpoints, progress) and recovers the fields and the error estimate.
+class FiniteStrainRun {
+ public:
+  FiniteStrainRun(const Problem& problem, PhaseClock* clock, Solution* solution)
+      : problem_(problem),
+        clock_(*clock),
+        solution_(solution),
+        summary_(solution->summary),
+        mesh_(problem.model.mesh),
+        dofs_(problem.model.dofs),
+        timed_(problem.analysis == AnalysisSpec::Type::kQuasiStatic),
+        one_point_(!mesh_.quadratic() && !mesh_.hexahedral()) {}
+
+  Status Run(StaticResult* result);
+
+ private:
+  Status MakeModel();
+  void MakeNewtonOptions();
+  Status StartHistory();
+  Status Solve();
+  Status Recover(StaticResult* result);
+  void Estimate();
+  void Summarise();
+  double Amplitude(double load) const {
+    return timed_ ? curve_->Amplitude(load * duration_) : load;
+  }
+
+  const Problem& problem_;
+  PhaseClock& clock_;
+  Solution* solution_;
+  Summary& summary_;
+  const Mesh& mesh_;
+  const DofMap& dofs_;
+  const bool timed_, one_point_;
+
+  std::unique_ptr<MaterialField> field_;
+  std::unique_ptr<FiniteStrainModel> body_, touching_;
+  const FiniteStrainModel* solid_ = nullptr;
+  std::vector<std::unique_ptr<RigidContact>> contacts_;
+  std::vector<std::pair<std::string, const RigidContact*>> named_contacts_;
+  std::vector<double> peak_contact_force_;
+  std::unique_ptr<LinearSolver> solver_;
+  std::string solver_name_;
+  std::optional<TimeCurve> curve_;
+  double duration_ = 1;
+  NewtonOptions options_;
+  std::optional<ExternalLoads> loads_;
+  std::optional<HistoryRecorder> history_;
+  std::optional<Checkpointer> checkpoints_;
+  NewtonReport report_;
+  Eigen::VectorXd u_;
+  std::vector<double> volume_;
+};
+
+// The element model for the problem's element type, with its contacts.
+Status FiniteStrainRun::MakeModel() {
+  field_ = MakeMaterialField(problem_.model.materials, problem_.relaxed_below_s,
+                             problem_.frozen_above_s, problem_.threads);
+  const MaterialField& field = *field_;
+  summary_.element_type = ElementName(problem_.element);
+  if (!one_point_ && ((timed_ && field.viscous()) || field.grows())) {
+    // ValidateScene refuses these (scene_checks::ValidateHistoryElements).
+    return Status::Internal(std::string(field.grows() ? "growth" : "viscoelastic relaxation") +
+                            " reached a " + summary_.element_type +
+                            " model, which keeps no history");
+  }
+  if (!timed_ && field.viscous()) {
+    summary_.notes.push_back(
+        "viscoelastic relaxation is not used by a static analysis: the instantaneous "
+        "(hyperelastic) response is solved; QUASI_STATIC follows it through time");
+  }
+  for (const std::string& note : problem_.model.materials.notes) summary_.notes.push_back(note);
+  const ElementType element = problem_.element;
+  const ThreadContext& threads = problem_.threads;
+  body_ = element == ElementType::kTet10Md    ? MakeTet10MdModel(mesh_, field, threads)
+          : mesh_.quadratic()                 ? MakeTet10Model(mesh_, field, threads)
+          : element == ElementType::kHex8Full ? MakeHex8FullModel(mesh_, field, threads)
+          : mesh_.hexahedral()                ? MakeHex8Model(mesh_, field, threads)
+          : element == ElementType::kTet4
+              ? MakeTet4Model(mesh_, field, threads)
+              : MakeAverageNodalPressureTet4Model(mesh_, field, threads);
+  PBA_RETURN_IF_ERROR(
+      MakeContacts(problem_, field.Base(0).ShearModulus(), &contacts_, &summary_.notes));
+  std::vector<const RigidContact*> contact_views;
+  for (std::size_t i = 0; i < contacts_.size(); ++i) {
+    contact_views.push_back(contacts_[i].get());
+    named_contacts_.emplace_back(problem_.contacts[i].name, contacts_[i].get());
+  }
+  if (!contacts_.empty()) touching_ = WithContact(*body_, contact_views);
+  solid_ = touching_ ? touching_.get() : body_.get();
+  peak_contact_force_.assign(contacts_.size(), 0.0);
   return Status::Ok();
+}
+
+// Newton's options and its observers: time steps, the field's and the
+// contacts' step, contact augmentation, what each converged increment
+// records.
+void FiniteStrainRun::MakeNewtonOptions() {
+  options_ = OptionsOf(problem_.nonlinear);
+  // Time: the load factor is t / T and the loads follow a(t); a static
+  // analysis is the ramp a = load factor with instantaneous steps.
+  TimeOptions unit_ramp;
+  unit_ramp.end_s = 1;
+  curve_.emplace(timed_ ? problem_.time : unit_ramp);
+  duration_ = curve_->end_s();
+  if (timed_) summary_.notes.push_back(SetTimeSteps(problem_.time, *curve_, *field_, &options_));
+  options_.amplitude = [this](double load) { return Amplitude(load); };
+  options_.begin_increment = [this](double from, double to) {
+    field_->BeginStep(timed_ ? (to - from) * duration_ : 0.0, Amplitude(to));
+    for (auto& contact : contacts_) contact->SetAmplitude(Amplitude(to));
+    return Status::Ok();
+  };
+  if (!contacts_.empty()) {
+    options_.augment = [this](const Eigen::VectorXd& u) {
+      bool changed = false;
+      for (auto& contact : contacts_) changed = contact->Augment(u) || changed;
+      return changed;
+    };
+  }
+  loads_.emplace(BuildLoads(problem_));
+  history_.emplace(problem_, timed_ ? duration_ : 0.0, named_contacts_);
+  options_.on_increment = [this](double load, const Eigen::VectorXd& u) {
+    solution_->step_load_factor.push_back(timed_ ? Amplitude(load) : load);
+    if (timed_) solution_->step_time_s.push_back(load * duration_);
+    for (int i = 0; i < u.size(); ++i) solution_->step_displacement_mm.push_back(u(i) / 1e-3);
+    if (field_->viscous() && one_point_)
+      field_->Commit(ElementDeformationGradients(mesh_, u, problem_.threads));
+    for (std::size_t i = 0; i < contacts_.size(); ++i) {
+      contacts_[i]->Commit(u);
+      peak_contact_force_[i] =
+          std::max(peak_contact_force_[i], contacts_[i]->Measure(u).force.norm());
+    }
+    if (timed_) history_->Record(*solid_, &*loads_, load, Amplitude(load), u, solution_);
+  };
+}
+
+// Checkpoints (QUASI_STATIC only): a restart takes up the state of a
+// converged step; later ones are written after converged steps. A fresh
+// timed run's history starts at t = 0 with the state before any step.
+Status FiniteStrainRun::StartHistory() {
+  std::vector<RigidContact*> contact_state;
+  for (auto& contact : contacts_) contact_state.push_back(contact.get());
+  checkpoints_.emplace(clock_.options(), problem_.name, duration_, mesh_, dofs_, field_.get(),
+                       contact_state);
+  if (timed_ && checkpoints_->restarts()) {
+    PBA_RETURN_IF_ERROR(checkpoints_->Restore(solution_, &options_, &peak_contact_force_));
+    summary_.notes.push_back(
+        Format("restarted from a checkpoint at t = %g s", checkpoints_->restored_time_s()));
+  } else if (timed_) {
+    for (auto& contact : contacts_) contact->SetAmplitude(Amplitude(0));
+    field_->BeginStep(0, Amplitude(0));
+    history_->Record(*solid_, &*loads_, 0, Amplitude(0), Eigen::VectorXd::Zero(dofs_.num_dofs()),
+                     solution_);
+  }
+  if (timed_ && checkpoints_->writes()) {
+    options_.after_increment = [this](double load, double next_step, const Eigen::VectorXd& u) {
+      return checkpoints_->AfterIncrement(load, next_step, u, *solution_, report_,
+                                          peak_contact_force_);
+    };
+  }
+  return Status::Ok();
+}
+
+Status FiniteStrainRun::Solve() {
+  clock_.Begin(
+      "newton", 0.05, 0.85,
+      timed_ ? Format("Newton-Raphson on %d unknowns through %g s", dofs_.num_free(), duration_)
+             : Format("Newton-Raphson on %d unknowns, %d initial increments", dofs_.num_free(),
+                      options_.initial_increments));
+  if (!loads_->empty()) {
+    const Eigen::Vector3d total = loads_->ReferenceResultant();
+    summary_.notes.push_back(
+        Format("applied loads: resultant (%.6g, %.6g, %.6g) N on the reference configuration%s",
+               total.x(), total.y(), total.z(),
+               loads_->follows_deformation() ? "; pressure follows the deformed surface" : ""));
+  }
+  const Status status = SolveNewtonStatic(
+      *solid_, &*loads_, dofs_, options_, solver_.get(),
+      [this](const NewtonProgress& p) {
+        const std::string where = timed_ ? Format("t = %.4g s", p.load_factor * duration_)
+                                         : Format("load factor %.3g", p.load_factor);
+        clock_.Update(p.load_factor, p.iteration == 0
+                                         ? where + " reached"
+                                         : Format("%s, iteration %d, relative residual %.2g",
+                                                  where.c_str(), p.iteration, p.relative_residual));
+        return !clock_.cancelled();
+      },
+      &u_, &report_);
+  // The factorisation (with PCG, a copy of the matrix and its incomplete
+  // factor) would otherwise stay resident through recovery and the error
+  // estimate; only the solver's name is wanted after Newton.
+  solver_name_ = solver_->Name();
+  solver_.reset();
+  checkpoints_->Merge(&report_);
+  summary_.newton_iterations = report_.total_iterations;
+  summary_.increment_cuts = report_.cuts;
+  summary_.newton_assembly_s = report_.assembly_s;
+  summary_.newton_linear_solve_s = report_.linear_solve_s;
+  summary_.newton_residual_s = report_.residual_s;
+  for (const IncrementRecord& r : report_.increments) {
+    summary_.increments.push_back({timed_ ? Amplitude(r.load_factor) : r.load_factor, r.iterations,
+                                   r.relative_residual, r.negative_eigenvalues});
+    if (timed_) {
+      summary_.time_steps.push_back({r.load_factor * duration_, r.step * duration_,
+                                     Amplitude(r.load_factor), r.iterations, r.relative_residual});
+    }
+  }
+  if (status.code() == Status::Code::kNumerical && timed_) {
+    return Status::Numerical(
+        status.message() + Format(" (load factor = t / %g s)", duration_) +
+        "; the motion or load may be too large or too fast for this mesh - try a finer mesh, "
+        "smaller steps (analysis.time.initial_step_s, min_step_s) or a smaller displacement or "
+        "load");
+  }
+  if (status.code() == Status::Code::kNumerical) {
+    return Status::Numerical(status.message() +
+                             "; the prescribed deformation or load may be too large for this "
+                             "mesh (elements invert) - try a finer mesh, more increments "
+                             "(analysis.nonlinear.increments) or a smaller displacement or load");
+  }
+  PBA_RETURN_IF_ERROR(status);
+  clock_.End();
+  return Status::Ok();
+}
+
+Status FiniteStrainRun::Recover(StaticResult* result) {
+  clock_.Begin("recover", 0.85, 0.95, "finite-strain fields, reactions");
+  result->max_strain = RecoverFiniteStrainFields(problem_, *field_, u_, solution_, &volume_);
+  for (std::size_t i = 0; i < contacts_.size(); ++i) {
+    const ContactMeasure m = contacts_[i]->Measure(u_);
+    ContactSummary c;
+    c.name = problem_.contacts[i].name;
+    for (int k = 0; k < 3; ++k) c.force_n[k] = m.force(k);
+    c.peak_force_n = peak_contact_force_[i];
+    c.area_mm2 = m.area * 1e6;
+    c.max_penetration_mm = m.penetration * 1e3;
+    c.penalty_pa_per_mm = contacts_[i]->penalty() * 1e-3;
+    c.augmentations = report_.augmentations;
+    summary_.contacts.push_back(c);
+  }
+  double energy = 0;
+  if (!solid_->InternalForce(u_, &result->internal_force, &energy)) {
+    return Status::Internal("an element inverted after a converged solve");
+  }
+  result->strain_energy_j = energy;
+  if (!loads_->empty()) result->external_force = loads_->Force(u_);
+  clock_.End();
+  return Status::Ok();
+}
+
+void FiniteStrainRun::Estimate() {
+  clock_.Begin("estimate", 0.95, 0.99, "Zienkiewicz-Zhu error estimate");
+  const ErrorEstimateResult estimate =
+      EstimateFiniteStrainError(problem_, *field_, u_, *solution_, volume_);
+  solution_->error_indicator = estimate.element_share;
+  summary_.error.estimated = true;
+  summary_.error.method =
+      "Zienkiewicz-Zhu recovery of the second Piola-Kirchhoff stress (nodal averaging), "
+      "measured with the initial compliance";
+  summary_.error.relative_error = estimate.relative_error;
+  for (const RegionError& r : ErrorByRegion(mesh_, estimate, "body")) {
+    summary_.error.regions.push_back({r.name, r.elements, r.relative_error, r.share});
+  }
+  summary_.error.note =
+      "estimated discretisation error in the energy norm, relative to the solution's; at large "
+      "strain the initial-compliance norm makes it an indicator rather than a bound; refine the "
+      "mesh (mesh.element_size_mm) to reduce it";
+  clock_.Update(1.0);
+  clock_.End();
+}
+
+void FiniteStrainRun::Summarise() {
+  summary_.analysis = timed_ ? Format(
+                                   "quasi-static through %g s (finite strain, total Lagrangian, "
+                                   "Newton-Raphson in %zu adaptive time steps)",
+                                   duration_, report_.increments.size())
+                             : "nonlinear static (finite strain, total Lagrangian, Newton-Raphson)";
+  summary_.linear_solver = solver_name_;
+  summary_.notes.push_back("elements: " + solid_->Describe());
+  NoteNewtonReport(report_, &summary_);
+  summary_.relative_residual =
+      report_.increments.empty() ? 0 : report_.increments.back().relative_residual;
+}
+
+Status FiniteStrainRun::Run(StaticResult* result) {
+  PBA_RETURN_IF_ERROR(MakeModel());
+  // PCG looks at the cancel flag every iteration (a direct factorisation cannot).
+  LinearSolverOptions linear_solver = problem_.linear_solver;
+  linear_solver.cancel = clock_.options().cancel;
+  solver_ = CreateLinearSolver(linear_solver);
+  MakeNewtonOptions();
+  PBA_RETURN_IF_ERROR(StartHistory());
+  PBA_RETURN_IF_ERROR(Solve());
+  PBA_RETURN_IF_ERROR(Recover(result));
+  Estimate();
+  Summarise();
+  result->u = std::move(u_);
+  return Status::Ok();
+}
+
+Status SolveFiniteStrain(const Problem& problem, PhaseClock* clock, Solution* solution,
+                         StaticResult* result) {
+  FiniteStrainRun run(problem, clock, solution);
+  return run.Run(result);
 }
 
 }  // namespace

@@ -58,8 +58,9 @@ std::unique_ptr<FiniteStrainModel> MakeTet10Model(const Mesh& mesh,
   return MakeElementModel(mesh, material, Tet10Element{false});
 }
 
-std::unique_ptr<FiniteStrainModel> MakeTet10Model(const Mesh& mesh, const MaterialField& field) {
-  return std::make_unique<ElementModel<Tet10Element>>(mesh, field, Tet10Element{false});
+std::unique_ptr<FiniteStrainModel> MakeTet10Model(const Mesh& mesh, const MaterialField& field,
+                                                  const ThreadContext& threads) {
+  return std::make_unique<ElementModel<Tet10Element>>(mesh, field, Tet10Element{false}, threads);
 }
 
 std::unique_ptr<FiniteStrainModel> MakeTet10MdModel(const Mesh& mesh,
@@ -67,8 +68,9 @@ std::unique_ptr<FiniteStrainModel> MakeTet10MdModel(const Mesh& mesh,
   return MakeElementModel(mesh, material, Tet10Element{true});
 }
 
-std::unique_ptr<FiniteStrainModel> MakeTet10MdModel(const Mesh& mesh, const MaterialField& field) {
-  return std::make_unique<ElementModel<Tet10Element>>(mesh, field, Tet10Element{true});
+std::unique_ptr<FiniteStrainModel> MakeTet10MdModel(const Mesh& mesh, const MaterialField& field,
+                                                    const ThreadContext& threads) {
+  return std::make_unique<ElementModel<Tet10Element>>(mesh, field, Tet10Element{true}, threads);
 }
 
 }  // namespace pba

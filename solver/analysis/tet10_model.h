@@ -23,11 +23,13 @@ namespace pba {
 // [m, N]. `mesh` and `material` must outlive the model.
 std::unique_ptr<FiniteStrainModel> MakeTet10Model(const Mesh& mesh,
                                                   const HyperelasticMaterial& material);
-std::unique_ptr<FiniteStrainModel> MakeTet10Model(const Mesh& mesh, const MaterialField& field);
+std::unique_ptr<FiniteStrainModel> MakeTet10Model(const Mesh& mesh, const MaterialField& field,
+                                                  const ThreadContext& threads = ThreadContext());
 
 // The mean-dilatation 10-node element, on the same terms as MakeTet10Model.
 std::unique_ptr<FiniteStrainModel> MakeTet10MdModel(const Mesh& mesh,
                                                     const HyperelasticMaterial& material);
-std::unique_ptr<FiniteStrainModel> MakeTet10MdModel(const Mesh& mesh, const MaterialField& field);
+std::unique_ptr<FiniteStrainModel> MakeTet10MdModel(const Mesh& mesh, const MaterialField& field,
+                                                    const ThreadContext& threads = ThreadContext());
 
 }  // namespace pba

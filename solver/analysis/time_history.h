@@ -9,12 +9,12 @@
 #include <vector>
 
 #include "analysis/finite_strain_model.h"
-#include "analysis/material_field.h"
 #include "analysis/newton_static.h"
 #include "analysis/rigid_contact.h"
-#include "analysis/time_curve.h"
+#include "material/material_field.h"
 #include "pba/solve.h"
 #include "scene/problem.h"
+#include "scene/time_curve.h"
 
 namespace pba {
 

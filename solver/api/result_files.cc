@@ -1,10 +1,10 @@
 // The file-writing entries of pba/solve.h: ExportAbaqusInput (a scene
-// resolved and meshed as for a solve, written by io/abaqus_writer.h) and
+// resolved and meshed as for a solve, written by results/abaqus_writer.h) and
 // WriteResultFiles (a solution's files with the scene's outputs, written by
-// io/result_writer.h).
-#include "io/abaqus_writer.h"
-#include "io/result_writer.h"
+// results/result_writer.h).
 #include "pba/solve.h"
+#include "results/abaqus_writer.h"
+#include "results/result_writer.h"
 #include "scene/problem.h"
 #include "scene/unsolved.h"
 

@@ -147,9 +147,6 @@ namespace {
 
 // The assembly of AssembleSystem for elements of N nodes: `nodes_of(e)`
 // gives their indices, `kernel` their 3N x 3N stiffness and 3N force.
-// Smallest colour assembled by a team of threads.
-constexpr int kParallelColourFrom = 64;
-
 template <int N, typename NodesOf, typename Kernel>
 Status AssembleElements(const Mesh& mesh, const NodesOf& nodes_of, const DofMap& dofs,
                         const std::vector<std::vector<int>>& colours, const Kernel& kernel,
@@ -197,8 +194,8 @@ Status AssembleElements(const Mesh& mesh, const NodesOf& nodes_of, const DofMap&
   for (std::size_t c = 0; c < colours.size() && failed.load() < 0 && !missing.load(); ++c) {
     const std::vector<int>& elements = colours[c];
     const bool serial = c + 1 == static_cast<std::size_t>(kMaxColours) ||
-                        elements.size() < static_cast<std::size_t>(kParallelColourFrom);
-#pragma omp parallel for schedule(static) if (!serial)
+                        !options.threads.Parallel(elements.size());
+#pragma omp parallel for schedule(static) num_threads(options.threads.threads()) if (!serial)
     for (std::size_t k = 0; k < elements.size(); ++k) {
       if (failed.load(std::memory_order_relaxed) >= 0 || missing.load(std::memory_order_relaxed)) {
         continue;
@@ -295,7 +292,8 @@ Status AssembleSystemHex8(const Mesh& mesh, const DofMap& dofs,
 
 Status AssembleLinearSystem(const Mesh& mesh, const ElasticityField& elasticity, const DofMap& dofs,
                             const std::vector<std::vector<int>>& colours,
-                            const std::function<bool(double)>& keep_going, LinearSystem* system) {
+                            const std::function<bool(double)>& keep_going, LinearSystem* system,
+                            const ThreadContext& threads) {
   const ElementKernel kernel = [&](int e, Matrix12d* k, Vector12d* f) {
     *k = Tet4Stiffness(ComputeTet4Geometry(TetCorners(mesh, e)), elasticity.D(e));
     f->setZero();
@@ -303,13 +301,14 @@ Status AssembleLinearSystem(const Mesh& mesh, const ElasticityField& elasticity,
   };
   AssemblyOptions options;
   options.lift_prescribed = true;
+  options.threads = threads;
   return AssembleSystem(mesh, dofs, colours, kernel, options, keep_going, system);
 }
 
 Status AssembleLinearSystemTet10(const Mesh& mesh, const ElasticityField& elasticity,
                                  const DofMap& dofs, const std::vector<std::vector<int>>& colours,
                                  const std::function<bool(double)>& keep_going,
-                                 LinearSystem* system) {
+                                 LinearSystem* system, const ThreadContext& threads) {
   const Tet10ElementKernel kernel = [&](int e, Matrix30d* k, Vector30d* f) {
     *k = Tet10Stiffness(Tet10Coordinates(mesh, e), elasticity.D(e));
     f->setZero();
@@ -317,6 +316,7 @@ Status AssembleLinearSystemTet10(const Mesh& mesh, const ElasticityField& elasti
   };
   AssemblyOptions options;
   options.lift_prescribed = true;
+  options.threads = threads;
   return AssembleSystemTet10(mesh, dofs, colours, kernel, options, keep_going, system);
 }
 
@@ -327,7 +327,8 @@ namespace {
 Status AssembleLinearHex8(const Mesh& mesh, const ElasticityField& elasticity,
                           Matrix24d (*stiffness)(const Hex8Nodes&, const Matrix6d&),
                           const DofMap& dofs, const std::vector<std::vector<int>>& colours,
-                          const std::function<bool(double)>& keep_going, LinearSystem* system) {
+                          const std::function<bool(double)>& keep_going, LinearSystem* system,
+                          const ThreadContext& threads) {
   const Hex8ElementKernel kernel = [&](int e, Matrix24d* k, Vector24d* f) {
     *k = stiffness(Hex8Coordinates(mesh, e), elasticity.D(e));
     f->setZero();
@@ -335,6 +336,7 @@ Status AssembleLinearHex8(const Mesh& mesh, const ElasticityField& elasticity,
   };
   AssemblyOptions options;
   options.lift_prescribed = true;
+  options.threads = threads;
   return AssembleSystemHex8(mesh, dofs, colours, kernel, options, keep_going, system);
 }
 
@@ -342,17 +344,19 @@ Status AssembleLinearHex8(const Mesh& mesh, const ElasticityField& elasticity,
 
 Status AssembleLinearSystemHex8(const Mesh& mesh, const ElasticityField& elasticity,
                                 const DofMap& dofs, const std::vector<std::vector<int>>& colours,
-                                const std::function<bool(double)>& keep_going,
-                                LinearSystem* system) {
-  return AssembleLinearHex8(mesh, elasticity, Hex8Stiffness, dofs, colours, keep_going, system);
+                                const std::function<bool(double)>& keep_going, LinearSystem* system,
+                                const ThreadContext& threads) {
+  return AssembleLinearHex8(mesh, elasticity, Hex8Stiffness, dofs, colours, keep_going, system,
+                            threads);
 }
 
 Status AssembleLinearSystemHex8Full(const Mesh& mesh, const ElasticityField& elasticity,
                                     const DofMap& dofs,
                                     const std::vector<std::vector<int>>& colours,
                                     const std::function<bool(double)>& keep_going,
-                                    LinearSystem* system) {
-  return AssembleLinearHex8(mesh, elasticity, Hex8StiffnessFull, dofs, colours, keep_going, system);
+                                    LinearSystem* system, const ThreadContext& threads) {
+  return AssembleLinearHex8(mesh, elasticity, Hex8StiffnessFull, dofs, colours, keep_going, system,
+                            threads);
 }
 
 }  // namespace pba

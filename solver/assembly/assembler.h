@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "assembly/dof_map.h"
+#include "core/thread_context.h"
 #include "fem/hex8.h"
 #include "fem/tet10.h"
 #include "fem/tet4.h"
@@ -77,6 +78,9 @@ struct AssemblyOptions {
   // volumetric stiffness K; Newton falls back on it when the consistent
   // tangent cannot be factorised. Models without such a term ignore it.
   bool drop_pressure_stiffness = false;
+  // The threads a colour is assembled by; a colour under kMinParallelWork
+  // elements is assembled by the calling thread.
+  ThreadContext threads;
 };
 
 // Assembles K_ff = sum k and rhs_f = sum f (minus K_fp u_p when lifting).
@@ -111,26 +115,29 @@ Status AssembleSystemHex8(const Mesh& mesh, const DofMap& dofs,
 
 // Assembles K_ff and the right-hand side for the elasticity of each element,
 // `elasticity.D(e)`.
+// `threads`: the solve's (the default, every thread OpenMP gives).
 // `keep_going(fraction)` is called between colours; returning false stops
 // the assembly with Status::Cancelled.
 Status AssembleLinearSystem(const Mesh& mesh, const ElasticityField& elasticity, const DofMap& dofs,
                             const std::vector<std::vector<int>>& colours,
-                            const std::function<bool(double)>& keep_going, LinearSystem* system);
+                            const std::function<bool(double)>& keep_going, LinearSystem* system,
+                            const ThreadContext& threads = ThreadContext());
 
 // AssembleLinearSystem for a quadratic mesh: small-strain 10-node elements
 // (Tet10Stiffness), prescribed values lifted to the right-hand side.
 Status AssembleLinearSystemTet10(const Mesh& mesh, const ElasticityField& elasticity,
                                  const DofMap& dofs, const std::vector<std::vector<int>>& colours,
                                  const std::function<bool(double)>& keep_going,
-                                 LinearSystem* system);
+                                 LinearSystem* system,
+                                 const ThreadContext& threads = ThreadContext());
 
 // AssembleLinearSystem for a hexahedral mesh: small-strain 8-node elements
 // with B-bar mean dilatation (Hex8Stiffness), prescribed values lifted to
 // the right-hand side.
 Status AssembleLinearSystemHex8(const Mesh& mesh, const ElasticityField& elasticity,
                                 const DofMap& dofs, const std::vector<std::vector<int>>& colours,
-                                const std::function<bool(double)>& keep_going,
-                                LinearSystem* system);
+                                const std::function<bool(double)>& keep_going, LinearSystem* system,
+                                const ThreadContext& threads = ThreadContext());
 
 // The same with the plain, fully integrated brick (Hex8StiffnessFull, C3D8
 // of Abaqus and CalculiX), which locks as nu -> 1/2.
@@ -138,7 +145,8 @@ Status AssembleLinearSystemHex8Full(const Mesh& mesh, const ElasticityField& ela
                                     const DofMap& dofs,
                                     const std::vector<std::vector<int>>& colours,
                                     const std::function<bool(double)>& keep_going,
-                                    LinearSystem* system);
+                                    LinearSystem* system,
+                                    const ThreadContext& threads = ThreadContext());
 
 // Gathers the 12 element unknowns of tet `e` from the full vector `u`.
 Vector12d GatherElement(const Mesh& mesh, int e, const Eigen::VectorXd& u);

@@ -6,10 +6,11 @@
 #include <limits>
 #include <set>
 
-#include "atlas/bitmap_font.h"
 #include "atlas/geometric_validation.h"
 #include "core/atomic_write.h"
 #include "core/format.h"
+#include "core/number_format.h"
+#include "io/bitmap_font.h"
 
 namespace pba {
 namespace fs = std::filesystem;
@@ -62,7 +63,6 @@ std::vector<const ColourEntry*> ColourIndex(const ColourTable& colours) {
 }
 
 // "-16", "2.5": the shortest of %g.
-std::string Mm(double value) { return Format("%g", value); }
 
 }  // namespace
 
@@ -73,7 +73,8 @@ ContactSheetLayout LayOutContactSheet(const PlateStack& plates) {
   l.rows = (n + l.columns - 1) / l.columns;
   l.gap = 4;
   int caption = 0;
-  for (double z : plates.z_mm) caption = std::max(caption, TextWidth("z " + Mm(z) + " mm", 1));
+  for (double z : plates.z_mm)
+    caption = std::max(caption, TextWidth("z " + ShortNumber(z) + " mm", 1));
   const auto cell = [&](int tile, int scale) { return std::max(tile, caption * scale + 2); };
   for (l.step = 1;; ++l.step) {
     l.tile_width = (plates.width + l.step - 1) / l.step;
@@ -115,7 +116,7 @@ Status RenderPlateContactSheet(const PlateStack& plates, const std::string& noti
         Put(&sheet, left + c, top + r, rgb);
       }
     }
-    DrawText("z " + Mm(plates.z_mm[p]) + " mm", left + 2, top + l.tile_height + 3, l.scale,
+    DrawText("z " + ShortNumber(plates.z_mm[p]) + " mm", left + 2, top + l.tile_height + 3, l.scale,
              kTextColour, &sheet);
   }
   AddText(notice,

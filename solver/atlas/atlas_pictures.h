@@ -67,7 +67,7 @@
 #include "atlas/colour_table.h"
 #include "atlas/label_volume.h"
 #include "atlas/plates.h"
-#include "atlas/png_io.h"
+#include "io/png_io.h"
 #include "mesh/mesh.h"
 #include "pba/status.h"
 

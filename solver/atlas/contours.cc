@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <string>
 
+#include "core/number_format.h"
 #include "core/yaml_guard.h"
 
 namespace pba {
@@ -32,16 +33,6 @@ double TwiceArea(const std::vector<Eigen::Vector2d>& points) {
     area += a.x() * b.y() - b.x() * a.y();
   }
   return area;
-}
-
-// Shortest text that parses back to the same double.
-std::string Number(double v) {
-  char buffer[32];
-  for (int precision = 15; precision <= 17; ++precision) {
-    std::snprintf(buffer, sizeof buffer, "%.*g", precision, v);
-    if (std::strtod(buffer, nullptr) == v) break;
-  }
-  return buffer;
 }
 
 }  // namespace
@@ -122,18 +113,19 @@ Status ParseContoursJson(std::string_view text, const std::string& field, Contou
 
 std::string FormatContoursJson(const Contours& contours) {
   std::string out = "{\"format\": \"pba-contours\", \"version\": 1";
-  if (contours.pixel_size_mm > 0) out += ", \"pixel_size_mm\": " + Number(contours.pixel_size_mm);
+  if (contours.pixel_size_mm > 0)
+    out += ", \"pixel_size_mm\": " + RoundTripNumber(contours.pixel_size_mm);
   out += ",\n \"plates\": [";
   for (size_t p = 0; p < contours.plates.size(); ++p) {
     const ContourPlate& plate = contours.plates[p];
     out += p == 0 ? "\n  " : ",\n  ";
-    out += "{\"z_mm\": " + Number(plate.z_mm) + ", \"polygons\": [";
+    out += "{\"z_mm\": " + RoundTripNumber(plate.z_mm) + ", \"polygons\": [";
     for (size_t k = 0; k < plate.polygons.size(); ++k) {
       out += k == 0 ? "\n    [" : ",\n    [";
       for (size_t i = 0; i < plate.polygons[k].size(); ++i) {
         const Eigen::Vector2d& v = plate.polygons[k][i];
         if (i > 0) out += ", ";
-        out += "[" + Number(v.x()) + ", " + Number(v.y()) + "]";
+        out += "[" + RoundTripNumber(v.x()) + ", " + RoundTripNumber(v.y()) + "]";
       }
       out += "]";
     }

@@ -10,10 +10,11 @@
 #include <system_error>
 #include <unordered_map>
 
-#include "atlas/png_io.h"
 #include "core/atomic_write.h"
 #include "core/format.h"
+#include "core/number_format.h"
 #include "core/yaml_guard.h"
+#include "io/png_io.h"
 
 namespace pba {
 namespace fs = std::filesystem;
@@ -22,13 +23,6 @@ namespace {
 constexpr char kIndexFile[] = "plates.json";
 constexpr char kColourFile[] = "colour_table.csv";
 constexpr char kFormat[] = "pba-atlas-plates";
-
-// Shortest text that reads back as the same double.
-std::string Number(double value) {
-  char buffer[32];
-  const auto [end, error] = std::to_chars(buffer, buffer + sizeof buffer, value);
-  return error == std::errc() ? std::string(buffer, end) : "0";
-}
 
 std::string PlateFileName(int index, int count) {
   std::string number = std::to_string(index + 1);
@@ -62,12 +56,13 @@ std::string IndexJson(const Grid& g, const std::vector<double>& z,
   json += "  \"notice\": " + JsonQuoted(kSyntheticAtlasNotice) + ",\n";
   json += "  \"format\": " + JsonQuoted(kFormat) + ",\n  \"version\": 1,\n";
   json += "  \"colour_table\": " + JsonQuoted(kColourFile) + ",\n";
-  json += "  \"pixel_size_mm\": " + Number(g.pixel) + ",\n";
-  json += "  \"origin_mm\": [" + Number(g.origin.x()) + ", " + Number(g.origin.y()) + "],\n";
+  json += "  \"pixel_size_mm\": " + RoundTripNumber(g.pixel) + ",\n";
+  json += "  \"origin_mm\": [" + RoundTripNumber(g.origin.x()) + ", " +
+          RoundTripNumber(g.origin.y()) + "],\n";
   json += Format("  \"width\": %d,\n  \"height\": %d,\n  \"plates\": [\n", g.width, g.height);
   for (size_t p = 0; p < z.size(); ++p) {
-    json += "    {\"file\": " + JsonQuoted(files[p]) + ", \"z_mm\": " + Number(z[p]) + "}" +
-            (p + 1 < z.size() ? ",\n" : "\n");
+    json += "    {\"file\": " + JsonQuoted(files[p]) + ", \"z_mm\": " + RoundTripNumber(z[p]) +
+            "}" + (p + 1 < z.size() ? ",\n" : "\n");
   }
   return json + "  ]\n}\n";
 }
@@ -87,7 +82,7 @@ Status WriteAll(const LabelVolume& volume, const ColourTable& colours, const Pla
     image.rgb.assign(static_cast<size_t>(g.width) * g.height * 3, 0);
     image.text = {{"Comment", kSyntheticAtlasNotice},
                   {"Title", Format("PBA synthetic atlas plate %d of %d, z = ", p + 1, count) +
-                                Number(options.z_mm[p]) + " mm"}};
+                                RoundTripNumber(options.z_mm[p]) + " mm"}};
     for (int r = 0; r < g.height; ++r) {
       for (int c = 0; c < g.width; ++c) {
         const Eigen::Vector3d point(g.origin.x() + c * g.pixel, g.origin.y() - r * g.pixel,

@@ -17,11 +17,11 @@
 #include "atlas/contours.h"
 #include "atlas/label_volume_io.h"
 #include "atlas/loft.h"
+#include "atlas/surface_io.h"
 #include "core/atomic_write.h"
 #include "core/format.h"
 #include "core/sha256.h"
 #include "core/yaml_guard.h"
-#include "io/surface_io.h"
 
 namespace pba {
 namespace fs = std::filesystem;
@@ -519,33 +519,6 @@ Status ComposeVolume(const StructureSet& set, const Loaded& loaded, const std::v
 }
 
 }  // namespace
-
-const char* StructureFormatName(StructureFormat format) {
-  switch (format) {
-    case StructureFormat::kContours:
-      return "contours_json";
-    case StructureFormat::kNifti:
-      return "nifti";
-    case StructureFormat::kStl:
-      return "stl";
-    case StructureFormat::kObj:
-      return "obj";
-    case StructureFormat::kVtk:
-      return "vtk";
-  }
-  return "unknown";
-}
-
-bool ParseStructureFormat(std::string_view name, StructureFormat* format) {
-  for (StructureFormat f : {StructureFormat::kContours, StructureFormat::kNifti,
-                            StructureFormat::kStl, StructureFormat::kObj, StructureFormat::kVtk}) {
-    if (name == StructureFormatName(f)) {
-      *format = f;
-      return true;
-    }
-  }
-  return false;
-}
 
 bool IsStructureSetDir(const fs::path& dir) {
   std::error_code ec;

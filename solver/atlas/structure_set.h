@@ -31,15 +31,10 @@
 #include "atlas/colour_table.h"
 #include "atlas/label_volume.h"
 #include "atlas/plates.h"
+#include "atlas/structure_format.h"
 #include "pba/status.h"
 
 namespace pba {
-
-enum class StructureFormat { kContours, kNifti, kStl, kObj, kVtk };
-
-// "contours_json", "nifti", "stl", "obj", "vtk" (the manifest's words).
-const char* StructureFormatName(StructureFormat format);
-bool ParseStructureFormat(std::string_view name, StructureFormat* format);
 
 struct StructureEntry {
   std::string name;  // non-empty; no '/', '\\', ',' or control characters

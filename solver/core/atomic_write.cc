@@ -89,10 +89,17 @@ Status AtomicWriteDirectory(const std::filesystem::path& dir,
   const fs::path temporary = pattern;
   Status status = fill(temporary);
   if (status.ok()) {
+    // The entries first, then the name: a crash leaves the whole directory
+    // or a temporary one that sweeps recognise.
+    SyncDirectory(temporary);
     fs::rename(temporary, target, ec);  // replaces an empty directory
     if (ec) status = Status::Io("cannot rename into " + target.string() + ": " + ec.message());
   }
-  if (!status.ok()) fs::remove_all(temporary, ec);
+  if (!status.ok()) {
+    fs::remove_all(temporary, ec);
+    return status;
+  }
+  SyncDirectory(parent);
   return status;
 }
 

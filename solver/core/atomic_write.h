@@ -43,9 +43,10 @@ void SyncDirectory(const std::filesystem::path& dir);
 
 // A new directory `dir`, whole or not at all: fill(temporary) writes into a
 // hidden directory beside it ("." + its name + ".partial-XXXXXX"), which is
-// then renamed to `dir` (replacing an empty directory); on failure the
-// temporary directory is removed. kIo when `dir` exists and is not an
-// empty directory, or its parent is not a directory.
+// then synced and renamed to `dir` (replacing an empty directory), and the
+// parent synced; on failure the temporary directory is removed. The files
+// `fill` writes must be durable on their own (AtomicWriteText's are). kIo when `dir` exists and is
+// not an empty directory, or its parent is not a directory.
 Status AtomicWriteDirectory(const std::filesystem::path& dir,
                             const std::function<Status(const std::filesystem::path&)>& fill);
 

@@ -8,12 +8,14 @@
 #include <limits>
 #include <memory>
 
-#include "analysis/time_curve.h"
 #include "core/format.h"
+#include "explicit/central_difference.h"
+#include "explicit/energy_balance.h"
 #include "explicit/explicit_setup.h"
 #include "explicit/impactor.h"
 #include "explicit/sensors.h"
 #include "explicit/tled_model.h"
+#include "scene/time_curve.h"
 #include "signal/butterworth.h"
 
 namespace pba {
@@ -26,428 +28,417 @@ constexpr int kStepCheckInterval = 20;
 // taken as unstable.
 constexpr double kBlowUpError = 0.1;
 
-// Running energies [J]; each work is a trapezoidal sum over the steps,
-// W^n = W^(n-1) + (f^(n-1) + f^n) . du^(n-1/2) / 2, kept as the part
-// through t^n plus the half that waits for the next force.
-struct Work {
-  double total = 0, carry = 0;
-  // At step n: a = f^n . du^(n-1/2) / 2, b = f^n . du^(n+1/2) / 2.
-  void Step(double a, double b) {
-    total += carry + a;
-    carry = b;
-  }
-};
-
-struct Energies {
-  Work internal, external, damping, contact_nodes;
-  double kinetic = 0, hourglass = 0, eroded_elements = 0, orphan_kinetic = 0;
-  double initial_kinetic = 0;  // of the velocities given at t = 0
-  double mass_scaling = 0;     // kinetic energy change by mass added during the run (<= 0)
-  double body_work = 0;        // impactors' work on the tissue
-  double Internal() const { return internal.total - hourglass - eroded_elements; }
-  double Contact() const { return body_work - contact_nodes.total; }
-  double External() const { return external.total + body_work; }
-  double Eroded() const { return eroded_elements + orphan_kinetic; }
-  double Error() const {
-    return std::abs(kinetic + Internal() + hourglass + Contact() + damping.total + Eroded() -
-                    External() - initial_kinetic - mass_scaling);
-  }
-  double Scale() const {
-    return std::max({std::abs(External()), kinetic, std::abs(internal.total)});
-  }
-};
-
 std::string ElementName(const Mesh& mesh, int e) {
   if (mesh.region_names.empty()) return Format("element %d", e);
   return Format("element %d (%s)", e, mesh.region_names[mesh.element_region[e]].c_str());
 }
 
-}  // namespace
+// One EXPLICIT_DYNAMIC run: the setup, then per step the forces at t^n
+// (internal with erosion, loads, impactors), the step size, the
+// central-difference step (explicit/central_difference.h), the energy
+// balance and what is recorded (history rows, frames, sensors, progress).
+class ExplicitDynamicRun {
+ public:
+  ExplicitDynamicRun(const Problem& problem, PhaseClock* clock, Solution* solution)
+      : problem_(problem),
+        mesh_(problem.model.mesh),
+        options_(problem.explicit_dynamics),
+        clock_(clock),
+        solution_(solution),
+        run_(solution->summary.explicit_run),
+        curve_(problem.time),
+        n_nodes_(mesh_.num_nodes()),
+        n_dofs_(3 * n_nodes_) {}
 
-Status SolveExplicitDynamic(const Problem& problem, PhaseClock* clock, Solution* solution,
-                            StaticResult* result) {
-  const Mesh& mesh = problem.model.mesh;
-  Summary& summary = solution->summary;
-  const ExplicitOptions& options = problem.explicit_dynamics;
-  clock->Begin("setup", 0.05, 0.1, "explicit model: masses, gradients, stable step");
-  ExplicitSetup setup;
-  PBA_RETURN_IF_ERROR(MakeExplicitSetup(problem, &setup));
-  TledModel& tled = *setup.tled;
-  const int n_nodes = mesh.num_nodes(), n_dofs = 3 * n_nodes;
-  const TimeCurve curve(problem.time);
-  const double end_time = curve.end_s();
-  const double factor = setup.time_step_factor;
-  ExplicitSummary& run = summary.explicit_run;
-  if (options.mass_scaling_step_s > 0) {
-    const TledModel::MassScaling scaled = tled.ScaleMass(options.mass_scaling_step_s / factor);
-    run.mass_scaled_elements = scaled.elements;
-    run.added_mass_kg = scaled.added_mass;
-    run.model_mass_kg = scaled.model_mass;
-    summary.notes.push_back(Format(
+  Status Setup();
+  Status Integrate();
+  Status Finish(StaticResult* result);
+
+ private:
+  Status ChooseFirstStep();
+  void MakeImpactors();
+  void PlanOutputs();
+  void Start();
+  Status Forces(bool last);
+  void Erode(TledEvaluation* eval);
+  void ImpactorForces(double amplitude);
+  void AdaptStep();
+  Status Stopped(const std::string& why) const;
+  void Record(bool output, double amplitude, double dt_next, double error);
+  void Summarise();
+
+  const Problem& problem_;
+  const Mesh& mesh_;
+  const ExplicitOptions& options_;
+  PhaseClock* clock_;
+  Solution* solution_;
+  ExplicitSummary& run_;
+  const TimeCurve curve_;
+  const int n_nodes_, n_dofs_;
+
+  ExplicitSetup setup_;
+  TledModel* tled_ = nullptr;
+  double factor_ = 1, stable0_ = 0;
+  std::vector<Impactor> impactors_;
+  SensorArray sensors_;
+  double frame_interval_ = 0;
+
+  // The state: displacements at t^n, velocities at t^(n-1/2), the forces at
+  // t^n, and the nodes eroded elements left without any.
+  Eigen::VectorXd u_, v_, f_int_, f_ext_, f_contact_;
+  std::vector<char> orphan_;
+  TledEvaluation eval_;
+  Energies energy_;
+  double t_ = 0, dt_ = 0, dt_prev_ = 0, next_output_ = 0, next_frame_ = 0;
+  std::vector<Eigen::Vector3d> body_force_prev_, centre_prev_;
+  int64_t step_ = 0;
+  double max_scale_ = 0, max_error_ = 0;
+  double max_strain_ = 0;
+};
+
+Status ExplicitDynamicRun::Setup() {
+  clock_->Begin("setup", 0.05, 0.1, "explicit model: masses, gradients, stable step");
+  PBA_RETURN_IF_ERROR(MakeExplicitSetup(problem_, &setup_));
+  tled_ = setup_.tled.get();
+  factor_ = setup_.time_step_factor;
+  PBA_RETURN_IF_ERROR(ChooseFirstStep());
+  MakeImpactors();
+  PBA_RETURN_IF_ERROR(
+      SensorArray::Locate(problem_.outputs.sensors.sensors, mesh_, *tled_, &sensors_));
+  PlanOutputs();
+  clock_->End();
+  return Status::Ok();
+}
+
+Status ExplicitDynamicRun::ChooseFirstStep() {
+  TledModel& tled = *tled_;
+  if (options_.mass_scaling_step_s > 0) {
+    const TledModel::MassScaling scaled = tled.ScaleMass(options_.mass_scaling_step_s / factor_);
+    run_.mass_scaled_elements = scaled.elements;
+    run_.added_mass_kg = scaled.added_mass;
+    run_.model_mass_kg = scaled.model_mass;
+    solution_->summary.notes.push_back(Format(
         "mass scaling: %d elements whose stable step was below %.3g us took mass, %.3g kg added "
         "to %.4g kg (%.3g %%)",
-        scaled.elements, options.mass_scaling_step_s / factor * 1e6, scaled.added_mass,
+        scaled.elements, options_.mass_scaling_step_s / factor_ * 1e6, scaled.added_mass,
         scaled.model_mass, 100 * scaled.added_mass / scaled.model_mass));
   }
   int controlling = -1;
   double length = 0;
-  const double stable0 = tled.StableTimeStep(nullptr, nullptr, &controlling, &length);
-  if (!(stable0 > 0) || !std::isfinite(stable0)) {
+  stable0_ = tled.StableTimeStep(nullptr, nullptr, &controlling, &length);
+  if (!(stable0_ > 0) || !std::isfinite(stable0_)) {
     return Status::Numerical(
         "explicit dynamics: no stable time step (is every element's wave "
         "speed finite and positive?)");
   }
-  double dt = factor * stable0;
-  tled.SetTimeStep(dt);
-  run.ran = true;
-  run.stable_step_s = stable0;
-  run.first_step_s = dt;
-  run.controlling_element =
-      ElementName(mesh, controlling) + Format(", length %.3g mm", length / kMm);
-  const Eigen::VectorXd& node_mass = tled.lumped_mass();
+  dt_ = factor_ * stable0_;
+  tled.SetTimeStep(dt_);
+  run_.ran = true;
+  run_.stable_step_s = stable0_;
+  run_.first_step_s = dt_;
+  run_.controlling_element =
+      ElementName(mesh_, controlling) + Format(", length %.3g mm", length / kMm);
+  return Status::Ok();
+}
 
-  // Impactors.
-  std::vector<Impactor> impactors;
-  for (const Contact& c : problem.contacts) {
-    std::vector<int> candidates = mesh.face_sets.at(c.set).nodes;
-    if (options.erosion_strain > 0) {
-      candidates.resize(n_nodes);
-      for (int n = 0; n < n_nodes; ++n) candidates[n] = n;
+void ExplicitDynamicRun::MakeImpactors() {
+  for (const Contact& c : problem_.contacts) {
+    std::vector<int> candidates = mesh_.face_sets.at(c.set).nodes;
+    if (options_.erosion_strain > 0) {
+      candidates.resize(n_nodes_);
+      for (int n = 0; n < n_nodes_; ++n) candidates[n] = n;
     }
-    impactors.emplace_back(c, std::move(candidates), node_mass, dt);
+    impactors_.emplace_back(c, std::move(candidates), tled_->lumped_mass(), dt_);
   }
-  if (!impactors.empty()) {
-    run.contact_stiffness_min_n_per_m = std::numeric_limits<double>::infinity();
-    for (const Impactor& imp : impactors) {
-      run.contact_stiffness_min_n_per_m =
-          std::min(run.contact_stiffness_min_n_per_m, imp.min_stiffness());
-      run.contact_stiffness_max_n_per_m =
-          std::max(run.contact_stiffness_max_n_per_m, imp.max_stiffness());
-    }
+  if (impactors_.empty()) return;
+  run_.contact_stiffness_min_n_per_m = std::numeric_limits<double>::infinity();
+  for (const Impactor& imp : impactors_) {
+    run_.contact_stiffness_min_n_per_m =
+        std::min(run_.contact_stiffness_min_n_per_m, imp.min_stiffness());
+    run_.contact_stiffness_max_n_per_m =
+        std::max(run_.contact_stiffness_max_n_per_m, imp.max_stiffness());
   }
-  // Sensors.
-  SensorArray sensors;
-  const SensorOptions& sensing = problem.outputs.sensors;
-  PBA_RETURN_IF_ERROR(SensorArray::Locate(sensing.sensors, mesh, tled, &sensors));
-  // The sensors record every step; their table is resampled every
-  // interval_s and filtered at that rate (the filter was checked with the
-  // scene, SensorOptions::Validate).
-  const double sample_interval = sensing.interval_s;
-  const int filter_order = sensing.filter_order;
-  const double cutoff_hz = sensing.filter_cutoff_hz;
-  const double output_interval = options.output_interval_s;
-  // At most this many frames of the displacement go into result.h5.
-  const int max_frames = static_cast<int>(std::clamp<double>(
-      2.5e8 / (24.0 * std::max(1, n_nodes)), 2, 1 + std::ceil(end_time / output_interval)));
-  const double frame_interval = end_time / std::max(1, max_frames - 1);
+}
 
-  // History columns.
-  solution->history_columns = {"time_s",          "step_s",      "kinetic_j", "internal_j",
-                               "hourglass_j",     "contact_j",   "damping_j", "eroded_j",
-                               "external_work_j", "energy_error"};
-  for (const Impactor& imp : impactors) {
+// The sensors record every step; their table is resampled every interval_s
+// and filtered at that rate (the filter was checked with the scene,
+// SensorOptions::Validate). History rows come every output interval, and at
+// most a bounded number of displacement frames go into result.h5.
+void ExplicitDynamicRun::PlanOutputs() {
+  const double end_time = curve_.end_s();
+  const int max_frames =
+      static_cast<int>(std::clamp<double>(2.5e8 / (24.0 * std::max(1, n_nodes_)), 2,
+                                          1 + std::ceil(end_time / options_.output_interval_s)));
+  frame_interval_ = end_time / std::max(1, max_frames - 1);
+  solution_->history_columns = {"time_s",          "step_s",      "kinetic_j", "internal_j",
+                                "hourglass_j",     "contact_j",   "damping_j", "eroded_j",
+                                "external_work_j", "energy_error"};
+  for (const Impactor& imp : impactors_) {
     for (const char* axis : {"x", "y", "z"}) {
-      solution->history_columns.push_back(imp.name() + " force " + axis + " [N]");
+      solution_->history_columns.push_back(imp.name() + " force " + axis + " [N]");
     }
   }
-  clock->End();
+}
 
-  clock->Begin("integrate", 0.1, 0.9,
-               Format("central difference, step %.3g us (%.2f of the stable %.3g us)", dt * 1e6,
-                      factor, stable0 * 1e6));
-  Eigen::VectorXd u = Eigen::VectorXd::Zero(n_dofs), v = Eigen::VectorXd::Zero(n_dofs);
-  Eigen::VectorXd f_int(n_dofs), f_ext = Eigen::VectorXd::Zero(n_dofs),
-                                 f_contact = Eigen::VectorXd::Zero(n_dofs);
-  std::vector<char> orphan;
-  const std::vector<PrescribedDof>& prescribed = setup.prescribed;
-  // Start: prescribed displacements at a(0), velocities at a(0).
-  {
-    const double a0 = curve.Amplitude(0);
-    for (int i = 0; i < n_dofs; ++i) {
-      if (prescribed[i].kind == PrescribedDof::kDisplacement) u(i) = prescribed[i].value * a0;
-      if (prescribed[i].kind == PrescribedDof::kVelocity) v(i) = prescribed[i].value * a0;
-    }
+// Prescribed displacements and velocities at a(0), the kinetic energy they
+// give, the impactors where they start.
+void ExplicitDynamicRun::Start() {
+  u_ = Eigen::VectorXd::Zero(n_dofs_);
+  v_ = Eigen::VectorXd::Zero(n_dofs_);
+  f_int_.resize(n_dofs_);
+  f_ext_ = Eigen::VectorXd::Zero(n_dofs_);
+  f_contact_ = Eigen::VectorXd::Zero(n_dofs_);
+  const std::vector<PrescribedDof>& prescribed = setup_.prescribed;
+  const double a0 = curve_.Amplitude(0);
+  for (int i = 0; i < n_dofs_; ++i) {
+    if (prescribed[i].kind == PrescribedDof::kDisplacement) u_(i) = prescribed[i].value * a0;
+    if (prescribed[i].kind == PrescribedDof::kVelocity) v_(i) = prescribed[i].value * a0;
   }
-  const double alpha = options.mass_damping_per_s;
-  Energies energy;
-  for (int i = 0; i < n_dofs; ++i) energy.initial_kinetic += 0.5 * node_mass(i / 3) * v(i) * v(i);
-  double t = 0, dt_prev = 0, next_output = 0, next_frame = 0;
-  std::vector<Eigen::Vector3d> body_force_prev(impactors.size(), Eigen::Vector3d::Zero());
-  std::vector<Eigen::Vector3d> centre_prev(impactors.size());
-  for (std::size_t k = 0; k < impactors.size(); ++k)
-    centre_prev[k] = impactors[k].Centre(curve.Amplitude(0));
-  int64_t step = 0;
-  double max_scale = 0, max_error = 0;
+  const Eigen::VectorXd& node_mass = tled_->lumped_mass();
+  for (int i = 0; i < n_dofs_; ++i) {
+    energy_.initial_kinetic += 0.5 * node_mass(i / 3) * v_(i) * v_(i);
+  }
+  body_force_prev_.assign(impactors_.size(), Eigen::Vector3d::Zero());
+  centre_prev_.resize(impactors_.size());
+  for (std::size_t k = 0; k < impactors_.size(); ++k) {
+    centre_prev_[k] = impactors_[k].Centre(curve_.Amplitude(0));
+  }
+}
+
+// Elements strained past the erosion limit, or inverted, leave; so do the
+// nodes left without an element, with their kinetic energy.
+void ExplicitDynamicRun::Erode(TledEvaluation* eval) {
+  TledModel& tled = *tled_;
+  // Which elements go, in parallel; a cheap bound first: the largest
+  // eigenvalue of C is at most its largest absolute row sum (Gershgorin), so
+  // most elements need no eigenvalues.
+  std::vector<char> erode(tled.num_elements(), 0);
+  const double limit = 1 + 2 * options_.erosion_strain;  // on the eigenvalue of C
+#pragma omp parallel for schedule(static) num_threads(setup_.options.threads.threads())
+  for (int e = 0; e < tled.num_elements(); ++e) {
+    if (tled.eroded(e)) continue;
+    const Eigen::Matrix3d f = tled.DeformationGradient(e);
+    if (!(f.determinant() > 0)) {
+      erode[e] = 1;
+      continue;
+    }
+    const Eigen::Matrix3d c = f.transpose() * f;
+    if (c.cwiseAbs().rowwise().sum().maxCoeff() <= limit) continue;
+    erode[e] = LargestPrincipalStrain(f) > options_.erosion_strain;
+  }
+  if (std::find(erode.begin(), erode.end(), 1) == erode.end()) return;
+  // The energy the eroded elements take: the stored total's drop.
+  const double stored_before = tled.StoredEnergy();
+  for (int e = 0; e < tled.num_elements(); ++e) {
+    if (!erode[e]) continue;
+    tled.Erode(e);
+    ++run_.eroded_elements;
+    run_.eroded_mass_kg += tled.material(e).density * tled.reference_volume(e);
+  }
+  energy_.eroded_elements += stored_before - tled.StoredEnergy();
+  orphan_.assign(n_nodes_, 0);
+  const Eigen::VectorXd& node_mass = tled.lumped_mass();
+  for (int n : tled.OrphanNodes()) {
+    orphan_[n] = 1;
+    energy_.orphan_kinetic += 0.5 * node_mass(n) * v_.segment<3>(3 * n).squaredNorm();
+    v_.segment<3>(3 * n).setZero();
+  }
+  *eval = tled.InternalForce(u_, v_, &f_int_);  // without the eroded elements
+}
+
+void ExplicitDynamicRun::ImpactorForces(double amplitude) {
+  f_contact_.setZero();
+  for (std::size_t k = 0; k < impactors_.size(); ++k) {
+    Impactor& imp = impactors_[k];
+    imp.AddForces(mesh_, u_, amplitude, orphan_, &f_contact_);
+    const Eigen::Vector3d centre = imp.Centre(amplitude);
+    const Eigen::Vector3d force = imp.state().force_on_body;
+    // The body's work on the tissue: -F_body . dc.
+    energy_.body_work -= 0.5 * (force + body_force_prev_[k]).dot(centre - centre_prev_[k]);
+    body_force_prev_[k] = force;
+    centre_prev_[k] = centre;
+  }
+}
+
+// The forces at t^n: internal (after erosion), loads at a(t^n), impactors.
+Status ExplicitDynamicRun::Forces(bool last) {
+  TledModel& tled = *tled_;
+  tled.RecordStress(last);
+  eval_ = tled.InternalForce(u_, v_, &f_int_);
+  if (options_.erosion_strain > 0) Erode(&eval_);
+  if (eval_.inverted_element >= 0) {
+    return Stopped(Format(
+        "%s inverted (det F <= 0)%s", ElementName(mesh_, eval_.inverted_element).c_str(),
+        factor_ > 1
+            ? Format("; the time step factor %g is above the stability limit 1", factor_).c_str()
+            : "; the deformation is too large for this mesh (a finer mesh, erosion "
+              "or a slower load)"));
+  }
+  energy_.hourglass = eval_.hourglass_energy;
+  const double amplitude = curve_.Amplitude(t_);
+  if (setup_.has_loads) {
+    f_ext_ = amplitude * (setup_.loads->follows_deformation() ? setup_.loads->Force(u_)
+                                                              : setup_.loads->dead_force());
+  }
+  if (!impactors_.empty()) ImpactorForces(amplitude);
+  return Status::Ok();
+}
+
+// The next step: shrink if the current elements need it. An impactor
+// crushes the elements at its tip within a few steps, so with one the check
+// is made every step.
+void ExplicitDynamicRun::AdaptStep() {
+  if (step_ == 0 || (impactors_.empty() && step_ % kStepCheckInterval != 0)) return;
+  TledModel& tled = *tled_;
+  int e = -1;
+  double l = 0;
+  double stable;
+  if (options_.mass_scaling_step_s > 0) {
+    // Crushed elements take mass rather than shrink the step.
+    const TledModel::MassScaling scaled =
+        tled.RescaleMass(u_, &v_, options_.mass_scaling_step_s / factor_, &stable, &e, &l);
+    run_.mass_scaled_elements += scaled.elements;
+    run_.added_mass_kg += scaled.added_mass;
+    energy_.mass_scaling += scaled.added_kinetic;
+  } else {
+    stable = tled.StableTimeStep(&u_, &v_, &e, &l);
+  }
+  if (factor_ * stable < dt_ * (1 - 1e-12)) {
+    dt_ = factor_ * stable;
+    tled.SetTimeStep(dt_);
+    ++run_.step_reductions;
+    run_.controlling_element = ElementName(mesh_, e) + Format(", length %.3g mm", l / kMm);
+  }
+}
+
+Status ExplicitDynamicRun::Stopped(const std::string& why) const {
+  return Status::Numerical(Format("explicit dynamics stopped at step %lld, t = %.6g s: %s",
+                                  static_cast<long long>(step_), t_, why.c_str()));
+}
+
+// A history row every output interval, a displacement frame every frame
+// interval (at t^n: u^(n+1) less the step just taken).
+void ExplicitDynamicRun::Record(bool output, double amplitude, double dt_next, double error) {
+  if (output) {
+    std::vector<double> row = {t_,
+                               dt_next,
+                               energy_.kinetic,
+                               energy_.Internal(),
+                               energy_.hourglass,
+                               energy_.Contact(),
+                               energy_.damping.total,
+                               energy_.Eroded(),
+                               energy_.External(),
+                               max_scale_ > 0 ? error / max_scale_ : 0.0};
+    for (const Impactor& imp : impactors_) {
+      for (int c = 0; c < 3; ++c) row.push_back(imp.state().force_on_body(c));
+    }
+    solution_->history.push_back(std::move(row));
+    next_output_ += options_.output_interval_s;
+  }
+  if (t_ >= next_frame_ - 1e-3 * dt_ && problem_.outputs.displacement) {
+    solution_->step_time_s.push_back(t_);
+    solution_->step_load_factor.push_back(amplitude);
+    for (int i = 0; i < n_dofs_; ++i) {
+      solution_->step_displacement_mm.push_back((u_(i) - dt_next * v_(i)) / kMm);
+    }
+    next_frame_ += frame_interval_;
+  }
+}
+
+Status ExplicitDynamicRun::Integrate() {
+  const double end_time = curve_.end_s();
+  clock_->Begin("integrate", 0.1, 0.9,
+                Format("central difference, step %.3g us (%.2f of the stable %.3g us)", dt_ * 1e6,
+                       factor_, stable0_ * 1e6));
+  Start();
+  const CentralDifference integrator(tled_->lumped_mass(), setup_.prescribed,
+                                     options_.mass_damping_per_s, setup_.options.threads);
+  const std::string unstable =
+      factor_ > 1 ? Format("; the time step factor %g is above the stability limit 1", factor_)
+                  : "";
   const auto loop_start = std::chrono::steady_clock::now();
   bool last = false;
   while (true) {
-    // Forces at t^n.
-    const bool output = t >= next_output - 1e-3 * dt || last;
-    tled.RecordStress(last);
-    TledEvaluation eval = tled.InternalForce(u, v, &f_int);
-    // Erosion: elements strained past the limit, or inverted, leave.
-    if (options.erosion_strain > 0) {
-      // Which elements go, in parallel; a cheap bound first: the largest
-      // eigenvalue of C is at most its largest absolute row sum
-      // (Gershgorin), so most elements need no eigenvalues.
-      std::vector<char> erode(tled.num_elements(), 0);
-      const double limit = 1 + 2 * options.erosion_strain;  // on the eigenvalue of C
-#pragma omp parallel for schedule(static)
-      for (int e = 0; e < tled.num_elements(); ++e) {
-        if (tled.eroded(e)) continue;
-        const Eigen::Matrix3d f = tled.DeformationGradient(e);
-        if (!(f.determinant() > 0)) {
-          erode[e] = 1;
-          continue;
-        }
-        const Eigen::Matrix3d c = f.transpose() * f;
-        if (c.cwiseAbs().rowwise().sum().maxCoeff() <= limit) continue;
-        erode[e] = LargestPrincipalStrain(f) > options.erosion_strain;
-      }
-      bool eroded_now = false;
-      // The energy the eroded elements take: the stored total's drop.
-      double stored_before = 0;
-      if (std::find(erode.begin(), erode.end(), 1) != erode.end()) {
-        stored_before = tled.StoredEnergy();
-      }
-      for (int e = 0; e < tled.num_elements(); ++e) {
-        if (!erode[e]) continue;
-        tled.Erode(e);
-        ++run.eroded_elements;
-        run.eroded_mass_kg += tled.material(e).density * tled.reference_volume(e);
-        eroded_now = true;
-      }
-      if (eroded_now) {
-        energy.eroded_elements += stored_before - tled.StoredEnergy();
-        orphan.assign(n_nodes, 0);
-        for (int n : tled.OrphanNodes()) {
-          orphan[n] = 1;
-          // The node leaves: its kinetic energy with it.
-          energy.orphan_kinetic += 0.5 * node_mass(n) * v.segment<3>(3 * n).squaredNorm();
-          v.segment<3>(3 * n).setZero();
-        }
-        eval = tled.InternalForce(u, v, &f_int);  // without the eroded elements
-      }
-    }
-    if (eval.inverted_element >= 0) {
-      return Status::Numerical(Format(
-          "explicit dynamics stopped at step %lld, t = %.6g s: %s inverted (det F <= 0)%s",
-          static_cast<long long>(step), t, ElementName(mesh, eval.inverted_element).c_str(),
-          factor > 1
-              ? Format("; the time step factor %g is above the stability limit 1", factor).c_str()
-              : "; the deformation is too large for this mesh (a finer mesh, erosion "
-                "or a slower load)"));
-    }
-    energy.hourglass = eval.hourglass_energy;
-    const double amplitude = curve.Amplitude(t);
-    if (setup.has_loads) {
-      f_ext = amplitude * (setup.loads->follows_deformation() ? setup.loads->Force(u)
-                                                              : setup.loads->dead_force());
-    }
-    if (!impactors.empty()) {
-      f_contact.setZero();
-      for (std::size_t k = 0; k < impactors.size(); ++k) {
-        Impactor& imp = impactors[k];
-        imp.AddForces(mesh, u, amplitude, orphan, &f_contact);
-        const Eigen::Vector3d centre = imp.Centre(amplitude);
-        const Eigen::Vector3d force = imp.state().force_on_body;
-        // The body's work on the tissue: -F_body . dc.
-        energy.body_work -= 0.5 * (force + body_force_prev[k]).dot(centre - centre_prev[k]);
-        body_force_prev[k] = force;
-        centre_prev[k] = centre;
-      }
-    }
+    const bool output = t_ >= next_output_ - 1e-3 * dt_ || last;
+    PBA_RETURN_IF_ERROR(Forces(last));
     if (last) break;
-    // The next step: shrink if the current elements need it. An impactor
-    // crushes the elements at its tip within a few steps, so with one the
-    // check is made every step.
-    if (step > 0 && (!impactors.empty() || step % kStepCheckInterval == 0)) {
-      int e = -1;
-      double l = 0;
-      double stable;
-      if (options.mass_scaling_step_s > 0) {
-        // Crushed elements take mass rather than shrink the step.
-        const TledModel::MassScaling scaled =
-            tled.RescaleMass(u, &v, options.mass_scaling_step_s / factor, &stable, &e, &l);
-        run.mass_scaled_elements += scaled.elements;
-        run.added_mass_kg += scaled.added_mass;
-        energy.mass_scaling += scaled.added_kinetic;
-      } else {
-        stable = tled.StableTimeStep(&u, &v, &e, &l);
-      }
-      if (factor * stable < dt * (1 - 1e-12)) {
-        dt = factor * stable;
-        tled.SetTimeStep(dt);
-        ++run.step_reductions;
-        run.controlling_element = ElementName(mesh, e) + Format(", length %.3g mm", l / kMm);
-      }
-    }
-    double dt_next = dt;
-    if (t + dt_next >= end_time * (1 - 1e-12)) {
-      dt_next = end_time - t;
+    AdaptStep();
+    StepTimes times;
+    times.dt_prev = dt_prev_;
+    times.dt_next = dt_;
+    if (t_ + times.dt_next >= end_time * (1 - 1e-12)) {
+      times.dt_next = end_time - t_;
       last = true;
     }
-    const double dt_mid = 0.5 * (dt_prev + dt_next);
-    const double a_half = curve.Amplitude(t + 0.5 * dt_next);
-    const double a_next = curve.Amplitude(t + dt_next);
-    sensors.Before(v);
-    double w_int_a = 0, w_int_b = 0, w_ext_a = 0, w_ext_b = 0, w_damp_a = 0, w_damp_b = 0,
-           w_c_a = 0, w_c_b = 0, kinetic = 0;
-    bool finite = true;
-#pragma omp parallel for schedule(static) reduction(+ : w_int_a, w_int_b, w_ext_a, w_ext_b, \
-                                                        w_damp_a, w_damp_b, w_c_a, w_c_b, kinetic) \
-    reduction(&& : finite)
-    for (int i = 0; i < n_dofs; ++i) {
-      const double m = node_mass(i / 3);
-      const double v_old = v(i);
-      double v_new;
-      double reaction = 0;
-      const PrescribedDof& p = prescribed[i];
-      if (p.kind == PrescribedDof::kVelocity) {
-        v_new = p.value * a_half;
-      } else if (p.kind == PrescribedDof::kDisplacement) {
-        v_new = (p.value * a_next - u(i)) / dt_next;
-      } else if (m > 0 && (orphan.empty() || !orphan[i / 3])) {
-        const double acc = (f_ext(i) + f_contact(i) - f_int(i)) / m;
-        const double h = 0.5 * alpha * dt_mid;
-        v_new = ((1 - h) * v_old + dt_mid * acc) / (1 + h);
-      } else {
-        v_new = 0;
-      }
-      if (p.kind != PrescribedDof::kFree && dt_mid > 0) {
-        // The force that holds the motion: M a + f_int - f_ext - f_contact.
-        reaction = m * (v_new - v_old) / dt_mid + f_int(i) - f_ext(i) - f_contact(i);
-      }
-      const double du_prev = dt_prev * v_old, du_next = dt_next * v_new;
-      const double v_mid = 0.5 * (v_old + v_new);
-      w_int_a += 0.5 * f_int(i) * du_prev, w_int_b += 0.5 * f_int(i) * du_next;
-      const double applied = f_ext(i) + reaction;
-      w_ext_a += 0.5 * applied * du_prev, w_ext_b += 0.5 * applied * du_next;
-      w_c_a += 0.5 * f_contact(i) * du_prev, w_c_b += 0.5 * f_contact(i) * du_next;
-      if (p.kind == PrescribedDof::kFree && alpha > 0) {
-        const double damping = alpha * m * v_mid;
-        w_damp_a += 0.5 * damping * du_prev, w_damp_b += 0.5 * damping * du_next;
-      }
-      kinetic += 0.5 * m * v_mid * v_mid;
-      v(i) = v_new;
-      u(i) += du_next;
-      finite = finite && std::isfinite(v_new);
-    }
-    energy.internal.Step(w_int_a, w_int_b);
-    energy.external.Step(w_ext_a, w_ext_b);
-    energy.damping.Step(w_damp_a, w_damp_b);
-    energy.contact_nodes.Step(w_c_a, w_c_b);
-    energy.kinetic = kinetic;
-    if (!finite) {
-      return Status::Numerical(Format(
-          "explicit dynamics stopped at step %lld, t = %.6g s: the velocity is no longer finite%s",
-          static_cast<long long>(step), t,
-          factor > 1
-              ? Format("; the time step factor %g is above the stability limit 1", factor).c_str()
-              : ""));
-    }
+    times.amplitude_half = curve_.Amplitude(t_ + 0.5 * times.dt_next);
+    times.amplitude_next = curve_.Amplitude(t_ + times.dt_next);
+    sensors_.Before(v_);
+    const StepWork work =
+        integrator.Advance({&f_int_, &f_ext_, &f_contact_}, times, orphan_, &u_, &v_);
+    energy_.Add(work);
+    if (!work.finite) return Stopped("the velocity is no longer finite" + unstable);
     // Energy balance at t^n (the kinetic energy from the mean of the half
     // steps around it).
-    max_scale = std::max(max_scale, energy.Scale());
-    const double error = energy.Error();
-    max_error = std::max(max_error, error);
-    if (step > 50 && max_scale > 0 && error > kBlowUpError * max_scale) {
-      return Status::Numerical(Format(
-          "explicit dynamics stopped at step %lld, t = %.6g s: the energy balance is off by %.3g "
-          "J, %.0f %% of the energies (kinetic %.3g J, external work %.3g J): the integration "
-          "is unstable%s; the step is %.3g us, %g of the stable step",
-          static_cast<long long>(step), t, error, 100 * error / max_scale, energy.kinetic,
-          energy.External(), factor > 1 ? " (the time step factor is above 1)" : "", dt * 1e6,
-          factor));
+    max_scale_ = std::max(max_scale_, energy_.Scale());
+    const double error = energy_.Error();
+    max_error_ = std::max(max_error_, error);
+    if (step_ > 50 && max_scale_ > 0 && error > kBlowUpError * max_scale_) {
+      return Stopped(Format(
+          "the energy balance is off by %.3g J, %.0f %% of the energies (kinetic %.3g J, "
+          "external work %.3g J): the integration is unstable%s; the step is %.3g us, %g of the "
+          "stable step",
+          error, 100 * error / max_scale_, energy_.kinetic, energy_.External(),
+          factor_ > 1 ? " (the time step factor is above 1)" : "", dt_ * 1e6, factor_));
     }
-    sensors.Sample(t, tled, v);
-    if (output) {
-      std::vector<double> row = {t,
-                                 dt_next,
-                                 energy.kinetic,
-                                 energy.Internal(),
-                                 energy.hourglass,
-                                 energy.Contact(),
-                                 energy.damping.total,
-                                 energy.Eroded(),
-                                 energy.External(),
-                                 max_scale > 0 ? error / max_scale : 0.0};
-      for (const Impactor& imp : impactors) {
-        for (int c = 0; c < 3; ++c) row.push_back(imp.state().force_on_body(c));
-      }
-      solution->history.push_back(std::move(row));
-      next_output += output_interval;
-    }
-    if (t >= next_frame - 1e-3 * dt && problem.outputs.displacement) {
-      solution->step_time_s.push_back(t);
-      solution->step_load_factor.push_back(amplitude);
-      for (int i = 0; i < n_dofs; ++i) {
-        solution->step_displacement_mm.push_back((u(i) - dt_next * v(i)) / kMm);
-      }
-      next_frame += frame_interval;
-    }
-    t += dt_next;
-    dt_prev = dt_next;
-    ++step;
-    if (step % 200 == 0) {
-      clock->Update(t / end_time, Format("t = %.4g us of %.4g us, step %lld", t * 1e6,
-                                         end_time * 1e6, static_cast<long long>(step)));
-      if (clock->cancelled()) return Status::Cancelled("cancelled during explicit dynamics");
+    sensors_.Sample(t_, *tled_, v_);
+    Record(output, curve_.Amplitude(t_), times.dt_next, error);
+    t_ += times.dt_next;
+    dt_prev_ = times.dt_next;
+    ++step_;
+    if (step_ % 200 == 0) {
+      clock_->Update(t_ / end_time, Format("t = %.4g us of %.4g us, step %lld", t_ * 1e6,
+                                           end_time * 1e6, static_cast<long long>(step_)));
+      if (clock_->cancelled()) return Status::Cancelled("cancelled during explicit dynamics");
     }
   }
   const double loop_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - loop_start).count();
-  clock->End();
+  run_.element_updates_per_s =
+      loop_s > 0 ? static_cast<double>(step_) * tled_->num_elements() / loop_s : 0;
+  clock_->End();
+  return Status::Ok();
+}
 
-  clock->Begin("recover", 0.9, 0.95, "end state, sensors, energies");
-  // The end state, written as the last frame and row.
-  if (problem.outputs.displacement) {
-    solution->step_time_s.push_back(t);
-    solution->step_load_factor.push_back(curve.Amplitude(t));
-    for (int i = 0; i < n_dofs; ++i) solution->step_displacement_mm.push_back(u(i) / kMm);
-  }
-  PBA_RETURN_IF_ERROR(sensors.Finish(filter_order, cutoff_hz, sample_interval, solution));
-  run.steps = step;
-  run.end_time_s = t;
-  run.last_step_s = dt;
-  run.kinetic_j = energy.kinetic;
-  run.internal_j = energy.Internal();
-  run.hourglass_j = energy.hourglass;
-  run.contact_j = energy.Contact();
-  run.damping_j = energy.damping.total;
-  run.eroded_j = energy.Eroded();
-  run.external_work_j = energy.External();
-  // The largest balance error over the run relative to the largest energy
-  // of the run.
-  if (max_scale > 0) run.max_energy_error = max_error / max_scale;
-  run.element_updates_per_s =
-      loop_s > 0 ? static_cast<double>(step) * tled.num_elements() / loop_s : 0;
-  double max_strain = 0;
-  FillExplicitFields(tled, solution, &max_strain);
+// What the summary says of the run: the analysis, the steps, the energies,
+// each impactor's force.
+void ExplicitDynamicRun::Summarise() {
+  Summary& summary = solution_->summary;
   summary.error.note =
       "explicit dynamics does not estimate the discretisation error; compare meshes with pba "
       "study convergence (docs/scenes.md)";
   summary.analysis = Format(
-      "explicit dynamics (central difference, total Lagrangian, lumped mass) to %.4g ms", t * 1e3);
+      "explicit dynamics (central difference, total Lagrangian, lumped mass) to %.4g ms", t_ * 1e3);
+  const double alpha = options_.mass_damping_per_s;
   summary.notes.push_back(Format(
       "explicit: %lld steps of %.3g us (%.2f x the stable %.3g us, set by %s), %d reductions; "
       "bulk viscosity %g (linear) and %g (quadratic)%s",
-      static_cast<long long>(step), run.first_step_s * 1e6, factor, stable0 * 1e6,
-      run.controlling_element.c_str(), run.step_reductions, setup.options.bulk_viscosity_linear,
-      setup.options.bulk_viscosity_quadratic,
+      static_cast<long long>(step_), run_.first_step_s * 1e6, factor_, stable0_ * 1e6,
+      run_.controlling_element.c_str(), run_.step_reductions, setup_.options.bulk_viscosity_linear,
+      setup_.options.bulk_viscosity_quadratic,
       alpha > 0 ? Format("; mass damping %g 1/s", alpha).c_str() : ""));
-  if (energy.mass_scaling != 0) {
+  if (energy_.mass_scaling != 0) {
     summary.notes.push_back(Format(
         "mass scaling during the run: %d element scalings, %.3g kg in all; the nodes kept their "
         "momentum, losing %.3g J of kinetic energy (part of the balance)",
-        run.mass_scaled_elements, run.added_mass_kg, -energy.mass_scaling));
+        run_.mass_scaled_elements, run_.added_mass_kg, -energy_.mass_scaling));
   }
   summary.notes.push_back(Format(
       "energy at the end: kinetic %.4g J, internal %.4g J, hourglass %.3g J, contact %.3g J, "
       "damping %.3g J, eroded %.3g J, external work %.4g J; balance error at most %.3g %%",
-      run.kinetic_j, run.internal_j, run.hourglass_j, run.contact_j, run.damping_j, run.eroded_j,
-      run.external_work_j, 100 * run.max_energy_error));
-  for (const Impactor& imp : impactors) {
+      run_.kinetic_j, run_.internal_j, run_.hourglass_j, run_.contact_j, run_.damping_j,
+      run_.eroded_j, run_.external_work_j, 100 * run_.max_energy_error));
+  for (const Impactor& imp : impactors_) {
     ContactSummary c;
     c.name = imp.name();
     for (int k = 0; k < 3; ++k) c.force_n[k] = imp.state().force_on_body(k);
@@ -456,13 +447,51 @@ Status SolveExplicitDynamic(const Problem& problem, PhaseClock* clock, Solution*
     c.penalty_pa_per_mm = 0;
     summary.contacts.push_back(c);
   }
-  result->u = u;
-  result->internal_force = f_int;
-  result->external_force = f_ext + f_contact;
-  result->strain_energy_j = energy.Internal();
-  result->max_strain = max_strain;
-  clock->End();
+}
+
+Status ExplicitDynamicRun::Finish(StaticResult* result) {
+  clock_->Begin("recover", 0.9, 0.95, "end state, sensors, energies");
+  // The end state, written as the last frame and row.
+  if (problem_.outputs.displacement) {
+    solution_->step_time_s.push_back(t_);
+    solution_->step_load_factor.push_back(curve_.Amplitude(t_));
+    for (int i = 0; i < n_dofs_; ++i) solution_->step_displacement_mm.push_back(u_(i) / kMm);
+  }
+  const SensorOptions& sensing = problem_.outputs.sensors;
+  PBA_RETURN_IF_ERROR(sensors_.Finish(sensing.filter_order, sensing.filter_cutoff_hz,
+                                      sensing.interval_s, solution_));
+  run_.steps = step_;
+  run_.end_time_s = t_;
+  run_.last_step_s = dt_;
+  run_.kinetic_j = energy_.kinetic;
+  run_.internal_j = energy_.Internal();
+  run_.hourglass_j = energy_.hourglass;
+  run_.contact_j = energy_.Contact();
+  run_.damping_j = energy_.damping.total;
+  run_.eroded_j = energy_.Eroded();
+  run_.external_work_j = energy_.External();
+  // The largest balance error over the run relative to the largest energy
+  // of the run.
+  if (max_scale_ > 0) run_.max_energy_error = max_error_ / max_scale_;
+  FillExplicitFields(*tled_, solution_, &max_strain_);
+  Summarise();
+  result->u = u_;
+  result->internal_force = f_int_;
+  result->external_force = f_ext_ + f_contact_;
+  result->strain_energy_j = energy_.Internal();
+  result->max_strain = max_strain_;
+  clock_->End();
   return Status::Ok();
+}
+
+}  // namespace
+
+Status SolveExplicitDynamic(const Problem& problem, PhaseClock* clock, Solution* solution,
+                            StaticResult* result) {
+  ExplicitDynamicRun run(problem, clock, solution);
+  PBA_RETURN_IF_ERROR(run.Setup());
+  PBA_RETURN_IF_ERROR(run.Integrate());
+  return run.Finish(result);
 }
 
 }  // namespace pba

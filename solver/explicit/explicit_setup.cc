@@ -2,10 +2,10 @@
 
 #include <Eigen/LU>
 
-#include "analysis/material_field.h"
 #include "core/format.h"
 #include "material/factory.h"
 #include "material/linear_elastic.h"
+#include "material/material_field.h"
 
 namespace pba {
 
@@ -25,6 +25,7 @@ Status MakeExplicitSetup(const Problem& problem, ExplicitSetup* out) {
   options.bulk_viscosity_linear = spec.bulk_viscosity_linear;
   options.bulk_viscosity_quadratic = spec.bulk_viscosity_quadratic;
   options.hourglass = spec.hourglass_coefficient;
+  options.threads = problem.threads;
   out->time_step_factor = spec.time_step_factor;
 
   const SceneMaterials& materials = model.materials;

@@ -6,7 +6,7 @@
 #include <memory>
 #include <vector>
 
-#include "analysis/external_loads.h"
+#include "assembly/external_loads.h"
 #include "explicit/tled_model.h"
 #include "pba/solve.h"
 #include "scene/problem.h"

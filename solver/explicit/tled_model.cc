@@ -254,7 +254,7 @@ double TledModel::StableTimeStep(const Eigen::VectorXd* u, const Eigen::VectorXd
   double best = std::numeric_limits<double>::infinity();
   int best_e = -1;
   double best_l = 0;
-#pragma omp parallel
+#pragma omp parallel num_threads(options_.threads.threads())
   {
     double local = std::numeric_limits<double>::infinity();
     int local_e = -1;
@@ -284,7 +284,7 @@ TledModel::MassScaling TledModel::RescaleMass(const Eigen::VectorXd& u, Eigen::V
   MassScaling out;
   if (speed_scale_.empty()) speed_scale_.assign(num_elements_, 1.0);
   std::vector<double> steps(num_elements_, std::numeric_limits<double>::infinity());
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) num_threads(options_.threads.threads())
   for (int e = 0; e < num_elements_; ++e) {
     if (eroded(e)) continue;
     double l = 0;
@@ -737,7 +737,7 @@ TledEvaluation TledModel::InternalForce(const Eigen::VectorXd& u, const Eigen::V
   TledEvaluation eval;
   if (record_stress_) stress_.resize(6 * static_cast<std::size_t>(num_elements_));
   f_int->resize(3 * static_cast<Eigen::Index>(num_nodes_));
-#pragma omp parallel
+#pragma omp parallel num_threads(options_.threads.threads())
   {
     if (anp_) {
       VolumeRatios(u);
@@ -770,7 +770,7 @@ void TledModel::Erode(int e) {
 
 double TledModel::StoredEnergy() const {
   double total = 0;
-#pragma omp parallel for schedule(static) reduction(+ : total)
+#pragma omp parallel for schedule(static) num_threads(options_.threads.threads()) reduction(+ : total)
   for (int e = 0; e < num_elements_; ++e) {
     if (eroded(e) || !(j_[e] > 0)) continue;
     const Eigen::Matrix3d f = DeformationGradient(e);
@@ -782,7 +782,7 @@ double TledModel::StoredEnergy() const {
   }
   if (!anp_) return total;
   const int groups = static_cast<int>(group_material_.size());
-#pragma omp parallel for schedule(static) reduction(+ : total)
+#pragma omp parallel for schedule(static) num_threads(options_.threads.threads()) reduction(+ : total)
   for (int g = 0; g < groups; ++g) {
     double sum_vj = 0, sum_v = 0;
     for (int k = group_start_[g]; k < group_start_[g + 1]; ++k) {

@@ -54,6 +54,7 @@
 #include <string>
 #include <vector>
 
+#include "core/thread_context.h"
 #include "material/hyperelastic.h"
 #include "material/viscoelastic.h"
 #include "mesh/mesh.h"
@@ -79,6 +80,9 @@ struct TledOptions {
   double bulk_viscosity_linear = 0.06;
   double bulk_viscosity_quadratic = 1.5;
   double hourglass = 0.05;  // hexahedra: kappa
+  // Every pass runs on this many threads, without a serial cut-off: the
+  // sums are in the same order on any number (see above).
+  ThreadContext threads;
 };
 
 // What one force evaluation produced beyond the forces.
@@ -109,6 +113,9 @@ class TledModel {
   const Eigen::VectorXd& lumped_mass() const { return mass_; }
   // Replaces it (dynamic relaxation's fictitious masses).
   void SetLumpedMass(Eigen::VectorXd mass) { mass_ = std::move(mass); }
+  // The threads its passes run on (TledOptions::threads), e.g. for a
+  // benchmark that measures one model on several counts.
+  void SetThreads(const ThreadContext& threads) { options_.threads = threads; }
   // Reference characteristic length of element e [m].
   double characteristic_length(int e) const { return length_[e]; }
 

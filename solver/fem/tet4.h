@@ -4,12 +4,12 @@
 
 #include <Eigen/Core>
 
+#include "material/voigt.h"
+
 namespace pba {
 
 using Matrix12d = Eigen::Matrix<double, 12, 12>;
 using Vector12d = Eigen::Matrix<double, 12, 1>;
-using Matrix6d = Eigen::Matrix<double, 6, 6>;
-using Vector6d = Eigen::Matrix<double, 6, 1>;
 using BMatrix = Eigen::Matrix<double, 6, 12>;
 
 struct Tet4Geometry {

@@ -5,10 +5,10 @@
 #include <cstddef>
 #include <limits>
 
-#include "atlas/bitmap_font.h"
-#include "atlas/png_io.h"
 #include "core/atomic_write.h"
 #include "core/format.h"
+#include "io/bitmap_font.h"
+#include "io/png_io.h"
 
 namespace pba {
 namespace {

@@ -3,7 +3,7 @@
 // of 1, 2 or 5 x 10^k) with labels and light grid lines, axis labels, a
 // title, each series as an anti-aliased polyline about 2.5 pixels wide, and a
 // legend in the corner of the plot area the lines cross least. Text uses the
-// atlas pictures' bitmap font (atlas/bitmap_font.h).
+// atlas pictures' bitmap font (io/bitmap_font.h).
 #pragma once
 
 #include <array>

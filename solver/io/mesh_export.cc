@@ -39,12 +39,6 @@ double Scale(const MeshExportOptions& options) { return options.millimetres ? 10
 
 const char* Unit(const MeshExportOptions& options) { return options.millimetres ? "mm" : "m"; }
 
-std::string Number(double value) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%.17g", value);
-  return text;
-}
-
 std::string OneLine(const std::string& text) {
   std::string line = text;
   for (char& c : line) {
@@ -119,8 +113,9 @@ std::string VtuText(const Mesh& mesh, const MeshExportOptions& options) {
   x += "      <Points>\n        <DataArray type=\"Float64\" Name=\"Points\" "
        "NumberOfComponents=\"3\" format=\"ascii\">\n";
   for (int i = 0; i < mesh.num_nodes(); ++i) {
-    x += "          " + Number(scale * mesh.nodes(i, 0)) + " " + Number(scale * mesh.nodes(i, 1)) +
-         " " + Number(scale * mesh.nodes(i, 2)) + "\n";
+    x += "          " + RoundTripNumber(scale * mesh.nodes(i, 0)) + " " +
+         RoundTripNumber(scale * mesh.nodes(i, 1)) + " " +
+         RoundTripNumber(scale * mesh.nodes(i, 2)) + "\n";
   }
   x += "        </DataArray>\n      </Points>\n      <Cells>\n";
   // The mesh's own orders are VTK's (mesh_export.h), so nodes go out as

@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "io/abaqus_writer.h"
+#include "io/abaqus_format.h"
 #include "io/mesh_export_formats.h"
 
 namespace pba::mesh_export {

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "core/number_format.h"
 #include "io/mesh_export.h"
 #include "mesh/mesh.h"
 #include "pba/status.h"
@@ -29,9 +30,6 @@ std::vector<std::string> RegionNames(const Mesh& mesh);
 // Coordinate scale from metres: 1000 or 1; and its unit name, "mm" or "m".
 double Scale(const MeshExportOptions& options);
 const char* Unit(const MeshExportOptions& options);
-
-// Shortest text that reads back as the same double (%.17g).
-std::string Number(double value);
 
 // `text` on one line (newlines and tabs as spaces).
 std::string OneLine(const std::string& text);

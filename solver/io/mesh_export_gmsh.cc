@@ -69,8 +69,8 @@ std::string GmshText(const Mesh& mesh, const MeshExportOptions& options) {
     }
     if (region_elements[r].empty()) lo = hi = {0, 0, 0};
     x += std::to_string(r + 1);
-    for (double v : lo) x += " " + Number(v);
-    for (double v : hi) x += " " + Number(v);
+    for (double v : lo) x += " " + RoundTripNumber(v);
+    for (double v : hi) x += " " + RoundTripNumber(v);
     x += " 1 " + std::to_string(r + 1) + " 0\n";
   }
   x += "$EndEntities\n";
@@ -82,8 +82,9 @@ std::string GmshText(const Mesh& mesh, const MeshExportOptions& options) {
   x += "$Nodes\n1 " + nn + " 1 " + nn + "\n3 1 0 " + nn + "\n";
   for (int i = 0; i < mesh.num_nodes(); ++i) x += std::to_string(i + 1) + "\n";
   for (int i = 0; i < mesh.num_nodes(); ++i) {
-    x += Number(scale * mesh.nodes(i, 0)) + " " + Number(scale * mesh.nodes(i, 1)) + " " +
-         Number(scale * mesh.nodes(i, 2)) + "\n";
+    x += RoundTripNumber(scale * mesh.nodes(i, 0)) + " " +
+         RoundTripNumber(scale * mesh.nodes(i, 1)) + " " +
+         RoundTripNumber(scale * mesh.nodes(i, 2)) + "\n";
   }
   x += "$EndNodes\n";
 

@@ -14,9 +14,12 @@ class CholmodSolver final : public LinearSolver {
   // A matrix that is not positive definite is reported through Status (a
   // Newton iterate far from equilibrium may have one, and the load step is
   // then cut), so CHOLMOD's own warning print is turned off.
-  CholmodSolver() { solver_.cholmod().print = 0; }
+  explicit CholmodSolver(const ThreadContext& threads) : threads_(threads) {
+    solver_.cholmod().print = 0;
+  }
 
   Status Factorize(const Eigen::SparseMatrix<double>& a) override {
+    const LibraryThreadScope bounded(threads_);
     // Newton iterations refactorise the same pattern: the fill-reducing
     // ordering and symbolic analysis are done once per pattern.
     if (!SamePattern(a)) {
@@ -34,6 +37,7 @@ class CholmodSolver final : public LinearSolver {
   }
 
   Status Solve(const Eigen::VectorXd& b, Eigen::VectorXd* x) override {
+    const LibraryThreadScope bounded(threads_);
     *x = solver_.solve(b);
     if (solver_.info() != Eigen::Success || !x->allFinite()) {
       return Status::Numerical("CHOLMOD's solve produced no finite answer");
@@ -43,7 +47,7 @@ class CholmodSolver final : public LinearSolver {
 
   std::string Name() const override { return "CHOLMOD supernodal Cholesky"; }
   std::unique_ptr<LinearSolver> NewOfSameKind() const override {
-    return std::make_unique<CholmodSolver>();
+    return std::make_unique<CholmodSolver>(threads_);
   }
 
  private:
@@ -54,12 +58,15 @@ class CholmodSolver final : public LinearSolver {
            std::equal(inner_.begin(), inner_.end(), a.innerIndexPtr());
   }
 
+  ThreadContext threads_;
   std::vector<int> outer_, inner_;
   Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> solver_;
 };
 
 }  // namespace
 
-std::unique_ptr<LinearSolver> CreateCholmodSolver() { return std::make_unique<CholmodSolver>(); }
+std::unique_ptr<LinearSolver> CreateCholmodSolver(const ThreadContext& threads) {
+  return std::make_unique<CholmodSolver>(threads);
+}
 
 }  // namespace pba

@@ -23,7 +23,7 @@ std::unique_ptr<LinearSolver> CreateLinearSolver(const LinearSolverOptions& opti
     case LinearSolverOptions::Kind::kCholmod:
       break;
   }
-  return CreateCholmodSolver();
+  return CreateCholmodSolver(options.threads);
 }
 
 }  // namespace pba

@@ -8,6 +8,7 @@
 #include <memory>
 #include <string>
 
+#include "core/thread_context.h"
 #include "pba/status.h"
 
 namespace pba {
@@ -39,6 +40,9 @@ struct LinearSolverOptions {
   // CHOLMOD's and Eigen's run to the end once started (seconds to minutes on
   // a large mesh) and the flag is seen after them. Not owned; may be null.
   const std::atomic<bool>* cancel = nullptr;
+  // The threads a factorisation may use (CHOLMOD's and its BLAS's):
+  // SolveScene sets the solve's.
+  ThreadContext threads;
 
   // "CHOLMOD", "EIGEN_LDLT" or "PCG": the scene's name for the kind.
   const char* KindName() const;
@@ -48,7 +52,9 @@ std::unique_ptr<LinearSolver> CreateLinearSolver(const LinearSolverOptions& opti
 
 // The backends (linear/cholmod_solver.cc, linear/eigen_ldlt_solver.cc,
 // linear/pcg_solver.cc).
-std::unique_ptr<LinearSolver> CreateCholmodSolver();
+// CHOLMOD's OpenMP teams and its BLAS's threads are bounded by `threads`
+// during each factorisation and solve (LibraryThreadScope).
+std::unique_ptr<LinearSolver> CreateCholmodSolver(const ThreadContext& threads = ThreadContext());
 std::unique_ptr<LinearSolver> CreateEigenLdltSolver();
 // Iterative: conjugate gradients with an incomplete Cholesky preconditioner,
 // aiming at ||b - A x|| / ||b|| <= 1e-12 in at most max(1000, 10 n)

@@ -6,6 +6,7 @@
 #include <set>
 #include <utility>
 
+#include "core/number_format.h"
 #include "material/linear_elastic.h"
 #include "material/ogden.h"
 #include "material/polynomial.h"
@@ -17,8 +18,8 @@ Status ValidateBulk(double bulk, double shear, const std::string& field) {
   PBA_RETURN_IF_ERROR(RequirePositive(bulk, field));
   if (bulk < shear) {
     return Status::InvalidArgument(
-        field, "the bulk modulus (" + FormatNumber(bulk) + " Pa) is below the shear modulus (" +
-                   FormatNumber(shear) +
+        field, "the bulk modulus (" + ShortNumber(bulk) + " Pa) is below the shear modulus (" +
+                   ShortNumber(shear) +
                    " Pa), which makes Poisson's ratio negative; soft tissue is nearly "
                    "incompressible, with K / mu of 1e5 to 1e6");
   }
@@ -69,7 +70,7 @@ Status ValidatePolynomial(const PolynomialParams& p, const std::string& path) {
   if (!(c.ShearModulus() > 0)) {
     return Status::InvalidArgument(path + ".terms",
                                    "the initial shear modulus 2 (C10 + C01) must be > 0, got " +
-                                       FormatNumber(c.ShearModulus()) + " Pa");
+                                       ShortNumber(c.ShearModulus()) + " Pa");
   }
   if (p.d_per_pa.empty() || p.d_per_pa.size() > static_cast<std::size_t>(order)) {
     return Status::InvalidArgument(
@@ -122,7 +123,7 @@ Status ValidateViscoelastic(const MaterialSpec& m, const std::string& path) {
       if (!std::isfinite(v.long_term_ratio) || v.long_term_ratio <= 0 || v.long_term_ratio > 1) {
         return Status::InvalidArgument(
             p + ".long_term_ratio",
-            "G_inf / G0 must lie in (0, 1], got " + FormatNumber(v.long_term_ratio));
+            "G_inf / G0 must lie in (0, 1], got " + ShortNumber(v.long_term_ratio));
       }
       PBA_RETURN_IF_ERROR(RequirePositive(v.beta_per_s, p + ".beta_per_s"));
       return PronySeriesOf(v).Validate(p);
@@ -136,7 +137,7 @@ Status ValidateViscoelastic(const MaterialSpec& m, const std::string& path) {
         PBA_RETURN_IF_ERROR(RequireFinite(v.moduli_pa[k], field));
         if (v.moduli_pa[k] < 0) {
           return Status::InvalidArgument(field,
-                                         "must be >= 0 Pa, got " + FormatNumber(v.moduli_pa[k]));
+                                         "must be >= 0 Pa, got " + ShortNumber(v.moduli_pa[k]));
         }
       }
       // Sizes and relaxation times are checked on the series (".tau_s");
@@ -172,7 +173,7 @@ Status ValidateModel(const MaterialSpec& m, const std::string& path) {
       if (!(mr.c10_pa + mr.c01_pa > 0)) {
         return Status::InvalidArgument(p + ".c10_pa",
                                        "the initial shear modulus 2 (C10 + C01) must be > 0, got " +
-                                           FormatNumber(2 * (mr.c10_pa + mr.c01_pa)) + " Pa");
+                                           ShortNumber(2 * (mr.c10_pa + mr.c01_pa)) + " Pa");
       }
       return ValidateBulk(mr.bulk_modulus_pa, 2 * (mr.c10_pa + mr.c01_pa), p + ".bulk_modulus_pa");
     }
@@ -268,40 +269,28 @@ namespace {
 // "[0.5, 0.2]"
 std::string ListOf(const std::vector<double>& values) {
   std::string out;
-  for (double v : values) out += (out.empty() ? "" : ", ") + FormatNumber(v);
+  for (double v : values) out += (out.empty() ? "" : ", ") + ShortNumber(v);
   return "[" + out + "]";
-}
-
-// A parameter as the scene gave it: the shortest text that reads back as
-// the same number. %g's six digits print nu = 0.4999999 as "0.5", hiding a
-// ratio K / mu of 1e7 behind the incompressible limit.
-std::string Given(double value) {
-  char text[32];
-  for (int digits = 6; digits < 17; ++digits) {
-    std::snprintf(text, sizeof text, "%.*g", digits, value);
-    if (std::strtod(text, nullptr) == value) return text;
-  }
-  std::snprintf(text, sizeof text, "%.17g", value);
-  return text;
 }
 
 std::string DescribeModel(const MaterialSpec& m) {
   if (m.kind == MaterialSpec::Kind::kLinearElastic) {
-    return "linear elastic, E = " + Given(m.linear_elastic.youngs_modulus_pa) +
-           " Pa, nu = " + Given(m.linear_elastic.poissons_ratio);
+    return "linear elastic, E = " + RoundTripNumber(m.linear_elastic.youngs_modulus_pa) +
+           " Pa, nu = " + RoundTripNumber(m.linear_elastic.poissons_ratio);
   }
   if (m.kind == MaterialSpec::Kind::kOrthotropicElastic) {
     const OrthotropicElasticParams& p = m.orthotropic_elastic;
     const Eigen::Matrix3d q = MaterialFrame(p.axis_1, p.axis_2);
     auto axis = [&](int c) {
-      return "(" + FormatNumber(q(0, c)) + ", " + FormatNumber(q(1, c)) + ", " +
-             FormatNumber(q(2, c)) + ")";
+      return "(" + ShortNumber(q(0, c)) + ", " + ShortNumber(q(1, c)) + ", " +
+             ShortNumber(q(2, c)) + ")";
     };
-    return "orthotropic linear elastic, E1 = " + Given(p.e1_pa) + " Pa, E2 = " + Given(p.e2_pa) +
-           " Pa, E3 = " + Given(p.e3_pa) + " Pa, nu12 = " + Given(p.nu12) +
-           ", nu13 = " + Given(p.nu13) + ", nu23 = " + Given(p.nu23) +
-           ", G12 = " + Given(p.g12_pa) + " Pa, G13 = " + Given(p.g13_pa) +
-           " Pa, G23 = " + Given(p.g23_pa) + " Pa, axis 1 = " + axis(0) + ", axis 2 = " + axis(1);
+    return "orthotropic linear elastic, E1 = " + RoundTripNumber(p.e1_pa) +
+           " Pa, E2 = " + RoundTripNumber(p.e2_pa) + " Pa, E3 = " + RoundTripNumber(p.e3_pa) +
+           " Pa, nu12 = " + RoundTripNumber(p.nu12) + ", nu13 = " + RoundTripNumber(p.nu13) +
+           ", nu23 = " + RoundTripNumber(p.nu23) + ", G12 = " + RoundTripNumber(p.g12_pa) +
+           " Pa, G13 = " + RoundTripNumber(p.g13_pa) + " Pa, G23 = " + RoundTripNumber(p.g23_pa) +
+           " Pa, axis 1 = " + axis(0) + ", axis 2 = " + axis(1);
   }
   return MakeHyperelasticMaterial(m)->Describe();
 }
@@ -313,7 +302,7 @@ std::string DescribeMaterial(const MaterialSpec& m) {
   if (m.viscoelastic.enabled()) {
     const PronySeries series = PronySeriesOf(m.viscoelastic);
     out += ", relaxing: g = " + ListOf(series.g) + ", tau = " + ListOf(series.tau_s) +
-           " s, mu_inf/mu0 = " + FormatNumber(series.LongTermFactor());
+           " s, mu_inf/mu0 = " + ShortNumber(series.LongTermFactor());
   }
   return out;
 }

@@ -5,9 +5,9 @@
 #include <memory>
 #include <string>
 
-#include "fem/tet4.h"
 #include "material/hyperelastic.h"
 #include "material/viscoelastic.h"
+#include "material/voigt.h"
 #include "pba/scene.h"
 
 namespace pba {

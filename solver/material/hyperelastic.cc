@@ -30,13 +30,7 @@ Status RequireFinite(double value, const std::string& field) {
 Status RequirePositive(double value, const std::string& field) {
   PBA_RETURN_IF_ERROR(RequireFinite(value, field));
   if (value > 0) return Status::Ok();
-  return Status::InvalidArgument(field, "must be > 0, got " + FormatNumber(value));
-}
-
-std::string FormatNumber(double value) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%g", value);
-  return buffer;
+  return Status::InvalidArgument(field, "must be > 0, got " + ShortNumber(value));
 }
 
 Status VolumetricParams::Validate(const std::string& path, int max_terms) const {

@@ -15,7 +15,8 @@
 #include <functional>
 #include <string>
 
-#include "fem/tet4.h"
+#include "core/number_format.h"
+#include "material/voigt.h"
 #include "pba/status.h"
 
 namespace pba {
@@ -105,8 +106,5 @@ Matrix6d FourthOrderToVoigt(const std::function<double(int, int, int, int)>& com
 // names `field`.
 Status RequireFinite(double value, const std::string& field);
 Status RequirePositive(double value, const std::string& field);
-
-// "%g" formatting for messages and Describe().
-std::string FormatNumber(double value);
 
 }  // namespace pba

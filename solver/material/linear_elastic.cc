@@ -94,8 +94,8 @@ Status OrthotropicElasticParams::Validate(const std::string& path) const {
     if (!(std::abs(r.value) < bound)) {
       return Status::InvalidArgument(
           field, std::string("must satisfy |") + r.name + "| < sqrt(E" + std::to_string(r.i + 1) +
-                     " / E" + std::to_string(r.j + 1) + ") = " + FormatNumber(bound) +
-                     " for a positive definite compliance, got " + FormatNumber(r.value));
+                     " / E" + std::to_string(r.j + 1) + ") = " + ShortNumber(bound) +
+                     " for a positive definite compliance, got " + ShortNumber(r.value));
     }
   }
   // The determinant of the normal block, scaled by E1 E2 E3, must be > 0 too
@@ -108,7 +108,7 @@ Status OrthotropicElasticParams::Validate(const std::string& path) const {
         path,
         "the Poisson's ratios make the compliance indefinite: 1 - nu12 nu21 - nu23 nu32 - "
         "nu31 nu13 - 2 nu21 nu32 nu13 = " +
-            FormatNumber(delta) +
+            ShortNumber(delta) +
             " must be > 0 (nu_ji = nu_ij E_j / E_i); lower nu12, nu13 or nu23");
   }
   PBA_RETURN_IF_ERROR(RequireAxis(axis_1, path + ".axis_1"));

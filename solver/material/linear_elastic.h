@@ -7,7 +7,7 @@
 #include <array>
 #include <vector>
 
-#include "fem/tet4.h"
+#include "material/voigt.h"
 #include "pba/scene.h"
 
 namespace pba {

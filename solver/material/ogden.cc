@@ -19,7 +19,7 @@ Status OgdenCoefficients::Validate(const std::string& path) const {
   if (!(ShearModulus() > 0)) {
     return Status::InvalidArgument(path + ".terms",
                                    "the initial shear modulus sum mu_p must be > 0, got " +
-                                       FormatNumber(ShearModulus()) + " Pa");
+                                       ShortNumber(ShearModulus()) + " Pa");
   }
   return volumetric.Validate(path, 1);
 }
@@ -86,8 +86,7 @@ void OgdenMaterial::Response(const Eigen::Matrix3d& f, bool volumetric, Vector6d
     }
   }
   // Volumetric part: tau_a = J U'(J), gamma_ab = J U' + J^2 U''.
-  const ScalarDerivatives u =
-      volumetric ? VolumetricEnergy(p_.volumetric, j) : ScalarDerivatives();
+  const ScalarDerivatives u = volumetric ? VolumetricEnergy(p_.volumetric, j) : ScalarDerivatives();
   tau.array() += j * u.first;
   gamma.array() += j * u.first + j * j * u.second;
 
@@ -152,10 +151,10 @@ std::string OgdenMaterial::Describe() const {
   std::string text = "Ogden";
   for (std::size_t p = 0; p < p_.terms.size(); ++p) {
     const std::string index = p_.terms.size() > 1 ? std::to_string(p + 1) : "";
-    text += (p ? ", mu" : " mu") + index + " = " + FormatNumber(p_.terms[p].mu) + " Pa, alpha" +
-            index + " = " + FormatNumber(p_.terms[p].alpha);
+    text += (p ? ", mu" : " mu") + index + " = " + ShortNumber(p_.terms[p].mu) + " Pa, alpha" +
+            index + " = " + ShortNumber(p_.terms[p].alpha);
   }
-  return text + ", K = " + FormatNumber(BulkModulus()) + " Pa";
+  return text + ", K = " + ShortNumber(BulkModulus()) + " Pa";
 }
 
 }  // namespace pba

@@ -36,7 +36,7 @@ Status PolynomialCoefficients::Validate(const std::string& path) const {
   if (!(ShearModulus() > 0)) {
     return Status::InvalidArgument(path + ".c10",
                                    "the initial shear modulus 2 (C10 + C01) must be > 0, got " +
-                                       FormatNumber(ShearModulus()) + " Pa");
+                                       ShortNumber(ShearModulus()) + " Pa");
   }
   return volumetric.Validate(path, order);
 }
@@ -112,29 +112,29 @@ void PolynomialMaterial::Isochoric(const Eigen::Matrix3d& f, double* energy, Vec
 }
 
 std::string PolynomialMaterial::Describe() const {
-  const std::string bulk = ", K = " + FormatNumber(BulkModulus()) + " Pa";
+  const std::string bulk = ", K = " + ShortNumber(BulkModulus()) + " Pa";
   if (p_.order == 1 && p_.c[0][1] == 0 && p_.volumetric.d[1] == 0) {
-    return "neo-Hookean, mu = " + FormatNumber(ShearModulus()) + " Pa" + bulk;
+    return "neo-Hookean, mu = " + ShortNumber(ShearModulus()) + " Pa" + bulk;
   }
   if (p_.order == 1) {
-    return "Mooney-Rivlin, C10 = " + FormatNumber(p_.c[1][0]) +
-           " Pa, C01 = " + FormatNumber(p_.c[0][1]) + " Pa" + bulk;
+    return "Mooney-Rivlin, C10 = " + ShortNumber(p_.c[1][0]) +
+           " Pa, C01 = " + ShortNumber(p_.c[0][1]) + " Pa" + bulk;
   }
   std::string text = "polynomial N = " + std::to_string(p_.order);
   for (int i = 0; i <= p_.order; ++i) {
     for (int j = 0; i + j <= p_.order; ++j) {
       if (p_.c[i][j] != 0) {
-        text += ", C" + std::to_string(i) + std::to_string(j) + " = " + FormatNumber(p_.c[i][j]) +
-                " Pa";
+        text +=
+            ", C" + std::to_string(i) + std::to_string(j) + " = " + ShortNumber(p_.c[i][j]) + " Pa";
       }
     }
   }
   for (int i = 0; i < p_.order; ++i) {
     if (p_.volumetric.d[i] != 0) {
-      text += ", D" + std::to_string(i + 1) + " = " + FormatNumber(p_.volumetric.d[i]) + " /Pa";
+      text += ", D" + std::to_string(i + 1) + " = " + ShortNumber(p_.volumetric.d[i]) + " /Pa";
     }
   }
-  return text + " (K = " + FormatNumber(BulkModulus()) + " Pa)";
+  return text + " (K = " + ShortNumber(BulkModulus()) + " Pa)";
 }
 
 }  // namespace pba

@@ -4,6 +4,7 @@
 #include <cstddef>
 
 #include "core/format.h"
+#include "core/number_format.h"
 
 namespace pba {
 namespace {
@@ -74,7 +75,7 @@ struct Library {
 // exponent, the rest in %g.
 std::string Num(double v) {
   if (v == std::floor(v) && std::fabs(v) < 1e12) return Format("%.0f", v);
-  return Format("%g", v);
+  return ShortNumber(v);
 }
 
 std::string Join(const double* v, std::size_t n, const char* separator) {

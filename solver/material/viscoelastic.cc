@@ -30,8 +30,7 @@ Status PronySeries::Validate(const std::string& path) const {
   for (std::size_t k = 0; k < g.size(); ++k) {
     PBA_RETURN_IF_ERROR(RequireFinite(g[k], Field(path, "g", k)));
     if (g[k] < 0) {
-      return Status::InvalidArgument(Field(path, "g", k),
-                                     "must be >= 0, got " + FormatNumber(g[k]));
+      return Status::InvalidArgument(Field(path, "g", k), "must be >= 0, got " + ShortNumber(g[k]));
     }
     PBA_RETURN_IF_ERROR(RequirePositive(tau_s[k], Field(path, "tau_s", k)));
     sum += g[k];
@@ -40,7 +39,7 @@ Status PronySeries::Validate(const std::string& path) const {
   // equilibrium under a held load.
   if (!(sum < 1)) {
     return Status::InvalidArgument(prefix + "g",
-                                   "must sum to less than 1, got " + FormatNumber(sum));
+                                   "must sum to less than 1, got " + ShortNumber(sum));
   }
   return Status::Ok();
 }
@@ -106,7 +105,7 @@ Status ViscoelasticPoint::Update(const HyperelasticMaterial& material, const Pro
                                  const Eigen::Matrix3d& f, double dt_s, Vector6d* stress,
                                  Matrix6d* tangent) {
   if (!(dt_s > 0) || !std::isfinite(dt_s)) {
-    return Status::InvalidArgument("dt_s", "must be > 0, got " + FormatNumber(dt_s));
+    return Status::InvalidArgument("dt_s", "must be > 0, got " + ShortNumber(dt_s));
   }
   if (!IsAdmissible(f)) {
     return Status::Numerical("viscoelastic update: det F <= 0 or F not finite");

@@ -30,8 +30,8 @@
 #include <string>
 #include <vector>
 
-#include "fem/tet4.h"
 #include "material/hyperelastic.h"
+#include "material/voigt.h"
 #include "pba/status.h"
 
 namespace pba {

@@ -4,13 +4,13 @@
 #include <cmath>
 #include <set>
 
-#include "analysis/time_curve.h"
 #include "atlas/colour_table.h"
 #include "core/format.h"
 #include "material/tissue_library.h"
 #include "mesh/primitive_mesher.h"
 #include "mesh/region_faces.h"
 #include "scene/materials.h"
+#include "scene/time_curve.h"
 
 namespace pba {
 namespace {
@@ -47,7 +47,7 @@ Status AutoFormulationOptions::Validate() const {
   if (!(written_tolerance > 0 && written_tolerance < 1)) {
     return Status::InvalidArgument(
         "formulation_tolerance",
-        "must be a fraction between 0 and 1 (0.01 is 1 %), got " + FormatNumber(written_tolerance));
+        "must be a fraction between 0 and 1 (0.01 is 1 %), got " + ShortNumber(written_tolerance));
   }
   return Status::Ok();
 }
@@ -82,7 +82,7 @@ void ReduceViscoelasticity(const SceneSpec& scene, SceneSpec* reduced,
       decision = Format("%zu of %zu relaxation terms", kept.g.size(), series.g.size());
     }
     std::string taus;
-    for (double tau : series.tau_s) taus += (taus.empty() ? "" : ", ") + FormatNumber(tau);
+    for (double tau : series.tau_s) taus += (taus.empty() ? "" : ", ") + ShortNumber(tau);
     decisions->push_back(
         {"viscoelasticity", where + ": " + decision,
          Format("tau = [%s] s against loading over %g s and an analysis of %g s (terms below "

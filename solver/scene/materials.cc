@@ -157,7 +157,8 @@ PronySeries RelaxationOf(const ViscoelasticSpec& spec) {
 }
 
 std::unique_ptr<MaterialField> MakeMaterialField(const SceneMaterials& materials,
-                                                 double relaxed_below_s, double frozen_above_s) {
+                                                 double relaxed_below_s, double frozen_above_s,
+                                                 const ThreadContext& threads) {
   std::vector<MaterialField::Entry> entries;
   for (std::size_t k = 0; k < materials.specs.size(); ++k) {
     MaterialField::Entry entry;
@@ -168,7 +169,7 @@ std::unique_ptr<MaterialField> MakeMaterialField(const SceneMaterials& materials
     entry.name = materials.labels[k];
     entries.push_back(std::move(entry));
   }
-  return std::make_unique<MaterialField>(std::move(entries), materials.of_element);
+  return std::make_unique<MaterialField>(std::move(entries), materials.of_element, threads);
 }
 
 }  // namespace pba

@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "analysis/material_field.h"
 #include "material/linear_elastic.h"
+#include "material/material_field.h"
 #include "mesh/mesh.h"
 #include "pba/scene.h"
 
@@ -42,9 +42,10 @@ Status ResolveMaterials(const SceneSpec& scene, const Mesh& mesh, SceneMaterials
 // The material field of resolved (hyperelastic) materials, their
 // relaxation reduced to what the analysis resolves (terms faster than
 // relaxed_below_s relaxed, slower than frozen_above_s when > 0 frozen; see
-// ReduceRelaxation).
+// ReduceRelaxation); its passes run on `threads`.
 std::unique_ptr<MaterialField> MakeMaterialField(const SceneMaterials& materials,
-                                                 double relaxed_below_s, double frozen_above_s);
+                                                 double relaxed_below_s, double frozen_above_s,
+                                                 const ThreadContext& threads);
 
 // The small-strain elasticity of every element (material/linear_elastic.h):
 // linear models as they are, hyperelastic ones with their initial moduli,

@@ -10,9 +10,9 @@
 #include <string>
 
 #include "atlas/atlas_build.h"
+#include "atlas/atlas_mesh_cache.h"
 #include "atlas/structure_set.h"
 #include "core/format.h"
-#include "io/atlas_mesh_cache.h"
 #include "mesh/primitive_mesher.h"
 #include "mesh/quadratic.h"
 #include "mesh/region_faces.h"

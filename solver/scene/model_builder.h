@@ -7,8 +7,8 @@
 #include <string>
 #include <vector>
 
-#include "analysis/external_loads.h"
 #include "assembly/dof_map.h"
+#include "assembly/external_loads.h"
 #include "mesh/mesh.h"
 #include "pba/scene.h"
 #include "scene/materials.h"
@@ -23,7 +23,7 @@ struct Model {
 };
 
 struct BuildModelOptions {
-  // Where built atlas meshes are kept and looked up (io/atlas_mesh_cache.h);
+  // Where built atlas meshes are kept and looked up (atlas/atlas_mesh_cache.h);
   // empty: every atlas is meshed. Only 4-node atlas meshes are cached (a
   // 10-node one needs the loft, which is not kept).
   std::filesystem::path atlas_cache_dir;

@@ -22,6 +22,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/thread_context.h"
 #include "linear/linear_solver.h"
 #include "pba/scene.h"
 #include "pba/status.h"
@@ -209,6 +210,9 @@ struct Problem {
   double relaxed_below_s = 0;
   double frozen_above_s = 0;
   OutputOptions outputs;
+  // The threads the solve may use: SolveOptions::threads, set by
+  // SolveScene (not by ResolveProblem, which sees only the scene).
+  ThreadContext threads;
 };
 
 // Resolves everything but the mesh (Problem::model stays empty): the scene

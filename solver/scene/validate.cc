@@ -1,5 +1,6 @@
 // Scene checks that need no mesh; every failure names its field path.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <optional>
@@ -7,6 +8,7 @@
 
 #include "atlas/atlas_build.h"
 #include "atlas/colour_table.h"
+#include "core/number_format.h"
 #include "material/factory.h"
 #include "material/tissue_library.h"
 #include "mesh/primitive_mesher.h"
@@ -21,12 +23,6 @@ namespace pba {
 namespace {}  // namespace
 
 namespace scene_checks {
-
-std::string Number(double value) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%g", value);
-  return buffer;
-}
 
 bool PositiveFinite(double value) { return std::isfinite(value) && value > 0; }
 
@@ -57,7 +53,6 @@ const char* AnalysisTypeName(AnalysisSpec::Type type) {
 namespace {
 
 using scene_checks::JoinNames;
-using scene_checks::Number;
 using scene_checks::PositiveFinite;
 
 // A mesh beyond this would need more memory than the machines PBA targets.
@@ -76,24 +71,24 @@ Status ValidateGeometry(const GeometrySpec& geometry) {
       if (!non_negative(a.voxel_size_mm)) {
         return Status::InvalidArgument(
             "geometry.atlas.voxel_size_mm",
-            "must be a positive number of mm (or 0 for 1.5), got " + Number(a.voxel_size_mm));
+            "must be a positive number of mm (or 0 for 1.5), got " + ShortNumber(a.voxel_size_mm));
       }
       if (!non_negative(a.facet_size_mm)) {
         return Status::InvalidArgument(
             "geometry.atlas.facet_size_mm",
             "must be a positive number of mm (or 0 for half the element size), got " +
-                Number(a.facet_size_mm));
+                ShortNumber(a.facet_size_mm));
       }
       if (!non_negative(a.roi_radius_mm)) {
         return Status::InvalidArgument(
             "geometry.atlas.roi_radius_mm",
-            "must be a positive number of mm (or 0 for none), got " + Number(a.roi_radius_mm));
+            "must be a positive number of mm (or 0 for none), got " + ShortNumber(a.roi_radius_mm));
       }
       if (a.roi_radius_mm > 0 && !PositiveFinite(a.roi_element_size_mm)) {
         return Status::InvalidArgument("geometry.atlas.roi_element_size_mm",
                                        "a region of interest needs a positive element size in "
                                        "mm, got " +
-                                           Number(a.roi_element_size_mm));
+                                           ShortNumber(a.roi_element_size_mm));
       }
       for (int c = 0; c < 3; ++c) {
         if (!std::isfinite(a.roi_centre_mm[c])) {
@@ -115,7 +110,7 @@ Status ValidateGeometry(const GeometrySpec& geometry) {
         if (!PositiveFinite(a)) {
           return Status::InvalidArgument(
               "geometry.ellipsoid.semi_axes_mm[" + std::to_string(c) + "]",
-              "every semi-axis must be a positive number of mm, got " + Number(a));
+              "every semi-axis must be a positive number of mm, got " + ShortNumber(a));
         }
       }
       return Status::Ok();
@@ -124,13 +119,13 @@ Status ValidateGeometry(const GeometrySpec& geometry) {
       if (!PositiveFinite(s.inner_radius_mm)) {
         return Status::InvalidArgument(
             "geometry.spherical_shell.inner_radius_mm",
-            "must be a positive number of mm, got " + Number(s.inner_radius_mm));
+            "must be a positive number of mm, got " + ShortNumber(s.inner_radius_mm));
       }
       if (!std::isfinite(s.outer_radius_mm) || s.outer_radius_mm <= s.inner_radius_mm) {
         return Status::InvalidArgument("geometry.spherical_shell.outer_radius_mm",
                                        "must be a number of mm larger than the inner radius (" +
-                                           Number(s.inner_radius_mm) + "), got " +
-                                           Number(s.outer_radius_mm));
+                                           ShortNumber(s.inner_radius_mm) + "), got " +
+                                           ShortNumber(s.outer_radius_mm));
       }
       return Status::Ok();
     }
@@ -139,7 +134,7 @@ Status ValidateGeometry(const GeometrySpec& geometry) {
         if (!PositiveFinite(size)) {
           return Status::InvalidArgument(
               "geometry.box.size_mm",
-              "every edge length must be a positive number of mm, got " + Number(size));
+              "every edge length must be a positive number of mm, got " + ShortNumber(size));
         }
       }
       return Status::Ok();
@@ -147,12 +142,12 @@ Status ValidateGeometry(const GeometrySpec& geometry) {
       if (!PositiveFinite(geometry.cylinder.radius_mm)) {
         return Status::InvalidArgument(
             "geometry.cylinder.radius_mm",
-            "must be a positive number of mm, got " + Number(geometry.cylinder.radius_mm));
+            "must be a positive number of mm, got " + ShortNumber(geometry.cylinder.radius_mm));
       }
       if (!PositiveFinite(geometry.cylinder.height_mm)) {
         return Status::InvalidArgument(
             "geometry.cylinder.height_mm",
-            "must be a positive number of mm, got " + Number(geometry.cylinder.height_mm));
+            "must be a positive number of mm, got " + ShortNumber(geometry.cylinder.height_mm));
       }
       return Status::Ok();
   }
@@ -253,7 +248,7 @@ Status CheckExtraMaterial(const MaterialSpec& material, const MaterialSpec& scen
   if (!std::isfinite(density) || density < 0) {
     return Status::InvalidArgument(
         path + ".density_kg_per_m3",
-        "must be a non-negative number of kg/m^3, got " + Number(density));
+        "must be a non-negative number of kg/m^3, got " + ShortNumber(density));
   }
   // One family per model: the analysis that suits the scene's material must
   // suit every other material as well.
@@ -307,12 +302,13 @@ Status ValidatePatches(const GeometrySpec& geometry) {
         if (!std::isfinite(p.centre_mm[c])) {
           return Status::InvalidArgument(
               path + ".centre_mm[" + std::to_string(c) + "]",
-              "must be a finite number of mm, got " + Number(p.centre_mm[c]));
+              "must be a finite number of mm, got " + ShortNumber(p.centre_mm[c]));
         }
       }
       if (!PositiveFinite(p.radius_mm)) {
         return Status::InvalidArgument(
-            path + ".radius_mm", "must be a positive number of mm, got " + Number(p.radius_mm));
+            path + ".radius_mm",
+            "must be a positive number of mm, got " + ShortNumber(p.radius_mm));
       }
     }
     if (p.half_space) {
@@ -321,11 +317,11 @@ Status ValidatePatches(const GeometrySpec& geometry) {
         if (!std::isfinite(p.plane_point_mm[c])) {
           return Status::InvalidArgument(
               path + ".plane_point_mm[" + std::to_string(c) + "]",
-              "must be a finite number of mm, got " + Number(p.plane_point_mm[c]));
+              "must be a finite number of mm, got " + ShortNumber(p.plane_point_mm[c]));
         }
         if (!std::isfinite(p.plane_normal[c])) {
           return Status::InvalidArgument(path + ".plane_normal[" + std::to_string(c) + "]",
-                                         "must be finite, got " + Number(p.plane_normal[c]));
+                                         "must be finite, got " + ShortNumber(p.plane_normal[c]));
         }
         length += p.plane_normal[c] * p.plane_normal[c];
       }
@@ -496,10 +492,11 @@ Status LinearElasticParams::Validate(const std::string& path) const {
   if (!PositiveFinite(youngs_modulus_pa)) {
     return Status::InvalidArgument(
         path + ".youngs_modulus_pa",
-        "Young's modulus must be a positive number of Pa, got " + Number(youngs_modulus_pa));
+        "Young's modulus must be a positive number of Pa, got " + ShortNumber(youngs_modulus_pa));
   }
   if (!std::isfinite(poissons_ratio) || poissons_ratio <= -1.0 || poissons_ratio >= 0.5) {
-    std::string message = "Poisson's ratio must lie in (-1, 0.5), got " + Number(poissons_ratio);
+    std::string message =
+        "Poisson's ratio must lie in (-1, 0.5), got " + ShortNumber(poissons_ratio);
     if (poissons_ratio == 0.5) {
       message += "; an incompressible material needs a hyperelastic model, not linear elasticity";
     }
@@ -556,15 +553,16 @@ int PlaneNormalAxis(const GeometrySpec& geometry, const std::string& set) {
   return -1;
 }
 
-Status ValidateScene(const SceneSpec& scene) {
-  PBA_RETURN_IF_ERROR(ValidateGeometry(scene.geometry));
-  PBA_RETURN_IF_ERROR(ValidatePatches(scene.geometry));
+namespace {
 
+// mesh: the element size, an element kind the geometry and the analysis
+// can take, and a mesh that fits in memory.
+Status ValidateMesh(const SceneSpec& scene) {
   if (!std::isfinite(scene.mesh.element_size_mm) || scene.mesh.element_size_mm < 0) {
     return Status::InvalidArgument(
         "mesh.element_size_mm",
         "must be a positive number of mm (or left out for the default), got " +
-            Number(scene.mesh.element_size_mm));
+            ShortNumber(scene.mesh.element_size_mm));
   }
   if (scene.geometry.kind == GeometrySpec::Kind::kAtlas && IsHexahedral(scene.mesh.element)) {
     return Status::InvalidArgument("mesh.element",
@@ -593,14 +591,84 @@ Status ValidateScene(const SceneSpec& scene) {
         "TET10_MD (10-node tetrahedron with mean dilatation) is implemented for "
         "NONLINEAR_STATIC; a linear analysis uses TET10 or HEX8");
   }
-  PBA_RETURN_IF_ERROR(ValidateMaterialSpec(scene.material, "material"));
-  PBA_RETURN_IF_ERROR(ValidateAnalysis(scene.analysis, scene.material));
-  PBA_RETURN_IF_ERROR(ValidateRegionMaterials(scene));
-  PBA_RETURN_IF_ERROR(scene_checks::ValidateInclusions(scene));
-  PBA_RETURN_IF_ERROR(ValidateHistoryElements(scene));
-  PBA_RETURN_IF_ERROR(scene_checks::ValidateExplicit(scene));
-  PBA_RETURN_IF_ERROR(AutoFormulationOptions::FromScene(scene).Validate());
+  return Status::Ok();
+}
 
+// The directions x, y, z a boundary condition holds the body in.
+using HeldDirections = std::array<bool, 3>;
+
+// boundary_conditions[i] (`path`): a face set of this geometry and a
+// condition with finite values; marks in `held` the directions it holds.
+Status CheckBoundaryCondition(const SceneSpec& scene, const BoundaryConditionSpec& bc,
+                              const std::string& path, const std::vector<std::string>& sets,
+                              HeldDirections* held) {
+  if (IsAtlasSetName(scene.geometry, bc.set)) {
+    PBA_RETURN_IF_ERROR(CheckAtlasSetName(scene.geometry, bc.set, path + ".set"));
+  } else if (std::find(sets.begin(), sets.end(), bc.set) == sets.end()) {
+    return Status::InvalidArgument(
+        path + ".set", "unknown face set '" + bc.set + "'; this geometry has: " + JoinNames(sets));
+  }
+  switch (bc.kind) {
+    case BoundaryConditionSpec::Kind::kNone:
+      return Status::InvalidArgument(path,
+                                     "no condition given: set fixed, displacement, symmetry, "
+                                     "pressure, traction or velocity");
+    case BoundaryConditionSpec::Kind::kPressure:
+      if (!std::isfinite(bc.pressure_pa)) {
+        return Status::InvalidArgument(
+            path + ".pressure.pressure_pa",
+            "must be a finite number of Pa, got " + ShortNumber(bc.pressure_pa));
+      }
+      break;
+    case BoundaryConditionSpec::Kind::kTraction:
+      for (int c = 0; c < 3; ++c) {
+        if (!std::isfinite(bc.traction_pa[c])) {
+          return Status::InvalidArgument(
+              path + ".traction.traction_pa[" + std::to_string(c) + "]",
+              "must be a finite number of Pa, got " + ShortNumber(bc.traction_pa[c]));
+        }
+      }
+      break;
+    case BoundaryConditionSpec::Kind::kFixed:
+      (*held)[0] = (*held)[1] = (*held)[2] = true;
+      break;
+    case BoundaryConditionSpec::Kind::kSymmetry: {
+      const int axis = PlaneNormalAxis(scene.geometry, bc.set);
+      if (axis < 0) {
+        return Status::InvalidArgument(
+            path + ".symmetry", "a symmetry condition needs a planar face set; '" + bc.set +
+                                    "' is curved (hold it with displacement components instead)");
+      }
+      (*held)[axis] = true;
+      break;
+    }
+    case BoundaryConditionSpec::Kind::kVelocity:
+      PBA_RETURN_IF_ERROR(scene_checks::CheckVelocity(bc, scene.analysis.type, path));
+      break;
+    case BoundaryConditionSpec::Kind::kDisplacement: {
+      bool any = false;
+      static const char* kNames[3] = {"x_mm", "y_mm", "z_mm"};
+      for (int c = 0; c < 3; ++c) {
+        if (!bc.displacement_mm[c]) continue;
+        if (!std::isfinite(*bc.displacement_mm[c])) {
+          return Status::InvalidArgument(path + ".displacement." + kNames[c],
+                                         "must be a finite number of mm");
+        }
+        any = (*held)[c] = true;
+      }
+      if (!any) {
+        return Status::InvalidArgument(path + ".displacement",
+                                       "no component given: set at least one of x_mm, y_mm, z_mm");
+      }
+      break;
+    }
+  }
+  return Status::Ok();
+}
+
+// boundary_conditions: at least one (outside dynamics), each checked in turn;
+// `held` gets the directions they hold together.
+Status ValidateBoundaryConditions(const SceneSpec& scene, HeldDirections* held) {
   // In dynamics a free body is fine: its inertia holds it (an impactor may
   // strike a body held by nothing).
   const bool dynamic = scene.analysis.type == AnalysisSpec::Type::kExplicitDynamic;
@@ -610,84 +678,28 @@ Status ValidateScene(const SceneSpec& scene) {
                                    "least one face (for example {set: bottom, fixed: {}})");
   }
   const std::vector<std::string> sets = FaceSetNames(scene.geometry);
-  bool held[3] = {false, false, false};
   for (std::size_t i = 0; i < scene.boundary_conditions.size(); ++i) {
-    const BoundaryConditionSpec& bc = scene.boundary_conditions[i];
     const std::string path = "boundary_conditions[" + std::to_string(i) + "]";
-    if (IsAtlasSetName(scene.geometry, bc.set)) {
-      PBA_RETURN_IF_ERROR(CheckAtlasSetName(scene.geometry, bc.set, path + ".set"));
-    } else if (std::find(sets.begin(), sets.end(), bc.set) == sets.end()) {
-      return Status::InvalidArgument(path + ".set", "unknown face set '" + bc.set +
-                                                        "'; this geometry has: " + JoinNames(sets));
-    }
-    switch (bc.kind) {
-      case BoundaryConditionSpec::Kind::kNone:
-        return Status::InvalidArgument(path,
-                                       "no condition given: set fixed, displacement, symmetry, "
-                                       "pressure, traction or velocity");
-      case BoundaryConditionSpec::Kind::kPressure:
-        if (!std::isfinite(bc.pressure_pa)) {
-          return Status::InvalidArgument(
-              path + ".pressure.pressure_pa",
-              "must be a finite number of Pa, got " + Number(bc.pressure_pa));
-        }
-        break;
-      case BoundaryConditionSpec::Kind::kTraction:
-        for (int c = 0; c < 3; ++c) {
-          if (!std::isfinite(bc.traction_pa[c])) {
-            return Status::InvalidArgument(
-                path + ".traction.traction_pa[" + std::to_string(c) + "]",
-                "must be a finite number of Pa, got " + Number(bc.traction_pa[c]));
-          }
-        }
-        break;
-      case BoundaryConditionSpec::Kind::kFixed:
-        held[0] = held[1] = held[2] = true;
-        break;
-      case BoundaryConditionSpec::Kind::kSymmetry: {
-        const int axis = PlaneNormalAxis(scene.geometry, bc.set);
-        if (axis < 0) {
-          return Status::InvalidArgument(
-              path + ".symmetry", "a symmetry condition needs a planar face set; '" + bc.set +
-                                      "' is curved (hold it with displacement components instead)");
-        }
-        held[axis] = true;
-        break;
-      }
-      case BoundaryConditionSpec::Kind::kVelocity:
-        PBA_RETURN_IF_ERROR(scene_checks::CheckVelocity(bc, scene.analysis.type, path));
-        break;
-      case BoundaryConditionSpec::Kind::kDisplacement: {
-        bool any = false;
-        static const char* kNames[3] = {"x_mm", "y_mm", "z_mm"};
-        for (int c = 0; c < 3; ++c) {
-          if (!bc.displacement_mm[c]) continue;
-          if (!std::isfinite(*bc.displacement_mm[c])) {
-            return Status::InvalidArgument(path + ".displacement." + kNames[c],
-                                           "must be a finite number of mm");
-          }
-          any = held[c] = true;
-        }
-        if (!any) {
-          return Status::InvalidArgument(
-              path + ".displacement", "no component given: set at least one of x_mm, y_mm, z_mm");
-        }
-        break;
-      }
-    }
+    PBA_RETURN_IF_ERROR(
+        CheckBoundaryCondition(scene, scene.boundary_conditions[i], path, sets, held));
   }
+  return Status::Ok();
+}
+
+// material.density_kg_per_m3 and gravity: a density gravity can act on.
+Status ValidateDensityAndGravity(const SceneSpec& scene) {
   const double density = scene.material.density_kg_per_m3;
   if (!std::isfinite(density) || density < 0) {
     return Status::InvalidArgument(
         "material.density_kg_per_m3",
-        "must be a non-negative number of kg/m^3, got " + Number(density));
+        "must be a non-negative number of kg/m^3, got " + ShortNumber(density));
   }
   if (scene.gravity.enabled) {
     for (int c = 0; c < 3; ++c) {
       if (!std::isfinite(scene.gravity.acceleration_m_per_s2[c])) {
         return Status::InvalidArgument("gravity.acceleration_m_per_s2[" + std::to_string(c) + "]",
                                        "must be a finite number of m/s^2, got " +
-                                           Number(scene.gravity.acceleration_m_per_s2[c]));
+                                           ShortNumber(scene.gravity.acceleration_m_per_s2[c]));
       }
     }
     if (density == 0) {
@@ -697,7 +709,14 @@ Status ValidateScene(const SceneSpec& scene) {
           "1040 kg/m^3)");
     }
   }
-  PBA_RETURN_IF_ERROR(scene_checks::ValidateBuoyancy(scene.gravity));
+  return Status::Ok();
+}
+
+// Outside explicit dynamics the boundary conditions together must hold the
+// body in every direction: a free direction leaves a static solve without a
+// unique answer.
+Status CheckBodyHeld(const SceneSpec& scene, const HeldDirections& held) {
+  const bool dynamic = scene.analysis.type == AnalysisSpec::Type::kExplicitDynamic;
   std::string free;
   for (int c = 0; c < 3; ++c) {
     if (!held[c]) free += std::string(free.empty() ? "" : ", ") + "xyz"[c];
@@ -708,7 +727,12 @@ Status ValidateScene(const SceneSpec& scene) {
                                        ", so it could slide away; fix or prescribe that component "
                                        "on some face");
   }
-  PBA_RETURN_IF_ERROR(scene_checks::ValidateContacts(scene));
+  return Status::Ok();
+}
+
+// outputs.reaction_sets: face sets of this geometry.
+Status ValidateReactionSets(const SceneSpec& scene) {
+  const std::vector<std::string> sets = FaceSetNames(scene.geometry);
   for (std::size_t i = 0; i < scene.outputs.reaction_sets.size(); ++i) {
     const std::string& name = scene.outputs.reaction_sets[i];
     const std::string path = "outputs.reaction_sets[" + std::to_string(i) + "]";
@@ -719,6 +743,31 @@ Status ValidateScene(const SceneSpec& scene) {
           path, "unknown face set '" + name + "'; this geometry has: " + JoinNames(sets));
     }
   }
+  return Status::Ok();
+}
+
+}  // namespace
+
+// Section by section, in an order that keeps the first error a scene reports
+// stable (tests and users see that one).
+Status ValidateScene(const SceneSpec& scene) {
+  PBA_RETURN_IF_ERROR(ValidateGeometry(scene.geometry));
+  PBA_RETURN_IF_ERROR(ValidatePatches(scene.geometry));
+  PBA_RETURN_IF_ERROR(ValidateMesh(scene));
+  PBA_RETURN_IF_ERROR(ValidateMaterialSpec(scene.material, "material"));
+  PBA_RETURN_IF_ERROR(ValidateAnalysis(scene.analysis, scene.material));
+  PBA_RETURN_IF_ERROR(ValidateRegionMaterials(scene));
+  PBA_RETURN_IF_ERROR(scene_checks::ValidateInclusions(scene));
+  PBA_RETURN_IF_ERROR(ValidateHistoryElements(scene));
+  PBA_RETURN_IF_ERROR(scene_checks::ValidateExplicit(scene));
+  PBA_RETURN_IF_ERROR(AutoFormulationOptions::FromScene(scene).Validate());
+  HeldDirections held = {false, false, false};
+  PBA_RETURN_IF_ERROR(ValidateBoundaryConditions(scene, &held));
+  PBA_RETURN_IF_ERROR(ValidateDensityAndGravity(scene));
+  PBA_RETURN_IF_ERROR(scene_checks::ValidateBuoyancy(scene.gravity));
+  PBA_RETURN_IF_ERROR(CheckBodyHeld(scene, held));
+  PBA_RETURN_IF_ERROR(scene_checks::ValidateContacts(scene));
+  PBA_RETURN_IF_ERROR(ValidateReactionSets(scene));
   PBA_RETURN_IF_ERROR(scene_checks::ValidateProfiles(scene.outputs));
   return ValidateStructureDisplacements(scene);
 }

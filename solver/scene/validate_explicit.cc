@@ -44,46 +44,50 @@ const char* UsedBy(const ExplicitField& f) {
 // The range of each field, as the message that refuses a value outside it
 // (empty: inside).
 std::string OutOfRange(const std::string& name, double value, const TimeSpec& time) {
-  if (!std::isfinite(value)) return "must be a finite number, got " + Number(value);
+  if (!std::isfinite(value)) return "must be a finite number, got " + ShortNumber(value);
   if (name == "time_step_factor") {
     if (value < 0 || value > 2) {
-      return "must lie in (0, 2] (0 for the default " + Number(ExplicitOptions::kTimeStepFactor) +
-             ", or " + Number(ExplicitOptions::kRelaxationTimeStepFactor) +
-             " for DYNAMIC_RELAXATION; above 1 the integration is unstable), got " + Number(value);
+      return "must lie in (0, 2] (0 for the default " +
+             ShortNumber(ExplicitOptions::kTimeStepFactor) + ", or " +
+             ShortNumber(ExplicitOptions::kRelaxationTimeStepFactor) +
+             " for DYNAMIC_RELAXATION; above 1 the integration is unstable), got " +
+             ShortNumber(value);
     }
   } else if (name == "bulk_viscosity_linear" || name == "bulk_viscosity_quadratic") {
     if (value < 0 || value > 10) {
       return "must lie in [0, 10] (0 turns the term off; leave it out for the default), got " +
-             Number(value);
+             ShortNumber(value);
     }
   } else if (name == "mass_damping_per_s") {
-    if (value < 0) return "must be a non-negative number of 1/s (0: none), got " + Number(value);
+    if (value < 0)
+      return "must be a non-negative number of 1/s (0: none), got " + ShortNumber(value);
   } else if (name == "hourglass_coefficient") {
     if (value < 0 || value > 0.5) {
       return "must lie in [0, 0.5] (0 for the default " +
-             Number(ExplicitOptions::kHourglassCoefficient) + "), got " + Number(value);
+             ShortNumber(ExplicitOptions::kHourglassCoefficient) + "), got " + ShortNumber(value);
     }
   } else if (name == "output_interval_s") {
     if (value < 0) {
       return "must be a non-negative number of s (0 for end_time_s / " +
-             Number(1 / ExplicitOptions::kOutputIntervalFraction) + "), got " + Number(value);
+             ShortNumber(1 / ExplicitOptions::kOutputIntervalFraction) + "), got " +
+             ShortNumber(value);
     }
     if (time.end_time_s > 0 && value > time.end_time_s) {
-      return "must not exceed analysis.time.end_time_s (" + Number(time.end_time_s) + " s), got " +
-             Number(value) + " s";
+      return "must not exceed analysis.time.end_time_s (" + ShortNumber(time.end_time_s) +
+             " s), got " + ShortNumber(value) + " s";
     }
   } else if (name == "erosion_strain") {
     if (value < 0) {
-      return "must be a non-negative strain (0: no erosion), got " + Number(value);
+      return "must be a non-negative strain (0: no erosion), got " + ShortNumber(value);
     }
   } else if (name == "mass_scaling_step_s") {
     if (value < 0) {
-      return "must be a non-negative number of s (0: no mass scaling), got " + Number(value);
+      return "must be a non-negative number of s (0: no mass scaling), got " + ShortNumber(value);
     }
   } else if (name == "relaxation_tolerance") {
     if (value < 0 || value >= 0.1) {
       return "must lie in [0, 0.1) (0 for the default " +
-             Number(ExplicitOptions::kRelaxationTolerance) + "), got " + Number(value);
+             ShortNumber(ExplicitOptions::kRelaxationTolerance) + "), got " + ShortNumber(value);
     }
   }
   return "";
@@ -169,14 +173,14 @@ Status ValidateSensors(const SceneSpec& scene) {
       if (!std::isfinite(s.position_mm[c])) {
         return Status::InvalidArgument(
             path + ".position_mm[" + std::to_string(c) + "]",
-            "must be a finite number of mm, got " + Number(s.position_mm[c]));
+            "must be a finite number of mm, got " + ShortNumber(s.position_mm[c]));
       }
     }
     if (!NonNegativeFinite(s.radius_mm)) {
       return Status::InvalidArgument(
           path + ".radius_mm",
           "must be a non-negative number of mm (0: the element holding the point), got " +
-              Number(s.radius_mm));
+              ShortNumber(s.radius_mm));
     }
   }
   const double end = scene.analysis.time.end_time_s;
@@ -184,8 +188,9 @@ Status ValidateSensors(const SceneSpec& scene) {
   if (!NonNegativeFinite(interval) || interval >= end) {
     return Status::InvalidArgument(
         "outputs.sensor_interval_s",
-        "must be a non-negative number of s below analysis.time.end_time_s (" + Number(end) +
-            " s; 0 for " + Number(kDefaultSensorIntervalS) + " s), got " + Number(interval));
+        "must be a non-negative number of s below analysis.time.end_time_s (" + ShortNumber(end) +
+            " s; 0 for " + ShortNumber(kDefaultSensorIntervalS) + " s), got " +
+            ShortNumber(interval));
   }
   if (outputs.filter_order < 0 || outputs.filter_order > 10) {
     return Status::InvalidArgument("outputs.filter_order",
@@ -200,10 +205,11 @@ Status ValidateSensors(const SceneSpec& scene) {
   if (!NonNegativeFinite(cutoff) || (cutoff > 0 && cutoff >= nyquist)) {
     return Status::InvalidArgument(
         "outputs.filter_cutoff_hz",
-        "must be a non-negative number of Hz below half the sampling rate (" + Number(nyquist) +
-            " Hz for samples every " + Number(interval > 0 ? interval : kDefaultSensorIntervalS) +
-            " s; 0 for the default " + Number(SensorOptions::kFilterCutoffHz) + " Hz), got " +
-            Number(cutoff));
+        "must be a non-negative number of Hz below half the sampling rate (" +
+            ShortNumber(nyquist) + " Hz for samples every " +
+            ShortNumber(interval > 0 ? interval : kDefaultSensorIntervalS) +
+            " s; 0 for the default " + ShortNumber(SensorOptions::kFilterCutoffHz) + " Hz), got " +
+            ShortNumber(cutoff));
   }
   // The filter the engine designs, with every default applied (a default
   // cutoff may not fit a coarse interval the scene chose).
@@ -217,7 +223,7 @@ Status CheckDensity(const MaterialSpec& material, const std::string& path) {
   return Status::InvalidArgument(
       path + ".density_kg_per_m3",
       "EXPLICIT_DYNAMIC needs a positive mass density in kg/m^3 (brain tissue: about 1040), got " +
-          Number(material.density_kg_per_m3));
+          ShortNumber(material.density_kg_per_m3));
 }
 
 // Every material of the scene: hyperelastic (the scene's is checked by

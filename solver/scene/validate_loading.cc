@@ -27,7 +27,7 @@ Status CheckFiniteThree(const std::array<double, 3>& values, const std::string& 
     if (!std::isfinite(values[c])) {
       return Status::InvalidArgument(
           path + "[" + std::to_string(c) + "]",
-          std::string("must be a finite number") + unit + ", got " + Number(values[c]));
+          std::string("must be a finite number") + unit + ", got " + ShortNumber(values[c]));
     }
   }
   return Status::Ok();
@@ -53,7 +53,7 @@ Status ValidateTime(const AnalysisSpec& analysis) {
     return Status::InvalidArgument("analysis.time.end_time_s",
                                    std::string(AnalysisTypeName(analysis.type)) +
                                        " needs a positive end time in s, got " +
-                                       Number(t.end_time_s));
+                                       ShortNumber(t.end_time_s));
   }
   if (dynamic) {
     // The explicit step is the stable one times time_step_factor: no
@@ -78,7 +78,8 @@ Status ValidateTime(const AnalysisSpec& analysis) {
     if (!NonNegativeFinite(steps[k].second)) {
       return Status::InvalidArgument(
           std::string("analysis.time.") + steps[k].first,
-          "must be a non-negative number of s (0 for the default), got " + Number(steps[k].second));
+          "must be a non-negative number of s (0 for the default), got " +
+              ShortNumber(steps[k].second));
     }
   }
   for (int k = 0; k < 3; ++k) {
@@ -86,12 +87,12 @@ Status ValidateTime(const AnalysisSpec& analysis) {
     const double fraction =
         k == 2 ? TimeOptions::kMaxStepFloorFraction : TimeOptions::kStepFloorFraction;
     if (steps[k].second < fraction * t.end_time_s) {
-      return Status::InvalidArgument(std::string("analysis.time.") + steps[k].first,
-                                     "must be at least " + Number(fraction) + " of end_time_s (" +
-                                         Number(fraction * t.end_time_s) + " s), got " +
-                                         Number(steps[k].second) + " s: smaller steps would take " +
-                                         (k == 2 ? "over a million" : "over 1e9") +
-                                         " increments (0 picks the default)");
+      return Status::InvalidArgument(
+          std::string("analysis.time.") + steps[k].first,
+          "must be at least " + ShortNumber(fraction) + " of end_time_s (" +
+              ShortNumber(fraction * t.end_time_s) + " s), got " + ShortNumber(steps[k].second) +
+              " s: smaller steps would take " + (k == 2 ? "over a million" : "over 1e9") +
+              " increments (0 picks the default)");
     }
   }
   for (int k = 0; k < 3; ++k) {
@@ -102,7 +103,7 @@ Status ValidateTime(const AnalysisSpec& analysis) {
         return Status::InvalidArgument(
             std::string("analysis.time.") + steps[k].first,
             "must not exceed " + std::string(steps[later].first) + " (" +
-                Number(steps[later].second) + " s), got " + Number(steps[k].second) +
+                ShortNumber(steps[later].second) + " s), got " + ShortNumber(steps[k].second) +
                 " s; given steps need min_step_s <= initial_step_s <= max_step_s <= end_time_s");
       }
       break;  // the next given one; the chain covers the rest
@@ -112,17 +113,17 @@ Status ValidateTime(const AnalysisSpec& analysis) {
     const auto& [time_s, amplitude] = t.curve[i];
     const std::string path = "analysis.time.curve[" + std::to_string(i) + "]";
     if (!NonNegativeFinite(time_s)) {
-      return Status::InvalidArgument(path + ".time_s",
-                                     "must be a non-negative number of s, got " + Number(time_s));
+      return Status::InvalidArgument(
+          path + ".time_s", "must be a non-negative number of s, got " + ShortNumber(time_s));
     }
     if (i > 0 && !(time_s > t.curve[i - 1].first)) {
       return Status::InvalidArgument(
-          path + ".time_s", "times must increase strictly: " + Number(time_s) + " s follows " +
-                                Number(t.curve[i - 1].first) + " s");
+          path + ".time_s", "times must increase strictly: " + ShortNumber(time_s) + " s follows " +
+                                ShortNumber(t.curve[i - 1].first) + " s");
     }
     if (!std::isfinite(amplitude)) {
       return Status::InvalidArgument(path + ".amplitude",
-                                     "must be a finite number, got " + Number(amplitude));
+                                     "must be a finite number, got " + ShortNumber(amplitude));
     }
   }
   return Status::Ok();
@@ -134,13 +135,13 @@ Status ValidateBuoyancy(const GravitySpec& gravity) {
         "gravity.fluid_density_kg_per_m3",
         "must be a non-negative number of kg/m^3 (0 for no fluid; cerebrospinal fluid: about "
         "1007), got " +
-            Number(gravity.fluid_density_kg_per_m3));
+            ShortNumber(gravity.fluid_density_kg_per_m3));
   }
   if (gravity.fluid_level_mm && !std::isfinite(*gravity.fluid_level_mm)) {
     return Status::InvalidArgument(
         "gravity.fluid_level_mm",
         "must be a finite number of mm (or left out: the fluid covers everything), got " +
-            Number(*gravity.fluid_level_mm));
+            ShortNumber(*gravity.fluid_level_mm));
   }
   return Status::Ok();
 }
@@ -174,14 +175,14 @@ Status ValidateInclusions(const SceneSpec& scene) {
     PBA_RETURN_IF_ERROR(CheckFiniteThree(inclusion.centre_mm, path + ".centre_mm", " of mm"));
     if (!PositiveFinite(inclusion.radius_mm)) {
       return Status::InvalidArgument(path + ".radius_mm", "must be a positive number of mm, got " +
-                                                              Number(inclusion.radius_mm));
+                                                              ShortNumber(inclusion.radius_mm));
     }
     PBA_RETURN_IF_ERROR(CheckExtraMaterial(inclusion.material, scene.material, path + ".material"));
     if (!std::isfinite(inclusion.growth_strain) || inclusion.growth_strain <= -1) {
       return Status::InvalidArgument(
           path + ".growth_strain",
           "must be a finite number above -1 (at -1 the inclusion would shrink to nothing), got " +
-              Number(inclusion.growth_strain));
+              ShortNumber(inclusion.growth_strain));
     }
     if (inclusion.growth_strain != 0 && !FiniteStrain(scene.analysis.type)) {
       return Status::InvalidArgument(
@@ -234,7 +235,7 @@ Status ValidateContacts(const SceneSpec& scene) {
       return Status::InvalidArgument(
           path + ".radius_mm",
           "a flat punch, a sphere or a cylinder needs a positive radius in mm, got " +
-              Number(c.radius_mm));
+              ShortNumber(c.radius_mm));
     }
     PBA_RETURN_IF_ERROR(CheckFiniteThree(c.axis, path + ".axis", ""));
     if (c.axis[0] == 0 && c.axis[1] == 0 && c.axis[2] == 0) {
@@ -245,14 +246,14 @@ Status ValidateContacts(const SceneSpec& scene) {
       return Status::InvalidArgument(
           path + ".friction",
           "the Coulomb coefficient must lie in [0, 0.5] (0: frictionless), got " +
-              Number(c.friction));
+              ShortNumber(c.friction));
     }
     if (impact && c.friction != 0) {
       return Status::InvalidArgument(
           path + ".friction",
           "friction is not modelled in EXPLICIT_DYNAMIC (an impactor is frictionless): leave it "
           "0, got " +
-              Number(c.friction));
+              ShortNumber(c.friction));
     }
     if (impact && c.start_touching) {
       return Status::InvalidArgument(
@@ -261,15 +262,15 @@ Status ValidateContacts(const SceneSpec& scene) {
           "motion_mm times a(t)");
     }
     if (!NonNegativeFinite(c.penalty_factor)) {
-      return Status::InvalidArgument(
-          path + ".penalty_factor",
-          "must be a non-negative number (0 for the default 100), got " + Number(c.penalty_factor));
+      return Status::InvalidArgument(path + ".penalty_factor",
+                                     "must be a non-negative number (0 for the default 100), got " +
+                                         ShortNumber(c.penalty_factor));
     }
     if (!NonNegativeFinite(c.penetration_tolerance_mm)) {
       return Status::InvalidArgument(
           path + ".penetration_tolerance_mm",
           "must be a non-negative number of mm (0 for 1 % of the element size), got " +
-              Number(c.penetration_tolerance_mm));
+              ShortNumber(c.penetration_tolerance_mm));
     }
   }
   return Status::Ok();
@@ -301,8 +302,8 @@ Status ValidateProfiles(const OutputSpec& outputs) {
       for (int c = 0; c < 3; ++c) {
         if (!std::isfinite((*end)[c])) {
           return Status::InvalidArgument(
-              path + field,
-              "xyz"[c] + std::string(" must be a finite number of mm, got ") + Number((*end)[c]));
+              path + field, "xyz"[c] + std::string(" must be a finite number of mm, got ") +
+                                ShortNumber((*end)[c]));
         }
       }
     }

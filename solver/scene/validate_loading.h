@@ -9,13 +9,12 @@
 #include <string>
 #include <vector>
 
+#include "core/number_format.h"
 #include "pba/scene.h"
 #include "pba/status.h"
 
 namespace pba::scene_checks {
 
-// "%g" of a value, for messages.
-std::string Number(double value);
 bool PositiveFinite(double value);
 // "a, b, c"
 std::string JoinNames(const std::vector<std::string>& names);

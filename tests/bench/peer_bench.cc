@@ -16,7 +16,7 @@
 
 #include "common/calculix.h"
 #include "common/scene_builders.h"
-#include "integration/subprocess.h"
+#include "common/subprocess.h"
 #include "pba/solve.h"
 
 namespace pba {

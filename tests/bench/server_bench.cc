@@ -323,7 +323,7 @@ void BM_Geometry50MiB(benchmark::State& state) {
     hash_s += Seconds(hash_start, Clock::now());
     // The server's surface check of the same content, alone.
     const auto check_start = Clock::now();
-    if (!CheckGeometryContent("upload_id", GeometryFormat::kStl, content).ok()) {
+    if (!CheckGeometryContent("upload_id", StructureFormat::kStl, content).ok()) {
       return state.SkipWithError("the sphere is not a closed surface");
     }
     check_s += Seconds(check_start, Clock::now());

@@ -214,7 +214,7 @@ void BM_InternalForce(benchmark::State& state) {
   const double triad = TriadBandwidth(threads);
   Case& c = CaseOf(k);
   TledModel& t = *c.setup.tled;
-  omp_set_num_threads(threads);
+  t.SetThreads(ThreadContext(threads));
   t.InternalForce(c.u, c.v, &c.f);  // first touch of f and the buffers
   double seconds = 0, fastest = 1e30;
   for (auto _ : state) {

@@ -112,7 +112,7 @@ int main(int argc, char** argv) {
   uint64_t seed = 1;
   FillChunk(0, &first, &seed);
   pba::Revision revision;
-  Check(store->CreateStructure("alice", ref, pba::StructureMetadata(), pba::GeometryFormat::kNifti,
+  Check(store->CreateStructure("alice", ref, pba::StructureMetadata(), pba::StructureFormat::kNifti,
                                first, &revision),
         "creating a structure");
   pba::LockInfo lock;
@@ -148,7 +148,7 @@ int main(int argc, char** argv) {
   request.structure = ref;
   request.lock_id = lock.lock_id;
   request.base_revision = 1;
-  request.format = pba::GeometryFormat::kNifti;
+  request.format = pba::StructureFormat::kNifti;
   request.message = "bench";
   std::string content;
   std::unique_ptr<pba::MappedFile> mapped;

@@ -9,7 +9,7 @@
 #include <map>
 #include <string>
 
-#include "integration/subprocess.h"
+#include "common/subprocess.h"
 
 namespace pba::testing {
 

@@ -299,48 +299,45 @@ void DrawConditions(Dice& dice, bool consistent, const std::string& load_set, Sc
   }
 }
 
-SceneSpec SampledScene(Dice& dice) {
-  SceneSpec s = BaseScene();
-  const bool consistent = dice.Chance(0.85);
-  // Dynamic relaxation has half the others' share: when it does not settle
-  // it runs 200000 steps, slow on a busy machine.
-  const Type type =
-      dice.Of({Type::kLinearStatic, Type::kLinearStatic, Type::kNonlinearStatic,
-               Type::kNonlinearStatic, Type::kQuasiStatic, Type::kQuasiStatic,
-               Type::kExplicitDynamic, Type::kExplicitDynamic, Type::kDynamicRelaxation});
-  s.analysis.type = type;
-  const bool explicit_engine = type == Type::kExplicitDynamic || type == Type::kDynamicRelaxation;
-  const bool dynamic = type == Type::kExplicitDynamic;
+// The tetrahedra of the tet4 family (the default element is one): growth,
+// and relaxation in QUASI_STATIC, take only these.
+bool Tet4Family(const SceneSpec& s) {
+  return s.mesh.element == ElementType::kDefault || s.mesh.element == ElementType::kTet4 ||
+         s.mesh.element == ElementType::kTet4Anp;
+}
 
-  // Mesh.
+// The element and its size.
+void DrawMesh(Dice& dice, bool consistent, SceneSpec* s) {
+  const Type type = s->analysis.type;
+  const bool explicit_engine = type == Type::kExplicitDynamic || type == Type::kDynamicRelaxation;
   if (!consistent) {
-    s.mesh.element = dice.Of({ElementType::kDefault, ElementType::kTet4, ElementType::kTet4Anp,
-                              ElementType::kTet10, ElementType::kTet10Md, ElementType::kHex8,
-                              ElementType::kHex8Full});
+    s->mesh.element = dice.Of({ElementType::kDefault, ElementType::kTet4, ElementType::kTet4Anp,
+                               ElementType::kTet10, ElementType::kTet10Md, ElementType::kHex8,
+                               ElementType::kHex8Full});
   } else if (explicit_engine) {
-    s.mesh.element = dice.Of(
+    s->mesh.element = dice.Of(
         {ElementType::kDefault, ElementType::kTet4, ElementType::kTet4Anp, ElementType::kHex8});
   } else if (type == Type::kLinearStatic) {
-    s.mesh.element = dice.Of({ElementType::kDefault, ElementType::kTet4, ElementType::kTet10,
-                              ElementType::kHex8, ElementType::kHex8Full});
+    s->mesh.element = dice.Of({ElementType::kDefault, ElementType::kTet4, ElementType::kTet10,
+                               ElementType::kHex8, ElementType::kHex8Full});
   } else {
-    s.mesh.element = dice.Of({ElementType::kDefault, ElementType::kTet4, ElementType::kTet4Anp,
-                              ElementType::kTet10, ElementType::kTet10Md, ElementType::kHex8,
-                              ElementType::kHex8Full});
+    s->mesh.element = dice.Of({ElementType::kDefault, ElementType::kTet4, ElementType::kTet4Anp,
+                               ElementType::kTet10, ElementType::kTet10Md, ElementType::kHex8,
+                               ElementType::kHex8Full});
   }
-  s.mesh.element_size_mm = dice.Of({2.0, 2.0, 2.0, 3.0, 6.0});
+  s->mesh.element_size_mm = dice.Of({2.0, 2.0, 2.0, 3.0, 6.0});
   // Dynamic relaxation does not always settle (HEX8 at 2 mm never does):
   // then it runs 200000 steps, cheap only on the coarsest meshes.
   if (consistent && type == Type::kDynamicRelaxation) {
-    s.mesh.element_size_mm = dice.Of({3.0, 6.0});
+    s->mesh.element_size_mm = dice.Of({3.0, 6.0});
   }
-  const bool tet4_family = s.mesh.element == ElementType::kDefault ||
-                           s.mesh.element == ElementType::kTet4 ||
-                           s.mesh.element == ElementType::kTet4Anp;
+}
 
-  DrawTime(dice, consistent, &s);
-
-  // Material.
+// The material, its density and maybe a relaxation.
+void DrawMaterial(Dice& dice, bool consistent, SceneSpec* s) {
+  const Type type = s->analysis.type;
+  const bool dynamic = type == Type::kExplicitDynamic;
+  const bool tet4_family = Tet4Family(*s);
   const bool linear_ok = type == Type::kLinearStatic || !consistent;
   const MatKind kind =
       linear_ok
@@ -348,25 +345,27 @@ SceneSpec SampledScene(Dice& dice) {
                      MatKind::kMooneyRivlin, MatKind::kPolynomial, MatKind::kOgden})
           : dice.Of({MatKind::kNeoHookean, MatKind::kMooneyRivlin, MatKind::kPolynomial,
                      MatKind::kOgden});
-  s.material = Material(kind, dice.Of({1.0, 10.0, 100.0, 1000.0}));
-  if (!dynamic || !consistent) s.material.density_kg_per_m3 = dice.Of({1040.0, 1040.0, 0.0});
+  s->material = Material(kind, dice.Of({1.0, 10.0, 100.0, 1000.0}));
+  if (!dynamic || !consistent) s->material.density_kg_per_m3 = dice.Of({1040.0, 1040.0, 0.0});
   const bool relaxation_ok =
-      s.material.hyperelastic() && (type != Type::kQuasiStatic || tet4_family);
+      s->material.hyperelastic() && (type != Type::kQuasiStatic || tet4_family);
   if ((relaxation_ok || !consistent) && dice.Chance(0.5)) {
-    const double scale = type == Type::kQuasiStatic ? s.analysis.time.end_time_s : 1.0;
-    AddRelaxation(dice.Of({Form::kProny, Form::kExponential, Form::kModuli}), scale, &s.material);
+    const double scale = type == Type::kQuasiStatic ? s->analysis.time.end_time_s : 1.0;
+    AddRelaxation(dice.Of({Form::kProny, Form::kExponential, Form::kModuli}), scale, &s->material);
   }
+}
 
-  // Patches of the top, and the set loads go on.
+// Patches of the top; returns the set loads go on (the top or a patch).
+std::string DrawPatches(Dice& dice, SceneSpec* s) {
   std::string load_set = "top";
   switch (dice.Below(12)) {
     case 0:
     case 1:
-      s.geometry.patches = {PatchSpec::Ball("spot", "top", {2, 2, 6}, 3)};
+      s->geometry.patches = {PatchSpec::Ball("spot", "top", {2, 2, 6}, 3)};
       load_set = "spot";
       break;
     case 2:
-      s.geometry.patches = {PatchSpec::HalfSpace("half", "top", {2, 2, 6}, {1, 0, 0})};
+      s->geometry.patches = {PatchSpec::HalfSpace("half", "top", {2, 2, 6}, {1, 0, 0})};
       load_set = "half";
       break;
     case 3: {
@@ -374,22 +373,24 @@ SceneSpec SampledScene(Dice& dice) {
       rim.invert = true;
       rim.half_space = true;
       rim.plane_normal = {0, 1, 0};
-      s.geometry.patches = {rim};
+      s->geometry.patches = {rim};
       load_set = "rim";
       break;
     }
     case 4:  // holds no face at 2 mm: the mesh tells (kFailedPrecondition)
-      s.geometry.patches = {PatchSpec::Ball("speck", "top", {1.3, 0.7, 6}, 0.05)};
+      s->geometry.patches = {PatchSpec::Ball("speck", "top", {1.3, 0.7, 6}, 0.05)};
       load_set = "speck";
       break;
     default:
       break;
   }
-  DrawConditions(dice, consistent, load_set, &s);
+  return load_set;
+}
 
-  // Gravity, with and without buoyancy.
+// Gravity, with and without buoyancy.
+void DrawGravity(Dice& dice, bool consistent, SceneSpec* s) {
   if (dice.Chance(0.3)) {
-    GravitySpec& g = s.gravity;
+    GravitySpec& g = s->gravity;
     g.enabled = true;
     g.acceleration_m_per_s2 =
         dice.Of<std::array<double, 3>>({{0, 0, -9.81}, {3, 0, -9.81}, {0, 0, -1e4}});
@@ -407,10 +408,14 @@ SceneSpec SampledScene(Dice& dice) {
       default:
         break;
     }
-    if (consistent && s.material.density_kg_per_m3 == 0) s.material.density_kg_per_m3 = 1040;
+    if (consistent && s->material.density_kg_per_m3 == 0) s->material.density_kg_per_m3 = 1040;
   }
+}
 
-  // Inclusions, growing or not.
+// Inclusions, growing or not.
+void DrawInclusions(Dice& dice, bool consistent, SceneSpec* s) {
+  const Type type = s->analysis.type;
+  const bool tet4_family = Tet4Family(*s);
   const bool growth_ok =
       (type == Type::kNonlinearStatic || type == Type::kQuasiStatic) && tet4_family;
   switch (dice.Below(12)) {
@@ -418,23 +423,28 @@ SceneSpec SampledScene(Dice& dice) {
     case 1:
     case 2:
     case 3: {
-      InclusionSpec core{"core", {2, 2, 3}, 1.6, Stiffer(s.material), 0};
+      InclusionSpec core{"core", {2, 2, 3}, 1.6, Stiffer(s->material), 0};
       if ((growth_ok || !consistent) && dice.Chance(0.6)) {
         core.growth_strain = dice.Of({0.1, -0.3, 1.0});
       }
-      s.inclusions = {core};
+      s->inclusions = {core};
       break;
     }
     case 4:  // outside the body, or too small to hold an element's centre
-      s.inclusions = {InclusionSpec{"stray",
-                                    dice.Of<std::array<double, 3>>({{20, 20, 20}, {0.1, 0.1, 0.1}}),
-                                    0.05, Stiffer(s.material), 0}};
+      s->inclusions = {
+          InclusionSpec{"stray", dice.Of<std::array<double, 3>>({{20, 20, 20}, {0.1, 0.1, 0.1}}),
+                        0.05, Stiffer(s->material), 0}};
       break;
     default:
       break;
   }
+}
 
-  // Rigid contacts (impactors in EXPLICIT_DYNAMIC).
+// Rigid contacts (impactors in EXPLICIT_DYNAMIC); `load_set` as for
+// DrawConditions.
+void DrawContacts(Dice& dice, bool consistent, const std::string& load_set, SceneSpec* s) {
+  const Type type = s->analysis.type;
+  const bool dynamic = type == Type::kExplicitDynamic;
   const bool contact_ok = type == Type::kNonlinearStatic || type == Type::kQuasiStatic || dynamic;
   if ((contact_ok || !consistent) && dice.Chance(0.4)) {
     ContactSpec c = Contact(dice.Of({Shape::kFlatPunch, Shape::kSphere, Shape::kPlane,
@@ -446,11 +456,15 @@ SceneSpec SampledScene(Dice& dice) {
     }
     c.penalty_factor = dice.Of({0.0, 0.0, 1.0, 1e4});
     c.penetration_tolerance_mm = dice.Of({0.0, 0.0, 1e-3});
-    s.contacts = {c};
+    s->contacts = {c};
   }
+}
 
-  // Outputs.
-  OutputSpec& o = s.outputs;
+// Output fields, profiles, sensors, structures and reactions.
+void DrawOutputs(Dice& dice, bool consistent, const std::string& load_set, SceneSpec* s) {
+  const Type type = s->analysis.type;
+  const bool dynamic = type == Type::kExplicitDynamic;
+  OutputSpec& o = s->outputs;
   if (dice.Chance(0.3)) {
     o.profiles.push_back({"axis", {2, 2, 0}, {2, 2, 6}, dice.Of({0, 2, 1000})});
     if (dice.Chance(0.3)) o.profiles.push_back({"outside-1", {10, 10, 10}, {20, 20, 20}, 2});
@@ -459,7 +473,7 @@ SceneSpec SampledScene(Dice& dice) {
     o.sensors = {{"centre", {2, 2, 3}, 0}};
     if (dice.Chance(0.4)) o.sensors.push_back({"ball_2", {2, 2, 1.5}, 1.5});
     if (dice.Chance(0.1)) o.sensors.push_back({"away", {2, 2, 30}, 0});
-    const double end = s.analysis.time.end_time_s > 0 ? s.analysis.time.end_time_s : 1e-4;
+    const double end = s->analysis.time.end_time_s > 0 ? s->analysis.time.end_time_s : 1e-4;
     switch (dice.Below(4)) {
       case 0:  // every filter setting at a boundary
         o.sensor_interval_s = 2e-6;
@@ -477,8 +491,8 @@ SceneSpec SampledScene(Dice& dice) {
         break;
     }
   }
-  if ((!s.inclusions.empty() || !consistent) && dice.Chance(0.4)) {
-    o.structure_displacements = {consistent ? dice.Of<std::string>({"*", s.inclusions[0].name})
+  if ((!s->inclusions.empty() || !consistent) && dice.Chance(0.4)) {
+    o.structure_displacements = {consistent ? dice.Of<std::string>({"*", s->inclusions[0].name})
                                             : dice.Of<std::string>({"*", "core", "body"})};
   }
   if (dice.Chance(0.3)) {
@@ -489,31 +503,57 @@ SceneSpec SampledScene(Dice& dice) {
     o.displacement = o.stress = o.strain = o.von_mises = false;
     o.pk2_stress = o.almansi_strain = o.jacobian = false;
   }
+}
 
-  // Analysis options.
+// Newton, explicit and linear solver options, and formulation AUTO.
+void DrawAnalysisOptions(Dice& dice, bool consistent, SceneSpec* s) {
+  const Type type = s->analysis.type;
+  const bool explicit_engine = type == Type::kExplicitDynamic || type == Type::kDynamicRelaxation;
   if ((type == Type::kNonlinearStatic || type == Type::kQuasiStatic || !consistent) &&
       dice.Chance(0.4)) {
-    DrawNonlinearOptions(dice, &s);
+    DrawNonlinearOptions(dice, s);
     // Time steps are cut to min_step_s (not min_increment): a hard Newton
     // stops there, at a hundredth of the analysis.
-    TimeSpec& t = s.analysis.time;
-    if (type == Type::kQuasiStatic && s.analysis.nonlinear.min_increment >= 0.5 &&
+    TimeSpec& t = s->analysis.time;
+    if (type == Type::kQuasiStatic && s->analysis.nonlinear.min_increment >= 0.5 &&
         t.min_step_s == 0) {
       t.min_step_s = 0.01 * t.end_time_s;
     }
   }
   if ((explicit_engine || !consistent) && dice.Chance(0.7)) {
-    DrawExplicitControls(dice, consistent, &s);
+    DrawExplicitControls(dice, consistent, s);
   }
   if (!explicit_engine) {
-    s.analysis.linear_solver =
+    s->analysis.linear_solver =
         dice.Of({AnalysisSpec::LinearSolver::kCholmod, AnalysisSpec::LinearSolver::kCholmod,
                  AnalysisSpec::LinearSolver::kEigenLdlt, AnalysisSpec::LinearSolver::kPcg});
   }
   if ((!explicit_engine || !consistent) && dice.Chance(0.2)) {
-    s.formulation = Formulation::kAuto;
-    s.formulation_tolerance = dice.Of({0.0, 1e-9, 0.5, 0.999999});
+    s->formulation = Formulation::kAuto;
+    s->formulation_tolerance = dice.Of({0.0, 1e-9, 0.5, 0.999999});
   }
+}
+
+SceneSpec SampledScene(Dice& dice) {
+  SceneSpec s = BaseScene();
+  const bool consistent = dice.Chance(0.85);
+  // Dynamic relaxation has half the others' share: when it does not settle
+  // it runs 200000 steps, slow on a busy machine.
+  const Type type =
+      dice.Of({Type::kLinearStatic, Type::kLinearStatic, Type::kNonlinearStatic,
+               Type::kNonlinearStatic, Type::kQuasiStatic, Type::kQuasiStatic,
+               Type::kExplicitDynamic, Type::kExplicitDynamic, Type::kDynamicRelaxation});
+  s.analysis.type = type;
+  DrawMesh(dice, consistent, &s);
+  DrawTime(dice, consistent, &s);
+  DrawMaterial(dice, consistent, &s);
+  const std::string load_set = DrawPatches(dice, &s);
+  DrawConditions(dice, consistent, load_set, &s);
+  DrawGravity(dice, consistent, &s);
+  DrawInclusions(dice, consistent, &s);
+  DrawContacts(dice, consistent, load_set, &s);
+  DrawOutputs(dice, consistent, load_set, &s);
+  DrawAnalysisOptions(dice, consistent, &s);
   return s;
 }
 

@@ -26,6 +26,7 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "hard/scene_variants.h"
@@ -87,7 +88,9 @@ SceneSpec QuasiStatic() {
   return s;
 }
 
-std::vector<EdgeCase> EdgeCases() {
+// Mesh sizes at their extremes, Newton controls at their bounds, and unusual
+// holds and loads.
+std::vector<EdgeCase> MeshNewtonAndHoldEdgeCases() {
   using S = SceneSpec*;
   return {
       {"default_element_size_on_a_small_box",
@@ -144,6 +147,13 @@ std::vector<EdgeCase> EdgeCases() {
          s->boundary_conditions = {Held("low", BcKind::kSymmetry), Held("dot", BcKind::kSymmetry),
                                    Held("bottom", BcKind::kSymmetry), Pressure("top", 100)};
        }},
+  };
+}
+
+// QUASI_STATIC time stepping and curves, and relaxation at its limits.
+std::vector<EdgeCase> QuasiStaticEdgeCases() {
+  using S = SceneSpec*;
+  return {
       {"quasi_static_single_step",
        [](S s) {
          *s = QuasiStatic();
@@ -191,6 +201,14 @@ std::vector<EdgeCase> EdgeCases() {
          *s = QuasiStatic();
          s->material.viscoelastic.g = {0, 0};
        }},
+  };
+}
+
+// Inclusions (covering, hidden, shrinking) and rigid contacts (starting
+// inside the body, never touching it, a cylinder in a static analysis).
+std::vector<EdgeCase> InclusionAndContactEdgeCases() {
+  using S = SceneSpec*;
+  return {
       {"inclusion_over_the_whole_body",
        [](S s) {
          s->inclusions = {{"all", {2, 2, 3}, 100, Stiffer(s->material), 0}};
@@ -224,6 +242,13 @@ std::vector<EdgeCase> EdgeCases() {
          s->contacts = {Contact(Shape::kCylinderFlat, "top")};
          s->contacts[0].start_touching = true;
        }},
+  };
+}
+
+// Gravity and buoyancy, and DYNAMIC_RELAXATION at its controls' bounds.
+std::vector<EdgeCase> GravityAndRelaxationEdgeCases() {
+  using S = SceneSpec*;
+  return {
       {"fluid_level_through_the_body",
        [](S s) {
          s->boundary_conditions = {Held("bottom", BcKind::kFixed)};
@@ -262,6 +287,14 @@ std::vector<EdgeCase> EdgeCases() {
          s->analysis.type = Type::kDynamicRelaxation;
          s->analysis.explicit_dynamics.time_step_factor = 2;
        }},
+  };
+}
+
+// EXPLICIT_DYNAMIC impacts: every control, sensor filters at their bounds,
+// prescribed motions.
+std::vector<EdgeCase> ImpactEdgeCases() {
+  using S = SceneSpec*;
+  return {
       {"impact_unstable_step",
        [](S s) {
          *s = Impact();
@@ -368,6 +401,13 @@ std::vector<EdgeCase> EdgeCases() {
          s->contacts[0].motion_mm = {0, -1, 0};
          s->outputs.sensors = {{"below", {0, -2, 2}, 0}};
        }},
+  };
+}
+
+// Shells, ellipsoids and cylinders: their named faces and patches.
+std::vector<EdgeCase> CurvedGeometryEdgeCases() {
+  using S = SceneSpec*;
+  return {
       {"pressurised_shell_octant",
        [](S s) {
          s->geometry.kind = GeometrySpec::Kind::kSphericalShell;
@@ -438,6 +478,14 @@ std::vector<EdgeCase> EdgeCases() {
          s->boundary_conditions = {Held("base", BcKind::kFixed)};
          s->gravity = {true, {0, 0, -9.81}, 1007, 0.0};
        }},
+  };
+}
+
+// Materials and linear solvers at their edges, and outputs that ask for
+// little or much.
+std::vector<EdgeCase> MaterialAndOutputEdgeCases() {
+  using S = SceneSpec*;
+  return {
       {"orthotropic_hex8_full_pcg",
        [](S s) {
          s->analysis.type = Type::kLinearStatic;
@@ -499,6 +547,13 @@ std::vector<EdgeCase> EdgeCases() {
          o.displacement = o.stress = o.strain = o.von_mises = false;
          o.pk2_stress = o.almansi_strain = o.jacobian = false;
        }},
+  };
+}
+
+// Formulation AUTO on small strains, relaxation and contact.
+std::vector<EdgeCase> AutoFormulationEdgeCases() {
+  using S = SceneSpec*;
+  return {
       {"auto_small_strain_tet4",
        [](S s) {
          s->mesh.element = ElementType::kTet4;
@@ -560,6 +615,18 @@ std::vector<EdgeCase> EdgeCases() {
          s->contacts = {Contact(Shape::kSphere, "top")};
        }},
   };
+}
+
+// Every edge case, in a fixed order.
+std::vector<EdgeCase> EdgeCases() {
+  std::vector<EdgeCase> cases;
+  for (std::vector<EdgeCase> (*group)() :
+       {MeshNewtonAndHoldEdgeCases, QuasiStaticEdgeCases, InclusionAndContactEdgeCases,
+        GravityAndRelaxationEdgeCases, ImpactEdgeCases, CurvedGeometryEdgeCases,
+        MaterialAndOutputEdgeCases, AutoFormulationEdgeCases}) {
+    for (EdgeCase& edge : group()) cases.push_back(std::move(edge));
+  }
+  return cases;
 }
 
 const char* CodeName(Code code) {

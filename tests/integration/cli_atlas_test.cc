@@ -16,7 +16,7 @@
 #include <thread>
 
 #include "atlas/structure_set.h"
-#include "integration/subprocess.h"
+#include "common/subprocess.h"
 
 namespace pba::testing {
 namespace {

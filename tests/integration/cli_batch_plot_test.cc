@@ -13,10 +13,10 @@
 #include <string>
 #include <vector>
 
-#include "atlas/png_io.h"
+#include "common/subprocess.h"
 #include "integration/server_fixture.h"
-#include "integration/subprocess.h"
 #include "io/line_plot.h"
+#include "io/png_io.h"
 
 namespace pba::testing {
 namespace {

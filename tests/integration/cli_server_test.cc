@@ -14,10 +14,10 @@
 #include <string>
 #include <thread>
 
+#include "common/subprocess.h"
 #include "common/yaml_bombs.h"
 #include "integration/block_scene.h"
 #include "integration/server_fixture.h"
-#include "integration/subprocess.h"
 
 namespace pba::testing {
 namespace {

@@ -14,8 +14,8 @@
 #include <string>
 #include <vector>
 
+#include "common/subprocess.h"
 #include "integration/server_fixture.h"
-#include "integration/subprocess.h"
 
 namespace pba::testing {
 namespace {

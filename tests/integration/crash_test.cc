@@ -27,9 +27,9 @@
 #include <thread>
 #include <vector>
 
+#include "common/subprocess.h"
 #include "integration/block_scene.h"
 #include "integration/db_query.h"
-#include "integration/subprocess.h"
 
 namespace pba::testing {
 namespace {

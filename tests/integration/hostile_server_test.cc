@@ -20,8 +20,8 @@
 #include <vector>
 
 #include "atlas/structure_set.h"
+#include "common/subprocess.h"
 #include "core/sha256.h"
-#include "integration/subprocess.h"
 #include "pba/v1/atlas.grpc.pb.h"
 #include "pba/v1/job.grpc.pb.h"
 

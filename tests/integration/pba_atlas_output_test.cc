@@ -1,6 +1,6 @@
 // pba-atlas -o PATH: what is at PATH is replaced only when pba-atlas wrote
 // it and --force says so; a file, a link or a directory holding anything
-// else is refused (exit 2) and left as it was.
+// else is refused (exit 5, invalid input) and left as it was.
 
 #include <gtest/gtest.h>
 
@@ -9,13 +9,13 @@
 #include <sstream>
 #include <string>
 
-#include "integration/subprocess.h"
+#include "common/subprocess.h"
 
 namespace pba::testing {
 namespace {
 namespace fs = std::filesystem;
 
-constexpr int kExitInvalid = 2;
+constexpr int kExitInvalid = 5;  // core/exit_codes.h, docs/cli.md
 
 RunResult Plates(const fs::path& out, bool force = false) {
   std::vector<std::string> args = {PBA_ATLAS_BIN, "plates", "-o", out.string(), "--voxel-mm", "2"};

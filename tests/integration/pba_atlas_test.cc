@@ -2,7 +2,8 @@
 // an atlas mesh built from them, from the label volume and from the
 // synthetic source directly, and from a structure set, each with its
 // reports and pictures; an atlas split into a structure set; bad input
-// exits 2 naming what is wrong and leaves nothing behind.
+// exits 5 naming what is wrong and leaves nothing behind, a bad command line
+// 2 (exit codes: core/exit_codes.h, docs/cli.md).
 
 #include <gtest/gtest.h>
 #include <yaml-cpp/yaml.h>
@@ -14,8 +15,8 @@
 #include <string>
 
 #include "atlas/colour_table.h"
-#include "atlas/png_io.h"
-#include "integration/subprocess.h"
+#include "common/subprocess.h"
+#include "io/png_io.h"
 
 namespace pba::testing {
 namespace {
@@ -287,7 +288,7 @@ TEST_F(PbaAtlasTest, StructureSetIsComposedAndMeshed) {
   const fs::path refused = dir_.path() / "refused";
   args[3] = refused.string();
   run = RunProcess(args);
-  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_EQ(run.exit_code, 5);  // invalid
   EXPECT_NE(run.err.find("structures[0].colour"), std::string::npos) << run.err;
   EXPECT_FALSE(fs::exists(refused));
 }
@@ -318,32 +319,33 @@ TEST_F(PbaAtlasTest, SplitGivesAStructureSetThatBuilds) {
   ExpectQualityReport(out, 2);
 
   run = RunProcess({PBA_ATLAS_BIN, "split", "-o", set.string(), "--synthetic-voxel-mm", "2"});
-  EXPECT_EQ(run.exit_code, 4);
+  EXPECT_EQ(run.exit_code, 13);  // io
   EXPECT_NE(run.err.find("not an empty directory"), std::string::npos) << run.err;
   EXPECT_EQ(ReadFile(set / "manifest.json"), manifest);
 }
 
-TEST_F(PbaAtlasTest, BadInputExitsTwoNamingItAndWritesNothing) {
+TEST_F(PbaAtlasTest, BadInputExitsFiveNamingItAndWritesNothing) {
   const fs::path out = dir_.path() / "atlas";
   RunResult run = RunProcess({PBA_ATLAS_BIN, "build", "-o", out.string(), "--synthetic-voxel-mm",
                               "2", "--structure", "Amygdala"});
-  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_EQ(run.exit_code, 5);  // invalid
   EXPECT_NE(run.err.find("structures[0]"), std::string::npos) << run.err;
   EXPECT_NE(run.err.find("Amygdala"), std::string::npos) << run.err;
   EXPECT_FALSE(fs::exists(out));
 
   run = RunProcess({PBA_ATLAS_BIN, "build", "-o", out.string(), "--cell-mm", "-1"});
-  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_EQ(run.exit_code, 5);
   EXPECT_NE(run.err.find("cell_size_mm"), std::string::npos) << run.err;
   EXPECT_FALSE(fs::exists(out));
 
   run = RunProcess({PBA_ATLAS_BIN, "build", "-o", out.string(), "--picture-mm", "0"});
-  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_EQ(run.exit_code, 5);
   EXPECT_NE(run.err.find("pixel_mm"), std::string::npos) << run.err;
   EXPECT_FALSE(fs::exists(out));
 
+  // CLI11 refuses this combination: a usage error.
   run = RunProcess({PBA_ATLAS_BIN, "build", "-o", out.string(), "--no-pictures", "--cut-z", "5"});
-  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_EQ(run.exit_code, 2);  // usage
   EXPECT_FALSE(fs::exists(out));
 
   run = RunProcess({PBA_ATLAS_BIN, "build", "-o", out.string(), "--labels",

@@ -1,6 +1,7 @@
 // pba-solve as users and the server call it: every example solves, bad input
-// exits 2 naming the field, an interrupted solve leaves nothing behind, and
-// --out replaces only an earlier result, with --force.
+// exits 5 naming the field and a bad command line 2 (core/exit_codes.h), an
+// interrupted solve leaves nothing behind, and --out replaces only an
+// earlier result, with --force.
 
 #include <gtest/gtest.h>
 #include <signal.h>
@@ -16,9 +17,9 @@
 #include <thread>
 #include <vector>
 
+#include "common/subprocess.h"
 #include "common/yaml_bombs.h"
 #include "integration/block_scene.h"
-#include "integration/subprocess.h"
 
 namespace pba::testing {
 namespace {
@@ -68,7 +69,7 @@ INSTANTIATE_TEST_SUITE_P(Examples, ExampleTest, ::testing::ValuesIn(Examples()),
                            return name;
                          });
 
-TEST(PbaSolveTest, InvalidSceneExitsTwoAndWritesNothing) {
+TEST(PbaSolveTest, InvalidSceneExitsFiveAndWritesNothing) {
   TempDir dir;
   const fs::path scene = dir.path() / "bad.yaml";
   std::ofstream(scene)
@@ -78,7 +79,7 @@ TEST(PbaSolveTest, InvalidSceneExitsTwoAndWritesNothing) {
   const fs::path out = dir.path() / "result";
   const RunResult run =
       RunProcess({PBA_SOLVE_BIN, scene.string(), "--out", out.string(), "--progress", "json"});
-  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_EQ(run.exit_code, 5);  // invalid
   EXPECT_NE(run.err.find("material.linear_elastic.poissons_ratio"), std::string::npos) << run.err;
   EXPECT_NE(run.out.find("\"ERROR\""), std::string::npos) << run.out;
   EXPECT_NE(run.out.find("INVALID_ARGUMENT"), std::string::npos) << run.out;
@@ -92,14 +93,14 @@ TEST(PbaSolveTest, UnknownFieldNamesPathAndLine) {
   std::ofstream(scene) << "name: x\nmaterial:\n  linear_elastic:\n    young: 3000\n";
   const RunResult run =
       RunProcess({PBA_SOLVE_BIN, scene.string(), "--out", (dir.path() / "r").string()});
-  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_EQ(run.exit_code, 5);  // invalid
   EXPECT_NE(run.err.find("typo.yaml:4"), std::string::npos) << run.err;
   EXPECT_NE(run.err.find("material.linear_elastic.young"), std::string::npos) << run.err;
 }
 
 // Nine levels of ten aliases: a billion values from a kilobyte, refused
-// before loading (exit 2 naming the alias and its line, at once).
-TEST(PbaSolveTest, AliasBombSceneExitsTwoNamingTheAlias) {
+// before loading (exit 5 naming the alias and its line, at once).
+TEST(PbaSolveTest, AliasBombSceneExitsFiveNamingTheAlias) {
   TempDir dir;
   const fs::path scene = dir.path() / "bomb.yaml";
   const std::string text = "name: bomb\n" + yaml_bombs::BillionLaughs();
@@ -109,7 +110,7 @@ TEST(PbaSolveTest, AliasBombSceneExitsTwoNamingTheAlias) {
       RunProcess({PBA_SOLVE_BIN, scene.string(), "--out", (dir.path() / "r").string()},
                  std::chrono::seconds(30));
   EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 10);
-  EXPECT_EQ(run.exit_code, 2) << run.err;
+  EXPECT_EQ(run.exit_code, 5) << run.err;  // invalid
   EXPECT_NE(run.err.find("bomb.yaml:3: YAML aliases (*l0) are not accepted"), std::string::npos)
       << run.err;
   EXPECT_FALSE(fs::exists(dir.path() / "r"));
@@ -135,7 +136,7 @@ TEST(PbaSolveTest, SigtermStopsCleanlyAndWritesNothing) {
   int status = 0;
   ASSERT_EQ(::waitpid(pid, &status, 0), pid);
   ASSERT_TRUE(WIFEXITED(status));
-  EXPECT_EQ(WEXITSTATUS(status), 5);  // cancelled
+  EXPECT_EQ(WEXITSTATUS(status), 7);  // cancelled
   EXPECT_FALSE(fs::exists(out));
   EXPECT_EQ(std::distance(fs::directory_iterator(dir.path()), fs::directory_iterator()), 1)
       << "a partial result was left behind";
@@ -200,7 +201,7 @@ const std::string kLongBlock = BlockSceneYaml("long-block", 50);
 // watchdog ends the process.
 TEST(PbaSolveTest, SigtermDuringAFactorisationExitsWithinASecond) {
   const CancelRun run = CancelDuring(kLongBlock, "factorize", std::chrono::milliseconds(500));
-  EXPECT_EQ(run.exit_code, 5) << run.err;
+  EXPECT_EQ(run.exit_code, 7) << run.err;  // cancelled
   EXPECT_LT(run.seconds, 1.0) << run.err;
 }
 
@@ -208,7 +209,7 @@ TEST(PbaSolveTest, SigtermDuringAFactorisationExitsWithinASecond) {
 TEST(PbaSolveTest, SigtermDuringConjugateGradientsExitsWithinASecond) {
   const CancelRun run = CancelDuring(std::string(kLongBlock) + "analysis: {linear_solver: PCG}\n",
                                      "solve", std::chrono::milliseconds(500));
-  EXPECT_EQ(run.exit_code, 5) << run.err;
+  EXPECT_EQ(run.exit_code, 7) << run.err;  // cancelled
   EXPECT_LT(run.seconds, 1.0) << run.err;
   EXPECT_NE(run.err.find("conjugate gradients"), std::string::npos) << run.err;
 }
@@ -234,8 +235,20 @@ TEST(PbaSolveTest, ExportOnlyWritesAnAbaqusDeck) {
 TEST(PbaSolveTest, NeitherOutNorExportIsAUsageError) {
   const RunResult run =
       RunProcess({PBA_SOLVE_BIN, std::string(PBA_EXAMPLES_DIR) + "/quickstart.yaml"});
-  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_EQ(run.exit_code, 2);  // usage
   EXPECT_NE(run.err.find("--out"), std::string::npos) << run.err;
+}
+
+// CLI11's refusals are usage errors too, as in pba and pba-atlas: exit 2,
+// not the 5 of a bad scene.
+TEST(PbaSolveTest, UnknownOptionOrBadValueIsAUsageError) {
+  const std::string scene = std::string(PBA_EXAMPLES_DIR) + "/quickstart.yaml";
+  RunResult run = RunProcess({PBA_SOLVE_BIN, scene, "--export-inp", "x.inp", "--no-such-flag"});
+  EXPECT_EQ(run.exit_code, 2) << run.err;
+  EXPECT_NE(run.err.find("--no-such-flag"), std::string::npos) << run.err;
+  run = RunProcess({PBA_SOLVE_BIN, scene, "--export-inp", "x.inp", "--progress", "loud"});
+  EXPECT_EQ(run.exit_code, 2) << run.err;
+  EXPECT_NE(run.err.find("loud"), std::string::npos) << run.err;
 }
 
 // A small QUASI_STATIC hold of a viscoelastic cube, held until `end_s`,
@@ -303,14 +316,14 @@ TEST(PbaSolveTest, CheckpointThenRestartExtendsTheHold) {
   const fs::path r3 = dir.path() / "r3";
   run = RunProcess({PBA_SOLVE_BIN, finer.string(), "--out", r3.string(), "--progress", "none",
                     "--restart", checkpoint.string()});
-  EXPECT_EQ(run.exit_code, 3) << run.out << run.err;
+  EXPECT_EQ(run.exit_code, 11) << run.out << run.err;  // numerical: cannot be solved as posed
   EXPECT_NE(run.err.find("its mesh has"), std::string::npos) << run.err;
   EXPECT_FALSE(fs::exists(r3));
 }
 
 // --out DIR: what is there is replaced only when pba-solve wrote it and
 // --force says so; a file, a link, or a directory holding anything else is
-// refused (exit 2) before anything is solved, and left as it was.
+// refused (exit 5) before anything is solved, and left as it was.
 constexpr char kSmallBlock[] =
     "geometry: {box: {size_mm: [10, 10, 10]}}\nmesh: {element_size_mm: 5}\n"
     "material: {linear_elastic: {youngs_modulus_pa: 3000, poissons_ratio: 0.45}}\n"
@@ -332,7 +345,7 @@ RunResult SolveInto(const fs::path& scene, const fs::path& out, bool force = fal
 
 // A refusal names --out and comes before the solve: no progress at all.
 void ExpectRefused(const RunResult& run, const std::string& why) {
-  EXPECT_EQ(run.exit_code, 2) << run.out << run.err;
+  EXPECT_EQ(run.exit_code, 5) << run.out << run.err;  // invalid
   EXPECT_NE(run.err.find("--out"), std::string::npos) << run.err;
   EXPECT_NE(run.err.find(why), std::string::npos) << run.err;
   EXPECT_EQ(run.out.find("PROGRESS"), std::string::npos) << run.out;

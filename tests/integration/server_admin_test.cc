@@ -7,7 +7,7 @@
 #include <regex>
 #include <string>
 
-#include "integration/subprocess.h"
+#include "common/subprocess.h"
 
 namespace pba::testing {
 namespace {

@@ -15,7 +15,7 @@
 #include <string>
 #include <vector>
 
-#include "integration/subprocess.h"
+#include "common/subprocess.h"
 
 namespace pba::testing {
 

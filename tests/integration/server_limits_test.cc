@@ -16,9 +16,9 @@
 #include <string>
 #include <thread>
 
+#include "common/subprocess.h"
 #include "integration/block_scene.h"
 #include "integration/server_fixture.h"
-#include "integration/subprocess.h"
 
 namespace pba::testing {
 namespace {

@@ -10,8 +10,8 @@
 #include <regex>
 #include <string>
 
+#include "common/subprocess.h"
 #include "integration/server_fixture.h"
-#include "integration/subprocess.h"
 
 namespace pba::testing {
 namespace {

@@ -1,4 +1,4 @@
-#include "integration/subprocess.h"
+#include "common/subprocess.h"
 
 #include <fcntl.h>
 #include <poll.h>

@@ -12,7 +12,7 @@
 #include <sstream>
 #include <string>
 
-#include "integration/subprocess.h"
+#include "common/subprocess.h"
 
 namespace pba::testing {
 namespace {

@@ -8,7 +8,7 @@
 #include <fstream>
 #include <string>
 
-#include "integration/subprocess.h"
+#include "common/subprocess.h"
 
 namespace pba::testing {
 namespace {

@@ -6,8 +6,8 @@
 #include <algorithm>
 #include <cmath>
 
-#include "analysis/material_field.h"
 #include "common/scene_builders.h"
+#include "material/material_field.h"
 #include "pba/solve.h"
 #include "scene/formulation.h"
 

@@ -15,8 +15,8 @@
 #include <cstdio>
 #include <string>
 
-#include "analysis/external_loads.h"
 #include "assembly/assembler.h"
+#include "assembly/external_loads.h"
 #include "fem/hex8.h"
 #include "fem/tet10.h"
 #include "linear/linear_solver.h"

@@ -14,11 +14,11 @@
 #include <vector>
 
 #include "analysis/average_nodal_pressure_model.h"
-#include "analysis/external_loads.h"
 #include "analysis/finite_strain_model.h"
 #include "analysis/hex8_model.h"
 #include "analysis/newton_static.h"
 #include "analysis/tet10_model.h"
+#include "assembly/external_loads.h"
 #include "linear/linear_solver.h"
 #include "material/polynomial.h"
 #include "mesh/primitive_mesher.h"

@@ -23,7 +23,10 @@ struct ProgressEvent {
 };
 
 struct SolveOptions {
-  // Worker threads for assembly and recovery; 0 = all cores.
+  // The threads the solve may use, and the bound of every library it
+  // calls: its own OpenMP loops, CHOLMOD's OpenMP teams and OpenBLAS
+  // (docs/performance.md). 0 = as many as OpenMP gives (OMP_NUM_THREADS,
+  // else one per core).
   int threads = 0;
   // Called from the solving thread at each phase change and within long phases.
   std::function<void(const ProgressEvent&)> progress;

@@ -24,19 +24,19 @@ constexpr int kBigResultBytes = 5 * 512 * 1024;
 
 // Writes the fake solver into `dir` and returns its path. It follows the
 // pba-solve contract (SCENE --out DIR --progress=json) and acts on the scene
-// name:
+// name (exit codes as pba-solve's, core/exit_codes.h):
 //   ok / big   progress lines, then a result dir (result.h5 = "hello\n" or
 //              kBigResultBytes bytes, result.xdmf, summary.json, and the
 //              staged snapshot's manifest.json when there is one), exit 0
 //   throttle   progress 0.10 0.11 0.12 0.20 in one phase, then as ok
-//   error      an ERROR line with a field, exit 3
-//   exit4      exit 4 without an ERROR line
+//   error      an ERROR line with a field, exit 11 (numerical)
+//   exit13     exit 13 (io) without an ERROR line
 //   killed     kills itself with SIGKILL
-//   slow       progress, then sleeps until SIGTERM (exits 5)
+//   slow       progress, then sleeps until SIGTERM (exits 7, cancelled)
 //   stubborn   ignores SIGTERM, sleeps until killed
 //   partial    half-writes a result in its hidden staging sibling
 //              (.result.partial-PID), then sleeps; SIGTERM ends it there
-//              (exit 5) without removing it, as pba-solve's cancel watchdog
+//              (exit 7) without removing it, as pba-solve's cancel watchdog
 //              does
 inline std::filesystem::path WriteFakeSolver(const std::filesystem::path& dir) {
   const std::filesystem::path path = dir / "fake-pba-solve";
@@ -81,20 +81,20 @@ case "$name" in
   error)
     progress assemble 0.2 "assembling"
     echo '{"kind":"ERROR","code":"NUMERICAL","field":"material.linear_elastic","message":"stiffness matrix is singular"}'
-    exit 3 ;;
-  exit4)
-    exit 4 ;;
+    exit 11 ;;
+  exit13)
+    exit 13 ;;
   killed)
     progress mesh 0.1 "meshing"
     kill -KILL $$ ;;
   slow)
-    trap 'exit 5' TERM
+    trap 'exit 7' TERM
     progress mesh 0.1 "meshing"
     i=0
     while [ $i -lt 600 ]; do sleep 0.1; i=$((i+1)); done
     exit 0 ;;
   partial)
-    trap 'exit 5' TERM
+    trap 'exit 7' TERM
     tmp="$(dirname "$out")/.result.partial-$$"
     mkdir -p "$tmp"
     printf 'half' > "$tmp/result.h5"

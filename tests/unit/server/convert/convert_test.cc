@@ -778,27 +778,5 @@ TEST(FormatSummary, ErrorPerStructureWhenThereAreSeveral) {
   EXPECT_NE(text.find("caudate"), std::string::npos) << text;
 }
 
-TEST(ToGrpcStatus, EachCodeMapsToItsGrpcNamesake) {
-  EXPECT_TRUE(ToGrpcStatus(Status::Ok()).ok());
-  const std::pair<Status, grpc::StatusCode> cases[] = {
-      {Status::InvalidArgument("lease", "must be positive"), grpc::StatusCode::INVALID_ARGUMENT},
-      {Status::FailedPrecondition("locked by bob"), grpc::StatusCode::FAILED_PRECONDITION},
-      {Status::Cancelled("stop"), grpc::StatusCode::CANCELLED},
-      {Status::NotFound("no such structure"), grpc::StatusCode::NOT_FOUND},
-      {Status::AlreadyExists("tag exists"), grpc::StatusCode::ALREADY_EXISTS},
-      {Status::Aborted("the head is revision 3"), grpc::StatusCode::ABORTED},
-      {Status::PermissionDenied("viewer"), grpc::StatusCode::PERMISSION_DENIED},
-      {Status::Unauthenticated("unknown token"), grpc::StatusCode::UNAUTHENTICATED},
-      {Status::Numerical("diverged"), grpc::StatusCode::INTERNAL},
-      {Status::Io("disk full"), grpc::StatusCode::INTERNAL},
-      {Status::Internal("bug"), grpc::StatusCode::INTERNAL},
-  };
-  for (const auto& [status, code] : cases) {
-    const grpc::Status converted = ToGrpcStatus(status);
-    EXPECT_EQ(converted.error_code(), code) << status.ToString();
-    EXPECT_EQ(converted.error_message(), status.ToString());
-  }
-}
-
 }  // namespace
 }  // namespace pba

@@ -165,9 +165,9 @@ TEST_F(JobExecutorTest, ErrorLineBecomesTheFailure) {
 }
 
 TEST_F(JobExecutorTest, ExitCodeWithoutErrorLine) {
-  const v1::Job job = RunToEnd("exit4");
+  const v1::Job job = RunToEnd("exit13");
   EXPECT_EQ(job.state(), v1::Job::FAILED);
-  EXPECT_EQ(job.error(), "pba-solve exited with code 4");
+  EXPECT_EQ(job.error(), "pba-solve exited with code 13 (reading or writing a file failed)");
 }
 
 TEST_F(JobExecutorTest, KilledFromOutside) {

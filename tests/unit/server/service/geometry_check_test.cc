@@ -81,30 +81,31 @@ std::string Vtk(const std::string& format = "ASCII") {
 std::string Message(const Status& s) { return s.ToString(); }
 
 TEST(GeometryCheckTest, ClosedSurfacesPassInEveryFormat) {
-  EXPECT_TRUE(CheckGeometryContent("upload_id", GeometryFormat::kObj, Obj(10)).ok());
-  EXPECT_TRUE(CheckGeometryContent("upload_id", GeometryFormat::kStl, AsciiStl(10)).ok());
-  const Status binary = CheckGeometryContent("upload_id", GeometryFormat::kStl, BinaryStl(10));
+  EXPECT_TRUE(CheckGeometryContent("upload_id", StructureFormat::kObj, Obj(10)).ok());
+  EXPECT_TRUE(CheckGeometryContent("upload_id", StructureFormat::kStl, AsciiStl(10)).ok());
+  const Status binary = CheckGeometryContent("upload_id", StructureFormat::kStl, BinaryStl(10));
   EXPECT_TRUE(binary.ok()) << Message(binary);
-  const Status vtk = CheckGeometryContent("upload_id", GeometryFormat::kVtk, Vtk());
+  const Status vtk = CheckGeometryContent("upload_id", StructureFormat::kVtk, Vtk());
   EXPECT_TRUE(vtk.ok()) << Message(vtk);
 }
 
 TEST(GeometryCheckTest, OpenFlatFarOrUnreadableSurfacesAreNamed) {
   const Status open =
-      CheckGeometryContent("upload_id", GeometryFormat::kObj, Obj(10, 3) + "f 1 2 3\n");
+      CheckGeometryContent("upload_id", StructureFormat::kObj, Obj(10, 3) + "f 1 2 3\n");
   EXPECT_NE(Message(open).find("not a closed surface"), std::string::npos) << Message(open);
-  const Status few = CheckGeometryContent("upload_id", GeometryFormat::kObj, Obj(10, 3));
+  const Status few = CheckGeometryContent("upload_id", StructureFormat::kObj, Obj(10, 3));
   EXPECT_NE(Message(few).find("at least four triangles"), std::string::npos) << Message(few);
-  const Status flat = CheckGeometryContent("upload_id", GeometryFormat::kObj, Obj(0));
+  const Status flat = CheckGeometryContent("upload_id", StructureFormat::kObj, Obj(0));
   EXPECT_NE(Message(flat).find("no volume"), std::string::npos) << Message(flat);
-  const Status far = CheckGeometryContent("upload_id", GeometryFormat::kStl, AsciiStl(1000));
+  const Status far = CheckGeometryContent("upload_id", StructureFormat::kStl, AsciiStl(1000));
   EXPECT_NE(Message(far).find("500 mm"), std::string::npos) << Message(far);
   const Status index =
-      CheckGeometryContent("upload_id", GeometryFormat::kObj, "v 0 0 0\nf 1 2 3\n");
+      CheckGeometryContent("upload_id", StructureFormat::kObj, "v 0 0 0\nf 1 2 3\n");
   EXPECT_NE(Message(index).find("line 2"), std::string::npos) << Message(index);
-  const Status binary_vtk = CheckGeometryContent("upload_id", GeometryFormat::kVtk, Vtk("BINARY"));
+  const Status binary_vtk = CheckGeometryContent("upload_id", StructureFormat::kVtk, Vtk("BINARY"));
   EXPECT_NE(Message(binary_vtk).find("only ASCII"), std::string::npos) << Message(binary_vtk);
-  const Status noise = CheckGeometryContent("upload_id", GeometryFormat::kStl, "not a mesh at all");
+  const Status noise =
+      CheckGeometryContent("upload_id", StructureFormat::kStl, "not a mesh at all");
   EXPECT_NE(Message(noise).find("neither binary STL"), std::string::npos) << Message(noise);
   for (const Status& s : {open, few, flat, far, index, binary_vtk, noise}) {
     EXPECT_EQ(s.code(), Status::Code::kInvalidArgument);
@@ -130,19 +131,19 @@ TEST(GeometryCheckTest, NiftiMasksAreReadToTheirData) {
   const Eigen::Vector3d origin(-10, 5, 2);
   for (const char* name : {"mask.nii", "mask.nii.gz"}) {
     const Status ok =
-        CheckGeometryContent("upload_id", GeometryFormat::kNifti, NiftiBytes(origin, 5, name));
+        CheckGeometryContent("upload_id", StructureFormat::kNifti, NiftiBytes(origin, 5, name));
     EXPECT_TRUE(ok.ok()) << name << ": " << Message(ok);
   }
   const Status empty =
-      CheckGeometryContent("upload_id", GeometryFormat::kNifti, NiftiBytes(origin, 0, "e.nii"));
+      CheckGeometryContent("upload_id", StructureFormat::kNifti, NiftiBytes(origin, 0, "e.nii"));
   EXPECT_NE(Message(empty).find("empty"), std::string::npos) << Message(empty);
 
   std::string whole = NiftiBytes(origin, 5, "t.nii");
   const Status truncated =
-      CheckGeometryContent("upload_id", GeometryFormat::kNifti, whole.substr(0, whole.size() - 7));
+      CheckGeometryContent("upload_id", StructureFormat::kNifti, whole.substr(0, whole.size() - 7));
   EXPECT_NE(Message(truncated).find("truncated"), std::string::npos) << Message(truncated);
 
-  const Status far = CheckGeometryContent("upload_id", GeometryFormat::kNifti,
+  const Status far = CheckGeometryContent("upload_id", StructureFormat::kNifti,
                                           NiftiBytes(Eigen::Vector3d(0, 0, 900), 5, "f.nii"));
   EXPECT_NE(Message(far).find("500 mm"), std::string::npos) << Message(far);
 
@@ -156,13 +157,13 @@ TEST(GeometryCheckTest, NiftiMasksAreReadToTheirData) {
     const float value = n == 3 ? 0.5f : 1.0f;
     floats.append(reinterpret_cast<const char*>(&value), 4);
   }
-  const Status fraction = CheckGeometryContent("upload_id", GeometryFormat::kNifti, floats);
+  const Status fraction = CheckGeometryContent("upload_id", StructureFormat::kNifti, floats);
   EXPECT_NE(Message(fraction).find("0.5"), std::string::npos) << Message(fraction);
 
   // The header of a .hdr/.img pair: its data is not in the upload.
   std::string pair = whole.substr(0, 348);
   std::memcpy(&pair[344], "ni1", 4);
-  const Status header_only = CheckGeometryContent("upload_id", GeometryFormat::kNifti, pair);
+  const Status header_only = CheckGeometryContent("upload_id", StructureFormat::kNifti, pair);
   EXPECT_NE(Message(header_only).find(".hdr/.img"), std::string::npos) << Message(header_only);
 
   for (const Status& s : {empty, truncated, far, fraction, header_only}) {
@@ -185,7 +186,7 @@ double SecondsSince(std::chrono::steady_clock::time_point start) {
 TEST(GeometryCheckTest, ContoursMadeOfAliasesAreRefusedAtOnce) {
   const auto start = std::chrono::steady_clock::now();
   const Status s =
-      CheckGeometryContent("upload_id", GeometryFormat::kContoursJson, AliasBombContours());
+      CheckGeometryContent("upload_id", StructureFormat::kContours, AliasBombContours());
   EXPECT_LT(SecondsSince(start), 5);
   EXPECT_EQ(s.code(), Status::Code::kInvalidArgument);
   EXPECT_EQ(s.field(), "upload_id");
@@ -200,7 +201,7 @@ TEST(GeometryCheckTest, VtkAnnouncingAHugePolygonIsRefusedAtOnce) {
       "# vtk DataFile Version 3.0\nbomb\nASCII\nDATASET POLYDATA\nPOINTS 3 float\n"
       "0 0 0 1 0 0 0 1 0\nPOLYGONS 1 268435457\n268435456 0 1 2\n";
   const auto start = std::chrono::steady_clock::now();
-  const Status s = CheckGeometryContent("upload_id", GeometryFormat::kVtk, vtk);
+  const Status s = CheckGeometryContent("upload_id", StructureFormat::kVtk, vtk);
   EXPECT_LT(SecondsSince(start), 5);
   EXPECT_EQ(s.code(), Status::Code::kInvalidArgument);
   EXPECT_NE(s.message().find("a polygon of 268435456 points"), std::string::npos) << Message(s);
@@ -218,12 +219,12 @@ TEST(GeometryCheckTest, AFailedNiftiCheckLeavesNothingInTmpdir) {
   setenv("TMPDIR", tmpdir.c_str(), 1);
 
   const Status truncated =
-      CheckGeometryContent("upload_id", GeometryFormat::kNifti, whole.substr(0, whole.size() - 7));
+      CheckGeometryContent("upload_id", StructureFormat::kNifti, whole.substr(0, whole.size() - 7));
   const bool empty_after_truncated = std::filesystem::is_empty(tmpdir);
   // Past its time limit the check is killed, its copy perhaps still open.
   ChildLimits no_time;
   no_time.time = std::chrono::milliseconds(1);
-  const Status killed = CheckGeometryContent("upload_id", GeometryFormat::kNifti, whole, no_time);
+  const Status killed = CheckGeometryContent("upload_id", StructureFormat::kNifti, whole, no_time);
   const bool empty_after_killed = std::filesystem::is_empty(tmpdir);
 
   if (old != nullptr) {

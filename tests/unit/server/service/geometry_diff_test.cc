@@ -144,14 +144,16 @@ TEST(GeometryDiffTest, BoxesOfAMetreAreComparedOnCoarserVoxelsWithinTheBudget) {
   const std::string b = BoxStl({-485, -495, -495}, {495, 495, 495});
   ASSERT_EQ(a.size(), 684u);
   double chosen = 0;
-  ASSERT_TRUE(ChooseDiffVoxel(GeometryFormat::kStl, a, GeometryFormat::kStl, b, 1.0, kMaxDiffVoxels,
-                              &chosen)
+  ASSERT_TRUE(ChooseDiffVoxel(StructureFormat::kStl, a, StructureFormat::kStl, b, 1.0,
+                              kMaxDiffVoxels, &chosen)
                   .ok());
   EXPECT_EQ(chosen, 6.0);
   double voxels = 0;
-  ASSERT_TRUE(DiffGridVoxels(GeometryFormat::kStl, a, GeometryFormat::kStl, b, 6.0, &voxels).ok());
+  ASSERT_TRUE(
+      DiffGridVoxels(StructureFormat::kStl, a, StructureFormat::kStl, b, 6.0, &voxels).ok());
   EXPECT_LE(voxels, static_cast<double>(kMaxDiffVoxels));
-  ASSERT_TRUE(DiffGridVoxels(GeometryFormat::kStl, a, GeometryFormat::kStl, b, 5.0, &voxels).ok());
+  ASSERT_TRUE(
+      DiffGridVoxels(StructureFormat::kStl, a, StructureFormat::kStl, b, 5.0, &voxels).ok());
   EXPECT_GT(voxels, static_cast<double>(kMaxDiffVoxels)) << "6 mm is not the first step that fits";
 
   void* shared = ::mmap(nullptr, sizeof(SharedResult), PROT_READ | PROT_WRITE,
@@ -160,7 +162,7 @@ TEST(GeometryDiffTest, BoxesOfAMetreAreComparedOnCoarserVoxelsWithinTheBudget) {
   auto* result = new (shared) SharedResult();
   const auto start = std::chrono::steady_clock::now();
   const test::BoundedRunResult run = test::RunBounded(int64_t{1} << 30, 60, [&] {
-    const Status status = CompareRevisionShapes(GeometryFormat::kStl, a, GeometryFormat::kStl, b,
+    const Status status = CompareRevisionShapes(StructureFormat::kStl, a, StructureFormat::kStl, b,
                                                 1.0, kMaxDiffVoxels, nullptr, &result->shapes);
     result->code = static_cast<int>(status.code());
     return status.ok();
@@ -193,8 +195,8 @@ TEST(GeometryDiffTest, SmallShapesKeepTheirMillimetreVoxels) {
   const std::string a = BoxStl({0, 0, 0}, {40, 40, 40});
   const std::string b = BoxStl({5, 5, 5}, {35, 35, 35});
   ShapeComparison shapes;
-  const Status status = CompareRevisionShapes(GeometryFormat::kStl, a, GeometryFormat::kStl, b, 1.0,
-                                              kMaxDiffVoxels, nullptr, &shapes);
+  const Status status = CompareRevisionShapes(StructureFormat::kStl, a, StructureFormat::kStl, b,
+                                              1.0, kMaxDiffVoxels, nullptr, &shapes);
   ASSERT_TRUE(status.ok()) << status.ToString();
   EXPECT_EQ(shapes.overlap.voxel_mm, 1.0);
   EXPECT_NEAR(shapes.overlap.a_mm3, 64000, 0.05 * 64000);
@@ -213,7 +215,7 @@ TEST(GeometryDiffTest, ACancelledComparisonStopsBeforeVoxelising) {
   int asked = 0;
   ShapeComparison shapes;
   const Status status = CompareRevisionShapes(
-      GeometryFormat::kStl, a, GeometryFormat::kStl, b, 1.0, kMaxDiffVoxels,
+      StructureFormat::kStl, a, StructureFormat::kStl, b, 1.0, kMaxDiffVoxels,
       [&] { return ++asked >= 2; }, &shapes);
   EXPECT_EQ(status.code(), Status::Code::kCancelled) << status.ToString();
   EXPECT_EQ(asked, 2);

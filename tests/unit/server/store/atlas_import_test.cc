@@ -15,7 +15,7 @@ class AtlasImportTest : public AtlasStoreTest {
       s.name = name;
       s.metadata = Metadata();
       s.metadata.colour.r = out.empty() ? 10 : 20;
-      s.format = GeometryFormat::kContoursJson;
+      s.format = StructureFormat::kContours;
       s.file = dir_.path() / (std::string(name) + ".json");
       std::ofstream(s.file) << "{\"plates\": \"" << name << "\"}";
       out.push_back(s);

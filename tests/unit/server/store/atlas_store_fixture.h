@@ -59,8 +59,8 @@ class AtlasStoreTest : public ::testing::Test {
     ASSERT_OK(store_->SetRole("alice", "atlas", "bob", Role::kEditor));
     ASSERT_OK(store_->SetRole("alice", "atlas", "carol", Role::kViewer));
     Revision first;
-    ASSERT_OK(store_->CreateStructure("bob", kHippocampus, Metadata(),
-                                      GeometryFormat::kContoursJson, "contours v1", &first));
+    ASSERT_OK(store_->CreateStructure("bob", kHippocampus, Metadata(), StructureFormat::kContours,
+                                      "contours v1", &first));
   }
 
   void Open() {

@@ -38,10 +38,10 @@ TEST_F(AtlasStoreTest, HostileNamesAreRefusedAndNothingIsWritten) {
     EXPECT_STATUS(store_->CreateProject("alice", name), Status::Code::kInvalidArgument,
                   "project: ");
     Revision revision;
-    EXPECT_STATUS(store_->CreateStructure("bob", {"atlas", name}, Metadata(), GeometryFormat::kStl,
+    EXPECT_STATUS(store_->CreateStructure("bob", {"atlas", name}, Metadata(), StructureFormat::kStl,
                                           "solid", &revision),
                   Status::Code::kInvalidArgument, "structure: ");
-    EXPECT_STATUS(store_->CreateStructure("bob", {name, "ok"}, Metadata(), GeometryFormat::kStl,
+    EXPECT_STATUS(store_->CreateStructure("bob", {name, "ok"}, Metadata(), StructureFormat::kStl,
                                           "solid", &revision),
                   Status::Code::kInvalidArgument, "project: ");
     EXPECT_STATUS(store_->Tag("bob", "atlas", snapshot.id, name), Status::Code::kInvalidArgument,
@@ -59,7 +59,7 @@ TEST_F(AtlasStoreTest, HostileNamesAreRefusedAndNothingIsWritten) {
     if (!name.empty() && name.find('/') == std::string::npos) {  // "cerebrum/a/b" is a path
       StructureMetadata metadata = Metadata();
       metadata.group_path = "cerebrum/" + name;
-      EXPECT_STATUS(store_->CreateStructure("bob", {"atlas", "ok"}, metadata, GeometryFormat::kStl,
+      EXPECT_STATUS(store_->CreateStructure("bob", {"atlas", "ok"}, metadata, StructureFormat::kStl,
                                             "solid", &revision),
                     Status::Code::kInvalidArgument, "group_path: ");
     }

@@ -117,7 +117,7 @@ TEST_F(AtlasStoreTest, ListStructuresPagesByNameForViewers) {
   // Created out of name order: the listing sorts by name, not by creation.
   for (const char* name : {"thalamus", "amygdala", "pons", "cerebellum", "insula"}) {
     Revision revision;
-    ASSERT_OK(store_->CreateStructure("bob", {"atlas", name}, Metadata(), GeometryFormat::kStl,
+    ASSERT_OK(store_->CreateStructure("bob", {"atlas", name}, Metadata(), StructureFormat::kStl,
                                       "solid", &revision));
   }
   const LockInfo lock = Lock("bob", {"atlas", "insula"});
@@ -215,7 +215,7 @@ TEST_F(AtlasStoreTest, CreateStructureStoresRevisionOneAndItsBlob) {
   EXPECT_EQ(revision.time_us, kStart);
   EXPECT_EQ(revision.content_sha256, Hash("contours v1"));
   EXPECT_EQ(revision.size_bytes, 11);
-  EXPECT_EQ(revision.format, GeometryFormat::kContoursJson);
+  EXPECT_EQ(revision.format, StructureFormat::kContours);
   EXPECT_EQ(revision.metadata, Metadata());
   EXPECT_EQ(geometry, "contours v1");
   EXPECT_TRUE(fs::exists(dir_.path() / "blobs" / revision.content_sha256.substr(0, 2) /
@@ -226,26 +226,26 @@ TEST_F(AtlasStoreTest, CreateStructureStoresRevisionOneAndItsBlob) {
   EXPECT_FALSE(info.metadata_etag.empty());
 
   Revision other;
-  EXPECT_STATUS(
-      store_->CreateStructure("alice", kHippocampus, Metadata(), GeometryFormat::kStl, "x", &other),
-      Status::Code::kAlreadyExists, "hippocampus");
+  EXPECT_STATUS(store_->CreateStructure("alice", kHippocampus, Metadata(), StructureFormat::kStl,
+                                        "x", &other),
+                Status::Code::kAlreadyExists, "hippocampus");
   EXPECT_STATUS(store_->CreateStructure("carol", {"atlas", "amygdala"}, Metadata(),
-                                        GeometryFormat::kStl, "x", &other),
+                                        StructureFormat::kStl, "x", &other),
                 Status::Code::kPermissionDenied, "carol");
   EXPECT_STATUS(store_->CreateStructure("dave", {"atlas", "amygdala"}, Metadata(),
-                                        GeometryFormat::kStl, "x", &other),
+                                        StructureFormat::kStl, "x", &other),
                 Status::Code::kPermissionDenied, "not a member");
   EXPECT_STATUS(store_->CreateStructure("bob", {"nowhere", "amygdala"}, Metadata(),
-                                        GeometryFormat::kStl, "x", &other),
+                                        StructureFormat::kStl, "x", &other),
                 Status::Code::kNotFound, "nowhere");
   EXPECT_STATUS(store_->CreateStructure("bob", {"atlas", "amygdala"}, Metadata(),
-                                        GeometryFormat::kStl, "", &other),
+                                        StructureFormat::kStl, "", &other),
                 Status::Code::kInvalidArgument, "geometry");
   StructureMetadata bad = Metadata();
   bad.material_json = "{\"mu\": }";
-  EXPECT_STATUS(
-      store_->CreateStructure("bob", {"atlas", "amygdala"}, bad, GeometryFormat::kStl, "x", &other),
-      Status::Code::kInvalidArgument, "material_json");
+  EXPECT_STATUS(store_->CreateStructure("bob", {"atlas", "amygdala"}, bad, StructureFormat::kStl,
+                                        "x", &other),
+                Status::Code::kInvalidArgument, "material_json");
   EXPECT_STATUS(store_->GetRevision("carol", kHippocampus, 2, &revision, nullptr),
                 Status::Code::kNotFound, "head is revision 1");
   StructureInfo scratch;
@@ -527,7 +527,7 @@ TEST_F(AtlasStoreTest, HistoryIsNewestFirstAndRevertAddsARevision) {
 TEST_F(AtlasStoreTest, SnapshotsPinHeadsAndTagsAreUniquePerProject) {
   Revision revision;
   const StructureRef amygdala{"atlas", "amygdala"};
-  ASSERT_OK(store_->CreateStructure("bob", amygdala, Metadata(), GeometryFormat::kNifti, "labels",
+  ASSERT_OK(store_->CreateStructure("bob", amygdala, Metadata(), StructureFormat::kNifti, "labels",
                                     &revision));
   const LockInfo lock = Lock("bob");
   ASSERT_OK(Commit("bob", lock.lock_id, 1, "v2"));
@@ -691,7 +691,7 @@ TEST_F(AtlasStoreTest, ARepeatedCreateStructureRequestIdReturnsRevisionOne) {
   NewStructure request;
   request.structure = {"atlas", "amygdala"};
   request.metadata = Metadata();
-  request.format = GeometryFormat::kContoursJson;
+  request.format = StructureFormat::kContours;
   request.geometry = "outline";
   request.message = "traced";
   request.request_id = "create-9c1e";

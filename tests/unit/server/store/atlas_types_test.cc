@@ -94,14 +94,15 @@ TEST(AtlasEnums, RoundTrip) {
   }
   Role role;
   EXPECT_FALSE(ParseRole("owner", &role));
-  for (GeometryFormat format : {GeometryFormat::kContoursJson, GeometryFormat::kNifti,
-                                GeometryFormat::kStl, GeometryFormat::kObj, GeometryFormat::kVtk}) {
-    GeometryFormat parsed = GeometryFormat::kContoursJson;
-    ASSERT_TRUE(ParseGeometryFormat(GeometryFormatName(format), &parsed));
+  for (StructureFormat format :
+       {StructureFormat::kContours, StructureFormat::kNifti, StructureFormat::kStl,
+        StructureFormat::kObj, StructureFormat::kVtk}) {
+    StructureFormat parsed = StructureFormat::kContours;
+    ASSERT_TRUE(ParseStructureFormat(StructureFormatName(format), &parsed));
     EXPECT_EQ(parsed, format);
   }
-  GeometryFormat format;
-  EXPECT_FALSE(ParseGeometryFormat("ply", &format));
+  StructureFormat format;
+  EXPECT_FALSE(ParseStructureFormat("ply", &format));
 }
 
 TEST(PageTokens, RoundTripAndRefuseTokensOfOtherListings) {

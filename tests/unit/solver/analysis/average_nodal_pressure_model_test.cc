@@ -15,10 +15,10 @@
 #include <utility>
 #include <vector>
 
-#include "analysis/material_field.h"
 #include "analysis/newton_static.h"
 #include "common/finite_strain_checks.h"
 #include "fem/tet4_finite_strain.h"
+#include "material/material_field.h"
 #include "material/polynomial.h"
 
 namespace pba {

@@ -250,9 +250,9 @@ TEST(Hex8Model, NewtonUniaxialCompressionReachesTheHomogeneousAnswer) {
 // prescribed top displacement and symmetry planes is reproduced exactly,
 // even at nu = 0.4999 (a uniform field: no locking for either).
 TEST(AssembleLinearSystemHex8, UniaxialStressIsExact) {
-  using Assembly = Status (*)(const Mesh&, const ElasticityField&, const DofMap&,
-                              const std::vector<std::vector<int>>&,
-                              const std::function<bool(double)>&, LinearSystem*);
+  using Assembly = Status (*)(
+      const Mesh&, const ElasticityField&, const DofMap&, const std::vector<std::vector<int>>&,
+      const std::function<bool(double)>&, LinearSystem*, const ThreadContext&);
   const Mesh mesh = HexCube(3, 0.2);
   const double delta = 1e-4, height = 0.01;
   const DofMap dofs = testing::UniaxialDofs(mesh, delta);
@@ -260,11 +260,11 @@ TEST(AssembleLinearSystemHex8, UniaxialStressIsExact) {
     const char* name = assemble == &AssembleLinearSystemHex8 ? "B-bar" : "full";
     for (double nu : {0.3, 0.4999}) {
       LinearSystem system;
-      ASSERT_TRUE(assemble(
-                      mesh,
-                      ElasticityField::Uniform(IsotropicElasticity(3000, nu), mesh.num_elements()),
-                      dofs, ColourElements(mesh), [](double) { return true; }, &system)
-                      .ok());
+      ASSERT_TRUE(
+          assemble(
+              mesh, ElasticityField::Uniform(IsotropicElasticity(3000, nu), mesh.num_elements()),
+              dofs, ColourElements(mesh), [](double) { return true; }, &system, ThreadContext())
+              .ok());
       const double worst = testing::UniaxialPatchError(mesh, dofs, system, nu, delta / height);
       EXPECT_LT(worst, 1e-9 * delta) << name << " nu " << nu;
     }

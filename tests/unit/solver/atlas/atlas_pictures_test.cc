@@ -12,8 +12,8 @@
 #include <string>
 #include <vector>
 
-#include "atlas/png_io.h"
 #include "common/plate_stacks.h"
+#include "io/png_io.h"
 #include "mesh/primitive_mesher.h"
 #include "mesh/quadratic.h"
 

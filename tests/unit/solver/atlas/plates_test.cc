@@ -9,9 +9,9 @@
 #include <memory>
 #include <sstream>
 
-#include "atlas/png_io.h"
 #include "atlas/synthetic_atlas.h"
 #include "core/format.h"
+#include "io/png_io.h"
 
 namespace pba {
 namespace {

@@ -3,13 +3,17 @@
 // and Format, which never cuts a message.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <string>
 
 #include "core/atomic_write.h"
 #include "core/format.h"
+#include "core/number_format.h"
 #include "core/sha256.h"
 
 namespace pba {
@@ -100,3 +104,40 @@ TEST(FormatTest, ALongMessageIsNeverCut) {
 
 }  // namespace
 }  // namespace pba
+
+TEST(NumberFormatTest, RoundTripIsTheShortestTextThatReadsBack) {
+  EXPECT_EQ(pba::RoundTripNumber(0.45), "0.45");
+  EXPECT_EQ(pba::RoundTripNumber(0.4999999), "0.4999999");  // %g would say 0.5
+  EXPECT_EQ(pba::RoundTripNumber(3000), "3000");
+  EXPECT_EQ(pba::RoundTripNumber(-0.0), "-0");
+  for (double value : {1.0 / 3.0, -0.1 - 0.2, 6.02214076e23, 5e-324, 1.7976931348623157e308,
+                       0.1 + 0.7, 1e-5, 123456789.123456789}) {
+    const std::string text = pba::RoundTripNumber(value);
+    EXPECT_EQ(std::strtod(text.c_str(), nullptr), value) << text;
+    EXPECT_LE(text.size(), 24u) << text;
+  }
+  EXPECT_EQ(pba::RoundTripNumber(std::numeric_limits<double>::infinity()), "inf");
+  EXPECT_EQ(pba::RoundTripNumber(-std::numeric_limits<double>::infinity()), "-inf");
+  EXPECT_EQ(pba::RoundTripNumber(std::nan("")), "nan");
+}
+
+TEST(NumberFormatTest, AFieldWidthKeepsAsManyDigitsAsFit) {
+  EXPECT_EQ(pba::RoundTripNumber(0.45, 20), "0.45");
+  const double big = -1.2345678901234567e+200;
+  const std::string text = pba::RoundTripNumber(big, 20);
+  EXPECT_EQ(text, "-1.234567890123e+200");  // 13 significant digits in 20 characters
+  EXPECT_NEAR(std::strtod(text.c_str(), nullptr) / big, 1, 1e-12);
+  // Every width from 8 up holds some text of every double.
+  for (int width = 8; width <= 24; ++width) {
+    for (double value : {1.0 / 3.0, -2.0 / 3.0 * 1e-300, 6.02214076e23}) {
+      EXPECT_LE(pba::RoundTripNumber(value, width).size(), static_cast<std::size_t>(width))
+          << value << " in " << width;
+    }
+  }
+}
+
+TEST(NumberFormatTest, ShortIsSixDigitsForMessages) {
+  EXPECT_EQ(pba::ShortNumber(0.4999999), "0.5");
+  EXPECT_EQ(pba::ShortNumber(1e6), "1e+06");
+  EXPECT_EQ(pba::ShortNumber(3000), "3000");
+}

@@ -7,7 +7,6 @@
 #include "explicit/tled_model.h"
 
 #include <gtest/gtest.h>
-#include <omp.h>
 
 #include <Eigen/Geometry>
 #include <Eigen/LU>
@@ -215,9 +214,9 @@ void Check(ElementType element, bool erode) {
   }
   Eigen::VectorXd u, v, f1, f2;
   State(mesh, &u, &v);
-  omp_set_num_threads(1);
+  t->SetThreads(ThreadContext(1));
   const TledEvaluation e1 = t->InternalForce(u, v, &f1);
-  omp_set_num_threads(2);
+  t->SetThreads(ThreadContext(2));
   const TledEvaluation e2 = t->InternalForce(u, v, &f2);
   EXPECT_EQ(e1.inverted_element, -1);
   // The same sums in the same order on any number of threads.

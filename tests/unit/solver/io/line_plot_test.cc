@@ -15,7 +15,7 @@
 #include <set>
 #include <string>
 
-#include "atlas/png_io.h"
+#include "io/png_io.h"
 
 namespace pba {
 namespace {

@@ -19,7 +19,7 @@
 #include <string>
 #include <vector>
 
-#include "io/abaqus_writer.h"
+#include "io/abaqus_format.h"
 #include "mesh/primitive_mesher.h"
 #include "mesh/quadratic.h"
 

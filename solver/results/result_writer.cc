@@ -1,5 +1,5 @@
 // result.h5 (HDF5 C API) and result.xdmf (XDMF 3, the ParaView view of it).
-#include "io/result_writer.h"
+#include "results/result_writer.h"
 
 #include <algorithm>
 #include <cctype>

@@ -1,4 +1,4 @@
-#include "analysis/external_loads.h"
+#include "assembly/external_loads.h"
 
 #include <Eigen/Geometry>
 #include <algorithm>

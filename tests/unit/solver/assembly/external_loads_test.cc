@@ -7,7 +7,7 @@
 // hexahedral meshes, whose bilinear quads and trilinear bricks integrate
 // these loads exactly on the box and the cavity's vector area exactly on
 // the shell.
-#include "analysis/external_loads.h"
+#include "assembly/external_loads.h"
 
 #include <gtest/gtest.h>
 

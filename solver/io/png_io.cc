@@ -1,4 +1,4 @@
-#include "atlas/png_io.h"
+#include "io/png_io.h"
 
 #include <png.h>
 

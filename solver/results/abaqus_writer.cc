@@ -1,6 +1,6 @@
 // Abaqus/CalculiX input deck of a scene's model, so the same problem can be
 // run in a peer code (CalculiX: `ccx -i model`). SI units: m, N, Pa.
-#include "io/abaqus_writer.h"
+#include "results/abaqus_writer.h"
 
 #include <algorithm>
 #include <cstdio>
@@ -96,23 +96,6 @@ std::string MaterialCards(const MaterialSpec& m) {
 }
 
 }  // namespace
-
-std::string AbaqusNumber(double value) {
-  char text[40];
-  // 15 digits give back most numbers a person typed (and %g drops trailing
-  // zeros: 0.45); computed ones may need 16 or 17.
-  int digits = 15;
-  for (; digits < 17; ++digits) {
-    std::snprintf(text, sizeof text, "%.*g", digits, value);
-    if (std::strtod(text, nullptr) == value) break;
-  }
-  for (; digits > 1; --digits) {
-    std::snprintf(text, sizeof text, "%.*g", digits, value);
-    if (std::strlen(text) <= static_cast<std::size_t>(kAbaqusFieldWidth)) return text;
-  }
-  std::snprintf(text, sizeof text, "%.1g", value);
-  return text;
-}
 
 Status WriteAbaqusDeck(const Problem& problem, const std::filesystem::path& file) {
   const Model& model = problem.model;

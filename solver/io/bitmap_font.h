@@ -8,7 +8,7 @@
 #include <cstdint>
 #include <string_view>
 
-#include "atlas/png_io.h"
+#include "io/png_io.h"
 
 namespace pba {
 

@@ -2,7 +2,7 @@
 // them, and a warning when an element that locks meets a nearly
 // incompressible material (issue 18: nu = 0.4999999 on TET4 answered 7,700
 // times too stiff under a summary that read "nu = 0.5").
-#include "analysis/solve_problem.h"
+#include "api/solve_problem.h"
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-#include "analysis/material_field.h"
+#include "material/material_field.h"
 
 #include <Eigen/LU>
 #include <algorithm>
@@ -69,8 +69,9 @@ Matrix6d ElementResponse::Tangent(const Eigen::Matrix3d& f) const {
   return iso + vol;
 }
 
-MaterialField::MaterialField(std::vector<Entry> entries, std::vector<int> of_element)
-    : entries_(std::move(entries)), of_element_(std::move(of_element)) {
+MaterialField::MaterialField(std::vector<Entry> entries, std::vector<int> of_element,
+                             const ThreadContext& threads)
+    : entries_(std::move(entries)), of_element_(std::move(of_element)), threads_(threads) {
   for (const Entry& entry : entries_) {
     viscous_ = viscous_ || !entry.relaxation.g.empty();
     grows_ = grows_ || entry.growth_strain != 0;
@@ -128,14 +129,14 @@ void MaterialField::BeginStep(double dt_s, double amplitude) {
   }
   if (!viscous_) return;
   const int ne = num_elements();
-#pragma omp parallel for schedule(static) if (ne >= 2000)
+#pragma omp parallel for schedule(static) num_threads(threads_.threads()) if (threads_.Parallel(ne))
   for (int e = 0; e < ne; ++e) offset_[e] = steps_[of_element_[e]].Offset(s_iso_[e], h_[e]);
 }
 
 void MaterialField::Commit(const std::vector<Eigen::Matrix3d>& f) {
   if (!viscous_) return;
   const int ne = num_elements();
-#pragma omp parallel for schedule(static) if (ne >= 2000)
+#pragma omp parallel for schedule(static) num_threads(threads_.threads()) if (threads_.Parallel(ne))
   for (int e = 0; e < ne; ++e) {
     const int k = of_element_[e];
     if (steps_[k].weight.empty()) continue;  // elastic, or an instantaneous step

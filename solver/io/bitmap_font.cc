@@ -1,4 +1,4 @@
-#include "atlas/bitmap_font.h"
+#include "io/bitmap_font.h"
 
 #include <cstddef>
 

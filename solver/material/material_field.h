@@ -27,6 +27,7 @@
 #include <string>
 #include <vector>
 
+#include "core/thread_context.h"
 #include "material/hyperelastic.h"
 #include "material/viscoelastic.h"
 #include "pba/status.h"
@@ -72,8 +73,10 @@ class MaterialField {
   };
 
   // `entries[of_element[e]]` is element e's material; entries must be
-  // validated (PronySeries::Validate) and of_element in range.
-  MaterialField(std::vector<Entry> entries, std::vector<int> of_element);
+  // validated (PronySeries::Validate) and of_element in range. BeginStep
+  // and Commit run on `threads` (the solve's).
+  MaterialField(std::vector<Entry> entries, std::vector<int> of_element,
+                const ThreadContext& threads = ThreadContext());
   // Every element the same elastic material, not owned (it must outlive
   // the field).
   static std::unique_ptr<MaterialField> Uniform(const HyperelasticMaterial& material, int elements);
@@ -113,6 +116,7 @@ class MaterialField {
  private:
   std::vector<Entry> entries_;
   std::vector<int> of_element_;
+  ThreadContext threads_;
   bool viscous_ = false;
   bool grows_ = false;
   // Per entry, for the current step.

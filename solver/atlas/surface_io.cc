@@ -1,6 +1,6 @@
 // Closed triangulated surfaces (surface_io.h): the readers of STL, OBJ and
 // legacy VTK, and the check that a surface can bound a structure.
-#include "io/surface_io.h"
+#include "atlas/surface_io.h"
 
 #include <Eigen/Geometry>
 #include <algorithm>

@@ -1,9 +1,7 @@
 // SolveProblem: the free-body check, the dispatch to the analysis, then
 // the results every analysis shares (nodal fields, reactions, maxima,
 // profiles, timing).
-#include "analysis/solve_problem.h"
-
-#include <omp.h>
+#include "api/solve_problem.h"
 
 #include <algorithm>
 #include <cstdio>
@@ -181,7 +179,7 @@ Status SolveProblem(const Problem& problem, PhaseClock* clock, Solution* solutio
         profile.name.c_str(), profile.points - profile.inside, profile.points,
         profile.name.c_str()));
   }
-  summary.threads = omp_get_max_threads();
+  summary.threads = problem.threads.threads();
   summary.wall_time_s = clock->elapsed_s();
   return Status::Ok();
 }

@@ -1,4 +1,4 @@
-#include "io/atlas_mesh_cache.h"
+#include "atlas/atlas_mesh_cache.h"
 
 #include <algorithm>
 #include <array>

@@ -1,7 +1,7 @@
 // The atlas mesh cache: entries read back bit for bit, damaged entries are
 // misses (and go), keys follow content and options but not timestamps,
 // and the directory keeps its most recently used entries within its bound.
-#include "io/atlas_mesh_cache.h"
+#include "atlas/atlas_mesh_cache.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>

@@ -1,6 +1,6 @@
 // Closed surfaces read from STL, OBJ and VTK: welded, checked, and their
 // enclosed volume.
-#include "io/surface_io.h"
+#include "atlas/surface_io.h"
 
 #include <gtest/gtest.h>
 

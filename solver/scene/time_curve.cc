@@ -1,4 +1,4 @@
-#include "analysis/time_curve.h"
+#include "scene/time_curve.h"
 
 #include <algorithm>
 

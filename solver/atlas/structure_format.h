@@ -1,0 +1,42 @@
+// The file formats a structure's geometry comes in: the one list, shared by
+// structure sets (atlas/structure_set.h), pba-atlas and the server's store,
+// which keeps the names below in pba.db.
+#pragma once
+
+#include <string_view>
+
+namespace pba {
+
+enum class StructureFormat { kContours, kNifti, kStl, kObj, kVtk };
+
+// "contours_json", "nifti", "stl", "obj", "vtk": the words of a structure
+// set's manifest and of the store's database.
+inline const char* StructureFormatName(StructureFormat format) {
+  switch (format) {
+    case StructureFormat::kContours:
+      return "contours_json";
+    case StructureFormat::kNifti:
+      return "nifti";
+    case StructureFormat::kStl:
+      return "stl";
+    case StructureFormat::kObj:
+      return "obj";
+    case StructureFormat::kVtk:
+      return "vtk";
+  }
+  return "unknown";
+}
+
+// False, leaving *format alone, for any other word.
+inline bool ParseStructureFormat(std::string_view name, StructureFormat* format) {
+  for (StructureFormat f : {StructureFormat::kContours, StructureFormat::kNifti,
+                            StructureFormat::kStl, StructureFormat::kObj, StructureFormat::kVtk}) {
+    if (name == StructureFormatName(f)) {
+      *format = f;
+      return true;
+    }
+  }
+  return false;
+}
+
+}  // namespace pba
