@@ -3,7 +3,12 @@
 
 1. No include cycle between source folders: folder A including a header of
    folder B while B (directly or through others) includes A's is a cycle.
-2. No function longer than MAX_FUNCTION_LINES lines (Universal Ctags finds
+2. No include across the library targets against their graph (pba_base,
+   pba_yaml_guard, pba_plot <- pba_fem <- pba_atlas <- pba_solver, see
+   solver/CMakeLists.txt), and from server/ and client_cli/ only the
+   solver's public headers (pba/, pba_base's, the plots', and for the
+   server the atlas pipeline's).
+3. No function longer than MAX_FUNCTION_LINES lines (Universal Ctags finds
    the functions and their ends), outside generated code.
 
 Prints each violation with the files that make it and exits 1 if there is
@@ -94,6 +99,79 @@ def strongly_connected(graph):
     return found
 
 
+# Which library target owns a solver file: by folder, with the exceptions
+# that split core/ and io/ between targets.
+BASE_FILES = ("core/sha256", "core/atomic_write", "core/number_format", "core/exit_codes",
+              "core/format", "atlas/structure_format")
+PLOT_FILES = ("io/png_io", "io/bitmap_font", "io/line_plot")
+FOLDER_TARGETS = {
+    "fem": "pba_fem", "material": "pba_fem", "mesh": "pba_fem", "assembly": "pba_fem",
+    "linear": "pba_fem", "signal": "pba_fem", "core": "pba_fem",
+    "io": "pba_atlas", "atlas": "pba_atlas",
+    "scene": "pba_solver", "analysis": "pba_solver", "explicit": "pba_solver",
+    "results": "pba_solver", "api": "pba_solver",
+}
+# What each target may include (pba/ is the declarations every target shares).
+MAY_INCLUDE = {
+    "pba_base": {"pba_base", "pba/"},
+    "pba_yaml_guard": {"pba_yaml_guard", "pba_base", "pba/"},
+    "pba_plot": {"pba_plot", "pba_base", "pba/"},
+    "pba_fem": {"pba_fem", "pba_base", "pba/"},
+    "pba_atlas": {"pba_atlas", "pba_fem", "pba_plot", "pba_yaml_guard", "pba_base", "pba/"},
+    "pba_solver": {"pba_solver", "pba_atlas", "pba_fem", "pba_plot", "pba_yaml_guard",
+                   "pba_base", "pba/"},
+    # Outside solver/: the public headers only.
+    "server": {"pba_base", "pba_yaml_guard", "pba_plot", "pba/", "atlas public"},
+    "client": {"pba_base", "pba_yaml_guard", "pba_plot", "pba/"},
+}
+
+
+def solver_target(path):
+    """The target owning solver file `path`, "pba/" for the public
+    declarations, None outside solver/."""
+    if not path.startswith("solver/"):
+        return None
+    inner = os.path.splitext(path[len("solver/"):])[0]
+    if inner.startswith("include/pba/"):
+        return "pba/"
+    if inner in BASE_FILES:
+        return "pba_base"
+    if inner == "core/yaml_guard":
+        return "pba_yaml_guard"
+    if inner in PLOT_FILES:
+        return "pba_plot"
+    return FOLDER_TARGETS.get(inner.split("/")[0])
+
+
+def includer(path):
+    if path.startswith("server/"):
+        return "server"
+    if path.startswith("client_cli/"):
+        return "client"
+    return solver_target(path)
+
+
+def target_violations(files):
+    found = []
+    for path in sorted(files):
+        who = includer(path)
+        if who is None or who == "pba/":
+            continue
+        allowed = MAY_INCLUDE[who]
+        with open(os.path.join(ROOT, path), encoding="utf-8") as text:
+            for line in text:
+                match = INCLUDE.match(line)
+                target = match and resolve(path, match.group(1))
+                owner = target and solver_target(target)
+                if owner is None or owner in allowed:
+                    continue
+                if (who == "server" and owner == "pba_atlas" and
+                        (target.startswith("solver/atlas/") or target == "solver/io/mesh_export.h")):
+                    continue  # the atlas pipeline's public headers
+                found.append(f"{path} ({who}) includes {target} ({owner})")
+    return found
+
+
 def long_functions(files):
     command = ["ctags", "-x", "--c++-kinds=f", "--fields=+ne", "--language-force=C++",
                "--_xformat=%{line}|%{end}|%{input}|%{name}"]
@@ -125,14 +203,17 @@ def main():
             for target in component:
                 for path, header in graph.get(source, {}).get(target, [])[:3]:
                     print(f"  {path} includes {header}")
+    for violation in target_violations(files):
+        failures += 1
+        print("include across targets: " + violation)
     for lines, where, name in long_functions(files):
         failures += 1
         print(f"function over {MAX_FUNCTION_LINES} lines: {name} ({lines} lines) at {where}")
     if failures:
         print(f"{failures} structure problem(s)")
         return 1
-    print(f"structure: {len(files)} files, no include cycle between folders, "
-          f"no function over {MAX_FUNCTION_LINES} lines")
+    print(f"structure: {len(files)} files, no include cycle between folders or across "
+          f"targets, no function over {MAX_FUNCTION_LINES} lines")
     return 0
 
 

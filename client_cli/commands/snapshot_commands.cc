@@ -20,6 +20,7 @@
 #include "commands/atlas_commands.h"
 #include "commands/atlas_shared.h"
 #include "commands/command_context.h"
+#include "core/atomic_write.h"
 #include "exit_codes.h"
 #include "files.h"
 #include "output.h"
@@ -164,23 +165,6 @@ std::string ExportColourProblem(const std::string& project,
   return "";
 }
 
-// Removes the staging directory this export made, unless it was moved
-// into place. Only ever what mkdtemp created: nothing of the user's.
-class StagingCleanup {
- public:
-  explicit StagingCleanup(fs::path path) : path_(std::move(path)) {}
-  ~StagingCleanup() {
-    std::error_code ec;
-    if (!path_.empty()) fs::remove_all(path_, ec);
-  }
-  StagingCleanup(const StagingCleanup&) = delete;
-  StagingCleanup& operator=(const StagingCleanup&) = delete;
-  void Release() { path_.clear(); }
-
- private:
-  fs::path path_;
-};
-
 }  // namespace
 
 int ExportSnapshot(Connection& connection, const std::string& project, const std::string& which,
@@ -231,60 +215,59 @@ int ExportSnapshot(Connection& connection, const std::string& project, const std
     return kExitInvalid;
   }
   // Written into a fresh directory beside the target and renamed into
-  // place: whole or absent. mkdtemp gives a name no one else has, so
-  // nothing already there is reused or removed.
+  // place, whole or absent (AtomicWriteDirectory: its temporary name is one
+  // no one else has, so nothing already there is reused or removed, and a
+  // rename takes the place of an empty directory only).
   fs::path target = fs::absolute(dir).lexically_normal();
   if (target.filename().empty()) target = target.parent_path();
   fs::create_directories(target.parent_path(), ec);
-  std::string pattern =
-      (target.parent_path() / ("." + target.filename().string() + ".pba-export-XXXXXX")).string();
-  if (::mkdtemp(pattern.data()) == nullptr) {
-    std::fprintf(stderr, "pba: cannot create a directory beside %s: %s\n", target.c_str(),
-                 std::strerror(errno));
-    return kExitError;
-  }
-  const fs::path staging = pattern;
-  StagingCleanup cleanup(staging);
-  google::protobuf::ListValue manifest_structures;
-  for (int i = 0; i < snapshot.members_size(); ++i) {
-    const auto& member = snapshot.members(i);
-    const v1::Revision& revision = revisions[static_cast<size_t>(i)];
-    const std::string& file = files[static_cast<size_t>(i)];
-    if (int code = DownloadRevision(connection, revision, staging / file, /*overwrite=*/false);
-        code != kExitOk) {
-      return code;
-    }
-    auto& entry = *manifest_structures.add_values()->mutable_struct_value()->mutable_fields();
-    entry["name"].set_string_value(member.structure());
-    entry["revision"].set_number_value(static_cast<double>(member.revision()));
-    entry["file"].set_string_value(file);
-    entry["format"].set_string_value(FormatText(revision.format()));
-    entry["sha256"].set_string_value(revision.content_sha256());
-    entry["colour"].set_string_value(ColourText(revision.metadata().colour()));
-    entry["group_path"].set_string_value(revision.metadata().group_path());
-    entry["material_json"].set_string_value(revision.metadata().material_json());
-  }
+  int exit_code = kExitError;
   google::protobuf::Struct manifest;
-  auto& fields = *manifest.mutable_fields();
-  fields["format"].set_string_value("pba-structure-set");
-  fields["version"].set_number_value(1);
-  fields["project"].set_string_value(project);
-  fields["snapshot"].set_number_value(static_cast<double>(snapshot.id()));
-  fields["snapshot_name"].set_string_value(snapshot.name());
-  *fields["structures"].mutable_list_value() = manifest_structures;
-  if (!WriteFileAtomically(staging / kManifestName, codec::ToJson(manifest))) {
-    std::fprintf(stderr, "pba: cannot write %s\n", (staging / kManifestName).c_str());
-    return kExitError;
+  const Status written = AtomicWriteDirectory(target, [&](const fs::path& staging) -> Status {
+    google::protobuf::ListValue manifest_structures;
+    for (int i = 0; i < snapshot.members_size(); ++i) {
+      const auto& member = snapshot.members(i);
+      const v1::Revision& revision = revisions[static_cast<size_t>(i)];
+      const std::string& file = files[static_cast<size_t>(i)];
+      if (int code = DownloadRevision(connection, revision, staging / file, /*overwrite=*/false);
+          code != kExitOk) {
+        exit_code = code;  // DownloadRevision said why
+        return Status::Io("");
+      }
+      auto& entry = *manifest_structures.add_values()->mutable_struct_value()->mutable_fields();
+      entry["name"].set_string_value(member.structure());
+      entry["revision"].set_number_value(static_cast<double>(member.revision()));
+      entry["file"].set_string_value(file);
+      entry["format"].set_string_value(FormatText(revision.format()));
+      entry["sha256"].set_string_value(revision.content_sha256());
+      entry["colour"].set_string_value(ColourText(revision.metadata().colour()));
+      entry["group_path"].set_string_value(revision.metadata().group_path());
+      entry["material_json"].set_string_value(revision.metadata().material_json());
+    }
+    auto& fields = *manifest.mutable_fields();
+    fields["format"].set_string_value("pba-structure-set");
+    fields["version"].set_number_value(1);
+    fields["project"].set_string_value(project);
+    fields["snapshot"].set_number_value(static_cast<double>(snapshot.id()));
+    fields["snapshot_name"].set_string_value(snapshot.name());
+    *fields["structures"].mutable_list_value() = manifest_structures;
+    if (!WriteFileAtomically(staging / kManifestName, codec::ToJson(manifest))) {
+      std::fprintf(stderr, "pba: cannot write %s\n", (staging / kManifestName).c_str());
+      return Status::Io("");
+    }
+    // The temporary directory is private (0700); the export is not.
+    if (::chmod(staging.c_str(), 0755 & ~CurrentUmask()) != 0) {
+      return Status::Io("cannot set the mode of " + staging.string() + ": " + std::strerror(errno));
+    }
+    return Status::Ok();
+  });
+  if (!written.ok()) {
+    if (!written.message().empty()) {
+      std::fprintf(stderr, "pba: cannot export into %s: %s\n", target.c_str(),
+                   written.message().c_str());
+    }
+    return exit_code;
   }
-  // rename() takes the place of an empty directory, and refuses anything
-  // else that appeared meanwhile (a file, a directory with files, a link).
-  if (::chmod(staging.c_str(), 0755 & ~CurrentUmask()) != 0 ||
-      std::rename(staging.c_str(), target.c_str()) != 0) {
-    std::fprintf(stderr, "pba: cannot move the export into %s: %s\n", target.c_str(),
-                 std::strerror(errno));
-    return kExitError;
-  }
-  cleanup.Release();
   if (connection.options().json) {
     PrintJson(manifest);
   } else {

@@ -13,6 +13,7 @@
 #include "core/format.h"
 #include "explicit/dynamic_relaxation.h"
 #include "explicit/explicit_dynamics.h"
+#include "fem/element_kind.h"
 #include "material/factory.h"
 
 namespace pba {
@@ -24,8 +25,7 @@ constexpr double kMm = 1e-3;
 std::string ElementSummaryName(const Problem& problem) {
   const bool engine = problem.analysis == AnalysisSpec::Type::kExplicitDynamic ||
                       problem.analysis == AnalysisSpec::Type::kDynamicRelaxation;
-  if (engine && problem.element == ElementType::kHex8) return "HEX8 (one point, hourglass control)";
-  return ElementName(problem.element);
+  return engine ? KindOf(problem.element).explicit_form : ElementName(problem.element);
 }
 
 // Above this bulk over shear modulus an element with a volume constraint
@@ -40,10 +40,7 @@ std::string LockingNote(const Problem& problem) {
   // The element as resolved (ResolvedElement): never kDefault here. TET10
   // locks less than TET4 but still does at K / mu = 1e6 (tet10_model.h).
   const ElementType element = problem.element;
-  if (element != ElementType::kTet4 && element != ElementType::kTet10 &&
-      element != ElementType::kHex8Full) {
-    return "";
-  }
+  if (!Locks(KindOf(element))) return "";
   double worst = 0;
   std::string label;
   const SceneMaterials& materials = problem.model.materials;

@@ -11,8 +11,6 @@
 
 namespace pba {
 
-const char* SolverVersion() { return PBA_VERSION; }
-
 Status SolveScene(const SceneSpec& scene, const SolveOptions& options, Solution* solution) {
   PBA_RETURN_IF_ERROR(ValidateScene(scene));
   if (!options.restart_from.empty() && scene.analysis.type != AnalysisSpec::Type::kQuasiStatic) {

@@ -3,6 +3,7 @@
 #include <Eigen/LU>
 
 #include "core/format.h"
+#include "fem/element_kind.h"
 #include "material/factory.h"
 #include "material/linear_elastic.h"
 #include "material/material_field.h"
@@ -15,7 +16,7 @@ Status MakeExplicitSetup(const Problem& problem, ExplicitSetup* out) {
   const bool relaxation = problem.analysis == AnalysisSpec::Type::kDynamicRelaxation;
   // ValidateScene refuses the elements and materials the engine does not
   // take (scene_checks::ValidateExplicit).
-  if (mesh.quadratic() || problem.element == ElementType::kHex8Full) {
+  if (!KindOf(problem.element).explicit_engine) {
     return Status::Internal(std::string("the explicit engine was given ") +
                             ElementName(problem.element) + " elements");
   }

@@ -8,7 +8,9 @@
 #include <string>
 #include <utility>
 
+#include "core/number_format.h"
 #include "material/hyperelastic.h"
+#include "pba/scene.h"
 
 namespace pba {
 namespace {
@@ -181,6 +183,25 @@ Matrix6d RotateCompliance(const Matrix6d& s_material, const Eigen::Matrix3d& fra
 double VonMises(const Vector6d& s) {
   const double a = s(0) - s(1), b = s(1) - s(2), c = s(2) - s(0);
   return std::sqrt(0.5 * (a * a + b * b + c * c) + 3 * (s(3) * s(3) + s(4) * s(4) + s(5) * s(5)));
+}
+
+// The scene's linear elastic parameters (pba/scene.h), checked here with
+// the law that uses them.
+Status LinearElasticParams::Validate(const std::string& path) const {
+  if (!(std::isfinite(youngs_modulus_pa) && youngs_modulus_pa > 0)) {
+    return Status::InvalidArgument(
+        path + ".youngs_modulus_pa",
+        "Young's modulus must be a positive number of Pa, got " + ShortNumber(youngs_modulus_pa));
+  }
+  if (!std::isfinite(poissons_ratio) || poissons_ratio <= -1.0 || poissons_ratio >= 0.5) {
+    std::string message =
+        "Poisson's ratio must lie in (-1, 0.5), got " + ShortNumber(poissons_ratio);
+    if (poissons_ratio == 0.5) {
+      message += "; an incompressible material needs a hyperelastic model, not linear elasticity";
+    }
+    return Status::InvalidArgument(path + ".poissons_ratio", message);
+  }
+  return Status::Ok();
 }
 
 }  // namespace pba

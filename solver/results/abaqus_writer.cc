@@ -9,6 +9,7 @@
 #include <fstream>
 #include <string>
 
+#include "fem/element_kind.h"
 #include "material/linear_elastic.h"
 #include "mesh/quadratic.h"
 #include "pba/solve.h"
@@ -131,11 +132,7 @@ Status WriteAbaqusDeck(const Problem& problem, const std::filesystem::path& file
   }
   // PBA's 10-node order (corners, then edges (0,1) (1,2) (2,0) (0,3) (1,3)
   // (2,3)) is C3D10's, so the nodes go out as they are.
-  out << "*ELEMENT, TYPE="
-      << (mesh.quadratic()    ? "C3D10"
-          : mesh.hexahedral() ? "C3D8"
-                              : "C3D4")
-      << ", ELSET=EALL\n";
+  out << "*ELEMENT, TYPE=" << KindOf(problem.element).abaqus_type << ", ELSET=EALL\n";
   for (int e = 0; e < mesh.num_elements(); ++e) {
     out << e + 1;
     if (mesh.quadratic()) {

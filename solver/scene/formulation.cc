@@ -6,6 +6,7 @@
 
 #include "atlas/colour_table.h"
 #include "core/format.h"
+#include "fem/element_kind.h"
 #include "material/tissue_library.h"
 #include "mesh/primitive_mesher.h"
 #include "mesh/region_faces.h"
@@ -153,8 +154,7 @@ void ReduceFiniteStrain(const SceneSpec& scene, std::optional<double> max_strain
   // small-strain counterpart: a linear solve would change the element, and
   // with it the discretisation error, which can exceed what the strain
   // costs. Their Newton solve then takes one load increment instead.
-  if (scene.mesh.element == ElementType::kTet4Anp || scene.mesh.element == ElementType::kTet10Md ||
-      scene.mesh.element == ElementType::kDefault) {
+  if (!KindOf(ResolveElement(scene.mesh.element, scene.analysis.type)).linear_static) {
     reduced->analysis.nonlinear.increments = 1;
     decisions->push_back({"finite strain",
                           "one load increment (the element has no small-strain form)", measured,

@@ -5,6 +5,7 @@
 
 #include "atlas/structure_set.h"
 #include "core/format.h"
+#include "fem/element_kind.h"
 #include "mesh/primitive_mesher.h"
 #include "signal/butterworth.h"
 
@@ -47,12 +48,6 @@ std::string DescribeGeometry(const GeometrySpec& g) {
       break;
   }
   return "no geometry";
-}
-
-ElementType ResolvedElement(const SceneSpec& scene) {
-  if (scene.mesh.element != ElementType::kDefault) return scene.mesh.element;
-  return scene.analysis.type == AnalysisSpec::Type::kLinearStatic ? ElementType::kTet4
-                                                                  : ElementType::kTet4Anp;
 }
 
 LinearSolverOptions::Kind SolverKind(AnalysisSpec::LinearSolver kind) {
@@ -341,26 +336,6 @@ std::vector<std::pair<std::string, std::string>> EffectiveOptions(const Problem&
   return out;
 }
 
-const char* ElementName(ElementType element) {
-  switch (element) {
-    case ElementType::kTet4:
-      return "TET4";
-    case ElementType::kTet4Anp:
-      return "TET4_ANP";
-    case ElementType::kTet10:
-      return "TET10";
-    case ElementType::kTet10Md:
-      return "TET10_MD";
-    case ElementType::kHex8:
-      return "HEX8";
-    case ElementType::kHex8Full:
-      return "HEX8_FULL";
-    case ElementType::kDefault:
-      break;
-  }
-  return "DEFAULT";
-}
-
 Status ResolveProblem(const SceneSpec& scene, Problem* problem) {
   PBA_RETURN_IF_ERROR(ValidateScene(scene));
   Problem& p = *problem;
@@ -368,7 +343,7 @@ Status ResolveProblem(const SceneSpec& scene, Problem* problem) {
   p.name = scene.name;
   p.geometry = DescribeGeometry(scene.geometry);
   p.analysis = scene.analysis.type;
-  p.element = ResolvedElement(scene);
+  p.element = ResolveElement(scene.mesh.element, scene.analysis.type);
   p.element_size_m = EffectiveElementSize(scene.geometry, scene.mesh) * kMm;
   const AtlasSpec& atlas = scene.geometry.atlas;
   p.finest_element_size_m =

@@ -9,6 +9,7 @@
 #include "atlas/atlas_build.h"
 #include "atlas/colour_table.h"
 #include "core/number_format.h"
+#include "fem/element_kind.h"
 #include "material/factory.h"
 #include "material/tissue_library.h"
 #include "mesh/primitive_mesher.h"
@@ -431,10 +432,9 @@ Status ValidateAnalysis(const AnalysisSpec& analysis, const MaterialSpec& materi
 // scene with a growing inclusion, on another element is refused here, not
 // minutes into the solve.
 Status ValidateHistoryElements(const SceneSpec& scene) {
-  const ElementType element = scene.mesh.element;
   const AnalysisSpec::Type type = scene.analysis.type;
-  if (element == ElementType::kDefault || element == ElementType::kTet4 ||
-      element == ElementType::kTet4Anp || type == AnalysisSpec::Type::kExplicitDynamic ||
+  const ElementType element = ResolveElement(scene.mesh.element, type);
+  if (KindOf(element).keeps_history || type == AnalysisSpec::Type::kExplicitDynamic ||
       type == AnalysisSpec::Type::kDynamicRelaxation) {
     return Status::Ok();
   }
@@ -487,23 +487,6 @@ Status ValidateHistoryElements(const SceneSpec& scene) {
 }
 
 }  // namespace
-
-Status LinearElasticParams::Validate(const std::string& path) const {
-  if (!PositiveFinite(youngs_modulus_pa)) {
-    return Status::InvalidArgument(
-        path + ".youngs_modulus_pa",
-        "Young's modulus must be a positive number of Pa, got " + ShortNumber(youngs_modulus_pa));
-  }
-  if (!std::isfinite(poissons_ratio) || poissons_ratio <= -1.0 || poissons_ratio >= 0.5) {
-    std::string message =
-        "Poisson's ratio must lie in (-1, 0.5), got " + ShortNumber(poissons_ratio);
-    if (poissons_ratio == 0.5) {
-      message += "; an incompressible material needs a hyperelastic model, not linear elasticity";
-    }
-    return Status::InvalidArgument(path + ".poissons_ratio", message);
-  }
-  return Status::Ok();
-}
 
 std::vector<std::string> FaceSetNames(const GeometrySpec& geometry) {
   std::vector<std::string> names;
@@ -579,17 +562,15 @@ Status ValidateMesh(const SceneSpec& scene) {
 
   // The finite-strain elements serve both finite-strain analyses.
   const bool finite_strain = scene.analysis.type != AnalysisSpec::Type::kLinearStatic;
-  if (scene.mesh.element == ElementType::kTet4Anp && !finite_strain) {
+  const ElementType element = scene.mesh.element;
+  if (element != ElementType::kDefault && !finite_strain && !KindOf(element).linear_static) {
     return Status::InvalidArgument(
-        "mesh.element",
-        "TET4_ANP (average nodal pressure) is implemented for NONLINEAR_STATIC; "
-        "a linear analysis uses TET4");
-  }
-  if (scene.mesh.element == ElementType::kTet10Md && !finite_strain) {
-    return Status::InvalidArgument(
-        "mesh.element",
-        "TET10_MD (10-node tetrahedron with mean dilatation) is implemented for "
-        "NONLINEAR_STATIC; a linear analysis uses TET10 or HEX8");
+        "mesh.element", element == ElementType::kTet4Anp
+                            ? "TET4_ANP (average nodal pressure) is implemented for "
+                              "NONLINEAR_STATIC; a linear analysis uses TET4"
+                            : std::string(ElementName(element)) +
+                                  " (10-node tetrahedron with mean dilatation) is implemented "
+                                  "for NONLINEAR_STATIC; a linear analysis uses TET10 or HEX8");
   }
   return Status::Ok();
 }

@@ -9,6 +9,7 @@
 #include <string>
 
 #include "atlas/colour_table.h"
+#include "fem/element_kind.h"
 #include "material/tissue_library.h"
 #include "scene/problem.h"
 #include "scene/validate_loading.h"
@@ -292,8 +293,7 @@ Status ValidateExplicit(const SceneSpec& scene) {
   if (!Explicit(type)) return Status::Ok();
 
   const ElementType e = scene.mesh.element;
-  if (e != ElementType::kDefault && e != ElementType::kTet4 && e != ElementType::kTet4Anp &&
-      e != ElementType::kHex8) {
+  if (e != ElementType::kDefault && !KindOf(e).explicit_engine) {
     return Status::InvalidArgument(
         "mesh.element", std::string(ElementName(e)) +
                             " is not implemented by the explicit engine; " +

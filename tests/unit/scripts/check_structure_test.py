@@ -63,5 +63,32 @@ class CheckStructureTest(unittest.TestCase):
             self.assertIn("function over 150 lines: TooLong (151 lines) at server/app/long.cc:1", out)
 
 
+    def test_a_lower_target_including_a_higher_one_fails(self):
+        with tempfile.TemporaryDirectory() as root:
+            write(root, "solver/scene/problem.h", "#pragma once\n")
+            write(root, "solver/mesh/mesh.cc", '#include "scene/problem.h"\n')
+            code, out = check(root)
+            self.assertEqual(code, 1, out)
+            self.assertIn("include across targets: solver/mesh/mesh.cc (pba_fem) includes "
+                          "solver/scene/problem.h (pba_solver)", out)
+
+    def test_the_server_and_client_see_only_public_solver_headers(self):
+        with tempfile.TemporaryDirectory() as root:
+            write(root, "solver/include/pba/status.h", "#pragma once\n")
+            write(root, "solver/atlas/atlas_build.h", '#include "pba/status.h"\n')
+            write(root, "solver/analysis/newton_static.h", "#pragma once\n")
+            write(root, "server/service/a.cc",
+                  '#include "atlas/atlas_build.h"\n#include "pba/status.h"\n')
+            code, out = check(root)
+            self.assertEqual(code, 0, out)
+            write(root, "server/service/b.cc", '#include "analysis/newton_static.h"\n')
+            write(root, "client_cli/c.cc", '#include "atlas/atlas_build.h"\n')
+            code, out = check(root)
+            self.assertEqual(code, 1, out)
+            self.assertIn("server/service/b.cc (server) includes solver/analysis/newton_static.h",
+                          out)
+            self.assertIn("client_cli/c.cc (client) includes solver/atlas/atlas_build.h", out)
+
+
 if __name__ == "__main__":
     unittest.main()
