@@ -58,6 +58,13 @@ void AtlasServiceImpl::Publish(v1::AtlasEvent::Kind kind, const std::string& pro
   hub_.Publish(event);
 }
 
+void AtlasServiceImpl::ForgetUpload(const char* rpc, const std::string& user,
+                                    const std::string& upload_id) {
+  if (upload_id.empty()) return;
+  const Status removed = uploads_.Remove(user, upload_id);
+  if (!removed.ok()) spdlog::warn("{}: {}", rpc, removed.ToString());
+}
+
 Status AtlasServiceImpl::TakeUpload(const std::string& user, const std::string& upload_id,
                                     StructureFormat format, std::unique_ptr<MappedFile>* content) {
   if (upload_id.empty()) return Status::InvalidArgument("upload_id", "required");
@@ -261,10 +268,7 @@ grpc::Status AtlasServiceImpl::CreateStructure(grpc::ServerContext* context,
       }
     }
     content.reset();
-    if (!request->upload_id().empty()) {
-      const Status removed = uploads_.Remove(user, request->upload_id());
-      if (!removed.ok()) spdlog::warn("{}: {}", kRpc, removed.ToString());
-    }
+    ForgetUpload(kRpc, user, request->upload_id());
     RevisionToProto(revision, response);
     return Status::Ok();
   });
@@ -409,10 +413,7 @@ grpc::Status AtlasServiceImpl::CommitStructure(grpc::ServerContext* context,
       }
     }
     content.reset();
-    if (!request->upload_id().empty()) {
-      const Status removed = uploads_.Remove(user, request->upload_id());
-      if (!removed.ok()) spdlog::warn("{}: {}", kRpc, removed.ToString());
-    }
+    ForgetUpload(kRpc, user, request->upload_id());
     RevisionToProto(revision, response);
     return Status::Ok();
   });
@@ -636,10 +637,10 @@ grpc::Status AtlasServiceImpl::DownloadGeometry(grpc::ServerContext* context,
     const int64_t size = static_cast<int64_t>(geometry.size());
     int64_t offset = request->offset();
     if (offset > size) {
-      return grpc::Status(grpc::StatusCode::OUT_OF_RANGE,
-                          "offset " + std::to_string(offset) + " is past the end of revision " +
-                              std::to_string(number) + " of structure '" + ref.structure + "' (" +
-                              std::to_string(size) + " bytes)");
+      return Status::OutOfRange("offset", std::to_string(offset) + " is past the end of revision " +
+                                              std::to_string(number) + " of structure '" +
+                                              ref.structure + "' (" + std::to_string(size) +
+                                              " bytes)");
     }
     v1::DataChunk chunk;
     chunk.set_total_size(size);
@@ -770,10 +771,9 @@ grpc::Status AtlasServiceImpl::Watch(grpc::ServerContext* context, const v1::Wat
     PBA_RETURN_IF_ERROR(MayWatch(project, caller.user));
     const StreamSlots::Ticket slot = watch_slots_.TryAcquire(caller.user);
     if (!slot.held()) {
-      return grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
-                          "user '" + caller.user + "' already has " +
-                              std::to_string(kMaxWatchesPerUser) +
-                              " Watch streams open; close one first");
+      return Status::ResourceExhausted("", "user '" + caller.user + "' already has " +
+                                               std::to_string(kMaxWatchesPerUser) +
+                                               " Watch streams open; close one first");
     }
     auto checked = std::chrono::steady_clock::now();
     // Subscribed before READY goes out: nothing published after READY is missed.
@@ -802,10 +802,9 @@ grpc::Status AtlasServiceImpl::Watch(grpc::ServerContext* context, const v1::Wat
       bool overrun = false;
       if (!subscription->Next(kWatchPoll, &events, &overrun)) {
         if (overrun) {
-          return grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
-                              "the watcher fell more than " +
-                                  std::to_string(AtlasEventHub::kMaxQueued) +
-                                  " events behind; watch again and read the audit log for the gap");
+          return Status::ResourceExhausted(
+              "", "the watcher fell more than " + std::to_string(AtlasEventHub::kMaxQueued) +
+                      " events behind; watch again and read the audit log for the gap");
         }
         return RpcStatus::StreamEnded(grpc::StatusCode::UNAVAILABLE, "the server is shutting down");
       }

@@ -150,6 +150,9 @@ class AtlasServiceImpl final : public v1::AtlasService::Service {
   // The verified, format-checked content of `user`'s complete upload.
   Status TakeUpload(const std::string& user, const std::string& upload_id, StructureFormat format,
                     std::unique_ptr<MappedFile>* content);
+  // Removes an upload a create or commit has consumed (or found consumed by
+  // the call it replays); a failure is only logged: the upload lapses.
+  void ForgetUpload(const char* rpc, const std::string& user, const std::string& upload_id);
   void Publish(v1::AtlasEvent::Kind kind, const std::string& project, const std::string& structure,
                int64_t revision, int64_t snapshot, const std::string& user,
                const std::string& detail);

@@ -132,6 +132,10 @@ Status MakeStatus(Status::Code code, std::string field, std::string message) {
       return Status::PermissionDenied(std::move(message));
     case Code::kUnauthenticated:
       return Status::Unauthenticated(std::move(message));
+    case Code::kOutOfRange:
+      return Status::OutOfRange(std::move(field), std::move(message));
+    case Code::kResourceExhausted:
+      return Status::ResourceExhausted(std::move(field), std::move(message));
     case Code::kInternal:
       break;
   }

@@ -30,7 +30,7 @@ class DiffSlots {
         return Status::Cancelled("the comparison was cancelled while it waited for its turn");
       }
       if (std::chrono::steady_clock::now() >= deadline) {
-        return Status::FailedPrecondition(
+        return Status::ResourceExhausted(
             "diff_slots", "the server is busy comparing other revisions' shapes; try again later");
       }
       freed_.wait_for(lock, std::chrono::milliseconds(50));

@@ -45,12 +45,13 @@ grpc::StatusCode CodeFor(const Status& status) {
     case Status::Code::kOk:
       return grpc::StatusCode::OK;
     case Status::Code::kInvalidArgument:
-      return status.field() == "offset" ? grpc::StatusCode::OUT_OF_RANGE
-                                        : grpc::StatusCode::INVALID_ARGUMENT;
+      return grpc::StatusCode::INVALID_ARGUMENT;
     case Status::Code::kFailedPrecondition:
-      return status.field() == "upload_quota" || status.field() == "diff_slots"
-                 ? grpc::StatusCode::RESOURCE_EXHAUSTED
-                 : grpc::StatusCode::FAILED_PRECONDITION;
+      return grpc::StatusCode::FAILED_PRECONDITION;
+    case Status::Code::kOutOfRange:
+      return grpc::StatusCode::OUT_OF_RANGE;
+    case Status::Code::kResourceExhausted:
+      return grpc::StatusCode::RESOURCE_EXHAUSTED;
     case Status::Code::kCancelled:
       return grpc::StatusCode::CANCELLED;
     case Status::Code::kNotFound:

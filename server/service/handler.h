@@ -32,21 +32,15 @@ namespace pba {
 
 // The one translation of a Status into the gRPC status a client gets
 // (google.rpc codes; the message is Status::ToString(), "field: message"):
-// kInvalidArgument -> INVALID_ARGUMENT; kFailedPrecondition, kCancelled,
-// kNotFound, kAlreadyExists, kAborted, kPermissionDenied and
-// kUnauthenticated -> the code of the same name; everything else (kNumerical,
-// kIo, kInternal) -> INTERNAL. Status has no OUT_OF_RANGE or
-// RESOURCE_EXHAUSTED, so the stores mark those by the field: kInvalidArgument
-// on "offset" (an out-of-order upload chunk, upload_store.h) -> OUT_OF_RANGE;
-// kFailedPrecondition on "upload_quota" (upload_store.h) or "diff_slots"
-// (diff_slots.h) -> RESOURCE_EXHAUSTED.
+// every code to the gRPC code of the same name (kOutOfRange OUT_OF_RANGE,
+// kResourceExhausted RESOURCE_EXHAUSTED, ...) but kNumerical, kIo and
+// kInternal, which are INTERNAL.
 grpc::Status ToGrpcStatus(const Status& status);
 
 // What a handler's body returns: a Status (sent as ToGrpcStatus makes it),
-// or, for a code Status lacks (OUT_OF_RANGE, RESOURCE_EXHAUSTED, DATA_LOSS,
-// UNAVAILABLE) or a message that must not name a field, a grpc::Status as
-// it is. Both convert implicitly, so a body may `return status;`,
-// `return grpc::Status(code, message);` and use PBA_RETURN_IF_ERROR.
+// or, for a code Status lacks (DATA_LOSS, UNAVAILABLE) or a message that
+// must not name a field, a grpc::Status as it is. Both convert implicitly, so a body may `return
+// status;`, `return grpc::Status(code, message);` and use PBA_RETURN_IF_ERROR.
 class RpcStatus {
  public:
   RpcStatus() = default;

@@ -286,10 +286,9 @@ grpc::Status JobServiceImpl::WatchJob(grpc::ServerContext* context,
     PBA_RETURN_IF_ERROR(LoadVisibleJob(kRpc, caller, id, JobView::kBasic, &job));
     const StreamSlots::Ticket slot = watch_slots_.TryAcquire(caller.user);
     if (!slot.held()) {
-      return grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
-                          "user '" + caller.user + "' already has " +
-                              std::to_string(kMaxWatchesPerUser) +
-                              " WatchJob streams open; close one first");
+      return Status::ResourceExhausted("", "user '" + caller.user + "' already has " +
+                                               std::to_string(kMaxWatchesPerUser) +
+                                               " WatchJob streams open; close one first");
     }
     auto checked = std::chrono::steady_clock::now();
     // All events of a job that was already terminal are stored: once those
@@ -341,11 +340,7 @@ grpc::Status JobServiceImpl::DownloadResult(grpc::ServerContext* context,
   return Handle(users_, kRpc, *context, [&](const Caller& caller) -> RpcStatus {
     const std::string& id = request->job_id();
     if (id.empty()) return Status::InvalidArgument("job_id", "required");
-    if (request->offset() < 0) {
-      // INVALID_ARGUMENT as ever: a Status on the field "offset" would be
-      // OUT_OF_RANGE (handler.h).
-      return grpc::Status(grpc::StatusCode::INVALID_ARGUMENT, "offset: must not be negative");
-    }
+    if (request->offset() < 0) return Status::InvalidArgument("offset", "must not be negative");
     // The id becomes part of a path below; only ids we could have made pass.
     if (!IsWellFormedJobId(id)) return JobNotFound(id);
     v1::Job job;
@@ -367,9 +362,9 @@ grpc::Status JobServiceImpl::DownloadResult(grpc::ServerContext* context,
     }
     const int64_t size = file.size_bytes();
     if (request->offset() > size) {
-      return grpc::Status(grpc::StatusCode::OUT_OF_RANGE,
-                          "offset " + std::to_string(request->offset()) + " is past the end of " +
-                              name + " (" + std::to_string(size) + " bytes)");
+      return Status::OutOfRange("offset", std::to_string(request->offset()) +
+                                              " is past the end of " + name + " (" +
+                                              std::to_string(size) + " bytes)");
     }
     const fs::path path = data_dir_ / "jobs" / id / "result" / name;
     std::error_code ec;

@@ -100,12 +100,12 @@ Status UploadStore::CheckQuota(const std::string& user, int64_t size_bytes) {
   }
   for (const std::string& id : expired) RemoveFiles(id);
   if (count >= kMaxOpenUploads) {
-    return Status::FailedPrecondition(
+    return Status::ResourceExhausted(
         "upload_quota", "you have " + std::to_string(count) + " open uploads, the most one user " +
                             "may hold; finish or discard some (DiscardUpload) first");
   }
   if (quota_bytes_ > 0 && announced + size_bytes > quota_bytes_) {
-    return Status::FailedPrecondition(
+    return Status::ResourceExhausted(
         "upload_quota", "your open uploads announce " + std::to_string(announced) + " bytes; " +
                             std::to_string(size_bytes) +
                             " more would pass the server's upload quota of " +
@@ -205,10 +205,10 @@ Status UploadStore::Write(const std::string& user, const std::string& id, int64_
   std::lock_guard lock(mutex_);
   PBA_RETURN_IF_ERROR(Load(user, id, info));
   if (offset != info->received_bytes) {
-    return Status::InvalidArgument("offset", std::to_string(offset) +
-                                                 " is not the received size of upload " + id +
-                                                 ": " + std::to_string(info->received_bytes) +
-                                                 " bytes have arrived; send from there");
+    return Status::OutOfRange("offset", std::to_string(offset) +
+                                            " is not the received size of upload " + id + ": " +
+                                            std::to_string(info->received_bytes) +
+                                            " bytes have arrived; send from there");
   }
   if (offset + static_cast<int64_t>(data.size()) > info->size_bytes) {
     return Status::InvalidArgument("data", "the chunk would grow upload " + id + " past its " +

@@ -19,11 +19,13 @@ class Status {
     kInternal,            // a bug
     // The codes below come from the shared atlas store (server/store), where
     // the caller needs to tell these refusals apart to react to them.
-    kNotFound,          // the named resource does not exist
-    kAlreadyExists,     // a create would duplicate a unique name
-    kAborted,           // a concurrent change won (stale etag or base revision); re-read, retry
-    kPermissionDenied,  // the caller's role does not allow the operation
-    kUnauthenticated,   // no valid credentials
+    kNotFound,           // the named resource does not exist
+    kAlreadyExists,      // a create would duplicate a unique name
+    kAborted,            // a concurrent change won (stale etag or base revision); re-read, retry
+    kPermissionDenied,   // the caller's role does not allow the operation
+    kUnauthenticated,    // no valid credentials
+    kOutOfRange,         // a position past what exists (an upload chunk at the wrong offset)
+    kResourceExhausted,  // a quota or a bounded pool is full; try again later
   };
 
   Status() = default;
@@ -61,6 +63,14 @@ class Status {
   }
   static Status Unauthenticated(std::string message) {
     return Status(Code::kUnauthenticated, std::move(message));
+  }
+  // `field` names the position asked for ("offset").
+  static Status OutOfRange(std::string field, std::string message) {
+    return Status(Code::kOutOfRange, std::move(message), std::move(field));
+  }
+  // `field` names the quota or pool ("upload_quota", "diff_slots").
+  static Status ResourceExhausted(std::string field, std::string message) {
+    return Status(Code::kResourceExhausted, std::move(message), std::move(field));
   }
 
   bool ok() const { return code_ == Code::kOk; }

@@ -38,7 +38,7 @@ TEST(DiffSlotsTest, NoSlotInTimeIsBusyNamingTheSlots) {
   const auto start = std::chrono::steady_clock::now();
   const Status busy = slots.Acquire(nullptr, milliseconds(150));
   EXPECT_GE(std::chrono::steady_clock::now() - start, milliseconds(150));
-  EXPECT_EQ(busy.code(), Status::Code::kFailedPrecondition) << busy.ToString();
+  EXPECT_EQ(busy.code(), Status::Code::kResourceExhausted) << busy.ToString();
   EXPECT_EQ(busy.field(), "diff_slots");
   EXPECT_NE(busy.message().find("busy"), std::string::npos) << busy.ToString();
 }
@@ -60,7 +60,7 @@ TEST(DiffSlotsTest, AWaitEndsWhenItsCallerGoes) {
   EXPECT_EQ(waited.code(), Status::Code::kCancelled) << waited.ToString();
   slots.Release();
   EXPECT_TRUE(slots.Acquire(nullptr, milliseconds(0)).ok());
-  EXPECT_EQ(slots.Acquire(nullptr, milliseconds(0)).code(), Status::Code::kFailedPrecondition)
+  EXPECT_EQ(slots.Acquire(nullptr, milliseconds(0)).code(), Status::Code::kResourceExhausted)
       << "the cancelled wait took a slot";
 }
 

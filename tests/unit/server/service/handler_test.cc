@@ -108,11 +108,14 @@ TEST_F(RpcHandlerTest, EachStatusKindGivesItsGrpcCode) {
       {Status::Numerical("diverged"), grpc::StatusCode::INTERNAL},
       {Status::Io("disk full"), grpc::StatusCode::INTERNAL},
       {Status::Internal("bug"), grpc::StatusCode::INTERNAL},
-      // The codes Status lacks, marked by the stores' fields (handler.h).
-      {Status::InvalidArgument("offset", "expected 10"), grpc::StatusCode::OUT_OF_RANGE},
-      {Status::FailedPrecondition("upload_quota", "1000 open"),
+      // A position past what exists, a quota or pool that is full.
+      {Status::OutOfRange("offset", "expected 10"), grpc::StatusCode::OUT_OF_RANGE},
+      {Status::ResourceExhausted("upload_quota", "1000 open"),
        grpc::StatusCode::RESOURCE_EXHAUSTED},
-      {Status::FailedPrecondition("diff_slots", "busy"), grpc::StatusCode::RESOURCE_EXHAUSTED},
+      // A field alone decides nothing: these keep their own codes.
+      {Status::InvalidArgument("offset", "must not be negative"),
+       grpc::StatusCode::INVALID_ARGUMENT},
+      {Status::FailedPrecondition("upload_quota", "x"), grpc::StatusCode::FAILED_PRECONDITION},
       {Status::InvalidArgument("upload_id", "required"), grpc::StatusCode::INVALID_ARGUMENT},
   };
   for (const auto& [status, code] : cases) {

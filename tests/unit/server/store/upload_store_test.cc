@@ -51,9 +51,9 @@ TEST_F(UploadStoreTest, ChunksArriveInOrderAndTheContentIsVerified) {
   ASSERT_OK(uploads_->Write("bob", info.id, 0, content.substr(0, 10), &info));
   EXPECT_EQ(info.received_bytes, 10);
 
-  // Out of order: the field "offset" (OUT_OF_RANGE at the service) names the received size.
+  // Out of order: kOutOfRange on the field "offset", naming the received size.
   Status status = uploads_->Write("bob", info.id, 4, "xx", &info);
-  EXPECT_EQ(status.code(), Status::Code::kInvalidArgument);
+  EXPECT_EQ(status.code(), Status::Code::kOutOfRange);
   EXPECT_EQ(status.field(), "offset");
   EXPECT_NE(status.message().find("10 bytes have arrived"), std::string::npos) << status.ToString();
   // Past the announced size.
@@ -153,7 +153,7 @@ TEST_F(UploadStoreTest, QuotaBoundsTheBytesAUserHasAnnounced) {
   const auto before = files();
   UploadInfo refused;
   Status status = uploads_->Begin("bob", 1, hash, &refused);
-  EXPECT_EQ(status.code(), Status::Code::kFailedPrecondition);
+  EXPECT_EQ(status.code(), Status::Code::kResourceExhausted);
   EXPECT_EQ(status.field(), "upload_quota");
   EXPECT_NE(status.message().find("upload quota of 4294967296 bytes"), std::string::npos)
       << status.ToString();

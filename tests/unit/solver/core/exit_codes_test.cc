@@ -80,7 +80,8 @@ TEST(ExitCodesTest, StatusCodesMapAsDocumented) {
     EXPECT_EQ(ExitCodeForStatus(Code::kIo, computation), kExitIo);
     EXPECT_EQ(ExitCodeForStatus(Code::kCancelled, computation), kExitCancelled);
     for (Code other : {Code::kInternal, Code::kNotFound, Code::kAlreadyExists, Code::kAborted,
-                       Code::kPermissionDenied, Code::kUnauthenticated}) {
+                       Code::kPermissionDenied, Code::kUnauthenticated, Code::kOutOfRange,
+                       Code::kResourceExhausted}) {
       EXPECT_EQ(ExitCodeForStatus(other, computation), kExitError);
     }
   }
