@@ -7,6 +7,7 @@
 #include <set>
 #include <string>
 
+#include "common/scene_builders.h"
 #include "pba/solve.h"
 
 namespace pba {
@@ -79,14 +80,10 @@ TEST(ElementKindTest, ValidationFollowsTheTable) {
         scene.material.neo_hookean = {1000, 100000};
         scene.material.density_kg_per_m3 = 1040;
       }
-      BoundaryConditionSpec bottom;
-      bottom.set = "bottom";
-      bottom.kind = BoundaryConditionSpec::Kind::kFixed;
-      BoundaryConditionSpec top;
-      top.set = "top";
-      top.kind = BoundaryConditionSpec::Kind::kDisplacement;
-      top.displacement_mm[2] = -1.0;
-      scene.boundary_conditions = {bottom, top};
+      scene.boundary_conditions = {
+          testing::Condition("bottom", BoundaryConditionSpec::Kind::kFixed),
+          testing::Condition("top", BoundaryConditionSpec::Kind::kDisplacement,
+                             {std::nullopt, std::nullopt, -1.0})};
       scene.analysis.type = analysis;
       if (analysis == AnalysisSpec::Type::kExplicitDynamic) {
         scene.analysis.time.end_time_s = 1e-3;
