@@ -43,23 +43,6 @@ std::string FileStemFor(const std::string& structure) {
   return stem;
 }
 
-// The extension the readers go by.
-std::string ExtensionFor(StructureFormat format, bool gzipped) {
-  switch (format) {
-    case StructureFormat::kContours:
-      return ".json";
-    case StructureFormat::kNifti:
-      return gzipped ? ".nii.gz" : ".nii";
-    case StructureFormat::kStl:
-      return ".stl";
-    case StructureFormat::kObj:
-      return ".obj";
-    case StructureFormat::kVtk:
-      return ".vtk";
-  }
-  return "";
-}
-
 // "<group>: <name>" names (the thalamic nuclei of the built-in atlas) go
 // into the group "<group>".
 std::string GroupOf(const std::string& name) {
@@ -221,8 +204,8 @@ Status AtlasJobs::StageSnapshot(const v1::Job& job, const fs::path& dir, v1::Sce
   std::set<uint32_t> colours;
   for (const SnapshotFile& file : files) {
     const Revision& r = file.revision;
-    const std::string name =
-        names.Take(FileStemFor(r.structure), ExtensionFor(r.format, HasGzipMagic(file.blob)));
+    const std::string name = names.Take(
+        FileStemFor(r.structure), StructureFormatExtension(r.format, HasGzipMagic(file.blob)));
     fs::copy_file(file.blob, set_dir / name, fs::copy_options::overwrite_existing, ec);
     if (ec) return Status::Io("cannot copy the geometry of " + r.structure + ": " + ec.message());
     StructureEntry entry;

@@ -27,6 +27,24 @@ inline const char* StructureFormatName(StructureFormat format) {
   return "unknown";
 }
 
+// The file name extension the readers go by: ".json", ".nii.gz" (".nii"
+// for a NIfTI that is not gzip-compressed), ".stl", ".obj", ".vtk".
+inline const char* StructureFormatExtension(StructureFormat format, bool gzipped) {
+  switch (format) {
+    case StructureFormat::kContours:
+      return ".json";
+    case StructureFormat::kNifti:
+      return gzipped ? ".nii.gz" : ".nii";
+    case StructureFormat::kStl:
+      return ".stl";
+    case StructureFormat::kObj:
+      return ".obj";
+    case StructureFormat::kVtk:
+      return ".vtk";
+  }
+  return "";
+}
+
 // False, leaving *format alone, for any other word.
 inline bool ParseStructureFormat(std::string_view name, StructureFormat* format) {
   for (StructureFormat f : {StructureFormat::kContours, StructureFormat::kNifti,

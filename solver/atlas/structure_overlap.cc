@@ -37,31 +37,13 @@ class ScratchDir {
   fs::path path_;
 };
 
-const char* Extension(StructureFormat format) {
-  switch (format) {
-    case StructureFormat::kContours:
-      return ".json";
-    case StructureFormat::kNifti:
-      return ".nii.gz";
-    case StructureFormat::kStl:
-      return ".stl";
-    case StructureFormat::kObj:
-      return ".obj";
-    case StructureFormat::kVtk:
-      return ".vtk";
-  }
-  return "";
-}
-
 // Places `file` in the scratch set as `name` + extension: a hard link when
 // it can (no copy of a large mask), else a copy. A NIfTI is named .nii.gz
 // when gzip-compressed, else .nii: the reader goes by the name.
 Status Place(const StructureGeometry& g, const fs::path& dir, const std::string& name,
              std::string* file_name) {
-  *file_name = name + Extension(g.format);
-  if (g.format == StructureFormat::kNifti) {
-    *file_name = name + (HasGzipMagic(g.file) ? ".nii.gz" : ".nii");
-  }
+  *file_name = name + StructureFormatExtension(
+                          g.format, g.format == StructureFormat::kNifti && HasGzipMagic(g.file));
   std::error_code ec;
   fs::create_hard_link(g.file, dir / *file_name, ec);
   if (ec) {
