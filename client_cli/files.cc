@@ -1,10 +1,5 @@
 #include "files.h"
 
-#include <fcntl.h>
-#include <stdio.h>  // renameat2
-#include <sys/stat.h>
-#include <unistd.h>
-
 #include <cerrno>
 #include <cstdio>
 #include <fstream>
@@ -63,15 +58,9 @@ std::string FoldCase(const std::string& name) {
 }
 
 bool RenameNoReplace(const std::filesystem::path& from, const std::filesystem::path& to) {
-  if (::renameat2(AT_FDCWD, from.c_str(), AT_FDCWD, to.c_str(), RENAME_NOREPLACE) == 0) {
-    return true;
-  }
-  if (errno != EINVAL && errno != ENOSYS) return false;
-  // A file system without RENAME_NOREPLACE: link() refuses an existing
-  // name too, and the source is then unlinked.
-  if (::link(from.c_str(), to.c_str()) != 0) return false;
-  ::unlink(from.c_str());
-  return true;
+  const Status moved = MoveIntoPlace(from, to, /*never_replace=*/true);
+  if (!moved.ok()) errno = moved.code() == Status::Code::kAlreadyExists ? EEXIST : EIO;
+  return moved.ok();
 }
 
 }  // namespace pba::cli

@@ -38,8 +38,8 @@ std::string QuotedName(const std::string& name);
 std::string FoldCase(const std::string& name);
 
 // Moves `from` to `to` unless `to` exists (a symbolic link counts, even a
-// dangling one). False with errno EEXIST when it does, else errno of the
-// failure.
+// dangling one): MoveIntoPlace (core/atomic_write.h), never replacing. False
+// with errno EEXIST when it does, EIO on any other failure.
 bool RenameNoReplace(const std::filesystem::path& from, const std::filesystem::path& to);
 
 }  // namespace pba::cli

@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <cstring>
 
+#include "core/atomic_write.h"
 #include "exit_codes.h"
 #include "files.h"
 
@@ -116,8 +117,10 @@ int DownloadTo(Connection& connection, const fs::path& target, int64_t size,
     progress.Update(offset);
   }
   if (!written) context->TryCancel();
-  written = closer.Close() && written;
   grpc::Status status = reader->Finish();
+  // Whole: synced before it gets its name, which a crash must not outlive.
+  if (written && status.ok() && ::fsync(fd) != 0) written = false;
+  written = closer.Close() && written;
   if (!written) {
     std::fprintf(stderr, "pba: writing %s failed (disk full?)\n", part.c_str());
     return kExitError;
@@ -130,20 +133,17 @@ int DownloadTo(Connection& connection, const fs::path& target, int64_t size,
                  what.c_str());
     return kExitError;
   }
-  // rename() replaces a link at `target` itself, never the file it points to.
-  const bool moved =
-      overwrite ? std::rename(part.c_str(), target.c_str()) == 0 : RenameNoReplace(part, target);
-  if (!moved) {
-    const int error = errno;
-    if (error == EEXIST) {
-      std::fprintf(stderr,
-                   "pba: %s appeared while it was downloading; not overwriting it (pass --force "
-                   "to); the download is in %s\n",
-                   target.c_str(), part.c_str());
-      return kExitConflict;
-    }
-    std::fprintf(stderr, "pba: cannot move %s into place: %s\n", target.c_str(),
-                 std::strerror(error));
+  // A rename replaces a link at `target` itself, never the file it points to.
+  const Status moved = MoveIntoPlace(part, target, /*never_replace=*/!overwrite);
+  if (moved.code() == Status::Code::kAlreadyExists) {
+    std::fprintf(stderr,
+                 "pba: %s appeared while it was downloading; not overwriting it (pass --force "
+                 "to); the download is in %s\n",
+                 target.c_str(), part.c_str());
+    return kExitConflict;
+  }
+  if (!moved.ok()) {
+    std::fprintf(stderr, "pba: %s\n", moved.message().c_str());  // cannot move ... into place
     return kExitError;
   }
   return kExitOk;

@@ -1,7 +1,6 @@
 #include "app/pba_server.h"
 
 #include <arpa/inet.h>
-#include <fcntl.h>
 #include <grpcpp/ext/proto_server_reflection_plugin.h>
 #include <grpcpp/grpcpp.h>
 #include <grpcpp/health_check_service_interface.h>
@@ -18,6 +17,8 @@
 #include <sstream>
 #include <system_error>
 #include <vector>
+
+#include "core/atomic_write.h"
 
 namespace pba {
 namespace fs = std::filesystem;
@@ -79,31 +80,20 @@ Status CreateFirstAdmin(AtlasStore& store, const std::string& user, const fs::pa
     spdlog::warn("replacing {}: the atlas store has no users", token_file.string());
     fs::remove(token_file, ec);
   }
-  // The file first, so a token is never issued that cannot be written down.
-  const int fd = ::open(token_file.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
-  if (fd < 0) {
-    return Status::Io("cannot create " + token_file.string() + ": " + std::strerror(errno));
-  }
-  std::string token;
-  Status status = store.CreateUser(user, &token, /*server_admin=*/true);
-  if (status.ok()) {
-    const std::string line = token + "\n";
-    size_t done = 0;
-    while (done < line.size()) {
-      const ssize_t n = ::write(fd, line.data() + done, line.size() - done);
-      if (n < 0 && errno == EINTR) continue;
-      if (n <= 0) break;
-      done += static_cast<size_t>(n);
-    }
-    if (done != line.size() || ::fsync(fd) != 0) {
-      status = Status::Io("cannot write " + token_file.string() + ": " + std::strerror(errno));
-    }
-  }
-  ::close(fd);
-  if (!status.ok()) {
-    fs::remove(token_file, ec);
-    return status;
-  }
+  // The (temporary) file first, so a token is never issued that cannot be
+  // written down; named only once the token is in it and synced. Never
+  // replacing: a file that appeared since is not the stale one removed above.
+  AtomicWriteOptions options;
+  options.never_replace = true;  // mode 0600, the default
+  PBA_RETURN_IF_ERROR(AtomicWrite(
+      token_file, "",
+      [&](int fd, const std::string& temporary) {
+        std::string token;
+        PBA_RETURN_IF_ERROR(store.CreateUser(user, &token, /*server_admin=*/true));
+        const std::string line = token + "\n";
+        return WriteAll(fd, line.data(), line.size(), temporary);
+      },
+      options));
   *created = true;
   return Status::Ok();
 }

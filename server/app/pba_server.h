@@ -133,10 +133,11 @@ Status RestrictDataDir(const std::filesystem::path& data_dir);
 // Checks that `solver` is an executable regular file.
 Status CheckSolver(const std::filesystem::path& solver);
 
-// If `store` has no user, creates `user` (a server admin) and writes its token (and a
-// newline) to `token_file`, created with O_CREAT | O_EXCL and mode 0600 and
-// fsynced; *created says whether it did. A token file left from an earlier
-// database that has no users is replaced.
+// If `store` has no user, creates `user` (a server admin) and writes its
+// token (and a newline) to `token_file`, mode 0600, written atomically
+// (AtomicWrite, never_replace: never over a file that appears meanwhile);
+// *created says whether it did. A token file left from an earlier database
+// that has no users is removed first, so it is replaced.
 Status CreateFirstAdmin(AtlasStore& store, const std::string& user,
                         const std::filesystem::path& token_file, bool* created);
 

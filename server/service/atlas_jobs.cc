@@ -104,54 +104,46 @@ Status CheckAtlasImport(const v1::AtlasImport& request) {
   return Status::Ok();
 }
 
+namespace {
+
+// A refused Take of the import's file `i`, naming its field.
+Status TakeRefused(int i, const Status& taken) {
+  const std::string field = "atlas_import.files[" + std::to_string(i) + "].upload_id";
+  switch (taken.code()) {
+    case Status::Code::kInvalidArgument:
+      return Status::InvalidArgument(field, taken.message());
+    case Status::Code::kNotFound:
+      return Status::NotFound(field + ": " + taken.message());
+    case Status::Code::kFailedPrecondition:
+      return Status::FailedPrecondition(field + ": " + taken.message());
+    default:
+      return taken;
+  }
+}
+
+}  // namespace
+
 Status StageImportSource(UploadStore& uploads, const std::string& user,
                          const v1::AtlasImport& request, const fs::path& dir) {
-  std::error_code ec;
-  const fs::path partial = dir.string() + ".part";
-  fs::remove_all(partial, ec);
-  fs::create_directories(partial, ec);
-  if (ec) return Status::Io("cannot create " + partial.string() + ": " + ec.message());
-  auto undo = [&](Status status) {
-    std::error_code ignored;
-    fs::remove_all(partial, ignored);
-    return status;
-  };
-  for (int i = 0; i < request.files_size(); ++i) {
-    const v1::ImportFile& file = request.files(i);
-    std::unique_ptr<MappedFile> content;
-    Status taken = uploads.Take(user, file.upload_id(), &content);
-    if (!taken.ok()) {
-      const std::string field = "atlas_import.files[" + std::to_string(i) + "].upload_id";
-      switch (taken.code()) {
-        case Status::Code::kInvalidArgument:
-          return undo(Status::InvalidArgument(field, taken.message()));
-        case Status::Code::kNotFound:
-          return undo(Status::NotFound(field + ": " + taken.message()));
-        case Status::Code::kFailedPrecondition:
-          return undo(Status::FailedPrecondition(field + ": " + taken.message()));
-        default:
-          return undo(taken);
+  return AtomicWriteDirectory(dir, [&](const fs::path& staging) -> Status {
+    for (int i = 0; i < request.files_size(); ++i) {
+      const v1::ImportFile& file = request.files(i);
+      std::unique_ptr<MappedFile> content;
+      const Status taken = uploads.Take(user, file.upload_id(), &content);
+      if (!taken.ok()) return TakeRefused(i, taken);
+      // A second name for the checked bytes (a complete upload takes no more
+      // writes), so nothing is copied and a refused submit leaves every
+      // upload as it was; a copy where a link cannot be made.
+      // The chunks were written without fsync: on disk before the job is.
+      if (::fsync(content->fd()) != 0) {
+        return Status::Io("cannot sync the upload of " + file.name());
       }
+      std::error_code ec;
+      fs::create_hard_link(content->path(), staging / file.name(), ec);
+      if (ec) PBA_RETURN_IF_ERROR(AtomicWriteText(staging / file.name(), content->bytes()));
     }
-    // A second name for the checked bytes (a complete upload takes no more
-    // writes), so nothing is copied and a refused submit leaves every
-    // upload as it was; a copy where a link cannot be made.
-    // The chunks were written without fsync: on disk before the job is.
-    if (::fsync(content->fd()) != 0) {
-      return undo(Status::Io("cannot sync the upload of " + file.name()));
-    }
-    fs::create_hard_link(content->path(), partial / file.name(), ec);
-    if (ec) {
-      ec.clear();
-      const Status written = AtomicWriteText(partial / file.name(), content->bytes());
-      if (!written.ok()) return undo(written);
-    }
-  }
-  SyncDirectory(partial);
-  fs::rename(partial, dir, ec);
-  if (ec) return undo(Status::Io("cannot move " + dir.string() + " into place: " + ec.message()));
-  SyncDirectory(dir.parent_path());
-  return Status::Ok();
+    return Status::Ok();  // AtomicWriteDirectory syncs the directory, then its parent
+  });
 }
 
 void RemoveImportUploads(UploadStore& uploads, const std::string& user,

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "convert/convert.h"
+#include "core/atomic_write.h"
 #include "service/atlas_jobs.h"
 #include "service/handler.h"
 #include "store/job_id.h"
@@ -188,6 +189,9 @@ grpc::Status JobServiceImpl::SubmitJob(grpc::ServerContext* context,
         fs::create_directories(dir, ec);
         if (!ec) fs::rename(staged, dir / "source", ec);
         if (ec) return Status::Io("cannot move the import's files into place: " + ec.message());
+        // Durable before the job is stored (the source's entries are).
+        SyncDirectory(dir);
+        SyncDirectory(dir.parent_path());
         return Status::Ok();
       };
     }

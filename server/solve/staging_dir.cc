@@ -6,6 +6,8 @@
 #include <string>
 #include <system_error>
 
+#include "core/atomic_write.h"
+
 namespace pba {
 namespace fs = std::filesystem;
 namespace {
@@ -115,22 +117,10 @@ Status StagingDir::Commit() {
   if (ec) return Status::Io("cannot list " + staging_.string() + ": " + ec.message());
   if (!FsyncPath(staging_, true)) return Status::Io("cannot flush " + staging_.string());
 
-  // An older result is moved aside first, so the destination never holds a mix.
-  fs::path old;
-  if (fs::exists(destination_)) {
-    old = destination_.parent_path() / Hidden(destination_, "old");
-    fs::remove_all(old, ec);
-    fs::rename(destination_, old, ec);
-    if (ec) return Status::Io("cannot replace " + destination_.string() + ": " + ec.message());
-  }
-  fs::rename(staging_, destination_, ec);
-  if (ec) {
-    if (!old.empty()) fs::rename(old, destination_, ec);
-    return Status::Io("cannot move the result into " + destination_.string() + ": " + ec.message());
-  }
+  // An older result is moved aside first, so the destination never holds a
+  // mix, and put back when the new one cannot be moved in.
+  PBA_RETURN_IF_ERROR(MoveDirectoryIntoPlace(staging_, destination_, /*replace=*/true));
   committed_ = true;
-  FsyncPath(destination_.parent_path(), true);
-  if (!old.empty()) fs::remove_all(old, ec);
   staging_ = destination_;
   return Status::Ok();
 }

@@ -1,5 +1,6 @@
 // pba_base: the one SHA-256 (known answers, pieces against one call, files
-// with their size), the one atomic write (its mode, its temporary names)
+// with their size), the one atomic write (its mode, never replacing,
+// directories replaced whole, its temporary names)
 // and Format, which never cuts a message.
 #include <gtest/gtest.h>
 
@@ -8,6 +9,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <limits>
 #include <string>
 
@@ -82,6 +84,136 @@ TEST(AtomicWriteTest, ATextGetsItsModeAndLeavesNoTemporaryFile) {
   const Status missing = AtomicWriteText(dir / "no" / "file", "c");
   EXPECT_EQ(missing.code(), Status::Code::kIo);
   fs::remove_all(dir);
+}
+
+// A new empty directory for one test.
+std::filesystem::path FreshDir(const std::string& name) {
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("pba-" + name + "-" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  return dir;
+}
+
+std::string ReadText(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+std::ptrdiff_t Entries(const std::filesystem::path& dir) {
+  return std::distance(std::filesystem::directory_iterator(dir),
+                       std::filesystem::directory_iterator());
+}
+
+TEST(AtomicWriteTest, NeverReplaceRefusesWhatIsThereAndLeavesNoTemporaryFile) {
+  namespace fs = std::filesystem;
+  const fs::path dir = FreshDir("never-replace");
+  std::ofstream(dir / "kept") << "old";
+  AtomicWriteOptions options;
+  options.never_replace = true;
+  options.mode = 0640;
+  const Status refused = AtomicWriteText(dir / "kept", "new", options);
+  EXPECT_EQ(refused.code(), Status::Code::kAlreadyExists);
+  EXPECT_NE(refused.message().find((dir / "kept").string()), std::string::npos)
+      << refused.ToString();
+  EXPECT_EQ(ReadText(dir / "kept"), "old");
+  // A dangling symbolic link counts as something there.
+  fs::create_symlink(dir / "nowhere", dir / "dangling");
+  EXPECT_EQ(AtomicWriteText(dir / "dangling", "new", options).code(), Status::Code::kAlreadyExists);
+  EXPECT_TRUE(fs::is_symlink(fs::symlink_status(dir / "dangling")));
+  EXPECT_EQ(Entries(dir), 2);
+  // A new name is written, with the mode asked for.
+  ASSERT_TRUE(AtomicWriteText(dir / "fresh", "new", options).ok());
+  EXPECT_EQ(ReadText(dir / "fresh"), "new");
+  EXPECT_EQ(fs::status(dir / "fresh").permissions() & fs::perms::all,
+            fs::perms::owner_read | fs::perms::owner_write | fs::perms::group_read);
+  EXPECT_EQ(Entries(dir), 3);
+  fs::remove_all(dir);
+}
+
+TEST(AtomicWriteTest, TheModeOptionAppliesToAWriteThroughTheDescriptor) {
+  namespace fs = std::filesystem;
+  const fs::path dir = FreshDir("atomic-mode");
+  std::ofstream(dir / "file") << "old";
+  AtomicWriteOptions options;
+  options.mode = 0604;
+  ASSERT_TRUE(
+      AtomicWrite(
+          dir / "file", ".txt",
+          [](int fd, const std::string& temporary) { return WriteAll(fd, "new", 3, temporary); },
+          options)
+          .ok());
+  EXPECT_EQ(ReadText(dir / "file"), "new");  // replaced: never_replace is off
+  EXPECT_EQ(fs::status(dir / "file").permissions() & fs::perms::all,
+            fs::perms::owner_read | fs::perms::owner_write | fs::perms::others_read);
+  EXPECT_EQ(Entries(dir), 1);
+  fs::remove_all(dir);
+}
+
+TEST(AtomicWriteTest, MoveIntoPlaceReplacesOrRefusesAsAsked) {
+  namespace fs = std::filesystem;
+  const fs::path dir = FreshDir("move-into-place");
+  std::ofstream(dir / "part") << "new";
+  std::ofstream(dir / "target") << "old";
+  const Status refused = MoveIntoPlace(dir / "part", dir / "target", /*never_replace=*/true);
+  EXPECT_EQ(refused.code(), Status::Code::kAlreadyExists);
+  EXPECT_NE(refused.message().find((dir / "target").string()), std::string::npos);
+  EXPECT_EQ(ReadText(dir / "target"), "old");
+  EXPECT_EQ(ReadText(dir / "part"), "new");
+  ASSERT_TRUE(MoveIntoPlace(dir / "part", dir / "other", /*never_replace=*/true).ok());
+  EXPECT_EQ(ReadText(dir / "other"), "new");
+  EXPECT_FALSE(fs::exists(dir / "part"));
+  ASSERT_TRUE(MoveIntoPlace(dir / "other", dir / "target", /*never_replace=*/false).ok());
+  EXPECT_EQ(ReadText(dir / "target"), "new");
+  EXPECT_EQ(Entries(dir), 1);
+  const Status missing = MoveIntoPlace(dir / "part", dir / "target", /*never_replace=*/false);
+  EXPECT_EQ(missing.code(), Status::Code::kIo);
+  EXPECT_EQ(
+      missing.message().rfind("cannot move " + (dir / "target").string() + " into place: ", 0), 0u)
+      << missing.ToString();
+  fs::remove_all(dir);
+}
+
+TEST(AtomicWriteTest, ADirectoryIsReplacedWholeOnlyWhenAskedAndKeptWhenTheFillFails) {
+  namespace fs = std::filesystem;
+  const fs::path parent = FreshDir("atomic-dir");
+  const fs::path out = parent / "out";
+  fs::create_directories(out);
+  std::ofstream(out / "a") << "old";
+  const auto write_b = [](const fs::path& staging) {
+    return AtomicWriteText(staging / "b", "new");
+  };
+  // Not empty: refused without `replace`.
+  EXPECT_EQ(AtomicWriteDirectory(out, write_b).code(), Status::Code::kIo);
+  // A fill that fails leaves the old content, and nothing beside it.
+  const Status failed = AtomicWriteDirectory(
+      out,
+      [&](const fs::path& staging) {
+        EXPECT_TRUE(write_b(staging).ok());
+        return Status::Io("the fill failed");
+      },
+      /*replace=*/true);
+  EXPECT_EQ(failed.message(), "the fill failed");
+  EXPECT_EQ(ReadText(out / "a"), "old");
+  EXPECT_EQ(Entries(out), 1);
+  EXPECT_EQ(Entries(parent), 1);
+  // A move in that fails puts the old content back.
+  EXPECT_EQ(MoveDirectoryIntoPlace(parent / "missing", out, /*replace=*/true).code(),
+            Status::Code::kIo);
+  EXPECT_EQ(ReadText(out / "a"), "old");
+  EXPECT_EQ(Entries(parent), 1);
+  // Replaced whole: the old entries are gone, no hidden directory is left.
+  ASSERT_TRUE(AtomicWriteDirectory(out, write_b, /*replace=*/true).ok());
+  EXPECT_FALSE(fs::exists(out / "a"));
+  EXPECT_EQ(ReadText(out / "b"), "new");
+  EXPECT_EQ(Entries(parent), 1);
+  // A file where the directory goes is replaced too.
+  fs::remove_all(out);
+  std::ofstream(out) << "a file";
+  ASSERT_TRUE(AtomicWriteDirectory(out, write_b, /*replace=*/true).ok());
+  EXPECT_EQ(ReadText(out / "b"), "new");
+  EXPECT_EQ(Entries(parent), 1);
+  fs::remove_all(parent);
 }
 
 TEST(AtomicWriteTest, ItsTemporaryNamesAreKnownForSweeps) {
