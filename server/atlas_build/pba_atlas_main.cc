@@ -235,12 +235,13 @@ int RunBuild(AtlasBuildOptions options, const Pictures& pictures, const std::str
     }
     const AtlasBuildTimes& t = result.times;
     const LabelMeshReport& m = result.mesher;
+    const bool ten_node = result.mesh.shape() == ElementShape::kTet10;
     std::printf(
         "\n%d structures, %d tetrahedra, %d nodes%s; source %.2f s, loft %.2f s, mesh %.2f s "
         "(seeds %.2f, refinement %.2f, ODT %.2f, perturbation %.2f, exudation %.2f), "
         "improvement %.2f s, quality %.2f s, validation %.2f s, pictures %.2f s\n",
         static_cast<int>(result.region_labels.size()), result.mesh.num_elements(),
-        result.mesh.num_nodes(), result.mesh.quadratic() ? " (10-node)" : "", t.source_s, t.loft_s,
+        result.mesh.num_nodes(), ten_node ? " (10-node)" : "", t.source_s, t.loft_s,
         t.mesh_s + t.quadratic_s, m.seed_s, m.refine_s, m.odt_s, m.perturb_s, m.exude_s,
         t.improve_s, t.quality_s, t.validation_s, pictures_s);
     const ImproveStats& i = result.improvement;
@@ -265,7 +266,7 @@ int RunBuild(AtlasBuildOptions options, const Pictures& pictures, const std::str
           static_cast<long long>(p->reset), MidsideProjectionOptions().max_jacobian_ratio,
           static_cast<long long>(p->unprojected), p->gap_mm.median_mm, p->gap_mm.p90_mm,
           p->gap_midpoints_mm.median_mm, p->gap_midpoints_mm.p90_mm, t.quadratic_s);
-    } else if (result.mesh.quadratic()) {
+    } else if (ten_node) {
       std::printf(
           "10-node: every mid-edge node at its edge's midpoint (a label volume gives no smooth "
           "surface to move them to)\n");
@@ -292,6 +293,7 @@ struct CommandLine {
   std::string plates_dir, labels_file, structures_dir, colour_table, format_name = "text";
   std::vector<std::string> structures;
   std::vector<double> roi;  // X,Y,Z,R or empty
+  int threads = 0;          // 0: every core
   bool no_pictures = false;
   AtlasPictureOptions pictures;
 
@@ -400,6 +402,11 @@ void AddBuildCommand(CLI::App& app, CommandLine& line) {
   build->add_option("--roi-mm", line.build.roi_size_mm,
                     "Element size in the region of interest [mm]; default half of --facet-mm");
   build->add_flag("--quadratic", line.build.quadratic, "10-node tetrahedra");
+  build
+      ->add_option("--threads", line.threads,
+                   "Threads the geometric validation may use (the mesher runs on one); 0 uses "
+                   "every core")
+      ->check(CLI::NonNegativeNumber);
   build->add_option("--structure", line.structures,
                     "Keep only this structure (colour-table name; repeat for several)");
   build->add_flag("--merge-rest", line.build.merge_rest,
@@ -467,6 +474,7 @@ int RunBuildCommand(CommandLine& line) {
     options.input = line.structures_dir;
   }
   options.structures = line.structures;
+  options.threads = ThreadContext(line.threads);
   if (!line.roi.empty()) {
     options.roi_centre_mm = {line.roi[0], line.roi[1], line.roi[2]};
     options.roi_radius_mm = line.roi[3];

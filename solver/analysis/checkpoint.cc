@@ -365,18 +365,18 @@ Status ReadCheckpoint(const std::filesystem::path& file, Checkpoint* c) {
 }
 
 Checkpointer::Checkpointer(const SolveOptions& options, std::string scene_name, double duration_s,
-                           const Mesh& mesh, const DofMap& dofs, MaterialField* field,
-                           std::vector<RigidContact*> contacts)
+                           const Mesh& mesh, const DofMap& dofs, DiscreteBody* body,
+                           const MaterialField& field, std::vector<RigidContact*> contacts)
     : options_(options),
       scene_name_(std::move(scene_name)),
       duration_s_(duration_s),
-      field_(field),
+      body_(body),
       contacts_(std::move(contacts)),
       last_write_(std::chrono::steady_clock::now()) {
   // Only checkpoints and restarts need it (it reads the whole mesh).
   if (!writes() && !restarts()) return;
   fingerprint_ = FingerprintOf(
-      mesh, dofs, *field, std::vector<const RigidContact*>(contacts_.begin(), contacts_.end()));
+      mesh, dofs, field, std::vector<const RigidContact*>(contacts_.begin(), contacts_.end()));
 }
 
 Status Checkpointer::Restore(Solution* solution, NewtonOptions* newton,
@@ -404,7 +404,7 @@ Status Checkpointer::Restore(Solution* solution, NewtonOptions* newton,
                "later analysis.time.end_time_s continues it",
                c.time_s));
   }
-  PBA_RETURN_IF_ERROR(field_->RestoreHistory(c.material_history));
+  PBA_RETURN_IF_ERROR(body_->RestoreHistory(c.material_history));
   for (std::size_t i = 0; i < contacts_.size(); ++i) {
     const Status restored = contacts_[i]->RestoreState(c.contact_states[i]);
     if (!restored.ok()) {
@@ -459,7 +459,7 @@ Status Checkpointer::AfterIncrement(double load, double next_step, const Eigen::
   c.load_factor = load;
   c.next_step = next_step;
   c.u.assign(u.data(), u.data() + u.size());
-  c.material_history = field_->SaveHistory();
+  c.material_history = body_->SaveHistory();
   for (const RigidContact* contact : contacts_) c.contact_states.push_back(contact->SaveState());
   c.peak_contact_force_n = peak_contact_force;
   c.history_columns = solution.history_columns;

@@ -16,6 +16,8 @@
 
 #include "analysis/newton_static.h"
 #include "analysis/rigid_contact.h"
+#include "analysis/step_observer.h"
+#include "assembly/discrete_body.h"
 #include "assembly/dof_map.h"
 #include "material/material_field.h"
 #include "mesh/mesh.h"
@@ -80,9 +82,10 @@ Status ReadCheckpoint(const std::filesystem::path& file, Checkpoint* checkpoint)
 // SolveOptions::checkpoint_dir, checkpoint_every_s and restart_from.
 class Checkpointer {
  public:
-  // `field` and `contacts` must outlive the checkpointer.
+  // `body` (whose history a checkpoint holds), `field` (its materials, in
+  // the model's fingerprint) and `contacts` must outlive the checkpointer.
   Checkpointer(const SolveOptions& options, std::string scene_name, double duration_s,
-               const Mesh& mesh, const DofMap& dofs, MaterialField* field,
+               const Mesh& mesh, const DofMap& dofs, DiscreteBody* body, const MaterialField& field,
                std::vector<RigidContact*> contacts);
 
   bool writes() const { return !options_.checkpoint_dir.empty(); }
@@ -113,11 +116,35 @@ class Checkpointer {
   const SolveOptions& options_;
   std::string scene_name_;
   double duration_s_;
-  MaterialField* field_;
+  DiscreteBody* body_;
   std::vector<RigidContact*> contacts_;
   ModelFingerprint fingerprint_;
   Checkpoint restored_;
   std::chrono::steady_clock::time_point last_write_;
+};
+
+// The checkpoints as an observer of Newton's converged increments
+// (NewtonOptions::observers): after each, Checkpointer::AfterIncrement with
+// the run's solution, report and peak contact forces as they stand. All
+// must outlive it.
+class CheckpointObserver final : public StepObserver {
+ public:
+  CheckpointObserver(Checkpointer* checkpoints, const Solution* solution,
+                     const NewtonReport* report, const std::vector<double>* peak_contact_force)
+      : checkpoints_(checkpoints),
+        solution_(solution),
+        report_(report),
+        peak_contact_force_(peak_contact_force) {}
+  Status AfterStep(const StepState& state) override {
+    return checkpoints_->AfterIncrement(state.time_s, state.next_step, *state.u, *solution_,
+                                        *report_, *peak_contact_force_);
+  }
+
+ private:
+  Checkpointer* checkpoints_;
+  const Solution* solution_;
+  const NewtonReport* report_;
+  const std::vector<double>* peak_contact_force_;
 };
 
 }  // namespace pba

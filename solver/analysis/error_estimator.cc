@@ -256,4 +256,44 @@ ErrorEstimateResult EstimateZzErrorHex8(const Mesh& mesh, const ElementStress& s
   return EstimateZzRecovered<Hex8Traits>(mesh, stress, elasticity, threads);
 }
 
+ErrorEstimateResult EstimateZzError(const Mesh& mesh, const ElementStress& stress,
+                                    const ElasticityField& elasticity,
+                                    const ThreadContext& threads) {
+  switch (mesh.shape()) {
+    case ElementShape::kTet10:
+      return EstimateZzErrorTet10(mesh, stress, elasticity, threads);
+    case ElementShape::kHex8:
+      return EstimateZzErrorHex8(mesh, stress, elasticity, threads);
+    case ElementShape::kTet4:
+      break;
+  }
+  // The 4-node element's stress is constant: one sample each, at the
+  // centroid, with the volume its recovery weighs it by.
+  const int ne = mesh.num_elements();
+  const Eigen::Vector3d centroid = Eigen::Vector3d::Constant(0.25);
+  std::vector<double> sampled(6 * static_cast<std::size_t>(ne)), volume(ne);
+#pragma omp parallel for schedule(static) num_threads(threads.threads()) if (threads.Parallel(ne))
+  for (int e = 0; e < ne; ++e) {
+    Vector6d::Map(&sampled[6 * static_cast<std::size_t>(e)]) = stress(e, centroid);
+    volume[e] = ComputeTet4Geometry(TetCorners(mesh, e)).volume;
+  }
+  return EstimateZzError(mesh, sampled, volume, elasticity, threads);
+}
+
+std::string ZzMethod(const Mesh& mesh, ZzStress stress) {
+  if (stress == ZzStress::kSecondPiolaKirchhoff) {
+    return "Zienkiewicz-Zhu recovery of the second Piola-Kirchhoff stress (nodal averaging), "
+           "measured with the initial compliance";
+  }
+  switch (mesh.shape()) {
+    case ElementShape::kTet10:
+      return "Zienkiewicz-Zhu stress recovery (nodal averaging, quadratic)";
+    case ElementShape::kHex8:
+      return "Zienkiewicz-Zhu stress recovery (nodal averaging, trilinear)";
+    case ElementShape::kTet4:
+      break;
+  }
+  return "Zienkiewicz-Zhu stress recovery (nodal averaging)";
+}
+
 }  // namespace pba

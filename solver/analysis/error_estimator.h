@@ -1,6 +1,6 @@
-// Zienkiewicz-Zhu a-posteriori error estimate for linear tetrahedra.
+// Zienkiewicz-Zhu a-posteriori error estimate, for every element shape.
 //
-// The element stresses sigma_h (constant per tet) are smoothed into a
+// On linear tetrahedra the element stresses sigma_h (constant per tet) are smoothed into a
 // continuous field sigma* by volume-weighted nodal averaging; the error of
 // element e is estimated in the energy norm,
 //   eta_e^2 = integral over e of (sigma* - sigma_h) : C : (sigma* - sigma_h) dV
@@ -42,30 +42,53 @@ struct RegionError {
 std::vector<RegionError> ErrorByRegion(const Mesh& mesh, const ErrorEstimateResult& estimate,
                                        const std::string& body);
 
-// `stress` is elements x 6 (Voigt), `volume` per element [m^3]; each
-// element's error and energy are measured with its own material's
-// compliance, `elasticity.Compliance(e)`. The estimates run on `threads`
-// (the solve's).
+// The stress of element e at natural point xi [Pa], Voigt order: the
+// finite-element stress the estimate recovers (called concurrently).
+using ElementStress = std::function<Vector6d(int element, const Eigen::Vector3d& xi)>;
+
+// The estimate, the recovery chosen by the mesh's element shape: 10-node
+// tetrahedra and 8-node hexahedra sample `stress` at their nodes and
+// integration points (EstimateZzErrorTet10, EstimateZzErrorHex8 below);
+// 4-node tetrahedra, whose stress is constant, sample it once per element at
+// the centroid xi = (1/4, 1/4, 1/4) and take the element volumes of
+// fem/tet4.h (EstimateZzError with stresses and volumes). Each element's
+// error and energy are measured with its own material's compliance,
+// `elasticity.Compliance(e)`; the estimate runs on `threads` (the solve's).
+// The one entry point of the analyses.
+ErrorEstimateResult EstimateZzError(const Mesh& mesh, const ElementStress& stress,
+                                    const ElasticityField& elasticity,
+                                    const ThreadContext& threads = ThreadContext());
+
+// What the summary says of the estimate (Summary::error.method): of the
+// small-strain stress, by the mesh's element shape, e.g. "Zienkiewicz-Zhu
+// stress recovery (nodal averaging, quadratic)"; of the second
+// Piola-Kirchhoff stress (the finite-strain analyses), one text for every
+// shape.
+enum class ZzStress { kSmallStrain, kSecondPiolaKirchhoff };
+std::string ZzMethod(const Mesh& mesh, ZzStress stress = ZzStress::kSmallStrain);
+
+// The per-shape estimates behind EstimateZzError.
+//
+// 4-node tetrahedra: `stress` is elements x 6 (Voigt), `volume` per element
+// [m^3].
 ErrorEstimateResult EstimateZzError(const Mesh& mesh, const std::vector<double>& stress,
                                     const std::vector<double>& volume,
                                     const ElasticityField& elasticity,
                                     const ThreadContext& threads = ThreadContext());
 
-// The same estimate for 10-node tetrahedra (a quadratic mesh), whose stress
-// varies within the element: `stress(e, xi)` is the finite-element stress
-// of element e at natural point xi (fem/tet10.h). The recovered field takes
-// at each of the 10 nodes the volume-weighted average of the stresses the
-// elements around it give there, and is interpolated with the quadratic
-// shape functions; the integrals use the 14-point degree-5 rule.
-// `stress` is called concurrently.
-using ElementStress = std::function<Vector6d(int element, const Eigen::Vector3d& xi)>;
+// 10-node tetrahedra (a quadratic mesh), whose stress varies within the
+// element: `stress(e, xi)` with xi the natural point of fem/tet10.h. The
+// recovered field takes at each of the 10 nodes the volume-weighted average
+// of the stresses the elements around it give there, and is interpolated
+// with the quadratic shape functions; the integrals use the 14-point
+// degree-5 rule.
 ErrorEstimateResult EstimateZzErrorTet10(const Mesh& mesh, const ElementStress& stress,
                                          const ElasticityField& elasticity,
                                          const ThreadContext& threads = ThreadContext());
 
-// The same for 8-node hexahedra (a hexahedral mesh): nodal averages at the
-// 8 corners, trilinear interpolation, the 2 x 2 x 2 rule; `stress(e, xi)`
-// with xi in [-1, 1]^3 (fem/hex8.h).
+// 8-node hexahedra (a hexahedral mesh): nodal averages at the 8 corners,
+// trilinear interpolation, the 2 x 2 x 2 rule; `stress(e, xi)` with xi in
+// [-1, 1]^3 (fem/hex8.h).
 ErrorEstimateResult EstimateZzErrorHex8(const Mesh& mesh, const ElementStress& stress,
                                         const ElasticityField& elasticity,
                                         const ThreadContext& threads = ThreadContext());

@@ -1,5 +1,11 @@
 #include "analysis/finite_strain_model.h"
 
+#include <cstdio>
+#include <cstdlib>
+
+#include "analysis/average_nodal_pressure_model.h"
+#include "analysis/hex8_model.h"
+#include "analysis/tet10_model.h"
 #include "fem/tet4_finite_strain.h"
 #include "material/hyperelastic.h"
 #include "material/material_field.h"
@@ -78,6 +84,57 @@ class Tet4Model final : public FiniteStrainModel {
 };
 
 }  // namespace
+
+std::unique_ptr<FiniteStrainModel> MakeFiniteStrainModel(ElementType element, const Mesh& mesh,
+                                                         const MaterialField& field,
+                                                         const ThreadContext& threads) {
+  switch (element) {
+    case ElementType::kTet4:
+      return MakeTet4Model(mesh, field, threads);
+    case ElementType::kTet4Anp:
+      return MakeAverageNodalPressureTet4Model(mesh, field, threads);
+    case ElementType::kTet10:
+      return MakeTet10Model(mesh, field, threads);
+    case ElementType::kTet10Md:
+      return MakeTet10MdModel(mesh, field, threads);
+    case ElementType::kHex8:
+      return MakeHex8Model(mesh, field, threads);
+    case ElementType::kHex8Full:
+      return MakeHex8FullModel(mesh, field, threads);
+    case ElementType::kDefault:
+      break;
+  }
+  std::fprintf(stderr, "pba: MakeFiniteStrainModel needs a resolved element type\n");
+  std::abort();
+}
+
+BodyForce FiniteStrainModel::Force(const Eigen::VectorXd& u, const Eigen::VectorXd* v,
+                                   Eigen::VectorXd* f_int) {
+  BodyForce out;
+  out.ok = InternalForce(u, f_int, &out.energy);
+  return out;
+}
+
+void FiniteStrainModel::KeepHistoryIn(MaterialField* field, const Mesh* mesh,
+                                      const ThreadContext& threads) {
+  history_ = field;
+  history_mesh_ = mesh;
+  history_threads_ = threads;
+}
+
+void FiniteStrainModel::CommitHistory(const Eigen::VectorXd& u) {
+  if (history_ == nullptr || !history_->viscous()) return;
+  history_->Commit(ElementDeformationGradients(*history_mesh_, u, history_threads_));
+}
+
+std::vector<double> FiniteStrainModel::SaveHistory() const {
+  return history_ == nullptr ? std::vector<double>() : history_->SaveHistory();
+}
+
+Status FiniteStrainModel::RestoreHistory(const std::vector<double>& values) {
+  if (history_ == nullptr) return DiscreteBody::RestoreHistory(values);
+  return history_->RestoreHistory(values);
+}
 
 std::unique_ptr<FiniteStrainModel> MakeTet4Model(const Mesh& mesh,
                                                  const HyperelasticMaterial& material) {

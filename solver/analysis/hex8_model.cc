@@ -17,7 +17,7 @@ struct Hex8Element {
 
   bool full_integration = false;
 
-  static bool Fits(const Mesh& mesh) { return mesh.hexahedral(); }
+  static bool Fits(const Mesh& mesh) { return mesh.shape() == ElementShape::kHex8; }
   static const char* Requirement() {
     return "MakeHex8Model and MakeHex8FullModel need a hexahedral mesh (Mesh::hexes)";
   }

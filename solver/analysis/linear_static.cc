@@ -4,7 +4,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 
+#include "analysis/element_fields.h"
 #include "analysis/error_estimator.h"
 #include "analysis/static_analysis.h"
 #include "assembly/assembler.h"
@@ -88,7 +90,11 @@ class LinearStaticRun {
     return Status::Cancelled("cancelled during " + summary_.phases.back().phase);
   }
   // Element e's fields from u_, its internal force added to `internal`.
+  Status AssembleStiffness(const std::function<bool(double)>& keep_going);
   ElementRecovery RecoverOne(int e, Eigen::VectorXd* internal) const;
+  // Element e's stress at natural point xi (the error estimate's sample);
+  // a 4-node element's is constant, the one Recover wrote.
+  Vector6d StressAt(int e, const Eigen::Vector3d& xi) const;
 
   const Problem& problem_;
   PhaseClock& clock_;
@@ -109,7 +115,6 @@ class LinearStaticRun {
   Eigen::VectorXd u_free_;
   double residual_ = 0;
   Eigen::VectorXd u_, internal_;
-  std::vector<double> volume_;
   double energy_ = 0, max_strain_ = 0;
 };
 
@@ -122,16 +127,7 @@ Status LinearStaticRun::Assemble() {
     clock_.Update(f);
     return !clock_.cancelled();
   };
-  const ThreadContext& threads = problem_.threads;
-  PBA_RETURN_IF_ERROR(
-      mesh_.quadratic() ? AssembleLinearSystemTet10(mesh_, elasticity_, dofs_, colours_, keep_going,
-                                                    &system_, threads)
-      : full_bricks_ ? AssembleLinearSystemHex8Full(mesh_, elasticity_, dofs_, colours_, keep_going,
-                                                    &system_, threads)
-      : mesh_.hexahedral() ? AssembleLinearSystemHex8(mesh_, elasticity_, dofs_, colours_,
-                                                      keep_going, &system_, threads)
-                           : AssembleLinearSystem(mesh_, elasticity_, dofs_, colours_, keep_going,
-                                                  &system_, threads));
+  PBA_RETURN_IF_ERROR(AssembleStiffness(keep_going));
   const ExternalLoads loads = BuildLoads(problem_);
   if (!loads.empty()) {
     external_ = loads.Force(Eigen::VectorXd::Zero(dofs_.num_dofs()));
@@ -175,27 +171,49 @@ Status LinearStaticRun::Solve() {
   return Status::Ok();
 }
 
-ElementRecovery LinearStaticRun::RecoverOne(int e, Eigen::VectorXd* internal) const {
-  if (mesh_.quadratic()) {
-    const Tet10Geometry g = ComputeTet10Geometry(Tet10Coordinates(mesh_, e));
-    return RecoverElement<10>(
-        Tet10NodeIndices(mesh_, e), GatherElementTet10(mesh_, e, u_), 4,
-        [&](int q, double* dv) {
-          *dv = g.volume[q];
-          return Tet10StrainDisplacement(g.grad[q]);
-        },
-        elasticity_.D(e), internal);
+// The stiffness of the mesh's elements into system_.
+Status LinearStaticRun::AssembleStiffness(const std::function<bool(double)>& keep_going) {
+  const ThreadContext& threads = problem_.threads;
+  switch (mesh_.shape()) {
+    case ElementShape::kTet10:
+      return AssembleLinearSystemTet10(mesh_, elasticity_, dofs_, colours_, keep_going, &system_,
+                                       threads);
+    case ElementShape::kHex8:
+      return full_bricks_ ? AssembleLinearSystemHex8Full(mesh_, elasticity_, dofs_, colours_,
+                                                         keep_going, &system_, threads)
+                          : AssembleLinearSystemHex8(mesh_, elasticity_, dofs_, colours_,
+                                                     keep_going, &system_, threads);
+    case ElementShape::kTet4:
+      break;
   }
-  if (mesh_.hexahedral()) {
-    const Hex8Geometry g = ComputeHex8Geometry(Hex8Coordinates(mesh_, e));
-    return RecoverElement<8>(
-        mesh_.hexes[e], GatherElementHex8(mesh_, e, u_), 8,
-        [&](int q, double* dv) {
-          *dv = g.volume[q];
-          return full_bricks_ ? Hex8StrainDisplacement(g.grad[q])
-                              : Hex8StrainDisplacementBar(g.grad[q], g.mean_grad);
-        },
-        elasticity_.D(e), internal);
+  return AssembleLinearSystem(mesh_, elasticity_, dofs_, colours_, keep_going, &system_, threads);
+}
+
+ElementRecovery LinearStaticRun::RecoverOne(int e, Eigen::VectorXd* internal) const {
+  switch (mesh_.shape()) {
+    case ElementShape::kTet10: {
+      const Tet10Geometry g = ComputeTet10Geometry(Tet10Coordinates(mesh_, e));
+      return RecoverElement<10>(
+          Tet10NodeIndices(mesh_, e), GatherElementTet10(mesh_, e, u_), 4,
+          [&](int q, double* dv) {
+            *dv = g.volume[q];
+            return Tet10StrainDisplacement(g.grad[q]);
+          },
+          elasticity_.D(e), internal);
+    }
+    case ElementShape::kHex8: {
+      const Hex8Geometry g = ComputeHex8Geometry(Hex8Coordinates(mesh_, e));
+      return RecoverElement<8>(
+          mesh_.hexes[e], GatherElementHex8(mesh_, e, u_), 8,
+          [&](int q, double* dv) {
+            *dv = g.volume[q];
+            return full_bricks_ ? Hex8StrainDisplacement(g.grad[q])
+                                : Hex8StrainDisplacementBar(g.grad[q], g.mean_grad);
+          },
+          elasticity_.D(e), internal);
+    }
+    case ElementShape::kTet4:
+      break;
   }
   const Tet4Geometry g = ComputeTet4Geometry(TetCorners(mesh_, e));
   return RecoverElement<4>(
@@ -213,11 +231,7 @@ void LinearStaticRun::Recover() {
   for (int dof = 0; dof < dofs_.num_dofs(); ++dof) {
     u_(dof) = dofs_.prescribed(dof) ? dofs_.prescribed_value(dof) : u_free_(dofs_.free_index(dof));
   }
-  const int ne = mesh_.num_elements();
-  solution_.strain.resize(6 * static_cast<std::size_t>(ne));
-  solution_.stress_pa.resize(6 * static_cast<std::size_t>(ne));
-  solution_.von_mises_pa.resize(ne);
-  std::vector<double> volume(ne);
+  StartSmallStrainFields(mesh_.num_elements(), &solution_);
   Eigen::VectorXd internal = Eigen::VectorXd::Zero(dofs_.num_dofs());
   double energy = 0, max_strain = 0;  // locals: OpenMP reduces variables, not members
   for (const auto& colour : colours_) {
@@ -226,49 +240,41 @@ void LinearStaticRun::Recover() {
     for (std::size_t k = 0; k < colour.size(); ++k) {
       const int e = colour[k];
       const ElementRecovery r = RecoverOne(e, &internal);
-      Eigen::Map<Vector6d>(&solution_.strain[6 * e]) = r.strain;
-      Eigen::Map<Vector6d>(&solution_.stress_pa[6 * e]) = r.stress;
-      solution_.von_mises_pa[e] = VonMises(r.stress);
-      volume[e] = r.volume;
+      WriteSmallStrainFields(e, r.strain, r.stress, &solution_);
       energy += r.energy;
       max_strain = std::max(max_strain, r.max_strain);
     }
   }
-  volume_ = std::move(volume);
   internal_ = std::move(internal);
   energy_ = energy;
   max_strain_ = max_strain;
   clock_.End();
 }
 
+Vector6d LinearStaticRun::StressAt(int e, const Eigen::Vector3d& xi) const {
+  switch (mesh_.shape()) {
+    case ElementShape::kTet10:
+      return elasticity_.D(e) *
+             Tet10Strain(Tet10Coordinates(mesh_, e), GatherElementTet10(mesh_, e, u_), xi);
+    case ElementShape::kHex8: {
+      const Hex8Nodes x = Hex8Coordinates(mesh_, e);
+      const Vector24d ue = GatherElementHex8(mesh_, e, u_);
+      return elasticity_.D(e) * (full_bricks_ ? Hex8StrainFull(x, ue, xi) : Hex8Strain(x, ue, xi));
+    }
+    case ElementShape::kTet4:
+      break;
+  }
+  return Eigen::Map<const Vector6d>(&solution_.stress_pa[6 * static_cast<std::size_t>(e)]);
+}
+
 void LinearStaticRun::EstimateError() {
   clock_.Begin("estimate", 0.9, 0.95, "Zienkiewicz-Zhu error estimate");
-  const ErrorEstimateResult estimate =
-      mesh_.quadratic()
-          ? EstimateZzErrorTet10(
-                mesh_,
-                [&](int e, const Eigen::Vector3d& xi) -> Vector6d {
-                  return elasticity_.D(e) * Tet10Strain(Tet10Coordinates(mesh_, e),
-                                                        GatherElementTet10(mesh_, e, u_), xi);
-                },
-                elasticity_, problem_.threads)
-      : mesh_.hexahedral()
-          ? EstimateZzErrorHex8(
-                mesh_,
-                [&](int e, const Eigen::Vector3d& xi) -> Vector6d {
-                  const Hex8Nodes x = Hex8Coordinates(mesh_, e);
-                  const Vector24d ue = GatherElementHex8(mesh_, e, u_);
-                  return elasticity_.D(e) *
-                         (full_bricks_ ? Hex8StrainFull(x, ue, xi) : Hex8Strain(x, ue, xi));
-                },
-                elasticity_, problem_.threads)
-          : EstimateZzError(mesh_, solution_.stress_pa, volume_, elasticity_, problem_.threads);
+  const ErrorEstimateResult estimate = EstimateZzError(
+      mesh_, [this](int e, const Eigen::Vector3d& xi) { return StressAt(e, xi); }, elasticity_,
+      problem_.threads);
   solution_.error_indicator = estimate.element_share;
   summary_.error.estimated = true;
-  summary_.error.method =
-      mesh_.quadratic()    ? "Zienkiewicz-Zhu stress recovery (nodal averaging, quadratic)"
-      : mesh_.hexahedral() ? "Zienkiewicz-Zhu stress recovery (nodal averaging, trilinear)"
-                           : "Zienkiewicz-Zhu stress recovery (nodal averaging)";
+  summary_.error.method = ZzMethod(mesh_);
   summary_.error.relative_error = estimate.relative_error;
   for (const RegionError& r : ErrorByRegion(mesh_, estimate, "body")) {
     summary_.error.regions.push_back({r.name, r.elements, r.relative_error, r.share});

@@ -459,8 +459,13 @@ Status NewtonRun::Accept(double target, const Attempt& attempt, Eigen::VectorXd*
   if (attempt.iteration <= options_.quick_iterations) {
     step_ = std::min(step_ * 1.5, options_.max_increment);
   }
-  if (options_.after_increment) return options_.after_increment(load_, step_, u_);
-  return Status::Ok();
+  if (options_.observers == nullptr) return Status::Ok();
+  return options_.observers->AfterStep({.step = static_cast<int64_t>(report_.increments.size()),
+                                        .time_s = load_,
+                                        .fraction = load_,
+                                        .last = load_ >= 1,
+                                        .next_step = step_,
+                                        .u = &u_});
 }
 
 // A failed increment is halved and retried, down to min_increment.

@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "analysis/finite_strain_model.h"
+#include "analysis/step_observer.h"
 #include "assembly/dof_map.h"
 #include "assembly/external_loads.h"
 #include "linear/linear_solver.h"
@@ -77,11 +78,11 @@ struct NewtonOptions {
   // A restart passes the next_step its checkpoint was written with, so that
   // it takes the steps the uninterrupted solve would.
   double start_step = 0;
-  // Called after on_increment with the converged load factor, the size of
-  // the increment to be tried next and the state (e.g. to write a
-  // checkpoint); an error stops the solve with it.
-  std::function<Status(double load_factor, double next_step, const Eigen::VectorXd& u)>
-      after_increment;
+  // Told after on_increment (analysis/step_observer.h): step = the
+  // increments converged, time_s = fraction = the load factor, next_step =
+  // the size of the increment to be tried next, u = the state (e.g. to
+  // write a checkpoint); an error stops the solve with it. Null: none.
+  StepObservers* observers = nullptr;
 };
 
 struct IncrementRecord {

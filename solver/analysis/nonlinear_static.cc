@@ -9,15 +9,15 @@
 
 #include "analysis/average_nodal_pressure_model.h"
 #include "analysis/checkpoint.h"
+#include "analysis/element_fields.h"
 #include "analysis/error_estimator.h"
 #include "analysis/finite_strain_model.h"
-#include "analysis/hex8_model.h"
 #include "analysis/newton_static.h"
 #include "analysis/rigid_contact.h"
 #include "analysis/static_analysis.h"
-#include "analysis/tet10_model.h"
 #include "analysis/time_history.h"
 #include "core/format.h"
+#include "fem/element_kind.h"
 #include "fem/hex8.h"
 #include "fem/tet4_finite_strain.h"
 #include "linear/linear_solver.h"
@@ -73,38 +73,21 @@ Eigen::Matrix3d MeanDilatationF(const Eigen::Matrix3d& f, double theta) {
   return std::cbrt(theta / f.determinant()) * f;
 }
 
-// The finite-strain fields at a material point, Voigt order, engineering
-// shear in the strains as for small strain.
-struct PointFields {
-  Vector6d green = Vector6d::Zero(), almansi = Vector6d::Zero();
-  Vector6d pk2 = Vector6d::Zero(), cauchy = Vector6d::Zero();
-  double j = 0;
-  void Add(double weight, const PointFields& p) {
-    green += weight * p.green;
-    almansi += weight * p.almansi;
-    pk2 += weight * p.pk2;
-    cauchy += weight * p.cauchy;
-    j += weight * p.j;
-  }
-};
-
-// With `pressure` (an average-nodal-pressure element), the volumetric part
-// of the stress is that pressure, not U'(det F): S = S_iso(F) + p J C^-1,
-// sigma = sigma_iso + p I; `volume_ratio` then replaces det F as J.
-PointFields FieldsAt(const HyperelasticMaterial& material, const Eigen::Matrix3d& f,
-                     std::optional<double> pressure = std::nullopt, double volume_ratio = 0) {
-  PointFields p;
-  p.j = f.determinant();
-  p.green = GreenLagrangeVoigt(f);
-  p.almansi = AlmansiVoigt(f);
+// The finite-strain fields at a material point. With `pressure` (an
+// average-nodal-pressure element), the volumetric part of the stress is that
+// pressure, not U'(det F): S = S_iso(F) + p J C^-1, sigma = sigma_iso + p I;
+// `volume_ratio` then replaces det F as J.
+ElementFields FieldsAt(const HyperelasticMaterial& material, const Eigen::Matrix3d& f,
+                       std::optional<double> pressure = std::nullopt, double volume_ratio = 0) {
+  Vector6d pk2 = Vector6d::Zero();
   if (pressure) {
     double w;
-    material.Isochoric(f, &w, &p.pk2, nullptr);
-    p.pk2 += *pressure * p.j * SymmetricToVoigt((f.transpose() * f).inverse());
+    material.Isochoric(f, &w, &pk2, nullptr);
+    pk2 += *pressure * f.determinant() * SymmetricToVoigt((f.transpose() * f).inverse());
   } else {
-    p.pk2 = material.Stress(f);
+    pk2 = material.Stress(f);
   }
-  p.cauchy = SymmetricToVoigt(f * VoigtToSymmetric(p.pk2) * f.transpose() / p.j);
+  ElementFields p = FieldsFromPk2(f, pk2);
   if (pressure) p.j = volume_ratio;
   return p;
 }
@@ -157,31 +140,22 @@ Status MakeContacts(const Problem& problem, double shear_modulus_pa,
 
 // The finite-strain fields of every element at the displacement u:
 // solution's strain, Almansi strain, PK2 and Cauchy stress, von Mises and J
-// (element means), *volume each element's volume, the largest
-// Green-Lagrange component returned.
+// (element means), the largest Green-Lagrange component returned.
 double RecoverFiniteStrainFields(const Problem& problem, const MaterialField& field,
-                                 const Eigen::VectorXd& u, Solution* solution,
-                                 std::vector<double>* volume_out) {
+                                 const Eigen::VectorXd& u, Solution* solution) {
   const Mesh& mesh = problem.model.mesh;
-  const bool plain = problem.element == ElementType::kTet4;
   const bool full_bricks = problem.element == ElementType::kHex8Full;
   const bool tet10_md = problem.element == ElementType::kTet10Md;
   const int ne = mesh.num_elements();
-  solution->strain.resize(6 * static_cast<std::size_t>(ne));
-  solution->almansi_strain.resize(6 * static_cast<std::size_t>(ne));
-  solution->stress_pa.resize(6 * static_cast<std::size_t>(ne));
-  solution->pk2_stress_pa.resize(6 * static_cast<std::size_t>(ne));
-  solution->von_mises_pa.resize(ne);
-  solution->jacobian.resize(ne);
-  std::vector<double>& volume = *volume_out;
-  volume.assign(ne, 0.0);
+  StartFiniteStrainFields(ne, solution);
   double max_strain = 0;
   // The average-nodal-pressure element's pressure and volume ratio: the
   // means over its corners of U'(J_a) and J_a, J_a = v_a / V_a the nodal
   // volume ratios its volumetric energy is written in (its own det F
   // carries the volumetric noise that element would lock on).
   std::vector<double> element_pressure, element_volume_ratio;
-  const bool nodal_pressure = !plain && !mesh.quadratic() && !mesh.hexahedral();
+  const bool nodal_pressure =
+      KindOf(problem.element).volumetric == ElementKind::Volumetric::kNodalAverage;
   if (nodal_pressure) {
     AverageNodalPressures(mesh, field, u, &element_pressure, &element_volume_ratio);
   }
@@ -191,53 +165,47 @@ double RecoverFiniteStrainFields(const Problem& problem, const MaterialField& fi
     num_threads(problem.threads.threads()) if (problem.threads.Parallel(ne))
   // clang-format on
   for (int e = 0; e < ne; ++e) {
-    // One point for a 4-node element; the volume average over the four
-    // integration points for a 10-node one.
-    PointFields sum;
-    double v = 0;
-    if (mesh.hexahedral()) {
-      // The mean-dilatation brick's stress comes from F_bar = (theta /
-      // J)^(1/3) F: F's isochoric part with the element's mean volume ratio.
-      const Hex8Geometry g = ComputeHex8Geometry(Hex8Coordinates(mesh, e));
-      const Vector24d ue = GatherElementHex8(mesh, e, u);
-      const double theta = MeanDilatation(g, ue);
-      for (int q = 0; q < 8; ++q) {
-        const PointFields p =
-            FieldsAt(field.At(e),
-                     full_bricks ? DeformationGradientHex8(g.grad[q], ue)
-                                 : MeanDilatationF(DeformationGradientHex8(g.grad[q], ue), theta));
-        sum.Add(g.volume[q], p);
-        v += g.volume[q];
-        max_strain = std::max(max_strain, p.green.cwiseAbs().maxCoeff());
+    // One point for a 4-node element; the volume average over the
+    // integration points for a 10-node one or a brick.
+    ElementFieldSum sum;
+    switch (mesh.shape()) {
+      case ElementShape::kHex8: {
+        // The mean-dilatation brick's stress comes from F_bar = (theta /
+        // J)^(1/3) F: F's isochoric part with the element's mean volume ratio.
+        const Hex8Geometry g = ComputeHex8Geometry(Hex8Coordinates(mesh, e));
+        const Vector24d ue = GatherElementHex8(mesh, e, u);
+        const double theta = MeanDilatation(g, ue);
+        for (int q = 0; q < 8; ++q) {
+          sum.Add(g.volume[q],
+                  FieldsAt(field.At(e),
+                           full_bricks
+                               ? DeformationGradientHex8(g.grad[q], ue)
+                               : MeanDilatationF(DeformationGradientHex8(g.grad[q], ue), theta)));
+        }
+        break;
       }
-    } else if (mesh.quadratic()) {
-      const Tet10Geometry g = ComputeTet10Geometry(Tet10Coordinates(mesh, e));
-      const Vector30d ue = GatherElementTet10(mesh, e, u);
-      // TET10_MD: F_bar, as for the brick.
-      const double theta = tet10_md ? MeanDilatation(g, ue) : 0;
-      for (int q = 0; q < 4; ++q) {
-        const Eigen::Matrix3d f = DeformationGradientTet10(g.grad[q], ue);
-        const PointFields p = FieldsAt(field.At(e), tet10_md ? MeanDilatationF(f, theta) : f);
-        sum.Add(g.volume[q], p);
-        v += g.volume[q];
-        max_strain = std::max(max_strain, p.green.cwiseAbs().maxCoeff());
+      case ElementShape::kTet10: {
+        const Tet10Geometry g = ComputeTet10Geometry(Tet10Coordinates(mesh, e));
+        const Vector30d ue = GatherElementTet10(mesh, e, u);
+        // TET10_MD: F_bar, as for the brick.
+        const double theta = tet10_md ? MeanDilatation(g, ue) : 0;
+        for (int q = 0; q < 4; ++q) {
+          const Eigen::Matrix3d f = DeformationGradientTet10(g.grad[q], ue);
+          sum.Add(g.volume[q], FieldsAt(field.At(e), tet10_md ? MeanDilatationF(f, theta) : f));
+        }
+        break;
       }
-    } else {
-      const Tet4Geometry g = ComputeTet4Geometry(TetCorners(mesh, e));
-      v = g.volume;
-      const Eigen::Matrix3d f = DeformationGradient(g, GatherElement(mesh, e, u));
-      sum.Add(v, nodal_pressure
-                     ? FieldsAt(field.At(e), f, element_pressure[e], element_volume_ratio[e])
-                     : FieldsAt(field.At(e), f));
-      max_strain = std::max(max_strain, sum.green.cwiseAbs().maxCoeff() / v);
+      case ElementShape::kTet4: {
+        const Tet4Geometry g = ComputeTet4Geometry(TetCorners(mesh, e));
+        const Eigen::Matrix3d f = DeformationGradient(g, GatherElement(mesh, e, u));
+        sum.Add(g.volume, nodal_pressure ? FieldsAt(field.At(e), f, element_pressure[e],
+                                                    element_volume_ratio[e])
+                                         : FieldsAt(field.At(e), f));
+        break;
+      }
     }
-    Eigen::Map<Vector6d>(&solution->strain[6 * e]) = sum.green / v;
-    Eigen::Map<Vector6d>(&solution->almansi_strain[6 * e]) = sum.almansi / v;
-    Eigen::Map<Vector6d>(&solution->pk2_stress_pa[6 * e]) = sum.pk2 / v;
-    Eigen::Map<Vector6d>(&solution->stress_pa[6 * e]) = sum.cauchy / v;
-    solution->von_mises_pa[e] = VonMises(sum.cauchy / v);
-    solution->jacobian[e] = sum.j / v;
-    volume[e] = v;
+    WriteFiniteStrainFields(e, sum.Mean(), solution);
+    max_strain = std::max(max_strain, sum.LargestStrain());
   }
   return max_strain;
 }
@@ -246,50 +214,50 @@ double RecoverFiniteStrainFields(const Problem& problem, const MaterialField& fi
 // measured with each element's initial compliance; solution->pk2_stress_pa
 // must hold the element means.
 ErrorEstimateResult EstimateFiniteStrainError(const Problem& problem, const MaterialField& field,
-                                              const Eigen::VectorXd& u, const Solution& solution,
-                                              const std::vector<double>& volume) {
+                                              const Eigen::VectorXd& u, const Solution& solution) {
   const Mesh& mesh = problem.model.mesh;
   const bool full_bricks = problem.element == ElementType::kHex8Full;
   const bool tet10_md = problem.element == ElementType::kTet10Md;
+  const auto mean = [&](int e) -> Vector6d {
+    return Eigen::Map<const Vector6d>(&solution.pk2_stress_pa[6 * static_cast<std::size_t>(e)]);
+  };
   // The recovery samples the stress at an element's nodes, outside its
   // integration points: under heavy compression F there may be inverted
   // although the element is sound where it is integrated. There it takes
   // the element's mean stress.
   const auto stress_or_mean = [&](int e, const Eigen::Matrix3d& f) -> Vector6d {
     if (IsAdmissible(f)) return field.At(e).Stress(f);
-    return Eigen::Map<const Vector6d>(&solution.pk2_stress_pa[6 * static_cast<std::size_t>(e)]);
+    return mean(e);
+  };
+  const auto stress = [&](int e, const Eigen::Vector3d& xi) -> Vector6d {
+    switch (mesh.shape()) {
+      case ElementShape::kTet10: {
+        const Tet10Nodes x = Tet10Coordinates(mesh, e);
+        const Vector30d ue = GatherElementTet10(mesh, e, u);
+        Tet10Nodes grad;
+        Tet10Gradients(x, xi, &grad);
+        const Eigen::Matrix3d f = DeformationGradientTet10(grad, ue);
+        if (!tet10_md || !IsAdmissible(f)) return stress_or_mean(e, f);
+        return stress_or_mean(e, MeanDilatationF(f, MeanDilatation(ComputeTet10Geometry(x), ue)));
+      }
+      case ElementShape::kHex8: {
+        const Hex8Nodes x = Hex8Coordinates(mesh, e);
+        const Vector24d ue = GatherElementHex8(mesh, e, u);
+        Hex8Nodes grad;
+        Hex8Gradients(x, xi, &grad);
+        const Eigen::Matrix3d f = DeformationGradientHex8(grad, ue);
+        if (full_bricks || !IsAdmissible(f)) return stress_or_mean(e, f);
+        return stress_or_mean(e, MeanDilatationF(f, MeanDilatation(ComputeHex8Geometry(x), ue)));
+      }
+      case ElementShape::kTet4:
+        break;
+    }
+    // A 4-node element's stress is constant: its mean, as recovered.
+    return mean(e);
   };
   // Each element's stress measured with its own material's initial compliance.
-  const ElasticityField elasticity = MakeElasticityField(problem.model.materials);
-  if (mesh.quadratic()) {
-    return EstimateZzErrorTet10(
-        mesh,
-        [&](int e, const Eigen::Vector3d& xi) -> Vector6d {
-          const Tet10Nodes x = Tet10Coordinates(mesh, e);
-          const Vector30d ue = GatherElementTet10(mesh, e, u);
-          Tet10Nodes grad;
-          Tet10Gradients(x, xi, &grad);
-          const Eigen::Matrix3d f = DeformationGradientTet10(grad, ue);
-          if (!tet10_md || !IsAdmissible(f)) return stress_or_mean(e, f);
-          return stress_or_mean(e, MeanDilatationF(f, MeanDilatation(ComputeTet10Geometry(x), ue)));
-        },
-        elasticity, problem.threads);
-  }
-  if (mesh.hexahedral()) {
-    return EstimateZzErrorHex8(
-        mesh,
-        [&](int e, const Eigen::Vector3d& xi) -> Vector6d {
-          const Hex8Nodes x = Hex8Coordinates(mesh, e);
-          const Vector24d ue = GatherElementHex8(mesh, e, u);
-          Hex8Nodes grad;
-          Hex8Gradients(x, xi, &grad);
-          const Eigen::Matrix3d f = DeformationGradientHex8(grad, ue);
-          if (full_bricks || !IsAdmissible(f)) return stress_or_mean(e, f);
-          return stress_or_mean(e, MeanDilatationF(f, MeanDilatation(ComputeHex8Geometry(x), ue)));
-        },
-        elasticity, problem.threads);
-  }
-  return EstimateZzError(mesh, solution.pk2_stress_pa, volume, elasticity, problem.threads);
+  return EstimateZzError(mesh, stress, MakeElasticityField(problem.model.materials),
+                         problem.threads);
 }
 
 // The Newton report's notes for the summary: substitute tangents,
@@ -340,7 +308,7 @@ class FiniteStrainRun {
         mesh_(problem.model.mesh),
         dofs_(problem.model.dofs),
         timed_(problem.analysis == AnalysisSpec::Type::kQuasiStatic),
-        one_point_(!mesh_.quadratic() && !mesh_.hexahedral()) {}
+        one_point_(KindOf(problem.element).keeps_history) {}
 
   Status Run(StaticResult* result);
 
@@ -378,9 +346,10 @@ class FiniteStrainRun {
   std::optional<ExternalLoads> loads_;
   std::optional<HistoryRecorder> history_;
   std::optional<Checkpointer> checkpoints_;
+  std::optional<CheckpointObserver> checkpoint_observer_;
+  StepObservers observers_;
   NewtonReport report_;
   Eigen::VectorXd u_;
-  std::vector<double> volume_;
 };
 
 // The element model for the problem's element type, with its contacts.
@@ -401,15 +370,9 @@ Status FiniteStrainRun::MakeModel() {
         "(hyperelastic) response is solved; QUASI_STATIC follows it through time");
   }
   for (const std::string& note : problem_.model.materials.notes) summary_.notes.push_back(note);
-  const ElementType element = problem_.element;
-  const ThreadContext& threads = problem_.threads;
-  body_ = element == ElementType::kTet10Md    ? MakeTet10MdModel(mesh_, field, threads)
-          : mesh_.quadratic()                 ? MakeTet10Model(mesh_, field, threads)
-          : element == ElementType::kHex8Full ? MakeHex8FullModel(mesh_, field, threads)
-          : mesh_.hexahedral()                ? MakeHex8Model(mesh_, field, threads)
-          : element == ElementType::kTet4
-              ? MakeTet4Model(mesh_, field, threads)
-              : MakeAverageNodalPressureTet4Model(mesh_, field, threads);
+  body_ = MakeFiniteStrainModel(problem_.element, mesh_, field, problem_.threads);
+  // One-point elements keep the field's history (MaterialField).
+  if (one_point_) body_->KeepHistoryIn(field_.get(), &mesh_, problem_.threads);
   PBA_RETURN_IF_ERROR(
       MakeContacts(problem_, field.Base(0).ShearModulus(), &contacts_, &summary_.notes));
   std::vector<const RigidContact*> contact_views;
@@ -454,8 +417,7 @@ void FiniteStrainRun::MakeNewtonOptions() {
     solution_->step_load_factor.push_back(timed_ ? Amplitude(load) : load);
     if (timed_) solution_->step_time_s.push_back(load * duration_);
     for (int i = 0; i < u.size(); ++i) solution_->step_displacement_mm.push_back(u(i) / 1e-3);
-    if (field_->viscous() && one_point_)
-      field_->Commit(ElementDeformationGradients(mesh_, u, problem_.threads));
+    body_->CommitHistory(u);
     for (std::size_t i = 0; i < contacts_.size(); ++i) {
       contacts_[i]->Commit(u);
       peak_contact_force_[i] =
@@ -471,8 +433,8 @@ void FiniteStrainRun::MakeNewtonOptions() {
 Status FiniteStrainRun::StartHistory() {
   std::vector<RigidContact*> contact_state;
   for (auto& contact : contacts_) contact_state.push_back(contact.get());
-  checkpoints_.emplace(clock_.options(), problem_.name, duration_, mesh_, dofs_, field_.get(),
-                       contact_state);
+  checkpoints_.emplace(clock_.options(), problem_.name, duration_, mesh_, dofs_, body_.get(),
+                       *field_, contact_state);
   if (timed_ && checkpoints_->restarts()) {
     PBA_RETURN_IF_ERROR(checkpoints_->Restore(solution_, &options_, &peak_contact_force_));
     summary_.notes.push_back(
@@ -484,10 +446,9 @@ Status FiniteStrainRun::StartHistory() {
                      solution_);
   }
   if (timed_ && checkpoints_->writes()) {
-    options_.after_increment = [this](double load, double next_step, const Eigen::VectorXd& u) {
-      return checkpoints_->AfterIncrement(load, next_step, u, *solution_, report_,
-                                          peak_contact_force_);
-    };
+    checkpoint_observer_.emplace(&*checkpoints_, solution_, &report_, &peak_contact_force_);
+    observers_.Add(&*checkpoint_observer_);
+    options_.observers = &observers_;
   }
   return Status::Ok();
 }
@@ -556,7 +517,7 @@ Status FiniteStrainRun::Solve() {
 
 Status FiniteStrainRun::Recover(StaticResult* result) {
   clock_.Begin("recover", 0.85, 0.95, "finite-strain fields, reactions");
-  result->max_strain = RecoverFiniteStrainFields(problem_, *field_, u_, solution_, &volume_);
+  result->max_strain = RecoverFiniteStrainFields(problem_, *field_, u_, solution_);
   for (std::size_t i = 0; i < contacts_.size(); ++i) {
     const ContactMeasure m = contacts_[i]->Measure(u_);
     ContactSummary c;
@@ -581,13 +542,10 @@ Status FiniteStrainRun::Recover(StaticResult* result) {
 
 void FiniteStrainRun::Estimate() {
   clock_.Begin("estimate", 0.95, 0.99, "Zienkiewicz-Zhu error estimate");
-  const ErrorEstimateResult estimate =
-      EstimateFiniteStrainError(problem_, *field_, u_, *solution_, volume_);
+  const ErrorEstimateResult estimate = EstimateFiniteStrainError(problem_, *field_, u_, *solution_);
   solution_->error_indicator = estimate.element_share;
   summary_.error.estimated = true;
-  summary_.error.method =
-      "Zienkiewicz-Zhu recovery of the second Piola-Kirchhoff stress (nodal averaging), "
-      "measured with the initial compliance";
+  summary_.error.method = ZzMethod(mesh_, ZzStress::kSecondPiolaKirchhoff);
   summary_.error.relative_error = estimate.relative_error;
   for (const RegionError& r : ErrorByRegion(mesh_, estimate, "body")) {
     summary_.error.regions.push_back({r.name, r.elements, r.relative_error, r.share});

@@ -19,7 +19,7 @@ struct Tet10Element {
 
   bool mean_dilatation = false;
 
-  static bool Fits(const Mesh& mesh) { return mesh.quadratic(); }
+  static bool Fits(const Mesh& mesh) { return mesh.shape() == ElementShape::kTet10; }
   static const char* Requirement() {
     return "MakeTet10Model and MakeTet10MdModel need a quadratic mesh (see MakeQuadratic)";
   }

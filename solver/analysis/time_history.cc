@@ -44,6 +44,23 @@ std::string SetTimeSteps(const TimeOptions& time, const TimeCurve& curve,
               : std::string());
 }
 
+namespace {
+
+// |volume| of element e's corners [m^3]: of a brick, or of a tetrahedron's
+// corners (for a 10-node one the straight-sided tetrahedron).
+double CornerVolume(const Mesh& mesh, int e) {
+  switch (mesh.shape()) {
+    case ElementShape::kTet4:
+    case ElementShape::kTet10:
+      return std::abs(ComputeTet4Geometry(TetCorners(mesh, e)).volume);
+    case ElementShape::kHex8:
+      return std::abs(HexVolume(mesh, e));
+  }
+  return 0;
+}
+
+}  // namespace
+
 StructureProbe::StructureProbe(const std::vector<std::string>& names, const Mesh& mesh) {
   std::vector<std::string> wanted = names;
   if (std::find(names.begin(), names.end(), "*") != names.end()) wanted = mesh.region_names;
@@ -55,15 +72,11 @@ StructureProbe::StructureProbe(const std::vector<std::string>& names, const Mesh
     double total = 0;
     for (int e = 0; e < mesh.num_elements(); ++e) {
       if (mesh.element_region[e] != region) continue;
-      if (mesh.hexahedral()) {
-        const double v = std::abs(HexVolume(mesh, e)) / 8;
-        for (int a : mesh.hexes[e]) weight[a] += v;
-        total += 8 * v;
-      } else {
-        const double v = std::abs(ComputeTet4Geometry(TetCorners(mesh, e)).volume) / 4;
-        for (int a : mesh.tets[e]) weight[a] += v;
-        total += 4 * v;
-      }
+      // The element's volume shared equally among its corners.
+      const NodeList corners = mesh.ElementCorners(e);
+      const double v = CornerVolume(mesh, e) / corners.size();
+      for (int a : corners) weight[a] += v;
+      total += corners.size() * v;
     }
     std::vector<std::pair<int, double>> nodes;
     for (int a = 0; a < mesh.num_nodes(); ++a) {

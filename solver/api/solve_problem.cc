@@ -144,18 +144,12 @@ Status SolveProblem(const Problem& problem, PhaseClock* clock, Solution* solutio
     const double norm = result.u.segment<3>(3 * i).norm();
     if (norm > max_u) max_u = norm, max_node = i;
   }
-  const int per_element = mesh.quadratic() ? 10 : mesh.hexahedral() ? 8 : 4;
+  const int per_element = ShapeInfo(mesh.shape()).nodes;
   solution->nodes_per_element = per_element;
   solution->tets.resize(per_element * static_cast<std::size_t>(ne));
   for (int e = 0; e < ne; ++e) {
-    if (mesh.hexahedral()) {
-      for (int a = 0; a < 8; ++a) solution->tets[8 * e + a] = mesh.hexes[e][a];
-      continue;
-    }
-    for (int a = 0; a < 4; ++a) solution->tets[per_element * e + a] = mesh.tets[e][a];
-    if (mesh.quadratic()) {
-      for (int k = 0; k < 6; ++k) solution->tets[10 * e + 4 + k] = mesh.midside[e][k];
-    }
+    const NodeList nodes = mesh.ElementNodes(e);
+    std::copy(nodes.begin(), nodes.end(), solution->tets.begin() + per_element * e);
   }
   summary.max_displacement_mm = max_u / kMm;
   for (int c = 0; c < 3; ++c) summary.max_displacement_at_mm[c] = mesh.nodes(max_node, c) / kMm;

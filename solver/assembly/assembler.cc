@@ -90,15 +90,16 @@ bool SamePattern(const LinearSystem& system, const Mesh& mesh, int nodes_per_ele
   return true;
 }
 
-// Greedy colouring of `elements` (node index arrays) on `num_nodes` nodes.
-template <std::size_t N>
-std::vector<std::vector<int>> Colour(int num_nodes,
-                                     const std::vector<std::array<int, N>>& elements) {
-  std::vector<std::bitset<kMaxColours>> used(num_nodes);
+}  // namespace
+
+// Greedy, on the corners (see assembler.h for why they suffice).
+std::vector<std::vector<int>> ColourElements(const Mesh& mesh) {
+  std::vector<std::bitset<kMaxColours>> used(mesh.num_nodes());
   std::vector<std::vector<int>> colours;
-  for (int e = 0; e < static_cast<int>(elements.size()); ++e) {
+  for (int e = 0; e < mesh.num_elements(); ++e) {
+    const NodeList corners = mesh.ElementCorners(e);
     std::bitset<kMaxColours> taken;
-    for (int a : elements[e]) taken |= used[a];
+    for (int a : corners) taken |= used[a];
     int c = 0;
     while (c < kMaxColours && taken[c]) ++c;
     // Structured tetrahedral meshes need a few dozen colours; running out
@@ -106,16 +107,9 @@ std::vector<std::vector<int>> Colour(int num_nodes,
     if (c == kMaxColours) c = kMaxColours - 1;
     if (c >= static_cast<int>(colours.size())) colours.resize(c + 1);
     colours[c].push_back(e);
-    for (int a : elements[e]) used[a].set(c);
+    for (int a : corners) used[a].set(c);
   }
   return colours;
-}
-
-}  // namespace
-
-std::vector<std::vector<int>> ColourElements(const Mesh& mesh) {
-  if (mesh.hexahedral()) return Colour(mesh.num_nodes(), mesh.hexes);
-  return Colour(mesh.num_nodes(), mesh.tets);
 }
 
 Vector12d GatherElement(const Mesh& mesh, int e, const Eigen::VectorXd& u) {

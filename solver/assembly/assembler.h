@@ -101,13 +101,13 @@ Status AssembleSystem(const Mesh& mesh, const DofMap& dofs,
                       const AssemblyOptions& options, const std::function<bool(double)>& keep_going,
                       LinearSystem* system);
 
-// AssembleSystem for a quadratic mesh (Mesh::quadratic()): 10-node elements.
+// AssembleSystem for a quadratic mesh (Mesh::shape() kTet10): 10-node elements.
 Status AssembleSystemTet10(const Mesh& mesh, const DofMap& dofs,
                            const std::vector<std::vector<int>>& colours,
                            const Tet10ElementKernel& kernel, const AssemblyOptions& options,
                            const std::function<bool(double)>& keep_going, LinearSystem* system);
 
-// AssembleSystem for a hexahedral mesh (Mesh::hexahedral()): 8-node elements.
+// AssembleSystem for a hexahedral mesh (Mesh::shape() kHex8): 8-node elements.
 Status AssembleSystemHex8(const Mesh& mesh, const DofMap& dofs,
                           const std::vector<std::vector<int>>& colours,
                           const Hex8ElementKernel& kernel, const AssemblyOptions& options,

@@ -219,10 +219,68 @@ std::vector<std::array<int, 3>> TriangleMidside(const Mesh& mesh, const FaceSet&
   return mid;
 }
 
+// f_a = integral b(x) N_a dV over each element of `mesh`, added to `dead`,
+// by a rule exact for a uniform b (and of degree 5 on tetrahedra, 5 per
+// coordinate on bricks, for a varying one); |det J| so that a consistently
+// negatively oriented element still loads along b, not against it. One
+// function per element shape.
+void AddHex8BodyForce(const Mesh& mesh,
+                      const ExternalLoads::ElementBodyForceField& force_per_volume,
+                      Eigen::VectorXd* dead) {
+  const double g[3] = {-std::sqrt(0.6), 0, std::sqrt(0.6)}, w[3] = {5.0 / 9, 8.0 / 9, 5.0 / 9};
+  for (int e = 0; e < mesh.num_elements(); ++e) {
+    const Hex8Nodes x = HexCorners(mesh, e);
+    for (int i = 0; i < 3; ++i) {
+      for (int j = 0; j < 3; ++j) {
+        for (int k = 0; k < 3; ++k) {
+          const Eigen::Vector3d xi(g[i], g[j], g[k]);
+          const Hex8Vector n = Hex8ShapeFunctions(xi);
+          const double det = (x.transpose() * Hex8NaturalGradients(xi)).determinant();
+          const Eigen::Vector3d b =
+              w[i] * w[j] * w[k] * std::abs(det) * force_per_volume(x.transpose() * n, e);
+          for (int a = 0; a < 8; ++a) dead->segment<3>(3 * mesh.hexes[e][a]) += n(a) * b;
+        }
+      }
+    }
+  }
+}
+
+void AddTet10BodyForce(const Mesh& mesh,
+                       const ExternalLoads::ElementBodyForceField& force_per_volume,
+                       Eigen::VectorXd* dead) {
+  for (int e = 0; e < mesh.num_elements(); ++e) {
+    const Tet10Nodes x = Tet10Coordinates(mesh, e);
+    const std::array<int, 10> nodes = Tet10NodeIndices(mesh, e);
+    for (const QuadraturePoint& q : Tet10MassRule()) {
+      const Tet10Vector n = Tet10ShapeFunctions(q.xi);
+      const double det = (x.transpose() * Tet10NaturalGradients(q.xi)).determinant();
+      const Eigen::Vector3d b = q.weight * std::abs(det) * force_per_volume(x.transpose() * n, e);
+      for (int a = 0; a < 10; ++a) dead->segment<3>(3 * nodes[a]) += n(a) * b;
+    }
+  }
+}
+
+void AddTet4BodyForce(const Mesh& mesh,
+                      const ExternalLoads::ElementBodyForceField& force_per_volume,
+                      Eigen::VectorXd* dead) {
+  for (int e = 0; e < mesh.num_elements(); ++e) {
+    const Eigen::Matrix<double, 4, 3> x = TetCorners(mesh, e);
+    const double volume = std::abs(ComputeTet4Geometry(x).volume);
+    for (const QuadraturePoint& q : Tet10MassRule()) {
+      // Linear shape functions: the volume coordinates at xi.
+      const Eigen::Vector4d n(1 - q.xi.sum(), q.xi.x(), q.xi.y(), q.xi.z());
+      const Eigen::Vector3d b = q.weight * 6 * volume * force_per_volume(x.transpose() * n, e);
+      for (int a = 0; a < 4; ++a) dead->segment<3>(3 * mesh.tets[e][a]) += n(a) * b;
+    }
+  }
+}
+
 }  // namespace
 
 ExternalLoads::ExternalLoads(const Mesh& mesh)
-    : mesh_(mesh), dead_(Eigen::VectorXd::Zero(3 * mesh.num_nodes())) {}
+    : mesh_(mesh),
+      face_(ShapeInfo(mesh.shape()).boundary_face),
+      dead_(Eigen::VectorXd::Zero(3 * mesh.num_nodes())) {}
 
 Eigen::Vector3d ExternalLoads::Position(int node, const Eigen::VectorXd* u) const {
   Eigen::Vector3d x = mesh_.nodes.row(node).transpose();
@@ -237,7 +295,7 @@ void ExternalLoads::AddTraction(const FaceSet& set, const Eigen::Vector3d& tract
     const Eigen::Vector4d share = AreaShares<4>(x, Quad4Rule());  // integral N_a dA
     for (int a = 0; a < 4; ++a) dead_.segment<3>(3 * quad[a]) += traction_pa * share(a);
   }
-  if (!mesh_.quadratic()) {
+  if (face_ != BoundaryFace::kTri6) {
     for (const auto& t : set.triangles) {
       const double area = 0.5 * (Position(t[1], nullptr) - Position(t[0], nullptr))
                                     .cross(Position(t[2], nullptr) - Position(t[0], nullptr))
@@ -270,49 +328,16 @@ void ExternalLoads::AddBodyForceField(const BodyForceField& force_per_volume) {
 }
 
 void ExternalLoads::AddElementBodyForceField(const ElementBodyForceField& force_per_volume) {
-  // f_a = integral b(x) N_a dV over each element, by a rule exact for a
-  // uniform b (and of degree 5 on tetrahedra, 5 per coordinate on bricks, for
-  // a varying one); |det J| so that a consistently negatively oriented
-  // element still loads along b, not against it.
-  if (mesh_.hexahedral()) {
-    const double g[3] = {-std::sqrt(0.6), 0, std::sqrt(0.6)}, w[3] = {5.0 / 9, 8.0 / 9, 5.0 / 9};
-    for (int e = 0; e < mesh_.num_elements(); ++e) {
-      const Hex8Nodes x = HexCorners(mesh_, e);
-      for (int i = 0; i < 3; ++i) {
-        for (int j = 0; j < 3; ++j) {
-          for (int k = 0; k < 3; ++k) {
-            const Eigen::Vector3d xi(g[i], g[j], g[k]);
-            const Hex8Vector n = Hex8ShapeFunctions(xi);
-            const double det = (x.transpose() * Hex8NaturalGradients(xi)).determinant();
-            const Eigen::Vector3d b =
-                w[i] * w[j] * w[k] * std::abs(det) * force_per_volume(x.transpose() * n, e);
-            for (int a = 0; a < 8; ++a) dead_.segment<3>(3 * mesh_.hexes[e][a]) += n(a) * b;
-          }
-        }
-      }
-    }
-    return;
-  }
-  for (int e = 0; e < mesh_.num_elements(); ++e) {
-    if (mesh_.quadratic()) {
-      const Tet10Nodes x = Tet10Coordinates(mesh_, e);
-      const std::array<int, 10> nodes = Tet10NodeIndices(mesh_, e);
-      for (const QuadraturePoint& q : Tet10MassRule()) {
-        const Tet10Vector n = Tet10ShapeFunctions(q.xi);
-        const double det = (x.transpose() * Tet10NaturalGradients(q.xi)).determinant();
-        const Eigen::Vector3d b = q.weight * std::abs(det) * force_per_volume(x.transpose() * n, e);
-        for (int a = 0; a < 10; ++a) dead_.segment<3>(3 * nodes[a]) += n(a) * b;
-      }
-      continue;
-    }
-    const Eigen::Matrix<double, 4, 3> x = TetCorners(mesh_, e);
-    const double volume = std::abs(ComputeTet4Geometry(x).volume);
-    for (const QuadraturePoint& q : Tet10MassRule()) {
-      // Linear shape functions: the volume coordinates at xi.
-      const Eigen::Vector4d n(1 - q.xi.sum(), q.xi.x(), q.xi.y(), q.xi.z());
-      const Eigen::Vector3d b = q.weight * 6 * volume * force_per_volume(x.transpose() * n, e);
-      for (int a = 0; a < 4; ++a) dead_.segment<3>(3 * mesh_.tets[e][a]) += n(a) * b;
-    }
+  switch (mesh_.shape()) {
+    case ElementShape::kTet4:
+      AddTet4BodyForce(mesh_, force_per_volume, &dead_);
+      return;
+    case ElementShape::kTet10:
+      AddTet10BodyForce(mesh_, force_per_volume, &dead_);
+      return;
+    case ElementShape::kHex8:
+      AddHex8BodyForce(mesh_, force_per_volume, &dead_);
+      return;
   }
 }
 
@@ -320,10 +345,10 @@ void ExternalLoads::AddPressure(const FaceSet& set, double pressure_pa, bool fol
   // The tetrahedron behind each triangle tells which side is out.
   const std::vector<std::array<int, 2>> owners = FaceElements(mesh_, set);
   std::vector<std::array<int, 3>> midside;
-  if (mesh_.quadratic()) midside = TriangleMidside(mesh_, set);
+  if (face_ == BoundaryFace::kTri6) midside = TriangleMidside(mesh_, set);
   for (std::size_t i = 0; i < set.triangles.size(); ++i) {
     std::array<int, 3> t = set.triangles[i];
-    std::array<int, 3> m = mesh_.quadratic() ? midside[i] : std::array<int, 3>{-1, -1, -1};
+    std::array<int, 3> m = midside.empty() ? std::array<int, 3>{-1, -1, -1} : midside[i];
     const auto [element, corner] = owners[i];
     if (element >= 0) {
       // The corners' plane decides, also for a curved 6-node triangle, whose
@@ -381,7 +406,7 @@ Eigen::VectorXd ExternalLoads::Force(const Eigen::VectorXd& u) const {
   }
   for (const Pressure& p : pressure_) {
     const Eigen::VectorXd* state = p.follower ? &u : nullptr;
-    if (!mesh_.quadratic()) {
+    if (face_ != BoundaryFace::kTri6) {
       const Eigen::Vector3d x0 = Position(p.nodes[0], state);
       const Eigen::Vector3d area2 =
           (Position(p.nodes[1], state) - x0).cross(Position(p.nodes[2], state) - x0);
@@ -424,7 +449,7 @@ SparseMatrix ExternalLoads::Stiffness(const Eigen::VectorXd& u, const DofMap& do
   }
   for (const Pressure& p : pressure_) {
     if (!p.follower) continue;
-    if (!mesh_.quadratic()) {
+    if (face_ != BoundaryFace::kTri6) {
       // f_a = -(p / 6) A, A = (x1 - x0) x (x2 - x0) = x0 x x1 + x1 x x2 + x2 x x0,
       // so dA/dx_b = [x_{b+2} - x_{b+1}]_x (indices mod 3) and
       // K_L(a, b) = -df_a/dx_b = (p / 6) [w_b]_x, w_b = x_{b+2} - x_{b+1};

@@ -12,7 +12,7 @@
 // carries f_a = -(p / 6) (x1 - x0) x (x2 - x0), one third of -p n da
 // (Bonet & Wood, Nonlinear Continuum Mechanics for FEA, 2nd ed., 8.4).
 //
-// On a quadratic mesh (Mesh::quadratic()) a boundary triangle has six
+// On a 10-node mesh (Mesh::shape() kTet10) a boundary triangle has six
 // nodes, corners 0..2 then the mid-edge nodes of edges (0,1), (1,2), (2,0),
 // and its surface is the isoparametric map x(xi, eta) = sum_a N_a x_a over
 // xi, eta >= 0, xi + eta <= 1: with L0 = 1 - xi - eta, L1 = xi, L2 = eta,
@@ -33,7 +33,7 @@
 // for pressure, whose integrand is of degree 4; the volume integral the
 // 14-point rule of degree 5, exact as N_a det J is of degree 5.
 //
-// On a hexahedral mesh (Mesh::hexahedral()) a boundary face is a bilinear
+// On a hexahedral mesh (Mesh::shape() kHex8) a boundary face is a bilinear
 // quad, nodes 0..3 at natural (xi, eta) = (-1,-1), (1,-1), (1,1), (-1,1),
 // N_a = (1 + xi xi_a)(1 + eta eta_a) / 4 over [-1, 1]^2, and an element
 // the trilinear brick of Mesh::hexes, N_a = (1 + xi xi_a)(1 + eta eta_a)
@@ -157,6 +157,9 @@ class ExternalLoads {
   Eigen::Vector3d Position(int node, const Eigen::VectorXd* u) const;
 
   const Mesh& mesh_;
+  // The kind of the mesh's boundary faces, from its shape: whether a
+  // triangle is loaded as a 3-node or a 6-node one.
+  const BoundaryFace face_;
   Eigen::VectorXd dead_;
   std::vector<Pressure> pressure_;
   std::vector<QuadPressure> quad_pressure_;

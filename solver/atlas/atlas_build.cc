@@ -429,7 +429,8 @@ Status BuildAtlas(const AtlasBuildOptions& options, AtlasBuildResult* result) {
       }
     }
     GeometricValidation validation;
-    if (Status s = ValidateAgainstPlates(result->mesh, result->region_labels, kept, &validation);
+    if (Status s = ValidateAgainstPlates(result->mesh, result->region_labels, kept, options.threads,
+                                         &validation);
         !s.ok()) {
       return s;
     }
@@ -465,10 +466,7 @@ ReportTable QualityReportTable(const AtlasBuildResult& result) {
       if (!seen[node]) nodes[mesh.element_region[e]] += 1;
       seen[node] = true;
     };
-    for (int node : mesh.tets[e]) count(node);
-    if (mesh.quadratic()) {
-      for (int node : mesh.midside[e]) count(node);
-    }
+    for (int node : mesh.ElementNodes(e)) count(node);
   }
   const auto row = [](const std::string& name, std::optional<int64_t> label, int64_t node_count,
                       const QualityStats& q) {

@@ -46,6 +46,7 @@
 #include "atlas/midside_projection.h"
 #include "atlas/plates.h"
 #include "atlas/report_format.h"
+#include "core/thread_context.h"
 #include "mesh/improve.h"
 #include "mesh/mesh.h"
 #include "mesh/quality.h"
@@ -123,6 +124,9 @@ struct AtlasBuildOptions {
   bool merge_rest = false;
 
   Status Validate() const;
+  // The threads the geometric validation runs on (the mesher runs on one):
+  // pba-atlas --threads, the server's solver threads.
+  ThreadContext threads;
 };
 
 // The region the structures a build does not keep become with merge_rest.

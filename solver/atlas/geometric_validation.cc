@@ -242,8 +242,12 @@ Status RegionLabelsFromNames(const Mesh& mesh, const ColourTable& colours,
 
 Status ValidateLabelledTetMesh(const Mesh& mesh, const std::vector<uint16_t>& labels,
                                const std::string& labels_field, const std::string& what) {
-  if (mesh.hexahedral()) {
-    return Status::InvalidArgument("mesh", "a hexahedral mesh; the " + what + " cuts tetrahedra");
+  switch (mesh.shape()) {
+    case ElementShape::kTet4:
+    case ElementShape::kTet10:
+      break;  // the cuts use the corners
+    case ElementShape::kHex8:
+      return Status::InvalidArgument("mesh", "a hexahedral mesh; the " + what + " cuts tetrahedra");
   }
   if (mesh.tets.empty()) return Status::InvalidArgument("mesh", "no elements");
   if (!mesh.element_region.empty() && mesh.element_region.size() != mesh.tets.size()) {
@@ -266,7 +270,8 @@ Status ValidateLabelledTetMesh(const Mesh& mesh, const std::vector<uint16_t>& la
 }
 
 Status ValidateAgainstPlates(const Mesh& mesh, const std::vector<uint16_t>& region_label,
-                             const PlateStack& plates, GeometricValidation* out) {
+                             const PlateStack& plates, const ThreadContext& threads,
+                             GeometricValidation* out) {
   PBA_RETURN_IF_ERROR(ValidateInputs(mesh, region_label, plates));
   const size_t nt = mesh.tets.size();
   std::vector<uint16_t> tet_label(nt);
@@ -284,7 +289,7 @@ Status ValidateAgainstPlates(const Mesh& mesh, const std::vector<uint16_t>& regi
 
   const int np = plates.num_plates();
   std::vector<std::vector<std::pair<uint16_t, SectionError>>> per_plate(np);
-#pragma omp parallel for schedule(dynamic)
+#pragma omp parallel for schedule(dynamic) num_threads(threads.threads())
   for (int p = 0; p < np; ++p) {
     const std::vector<uint16_t> section =
         RasteriseSection(mesh, tet_label, z_range, plates, plates.z_mm[p]);

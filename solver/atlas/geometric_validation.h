@@ -73,6 +73,7 @@
 #include "atlas/colour_table.h"
 #include "atlas/plates.h"
 #include "atlas/report_format.h"
+#include "core/thread_context.h"
 #include "mesh/mesh.h"
 #include "pba/status.h"
 
@@ -128,9 +129,11 @@ Status ValidateLabelledTetMesh(const Mesh& mesh, const std::vector<uint16_t>& la
 // region_names, region_label[0]); label 0 makes a region invisible (as if
 // background). Errors (kInvalidArgument naming the field): a hexahedral or
 // empty mesh, element_region of the wrong size or out of range,
-// region_label of the wrong size, a malformed plate stack.
+// region_label of the wrong size, a malformed plate stack. The sections
+// are cut on `threads`.
 Status ValidateAgainstPlates(const Mesh& mesh, const std::vector<uint16_t>& region_label,
-                             const PlateStack& plates, GeometricValidation* out);
+                             const PlateStack& plates, const ThreadContext& threads,
+                             GeometricValidation* out);
 
 // The per-structure table: structure, label, sections, E [mm], %Err, flag,
 // and an overall footer row (sections N_all, E_all, %Err_all).

@@ -156,7 +156,7 @@ MidsideProjectionReport ProjectMidsideNodes(const LoftField& loft,
                                             const std::vector<std::vector<int>>& region_labels,
                                             const MidsideProjectionOptions& options, Mesh* mesh) {
   MidsideProjectionReport report;
-  if (!mesh->quadratic() || region_labels.size() != mesh->region_names.size()) {
+  if (mesh->shape() != ElementShape::kTet10 || region_labels.size() != mesh->region_names.size()) {
     std::fprintf(stderr,
                  "pba: ProjectMidsideNodes needs a quadratic mesh and one label set per region\n");
     std::abort();

@@ -1,9 +1,9 @@
 #include "explicit/dynamic_relaxation.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 
+#include "analysis/step_observer.h"
 #include "core/format.h"
 #include "explicit/explicit_setup.h"
 
@@ -188,19 +188,26 @@ Status DynamicRelaxationRun::Relax() {
   du_prev_ = Eigen::VectorXd::Zero(n_dofs_);
   f_ext_ = Eigen::VectorXd::Zero(n_dofs_);
   bool converged = false;
-  const auto start = std::chrono::steady_clock::now();
+  double amplitude = 0, relative_estimate = 0;
+  HistoryObserver history(&solution_->history, 50, 0, [&](const StepState& s) {
+    double kinetic = 0;
+    for (int i = 0; i < n_dofs_; ++i) kinetic += 0.5 * mass_(i / 3) * v_(i) * v_(i);
+    return std::vector<double>{static_cast<double>(s.step), amplitude, residual_,
+                               relative_estimate,           kinetic,   damping_ * kDt};
+  });
+  // The fraction: how far the out-of-balance force has come down to the
+  // tolerance, on a log scale.
+  ProgressObserver progress(clock_, 200, "dynamic relaxation", [&](const StepState& s) {
+    return Format("step %lld, out of balance %.3g", static_cast<long long>(s.step), residual_);
+  });
+  const LoopThroughput throughput;
   for (; step_ < kMaxSteps; ++step_) {
-    const double amplitude = RampAmplitude(step_);
+    amplitude = RampAmplitude(step_);
     PBA_RETURN_IF_ERROR(Forces(amplitude));
     residual_ = Balance();
     estimate_ = DistanceToAnswer();
-    const double relative_estimate = largest_u_ > 0 ? estimate_ / largest_u_ : estimate_;
-    if (step_ % 50 == 0) {
-      double kinetic = 0;
-      for (int i = 0; i < n_dofs_; ++i) kinetic += 0.5 * mass_(i / 3) * v_(i) * v_(i);
-      solution_->history.push_back({static_cast<double>(step_), amplitude, residual_,
-                                    relative_estimate, kinetic, damping_ * kDt});
-    }
+    relative_estimate = largest_u_ > 0 ? estimate_ / largest_u_ : estimate_;
+    PBA_RETURN_IF_ERROR(history.AfterStep({step_, static_cast<double>(step_), 0, false}));
     if (step_ > kRampSteps && residual_ <= tolerance_ && relative_estimate <= tolerance_) {
       converged = true;
       break;
@@ -213,14 +220,11 @@ Status DynamicRelaxationRun::Relax() {
     }
     increments_.push_back(largest_du);
     f_int_prev_ = f_int_;
-    if (step_ % 200 == 0) {
-      clock_->Update(
-          std::min(0.99, std::log10(std::max(residual_, tolerance_)) / std::log10(tolerance_)),
-          Format("step %lld, out of balance %.3g", static_cast<long long>(step_), residual_));
-      if (clock_->cancelled()) return Status::Cancelled("cancelled during dynamic relaxation");
-    }
+    const double fraction =
+        std::min(0.99, std::log10(std::max(residual_, tolerance_)) / std::log10(tolerance_));
+    PBA_RETURN_IF_ERROR(progress.AfterStep({step_, static_cast<double>(step_), fraction, false}));
   }
-  loop_s_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  loop_s_ = throughput.Seconds();
   if (!converged) {
     return Status::Numerical(Format(
         "dynamic relaxation did not converge in %lld steps: out-of-balance force %.3g of the "

@@ -3,11 +3,11 @@
 #include <Eigen/Geometry>
 #include <Eigen/LU>
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <limits>
 #include <memory>
 
+#include "analysis/step_observer.h"
 #include "core/format.h"
 #include "explicit/central_difference.h"
 #include "explicit/energy_balance.h"
@@ -64,7 +64,8 @@ class ExplicitDynamicRun {
   void ImpactorForces(double amplitude);
   void AdaptStep();
   Status Stopped(const std::string& why) const;
-  void Record(bool output, double amplitude, double dt_next, double error);
+  std::vector<double> HistoryRow(double dt_next, double error) const;
+  void RecordFrame(double amplitude, double dt_next);
   void Summarise();
 
   const Problem& problem_;
@@ -89,7 +90,7 @@ class ExplicitDynamicRun {
   std::vector<char> orphan_;
   TledEvaluation eval_;
   Energies energy_;
-  double t_ = 0, dt_ = 0, dt_prev_ = 0, next_output_ = 0, next_frame_ = 0;
+  double t_ = 0, dt_ = 0, dt_prev_ = 0, next_frame_ = 0;
   std::vector<Eigen::Vector3d> body_force_prev_, centre_prev_;
   int64_t step_ = 0;
   double max_scale_ = 0, max_error_ = 0;
@@ -316,26 +317,28 @@ Status ExplicitDynamicRun::Stopped(const std::string& why) const {
                                   static_cast<long long>(step_), t_, why.c_str()));
 }
 
-// A history row every output interval, a displacement frame every frame
-// interval (at t^n: u^(n+1) less the step just taken).
-void ExplicitDynamicRun::Record(bool output, double amplitude, double dt_next, double error) {
-  if (output) {
-    std::vector<double> row = {t_,
-                               dt_next,
-                               energy_.kinetic,
-                               energy_.Internal(),
-                               energy_.hourglass,
-                               energy_.Contact(),
-                               energy_.damping.total,
-                               energy_.Eroded(),
-                               energy_.External(),
-                               max_scale_ > 0 ? error / max_scale_ : 0.0};
-    for (const Impactor& imp : impactors_) {
-      for (int c = 0; c < 3; ++c) row.push_back(imp.state().force_on_body(c));
-    }
-    solution_->history.push_back(std::move(row));
-    next_output_ += options_.output_interval_s;
+// A history row (every output interval): the energies, the balance error
+// relative to the largest energy so far, each impactor's force.
+std::vector<double> ExplicitDynamicRun::HistoryRow(double dt_next, double error) const {
+  std::vector<double> row = {t_,
+                             dt_next,
+                             energy_.kinetic,
+                             energy_.Internal(),
+                             energy_.hourglass,
+                             energy_.Contact(),
+                             energy_.damping.total,
+                             energy_.Eroded(),
+                             energy_.External(),
+                             max_scale_ > 0 ? error / max_scale_ : 0.0};
+  for (const Impactor& imp : impactors_) {
+    for (int c = 0; c < 3; ++c) row.push_back(imp.state().force_on_body(c));
   }
+  return row;
+}
+
+// A displacement frame every frame interval (at t^n: u^(n+1) less the step
+// just taken).
+void ExplicitDynamicRun::RecordFrame(double amplitude, double dt_next) {
   if (t_ >= next_frame_ - 1e-3 * dt_ && problem_.outputs.displacement) {
     solution_->step_time_s.push_back(t_);
     solution_->step_load_factor.push_back(amplitude);
@@ -357,10 +360,19 @@ Status ExplicitDynamicRun::Integrate() {
   const std::string unstable =
       factor_ > 1 ? Format("; the time step factor %g is above the stability limit 1", factor_)
                   : "";
-  const auto loop_start = std::chrono::steady_clock::now();
+  // The history row of t^n is written after the step from t^n (its
+  // balance error is known then), on the schedule of the step before it.
+  double error = 0, dt_next = 0;
+  HistoryObserver history(&solution_->history, 0, options_.output_interval_s,
+                          [&](const StepState&) { return HistoryRow(dt_next, error); });
+  ProgressObserver progress(clock_, 200, "explicit dynamics", [&](const StepState& s) {
+    return Format("t = %.4g us of %.4g us, step %lld", t_ * 1e6, end_time * 1e6,
+                  static_cast<long long>(s.step));
+  });
+  const LoopThroughput throughput;
   bool last = false;
   while (true) {
-    const bool output = t_ >= next_output_ - 1e-3 * dt_ || last;
+    history.SetStep(dt_);
     PBA_RETURN_IF_ERROR(Forces(last));
     if (last) break;
     AdaptStep();
@@ -381,7 +393,7 @@ Status ExplicitDynamicRun::Integrate() {
     // Energy balance at t^n (the kinetic energy from the mean of the half
     // steps around it).
     max_scale_ = std::max(max_scale_, energy_.Scale());
-    const double error = energy_.Error();
+    error = energy_.Error();
     max_error_ = std::max(max_error_, error);
     if (step_ > 50 && max_scale_ > 0 && error > kBlowUpError * max_scale_) {
       return Stopped(Format(
@@ -392,20 +404,15 @@ Status ExplicitDynamicRun::Integrate() {
           factor_ > 1 ? " (the time step factor is above 1)" : "", dt_ * 1e6, factor_));
     }
     sensors_.Sample(t_, *tled_, v_);
-    Record(output, curve_.Amplitude(t_), times.dt_next, error);
+    dt_next = times.dt_next;
+    PBA_RETURN_IF_ERROR(history.AfterStep({step_, t_, t_ / end_time, false}));
+    RecordFrame(curve_.Amplitude(t_), times.dt_next);
     t_ += times.dt_next;
     dt_prev_ = times.dt_next;
     ++step_;
-    if (step_ % 200 == 0) {
-      clock_->Update(t_ / end_time, Format("t = %.4g us of %.4g us, step %lld", t_ * 1e6,
-                                           end_time * 1e6, static_cast<long long>(step_)));
-      if (clock_->cancelled()) return Status::Cancelled("cancelled during explicit dynamics");
-    }
+    PBA_RETURN_IF_ERROR(progress.AfterStep({step_, t_, t_ / end_time, last}));
   }
-  const double loop_s =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - loop_start).count();
-  run_.element_updates_per_s =
-      loop_s > 0 ? static_cast<double>(step_) * tled_->num_elements() / loop_s : 0;
+  run_.element_updates_per_s = throughput.UpdatesPerSecond(step_, tled_->num_elements());
   clock_->End();
   return Status::Ok();
 }

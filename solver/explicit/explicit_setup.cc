@@ -1,7 +1,8 @@
 #include "explicit/explicit_setup.h"
 
-#include <Eigen/LU>
+#include <algorithm>
 
+#include "analysis/element_fields.h"
 #include "core/format.h"
 #include "fem/element_kind.h"
 #include "material/factory.h"
@@ -81,29 +82,15 @@ Status MakeExplicitSetup(const Problem& problem, ExplicitSetup* out) {
 
 void FillExplicitFields(const TledModel& tled, Solution* solution, double* max_strain) {
   const int ne = tled.num_elements();
-  solution->strain.assign(6 * static_cast<std::size_t>(ne), 0.0);
-  solution->almansi_strain.assign(6 * static_cast<std::size_t>(ne), 0.0);
-  solution->stress_pa.assign(6 * static_cast<std::size_t>(ne), 0.0);
-  solution->pk2_stress_pa.assign(6 * static_cast<std::size_t>(ne), 0.0);
-  solution->von_mises_pa.assign(ne, 0.0);
-  solution->jacobian.assign(ne, 1.0);
+  StartFiniteStrainFields(ne, solution);
   double largest = 0;
   for (int e = 0; e < ne; ++e) {
     if (tled.eroded(e)) continue;
-    const Eigen::Matrix3d f = tled.DeformationGradient(e);
-    const double j = f.determinant();
-    const Vector6d green = GreenLagrangeVoigt(f);
-    const Vector6d almansi = AlmansiVoigt(f);
-    const Vector6d cauchy = tled.CauchyStress(e);
-    const Eigen::Matrix3d finv = f.inverse();
-    const Vector6d pk2 = SymmetricToVoigt(j * finv * VoigtToSymmetric(cauchy) * finv.transpose());
-    Eigen::Map<Vector6d>(&solution->strain[6 * e]) = green;
-    Eigen::Map<Vector6d>(&solution->almansi_strain[6 * e]) = almansi;
-    Eigen::Map<Vector6d>(&solution->stress_pa[6 * e]) = cauchy;
-    Eigen::Map<Vector6d>(&solution->pk2_stress_pa[6 * e]) = pk2;
-    solution->von_mises_pa[e] = VonMises(cauchy);
-    solution->jacobian[e] = j;
-    largest = std::max(largest, green.cwiseAbs().maxCoeff());
+    // One point per element: its fields are written as they are, not
+    // through a weighted sum (which would turn a -0 into a +0).
+    const ElementFields fields =
+        FieldsFromCauchy(tled.DeformationGradient(e), tled.CauchyStress(e));
+    largest = std::max(largest, WriteFiniteStrainFields(e, fields, solution));
   }
   *max_strain = largest;
 }

@@ -16,18 +16,20 @@ namespace {
 
 constexpr double kMm = 1e-3;
 
-// True when reference point p lies in element e (barycentric for a
-// tetrahedron, Newton on the trilinear map for a hexahedron), with a
-// relative tolerance.
-bool Contains(const Mesh& mesh, int e, const Eigen::Vector3d& p) {
+// True when reference point p lies in tetrahedron e (barycentric
+// coordinates), with a relative tolerance.
+bool TetContains(const Mesh& mesh, int e, const Eigen::Vector3d& p) {
   constexpr double kTol = 1e-9;
-  if (!mesh.hexahedral()) {
-    const Eigen::Matrix<double, 4, 3> x = TetCorners(mesh, e);
-    Eigen::Matrix3d a;
-    for (int k = 0; k < 3; ++k) a.col(k) = (x.row(k + 1) - x.row(0)).transpose();
-    const Eigen::Vector3d l = a.partialPivLu().solve(p - x.row(0).transpose());
-    return l.minCoeff() >= -kTol && l.sum() <= 1 + kTol;
-  }
+  const Eigen::Matrix<double, 4, 3> x = TetCorners(mesh, e);
+  Eigen::Matrix3d a;
+  for (int k = 0; k < 3; ++k) a.col(k) = (x.row(k + 1) - x.row(0)).transpose();
+  const Eigen::Vector3d l = a.partialPivLu().solve(p - x.row(0).transpose());
+  return l.minCoeff() >= -kTol && l.sum() <= 1 + kTol;
+}
+
+// The same for hexahedron e (Newton on the trilinear map).
+bool HexContains(const Mesh& mesh, int e, const Eigen::Vector3d& p) {
+  constexpr double kTol = 1e-9;
   const Hex8Nodes x = HexCorners(mesh, e);
   const Eigen::Vector3d lo = x.colwise().minCoeff().transpose(),
                         hi = x.colwise().maxCoeff().transpose();
@@ -46,9 +48,29 @@ bool Contains(const Mesh& mesh, int e, const Eigen::Vector3d& p) {
   return xi.cwiseAbs().maxCoeff() <= 1 + 1e-7;
 }
 
+// True when reference point p lies in element e; a 10-node element is taken
+// as its corners' straight-sided tetrahedron.
+bool Contains(const Mesh& mesh, int e, const Eigen::Vector3d& p) {
+  switch (mesh.shape()) {
+    case ElementShape::kTet4:
+    case ElementShape::kTet10:
+      return TetContains(mesh, e, p);
+    case ElementShape::kHex8:
+      return HexContains(mesh, e, p);
+  }
+  return false;
+}
+
+// The mean of the corners.
 Eigen::Vector3d Centroid(const Mesh& mesh, int e) {
-  if (mesh.hexahedral()) return HexCorners(mesh, e).colwise().mean().transpose();
-  return TetCorners(mesh, e).colwise().mean().transpose();
+  switch (mesh.shape()) {
+    case ElementShape::kTet4:
+    case ElementShape::kTet10:
+      return TetCorners(mesh, e).colwise().mean().transpose();
+    case ElementShape::kHex8:
+      return HexCorners(mesh, e).colwise().mean().transpose();
+  }
+  return Eigen::Vector3d::Zero();
 }
 
 // The zero-phase filtered signal of a body that was at rest before the

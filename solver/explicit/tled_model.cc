@@ -11,6 +11,7 @@
 #include "explicit/cube_root.h"
 #include "fem/hex8.h"
 #include "fem/tet4.h"
+#include "material/material_point.h"
 
 namespace pba {
 namespace {
@@ -41,19 +42,6 @@ double CharacteristicLength(const Eigen::Matrix<double, N, 3>& x, double volume)
   }
 }
 
-// cof F = det(F) F^-T, row-major 3 x 3.
-inline void Cofactor(const double* f, double* c) {
-  c[0] = f[4] * f[8] - f[5] * f[7];
-  c[1] = f[5] * f[6] - f[3] * f[8];
-  c[2] = f[3] * f[7] - f[4] * f[6];
-  c[3] = f[2] * f[7] - f[1] * f[8];
-  c[4] = f[0] * f[8] - f[2] * f[6];
-  c[5] = f[1] * f[6] - f[0] * f[7];
-  c[6] = f[1] * f[5] - f[2] * f[4];
-  c[7] = f[2] * f[3] - f[0] * f[5];
-  c[8] = f[0] * f[4] - f[1] * f[3];
-}
-
 }  // namespace
 
 double TledMaterial::WaveSpeed() const { return std::sqrt((bulk + 4 * mu / 3) / density); }
@@ -62,7 +50,7 @@ Status TledModel::Build(const Mesh& mesh, std::vector<TledMaterial> materials,
                         std::vector<int> material_of, const TledOptions& options,
                         std::unique_ptr<TledModel>* out) {
   // A scene's validation refuses both (scene_checks::ValidateExplicit).
-  if (mesh.quadratic()) {
+  if (mesh.shape() == ElementShape::kTet10) {
     return Status::Internal(
         "the explicit engine takes 4-node tetrahedra or 8-node hexahedra, not 10-node tetrahedra");
   }
@@ -81,7 +69,7 @@ Status TledModel::Build(const Mesh& mesh, std::vector<TledMaterial> materials,
   t.num_nodes_ = mesh.num_nodes();
   t.num_elements_ = mesh.num_elements();
   const int ne = t.num_elements_;
-  const bool hex = mesh.hexahedral();
+  const bool hex = mesh.shape() == ElementShape::kHex8;
   t.npe_ = hex ? 8 : 4;
   const int npe = t.npe_;
   t.anp_ = !hex && options.average_nodal_pressure;
@@ -384,9 +372,7 @@ void TledModel::VolumeRatios(const Eigen::VectorXd& u) {
         f[3 * i + 2] += ua[i] * ga[2];
       }
     }
-    const double j = f[0] * (f[4] * f[8] - f[5] * f[7]) - f[1] * (f[3] * f[8] - f[5] * f[6]) +
-                     f[2] * (f[3] * f[7] - f[4] * f[6]);
-    volume_ratio_[e] = volume_[e] * j;
+    volume_ratio_[e] = volume_[e] * Determinant(f);
   }
 }
 
@@ -456,9 +442,7 @@ void TledModel::ElementForce(int e, const double* ud, const double* vd, double* 
       fe[3 * i + 2] += ua[i] * ga[2];
     }
   }
-  const double j = fe[0] * (fe[4] * fe[8] - fe[5] * fe[7]) -
-                   fe[1] * (fe[3] * fe[8] - fe[5] * fe[6]) +
-                   fe[2] * (fe[3] * fe[7] - fe[4] * fe[6]);
+  const double j = Determinant(fe);
   std::copy(fe, fe + 9, &f_[9 * static_cast<std::size_t>(e)]);
   j_[e] = j;
   double* force = &force_[3 * kNpe * static_cast<std::size_t>(e)];
@@ -501,34 +485,11 @@ void TledModel::ElementForce(int e, const double* ud, const double* vd, double* 
   }
   double pk[9];  // first Piola-Kirchhoff stress, row-major
   if (m.neo_hookean) {
-    double i1 = 0;
-    for (int k = 0; k < 9; ++k) i1 += fe[k] * fe[k];
-    const double a = m.mu / (cbrt_j * cbrt_j);
-    const double b = p - q - a * i1 / (3 * j);
-    for (int k = 0; k < 9; ++k) pk[k] = a * fe[k] + b * cof[k];
+    NeoHookeanFirstPiola(m.mu, p - q, fe, cof, j, cbrt_j, pk);
   } else {
-    const Eigen::Matrix3d f = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(fe);
-    Vector6d s_iso;
-    m.model->Isochoric(f, nullptr, &s_iso, nullptr);
-    if (history_start_[e] >= 0) {
-      // S_visc = g_inf S_iso + sum_k H_k; H_k advances over the step.
-      const ViscousStep& step = steps_[mi];
-      double* hist = &history_[history_start_[e]];
-      Eigen::Map<Vector6d> s_old(hist);
-      const Vector6d ds = s_iso - s_old;
-      Vector6d s_visc = m.relaxation.LongTermFactor() * s_iso;
-      for (std::size_t k = 0; k < step.decay.size(); ++k) {
-        Eigen::Map<Vector6d> hk(hist + 6 * (k + 1));
-        hk = step.decay[k] * hk + step.weight[k] * ds;
-        s_visc += hk;
-      }
-      s_old = s_iso;
-      s_iso = s_visc;
-    }
-    const Eigen::Matrix3d p_iso = f * VoigtToSymmetric(s_iso);
-    for (int i = 0; i < 3; ++i) {
-      for (int k = 0; k < 3; ++k) pk[3 * i + k] = p_iso(i, k) + (p - q) * cof[3 * i + k];
-    }
+    const bool relaxes = history_start_[e] >= 0;
+    FirstPiola(*m.model, relaxes ? &steps_[mi] : nullptr,
+               relaxes ? &history_[history_start_[e]] : nullptr, fe, cof, p - q, pk);
   }
   // Pressure -tr(sigma)/3 = -(P : F) / (3 J), less the viscosity's q.
   double pf = 0;
@@ -751,6 +712,36 @@ TledEvaluation TledModel::InternalForce(const Eigen::VectorXd& u, const Eigen::V
     Gather(f_int);
   }
   return eval;
+}
+
+std::string TledModel::Describe() const {
+  const char* element = npe_ == 8 ? "HEX8 (one point, hourglass control)"
+                        : anp_    ? "TET4_ANP"
+                                  : "TET4";
+  return std::string(element) + ", explicit total Lagrangian";
+}
+
+BodyForce TledModel::Force(const Eigen::VectorXd& u, const Eigen::VectorXd* v,
+                           Eigen::VectorXd* f_int) {
+  const TledEvaluation eval = v != nullptr
+                                  ? InternalForce(u, *v, f_int)
+                                  : InternalForce(u, Eigen::VectorXd::Zero(u.size()), f_int);
+  BodyForce out;
+  out.inverted_element = eval.inverted_element;
+  out.ok = eval.inverted_element < 0 && f_int->allFinite();
+  out.hourglass_energy = eval.hourglass_energy;
+  if (out.ok) out.energy = StoredEnergy();
+  return out;
+}
+
+Status TledModel::RestoreHistory(const std::vector<double>& values) {
+  if (values.size() != history_.size()) {
+    return Status::InvalidArgument(
+        "history", "holds " + std::to_string(values.size()) + " numbers where this model keeps " +
+                       std::to_string(history_.size()) + " (a different mesh or material?)");
+  }
+  history_ = values;
+  return Status::Ok();
 }
 
 Eigen::Matrix3d TledModel::DeformationGradient(int e) const {

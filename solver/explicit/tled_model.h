@@ -25,12 +25,11 @@
 //
 // Stress: the uncoupled split S = S_iso(F) + p J C^-1, so P = F S_iso +
 // p cof F with p = U'(J) (the nodal average for TET4_ANP) less the bulk
-// viscosity q. For neo-Hookean tissue, P = a F + (p - a I1 / (3 J)) cof F
-// with a = mu J^-2/3 (no inverse, no Voigt); other models go through
-// HyperelasticMaterial::Isochoric. A relaxing material keeps, per element,
-// its isochoric stress and one internal variable per Prony term
-// (material/viscoelastic.h): S_visc = g_inf S_iso + sum_k H_k,
-// H_k <- e^(-dt/tau_k) H_k + g_k (1 - e^(-dt/tau_k)) tau_k / dt dS_iso.
+// viscosity q, through the material-point kernel the implicit analyses
+// share (material/material_point.h): neo-Hookean tissue in closed form,
+// other models through HyperelasticMaterial::Isochoric. A relaxing material
+// keeps, per element, its Prony state (material/viscoelastic.h), advanced
+// by ViscousStep::Relax at every evaluation.
 //
 // Bulk viscosity (von Neumann and Richtmyer, with the linear term of
 // Wilkins; as LS-DYNA's): while an element compresses, tr D = dJ/dt / J < 0,
@@ -54,6 +53,7 @@
 #include <string>
 #include <vector>
 
+#include "assembly/discrete_body.h"
 #include "core/thread_context.h"
 #include "material/hyperelastic.h"
 #include "material/viscoelastic.h"
@@ -93,7 +93,9 @@ struct TledEvaluation {
   int inverted_element = -1;
 };
 
-class TledModel {
+// The explicit engine's body (a DiscreteBody with a lumped mass and no
+// tangent, whose history advances with every evaluation).
+class TledModel final : public DiscreteBody {
  public:
   // `mesh` (4-node tetrahedra or 8-node hexahedra) must outlive the model;
   // material_of[e] indexes `materials`. Fails naming the element when one
@@ -160,6 +162,17 @@ class TledModel {
   // once per time step. Elements marked eroded are skipped.
   TledEvaluation InternalForce(const Eigen::VectorXd& u, const Eigen::VectorXd& v,
                                Eigen::VectorXd* f_int);
+
+  // DiscreteBody: "TET4_ANP, explicit total Lagrangian" and the like;
+  // Force is InternalForce (at rest when v is null) with StoredEnergy; the
+  // history is the relaxing elements' Prony states, in element order.
+  std::string Describe() const override;
+  BodyForce Force(const Eigen::VectorXd& u, const Eigen::VectorXd* v,
+                  Eigen::VectorXd* f_int) override;
+  bool advances_on_evaluation() const override { return true; }
+  Eigen::VectorXd LumpedMass() const override { return mass_; }
+  std::vector<double> SaveHistory() const override { return history_; }
+  Status RestoreHistory(const std::vector<double>& values) override;
 
   // Per element, from the last InternalForce: F (9, row-major), the
   // pressure -tr(sigma)/3 without the bulk viscosity [Pa], and the Cauchy

@@ -11,21 +11,9 @@
 #include "core/atomic_write.h"
 #include "core/format.h"
 #include "io/mesh_export_formats.h"
-#include "mesh/quadratic.h"
 
 namespace pba {
 namespace mesh_export {
-
-int NodesPerElement(const Mesh& mesh) { return mesh.hexahedral() ? 8 : mesh.quadratic() ? 10 : 4; }
-
-std::vector<int> ElementNodes(const Mesh& mesh, int e) {
-  if (mesh.hexahedral()) return {mesh.hexes[e].begin(), mesh.hexes[e].end()};
-  if (mesh.quadratic()) {
-    const std::array<int, 10> nodes = Tet10NodeIndices(mesh, e);
-    return {nodes.begin(), nodes.end()};
-  }
-  return {mesh.tets[e].begin(), mesh.tets[e].end()};
-}
 
 int ElementRegion(const Mesh& mesh, int e) {
   return mesh.element_region.empty() ? 0 : mesh.element_region[e];
@@ -83,19 +71,11 @@ std::string XmlComment(const std::string& text) {
   return out;
 }
 
-namespace {
-
-// VTK cell types (vtkCellType.h).
-int VtkCellType(int nodes_per_element) {
-  return nodes_per_element == 10 ? 24 : nodes_per_element == 8 ? 12 : 10;
-}
-
-}  // namespace
-
 // ASCII VTU: simplest to check by eye and by the tests; an atlas mesh of a
 // few hundred thousand elements stays in the tens of megabytes.
 std::string VtuText(const Mesh& mesh, const MeshExportOptions& options) {
-  const int npe = NodesPerElement(mesh), elements = mesh.num_elements();
+  const ElementShapeInfo& shape = ShapeInfo(mesh.shape());
+  const int npe = shape.nodes, elements = mesh.num_elements();
   const double scale = Scale(options);
   const std::vector<std::string> names = RegionNames(mesh);
   std::string x = "<?xml version=\"1.0\"?>\n";
@@ -123,7 +103,7 @@ std::string VtuText(const Mesh& mesh, const MeshExportOptions& options) {
   x += "        <DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n";
   for (int e = 0; e < elements; ++e) {
     x += "         ";
-    for (int node : ElementNodes(mesh, e)) x += " " + std::to_string(node);
+    for (int node : mesh.ElementNodes(e)) x += " " + std::to_string(node);
     x += "\n";
   }
   x += "        </DataArray>\n        <DataArray type=\"Int64\" Name=\"offsets\" "
@@ -133,7 +113,7 @@ std::string VtuText(const Mesh& mesh, const MeshExportOptions& options) {
   }
   x += "\n        </DataArray>\n        <DataArray type=\"UInt8\" Name=\"types\" "
        "format=\"ascii\">\n";
-  const std::string type = std::to_string(VtkCellType(npe));
+  const std::string type = std::to_string(shape.vtk_cell_type);
   for (int e = 0; e < elements; ++e) x += type + (e % 32 == 31 ? "\n" : " ");
   x += "\n        </DataArray>\n      </Cells>\n      <CellData Scalars=\"region\">\n"
        "        <DataArray type=\"Int32\" Name=\"region\" format=\"ascii\">\n";
@@ -149,20 +129,23 @@ namespace {
 
 Status ValidateMesh(const Mesh& mesh) {
   if (mesh.num_nodes() == 0) return Status::InvalidArgument("mesh.nodes", "no nodes");
-  const char* elements_field = mesh.hexahedral() ? "mesh.hexes" : "mesh.tets";
+  const ElementShape shape = mesh.shape();
+  const char* elements_field = shape == ElementShape::kHex8 ? "mesh.hexes" : "mesh.tets";
   if (mesh.num_elements() == 0) return Status::InvalidArgument(elements_field, "no elements");
-  if (mesh.hexahedral() && !mesh.tets.empty()) {
+  if (shape == ElementShape::kHex8 && !mesh.tets.empty()) {
     return Status::InvalidArgument("mesh.tets", "both tets and hexes set (one kind per mesh)");
   }
-  if (mesh.quadratic() && mesh.midside.size() != mesh.tets.size()) {
+  // Checked on the arrays themselves: a brick mesh with stray mid-edge rows
+  // is refused too.
+  if (!mesh.midside.empty() && mesh.midside.size() != mesh.tets.size()) {
     return Status::InvalidArgument(
         "mesh.midside", Format("%zu rows for %zu tets", mesh.midside.size(), mesh.tets.size()));
   }
   for (int e = 0; e < mesh.num_elements(); ++e) {
-    for (int node : ElementNodes(mesh, e)) {
+    for (int node : mesh.ElementNodes(e)) {
       if (node < 0 || node >= mesh.num_nodes()) {
         return Status::InvalidArgument(
-            mesh.quadratic() ? "mesh.tets / mesh.midside" : elements_field,
+            shape == ElementShape::kTet10 ? "mesh.tets / mesh.midside" : elements_field,
             Format("element %d has node %d, outside 0..%d", e, node, mesh.num_nodes() - 1));
       }
     }

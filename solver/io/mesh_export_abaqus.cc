@@ -47,7 +47,7 @@ std::string IdLines(const std::vector<int>& indices) {
 }  // namespace
 
 std::string AbaqusText(const Mesh& mesh, const MeshExportOptions& options) {
-  const int npe = NodesPerElement(mesh), elements = mesh.num_elements();
+  const int elements = mesh.num_elements();
   const double scale = Scale(options);
   const std::vector<std::string> names = RegionNames(mesh);
   std::set<std::string> used = {"NALL", "EALL"};
@@ -72,15 +72,11 @@ std::string AbaqusText(const Mesh& mesh, const MeshExportOptions& options) {
          "\n";
   }
   // C3D4, C3D10 and C3D8 take the mesh's own node orders (mesh.h).
-  x += std::string("*ELEMENT, TYPE=") +
-       (npe == 10  ? "C3D10"
-        : npe == 8 ? "C3D8"
-                   : "C3D4") +
-       ", ELSET=EALL\n";
+  x += std::string("*ELEMENT, TYPE=") + ShapeInfo(mesh.shape()).abaqus_type + ", ELSET=EALL\n";
   std::vector<std::vector<int>> region_elements(names.size());
   for (int e = 0; e < elements; ++e) {
     x += std::to_string(e + 1);
-    for (int node : ElementNodes(mesh, e)) x += ", " + std::to_string(node + 1);
+    for (int node : mesh.ElementNodes(e)) x += ", " + std::to_string(node + 1);
     x += "\n";
     region_elements[ElementRegion(mesh, e)].push_back(e);
   }

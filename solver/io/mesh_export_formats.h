@@ -14,13 +14,6 @@
 
 namespace pba::mesh_export {
 
-// Nodes per element: 4, 10 or 8.
-int NodesPerElement(const Mesh& mesh);
-
-// Element e's nodes in the mesh's order (C3D10 for a 10-node tet, C3D8 for
-// a brick).
-std::vector<int> ElementNodes(const Mesh& mesh, int e);
-
 // element_region[e], or 0 for a one-region mesh.
 int ElementRegion(const Mesh& mesh, int e);
 

@@ -11,12 +11,6 @@
 namespace pba::mesh_export {
 namespace {
 
-// Gmsh element types: 4 the 4-node tetrahedron, 11 the 10-node one, 5 the
-// 8-node hexahedron.
-int GmshType(int nodes_per_element) {
-  return nodes_per_element == 10 ? 11 : nodes_per_element == 8 ? 5 : 4;
-}
-
 // Position in the mesh's order of each Gmsh node of an element. Gmsh's
 // 10-node tetrahedron takes its mid-edge nodes on edges (0,1) (1,2) (2,0)
 // (3,0) (3,2) (3,1): C3D10's last two, (1,3) and (2,3), swapped. The 4-node
@@ -33,7 +27,8 @@ std::string Quoted(const std::string& name) {
 }  // namespace
 
 std::string GmshText(const Mesh& mesh, const MeshExportOptions& options) {
-  const int npe = NodesPerElement(mesh), elements = mesh.num_elements();
+  const ElementShapeInfo& shape = ShapeInfo(mesh.shape());
+  const int npe = shape.nodes, elements = mesh.num_elements();
   const double scale = Scale(options);
   const std::vector<std::string> names = RegionNames(mesh);
   const int regions = static_cast<int>(names.size());
@@ -60,7 +55,7 @@ std::string GmshText(const Mesh& mesh, const MeshExportOptions& options) {
     constexpr double kInf = std::numeric_limits<double>::infinity();
     std::array<double, 3> lo = {kInf, kInf, kInf}, hi = {-kInf, -kInf, -kInf};
     for (int e : region_elements[r]) {
-      for (int node : ElementNodes(mesh, e)) {
+      for (int node : mesh.ElementNodes(e)) {
         for (int k = 0; k < 3; ++k) {
           lo[k] = std::min(lo[k], scale * mesh.nodes(node, k));
           hi[k] = std::max(hi[k], scale * mesh.nodes(node, k));
@@ -92,16 +87,17 @@ std::string GmshText(const Mesh& mesh, const MeshExportOptions& options) {
   for (int r = 0; r < regions; ++r) blocks += region_elements[r].empty() ? 0 : 1;
   x += "$Elements\n" + std::to_string(blocks) + " " + std::to_string(elements) + " 1 " +
        std::to_string(elements) + "\n";
-  const std::string type = std::to_string(GmshType(npe));
+  const std::string type = std::to_string(shape.gmsh_type);
+  const bool gmsh_tet10 = shape.shape == ElementShape::kTet10;  // its own node order
   for (int r = 0; r < regions; ++r) {
     if (region_elements[r].empty()) continue;
     x += "3 " + std::to_string(r + 1) + " " + type + " " +
          std::to_string(region_elements[r].size()) + "\n";
     for (int e : region_elements[r]) {
-      const std::vector<int> nodes = ElementNodes(mesh, e);
+      const NodeList nodes = mesh.ElementNodes(e);
       x += std::to_string(e + 1);
       for (int k = 0; k < npe; ++k) {
-        x += " " + std::to_string(nodes[npe == 10 ? kGmshTet10FromMesh[k] : k] + 1);
+        x += " " + std::to_string(nodes[gmsh_tet10 ? kGmshTet10FromMesh[k] : k] + 1);
       }
       x += "\n";
     }

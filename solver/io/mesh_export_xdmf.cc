@@ -11,13 +11,19 @@
 namespace pba::mesh_export {
 namespace {
 
-// XDMF 3 cell names; Tetrahedron_10 lists its nodes in VTK_QUADRATIC_TETRA
-// order, which ParaView's XDMF readers pass to VTK unpermuted, and that is
-// the mesh's (C3D10) order.
-const char* TopologyType(int nodes_per_element) {
-  return nodes_per_element == 10  ? "Tetrahedron_10"
-         : nodes_per_element == 8 ? "Hexahedron"
-                                  : "Tetrahedron";
+// The description of /mesh/topology's columns.
+const char* TopologyDescription(ElementShape shape) {
+  switch (shape) {
+    case ElementShape::kTet4:
+      return "node indices, 0-based";
+    case ElementShape::kTet10:
+      return "node indices, 0-based: corners 0-3, then the mid-edge nodes of edges "
+             "(0,1) (1,2) (2,0) (0,3) (1,3) (2,3)";
+    case ElementShape::kHex8:
+      return "node indices, 0-based: one face 0-3, then the opposite face, node "
+             "4 + i across from node i (VTK_HEXAHEDRON, Abaqus C3D8)";
+  }
+  return "";
 }
 
 std::string Item(const std::string& dims, const std::string& h5_name, const std::string& path,
@@ -27,7 +33,7 @@ std::string Item(const std::string& dims, const std::string& h5_name, const std:
 }
 
 Status WriteH5(const Mesh& mesh, const std::string& path, const MeshExportOptions& options) {
-  const int npe = NodesPerElement(mesh), elements = mesh.num_elements();
+  const int npe = ShapeInfo(mesh.shape()).nodes, elements = mesh.num_elements();
   const double scale = Scale(options);
   std::vector<double> nodes(static_cast<size_t>(mesh.num_nodes()) * 3);
   for (int i = 0; i < mesh.num_nodes(); ++i) {
@@ -36,7 +42,7 @@ Status WriteH5(const Mesh& mesh, const std::string& path, const MeshExportOption
   std::vector<int64_t> topology, region(elements);
   topology.reserve(static_cast<size_t>(elements) * npe);
   for (int e = 0; e < elements; ++e) {
-    for (int node : ElementNodes(mesh, e)) topology.push_back(node);
+    for (int node : mesh.ElementNodes(e)) topology.push_back(node);
     region[e] = ElementRegion(mesh, e);
   }
   H5Writer w(path);
@@ -48,12 +54,7 @@ Status WriteH5(const Mesh& mesh, const std::string& path, const MeshExportOption
             WriteStringAttribute(w.file(), "region_names", joined);
   w.Group("/mesh");
   w.Dataset("/mesh/nodes", nodes, 3, Unit(options), "x y z");
-  w.Dataset("/mesh/topology", topology, npe, "1",
-            npe == 10  ? "node indices, 0-based: corners 0-3, then the mid-edge nodes of edges "
-                         "(0,1) (1,2) (2,0) (0,3) (1,3) (2,3)"
-            : npe == 8 ? "node indices, 0-based: one face 0-3, then the opposite face, node "
-                         "4 + i across from node i (VTK_HEXAHEDRON, Abaqus C3D8)"
-                       : "node indices, 0-based");
+  w.Dataset("/mesh/topology", topology, npe, "1", TopologyDescription(mesh.shape()));
   w.Dataset("/mesh/region", region, 0, "1",
             "region index per element; names in the file attribute region_names, one a line");
   ok = ok && w.ok();
@@ -62,7 +63,8 @@ Status WriteH5(const Mesh& mesh, const std::string& path, const MeshExportOption
 
 std::string XdmfText(const Mesh& mesh, const std::string& h5_name,
                      const MeshExportOptions& options) {
-  const int npe = NodesPerElement(mesh);
+  const ElementShapeInfo& shape = ShapeInfo(mesh.shape());
+  const int npe = shape.nodes;
   const std::string ne = std::to_string(mesh.num_elements());
   const std::string nn = std::to_string(mesh.num_nodes());
   std::string x = "<?xml version=\"1.0\" ?>\n";
@@ -83,9 +85,13 @@ std::string XdmfText(const Mesh& mesh, const std::string& h5_name,
   }
   x += "</main>]]></Information>\n";
   // NodesPerElement only for the quadratic cell, as in result.xdmf.
-  x += std::string("      <Topology TopologyType=\"") + TopologyType(npe) +
-       "\" NumberOfElements=\"" + ne + (npe == 10 ? "\" NodesPerElement=\"10" : "") +
-       "\">\n        " + Item(ne + " " + std::to_string(npe), h5_name, "/mesh/topology", "Int") +
+  // Tetrahedron_10 lists its nodes in VTK_QUADRATIC_TETRA order, which
+  // ParaView's XDMF readers pass to VTK unpermuted, and that is the mesh's
+  // (C3D10) order.
+  x += std::string("      <Topology TopologyType=\"") + shape.xdmf_topology +
+       "\" NumberOfElements=\"" + ne +
+       (shape.shape == ElementShape::kTet10 ? "\" NodesPerElement=\"10" : "") + "\">\n        " +
+       Item(ne + " " + std::to_string(npe), h5_name, "/mesh/topology", "Int") +
        "\n      </Topology>\n      <Geometry GeometryType=\"XYZ\">\n        " +
        Item(nn + " 3", h5_name, "/mesh/nodes", "Float") +
        "\n      </Geometry>\n      <Attribute Name=\"region\" AttributeType=\"Scalar\" "

@@ -79,8 +79,12 @@ MaterialField::MaterialField(std::vector<Entry> entries, std::vector<int> of_ele
   steps_.assign(entries_.size(), ViscousStep());
   volume_factor_.assign(entries_.size(), 1.0);
   if (viscous_) {
-    s_iso_.assign(of_element_.size(), Vector6d::Zero());
-    h_.resize(of_element_.size());
+    state_start_.resize(of_element_.size() + 1, 0);
+    for (std::size_t e = 0; e < of_element_.size(); ++e) {
+      state_start_[e + 1] =
+          state_start_[e] + PronyStateSize(entries_[of_element_[e]].relaxation.g.size());
+    }
+    state_.assign(state_start_.back(), 0.0);
     offset_.assign(of_element_.size(), Vector6d::Zero());
   }
 }
@@ -130,7 +134,7 @@ void MaterialField::BeginStep(double dt_s, double amplitude) {
   if (!viscous_) return;
   const int ne = num_elements();
 #pragma omp parallel for schedule(static) num_threads(threads_.threads()) if (threads_.Parallel(ne))
-  for (int e = 0; e < ne; ++e) offset_[e] = steps_[of_element_[e]].Offset(s_iso_[e], h_[e]);
+  for (int e = 0; e < ne; ++e) offset_[e] = steps_[of_element_[e]].Offset(&state_[state_start_[e]]);
 }
 
 void MaterialField::Commit(const std::vector<Eigen::Matrix3d>& f) {
@@ -143,44 +147,19 @@ void MaterialField::Commit(const std::vector<Eigen::Matrix3d>& f) {
     Vector6d s_iso;
     entries_[k].material->Isochoric(f[e], nullptr, &s_iso, nullptr);
     s_iso *= volume_factor_[k] * entries_[k].isochoric_scale;
-    steps_[k].Advance(s_iso_[e], s_iso, &h_[e]);
-    s_iso_[e] = s_iso;
+    steps_[k].Relax(s_iso, &state_[state_start_[e]]);
   }
 }
 
-std::vector<double> MaterialField::SaveHistory() const {
-  std::vector<double> values;
-  for (std::size_t e = 0; e < s_iso_.size(); ++e) {
-    values.insert(values.end(), s_iso_[e].data(), s_iso_[e].data() + 6);
-    const std::size_t terms = entries_[of_element_[e]].relaxation.g.size();
-    for (std::size_t k = 0; k < terms; ++k) {
-      const Vector6d h = k < h_[e].size() ? h_[e][k] : Vector6d::Zero();
-      values.insert(values.end(), h.data(), h.data() + 6);
-    }
-  }
-  return values;
-}
+std::vector<double> MaterialField::SaveHistory() const { return state_; }
 
 Status MaterialField::RestoreHistory(const std::vector<double>& values) {
-  std::size_t expected = 0;
-  for (std::size_t e = 0; e < s_iso_.size(); ++e) {
-    expected += 6 * (1 + entries_[of_element_[e]].relaxation.g.size());
-  }
-  if (values.size() != expected) {
+  if (values.size() != state_.size()) {
     return Status::InvalidArgument(
         "history", "holds " + std::to_string(values.size()) + " numbers where this model keeps " +
-                       std::to_string(expected) + " (a different mesh or material?)");
+                       std::to_string(state_.size()) + " (a different mesh or material?)");
   }
-  std::size_t at = 0;
-  for (std::size_t e = 0; e < s_iso_.size(); ++e) {
-    s_iso_[e] = Eigen::Map<const Vector6d>(&values[at]);
-    at += 6;
-    h_[e].resize(entries_[of_element_[e]].relaxation.g.size());
-    for (Vector6d& h : h_[e]) {
-      h = Eigen::Map<const Vector6d>(&values[at]);
-      at += 6;
-    }
-  }
+  state_ = values;
   return Status::Ok();
 }
 

@@ -122,10 +122,12 @@ class MaterialField {
   // Per entry, for the current step.
   std::vector<ViscousStep> steps_;
   std::vector<double> volume_factor_;
-  // Per element: the committed isochoric stress and internal variables, and
-  // the offset of the current step (all empty without relaxation).
-  std::vector<Vector6d> s_iso_;
-  std::vector<std::vector<Vector6d>> h_;
+  // Per element: the committed relaxation state (PronyStateSize of its
+  // material's terms, from state_start_[e]; all of them in SaveHistory's
+  // order) and the offset of the current step (all empty without
+  // relaxation).
+  std::vector<double> state_;
+  std::vector<std::size_t> state_start_;
   std::vector<Vector6d> offset_;
 };
 

@@ -75,7 +75,7 @@ PronySeries FromModuli(double g_inf, const std::vector<double>& g_i,
 
 ViscousStep ViscousStep::Of(const PronySeries& series, double dt_s) {
   ViscousStep step;
-  step.alpha = series.LongTermFactor();
+  step.alpha = step.long_term = series.LongTermFactor();
   for (std::size_t k = 0; k < series.g.size(); ++k) {
     step.decay.push_back(std::exp(-dt_s / series.tau_s[k]));
     step.weight.push_back(series.g[k] * StepWeight(dt_s, series.tau_s[k]));
@@ -84,21 +84,27 @@ ViscousStep ViscousStep::Of(const PronySeries& series, double dt_s) {
   return step;
 }
 
-Vector6d ViscousStep::Offset(const Vector6d& s_iso, const std::vector<Vector6d>& h) const {
+Vector6d ViscousStep::Offset(const double* state) const {
+  const Eigen::Map<const Vector6d> s_iso(state);
   Vector6d offset = Vector6d::Zero();
   for (std::size_t k = 0; k < weight.size(); ++k) {
     offset -= weight[k] * s_iso;
-    if (k < h.size()) offset += decay[k] * h[k];
+    offset += decay[k] * Eigen::Map<const Vector6d>(state + 6 * (k + 1));
   }
   return offset;
 }
 
-void ViscousStep::Advance(const Vector6d& s_iso_old, const Vector6d& s_iso_new,
-                          std::vector<Vector6d>* h) const {
-  h->resize(weight.size(), Vector6d::Zero());
+Vector6d ViscousStep::Relax(const Vector6d& s_iso, double* state) const {
+  Eigen::Map<Vector6d> s_old(state);
+  const Vector6d ds = s_iso - s_old;
+  Vector6d s_visc = long_term * s_iso;
   for (std::size_t k = 0; k < weight.size(); ++k) {
-    (*h)[k] = decay[k] * (*h)[k] + weight[k] * (s_iso_new - s_iso_old);
+    Eigen::Map<Vector6d> h(state + 6 * (k + 1));
+    h = decay[k] * h + weight[k] * ds;
+    s_visc += h;
   }
+  s_old = s_iso;
+  return s_visc;
 }
 
 Status ViscoelasticPoint::Update(const HyperelasticMaterial& material, const PronySeries& series,
@@ -110,7 +116,9 @@ Status ViscoelasticPoint::Update(const HyperelasticMaterial& material, const Pro
   if (!IsAdmissible(f)) {
     return Status::Numerical("viscoelastic update: det F <= 0 or F not finite");
   }
-  if (h_.size() != series.g.size()) h_.assign(series.g.size(), Vector6d::Zero());
+  if (state_.size() != PronyStateSize(series.g.size())) {
+    state_.assign(PronyStateSize(series.g.size()), 0.0);
+  }
 
   Vector6d s_iso;
   Matrix6d c_iso;
@@ -124,10 +132,9 @@ Status ViscoelasticPoint::Update(const HyperelasticMaterial& material, const Pro
                     &s_vol, tangent ? &c_vol : nullptr);
 
   const ViscousStep step = ViscousStep::Of(series, dt_s);
-  const Vector6d s_visc = step.alpha * s_iso + step.Offset(s_iso_, h_);
-  trial_h_ = h_;
-  step.Advance(s_iso_, s_iso, &trial_h_);
-  trial_s_iso_ = s_iso;
+  const Vector6d s_visc = step.alpha * s_iso + step.Offset(state_.data());
+  trial_state_ = state_;
+  step.Relax(s_iso, trial_state_.data());
   has_trial_ = true;
 
   if (stress) *stress = s_vol + s_visc;
@@ -137,8 +144,7 @@ Status ViscoelasticPoint::Update(const HyperelasticMaterial& material, const Pro
 
 void ViscoelasticPoint::Commit() {
   if (!has_trial_) return;
-  s_iso_ = trial_s_iso_;
-  h_ = trial_h_;
+  state_ = trial_state_;
   has_trial_ = false;
 }
 

@@ -60,6 +60,13 @@ PronySeries FromExponential(double g_inf_over_g0, double beta_per_s);
 PronySeries FromModuli(double g_inf, const std::vector<double>& g_i,
                        const std::vector<double>& tau_i);
 
+// The relaxation state of one material point, flat: the committed S_iso^n,
+// then H_1^n .. H_m^n, six numbers each (Voigt), 6 (m + 1) in all, zero
+// at the start (unstressed, fully relaxed). Both engines keep it in this
+// layout (MaterialField per element of the implicit analyses, TledModel per
+// element of the explicit engine), and restart files store it as is.
+inline std::size_t PronyStateSize(std::size_t terms) { return 6 * (terms + 1); }
+
 // One step of dt for a series, independent of the point: within the step
 // the viscous isochoric stress is affine in the end-of-step S_iso,
 //   S_visc = alpha S_iso^{n+1} + offset^n,
@@ -67,19 +74,25 @@ PronySeries FromModuli(double g_inf, const std::vector<double>& g_i,
 //   offset^n = sum_k (decay_k H_k^n - weight_k S_iso^n),  decay_k = exp(-dt/tau_k),
 // so that alpha W_iso + offset^n . E is an incremental potential whose
 // derivatives are S_visc and alpha C_iso (the elements' Newton iterations
-// and line searches use it as an energy).
+// and line searches use it as an energy). This is the one place the
+// relaxation is integrated: the implicit analyses take Offset within a step
+// and Relax at its end, the explicit engine Relax at every evaluation (each
+// is a step).
 struct ViscousStep {
   double alpha = 1;
+  double long_term = 1;  // g_inf
   std::vector<double> decay, weight;
 
   // `series` must have passed Validate(); dt_s > 0.
   static ViscousStep Of(const PronySeries& series, double dt_s);
-  // offset^n of a point with committed S_iso^n and H_k^n (an empty h: zero).
-  Vector6d Offset(const Vector6d& s_iso, const std::vector<Vector6d>& h) const;
-  // The internal variables at the end of the step, given the step's final
-  // S_iso: H_k^{n+1} from H_k^n in `h` (resized to the series' terms).
-  void Advance(const Vector6d& s_iso_old, const Vector6d& s_iso_new,
-               std::vector<Vector6d>* h) const;
+  // offset^n of a point's state (PronyStateSize(terms) numbers).
+  Vector6d Offset(const double* state) const;
+  // Moves a point's state to the end of the step, given the step's final
+  // S_iso: H_k^{n+1} = decay_k H_k^n + weight_k (S_iso^{n+1} - S_iso^n),
+  // then S_iso^n <- S_iso^{n+1}. Returns the step's viscous stress
+  // S_visc = g_inf S_iso^{n+1} + sum_k H_k^{n+1} (= alpha S_iso^{n+1} +
+  // offset^n up to rounding).
+  Vector6d Relax(const Vector6d& s_iso, double* state) const;
 };
 
 // History of one material point. Starts unstressed and fully relaxed
@@ -97,14 +110,9 @@ class ViscoelasticPoint {
   // Accepts the last trial update as the state at the end of the step.
   void Commit();
 
-  // Committed internal variables H_k [Pa] (empty before the first commit).
-  const std::vector<Vector6d>& history() const { return h_; }
-
  private:
-  Vector6d s_iso_ = Vector6d::Zero();  // committed S_iso^n
-  std::vector<Vector6d> h_;            // committed H_k^n
-  Vector6d trial_s_iso_ = Vector6d::Zero();
-  std::vector<Vector6d> trial_h_;
+  // Committed and trial states (PronyStateSize; empty before the first update).
+  std::vector<double> state_, trial_state_;
   bool has_trial_ = false;
 };
 

@@ -518,15 +518,18 @@ Status ValidateOptions(const ImproveOptions& o) {
 
 Status ImproveTetMesh(const ImproveOptions& options, Mesh* mesh, ImproveStats* stats) {
   if (mesh == nullptr) return Status::InvalidArgument("mesh", "no mesh given");
-  if (mesh->hexahedral()) {
-    return Status::InvalidArgument("mesh",
-                                   "a hexahedral mesh cannot be improved: only linear "
-                                   "tetrahedra");
-  }
-  if (mesh->quadratic()) {
-    return Status::InvalidArgument("mesh",
-                                   "a quadratic mesh cannot be improved: improve the "
-                                   "linear mesh, then make it quadratic");
+  // The flips and the smoothing work on linear tetrahedra only.
+  switch (mesh->shape()) {
+    case ElementShape::kTet4:
+      break;
+    case ElementShape::kTet10:
+      return Status::InvalidArgument("mesh",
+                                     "a quadratic mesh cannot be improved: improve the "
+                                     "linear mesh, then make it quadratic");
+    case ElementShape::kHex8:
+      return Status::InvalidArgument("mesh",
+                                     "a hexahedral mesh cannot be improved: only linear "
+                                     "tetrahedra");
   }
   PBA_RETURN_IF_ERROR(ValidateOptions(options));
   // Prepare only reads the mesh: a refused mesh stays as it was.

@@ -9,6 +9,30 @@
 
 namespace pba {
 
+NodeList Mesh::ElementNodes(int e) const {
+  NodeList list;
+  switch (shape()) {
+    case ElementShape::kTet4:
+      std::copy(tets[e].begin(), tets[e].end(), list.node.begin());
+      break;
+    case ElementShape::kTet10:
+      std::copy(tets[e].begin(), tets[e].end(), list.node.begin());
+      std::copy(midside[e].begin(), midside[e].end(), list.node.begin() + 4);
+      break;
+    case ElementShape::kHex8:
+      std::copy(hexes[e].begin(), hexes[e].end(), list.node.begin());
+      break;
+  }
+  list.count = ShapeInfo(shape()).nodes;
+  return list;
+}
+
+NodeList Mesh::ElementCorners(int e) const {
+  NodeList list = ElementNodes(e);
+  list.count = ShapeInfo(shape()).corners;
+  return list;
+}
+
 Eigen::Matrix<double, 4, 3> TetCorners(const Mesh& mesh, int e) {
   Eigen::Matrix<double, 4, 3> x;
   for (int a = 0; a < 4; ++a) x.row(a) = mesh.nodes.row(mesh.tets[e][a]);

@@ -11,6 +11,8 @@
 #include <string>
 #include <vector>
 
+#include "mesh/element_shape.h"
+
 namespace pba {
 
 // A named part of the boundary: its triangles and the nodes they touch.
@@ -49,8 +51,24 @@ struct Mesh {
 
   int num_nodes() const { return static_cast<int>(nodes.rows()); }
   int num_elements() const { return static_cast<int>(hexes.empty() ? tets.size() : hexes.size()); }
-  bool quadratic() const { return !midside.empty(); }
-  bool hexahedral() const { return !hexes.empty(); }
+
+  // The shape of every element: hexahedra when `hexes` is set, else 10-node
+  // tetrahedra when `midside` is, else 4-node tetrahedra (also for a mesh
+  // without elements). The one place that tells the shapes apart by which
+  // arrays are filled; ShapeInfo(shape()) gives its nodes and names.
+  ElementShape shape() const {
+    return !hexes.empty()     ? ElementShape::kHex8
+           : !midside.empty() ? ElementShape::kTet10
+                              : ElementShape::kTet4;
+  }
+  bool quadratic() const { return shape() == ElementShape::kTet10; }
+  bool hexahedral() const { return shape() == ElementShape::kHex8; }
+
+  // Element e's nodes in the Abaqus / VTK order (C3D4, C3D10: corners, then
+  // `midside`; C3D8), ShapeInfo(shape()).nodes of them.
+  NodeList ElementNodes(int e) const;
+  // Its corners: the first ShapeInfo(shape()).corners of those.
+  NodeList ElementCorners(int e) const;
 };
 
 // Corner coordinates of tetrahedron `e`, one row per node [m].

@@ -18,9 +18,15 @@ uint64_t EdgeKey(int a, int b) {
 }  // namespace
 
 Mesh MakeQuadratic(const Mesh& linear, const MidsideProjection& project) {
-  if (linear.quadratic()) {
-    std::fprintf(stderr, "pba: MakeQuadratic called with a mesh that is already quadratic\n");
-    std::abort();
+  switch (linear.shape()) {
+    case ElementShape::kTet4:
+      break;
+    case ElementShape::kTet10:
+      std::fprintf(stderr, "pba: MakeQuadratic called with a mesh that is already quadratic\n");
+      std::abort();
+    case ElementShape::kHex8:
+      std::fprintf(stderr, "pba: MakeQuadratic called with a hexahedral mesh\n");
+      std::abort();
   }
   const int n = linear.num_nodes(), ne = linear.num_elements();
 

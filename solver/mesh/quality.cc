@@ -97,38 +97,56 @@ double Tet10MaxJacobianRatio(const Tet10Nodes& x) {
   return 1 / ratio;
 }
 
+namespace {
+
+// The measures of element e of `mesh`, whose elements are of `shape`: of a
+// brick only its volume, of a tetrahedron also those of its corners.
+ElementQuality Measure(const Mesh& mesh, ElementShape shape, int e) {
+  ElementQuality q;
+  const auto measure_corners = [&](const Eigen::Matrix<double, 4, 3>& x) {
+    q.aspect_ratio = TetAspectRatio(x);
+    q.dihedral_deg = TetDihedralRangeDegrees(x);
+  };
+  switch (shape) {
+    case ElementShape::kHex8:
+      q.volume = HexVolume(mesh, e);
+      break;
+    case ElementShape::kTet10: {
+      measure_corners(TetCorners(mesh, e));
+      const Tet10Nodes x10 = Tet10Coordinates(mesh, e);
+      q.jacobian_ratio = Tet10MaxJacobianRatio(x10);
+      q.volume = Tet10Volume(x10);
+      break;
+    }
+    case ElementShape::kTet4: {
+      const Eigen::Matrix<double, 4, 3> x = TetCorners(mesh, e);
+      measure_corners(x);
+      const Eigen::Vector3d e1 = (x.row(1) - x.row(0)).transpose();
+      const Eigen::Vector3d e2 = (x.row(2) - x.row(0)).transpose();
+      const Eigen::Vector3d e3 = (x.row(3) - x.row(0)).transpose();
+      q.volume = e1.dot(e2.cross(e3)) / 6;
+      break;
+    }
+  }
+  return q;
+}
+
+}  // namespace
+
 QualitySummary Summarise(const Mesh& mesh) {
   QualitySummary summary;
   const int n = mesh.num_elements();
   const bool by_region = !mesh.element_region.empty();
   std::vector<ElementQuality> all(n);
-  for (int e = 0; e < n; ++e) {
-    ElementQuality& q = all[e];
-    if (mesh.hexahedral()) {
-      q.volume = HexVolume(mesh, e);
-      continue;
-    }
-    const Eigen::Matrix<double, 4, 3> x = TetCorners(mesh, e);
-    q.aspect_ratio = TetAspectRatio(x);
-    q.dihedral_deg = TetDihedralRangeDegrees(x);
-    if (mesh.quadratic()) {
-      const Tet10Nodes x10 = Tet10Coordinates(mesh, e);
-      q.jacobian_ratio = Tet10MaxJacobianRatio(x10);
-      q.volume = Tet10Volume(x10);
-    } else {
-      const Eigen::Vector3d e1 = (x.row(1) - x.row(0)).transpose();
-      const Eigen::Vector3d e2 = (x.row(2) - x.row(0)).transpose();
-      const Eigen::Vector3d e3 = (x.row(3) - x.row(0)).transpose();
-      q.volume = e1.dot(e2.cross(e3)) / 6;
-    }
-  }
+  const ElementShape shape = mesh.shape();
+  for (int e = 0; e < n; ++e) all[e] = Measure(mesh, shape, e);
   if (by_region) {
     std::vector<std::vector<ElementQuality>> per_region(mesh.region_names.size());
     for (int e = 0; e < n; ++e) per_region.at(mesh.element_region[e]).push_back(all[e]);
     for (auto& elements : per_region) summary.regions.push_back(Gather(std::move(elements)));
   }
   summary.overall = Gather(std::move(all));
-  if (mesh.hexahedral()) {
+  if (shape == ElementShape::kHex8) {
     // Only count and volume mean anything for bricks.
     const auto keep_count_and_volume = [](QualityStats* s) {
       QualityStats kept;

@@ -127,7 +127,8 @@ void RebuildRegionFaceSets(Mesh* mesh) {
 
 RelabelStats RelabelInterfaceSlivers(double target_deg, Mesh* mesh) {
   RelabelStats stats;
-  if (mesh->element_region.empty() || mesh->quadratic() || mesh->hexahedral()) return stats;
+  // A linear tetrahedral mesh only (region_faces.h).
+  if (mesh->element_region.empty() || mesh->shape() != ElementShape::kTet4) return stats;
   const std::vector<int> neighbour = FaceNeighbours(*mesh);
   std::vector<int> count(mesh->region_names.size(), 0);
   for (int r : mesh->element_region) ++count[r];

@@ -11,7 +11,6 @@
 
 #include "fem/element_kind.h"
 #include "material/linear_elastic.h"
-#include "mesh/quadratic.h"
 #include "pba/solve.h"
 #include "scene/problem.h"
 
@@ -116,7 +115,7 @@ Status WriteAbaqusDeck(const Problem& problem, const std::filesystem::path& file
            "** mean-dilatation 10-node element, so C3D10 here is the plain element, which locks\n"
            "** when nearly incompressible: set mesh.element: TET10 to compare the same discrete\n"
            "** problem.\n";
-  } else if (mesh.quadratic()) {
+  } else if (mesh.shape() == ElementShape::kTet10) {
     out << "** PBA solves this scene with TET10; C3D10 is the same element (the same 10 nodes in\n"
            "** the same order, the same 4-point rule), so both codes answer one discrete "
            "problem.\n";
@@ -135,13 +134,7 @@ Status WriteAbaqusDeck(const Problem& problem, const std::filesystem::path& file
   out << "*ELEMENT, TYPE=" << KindOf(problem.element).abaqus_type << ", ELSET=EALL\n";
   for (int e = 0; e < mesh.num_elements(); ++e) {
     out << e + 1;
-    if (mesh.quadratic()) {
-      for (int node : Tet10NodeIndices(mesh, e)) out << ", " << node + 1;
-    } else if (mesh.hexahedral()) {
-      for (int node : mesh.hexes[e]) out << ", " << node + 1;
-    } else {
-      for (int node : mesh.tets[e]) out << ", " << node + 1;
-    }
+    for (int node : mesh.ElementNodes(e)) out << ", " << node + 1;
     out << "\n";
   }
   for (const auto& [name, set] : mesh.face_sets) {
@@ -207,7 +200,7 @@ Status WriteAbaqusDeck(const Problem& problem, const std::filesystem::path& file
     if (!dload) out << "*DLOAD\n";
     dload = true;
     const FaceSet& set = mesh.face_sets.at(bc.set);
-    if (mesh.hexahedral()) {
+    if (ShapeInfo(mesh.shape()).boundary_face == BoundaryFace::kQuad4) {
       // C3D8 faces S1..S6 (mesh.h, kHex8Faces).
       for (const auto& [element, face] : QuadFaceElements(mesh, set)) {
         if (element < 0) continue;

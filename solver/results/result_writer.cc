@@ -13,6 +13,7 @@
 #include "core/atomic_write.h"
 #include "io/h5_writer.h"
 #include "io/line_plot.h"
+#include "mesh/element_shape.h"
 #include "pba/solve.h"
 
 namespace pba {
@@ -24,16 +25,10 @@ std::string Item(const std::string& dims, const std::string& path,
          std::to_string(precision) + "\" Format=\"HDF\">result.h5:" + path + "</DataItem>";
 }
 
-// The XDMF cell of a connectivity with `nodes_per_element` columns (4, 10
-// or 8, checked by WriteResultFiles); all share VTK's and Abaqus' node order.
-const char* XdmfTopologyType(int nodes_per_element) {
-  return nodes_per_element == 10  ? "Tetrahedron_10"
-         : nodes_per_element == 8 ? "Hexahedron"
-                                  : "Tetrahedron";
-}
-
-const char* ElementTypeName(int nodes_per_element) {
-  return nodes_per_element == 10 ? "TET10" : nodes_per_element == 8 ? "HEX8" : "TET4";
+// The shape of a connectivity with `nodes_per_element` columns (4, 10 or
+// 8, checked by WriteResultFiles); all share VTK's and Abaqus' node order.
+const ElementShapeInfo& ShapeOf(int nodes_per_element) {
+  return *ShapeWithNodes(nodes_per_element);
 }
 
 // The per-component views of an elements x 6 dataset (ComponentView) and
@@ -112,8 +107,8 @@ std::string XdmfText(const std::string& scene_name, const OutputOptions& outputs
   const std::string per_element =
       s.nodes_per_element == 10 ? "\" NodesPerElement=\"" + npe : std::string();
   const std::string mesh = std::string("      <Topology TopologyType=\"") +
-                           XdmfTopologyType(s.nodes_per_element) + "\" NumberOfElements=\"" + ne +
-                           per_element + "\">\n        " +
+                           ShapeOf(s.nodes_per_element).xdmf_topology + "\" NumberOfElements=\"" +
+                           ne + per_element + "\">\n        " +
                            Item(ne + " " + npe, "/mesh/tets", "Int", 8) +
                            "\n      </Topology>\n"
                            "      <Geometry GeometryType=\"XYZ\">\n        " +
@@ -268,7 +263,7 @@ Status WriteResults(const std::string& scene_name, const OutputOptions& outputs,
                     const std::filesystem::path& dir) {
   const auto start = std::chrono::steady_clock::now();
   const int npe = solution->nodes_per_element;
-  if ((npe != 4 && npe != 10 && npe != 8) || solution->tets.size() % npe != 0) {
+  if (ShapeWithNodes(npe) == nullptr || solution->tets.size() % npe != 0) {
     return Status::Internal("solution connectivity: " + std::to_string(solution->tets.size()) +
                             " indices, " + std::to_string(npe) +
                             " nodes per element (4, 10 or 8, dividing the count)");
@@ -288,7 +283,7 @@ Status WriteResults(const std::string& scene_name, const OutputOptions& outputs,
               : npe == 8 ? "node indices, 0-based: one face 0-3, then the opposite face, node "
                            "4 + i across from node i (VTK_HEXAHEDRON, Abaqus C3D8)"
                          : "node indices, 0-based");
-    w.Attribute("/mesh/tets", "element_type", ElementTypeName(npe));
+    w.Attribute("/mesh/tets", "element_type", ShapeOf(npe).name);
     const std::string voigt = "xx yy zz yz xz xy";
     if (outputs.displacement)
       w.Dataset("/fields/displacement", solution->displacement_mm, 3, "mm", "x y z");

@@ -24,12 +24,10 @@ Status CutInclusions(const SceneSpec& scene, Mesh* mesh) {
     const int region = static_cast<int>(mesh->region_names.size());
     int count = 0;
     for (int e = 0; e < ne; ++e) {
+      // The mean of the corners (of a 10-node element's too).
       Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
-      if (mesh->hexahedral()) {
-        for (int a : mesh->hexes[e]) centroid += mesh->nodes.row(a).transpose() / 8;
-      } else {
-        for (int a : mesh->tets[e]) centroid += mesh->nodes.row(a).transpose() / 4;
-      }
+      const NodeList corners = mesh->ElementCorners(e);
+      for (int a : corners) centroid += mesh->nodes.row(a).transpose() / corners.size();
       if ((centroid - centre).norm() <= radius) {
         mesh->element_region[e] = region;
         ++count;

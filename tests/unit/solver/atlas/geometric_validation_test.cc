@@ -107,10 +107,29 @@ class SphereInBoxTest : public ::testing::Test {
 // The perimeter of B on plate i is the marching-squares length of a disc
 // of radius sqrt(R^2 - z^2): 0 to 5.5 % above 2 pi r (see the header),
 // allowing one pixel of radius for the digital disc: within [0.96, 1.08].
+// The sections are cut in parallel, each into its own slot: one thread and
+// two give the same figures, number for number.
+TEST_F(SphereInBoxTest, TheSameOnOneThreadAndTwo) {
+  GeometricValidation one, two;
+  ASSERT_TRUE(
+      ValidateAgainstPlates(mesh_, region_label_, SpherePlates(2), ThreadContext(1), &one).ok());
+  ASSERT_TRUE(
+      ValidateAgainstPlates(mesh_, region_label_, SpherePlates(2), ThreadContext(2), &two).ok());
+  ASSERT_EQ(one.structures.size(), two.structures.size());
+  EXPECT_EQ(one.total_sections, two.total_sections);
+  EXPECT_EQ(one.overall_structural_error_mm, two.overall_structural_error_mm);
+  EXPECT_GT(one.overall_structural_error_mm, 0);
+  for (std::size_t k = 0; k < one.structures.size(); ++k) {
+    EXPECT_EQ(one.structures[k].structural_error_mm, two.structures[k].structural_error_mm);
+    EXPECT_EQ(one.structures[k].sections.size(), two.structures[k].sections.size());
+  }
+}
+
 TEST_F(SphereInBoxTest, MatchingPlatesLeaveOnlyDiscretisationError) {
   const auto start = std::chrono::steady_clock::now();
   GeometricValidation v;
-  ASSERT_TRUE(ValidateAgainstPlates(mesh_, region_label_, SpherePlates(0), &v).ok());
+  ASSERT_TRUE(
+      ValidateAgainstPlates(mesh_, region_label_, SpherePlates(0), ThreadContext(), &v).ok());
   std::printf("%d tets, %.2f s\n%s", mesh_.num_elements(), Seconds(start),
               FormatValidationTable(v, TableFormat::kText).c_str());
   ASSERT_EQ(v.structures.size(), 2u);
@@ -152,8 +171,11 @@ TEST_F(SphereInBoxTest, MatchingPlatesLeaveOnlyDiscretisationError) {
 // grows with E (same perimeters within a pixel).
 TEST_F(SphereInBoxTest, ShiftedSphereRaisesTheErrorToAboutTheShift) {
   GeometricValidation matching, shifted;
-  ASSERT_TRUE(ValidateAgainstPlates(mesh_, region_label_, SpherePlates(0), &matching).ok());
-  ASSERT_TRUE(ValidateAgainstPlates(mesh_, region_label_, SpherePlates(2), &shifted).ok());
+  ASSERT_TRUE(
+      ValidateAgainstPlates(mesh_, region_label_, SpherePlates(0), ThreadContext(), &matching)
+          .ok());
+  ASSERT_TRUE(
+      ValidateAgainstPlates(mesh_, region_label_, SpherePlates(2), ThreadContext(), &shifted).ok());
   std::printf("%s", FormatValidationTable(shifted, TableFormat::kText).c_str());
   const StructureValidation& b0 = *Find(matching, kB);
   const StructureValidation& b2 = *Find(shifted, kB);
@@ -184,7 +206,7 @@ TEST_F(SphereInBoxTest, MissingAndExtraStructuresAreReportedAsDocumented) {
         return Eigen::Vector3d(x, y, z).norm() < kRadius ? kB : kA;
       });
   GeometricValidation v;
-  ASSERT_TRUE(ValidateAgainstPlates(mesh_, region_label_, plates, &v).ok());
+  ASSERT_TRUE(ValidateAgainstPlates(mesh_, region_label_, plates, ThreadContext(), &v).ok());
   std::printf("%s", FormatValidationTable(v, TableFormat::kText).c_str());
   ASSERT_EQ(v.structures.size(), 3u);
 
@@ -240,11 +262,11 @@ TEST_F(SphereInBoxTest, MissingAndExtraStructuresAreReportedAsDocumented) {
 
 TEST_F(SphereInBoxTest, RejectsBadInputNamingTheField) {
   GeometricValidation v;
-  Status s = ValidateAgainstPlates(mesh_, {kA}, SpherePlates(0), &v);
+  Status s = ValidateAgainstPlates(mesh_, {kA}, SpherePlates(0), ThreadContext(), &v);
   EXPECT_EQ(s.field(), "region_label");
   PlateStack plates = SpherePlates(0);
   plates.labels[1].pop_back();
-  s = ValidateAgainstPlates(mesh_, region_label_, plates, &v);
+  s = ValidateAgainstPlates(mesh_, region_label_, plates, ThreadContext(), &v);
   EXPECT_EQ(s.field(), "plates.labels[1]");
   mesh_.region_names[1] = "no such structure";
   s = RegionLabelsFromNames(mesh_, colours_, &region_label_);
@@ -325,7 +347,7 @@ TEST(AtlasValidationTest, BoxMeshSampledFromTheLoftFollowsThePlates) {
 
   start = std::chrono::steady_clock::now();
   GeometricValidation v;
-  ASSERT_TRUE(ValidateAgainstPlates(mesh, region_label, plates, &v).ok());
+  ASSERT_TRUE(ValidateAgainstPlates(mesh, region_label, plates, ThreadContext(), &v).ok());
   std::printf("validation: %.2f s\n%s", Seconds(start),
               FormatValidationTable(v, TableFormat::kText).c_str());
 
