@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "analysis/element_fields.h"
 #include "fem/tet4_finite_strain.h"
 #include "material/hyperelastic.h"
 
@@ -266,6 +267,22 @@ class NodalPressureModel final : public FiniteStrainModel {
 
   std::string Describe() const override {
     return "TET4 with average nodal pressure (nodal volumetric energy), total Lagrangian";
+  }
+
+  // Each element's pressure and volume ratio are the means over its corners
+  // of U'(J_a) and J_a, the nodal volume ratios its volumetric energy is
+  // written in (its own det F carries the volumetric noise the element
+  // would lock on).
+  double RecoverFields(const Eigen::VectorXd& u, Solution* solution) const override {
+    std::vector<double> pressure, volume_ratio;
+    AverageNodalPressures(mesh_, field_, u, &pressure, &volume_ratio);
+    return RecoverFiniteStrainFields(
+        mesh_.num_elements(), threads_, solution, [&](int e, ElementFieldSum* sum) {
+          const Tet4Geometry& g = geometry_[e];
+          sum->Add(g.volume,
+                   FieldsAt(field_.At(e), DeformationGradient(g, GatherElement(mesh_, e, u)),
+                            pressure[e], volume_ratio[e]));
+        });
   }
 
  private:

@@ -91,4 +91,37 @@ double WriteFiniteStrainFields(int e, const ElementFields& fields, Solution* sol
   return fields.green.cwiseAbs().maxCoeff();
 }
 
+ElementFields FieldsAt(const HyperelasticMaterial& material, const Eigen::Matrix3d& f,
+                       std::optional<double> pressure, double volume_ratio) {
+  Vector6d pk2 = Vector6d::Zero();
+  if (pressure) {
+    double w;
+    material.Isochoric(f, &w, &pk2, nullptr);
+    pk2 += *pressure * f.determinant() * SymmetricToVoigt((f.transpose() * f).inverse());
+  } else {
+    pk2 = material.Stress(f);
+  }
+  ElementFields p = FieldsFromPk2(f, pk2);
+  if (pressure) p.j = volume_ratio;
+  return p;
+}
+
+double RecoverFiniteStrainFields(int elements, const ThreadContext& threads, Solution* solution,
+                                 const std::function<void(int e, ElementFieldSum* sum)>& sample) {
+  StartFiniteStrainFields(elements, solution);
+  double max_strain = 0;
+  // clang-format splits "max : max_strain" across the continuation.
+  // clang-format off
+#pragma omp parallel for schedule(static) reduction(max : max_strain) \
+    num_threads(threads.threads()) if (threads.Parallel(elements))
+  // clang-format on
+  for (int e = 0; e < elements; ++e) {
+    ElementFieldSum sum;
+    sample(e, &sum);
+    WriteFiniteStrainFields(e, sum.Mean(), solution);
+    max_strain = std::max(max_strain, sum.LargestStrain());
+  }
+  return max_strain;
+}
+
 }  // namespace pba

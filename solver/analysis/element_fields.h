@@ -9,7 +9,11 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <functional>
+#include <optional>
 
+#include "core/thread_context.h"
+#include "material/hyperelastic.h"
 #include "material/voigt.h"
 #include "pba/solve.h"
 
@@ -29,6 +33,14 @@ struct ElementFields {
 ElementFields FieldsFromPk2(const Eigen::Matrix3d& f, const Vector6d& pk2);
 // The same under Cauchy stress `cauchy` (S = J F^-1 sigma F^-T).
 ElementFields FieldsFromCauchy(const Eigen::Matrix3d& f, const Vector6d& cauchy);
+
+// The fields of deformation gradient `f` under `material`'s stress; with a
+// `pressure` (average nodal pressure: the element's mean of its corners'
+// U'(J_a)), the isochoric stress plus that pressure's p J C^-1, and J
+// reported as `volume_ratio` (the corners' mean volume ratio, which the
+// element's energy is written in).
+ElementFields FieldsAt(const HyperelasticMaterial& material, const Eigen::Matrix3d& f,
+                       std::optional<double> pressure = std::nullopt, double volume_ratio = 0);
 
 // An element's volume-weighted means: Add each integration point with its
 // share of the element's volume, then Mean() divides every sum by the total
@@ -62,5 +74,12 @@ void WriteSmallStrainFields(int e, const Vector6d& strain, const Vector6d& stres
 // Element e's finite-strain fields (strain the Green-Lagrange, stress_pa the
 // Cauchy); returns the largest Green-Lagrange component (magnitude).
 double WriteFiniteStrainFields(int e, const ElementFields& fields, Solution* solution);
+
+// Writes every element's finite-strain fields (StartFiniteStrainFields,
+// then the means of the samples `sample(e, &sum)` adds for element e) on
+// `threads`, element by element; returns the largest Green-Lagrange
+// component. The body side of field recovery (DiscreteBody::RecoverFields).
+double RecoverFiniteStrainFields(int elements, const ThreadContext& threads, Solution* solution,
+                                 const std::function<void(int e, ElementFieldSum* sum)>& sample);
 
 }  // namespace pba

@@ -14,8 +14,15 @@
 //   bool Evaluate(const Geometry&, const Unknowns&, const HyperelasticMaterial&,
 //                 bool with_tangent, bool drop_pressure_stiffness, Result*) const;
 //   std::string Describe() const;
+//   // Field recovery: kPoints integration points; the element's mean
+//   // volume ratio (mean dilatation; any number otherwise) and the F its
+//   // stress is evaluated with at point q.
+//   static constexpr int kPoints;
+//   double Dilatation(const Geometry&, const Unknowns&) const;
+//   Eigen::Matrix3d PointF(const Geometry&, const Unknowns&, int q, double theta) const;
 //
-// Geometry has `grad` (dN/dX per integration point) and `min_jacobian`.
+// Geometry has `grad` (dN/dX per integration point), `volume` (each
+// point's share of the element's volume) and `min_jacobian`.
 #pragma once
 
 #include <algorithm>
@@ -26,6 +33,7 @@
 #include <string>
 #include <vector>
 
+#include "analysis/element_fields.h"
 #include "analysis/finite_strain_model.h"
 #include "material/hyperelastic.h"
 #include "material/material_field.h"
@@ -118,6 +126,18 @@ class ElementModel final : public FiniteStrainModel {
   }
 
   std::string Describe() const override { return element_.Describe(); }
+
+  double RecoverFields(const Eigen::VectorXd& u, Solution* solution) const override {
+    return RecoverFiniteStrainFields(
+        mesh_.num_elements(), threads_, solution, [&](int e, ElementFieldSum* sum) {
+          const auto& g = geometry_[e];
+          const auto ue = Element::Gather(mesh_, e, u);
+          const double theta = element_.Dilatation(g, ue);
+          for (int q = 0; q < Element::kPoints; ++q) {
+            sum->Add(g.volume[q], FieldsAt(field_.At(e), element_.PointF(g, ue, q, theta)));
+          }
+        });
+  }
 
  private:
   // The lowest element whose reference det J or whose F at an integration

@@ -4,6 +4,7 @@
 #include <cstdlib>
 
 #include "analysis/average_nodal_pressure_model.h"
+#include "analysis/element_fields.h"
 #include "analysis/hex8_model.h"
 #include "analysis/tet10_model.h"
 #include "fem/tet4_finite_strain.h"
@@ -73,6 +74,15 @@ class Tet4Model final : public FiniteStrainModel {
   }
 
   std::string Describe() const override { return "TET4, total Lagrangian"; }
+
+  double RecoverFields(const Eigen::VectorXd& u, Solution* solution) const override {
+    return RecoverFiniteStrainFields(
+        mesh_.num_elements(), threads_, solution, [&](int e, ElementFieldSum* sum) {
+          const Tet4Geometry& g = geometry_[e];
+          sum->Add(g.volume,
+                   FieldsAt(field_.At(e), DeformationGradient(g, GatherElement(mesh_, e, u))));
+        });
+  }
 
  private:
   const Mesh& mesh_;

@@ -2,6 +2,7 @@
 
 #include "analysis/element_model.h"
 #include "fem/hex8_finite_strain.h"
+#include "fem/point_kinematics.h"
 
 namespace pba {
 namespace {
@@ -40,6 +41,14 @@ struct Hex8Element {
     return full_integration
                ? Hex8FiniteStrainFull(g, ue, material, with_tangent, r, drop_pressure_stiffness)
                : Hex8FiniteStrain(g, ue, material, with_tangent, r, drop_pressure_stiffness);
+  }
+  static constexpr int kPoints = 8;
+  double Dilatation(const Geometry& g, const Unknowns& ue) const { return MeanDilatation(g, ue); }
+  // The mean-dilatation brick's stress comes from F_bar = (theta / J)^(1/3)
+  // F: F's isochoric part with the element's mean volume ratio.
+  Eigen::Matrix3d PointF(const Geometry& g, const Unknowns& ue, int q, double theta) const {
+    return full_integration ? DeformationGradientHex8(g.grad[q], ue)
+                            : MeanDilatationF(DeformationGradientHex8(g.grad[q], ue), theta);
   }
   std::string Describe() const {
     return full_integration

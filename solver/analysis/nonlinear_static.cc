@@ -19,6 +19,7 @@
 #include "core/format.h"
 #include "fem/element_kind.h"
 #include "fem/hex8.h"
+#include "fem/point_kinematics.h"
 #include "fem/tet4_finite_strain.h"
 #include "linear/linear_solver.h"
 #include "material/factory.h"
@@ -32,65 +33,6 @@
 
 namespace pba {
 namespace {
-
-// F = I + sum_a u_a (x) grad N_a for a 10-node element (rows of `grad`:
-// dN_a/dX).
-Eigen::Matrix3d DeformationGradientTet10(const Tet10Nodes& grad, const Vector30d& ue) {
-  Eigen::Matrix3d f = Eigen::Matrix3d::Identity();
-  for (int a = 0; a < 10; ++a) f += ue.segment<3>(3 * a) * grad.row(a);
-  return f;
-}
-
-// F = I + sum_a u_a (x) grad N_a for an 8-node element.
-Eigen::Matrix3d DeformationGradientHex8(const Hex8Nodes& grad, const Vector24d& ue) {
-  Eigen::Matrix3d f = Eigen::Matrix3d::Identity();
-  for (int a = 0; a < 8; ++a) f += ue.segment<3>(3 * a) * grad.row(a);
-  return f;
-}
-
-// theta = v / V, the brick's current over reference volume.
-double MeanDilatation(const Hex8Geometry& g, const Vector24d& ue) {
-  double v = 0;
-  for (int q = 0; q < 8; ++q) {
-    v += g.volume[q] * DeformationGradientHex8(g.grad[q], ue).determinant();
-  }
-  return v / g.element_volume;
-}
-
-// theta = v / V for TET10_MD, by its 4-point rule (fem/tet10_finite_strain.h).
-double MeanDilatation(const Tet10Geometry& g, const Vector30d& ue) {
-  double v = 0, v0 = 0;
-  for (int q = 0; q < 4; ++q) {
-    v += g.volume[q] * DeformationGradientTet10(g.grad[q], ue).determinant();
-    v0 += g.volume[q];
-  }
-  return v / v0;
-}
-
-// F_bar = (theta / det F)^(1/3) F: F's isochoric part with the element's
-// mean volume ratio, the F a mean-dilatation element's stress comes from.
-Eigen::Matrix3d MeanDilatationF(const Eigen::Matrix3d& f, double theta) {
-  return std::cbrt(theta / f.determinant()) * f;
-}
-
-// The finite-strain fields at a material point. With `pressure` (an
-// average-nodal-pressure element), the volumetric part of the stress is that
-// pressure, not U'(det F): S = S_iso(F) + p J C^-1, sigma = sigma_iso + p I;
-// `volume_ratio` then replaces det F as J.
-ElementFields FieldsAt(const HyperelasticMaterial& material, const Eigen::Matrix3d& f,
-                       std::optional<double> pressure = std::nullopt, double volume_ratio = 0) {
-  Vector6d pk2 = Vector6d::Zero();
-  if (pressure) {
-    double w;
-    material.Isochoric(f, &w, &pk2, nullptr);
-    pk2 += *pressure * f.determinant() * SymmetricToVoigt((f.transpose() * f).inverse());
-  } else {
-    pk2 = material.Stress(f);
-  }
-  ElementFields p = FieldsFromPk2(f, pk2);
-  if (pressure) p.j = volume_ratio;
-  return p;
-}
 
 NewtonOptions OptionsOf(const NonlinearOptions& nonlinear) {
   NewtonOptions options;
@@ -136,78 +78,6 @@ Status MakeContacts(const Problem& problem, double shear_modulus_pa,
                                                        c.penetration_tolerance_m));
   }
   return Status::Ok();
-}
-
-// The finite-strain fields of every element at the displacement u:
-// solution's strain, Almansi strain, PK2 and Cauchy stress, von Mises and J
-// (element means), the largest Green-Lagrange component returned.
-double RecoverFiniteStrainFields(const Problem& problem, const MaterialField& field,
-                                 const Eigen::VectorXd& u, Solution* solution) {
-  const Mesh& mesh = problem.model.mesh;
-  const bool full_bricks = problem.element == ElementType::kHex8Full;
-  const bool tet10_md = problem.element == ElementType::kTet10Md;
-  const int ne = mesh.num_elements();
-  StartFiniteStrainFields(ne, solution);
-  double max_strain = 0;
-  // The average-nodal-pressure element's pressure and volume ratio: the
-  // means over its corners of U'(J_a) and J_a, J_a = v_a / V_a the nodal
-  // volume ratios its volumetric energy is written in (its own det F
-  // carries the volumetric noise that element would lock on).
-  std::vector<double> element_pressure, element_volume_ratio;
-  const bool nodal_pressure =
-      KindOf(problem.element).volumetric == ElementKind::Volumetric::kNodalAverage;
-  if (nodal_pressure) {
-    AverageNodalPressures(mesh, field, u, &element_pressure, &element_volume_ratio);
-  }
-  // clang-format splits "max : max_strain" across the continuation.
-  // clang-format off
-#pragma omp parallel for schedule(static) reduction(max : max_strain) \
-    num_threads(problem.threads.threads()) if (problem.threads.Parallel(ne))
-  // clang-format on
-  for (int e = 0; e < ne; ++e) {
-    // One point for a 4-node element; the volume average over the
-    // integration points for a 10-node one or a brick.
-    ElementFieldSum sum;
-    switch (mesh.shape()) {
-      case ElementShape::kHex8: {
-        // The mean-dilatation brick's stress comes from F_bar = (theta /
-        // J)^(1/3) F: F's isochoric part with the element's mean volume ratio.
-        const Hex8Geometry g = ComputeHex8Geometry(Hex8Coordinates(mesh, e));
-        const Vector24d ue = GatherElementHex8(mesh, e, u);
-        const double theta = MeanDilatation(g, ue);
-        for (int q = 0; q < 8; ++q) {
-          sum.Add(g.volume[q],
-                  FieldsAt(field.At(e),
-                           full_bricks
-                               ? DeformationGradientHex8(g.grad[q], ue)
-                               : MeanDilatationF(DeformationGradientHex8(g.grad[q], ue), theta)));
-        }
-        break;
-      }
-      case ElementShape::kTet10: {
-        const Tet10Geometry g = ComputeTet10Geometry(Tet10Coordinates(mesh, e));
-        const Vector30d ue = GatherElementTet10(mesh, e, u);
-        // TET10_MD: F_bar, as for the brick.
-        const double theta = tet10_md ? MeanDilatation(g, ue) : 0;
-        for (int q = 0; q < 4; ++q) {
-          const Eigen::Matrix3d f = DeformationGradientTet10(g.grad[q], ue);
-          sum.Add(g.volume[q], FieldsAt(field.At(e), tet10_md ? MeanDilatationF(f, theta) : f));
-        }
-        break;
-      }
-      case ElementShape::kTet4: {
-        const Tet4Geometry g = ComputeTet4Geometry(TetCorners(mesh, e));
-        const Eigen::Matrix3d f = DeformationGradient(g, GatherElement(mesh, e, u));
-        sum.Add(g.volume, nodal_pressure ? FieldsAt(field.At(e), f, element_pressure[e],
-                                                    element_volume_ratio[e])
-                                         : FieldsAt(field.At(e), f));
-        break;
-      }
-    }
-    WriteFiniteStrainFields(e, sum.Mean(), solution);
-    max_strain = std::max(max_strain, sum.LargestStrain());
-  }
-  return max_strain;
 }
 
 // The Zienkiewicz-Zhu estimate of the second Piola-Kirchhoff stress at u,
@@ -517,7 +387,7 @@ Status FiniteStrainRun::Solve() {
 
 Status FiniteStrainRun::Recover(StaticResult* result) {
   clock_.Begin("recover", 0.85, 0.95, "finite-strain fields, reactions");
-  result->max_strain = RecoverFiniteStrainFields(problem_, *field_, u_, solution_);
+  result->max_strain = body_->RecoverFields(u_, solution_);
   for (std::size_t i = 0; i < contacts_.size(); ++i) {
     const ContactMeasure m = contacts_[i]->Measure(u_);
     ContactSummary c;

@@ -48,6 +48,11 @@ class ContactModel : public FiniteStrainModel {
     return Status::Ok();
   }
 
+  // The tissue's fields: contact adds forces, not elements.
+  double RecoverFields(const Eigen::VectorXd& u, Solution* solution) const override {
+    return body_.RecoverFields(u, solution);
+  }
+
   std::string Describe() const override {
     const int n = static_cast<int>(contacts_.size());
     return body_.Describe() + Format(", with %d rigid contact%s", n, n == 1 ? "" : "s");

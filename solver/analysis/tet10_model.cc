@@ -1,6 +1,7 @@
 #include "analysis/tet10_model.h"
 
 #include "analysis/element_model.h"
+#include "fem/point_kinematics.h"
 #include "fem/tet10_finite_strain.h"
 #include "mesh/quadratic.h"
 
@@ -43,6 +44,15 @@ struct Tet10Element {
                ? Tet10FiniteStrainMeanDilatation(g, ue, material, with_tangent, r,
                                                  drop_pressure_stiffness)
                : Tet10FiniteStrain(g, ue, material, with_tangent, r, drop_pressure_stiffness);
+  }
+  static constexpr int kPoints = 4;
+  double Dilatation(const Geometry& g, const Unknowns& ue) const {
+    return mean_dilatation ? MeanDilatation(g, ue) : 0;
+  }
+  // TET10_MD: F_bar, as for the mean-dilatation brick.
+  Eigen::Matrix3d PointF(const Geometry& g, const Unknowns& ue, int q, double theta) const {
+    const Eigen::Matrix3d f = DeformationGradientTet10(g.grad[q], ue);
+    return mean_dilatation ? MeanDilatationF(f, theta) : f;
   }
   std::string Describe() const {
     return mean_dilatation

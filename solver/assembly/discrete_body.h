@@ -5,6 +5,7 @@
 //   - its internal force f_int(u, v) and stored energy,
 //   - its tangent stiffness, where it has one (the implicit models),
 //   - its lumped mass, where it has densities (the explicit engine),
+//   - its element fields (strain, stress) at a state,
 //   - its history (relaxation): commit at the end of a step, save, restore.
 // Implementations: FiniteStrainModel (analysis/finite_strain_model.h: TET4,
 // TET4_ANP, TET10, TET10_MD, HEX8, HEX8_FULL with a tangent) and TledModel
@@ -20,6 +21,7 @@
 
 #include "assembly/assembler.h"
 #include "assembly/dof_map.h"
+#include "pba/solve.h"
 #include "pba/status.h"
 
 namespace pba {
@@ -59,6 +61,14 @@ class DiscreteBody {
                           const AssemblyOptions& options, LinearSystem* system) const {
     return Status::FailedPrecondition(Describe() + " has no tangent stiffness");
   }
+
+  // The element fields at `u` into `solution` (per element: Green-Lagrange
+  // and Almansi strain, second Piola-Kirchhoff and Cauchy stress, von Mises,
+  // J; the means over its integration points); returns the largest
+  // Green-Lagrange component. A body that advances on evaluation gives
+  // those of its last evaluation, which must have been at `u` (with its
+  // stress recorded: TledModel::RecordStress).
+  virtual double RecoverFields(const Eigen::VectorXd& u, Solution* solution) const = 0;
 
   // Lumped mass per node [kg]; empty for a body without densities.
   virtual Eigen::VectorXd LumpedMass() const { return Eigen::VectorXd(); }

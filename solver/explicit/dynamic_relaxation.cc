@@ -242,8 +242,7 @@ Status DynamicRelaxationRun::Finish(StaticResult* result) {
   TledModel& tled = *tled_;
   tled.RecordStress(true);
   tled.InternalForce(u_, v_, &f_int_);
-  double max_strain = 0;
-  FillExplicitFields(tled, solution_, &max_strain);
+  const double max_strain = tled.RecoverFields(u_, solution_);
   Summary& summary = solution_->summary;
   ExplicitSummary& run = summary.explicit_run;
   run.ran = true;

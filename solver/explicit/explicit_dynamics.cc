@@ -480,7 +480,7 @@ Status ExplicitDynamicRun::Finish(StaticResult* result) {
   // The largest balance error over the run relative to the largest energy
   // of the run.
   if (max_scale_ > 0) run_.max_energy_error = max_error_ / max_scale_;
-  FillExplicitFields(*tled_, solution_, &max_strain_);
+  max_strain_ = tled_->RecoverFields(u_, solution_);
   Summarise();
   result->u = u_;
   result->internal_force = f_int_;

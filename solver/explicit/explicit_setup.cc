@@ -1,8 +1,5 @@
 #include "explicit/explicit_setup.h"
 
-#include <algorithm>
-
-#include "analysis/element_fields.h"
 #include "core/format.h"
 #include "fem/element_kind.h"
 #include "material/factory.h"
@@ -78,21 +75,6 @@ Status MakeExplicitSetup(const Problem& problem, ExplicitSetup* out) {
   out->loads = std::make_unique<ExternalLoads>(BuildLoads(problem));
   out->has_loads = !out->loads->empty();
   return Status::Ok();
-}
-
-void FillExplicitFields(const TledModel& tled, Solution* solution, double* max_strain) {
-  const int ne = tled.num_elements();
-  StartFiniteStrainFields(ne, solution);
-  double largest = 0;
-  for (int e = 0; e < ne; ++e) {
-    if (tled.eroded(e)) continue;
-    // One point per element: its fields are written as they are, not
-    // through a weighted sum (which would turn a -0 into a +0).
-    const ElementFields fields =
-        FieldsFromCauchy(tled.DeformationGradient(e), tled.CauchyStress(e));
-    largest = std::max(largest, WriteFiniteStrainFields(e, fields, solution));
-  }
-  *max_strain = largest;
 }
 
 }  // namespace pba

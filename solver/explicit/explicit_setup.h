@@ -30,12 +30,6 @@ struct ExplicitSetup {
   double time_step_factor = ExplicitOptions::kTimeStepFactor;
 };
 
-// The finite-strain fields (strain, Almansi strain, Cauchy and second
-// Piola-Kirchhoff stress, von Mises, J) of the model's last evaluation,
-// which must have had RecordStress on; *max_strain the largest
-// Green-Lagrange component.
-void FillExplicitFields(const TledModel& tled, Solution* solution, double* max_strain);
-
 // Builds the setup of a problem. DYNAMIC_RELAXATION takes the instantaneous
 // elastic materials (its options carry no bulk viscosity). What the engine
 // cannot take (10-node elements, full hexahedra, growth) the scene's

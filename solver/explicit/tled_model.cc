@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 
+#include "analysis/element_fields.h"
 #include "core/format.h"
 #include "explicit/cube_root.h"
 #include "fem/hex8.h"
@@ -732,6 +733,19 @@ BodyForce TledModel::Force(const Eigen::VectorXd& u, const Eigen::VectorXd* v,
   out.hourglass_energy = eval.hourglass_energy;
   if (out.ok) out.energy = StoredEnergy();
   return out;
+}
+
+double TledModel::RecoverFields(const Eigen::VectorXd& u, Solution* solution) const {
+  StartFiniteStrainFields(num_elements_, solution);
+  double largest = 0;
+  for (int e = 0; e < num_elements_; ++e) {
+    if (eroded(e)) continue;
+    // One point per element: its fields are written as they are, not
+    // through a weighted sum (which would turn a -0 into a +0).
+    const ElementFields fields = FieldsFromCauchy(DeformationGradient(e), CauchyStress(e));
+    largest = std::max(largest, WriteFiniteStrainFields(e, fields, solution));
+  }
+  return largest;
 }
 
 Status TledModel::RestoreHistory(const std::vector<double>& values) {

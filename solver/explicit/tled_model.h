@@ -170,6 +170,9 @@ class TledModel final : public DiscreteBody {
   BodyForce Force(const Eigen::VectorXd& u, const Eigen::VectorXd* v,
                   Eigen::VectorXd* f_int) override;
   bool advances_on_evaluation() const override { return true; }
+  // The fields of the last InternalForce, which must have had
+  // RecordStress(true) (eroded elements read undeformed).
+  double RecoverFields(const Eigen::VectorXd& u, Solution* solution) const override;
   Eigen::VectorXd LumpedMass() const override { return mass_; }
   std::vector<double> SaveHistory() const override { return history_; }
   Status RestoreHistory(const std::vector<double>& values) override;

@@ -192,6 +192,49 @@ TEST(DiscreteBodyTest, ImplicitAndExplicitBodiesGiveTheSameForces) {
   }
 }
 
+TEST(DiscreteBodyTest, EveryBodyRecoversUndeformedFieldsFromARigidMotion) {
+  for (const auto& s : Elastic()) {
+    const Eigen::VectorXd u = Rigid(s->mesh);
+    if (auto* tled = dynamic_cast<TledModel*>(s->body.get())) tled->RecordStress(true);
+    Eigen::VectorXd f;
+    ASSERT_TRUE(s->body->Force(u, nullptr, &f).ok) << s->name;
+    Solution solution;
+    const double largest = s->body->RecoverFields(u, &solution);
+    const std::size_t ne = s->mesh.num_elements();
+    ASSERT_EQ(solution.strain.size(), 6 * ne) << s->name;
+    ASSERT_EQ(solution.jacobian.size(), ne) << s->name;
+    EXPECT_LT(largest, 1e-12) << s->name;
+    for (std::size_t e = 0; e < ne; ++e) {
+      ASSERT_NEAR(solution.jacobian[e], 1, 1e-12) << s->name;
+      ASSERT_NEAR(solution.von_mises_pa[e], 0, 1e-6) << s->name;
+    }
+  }
+}
+
+TEST(DiscreteBodyTest, ImplicitAndExplicitBodiesRecoverTheSameFields) {
+  for (ElementType e : {ElementType::kTet4, ElementType::kTet4Anp}) {
+    const auto implicit = Implicit(e);
+    const auto explicit_body = Explicit(e);
+    const Eigen::VectorXd u = Smooth(implicit->mesh);
+    static_cast<TledModel*>(explicit_body->body.get())->RecordStress(true);
+    Eigen::VectorXd f;
+    ASSERT_TRUE(explicit_body->body->Force(u, nullptr, &f).ok);
+    Solution a, b;
+    const double largest_a = implicit->body->RecoverFields(u, &a);
+    const double largest_b = explicit_body->body->RecoverFields(u, &b);
+    EXPECT_NEAR(largest_a, largest_b, 1e-12) << ElementName(e);
+    EXPECT_GT(largest_a, 1e-3) << ElementName(e);  // strains of a few per cent
+    double stress_scale = 0;
+    for (double v : a.stress_pa) stress_scale = std::max(stress_scale, std::abs(v));
+    ASSERT_EQ(a.stress_pa.size(), b.stress_pa.size());
+    for (std::size_t k = 0; k < a.stress_pa.size(); ++k) {
+      ASSERT_NEAR(a.strain[k], b.strain[k], 1e-12) << ElementName(e) << " " << k;
+      ASSERT_NEAR(a.stress_pa[k], b.stress_pa[k], 1e-9 * stress_scale)
+          << ElementName(e) << " " << k;
+    }
+  }
+}
+
 TEST(DiscreteBodyTest, OnlyTheImplicitBodiesHaveATangentOnlyTheExplicitAMass) {
   const auto implicit = Implicit(ElementType::kTet4Anp);
   const auto explicit_body = Explicit(ElementType::kTet4Anp);
