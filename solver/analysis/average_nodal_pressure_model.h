@@ -34,8 +34,9 @@ std::unique_ptr<FiniteStrainModel> MakeAverageNodalPressureTet4Model(
 // the incompressible tissue around it):
 //   Pi_vol = sum_a sum_m V_am U_m(v_am / V_am),
 //   V_am, v_am = sum over the elements e ∋ a of material m of V_e / 4, v_e / 4.
-std::unique_ptr<FiniteStrainModel> MakeAverageNodalPressureTet4Model(
-    const Mesh& mesh, const MaterialField& field, const ThreadContext& threads = ThreadContext());
+std::unique_ptr<FiniteStrainModel> MakeAverageNodalPressureTet4Model(const Mesh& mesh,
+                                                                     const MaterialField& field,
+                                                                     const ThreadContext& threads);
 
 // Each element's pressure and volume ratio at `u` as the model sees them:
 // the means over its corners of U_m'(J_am) and of J_am = v_am / V_am, m the

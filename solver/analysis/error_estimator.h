@@ -57,7 +57,7 @@ using ElementStress = std::function<Vector6d(int element, const Eigen::Vector3d&
 // The one entry point of the analyses.
 ErrorEstimateResult EstimateZzError(const Mesh& mesh, const ElementStress& stress,
                                     const ElasticityField& elasticity,
-                                    const ThreadContext& threads = ThreadContext());
+                                    const ThreadContext& threads);
 
 // What the summary says of the estimate (Summary::error.method): of the
 // small-strain stress, by the mesh's element shape, e.g. "Zienkiewicz-Zhu
@@ -74,7 +74,7 @@ std::string ZzMethod(const Mesh& mesh, ZzStress stress = ZzStress::kSmallStrain)
 ErrorEstimateResult EstimateZzError(const Mesh& mesh, const std::vector<double>& stress,
                                     const std::vector<double>& volume,
                                     const ElasticityField& elasticity,
-                                    const ThreadContext& threads = ThreadContext());
+                                    const ThreadContext& threads);
 
 // 10-node tetrahedra (a quadratic mesh), whose stress varies within the
 // element: `stress(e, xi)` with xi the natural point of fem/tet10.h. The
@@ -84,13 +84,13 @@ ErrorEstimateResult EstimateZzError(const Mesh& mesh, const std::vector<double>&
 // degree-5 rule.
 ErrorEstimateResult EstimateZzErrorTet10(const Mesh& mesh, const ElementStress& stress,
                                          const ElasticityField& elasticity,
-                                         const ThreadContext& threads = ThreadContext());
+                                         const ThreadContext& threads);
 
 // 8-node hexahedra (a hexahedral mesh): nodal averages at the 8 corners,
 // trilinear interpolation, the 2 x 2 x 2 rule; `stress(e, xi)` with xi in
 // [-1, 1]^3 (fem/hex8.h).
 ErrorEstimateResult EstimateZzErrorHex8(const Mesh& mesh, const ElementStress& stress,
                                         const ElasticityField& elasticity,
-                                        const ThreadContext& threads = ThreadContext());
+                                        const ThreadContext& threads);
 
 }  // namespace pba

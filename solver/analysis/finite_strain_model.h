@@ -66,7 +66,7 @@ std::unique_ptr<FiniteStrainModel> MakeTet4Model(const Mesh& mesh,
 // evaluation; `field` must outlive the model. The models' passes run on
 // `threads` (the solve's; the default, every thread OpenMP gives).
 std::unique_ptr<FiniteStrainModel> MakeTet4Model(const Mesh& mesh, const MaterialField& field,
-                                                 const ThreadContext& threads = ThreadContext());
+                                                 const ThreadContext& threads);
 
 // The model of a scene's element (resolved: not kDefault) on `mesh`, which
 // must have that element's node layout, with the materials of `field`; the
@@ -78,7 +78,7 @@ std::unique_ptr<FiniteStrainModel> MakeFiniteStrainModel(ElementType element, co
 
 // The deformation gradient of every 4-node element at `u` (one point each),
 // e.g. for MaterialField::Commit.
-std::vector<Eigen::Matrix3d> ElementDeformationGradients(
-    const Mesh& mesh, const Eigen::VectorXd& u, const ThreadContext& threads = ThreadContext());
+std::vector<Eigen::Matrix3d> ElementDeformationGradients(const Mesh& mesh, const Eigen::VectorXd& u,
+                                                         const ThreadContext& threads);
 
 }  // namespace pba

@@ -23,12 +23,12 @@ namespace pba {
 std::unique_ptr<FiniteStrainModel> MakeHex8Model(const Mesh& mesh,
                                                  const HyperelasticMaterial& material);
 std::unique_ptr<FiniteStrainModel> MakeHex8Model(const Mesh& mesh, const MaterialField& field,
-                                                 const ThreadContext& threads = ThreadContext());
+                                                 const ThreadContext& threads);
 
 // The fully integrated brick, on the same terms as MakeHex8Model.
 std::unique_ptr<FiniteStrainModel> MakeHex8FullModel(const Mesh& mesh,
                                                      const HyperelasticMaterial& material);
-std::unique_ptr<FiniteStrainModel> MakeHex8FullModel(
-    const Mesh& mesh, const MaterialField& field, const ThreadContext& threads = ThreadContext());
+std::unique_ptr<FiniteStrainModel> MakeHex8FullModel(const Mesh& mesh, const MaterialField& field,
+                                                     const ThreadContext& threads);
 
 }  // namespace pba

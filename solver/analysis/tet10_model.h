@@ -24,12 +24,12 @@ namespace pba {
 std::unique_ptr<FiniteStrainModel> MakeTet10Model(const Mesh& mesh,
                                                   const HyperelasticMaterial& material);
 std::unique_ptr<FiniteStrainModel> MakeTet10Model(const Mesh& mesh, const MaterialField& field,
-                                                  const ThreadContext& threads = ThreadContext());
+                                                  const ThreadContext& threads);
 
 // The mean-dilatation 10-node element, on the same terms as MakeTet10Model.
 std::unique_ptr<FiniteStrainModel> MakeTet10MdModel(const Mesh& mesh,
                                                     const HyperelasticMaterial& material);
 std::unique_ptr<FiniteStrainModel> MakeTet10MdModel(const Mesh& mesh, const MaterialField& field,
-                                                    const ThreadContext& threads = ThreadContext());
+                                                    const ThreadContext& threads);
 
 }  // namespace pba

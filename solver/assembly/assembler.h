@@ -121,15 +121,14 @@ Status AssembleSystemHex8(const Mesh& mesh, const DofMap& dofs,
 Status AssembleLinearSystem(const Mesh& mesh, const ElasticityField& elasticity, const DofMap& dofs,
                             const std::vector<std::vector<int>>& colours,
                             const std::function<bool(double)>& keep_going, LinearSystem* system,
-                            const ThreadContext& threads = ThreadContext());
+                            const ThreadContext& threads);
 
 // AssembleLinearSystem for a quadratic mesh: small-strain 10-node elements
 // (Tet10Stiffness), prescribed values lifted to the right-hand side.
 Status AssembleLinearSystemTet10(const Mesh& mesh, const ElasticityField& elasticity,
                                  const DofMap& dofs, const std::vector<std::vector<int>>& colours,
                                  const std::function<bool(double)>& keep_going,
-                                 LinearSystem* system,
-                                 const ThreadContext& threads = ThreadContext());
+                                 LinearSystem* system, const ThreadContext& threads);
 
 // AssembleLinearSystem for a hexahedral mesh: small-strain 8-node elements
 // with B-bar mean dilatation (Hex8Stiffness), prescribed values lifted to
@@ -137,7 +136,7 @@ Status AssembleLinearSystemTet10(const Mesh& mesh, const ElasticityField& elasti
 Status AssembleLinearSystemHex8(const Mesh& mesh, const ElasticityField& elasticity,
                                 const DofMap& dofs, const std::vector<std::vector<int>>& colours,
                                 const std::function<bool(double)>& keep_going, LinearSystem* system,
-                                const ThreadContext& threads = ThreadContext());
+                                const ThreadContext& threads);
 
 // The same with the plain, fully integrated brick (Hex8StiffnessFull, C3D8
 // of Abaqus and CalculiX), which locks as nu -> 1/2.
@@ -145,8 +144,7 @@ Status AssembleLinearSystemHex8Full(const Mesh& mesh, const ElasticityField& ela
                                     const DofMap& dofs,
                                     const std::vector<std::vector<int>>& colours,
                                     const std::function<bool(double)>& keep_going,
-                                    LinearSystem* system,
-                                    const ThreadContext& threads = ThreadContext());
+                                    LinearSystem* system, const ThreadContext& threads);
 
 // Gathers the 12 element unknowns of tet `e` from the full vector `u`.
 Vector12d GatherElement(const Mesh& mesh, int e, const Eigen::VectorXd& u);

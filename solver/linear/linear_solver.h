@@ -54,7 +54,7 @@ std::unique_ptr<LinearSolver> CreateLinearSolver(const LinearSolverOptions& opti
 // linear/pcg_solver.cc).
 // CHOLMOD's OpenMP teams and its BLAS's threads are bounded by `threads`
 // during each factorisation and solve (LibraryThreadScope).
-std::unique_ptr<LinearSolver> CreateCholmodSolver(const ThreadContext& threads = ThreadContext());
+std::unique_ptr<LinearSolver> CreateCholmodSolver(const ThreadContext& threads);
 std::unique_ptr<LinearSolver> CreateEigenLdltSolver();
 // Iterative: conjugate gradients with an incomplete Cholesky preconditioner,
 // aiming at ||b - A x|| / ||b|| <= 1e-12 in at most max(1000, 10 n)

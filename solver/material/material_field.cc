@@ -97,7 +97,10 @@ std::unique_ptr<MaterialField> MaterialField::Uniform(const HyperelasticMaterial
       std::shared_ptr<const HyperelasticMaterial>(&material, [](const HyperelasticMaterial*) {});
   std::vector<Entry> entries;
   entries.push_back(std::move(entry));
-  return std::make_unique<MaterialField>(std::move(entries), std::vector<int>(elements, 0));
+  // Elastic and of one material: BeginStep and Commit have no pass to run
+  // in parallel.
+  return std::make_unique<MaterialField>(std::move(entries), std::vector<int>(elements, 0),
+                                         ThreadContext(1));
 }
 
 PronySeries ReduceRelaxation(const PronySeries& series, double relaxed_below_s,

@@ -76,7 +76,7 @@ class MaterialField {
   // validated (PronySeries::Validate) and of_element in range. BeginStep
   // and Commit run on `threads` (the solve's).
   MaterialField(std::vector<Entry> entries, std::vector<int> of_element,
-                const ThreadContext& threads = ThreadContext());
+                const ThreadContext& threads);
   // Every element the same elastic material, not owned (it must outlive
   // the field).
   static std::unique_ptr<MaterialField> Uniform(const HyperelasticMaterial& material, int elements);

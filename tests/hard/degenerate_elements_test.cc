@@ -146,12 +146,12 @@ TEST_P(DegenerateElementsTest, LinearSolveIsExactOrNamesTheElement) {
   LinearSystem system;
   const Status assembled = AssembleLinearSystem(
       mesh, ElasticityField::Uniform(IsotropicElasticity(3000, nu), mesh.num_elements()), dofs,
-      ColourElements(mesh), [](double) { return true; }, &system);
+      ColourElements(mesh), [](double) { return true; }, &system, ThreadContext());
   if (!assembled.ok()) {
     EXPECT_NE(assembled.message().find("element"), std::string::npos) << assembled.message();
     return;
   }
-  const auto solver = CreateCholmodSolver();
+  const auto solver = CreateCholmodSolver(ThreadContext());
   Eigen::VectorXd free;
   Status status = solver->Factorize(system.k);
   if (status.ok()) status = solver->Solve(system.rhs, &free);
@@ -184,7 +184,7 @@ TEST_P(DegenerateElementsTest, NonlinearSolveIsExactOrFailsClearly) {
   for (const bool nodal_pressure : {false, true}) {
     const auto model = nodal_pressure ? MakeAverageNodalPressureTet4Model(mesh, material)
                                       : MakeTet4Model(mesh, material);
-    const auto solver = CreateCholmodSolver();
+    const auto solver = CreateCholmodSolver(ThreadContext());
     Eigen::VectorXd u = Eigen::VectorXd::Zero(dofs.num_dofs());
     NewtonReport report;
     const Status status = SolveNewtonStatic(

@@ -98,10 +98,10 @@ double RelativeL2Error(Element element, int cells, const Manufactured& m) {
   LinearSystem system;
   const Status assembled =
       element == Element::kTet10
-          ? AssembleLinearSystemTet10(mesh, d, dofs, colours, keep_going, &system)
+          ? AssembleLinearSystemTet10(mesh, d, dofs, colours, keep_going, &system, ThreadContext())
       : element == Element::kHex8
-          ? AssembleLinearSystemHex8(mesh, d, dofs, colours, keep_going, &system)
-          : AssembleLinearSystem(mesh, d, dofs, colours, keep_going, &system);
+          ? AssembleLinearSystemHex8(mesh, d, dofs, colours, keep_going, &system, ThreadContext())
+          : AssembleLinearSystem(mesh, d, dofs, colours, keep_going, &system, ThreadContext());
   EXPECT_TRUE(assembled.ok()) << assembled.ToString();
   ExternalLoads loads(mesh);
   loads.AddBodyForceField([&](const Eigen::Vector3d& x) { return m.BodyForce(x); });
@@ -109,7 +109,7 @@ double RelativeL2Error(Element element, int cells, const Manufactured& m) {
   for (int dof = 0; dof < dofs.num_dofs(); ++dof) {
     if (dofs.free_index(dof) >= 0) system.rhs(dofs.free_index(dof)) += f(dof);
   }
-  const auto solver = CreateCholmodSolver();
+  const auto solver = CreateCholmodSolver(ThreadContext());
   Eigen::VectorXd u_free;
   EXPECT_TRUE(solver->Factorize(system.k).ok());
   EXPECT_TRUE(solver->Solve(system.rhs, &u_free).ok());

@@ -82,7 +82,7 @@ CookResult SolveCook(int n, Element element) {
                      : element == Element::kNodalPressureTet
                          ? MakeAverageNodalPressureTet4Model(mesh, material)
                          : MakeTet4Model(mesh, material);
-  const auto solver = CreateCholmodSolver();
+  const auto solver = CreateCholmodSolver(ThreadContext());
   NewtonOptions options;
   options.initial_increments = 5;
   Eigen::VectorXd u;

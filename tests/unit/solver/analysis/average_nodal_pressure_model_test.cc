@@ -88,17 +88,17 @@ MaterialField TwoMaterials(const Mesh& mesh) {
     for (int a : mesh.tets[e]) x += mesh.nodes(a, 0) / 4;
     of_element[e] = x > kEdge / 2;
   }
-  return MaterialField(std::move(entries), std::move(of_element));
+  return MaterialField(std::move(entries), std::move(of_element), ThreadContext());
 }
 
 TEST(AverageNodalPressure, MaterialsGrowthAndHistoryKeepForceAndTangentExact) {
   const Mesh mesh = Cube(2.5);
   MaterialField field = TwoMaterials(mesh);
-  const auto model = MakeAverageNodalPressureTet4Model(mesh, field);
+  const auto model = MakeAverageNodalPressureTet4Model(mesh, field, ThreadContext());
   // A committed step, then a trial step with history and growth.
   field.BeginStep(0.05, 0.5);
-  field.Commit(
-      ElementDeformationGradients(mesh, testing::RandomSmoothDisplacement(mesh, 0.04, 3, kEdge)));
+  field.Commit(ElementDeformationGradients(
+      mesh, testing::RandomSmoothDisplacement(mesh, 0.04, 3, kEdge), ThreadContext()));
   field.BeginStep(0.05, 1.0);
   const Eigen::VectorXd u = testing::RandomSmoothDisplacement(mesh, 0.06, 5, kEdge);
   testing::ExpectForceIsEnergyDerivative(*model, u, "two materials", 1e-9, 1e-7);
@@ -115,11 +115,11 @@ TEST(AverageNodalPressure, AGrownBodyIsStressFreeAtItsGrownShape) {
   entries[1].material = std::make_shared<PolynomialMaterial>(NeoHookeanCoefficients(1000, 1e7));
   entries[1].growth_strain = 0.1;
   std::vector<int> of_element(mesh.num_elements(), 1);
-  MaterialField grown(std::move(entries), std::move(of_element));
+  MaterialField grown(std::move(entries), std::move(of_element), ThreadContext());
   grown.BeginStep(0, 1.0);
   // All of the cube grows and nothing holds it but rigid modes: the model
   // is stress-free at u = 0.1 X.
-  const auto model = MakeAverageNodalPressureTet4Model(mesh, grown);
+  const auto model = MakeAverageNodalPressureTet4Model(mesh, grown, ThreadContext());
   Eigen::VectorXd u(3 * mesh.num_nodes());
   for (int a = 0; a < mesh.num_nodes(); ++a)
     u.segment<3>(3 * a) = 0.1 * mesh.nodes.row(a).transpose();

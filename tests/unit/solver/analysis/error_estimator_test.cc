@@ -44,7 +44,8 @@ TEST(ErrorByRegion, RegionsAddUpAndAQuietRegionHasNoError) {
     if (x > 8e-3) stress[6 * e] += 300 * std::sin(1e4 * x + e);
   }
   const ErrorEstimateResult estimate = EstimateZzError(
-      mesh, stress, volume, ElasticityField::Uniform(IsotropicElasticity(3000, 0.3), ne));
+      mesh, stress, volume, ElasticityField::Uniform(IsotropicElasticity(3000, 0.3), ne),
+      ThreadContext());
   ASSERT_GT(estimate.relative_error, 0);
   const std::vector<RegionError> regions = ErrorByRegion(mesh, estimate, "body");
   ASSERT_EQ(regions.size(), 2u);

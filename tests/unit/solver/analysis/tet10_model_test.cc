@@ -154,7 +154,7 @@ TEST(AssembleLinearSystemTet10, UniaxialStressIsExact) {
   LinearSystem system;
   ASSERT_TRUE(AssembleLinearSystemTet10(
                   mesh, ElasticityField::Uniform(IsotropicElasticity(e, nu), mesh.num_elements()),
-                  dofs, ColourElements(mesh), [](double) { return true; }, &system)
+                  dofs, ColourElements(mesh), [](double) { return true; }, &system, ThreadContext())
                   .ok());
   const double worst = testing::UniaxialPatchError(mesh, dofs, system, nu, delta / height);
   EXPECT_LT(worst, 1e-10 * delta);

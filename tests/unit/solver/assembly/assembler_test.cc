@@ -45,11 +45,12 @@ Status Assemble(const Mesh& mesh, const Matrix6d& d, const DofMap& dofs, LinearS
   const auto colours = ColourElements(mesh);
   const auto keep_going = [](double) { return true; };
   const ElasticityField elasticity = ElasticityField::Uniform(d, mesh.num_elements());
-  return mesh.quadratic()
-             ? AssembleLinearSystemTet10(mesh, elasticity, dofs, colours, keep_going, system)
-         : mesh.hexahedral()
-             ? AssembleLinearSystemHex8(mesh, elasticity, dofs, colours, keep_going, system)
-             : AssembleLinearSystem(mesh, elasticity, dofs, colours, keep_going, system);
+  return mesh.quadratic() ? AssembleLinearSystemTet10(mesh, elasticity, dofs, colours, keep_going,
+                                                      system, ThreadContext())
+         : mesh.hexahedral() ? AssembleLinearSystemHex8(mesh, elasticity, dofs, colours, keep_going,
+                                                        system, ThreadContext())
+                             : AssembleLinearSystem(mesh, elasticity, dofs, colours, keep_going,
+                                                    system, ThreadContext());
 }
 
 // Same size, pattern (outer and inner indices) and values, compared exactly.

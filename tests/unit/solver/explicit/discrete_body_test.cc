@@ -282,8 +282,8 @@ TEST(DiscreteBodyTest, ImplicitHistoryIsTheMaterialFieldsCommittedAtTheEndOfASte
   entry.material = MakeHyperelasticMaterial(NeoHookeanSpec());
   entry.relaxation = PronySeries{{0.4}, {0.1}};
   std::vector<MaterialField::Entry> entries = {entry};
-  MaterialField field(entries, std::vector<int>(mesh.num_elements(), 0));
-  auto body = MakeAverageNodalPressureTet4Model(mesh, field);
+  MaterialField field(entries, std::vector<int>(mesh.num_elements(), 0), ThreadContext());
+  auto body = MakeAverageNodalPressureTet4Model(mesh, field, ThreadContext());
   const std::vector<double> before = body->SaveHistory();
   EXPECT_TRUE(before.empty());  // not attached: no history of its own
   body->KeepHistoryIn(&field, &mesh, ThreadContext());

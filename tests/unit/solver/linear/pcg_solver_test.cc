@@ -52,11 +52,12 @@ TEST(PcgSolver, MatchesCholmodOnAnAssembledStiffness) {
       AssembleLinearSystem(
           model.mesh,
           ElasticityField::Uniform(IsotropicElasticity(3000, 0.45), model.mesh.num_elements()),
-          model.dofs, ColourElements(model.mesh), [](double) { return true; }, &system)
+          model.dofs, ColourElements(model.mesh), [](double) { return true; }, &system,
+          ThreadContext())
           .ok());
   ASSERT_GT(system.k.rows(), 1000);
 
-  const auto cholmod = CreateCholmodSolver();
+  const auto cholmod = CreateCholmodSolver(ThreadContext());
   Eigen::VectorXd direct;
   ASSERT_TRUE(cholmod->Factorize(system.k).ok());
   ASSERT_TRUE(cholmod->Solve(system.rhs, &direct).ok());
@@ -116,7 +117,8 @@ TEST(PcgSolver, CancelEndsTheIteration) {
       AssembleLinearSystem(
           model.mesh,
           ElasticityField::Uniform(IsotropicElasticity(3000, 0.45), model.mesh.num_elements()),
-          model.dofs, ColourElements(model.mesh), [](double) { return true; }, &system)
+          model.dofs, ColourElements(model.mesh), [](double) { return true; }, &system,
+          ThreadContext())
           .ok());
   std::atomic<bool> cancel{true};
   LinearSolverOptions options;
@@ -188,7 +190,8 @@ TEST(PcgSolver, UnheldBodyEndsWithAClearErrorNotNan) {
       AssembleLinearSystem(
           model.mesh,
           ElasticityField::Uniform(IsotropicElasticity(3000, 0.45), model.mesh.num_elements()),
-          model.dofs, ColourElements(model.mesh), [](double) { return true; }, &system)
+          model.dofs, ColourElements(model.mesh), [](double) { return true; }, &system,
+          ThreadContext())
           .ok());
   ASSERT_EQ(system.k.rows(), 3 * model.mesh.num_nodes());
   // A load along z on every node: the rigid translation takes it all.
