@@ -10,6 +10,7 @@
 #include <functional>
 
 #include "assembly/assembler.h"
+#include "common/finite_strain_checks.h"
 #include "fem/hex8.h"
 #include "material/linear_elastic.h"
 #include "mesh/primitive_mesher.h"
@@ -67,16 +68,7 @@ TEST(ErrorByRegion, RegionsAddUpAndAQuietRegionHasNoError) {
 }
 
 // A 2 x 2 x 2 mm box in 1 mm cells, of 4-node tetrahedra or bricks.
-Mesh SmallBox(ElementType element) {
-  GeometrySpec g;
-  g.kind = GeometrySpec::Kind::kBox;
-  g.box.size_mm = {2, 2, 2};
-  MeshSpec m;
-  m.element = element;
-  m.element_size_mm = 1;
-  MeshStats stats;
-  return BuildPrimitiveMesh(g, m, &stats);
-}
+Mesh SmallBox(ElementType element) { return testing::BoxMesh(2, 2, 2, 1, element); }
 
 // The nodal displacement u(X) of every node, 3 per node [m].
 Eigen::VectorXd Displacement(const Mesh& mesh,

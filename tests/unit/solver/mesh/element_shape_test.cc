@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "common/finite_strain_checks.h"
 #include "common/subprocess.h"
 #include "io/mesh_export.h"
 #include "mesh/mesh.h"
@@ -27,14 +28,8 @@ using testing::TempDir;
 
 // A 4 x 4 x 6 mm box of 2 mm elements of `shape`.
 Mesh Box(ElementShape shape) {
-  GeometrySpec g;
-  g.kind = GeometrySpec::Kind::kBox;
-  g.box.size_mm = {4, 4, 6};
-  MeshSpec options;
-  options.element_size_mm = 2;
-  if (shape == ElementShape::kHex8) options.element = ElementType::kHex8;
-  MeshStats stats;
-  Mesh mesh = BuildPrimitiveMesh(g, options, &stats);
+  const Mesh mesh = testing::BoxMesh(
+      4, 4, 6, 2, shape == ElementShape::kHex8 ? ElementType::kHex8 : ElementType::kDefault);
   return shape == ElementShape::kTet10 ? MakeQuadratic(mesh) : mesh;
 }
 
