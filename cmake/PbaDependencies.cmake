@@ -1,6 +1,9 @@
 # Every dependency comes from a Debian package (scripts/deps.sh installs them).
 find_package(Threads REQUIRED)
 find_package(Eigen3 3.4 REQUIRED NO_MODULE)
+# The serial HDF5: PETSc's packages install the MPI build beside it, and
+# result files are written by one process.
+set(HDF5_PREFER_PARALLEL FALSE)
 find_package(HDF5 REQUIRED COMPONENTS C)
 find_package(PNG REQUIRED)
 find_package(ZLIB REQUIRED)
@@ -32,5 +35,16 @@ find_library(SUITESPARSE_CONFIG_LIBRARY suitesparseconfig REQUIRED)
 add_library(pba_cholmod INTERFACE)
 target_include_directories(pba_cholmod INTERFACE ${CHOLMOD_INCLUDE_DIR})
 target_link_libraries(pba_cholmod INTERFACE ${CHOLMOD_LIBRARY} ${SUITESPARSE_CONFIG_LIBRARY})
+
+# PETSc 3.18 (libpetsc-real-dev: hypre, MUMPS, GAMG) and the MPI it is
+# built on (Open MPI): the scalable linear solvers, and runs on several
+# ranks. Debian's PETSc ships a pkg-config file only.
+find_package(MPI REQUIRED COMPONENTS C)
+find_package(PkgConfig REQUIRED)
+pkg_check_modules(PETSC REQUIRED IMPORTED_TARGET PETSc>=3.18)
+add_library(pba_petsc INTERFACE)
+target_link_libraries(pba_petsc INTERFACE PkgConfig::PETSC MPI::MPI_C)
+# MPI's C API only: Open MPI's deprecated C++ bindings would need libmpi_cxx.
+target_compile_definitions(pba_petsc INTERFACE OMPI_SKIP_MPICXX=1 MPICH_SKIP_MPICXX=1)
 
 find_program(GRPC_CPP_PLUGIN grpc_cpp_plugin REQUIRED)

@@ -10,6 +10,7 @@ packages=(
   libcgal-dev libgmp-dev libmpfr-dev
   libgrpc++-dev libgrpc-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler
   libsqlite3-dev
+  libpetsc-real-dev libopenmpi-dev openmpi-bin
   libyaml-cpp-dev libcli11-dev libspdlog-dev libfmt-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   calculix-ccx

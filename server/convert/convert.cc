@@ -399,6 +399,20 @@ void AnalysisOptionsFromProto(const v1::Analysis& analysis, AnalysisSpec* analys
   n.min_increment = nonlinear.min_increment();
   n.line_search = !nonlinear.has_line_search() || nonlinear.line_search();
 
+  const v1::LinearSolverOptions& linear = analysis.linear_solver_options();
+  LinearSolverSpec& l = analysis_spec->linear_solver_options;
+  l.preconditioner = linear.preconditioner() == v1::LinearSolverOptions::BOOMERAMG
+                         ? LinearSolverSpec::Preconditioner::kBoomerAmg
+                         : LinearSolverSpec::Preconditioner::kGamg;
+  l.relative_tolerance = linear.relative_tolerance();
+  l.max_iterations = linear.max_iterations();
+  if (linear.has_gamg_threshold()) l.gamg_threshold = linear.gamg_threshold();
+  l.boomeramg_strong_threshold = linear.boomeramg_strong_threshold();
+  l.auto_direct_max_unknowns = linear.auto_direct_max_unknowns();
+  if (linear.has_fallback_direct_max_unknowns()) {
+    l.fallback_direct_max_unknowns = linear.fallback_direct_max_unknowns();
+  }
+
   const v1::Time& time = analysis.time();
   TimeSpec& t = analysis_spec->time;
   t.end_time_s = time.end_time_s();
@@ -450,8 +464,17 @@ Status AnalysisFromProto(const v1::Analysis& analysis, AnalysisSpec* analysis_sp
   }
   switch (analysis.linear_solver()) {
     case v1::Analysis::LINEAR_SOLVER_UNSPECIFIED:
+    case v1::Analysis::AUTO:
+      analysis_spec->linear_solver = AnalysisSpec::LinearSolver::kAuto;
+      break;
     case v1::Analysis::CHOLMOD:
       analysis_spec->linear_solver = AnalysisSpec::LinearSolver::kCholmod;
+      break;
+    case v1::Analysis::AMG:
+      analysis_spec->linear_solver = AnalysisSpec::LinearSolver::kAmg;
+      break;
+    case v1::Analysis::MUMPS:
+      analysis_spec->linear_solver = AnalysisSpec::LinearSolver::kMumps;
       break;
     case v1::Analysis::EIGEN_LDLT:
       analysis_spec->linear_solver = AnalysisSpec::LinearSolver::kEigenLdlt;
@@ -463,6 +486,13 @@ Status AnalysisFromProto(const v1::Analysis& analysis, AnalysisSpec* analysis_sp
       return Status::InvalidArgument(
           "analysis.linear_solver",
           "unknown linear solver " + std::to_string(analysis.linear_solver()));
+  }
+  if (!v1::LinearSolverOptions::Preconditioner_IsValid(
+          analysis.linear_solver_options().preconditioner())) {
+    return Status::InvalidArgument(
+        "analysis.linear_solver_options.preconditioner",
+        "unknown preconditioner " +
+            std::to_string(analysis.linear_solver_options().preconditioner()));
   }
   AnalysisOptionsFromProto(analysis, analysis_spec);
   return Status::Ok();

@@ -147,6 +147,8 @@ Status LinearStaticRun::Solve() {
   // PCG looks at the cancel flag every iteration (a direct factorisation cannot).
   LinearSolverOptions linear_solver = problem_.linear_solver;
   linear_solver.cancel = clock_.options().cancel;
+  const UnknownLayout layout = MakeUnknownLayout(dofs_, mesh_.nodes);
+  linear_solver.layout = &layout;
   auto solver = CreateLinearSolver(linear_solver);
   if (dofs_.num_free() > 0) {
     clock_.Begin("factorize", 0.25, 0.75,

@@ -208,6 +208,7 @@ class FiniteStrainRun {
   std::vector<std::unique_ptr<RigidContact>> contacts_;
   std::vector<std::pair<std::string, const RigidContact*>> named_contacts_;
   std::vector<double> peak_contact_force_;
+  UnknownLayout layout_;  // the solvers' view of the unknowns (outlives them)
   std::unique_ptr<LinearSolver> solver_;
   std::string solver_name_;
   std::optional<TimeCurve> curve_;
@@ -446,6 +447,8 @@ Status FiniteStrainRun::Run(StaticResult* result) {
   // PCG looks at the cancel flag every iteration (a direct factorisation cannot).
   LinearSolverOptions linear_solver = problem_.linear_solver;
   linear_solver.cancel = clock_.options().cancel;
+  layout_ = MakeUnknownLayout(dofs_, mesh_.nodes);
+  linear_solver.layout = &layout_;
   solver_ = CreateLinearSolver(linear_solver);
   MakeNewtonOptions();
   PBA_RETURN_IF_ERROR(StartHistory());

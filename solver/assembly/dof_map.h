@@ -2,7 +2,10 @@
 // for) and prescribed ones (eliminated: K_ff u_f = f_f - K_fp u_p).
 #pragma once
 
+#include <Eigen/Core>
 #include <vector>
+
+#include "linear/linear_solver.h"
 
 namespace pba {
 
@@ -30,5 +33,10 @@ class DofMap {
   std::vector<double> value_;
   int num_free_ = 0;
 };
+
+// The free unknowns' nodes and directions and the nodes' coordinates (rows
+// of `nodes` [m]), for multigrid's rigid-body modes.
+UnknownLayout MakeUnknownLayout(
+    const DofMap& dofs, const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>& nodes);
 
 }  // namespace pba

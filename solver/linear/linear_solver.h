@@ -7,6 +7,7 @@
 #include <atomic>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "core/thread_context.h"
 #include "pba/status.h"
@@ -26,25 +27,81 @@ class LinearSolver {
   virtual std::unique_ptr<LinearSolver> NewOfSameKind() const = 0;
 };
 
+// Where the unknowns of a system sit: for free unknown i, its node
+// dof_of_unknown[i] / 3 and direction dof_of_unknown[i] % 3, and every
+// node's coordinates [m]. Multigrid builds its coarse spaces from the rigid
+// motions of these nodes (the elasticity operator's near-null space) and
+// groups each node's three unknowns; without a layout it falls back to
+// scalar aggregation, which converges far more slowly on elasticity.
+struct UnknownLayout {
+  std::vector<int> dof_of_unknown;  // increasing; 3 * node + direction
+  std::vector<double> coordinates;  // 3 per node, node-major [m]
+  int num_nodes() const { return static_cast<int>(coordinates.size() / 3); }
+};
+
+// The tunable parts of the linear solve (analysis.linear_solver_options),
+// defaults declared here once; SolveScene echoes them in the summary.
+struct LinearSolverSettings {
+  // AMG: the preconditioner under conjugate gradients.
+  enum class Preconditioner {
+    kGamg,       // PETSc's smoothed aggregation, rigid-body near-null space
+    kBoomerAmg,  // hypre's BoomerAMG (classical AMG), unknowns grouped by node
+  };
+  Preconditioner preconditioner = Preconditioner::kGamg;
+  // AMG: the solve ends when ||b - A x|| <= relative_tolerance ||b||. Newton
+  // tests its own residual, so an inexact correction costs iterations, never
+  // accuracy; a linear analysis's answer is this solve, hence tight.
+  double relative_tolerance = 1e-10;
+  // AMG: conjugate-gradient iterations per solve before it counts as not
+  // converged (and falls back to MUMPS when the system is small enough).
+  int max_iterations = 1000;
+  // GAMG: the graph threshold dropping weak couplings before aggregation
+  // (0..0.5; larger: smaller coarse grids, more iterations).
+  double gamg_threshold = 0.01;
+  // BoomerAMG: the strong-connection threshold (0..1; 0.5 suits 3D elasticity).
+  double boomeramg_strong_threshold = 0.5;
+  // AUTO: systems with at most this many unknowns are factorised by CHOLMOD,
+  // larger ones go to AMG. Chosen where CHOLMOD's factor still fits the
+  // 2-core, 24 GB machine's budget comfortably on TET4_ANP's wide stencil
+  // (4.9 GB at 83,607 unknowns) and where AMG starts to win on time
+  // (docs/performance.md, "Linear solvers").
+  int auto_direct_max_unknowns = 60000;
+  // AMG: a solve that does not converge is redone by MUMPS when the system
+  // has at most this many unknowns; above, the increment fails with the
+  // iterative solver's message.
+  int fallback_direct_max_unknowns = 250000;
+
+  const char* PreconditionerName() const;
+};
+
 // Which backend an implicit analysis factorises with (analysis.linear_solver).
 struct LinearSolverOptions {
   enum class Kind {
-    kCholmod,    // supernodal sparse Cholesky (SuiteSparse), the default
+    kAuto,       // CHOLMOD up to settings.auto_direct_max_unknowns, AMG above (the default)
+    kCholmod,    // supernodal sparse Cholesky (SuiteSparse)
     kEigenLdlt,  // Eigen's simplicial LDL^T, the fallback
     kPcg,        // conjugate gradients with incomplete Cholesky (CreatePcgSolver)
+    kAmg,        // PETSc conjugate gradients with algebraic multigrid (CreateAmgSolver)
+    kMumps,      // PETSc + MUMPS parallel sparse LDL^T (CreateMumpsSolver)
   };
-  Kind kind = Kind::kCholmod;
+  Kind kind = Kind::kAuto;
+  LinearSolverSettings settings;
+  // Set by the analysis: the unknowns' nodes and coordinates, for AMG. Not
+  // owned; may be null (AMG then aggregates scalar unknowns).
+  const UnknownLayout* layout = nullptr;
   // Set by the caller to stop an iterative solve early (the analysis passes
-  // SolveOptions::cancel): PCG looks at it every iteration and its Solve
-  // returns Status::Cancelled. Direct factorisations cannot be interrupted:
-  // CHOLMOD's and Eigen's run to the end once started (seconds to minutes on
-  // a large mesh) and the flag is seen after them. Not owned; may be null.
+  // SolveOptions::cancel): PCG and AMG look at it every iteration and their
+  // Solve returns Status::Cancelled. Direct factorisations cannot be
+  // interrupted: CHOLMOD's, MUMPS's and Eigen's run to the end once started
+  // (seconds to minutes on a large mesh) and the flag is seen after them.
+  // Not owned; may be null.
   const std::atomic<bool>* cancel = nullptr;
   // The threads a factorisation may use (CHOLMOD's and its BLAS's):
   // SolveScene sets the solve's.
   ThreadContext threads;
 
-  // "CHOLMOD", "EIGEN_LDLT" or "PCG": the scene's name for the kind.
+  // "AUTO", "CHOLMOD", "EIGEN_LDLT", "PCG", "AMG" or "MUMPS": the scene's
+  // name for the kind.
   const char* KindName() const;
 };
 
@@ -64,5 +121,26 @@ std::unique_ptr<LinearSolver> CreateEigenLdltSolver();
 // Name() carries its iteration count and residual. A set `*cancel` (may be
 // null) ends a solve within an iteration with Status::Cancelled.
 std::unique_ptr<LinearSolver> CreatePcgSolver(const std::atomic<bool>* cancel = nullptr);
+
+// PETSc's conjugate gradients preconditioned by algebraic multigrid
+// (settings.preconditioner), to settings.relative_tolerance in at most
+// settings.max_iterations. Factorize builds the multigrid hierarchy (reusing
+// the prolongation while the pattern stays: Newton's tangents); Solve checks
+// the true residual and, when the iteration did not converge, redoes the
+// solve with MUMPS if the system has at most
+// settings.fallback_direct_max_unknowns unknowns, else fails with
+// Status::Numerical naming the iterations and the residual reached. Name()
+// carries the iteration counts and fallbacks.
+std::unique_ptr<LinearSolver> CreateAmgSolver(const LinearSolverSettings& settings,
+                                              const UnknownLayout* layout,
+                                              const std::atomic<bool>* cancel);
+// PETSc's interface to MUMPS, the multifrontal sparse direct solver, as a
+// symmetric LDL^T: the matrix's inertia tells a tangent that is not positive
+// definite (Status::Numerical), as CHOLMOD's failed pivot does.
+std::unique_ptr<LinearSolver> CreateMumpsSolver();
+// AUTO: on the first Factorize, CHOLMOD for at most
+// settings.auto_direct_max_unknowns unknowns, else AMG; Name() says which
+// and why.
+std::unique_ptr<LinearSolver> CreateAutoSolver(const LinearSolverOptions& options);
 
 }  // namespace pba

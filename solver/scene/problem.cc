@@ -51,15 +51,22 @@ std::string DescribeGeometry(const GeometrySpec& g) {
 }
 
 LinearSolverOptions::Kind SolverKind(AnalysisSpec::LinearSolver kind) {
+  using Kind = LinearSolverOptions::Kind;
   switch (kind) {
-    case AnalysisSpec::LinearSolver::kEigenLdlt:
-      return LinearSolverOptions::Kind::kEigenLdlt;
-    case AnalysisSpec::LinearSolver::kPcg:
-      return LinearSolverOptions::Kind::kPcg;
     case AnalysisSpec::LinearSolver::kCholmod:
+      return Kind::kCholmod;
+    case AnalysisSpec::LinearSolver::kEigenLdlt:
+      return Kind::kEigenLdlt;
+    case AnalysisSpec::LinearSolver::kPcg:
+      return Kind::kPcg;
+    case AnalysisSpec::LinearSolver::kAmg:
+      return Kind::kAmg;
+    case AnalysisSpec::LinearSolver::kMumps:
+      return Kind::kMumps;
+    case AnalysisSpec::LinearSolver::kAuto:
       break;
   }
-  return LinearSolverOptions::Kind::kCholmod;
+  return Kind::kAuto;
 }
 
 std::vector<Motion> ResolveMotions(const SceneSpec& scene) {
@@ -191,6 +198,63 @@ Status NonlinearOptions::Validate() const {
   return Status::Ok();
 }
 
+LinearSolverSettings LinearSolverSettingsFromSpec(const LinearSolverSpec& spec) {
+  LinearSolverSettings o;
+  o.preconditioner = spec.preconditioner == LinearSolverSpec::Preconditioner::kBoomerAmg
+                         ? LinearSolverSettings::Preconditioner::kBoomerAmg
+                         : LinearSolverSettings::Preconditioner::kGamg;
+  if (spec.relative_tolerance != 0) o.relative_tolerance = spec.relative_tolerance;
+  if (spec.max_iterations != 0) o.max_iterations = spec.max_iterations;
+  if (spec.gamg_threshold) o.gamg_threshold = *spec.gamg_threshold;
+  if (spec.boomeramg_strong_threshold != 0) {
+    o.boomeramg_strong_threshold = spec.boomeramg_strong_threshold;
+  }
+  if (spec.auto_direct_max_unknowns != 0)
+    o.auto_direct_max_unknowns = spec.auto_direct_max_unknowns;
+  if (spec.fallback_direct_max_unknowns) {
+    o.fallback_direct_max_unknowns = *spec.fallback_direct_max_unknowns;
+  }
+  return o;
+}
+
+Status ValidateLinearSolverSettings(const LinearSolverSettings& s) {
+  const LinearSolverSettings defaults;
+  const std::string path = "analysis.linear_solver_options.";
+  if (!(s.relative_tolerance >= 1e-14 && s.relative_tolerance <= 1e-2)) {
+    return Status::InvalidArgument(
+        path + "relative_tolerance",
+        Format("must lie in [1e-14, 1e-2] (0 for the default %g), got %g",
+               defaults.relative_tolerance, s.relative_tolerance));
+  }
+  if (s.max_iterations < 1 || s.max_iterations > 100000) {
+    return Status::InvalidArgument(path + "max_iterations",
+                                   Format("must lie in 1..100000 (0 for the default %d), got %d",
+                                          defaults.max_iterations, s.max_iterations));
+  }
+  if (!(s.gamg_threshold >= 0 && s.gamg_threshold <= 0.5)) {
+    return Status::InvalidArgument(path + "gamg_threshold",
+                                   Format("must lie in [0, 0.5] (unset for the default %g), got %g",
+                                          defaults.gamg_threshold, s.gamg_threshold));
+  }
+  if (!(s.boomeramg_strong_threshold > 0 && s.boomeramg_strong_threshold < 1)) {
+    return Status::InvalidArgument(
+        path + "boomeramg_strong_threshold",
+        Format("must lie in (0, 1) (0 for the default %g), got %g",
+               defaults.boomeramg_strong_threshold, s.boomeramg_strong_threshold));
+  }
+  if (s.auto_direct_max_unknowns < 0) {
+    return Status::InvalidArgument(
+        path + "auto_direct_max_unknowns",
+        Format("must not be negative, got %d", s.auto_direct_max_unknowns));
+  }
+  if (s.fallback_direct_max_unknowns < 0) {
+    return Status::InvalidArgument(
+        path + "fallback_direct_max_unknowns",
+        Format("must not be negative (0: never), got %d", s.fallback_direct_max_unknowns));
+  }
+  return Status::Ok();
+}
+
 TimeOptions TimeOptions::FromSpec(const TimeSpec& spec) {
   TimeOptions t;
   t.end_s = spec.end_time_s;
@@ -275,7 +339,28 @@ std::vector<std::pair<std::string, std::string>> EffectiveOptions(const Problem&
   const bool explicit_engine = type == Type::kExplicitDynamic || type == Type::kDynamicRelaxation;
   add("mesh.element", ElementName(problem.element));
   add("mesh.element_size_mm", number(problem.element_size_m / kMm, "mm"));
-  if (!explicit_engine) add("analysis.linear_solver", problem.linear_solver.KindName());
+  if (!explicit_engine) {
+    using Kind = LinearSolverOptions::Kind;
+    const LinearSolverOptions& l = problem.linear_solver;
+    const LinearSolverSettings& ls = l.settings;
+    add("analysis.linear_solver", l.KindName());
+    const std::string o = "analysis.linear_solver_options.";
+    if (l.kind == Kind::kAuto) {
+      add(o + "auto_direct_max_unknowns", std::to_string(ls.auto_direct_max_unknowns));
+    }
+    if (l.kind == Kind::kAuto || l.kind == Kind::kAmg) {
+      const bool gamg = ls.preconditioner == LinearSolverSettings::Preconditioner::kGamg;
+      add(o + "preconditioner", gamg ? "GAMG" : "BOOMERAMG");
+      add(o + "relative_tolerance", number(ls.relative_tolerance, ""));
+      add(o + "max_iterations", std::to_string(ls.max_iterations));
+      if (gamg) {
+        add(o + "gamg_threshold", number(ls.gamg_threshold, ""));
+      } else {
+        add(o + "boomeramg_strong_threshold", number(ls.boomeramg_strong_threshold, ""));
+      }
+      add(o + "fallback_direct_max_unknowns", std::to_string(ls.fallback_direct_max_unknowns));
+    }
+  }
   if (type == Type::kNonlinearStatic || type == Type::kQuasiStatic) {
     const NonlinearOptions& n = problem.nonlinear;
     if (type == Type::kNonlinearStatic) {
@@ -378,6 +463,7 @@ Status ResolveProblem(const SceneSpec& scene, Problem* problem) {
   p.contacts = ResolveContacts(scene, p.finest_element_size_m);
 
   p.linear_solver.kind = SolverKind(scene.analysis.linear_solver);
+  p.linear_solver.settings = LinearSolverSettingsFromSpec(scene.analysis.linear_solver_options);
   p.nonlinear = NonlinearOptions::FromSpec(scene.analysis.nonlinear);
   p.time = TimeOptions::FromSpec(scene.analysis.time);
   p.explicit_dynamics = ExplicitOptions::FromSpec(scene.analysis.explicit_dynamics,

@@ -49,6 +49,11 @@ struct NonlinearOptions {
   Status Validate() const;
 };
 
+// analysis.linear_solver_options with the defaults of LinearSolverSettings
+// where a field is 0 (unset); the validation names the field.
+LinearSolverSettings LinearSolverSettingsFromSpec(const LinearSolverSpec& spec);
+Status ValidateLinearSolverSettings(const LinearSolverSettings& settings);
+
 // Time of QUASI_STATIC and EXPLICIT_DYNAMIC (analysis.time) [s], defaults
 // applied. The curve is a(t) through (time, amplitude) points; empty: a
 // ramp t / end_s.

@@ -412,6 +412,8 @@ Status ValidateAnalysis(const AnalysisSpec& analysis, const MaterialSpec& materi
         "polynomial or ogden)");
   }
   PBA_RETURN_IF_ERROR(scene_checks::ValidateTime(analysis));
+  PBA_RETURN_IF_ERROR(
+      ValidateLinearSolverSettings(LinearSolverSettingsFromSpec(analysis.linear_solver_options)));
   if (analysis.type == AnalysisSpec::Type::kLinearStatic) return Status::Ok();
   // Every finite-strain analysis (Newton or explicit) on a hyperelastic model.
   if (!material.hyperelastic()) {

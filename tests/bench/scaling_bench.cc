@@ -6,7 +6,8 @@
 // process's peak memory. The direct solver's rows are nearly incompressible
 // (K / mu = 1e3); the PCG rows, which reach about 1e6 unknowns, are
 // compressible (K / mu = 10, Poisson's ratio 0.45), because CG's iterations
-// grow with K / mu (see docs/performance.md). A benchmark, not a test:
+// grow with K / mu (see docs/performance.md). AMG's rows run the same
+// sizes at K / mu = 10, 1e3 and 1e4. A benchmark, not a test:
 // scripts/bench.sh runs the direct solver's rows for docs/performance.md;
 // `--benchmark_filter` picks rows (peak memory is the row's own only when
 // it runs alone).
@@ -21,8 +22,26 @@ namespace {
 
 using testing::Condition;
 
+// The linear solver argument.
+AnalysisSpec::LinearSolver Solver(int64_t code, LinearSolverSpec* options) {
+  switch (code) {
+    case 1:
+      return AnalysisSpec::LinearSolver::kPcg;
+    case 2:
+      return AnalysisSpec::LinearSolver::kAmg;
+    case 3:
+      options->preconditioner = LinearSolverSpec::Preconditioner::kBoomerAmg;
+      return AnalysisSpec::LinearSolver::kAmg;
+    case 4:
+      return AnalysisSpec::LinearSolver::kMumps;
+    default:
+      return AnalysisSpec::LinearSolver::kCholmod;
+  }
+}
+
 // Arguments: cells per cube edge; the element (0 = TET4_ANP, 1 = TET10);
-// the linear solver (0 = CHOLMOD, 1 = PCG); K / mu.
+// the linear solver (0 = CHOLMOD, 1 = PCG, 2 = AMG with GAMG, 3 = AMG with
+// BoomerAMG, 4 = MUMPS); K / mu.
 void BM_NewtonScaling(benchmark::State& state) {
   using K = BoundaryConditionSpec::Kind;
   SceneSpec s;
@@ -37,8 +56,7 @@ void BM_NewtonScaling(benchmark::State& state) {
                            Condition("top", K::kDisplacement, {0.0, 0.0, -1.0})};
   s.analysis.type = AnalysisSpec::Type::kNonlinearStatic;
   s.analysis.nonlinear.increments = 2;
-  s.analysis.linear_solver =
-      state.range(2) ? AnalysisSpec::LinearSolver::kPcg : AnalysisSpec::LinearSolver::kCholmod;
+  s.analysis.linear_solver = Solver(state.range(2), &s.analysis.linear_solver_options);
   s.outputs.reaction_sets = {"top"};
   Solution solution;
   if (!testing::SolveEachIteration(state, s, &solution)) return;
@@ -50,8 +68,8 @@ void BM_NewtonScaling(benchmark::State& state) {
   state.counters["solve_per_it_s"] = m.newton_linear_solve_s / iterations;
   state.counters["residual_per_it_s"] = m.newton_residual_s / iterations;
   state.counters["reaction_N"] = m.reactions.at(0).force_n[2];
-  // PCG's name carries the CG iterations and residual of its last solve.
-  if (state.range(2)) state.SetLabel(m.linear_solver);
+  // The iterative solvers' names carry their CG iterations and residuals.
+  if (state.range(2) != 0) state.SetLabel(m.linear_solver);
   state.counters["peak_rss_mb"] = testing::PeakRssMb();
 }
 
@@ -69,6 +87,14 @@ void ScalingRows(benchmark::internal::Benchmark* b) {
     b->Args({14, 0, 1, k_mu});
     b->Args({7, 1, 1, k_mu});
   }
+  // AMG (GAMG, then BoomerAMG) from about 1e4 to 1e6 unknowns, compressible
+  // and nearly incompressible; MUMPS beside CHOLMOD.
+  for (int k_mu : {10, 1000, 10000}) {
+    for (int n : {7, 16, 23, 34}) b->Args({n, 1, 2, k_mu});
+    for (int n : {14, 32}) b->Args({n, 0, 2, k_mu});
+  }
+  for (int n : {7, 16}) b->Args({n, 1, 3, 1000});
+  for (int n : {10, 15}) b->Args({n, 1, 4, 1000});
 }
 
 BENCHMARK(BM_NewtonScaling)

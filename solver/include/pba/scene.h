@@ -388,6 +388,19 @@ struct GravitySpec {
 
 // Load stepping and Newton-Raphson controls of a nonlinear static analysis;
 // 0 (or unset) picks the default given.
+// Controls of the linear solve (analysis.linear_solver_options); 0 picks the
+// default (LinearSolverSettings in linear/linear_solver.h declares them).
+struct LinearSolverSpec {
+  enum class Preconditioner { kGamg, kBoomerAmg };
+  Preconditioner preconditioner = Preconditioner::kGamg;  // AMG
+  double relative_tolerance = 0;                          // AMG, [1e-14, 1e-2]
+  int max_iterations = 0;                                 // AMG, 1..100000
+  std::optional<double> gamg_threshold;                   // GAMG, [0, 0.5]
+  double boomeramg_strong_threshold = 0;                  // BoomerAMG, (0, 1)
+  int auto_direct_max_unknowns = 0;                       // AUTO, >= 0
+  std::optional<int> fallback_direct_max_unknowns;        // AMG, >= 0 (0: never)
+};
+
 struct NonlinearOptionsSpec {
   int increments = 0;                 // initial number of load increments, default 5, <= 10000
   int max_iterations = 0;             // Newton iterations per increment, default 20, <= 1000
@@ -473,18 +486,22 @@ struct AnalysisSpec {
     kDynamicRelaxation,
   };
   enum class LinearSolver {
-    kCholmod,    // supernodal sparse Cholesky (SuiteSparse), the default
+    kAuto,       // CHOLMOD up to linear_solver_options.auto_direct_max_unknowns, AMG above
+    kCholmod,    // supernodal sparse Cholesky (SuiteSparse)
     kEigenLdlt,  // Eigen's simplicial LDL^T, the fallback
     // Conjugate gradients with an incomplete Cholesky preconditioner, to a
     // relative residual of 1e-12: memory near the matrix's own, for systems
     // too big to factorise; slow to converge when nearly incompressible.
     kPcg,
+    kAmg,    // PETSc conjugate gradients with algebraic multigrid
+    kMumps,  // MUMPS sparse direct (PETSc)
   };
   Type type = Type::kLinearStatic;
-  LinearSolver linear_solver = LinearSolver::kCholmod;
-  NonlinearOptionsSpec nonlinear;  // Newton controls (increments: see time)
-  TimeSpec time;                   // kQuasiStatic, kExplicitDynamic (end and curve only)
-  ExplicitSpec explicit_dynamics;  // kExplicitDynamic, kDynamicRelaxation
+  LinearSolver linear_solver = LinearSolver::kAuto;
+  LinearSolverSpec linear_solver_options;  // tolerances and parameters (0: default)
+  NonlinearOptionsSpec nonlinear;          // Newton controls (increments: see time)
+  TimeSpec time;                           // kQuasiStatic, kExplicitDynamic (end and curve only)
+  ExplicitSpec explicit_dynamics;          // kExplicitDynamic, kDynamicRelaxation
   // Set by formulation AUTO, not read from a scene file: relaxation terms
   // with tau below the first are taken as relaxed (folded into the
   // long-term modulus), those above the second as never relaxing (dropped).

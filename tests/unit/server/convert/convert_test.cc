@@ -328,7 +328,13 @@ outputs: {fields: [DISPLACEMENT, JACOBIAN]}
 TEST(SceneFromProto, EveryLinearSolver) {
   const std::string material =
       "material: {linear_elastic: {youngs_modulus_pa: 3000, poissons_ratio: 0.45}}\n";
-  EXPECT_EQ(Parse(material).analysis.linear_solver, AnalysisSpec::LinearSolver::kCholmod);
+  EXPECT_EQ(Parse(material).analysis.linear_solver, AnalysisSpec::LinearSolver::kAuto);
+  EXPECT_EQ(Parse(material + "analysis: {linear_solver: AUTO}\n").analysis.linear_solver,
+            AnalysisSpec::LinearSolver::kAuto);
+  EXPECT_EQ(Parse(material + "analysis: {linear_solver: AMG}\n").analysis.linear_solver,
+            AnalysisSpec::LinearSolver::kAmg);
+  EXPECT_EQ(Parse(material + "analysis: {linear_solver: MUMPS}\n").analysis.linear_solver,
+            AnalysisSpec::LinearSolver::kMumps);
   EXPECT_EQ(Parse(material + "analysis: {linear_solver: CHOLMOD}\n").analysis.linear_solver,
             AnalysisSpec::LinearSolver::kCholmod);
   EXPECT_EQ(Parse(material + "analysis: {linear_solver: EIGEN_LDLT}\n").analysis.linear_solver,
@@ -345,6 +351,30 @@ TEST(SceneFromProto, EveryLinearSolver) {
   scene.mutable_analysis()->set_linear_solver(static_cast<v1::Analysis::LinearSolver>(99));
   SceneSpec spec;
   EXPECT_EQ(SceneFromProto(scene, &spec).field(), "analysis.linear_solver");
+  scene.mutable_analysis()->set_linear_solver(v1::Analysis::AMG);
+  scene.mutable_analysis()->mutable_linear_solver_options()->set_preconditioner(
+      static_cast<v1::LinearSolverOptions::Preconditioner>(7));
+  EXPECT_EQ(SceneFromProto(scene, &spec).field(), "analysis.linear_solver_options.preconditioner");
+
+  // The options reach the spec; unset ones stay unset (their defaults).
+  const SceneSpec options =
+      Parse(material +
+            "analysis: {linear_solver: AMG, linear_solver_options: {preconditioner: BOOMERAMG, "
+            "relative_tolerance: 1e-8, max_iterations: 300, boomeramg_strong_threshold: 0.6, "
+            "fallback_direct_max_unknowns: 0}}\n");
+  const LinearSolverSpec& l = options.analysis.linear_solver_options;
+  EXPECT_EQ(l.preconditioner, LinearSolverSpec::Preconditioner::kBoomerAmg);
+  EXPECT_EQ(l.relative_tolerance, 1e-8);
+  EXPECT_EQ(l.max_iterations, 300);
+  EXPECT_EQ(l.boomeramg_strong_threshold, 0.6);
+  EXPECT_FALSE(l.gamg_threshold.has_value());
+  ASSERT_TRUE(l.fallback_direct_max_unknowns.has_value());
+  EXPECT_EQ(*l.fallback_direct_max_unknowns, 0);
+  EXPECT_EQ(l.auto_direct_max_unknowns, 0);
+  // Out of range: the scene is refused, naming the field.
+  EXPECT_EQ(
+      Validate(material + "analysis: {linear_solver_options: {relative_tolerance: 2}}\n").field(),
+      "analysis.linear_solver_options.relative_tolerance");
 
   // The solver's name comes back in the summary.
   Summary summary;

@@ -1,0 +1,36 @@
+// The process's PETSc (and MPI, when nobody started it): started on first
+// use, finished at exit. PETSc is not thread-safe, so every use holds
+// PetscLock; its errors come back as codes (never printed, never aborting)
+// and PBA_PETSC turns them into Status.
+#pragma once
+
+#include <mutex>
+#include <string>
+
+#include "pba/status.h"
+
+namespace pba {
+
+// Starts PETSc once per process: MPI_Init_thread (serialized) when MPI is
+// not running yet, then PetscInitialize without PETSc's signal handlers
+// (the process keeps its own: pba-solve's SIGTERM cancels the run), without
+// reading ~/.petscrc, and with the options database then cleared, so that
+// PETSC_OPTIONS in the environment cannot change an answer: a scene's
+// options are the only ones. Both are finished at exit. Idempotent and
+// thread-safe; a failure is remembered and returned again.
+Status InitializePetsc();
+
+// Held around every sequence of PETSc calls.
+std::unique_lock<std::mutex> PetscLock();
+
+// "PETSc error 73 (Object is in wrong state) in KSPSolve" for a failed call.
+Status PetscFailure(int code, const char* call);
+
+}  // namespace pba
+
+// Runs a PETSc call and returns its failure as Status::Internal.
+#define PBA_PETSC(call)                                                           \
+  do {                                                                            \
+    const int pba_petsc_code_ = static_cast<int>(call);                           \
+    if (pba_petsc_code_ != 0) return ::pba::PetscFailure(pba_petsc_code_, #call); \
+  } while (false)

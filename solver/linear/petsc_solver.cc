@@ -1,0 +1,509 @@
+// The PETSc backends: conjugate gradients with algebraic multigrid (GAMG or
+// hypre's BoomerAMG) for systems too large to factorise, and MUMPS, the
+// multifrontal direct solver, for the fallback and for users who want it.
+// Serial here (PETSC_COMM_SELF); every PETSc call holds PetscLock.
+#include <petscksp.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <memory>
+#include <vector>
+
+#include "core/format.h"
+#include "linear/linear_solver.h"
+#include "linear/petsc_runtime.h"
+
+namespace pba {
+namespace {
+
+// The PETSc objects of one solver, destroyed under the lock.
+struct PetscObjects {
+  Mat matrix = nullptr;
+  KSP ksp = nullptr;
+  Vec rhs = nullptr, solution = nullptr;
+
+  void Destroy() {
+    if (ksp != nullptr) KSPDestroy(&ksp);
+    if (matrix != nullptr) MatDestroy(&matrix);
+    if (rhs != nullptr) VecDestroy(&rhs);
+    if (solution != nullptr) VecDestroy(&solution);
+  }
+};
+
+// A symmetric matrix handed over in Eigen's compressed column storage, kept
+// as PETSc's row storage of the same matrix (symmetric: columns are rows),
+// optionally expanded to every degree of freedom of the mesh's nodes so
+// that each node's three unknowns form a block (prescribed ones get a
+// diagonal entry of the matrix's scale and a zero right-hand side).
+class PetscMatrix {
+ public:
+  // Builds `objects->matrix` for `a`'s pattern, or refills its values when
+  // the pattern is the one it was built for; *rebuilt says which.
+  Status Load(const Eigen::SparseMatrix<double>& a, const UnknownLayout* layout,
+              PetscObjects* objects, bool* rebuilt) {
+    if (!a.isCompressed()) return Status::Internal("PETSc solver given an uncompressed matrix");
+    if (layout != nullptr && static_cast<Eigen::Index>(layout->dof_of_unknown.size()) != a.rows()) {
+      return Status::Internal("unknown layout does not match the matrix size");
+    }
+    *rebuilt = !SamePattern(a);
+    if (*rebuilt) {
+      if (objects->matrix != nullptr) MatDestroy(&objects->matrix);
+      outer_.assign(a.outerIndexPtr(), a.outerIndexPtr() + a.outerSize() + 1);
+      inner_.assign(a.innerIndexPtr(), a.innerIndexPtr() + a.nonZeros());
+      BuildPattern(a, layout);
+    }
+    FillValues(a, layout);
+    if (*rebuilt) {
+      const PetscInt size = static_cast<PetscInt>(row_start_.size() - 1);
+      PBA_PETSC(MatCreate(PETSC_COMM_SELF, &objects->matrix));
+      PBA_PETSC(MatSetSizes(objects->matrix, size, size, size, size));
+      PBA_PETSC(MatSetType(objects->matrix, MATSEQAIJ));
+      if (layout != nullptr) PBA_PETSC(MatSetBlockSize(objects->matrix, 3));
+      PBA_PETSC(MatSeqAIJSetPreallocationCSR(objects->matrix, row_start_.data(), columns_.data(),
+                                             values_.data()));
+      PBA_PETSC(MatSetOption(objects->matrix, MAT_SYMMETRIC, PETSC_TRUE));
+      PBA_PETSC(MatSetOption(objects->matrix, MAT_SYMMETRY_ETERNAL, PETSC_TRUE));
+    } else {
+      // Same pattern, same order: PETSc's value array is overwritten (and
+      // its state advanced, so the preconditioner sees a new matrix).
+      PetscScalar* target = nullptr;
+      PBA_PETSC(MatSeqAIJGetArray(objects->matrix, &target));
+      std::copy(values_.begin(), values_.end(), target);
+      PBA_PETSC(MatSeqAIJRestoreArray(objects->matrix, &target));
+    }
+    values_ = std::vector<PetscScalar>();  // PETSc holds its copy
+    return Status::Ok();
+  }
+
+  PetscInt size() const { return static_cast<PetscInt>(row_start_.size() - 1); }
+  // Expanded position of unknown i.
+  PetscInt Position(Eigen::Index i, const UnknownLayout* layout) const {
+    return layout != nullptr ? layout->dof_of_unknown[i] : static_cast<PetscInt>(i);
+  }
+
+ private:
+  bool SamePattern(const Eigen::SparseMatrix<double>& a) const {
+    return outer_.size() == static_cast<std::size_t>(a.outerSize()) + 1 &&
+           inner_.size() == static_cast<std::size_t>(a.nonZeros()) &&
+           std::equal(outer_.begin(), outer_.end(), a.outerIndexPtr()) &&
+           std::equal(inner_.begin(), inner_.end(), a.innerIndexPtr());
+  }
+
+  // Row starts and columns; unknown positions increase with the unknown, so
+  // each column's sorted rows stay sorted.
+  void BuildPattern(const Eigen::SparseMatrix<double>& a, const UnknownLayout* layout) {
+    const PetscInt rows = layout != nullptr ? 3 * layout->num_nodes() : a.rows();
+    std::vector<Eigen::Index> unknown_at(rows, -1);
+    for (Eigen::Index i = 0; i < a.rows(); ++i) unknown_at[Position(i, layout)] = i;
+    row_start_.assign(1, 0);
+    columns_.clear();
+    columns_.reserve(a.nonZeros() + rows - a.rows());
+    for (PetscInt row = 0; row < rows; ++row) {
+      const Eigen::Index j = unknown_at[row];
+      if (j < 0) {
+        columns_.push_back(row);
+      } else {
+        for (int k = a.outerIndexPtr()[j]; k < a.outerIndexPtr()[j + 1]; ++k) {
+          columns_.push_back(Position(a.innerIndexPtr()[k], layout));
+        }
+      }
+      row_start_.push_back(static_cast<PetscInt>(columns_.size()));
+    }
+    prescribed_rows_.clear();
+    for (PetscInt row = 0; row < rows; ++row) {
+      if (unknown_at[row] < 0) prescribed_rows_.push_back(row);
+    }
+  }
+
+  void FillValues(const Eigen::SparseMatrix<double>& a, const UnknownLayout* layout) {
+    values_.assign(columns_.size(), 0.0);
+    // A prescribed row's diagonal: the mean free diagonal, so that the
+    // expanded matrix is no worse scaled than the free one.
+    double scale = 1;
+    if (a.rows() > 0) scale = a.diagonal().cwiseAbs().mean();
+    if (!(scale > 0) || !std::isfinite(scale)) scale = 1;
+    for (PetscInt row : prescribed_rows_) values_[row_start_[row]] = scale;
+    for (Eigen::Index j = 0; j < a.cols(); ++j) {
+      const PetscInt start = row_start_[Position(j, layout)];
+      const int first = a.outerIndexPtr()[j];
+      for (int k = first; k < a.outerIndexPtr()[j + 1]; ++k) {
+        values_[start + (k - first)] = a.valuePtr()[k];
+      }
+    }
+  }
+
+  std::vector<int> outer_, inner_;  // the pattern loaded
+  std::vector<PetscInt> row_start_, columns_, prescribed_rows_;
+  std::vector<PetscScalar> values_;  // between building and handing over
+};
+
+// Copies b into the expanded right-hand side, solves, copies the answer
+// out; `solve` runs the KSP.
+Status ExpandedSolve(const PetscMatrix& matrix, const UnknownLayout* layout, PetscObjects* objects,
+                     const Eigen::VectorXd& b, Eigen::VectorXd* x) {
+  PBA_PETSC(VecSet(objects->rhs, 0.0));
+  PBA_PETSC(VecSet(objects->solution, 0.0));
+  PetscScalar* rhs = nullptr;
+  PBA_PETSC(VecGetArray(objects->rhs, &rhs));
+  for (Eigen::Index i = 0; i < b.size(); ++i) rhs[matrix.Position(i, layout)] = b(i);
+  PBA_PETSC(VecRestoreArray(objects->rhs, &rhs));
+  PBA_PETSC(KSPSolve(objects->ksp, objects->rhs, objects->solution));
+  const PetscScalar* solution = nullptr;
+  PBA_PETSC(VecGetArrayRead(objects->solution, &solution));
+  x->resize(b.size());
+  for (Eigen::Index i = 0; i < b.size(); ++i) (*x)(i) = solution[matrix.Position(i, layout)];
+  PBA_PETSC(VecRestoreArrayRead(objects->solution, &solution));
+  return Status::Ok();
+}
+
+// MUMPS as PETSc's Cholesky-type factorisation (LDL^T with pivoting, sym =
+// 2, since the matrix is only flagged symmetric), the inertia telling a
+// matrix that is not positive definite.
+class MumpsSolver final : public LinearSolver {
+ public:
+  ~MumpsSolver() override {
+    const auto lock = PetscLock();
+    objects_.Destroy();
+  }
+
+  Status Factorize(const Eigen::SparseMatrix<double>& a) override {
+    PBA_RETURN_IF_ERROR(InitializePetsc());
+    const auto lock = PetscLock();
+    factorized_ = false;
+    bool rebuilt = false;
+    PBA_RETURN_IF_ERROR(matrix_.Load(a, nullptr, &objects_, &rebuilt));
+    if (rebuilt || objects_.ksp == nullptr) PBA_RETURN_IF_ERROR(Setup());
+    PBA_PETSC(KSPSetOperators(objects_.ksp, objects_.matrix, objects_.matrix));
+    PBA_PETSC(KSPSetUp(objects_.ksp));
+    PC pc = nullptr;
+    PBA_PETSC(KSPGetPC(objects_.ksp, &pc));
+    PCFailedReason failed = PC_NOERROR;
+    PBA_PETSC(PCGetFailedReason(pc, &failed));
+    if (failed != PC_NOERROR) {
+      return Status::Numerical(
+          Format("MUMPS could not factorise the stiffness matrix (%s): it is singular or not "
+                 "positive definite (a body not held against rigid motion, or a degenerate mesh)",
+                 PCFailedReasons[failed]));
+    }
+    Mat factor = nullptr;
+    PBA_PETSC(PCFactorGetMatrix(pc, &factor));
+    PetscInt negative = 0, zero = 0, positive = 0;
+    PBA_PETSC(MatGetInertia(factor, &negative, &zero, &positive));
+    if (negative > 0 || zero > 0) {
+      return Status::Numerical(
+          Format("the stiffness matrix is not positive definite: MUMPS found %d negative and %d "
+                 "zero pivots (a body not held against rigid motion, an unstable state, or a "
+                 "degenerate mesh)",
+                 static_cast<int>(negative), static_cast<int>(zero)));
+    }
+    factorized_ = true;
+    return Status::Ok();
+  }
+
+  Status Solve(const Eigen::VectorXd& b, Eigen::VectorXd* x) override {
+    if (!factorized_) return Status::Internal("MUMPS solve without a successful Factorize");
+    const auto lock = PetscLock();
+    PBA_RETURN_IF_ERROR(ExpandedSolve(matrix_, nullptr, &objects_, b, x));
+    if (!x->allFinite()) return Status::Numerical("MUMPS's solve produced no finite answer");
+    return Status::Ok();
+  }
+
+  std::string Name() const override { return "MUMPS multifrontal LDL^T (PETSc)"; }
+  std::unique_ptr<LinearSolver> NewOfSameKind() const override {
+    return std::make_unique<MumpsSolver>();
+  }
+
+ private:
+  Status Setup() {
+    if (objects_.ksp != nullptr) KSPDestroy(&objects_.ksp);
+    if (objects_.rhs != nullptr) VecDestroy(&objects_.rhs);
+    if (objects_.solution != nullptr) VecDestroy(&objects_.solution);
+    PBA_PETSC(MatCreateVecs(objects_.matrix, &objects_.solution, &objects_.rhs));
+    PBA_PETSC(KSPCreate(PETSC_COMM_SELF, &objects_.ksp));
+    PBA_PETSC(KSPSetOperators(objects_.ksp, objects_.matrix, objects_.matrix));
+    PBA_PETSC(KSPSetType(objects_.ksp, KSPPREONLY));
+    PC pc = nullptr;
+    PBA_PETSC(KSPGetPC(objects_.ksp, &pc));
+    PBA_PETSC(PCSetType(pc, PCCHOLESKY));
+    PBA_PETSC(PCFactorSetMatSolverType(pc, MATSOLVERMUMPS));
+    PBA_PETSC(PCFactorSetUpMatSolverType(pc));
+    Mat factor = nullptr;
+    PBA_PETSC(PCFactorGetMatrix(pc, &factor));
+    // Null pivots detected (needed for the inertia); MUMPS prints nothing.
+    PBA_PETSC(MatMumpsSetIcntl(factor, 24, 1));
+    PBA_PETSC(MatMumpsSetIcntl(factor, 4, 0));
+    return Status::Ok();
+  }
+
+  PetscMatrix matrix_;
+  PetscObjects objects_;
+  bool factorized_ = false;
+};
+
+// Conjugate gradients with algebraic multigrid.
+class AmgSolver final : public LinearSolver {
+ public:
+  AmgSolver(const LinearSolverSettings& settings, const UnknownLayout* layout,
+            const std::atomic<bool>* cancel)
+      : settings_(settings), layout_(layout), cancel_(cancel) {}
+  ~AmgSolver() override {
+    const auto lock = PetscLock();
+    objects_.Destroy();
+  }
+
+  Status Factorize(const Eigen::SparseMatrix<double>& a) override {
+    PBA_RETURN_IF_ERROR(InitializePetsc());
+    factorized_ = false;
+    fallback_.reset();
+    kept_ = Eigen::SparseMatrix<double>();
+    // A positive definite matrix has a positive diagonal; CG on one that is
+    // not would wander, so this necessary condition is checked first (as
+    // PCG does). Indefinite matrices with a positive diagonal show as a
+    // failed solve.
+    for (Eigen::Index i = 0; i < a.rows(); ++i) {
+      const double d = a.coeff(i, i);
+      if (!(d > 0) || !std::isfinite(d)) {
+        return Status::Numerical(
+            Format("the stiffness matrix is not positive definite (diagonal entry %lld is %.3g): "
+                   "a body not held against rigid motion, or a degenerate mesh",
+                   static_cast<long long>(i), d));
+      }
+    }
+    unknowns_ = a.rows();
+    const auto lock = PetscLock();
+    bool rebuilt = false;
+    PBA_RETURN_IF_ERROR(matrix_.Load(a, layout_, &objects_, &rebuilt));
+    if (rebuilt || objects_.ksp == nullptr) PBA_RETURN_IF_ERROR(Setup());
+    PBA_PETSC(KSPSetOperators(objects_.ksp, objects_.matrix, objects_.matrix));
+    PBA_PETSC(KSPSetUp(objects_.ksp));
+    PC pc = nullptr;
+    PBA_PETSC(KSPGetPC(objects_.ksp, &pc));
+    PCFailedReason failed = PC_NOERROR;
+    PBA_PETSC(PCGetFailedReason(pc, &failed));
+    if (failed != PC_NOERROR) {
+      return Status::Numerical(
+          Format("the multigrid preconditioner could not be built (%s)", PCFailedReasons[failed]));
+    }
+    // A modified-Newton step solves with this factorisation after the
+    // caller's matrix is gone: a fallback needs its own copy, kept only
+    // where there can be one.
+    if (unknowns_ <= settings_.fallback_direct_max_unknowns) {
+      kept_ = a;
+    } else {
+      kept_ = Eigen::SparseMatrix<double>();
+    }
+    factorized_ = true;
+    return Status::Ok();
+  }
+
+  Status Solve(const Eigen::VectorXd& b, Eigen::VectorXd* x) override {
+    if (!factorized_) return Status::Internal("AMG solve without a successful Factorize");
+    int iterations = 0;
+    double residual = INFINITY;
+    bool converged = false;
+    {
+      const auto lock = PetscLock();
+      cancelled_ = false;
+      PBA_RETURN_IF_ERROR(ExpandedSolve(matrix_, layout_, &objects_, b, x));
+      PetscInt its = 0;
+      PBA_PETSC(KSPGetIterationNumber(objects_.ksp, &its));
+      iterations = static_cast<int>(its);
+      KSPConvergedReason reason = KSP_CONVERGED_ITERATING;
+      PBA_PETSC(KSPGetConvergedReason(objects_.ksp, &reason));
+      converged = reason > 0;
+      // The true residual of the system solved (prescribed rows included:
+      // theirs is their tiny solution times the scale).
+      PBA_RETURN_IF_ERROR(TrueResidual(&residual));
+    }
+    if (cancelled_) {
+      return Status::Cancelled(
+          Format("cancelled during conjugate gradients (iteration %d)", iterations));
+    }
+    if (!x->allFinite()) residual = INFINITY;
+    ++solves_;
+    last_iterations_ = iterations;
+    last_residual_ = residual;
+    min_iterations_ = solves_ == 1 ? iterations : std::min(min_iterations_, iterations);
+    max_iterations_seen_ = std::max(max_iterations_seen_, iterations);
+    // The recurrence CG tests drifts from the true residual; a digit of
+    // drift is accepted, more is not convergence.
+    if (converged && residual <= 10 * settings_.relative_tolerance) return Status::Ok();
+    const std::string failure = Format(
+        "conjugate gradients with %s did not converge: %d iterations reached a relative "
+        "residual of %.3g (target %.1e)",
+        settings_.PreconditionerName(), iterations, residual, settings_.relative_tolerance);
+    if (unknowns_ > settings_.fallback_direct_max_unknowns) {
+      return Status::Numerical(
+          failure + Format("; the system (%lld unknowns) is above "
+                           "linear_solver_options.fallback_direct_max_unknowns (%d), so it is "
+                           "not redone by MUMPS; a nearly incompressible material or a body "
+                           "barely held against rigid motion are the usual causes",
+                           static_cast<long long>(unknowns_),
+                           settings_.fallback_direct_max_unknowns));
+    }
+    // Redone by MUMPS, whose inertia also tells an indefinite matrix.
+    if (fallback_ == nullptr) {
+      fallback_ = CreateMumpsSolver();
+      const Status factorized = fallback_->Factorize(kept_);
+      if (!factorized.ok()) {
+        fallback_.reset();
+        return Status::Numerical(failure + "; MUMPS, the fallback: " + factorized.message());
+      }
+    }
+    ++fallbacks_;
+    return fallback_->Solve(b, x);
+  }
+
+  std::string Name() const override {
+    std::string name = Format("conjugate gradients with %s (PETSc), relative tolerance %.0e",
+                              settings_.PreconditionerName(), settings_.relative_tolerance);
+    if (layout_ == nullptr) name += ", scalar aggregation (no rigid-body modes)";
+    if (solves_ > 0) {
+      name +=
+          Format(" (%d solves, %d-%d iterations; last: %d iterations, relative residual %.1e",
+                 solves_, min_iterations_, max_iterations_seen_, last_iterations_, last_residual_);
+      if (fallbacks_ > 0) name += Format("; %d redone by MUMPS", fallbacks_);
+      name += ")";
+    }
+    return name;
+  }
+
+  std::unique_ptr<LinearSolver> NewOfSameKind() const override {
+    return std::make_unique<AmgSolver>(settings_, layout_, cancel_);
+  }
+
+ private:
+  Status Setup() {
+    if (objects_.ksp != nullptr) KSPDestroy(&objects_.ksp);
+    if (objects_.rhs != nullptr) VecDestroy(&objects_.rhs);
+    if (objects_.solution != nullptr) VecDestroy(&objects_.solution);
+    PBA_PETSC(MatCreateVecs(objects_.matrix, &objects_.solution, &objects_.rhs));
+    if (layout_ != nullptr) PBA_RETURN_IF_ERROR(SetNearNullSpace());
+    PBA_PETSC(KSPCreate(PETSC_COMM_SELF, &objects_.ksp));
+    PBA_PETSC(KSPSetOperators(objects_.ksp, objects_.matrix, objects_.matrix));
+    PBA_PETSC(KSPSetType(objects_.ksp, KSPCG));
+    // The tolerance is on the residual itself, ||b - A x|| / ||b||.
+    PBA_PETSC(KSPSetNormType(objects_.ksp, KSP_NORM_UNPRECONDITIONED));
+    PBA_PETSC(KSPSetTolerances(objects_.ksp, settings_.relative_tolerance, 0.0, PETSC_DEFAULT,
+                               settings_.max_iterations));
+    PBA_PETSC(KSPSetErrorIfNotConverged(objects_.ksp, PETSC_FALSE));
+    void* default_test = nullptr;
+    PBA_PETSC(KSPConvergedDefaultCreate(&default_test));
+    PBA_PETSC(KSPSetConvergenceTest(objects_.ksp, &AmgSolver::Test, this, nullptr));
+    default_test_.reset(default_test);
+    PC pc = nullptr;
+    PBA_PETSC(KSPGetPC(objects_.ksp, &pc));
+    if (settings_.preconditioner == LinearSolverSettings::Preconditioner::kGamg) {
+      PBA_PETSC(PCSetType(pc, PCGAMG));
+      PBA_PETSC(PCGAMGSetType(pc, PCGAMGAGG));
+      PetscReal threshold[] = {settings_.gamg_threshold};
+      PBA_PETSC(PCGAMGSetThreshold(pc, threshold, 1));
+      // Newton's tangents keep their pattern: the aggregates and
+      // prolongation of the first are kept, the Galerkin products redone.
+      PBA_PETSC(PCGAMGSetReuseInterpolation(pc, PETSC_TRUE));
+    } else {
+      PBA_PETSC(PCSetType(pc, PCHYPRE));
+      PBA_PETSC(PCHYPRESetType(pc, "boomeramg"));
+      // hypre reads its parameters from the options database: this
+      // solver's, under its own prefix, set from the scene only.
+      const std::string prefix = Format("pba_amg_%p_", static_cast<void*>(this));
+      PBA_PETSC(KSPSetOptionsPrefix(objects_.ksp, prefix.c_str()));
+      const std::string strong = Format("%.17g", settings_.boomeramg_strong_threshold);
+      const std::pair<const char*, std::string> options[] = {
+          {"pc_hypre_boomeramg_strong_threshold", strong},
+          {"pc_hypre_boomeramg_coarsen_type", "HMIS"},
+          {"pc_hypre_boomeramg_interp_type", "ext+i"},
+          {"pc_hypre_boomeramg_nodal_coarsen", layout_ != nullptr ? "6" : "0"},
+      };
+      for (const auto& [key, value] : options) {
+        const std::string name = "-" + prefix + key;
+        PBA_PETSC(PetscOptionsSetValue(nullptr, name.c_str(), value.c_str()));
+      }
+      PBA_PETSC(PCSetFromOptions(pc));
+      for (const auto& [key, value] : options) {
+        const std::string name = "-" + prefix + key;
+        PetscOptionsClearValue(nullptr, name.c_str());
+      }
+    }
+    return Status::Ok();
+  }
+
+  // ||b - A x|| / ||b|| over the expanded system just solved.
+  Status TrueResidual(double* residual) {
+    Vec r = nullptr;
+    PBA_PETSC(VecDuplicate(objects_.rhs, &r));
+    PetscReal r_norm = 0, b_norm = 0;
+    PetscErrorCode code = MatMult(objects_.matrix, objects_.solution, r);
+    if (code == 0) code = VecAYPX(r, -1.0, objects_.rhs);
+    if (code == 0) code = VecNorm(r, NORM_2, &r_norm);
+    if (code == 0) code = VecNorm(objects_.rhs, NORM_2, &b_norm);
+    VecDestroy(&r);
+    PBA_PETSC(code);
+    *residual = r_norm / (b_norm > 0 ? b_norm : 1.0);
+    if (!std::isfinite(*residual)) *residual = INFINITY;
+    return Status::Ok();
+  }
+
+  // The rigid motions of the nodes: three translations, three rotations.
+  Status SetNearNullSpace() {
+    Vec coordinates = nullptr;
+    PBA_PETSC(VecCreateSeq(PETSC_COMM_SELF, 3 * layout_->num_nodes(), &coordinates));
+    PBA_PETSC(VecSetBlockSize(coordinates, 3));
+    PetscScalar* c = nullptr;
+    PBA_PETSC(VecGetArray(coordinates, &c));
+    std::copy(layout_->coordinates.begin(), layout_->coordinates.end(), c);
+    PBA_PETSC(VecRestoreArray(coordinates, &c));
+    MatNullSpace rigid = nullptr;
+    const PetscErrorCode made = MatNullSpaceCreateRigidBody(coordinates, &rigid);
+    VecDestroy(&coordinates);
+    PBA_PETSC(made);
+    const PetscErrorCode set = MatSetNearNullSpace(objects_.matrix, rigid);
+    MatNullSpaceDestroy(&rigid);
+    PBA_PETSC(set);
+    return Status::Ok();
+  }
+
+  // PETSc's default test, plus the cancel flag.
+  static PetscErrorCode Test(KSP ksp, PetscInt iteration, PetscReal norm,
+                             KSPConvergedReason* reason, void* context) {
+    auto* self = static_cast<AmgSolver*>(context);
+    if (self->cancel_ != nullptr && self->cancel_->load(std::memory_order_relaxed)) {
+      self->cancelled_ = true;
+      *reason = KSP_DIVERGED_ITS;
+      return 0;
+    }
+    return KSPConvergedDefault(ksp, iteration, norm, reason, self->default_test_.get());
+  }
+
+  struct DefaultTestDeleter {
+    void operator()(void* context) const { KSPConvergedDefaultDestroy(context); }
+  };
+
+  LinearSolverSettings settings_;
+  const UnknownLayout* layout_;      // not owned; may be null
+  const std::atomic<bool>* cancel_;  // not owned; may be null
+  PetscMatrix matrix_;
+  PetscObjects objects_;
+  std::unique_ptr<void, DefaultTestDeleter> default_test_;
+  Eigen::SparseMatrix<double> kept_;  // the matrix, for a fallback
+  std::unique_ptr<LinearSolver> fallback_;
+  Eigen::Index unknowns_ = 0;
+  bool factorized_ = false;
+  bool cancelled_ = false;
+  int solves_ = 0, fallbacks_ = 0;
+  int last_iterations_ = 0, min_iterations_ = 0, max_iterations_seen_ = 0;
+  double last_residual_ = 0;
+};
+
+}  // namespace
+
+std::unique_ptr<LinearSolver> CreateAmgSolver(const LinearSolverSettings& settings,
+                                              const UnknownLayout* layout,
+                                              const std::atomic<bool>* cancel) {
+  return std::make_unique<AmgSolver>(settings, layout, cancel);
+}
+
+std::unique_ptr<LinearSolver> CreateMumpsSolver() { return std::make_unique<MumpsSolver>(); }
+
+}  // namespace pba

@@ -1,0 +1,359 @@
+// The PETSc backends (AMG under conjugate gradients, MUMPS) and AUTO: they
+// agree with CHOLMOD on assembled stiffnesses and through whole solves; a
+// matrix that is not positive definite, an iteration that does not
+// converge and a cancel each end in the Status that says so, never in an
+// unconverged answer passed on as converged.
+#include <gtest/gtest.h>
+
+#include <Eigen/SparseCore>
+#include <atomic>
+#include <string>
+#include <vector>
+
+#include "assembly/assembler.h"
+#include "assembly/dof_map.h"
+#include "common/scene_builders.h"
+#include "linear/linear_solver.h"
+#include "material/linear_elastic.h"
+#include "pba/solve.h"
+#include "scene/model_builder.h"
+#include "scene/problem.h"
+
+namespace pba {
+namespace {
+
+using K = BoundaryConditionSpec::Kind;
+using testing::Condition;
+
+// A 20 x 20 x 30 mm block, bottom fixed, top pressed 1.5 mm, linear elastic.
+SceneSpec Block(double element_size_mm, AnalysisSpec::LinearSolver solver) {
+  SceneSpec s;
+  s.name = "block";
+  s.geometry.kind = GeometrySpec::Kind::kBox;
+  s.geometry.box.size_mm = {20, 20, 30};
+  s.mesh.element_size_mm = element_size_mm;
+  s.material.kind = MaterialSpec::Kind::kLinearElastic;
+  s.material.linear_elastic = {3000, 0.45};
+  s.boundary_conditions = {Condition("bottom", K::kFixed),
+                           Condition("top", K::kDisplacement, {0.0, 0.0, -1.5})};
+  s.analysis.linear_solver = solver;
+  return s;
+}
+
+// The block's assembled stiffness, its load and the unknowns' layout.
+struct BlockSystem {
+  Model model;
+  LinearSystem system;
+  UnknownLayout layout;
+  Eigen::VectorXd direct;  // CHOLMOD's answer
+};
+
+void Assemble(double element_size_mm, double poisson, BlockSystem* out) {
+  const SceneSpec scene = Block(element_size_mm, AnalysisSpec::LinearSolver::kCholmod);
+  ASSERT_TRUE(BuildModel(scene, &out->model).ok());
+  ASSERT_TRUE(AssembleLinearSystem(
+                  out->model.mesh,
+                  ElasticityField::Uniform(IsotropicElasticity(3000, poisson),
+                                           out->model.mesh.num_elements()),
+                  out->model.dofs, ColourElements(out->model.mesh), [](double) { return true; },
+                  &out->system, ThreadContext())
+                  .ok());
+  out->layout = MakeUnknownLayout(out->model.dofs, out->model.mesh.nodes);
+  const auto cholmod = CreateCholmodSolver(ThreadContext());
+  ASSERT_TRUE(cholmod->Factorize(out->system.k).ok());
+  ASSERT_TRUE(cholmod->Solve(out->system.rhs, &out->direct).ok());
+}
+
+double RelativeDifference(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
+  return (a - b).norm() / b.norm();
+}
+
+double Residual(const Eigen::SparseMatrix<double>& a, const Eigen::VectorXd& x,
+                const Eigen::VectorXd& b) {
+  return (a * x - b).norm() / b.norm();
+}
+
+// Iterations of the last solve, read from the name ("... last: N iterations").
+int LastIterations(const std::string& name) {
+  const std::size_t at = name.find("last: ");
+  if (at == std::string::npos) return -1;
+  return std::stoi(name.substr(at + 6));
+}
+
+TEST(AmgSolver, GamgWithRigidBodyModesMatchesCholmod) {
+  BlockSystem b;
+  Assemble(2.0, 0.45, &b);
+  ASSERT_GT(b.system.k.rows(), 5000);
+  LinearSolverSettings settings;
+  const auto amg = CreateAmgSolver(settings, &b.layout, nullptr);
+  Eigen::VectorXd x;
+  Status status = amg->Factorize(b.system.k);
+  ASSERT_TRUE(status.ok()) << status.ToString();
+  status = amg->Solve(b.system.rhs, &x);
+  ASSERT_TRUE(status.ok()) << status.ToString();
+  EXPECT_LT(Residual(b.system.k, x, b.system.rhs), 10 * settings.relative_tolerance);
+  EXPECT_LT(RelativeDifference(x, b.direct), 1e-7);
+  const std::string name = amg->Name();
+  EXPECT_NE(name.find("GAMG"), std::string::npos) << name;
+  EXPECT_EQ(name.find("MUMPS"), std::string::npos) << name;  // converged on its own
+  // Multigrid with the rigid-body modes: tens of iterations, where
+  // incomplete Cholesky needs hundreds on this block.
+  const int with_modes = LastIterations(name);
+  EXPECT_GT(with_modes, 0) << name;
+  EXPECT_LT(with_modes, 80) << name;
+
+  // Without the layout, scalar aggregation still converges, more slowly.
+  const auto scalar = CreateAmgSolver(settings, nullptr, nullptr);
+  ASSERT_TRUE(scalar->Factorize(b.system.k).ok());
+  ASSERT_TRUE(scalar->Solve(b.system.rhs, &x).ok());
+  EXPECT_LT(RelativeDifference(x, b.direct), 1e-7);
+  EXPECT_NE(scalar->Name().find("scalar aggregation"), std::string::npos) << scalar->Name();
+  EXPECT_GT(LastIterations(scalar->Name()), with_modes) << scalar->Name();
+}
+
+TEST(AmgSolver, BoomerAmgMatchesCholmod) {
+  BlockSystem b;
+  Assemble(2.5, 0.45, &b);
+  LinearSolverSettings settings;
+  settings.preconditioner = LinearSolverSettings::Preconditioner::kBoomerAmg;
+  const auto amg = CreateAmgSolver(settings, &b.layout, nullptr);
+  Eigen::VectorXd x;
+  ASSERT_TRUE(amg->Factorize(b.system.k).ok());
+  const Status status = amg->Solve(b.system.rhs, &x);
+  ASSERT_TRUE(status.ok()) << status.ToString();
+  EXPECT_LT(RelativeDifference(x, b.direct), 1e-7);
+  EXPECT_NE(amg->Name().find("BoomerAMG"), std::string::npos) << amg->Name();
+  EXPECT_EQ(amg->Name().find("MUMPS"), std::string::npos) << amg->Name();
+}
+
+TEST(AmgSolver, RefactorisesNewValuesOnTheSamePatternAndKeepsItsMatrix) {
+  BlockSystem b;
+  Assemble(2.5, 0.45, &b);
+  const auto amg = CreateAmgSolver(LinearSolverSettings(), &b.layout, nullptr);
+  Eigen::VectorXd x;
+  ASSERT_TRUE(amg->Factorize(b.system.k).ok());
+  ASSERT_TRUE(amg->Solve(b.system.rhs, &x).ok());
+  {
+    // Twice as stiff: half the displacement. The caller's matrix is gone
+    // before the solve (Newton's modified step).
+    Eigen::SparseMatrix<double> stiffer = 2 * b.system.k;
+    ASSERT_TRUE(amg->Factorize(stiffer).ok());
+  }
+  ASSERT_TRUE(amg->Solve(b.system.rhs, &x).ok());
+  EXPECT_LT(RelativeDifference(x, 0.5 * b.direct), 1e-7);
+  const auto other = amg->NewOfSameKind();
+  ASSERT_TRUE(other->Factorize(b.system.k).ok());
+  ASSERT_TRUE(other->Solve(b.system.rhs, &x).ok());
+  EXPECT_LT(RelativeDifference(x, b.direct), 1e-7);
+}
+
+TEST(AmgSolver, NotConvergedIsRedoneByMumpsOrRefused) {
+  BlockSystem b;
+  Assemble(2.5, 0.45, &b);
+  LinearSolverSettings settings;
+  settings.max_iterations = 2;  // far too few
+  const auto amg = CreateAmgSolver(settings, &b.layout, nullptr);
+  Eigen::VectorXd x;
+  ASSERT_TRUE(amg->Factorize(b.system.k).ok());
+  Status status = amg->Solve(b.system.rhs, &x);
+  ASSERT_TRUE(status.ok()) << status.ToString();
+  EXPECT_LT(RelativeDifference(x, b.direct), 1e-9);
+  EXPECT_NE(amg->Name().find("1 redone by MUMPS"), std::string::npos) << amg->Name();
+
+  // No fallback allowed: the solve fails and says why.
+  settings.fallback_direct_max_unknowns = 0;
+  const auto strict = CreateAmgSolver(settings, &b.layout, nullptr);
+  ASSERT_TRUE(strict->Factorize(b.system.k).ok());
+  status = strict->Solve(b.system.rhs, &x);
+  ASSERT_EQ(status.code(), Status::Code::kNumerical) << status.ToString();
+  EXPECT_NE(status.message().find("did not converge: 2 iterations"), std::string::npos)
+      << status.message();
+  EXPECT_NE(status.message().find("fallback_direct_max_unknowns"), std::string::npos)
+      << status.message();
+}
+
+// The 1D Laplacian (tridiagonal 2, -1) minus `shift` times the identity.
+Eigen::SparseMatrix<double> ShiftedLaplacian(int n, double shift) {
+  std::vector<Eigen::Triplet<double>> entries;
+  for (int i = 0; i < n; ++i) {
+    entries.emplace_back(i, i, 2.0 - shift);
+    if (i + 1 < n) {
+      entries.emplace_back(i, i + 1, -1.0);
+      entries.emplace_back(i + 1, i, -1.0);
+    }
+  }
+  Eigen::SparseMatrix<double> a(n, n);
+  a.setFromTriplets(entries.begin(), entries.end());
+  a.makeCompressed();
+  return a;
+}
+
+TEST(AmgSolver, IndefiniteMatrixEndsNamingItNotInAnAnswer) {
+  // Positive diagonal, about half the eigenvalues negative: CG cannot
+  // converge, and MUMPS, the fallback, finds the negative pivots.
+  const auto amg = CreateAmgSolver(LinearSolverSettings(), nullptr, nullptr);
+  Eigen::VectorXd x;
+  ASSERT_TRUE(amg->Factorize(ShiftedLaplacian(200, 1.9)).ok());
+  const Status status = amg->Solve(Eigen::VectorXd::Ones(200), &x);
+  ASSERT_EQ(status.code(), Status::Code::kNumerical) << status.ToString();
+  EXPECT_NE(status.message().find("did not converge"), std::string::npos) << status.message();
+  EXPECT_NE(status.message().find("not positive definite"), std::string::npos) << status.message();
+  // A negative diagonal is refused before any iteration.
+  const Status negative = amg->Factorize(ShiftedLaplacian(50, 3.0));
+  EXPECT_EQ(negative.code(), Status::Code::kNumerical);
+  EXPECT_NE(negative.message().find("diagonal entry"), std::string::npos) << negative.message();
+  EXPECT_FALSE(amg->Solve(Eigen::VectorXd::Ones(50), &x).ok());
+}
+
+TEST(AmgSolver, CancelEndsTheIteration) {
+  BlockSystem b;
+  Assemble(2.5, 0.45, &b);
+  std::atomic<bool> cancel{true};
+  LinearSolverOptions options;
+  options.kind = LinearSolverOptions::Kind::kAmg;
+  options.layout = &b.layout;
+  options.cancel = &cancel;
+  const auto amg = CreateLinearSolver(options);
+  ASSERT_TRUE(amg->Factorize(b.system.k).ok());
+  Eigen::VectorXd x;
+  const Status cancelled = amg->Solve(b.system.rhs, &x);
+  EXPECT_EQ(cancelled.code(), Status::Code::kCancelled) << cancelled.ToString();
+  cancel = false;
+  const Status solved = amg->Solve(b.system.rhs, &x);
+  ASSERT_TRUE(solved.ok()) << solved.ToString();
+  EXPECT_LT(RelativeDifference(x, b.direct), 1e-7);
+}
+
+TEST(MumpsSolver, MatchesCholmodAndTellsIndefiniteAndSingular) {
+  BlockSystem b;
+  Assemble(2.5, 0.45, &b);
+  const auto mumps = CreateMumpsSolver();
+  Eigen::VectorXd x;
+  Status status = mumps->Factorize(b.system.k);
+  ASSERT_TRUE(status.ok()) << status.ToString();
+  ASSERT_TRUE(mumps->Solve(b.system.rhs, &x).ok());
+  EXPECT_LT(RelativeDifference(x, b.direct), 1e-10);
+  EXPECT_NE(mumps->Name().find("MUMPS"), std::string::npos);
+
+  status = mumps->Factorize(ShiftedLaplacian(100, 1.0));
+  ASSERT_EQ(status.code(), Status::Code::kNumerical) << status.ToString();
+  EXPECT_NE(status.message().find("negative"), std::string::npos) << status.message();
+  EXPECT_FALSE(mumps->Solve(Eigen::VectorXd::Ones(100), &x).ok());
+
+  // A body held nowhere: six rigid-body modes, a singular matrix.
+  SceneSpec scene = Block(5.0, AnalysisSpec::LinearSolver::kMumps);
+  scene.boundary_conditions.clear();
+  Model model;
+  ASSERT_TRUE(BuildModel(scene, &model).ok());
+  LinearSystem system;
+  ASSERT_TRUE(
+      AssembleLinearSystem(
+          model.mesh,
+          ElasticityField::Uniform(IsotropicElasticity(3000, 0.45), model.mesh.num_elements()),
+          model.dofs, ColourElements(model.mesh), [](double) { return true; }, &system,
+          ThreadContext())
+          .ok());
+  status = mumps->Factorize(system.k);
+  EXPECT_EQ(status.code(), Status::Code::kNumerical) << status.ToString();
+}
+
+TEST(AutoSolver, ChoosesBySizeAndSaysWhy) {
+  BlockSystem b;
+  Assemble(2.5, 0.45, &b);
+  LinearSolverOptions options;  // AUTO is the default
+  ASSERT_EQ(options.kind, LinearSolverOptions::Kind::kAuto);
+  options.layout = &b.layout;
+  Eigen::VectorXd x;
+  const auto small = CreateLinearSolver(options);
+  ASSERT_TRUE(small->Factorize(b.system.k).ok());
+  ASSERT_TRUE(small->Solve(b.system.rhs, &x).ok());
+  EXPECT_EQ(x, b.direct);  // CHOLMOD itself
+  EXPECT_EQ(small->Name().rfind("CHOLMOD", 0), 0u) << small->Name();
+  EXPECT_NE(small->Name().find("AUTO: " + std::to_string(b.system.k.rows()) + " unknowns, at most"),
+            std::string::npos)
+      << small->Name();
+
+  options.settings.auto_direct_max_unknowns = static_cast<int>(b.system.k.rows()) - 1;
+  const auto large = CreateLinearSolver(options);
+  ASSERT_TRUE(large->Factorize(b.system.k).ok());
+  ASSERT_TRUE(large->Solve(b.system.rhs, &x).ok());
+  EXPECT_LT(RelativeDifference(x, b.direct), 1e-7);
+  EXPECT_NE(large->Name().find("GAMG"), std::string::npos) << large->Name();
+  EXPECT_NE(large->Name().find("more than"), std::string::npos) << large->Name();
+}
+
+Eigen::Map<const Eigen::VectorXd> Displacement(const Solution& s) {
+  return {s.displacement_mm.data(), static_cast<Eigen::Index>(s.displacement_mm.size())};
+}
+
+TEST(LinearSolverScenes, AmgAndMumpsSolveTheLinearBlockAsCholmodDoes) {
+  Solution cholmod, amg, mumps;
+  ASSERT_TRUE(
+      SolveScene(Block(2.5, AnalysisSpec::LinearSolver::kCholmod), SolveOptions(), &cholmod).ok());
+  Status status = SolveScene(Block(2.5, AnalysisSpec::LinearSolver::kAmg), SolveOptions(), &amg);
+  ASSERT_TRUE(status.ok()) << status.ToString();
+  status = SolveScene(Block(2.5, AnalysisSpec::LinearSolver::kMumps), SolveOptions(), &mumps);
+  ASSERT_TRUE(status.ok()) << status.ToString();
+  EXPECT_LT(RelativeDifference(Displacement(amg), Displacement(cholmod)), 1e-7);
+  EXPECT_LT(RelativeDifference(Displacement(mumps), Displacement(cholmod)), 1e-10);
+  EXPECT_NE(amg.summary.linear_solver.find("GAMG"), std::string::npos) << amg.summary.linear_solver;
+  // The options as they ran are in the summary.
+  bool echoed = false;
+  for (const auto& [name, value] : amg.summary.options) {
+    if (name == "analysis.linear_solver_options.relative_tolerance") echoed = value == "1e-10";
+  }
+  EXPECT_TRUE(echoed);
+}
+
+TEST(LinearSolverScenes, NonlinearNeoHookeanWithAmgMatchesCholmod) {
+  auto scene = [](AnalysisSpec::LinearSolver solver) {
+    SceneSpec s;
+    s.name = "neo-hookean cube";
+    s.geometry.kind = GeometrySpec::Kind::kBox;
+    s.geometry.box.size_mm = {10, 10, 10};
+    s.mesh.element_size_mm = 2.0;
+    s.material.kind = MaterialSpec::Kind::kNeoHookean;
+    s.material.neo_hookean = {1000, 1e5};
+    s.boundary_conditions = {Condition("bottom", K::kFixed),
+                             Condition("top", K::kDisplacement, {0.0, 0.0, -2.0})};
+    s.analysis.type = AnalysisSpec::Type::kNonlinearStatic;
+    s.analysis.linear_solver = solver;
+    return s;
+  };
+  Solution cholmod, amg;
+  ASSERT_TRUE(
+      SolveScene(scene(AnalysisSpec::LinearSolver::kCholmod), SolveOptions(), &cholmod).ok());
+  const Status status = SolveScene(scene(AnalysisSpec::LinearSolver::kAmg), SolveOptions(), &amg);
+  ASSERT_TRUE(status.ok()) << status.ToString();
+  EXPECT_LT(amg.summary.relative_residual, 1e-8);
+  // Both converged to Newton's tolerance on the same equations.
+  EXPECT_LT(RelativeDifference(Displacement(amg), Displacement(cholmod)), 1e-6);
+  EXPECT_NEAR(amg.summary.strain_energy_j, cholmod.summary.strain_energy_j,
+              1e-7 * cholmod.summary.strain_energy_j);
+}
+
+TEST(LinearSolverSettings, DefaultsAndValidationNameTheField) {
+  LinearSolverSpec spec;
+  LinearSolverSettings s = LinearSolverSettingsFromSpec(spec);
+  EXPECT_TRUE(ValidateLinearSolverSettings(s).ok());
+  EXPECT_EQ(s.relative_tolerance, LinearSolverSettings().relative_tolerance);
+  spec.relative_tolerance = 0.5;
+  Status status = ValidateLinearSolverSettings(LinearSolverSettingsFromSpec(spec));
+  EXPECT_EQ(status.field(), "analysis.linear_solver_options.relative_tolerance");
+  spec = LinearSolverSpec();
+  spec.gamg_threshold = 0.0;  // explicitly zero is allowed
+  EXPECT_EQ(LinearSolverSettingsFromSpec(spec).gamg_threshold, 0.0);
+  spec.gamg_threshold = 0.9;
+  status = ValidateLinearSolverSettings(LinearSolverSettingsFromSpec(spec));
+  EXPECT_EQ(status.field(), "analysis.linear_solver_options.gamg_threshold");
+  spec = LinearSolverSpec();
+  spec.max_iterations = -3;
+  status = ValidateLinearSolverSettings(LinearSolverSettingsFromSpec(spec));
+  EXPECT_EQ(status.field(), "analysis.linear_solver_options.max_iterations");
+  spec = LinearSolverSpec();
+  spec.fallback_direct_max_unknowns = 0;  // never
+  EXPECT_EQ(LinearSolverSettingsFromSpec(spec).fallback_direct_max_unknowns, 0);
+}
+
+}  // namespace
+}  // namespace pba
