@@ -408,7 +408,7 @@ void AnalysisOptionsFromProto(const v1::Analysis& analysis, AnalysisSpec* analys
   l.max_iterations = linear.max_iterations();
   if (linear.has_gamg_threshold()) l.gamg_threshold = linear.gamg_threshold();
   l.boomeramg_strong_threshold = linear.boomeramg_strong_threshold();
-  l.auto_direct_max_unknowns = linear.auto_direct_max_unknowns();
+  l.auto_direct_max_factor_mb = linear.auto_direct_max_factor_mb();
   if (linear.has_fallback_direct_max_unknowns()) {
     l.fallback_direct_max_unknowns = linear.fallback_direct_max_unknowns();
   }

@@ -246,19 +246,31 @@ class NewtonRun {
   double step_ = 0;
 };
 
+// Factorises `k` and solves. A matrix that is not positive definite shows
+// as Status::Numerical from the factorisation (Cholesky's failed pivot) or,
+// for an iterative solver, from the solve (conjugate gradients meeting
+// negative curvature); either sends Newton to its substitutes. Other
+// failures (a cancel) pass through.
+Status FactorizeAndSolve(LinearSolver* solver, const SparseMatrix& k, const Eigen::VectorXd& rhs,
+                         Eigen::VectorXd* du) {
+  PBA_RETURN_IF_ERROR(solver->Factorize(k));
+  return solver->Solve(rhs, du);
+}
+
 Status NewtonRun::SolveLinear(const LinearSystem& system, int iteration, double residual,
                               bool near_equilibrium,
                               const std::function<Status(LinearSystem*)>& assemble_approximate,
                               Eigen::VectorXd* du) {
   ScopedTimer timer(&report_.linear_solve_s);
   LinearSolver* target = good_ == solver_ ? spare_.get() : solver_;
-  Status status = target->Factorize(system.k);
+  const Status status = FactorizeAndSolve(target, system.k, system.rhs, du);
   if (status.ok()) {
     good_ = target;
     indefinite_streak_ = 0;
     step_negative_ = 0;
-    return good_->Solve(system.rhs, du);
+    return Status::Ok();
   }
+  if (status.code() != Status::Code::kNumerical) return status;
   ++indefinite_streak_;
   if (near_equilibrium && SolveIndefinite(system, &ldlt_, du, &step_negative_)) {
     ++report_.indefinite_iterations;
@@ -286,10 +298,10 @@ Status NewtonRun::SolveApproximate(const LinearSystem& system, LinearSolver* tar
     report_.assembly_s += assembly;
     report_.linear_solve_s -= assembly;
   }
-  if (approximated && target->Factorize(approximate_.k).ok()) {
+  if (approximated && FactorizeAndSolve(target, approximate_.k, system.rhs, du).ok()) {
     ++report_.approximate_iterations;
     good_ = target;
-    return good_->Solve(system.rhs, du);
+    return Status::Ok();
   }
   ++report_.modified_iterations;
   if (good_ != nullptr) return good_->Solve(system.rhs, du);
@@ -297,7 +309,7 @@ Status NewtonRun::SolveApproximate(const LinearSystem& system, LinearSolver* tar
   for (double tau = 1e-4; tau <= 1e2; tau *= 10) {
     shifted_ = system.k;
     for (int i = 0; i < shifted_.outerSize(); ++i) shifted_.coeffRef(i, i) += tau * diagonal(i);
-    if (target->Factorize(shifted_).ok()) return target->Solve(system.rhs, du);
+    if (FactorizeAndSolve(target, shifted_, system.rhs, du).ok()) return Status::Ok();
   }
   return Status::Numerical(
       Format("the tangent stiffness could not be made positive definite at iteration %d "

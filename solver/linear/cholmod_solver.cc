@@ -65,6 +65,31 @@ class CholmodSolver final : public LinearSolver {
 
 }  // namespace
 
+Status PredictCholmodFactor(const Eigen::SparseMatrix<double>& a, const ThreadContext& threads,
+                            FactorPrediction* prediction) {
+  const LibraryThreadScope bounded(threads);
+  cholmod_common common;
+  cholmod_start(&common);
+  common.print = 0;
+  common.supernodal = CHOLMOD_SUPERNODAL;
+  // A view of the lower triangle (no copy), as the solver factorises it.
+  cholmod_sparse view = Eigen::viewAsCholmod(a.selfadjointView<Eigen::Lower>());
+  cholmod_factor* factor = cholmod_analyze(&view, &common);
+  Status status = Status::Ok();
+  if (factor == nullptr || common.status < CHOLMOD_OK) {
+    status = Status::Internal("CHOLMOD's symbolic analysis failed");
+  } else {
+    // The supernodal factor's values, its row indices and the column
+    // structure per supernode.
+    prediction->bytes = static_cast<double>(factor->xsize) * sizeof(double) +
+                        static_cast<double>(factor->ssize) * sizeof(int);
+    prediction->flops = common.fl;
+  }
+  if (factor != nullptr) cholmod_free_factor(&factor, &common);
+  cholmod_finish(&common);
+  return status;
+}
+
 std::unique_ptr<LinearSolver> CreateCholmodSolver(const ThreadContext& threads) {
   return std::make_unique<CholmodSolver>(threads);
 }

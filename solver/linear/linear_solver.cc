@@ -11,13 +11,7 @@ class AutoSolver final : public LinearSolver {
   explicit AutoSolver(const LinearSolverOptions& options) : options_(options) {}
 
   Status Factorize(const Eigen::SparseMatrix<double>& a) override {
-    if (chosen_ == nullptr) {
-      const LinearSolverSettings& s = options_.settings;
-      direct_ = a.rows() <= s.auto_direct_max_unknowns;
-      unknowns_ = a.rows();
-      chosen_ = direct_ ? CreateCholmodSolver(options_.threads)
-                        : CreateAmgSolver(s, options_.layout, options_.cancel);
-    }
+    if (chosen_ == nullptr) PBA_RETURN_IF_ERROR(Choose(a));
     return chosen_->Factorize(a);
   }
 
@@ -27,11 +21,8 @@ class AutoSolver final : public LinearSolver {
   }
 
   std::string Name() const override {
-    if (chosen_ == nullptr) return "AUTO (no system solved)";
-    return chosen_->Name() +
-           Format(" [AUTO: %lld unknowns, %s linear_solver_options.auto_direct_max_unknowns = %d]",
-                  static_cast<long long>(unknowns_), direct_ ? "at most" : "more than",
-                  options_.settings.auto_direct_max_unknowns);
+    if (chosen_ == nullptr) return "AUTO (chosen at the first factorisation)";
+    return chosen_->Name() + " [AUTO: " + reason_ + "]";
   }
 
   std::unique_ptr<LinearSolver> NewOfSameKind() const override {
@@ -39,10 +30,25 @@ class AutoSolver final : public LinearSolver {
   }
 
  private:
+  // CHOLMOD while its predicted factor fits the budget, else AMG.
+  Status Choose(const Eigen::SparseMatrix<double>& a) {
+    const double budget_mb = options_.settings.auto_direct_max_factor_mb;
+    FactorPrediction prediction;
+    PBA_RETURN_IF_ERROR(PredictCholmodFactor(a, options_.threads, &prediction));
+    const double factor_mb = prediction.bytes / (1024.0 * 1024.0);
+    const bool direct = factor_mb <= budget_mb;
+    reason_ = Format(
+        "%lld unknowns, predicted Cholesky factor %.0f MB %s "
+        "linear_solver_options.auto_direct_max_factor_mb = %.0f",
+        static_cast<long long>(a.rows()), factor_mb, direct ? "<=" : ">", budget_mb);
+    chosen_ = direct ? CreateCholmodSolver(options_.threads)
+                     : CreateAmgSolver(options_.settings, options_.layout, options_.cancel);
+    return Status::Ok();
+  }
+
   LinearSolverOptions options_;
   std::unique_ptr<LinearSolver> chosen_;
-  Eigen::Index unknowns_ = 0;
-  bool direct_ = true;
+  std::string reason_;
 };
 
 }  // namespace

@@ -60,12 +60,13 @@ struct LinearSolverSettings {
   double gamg_threshold = 0.01;
   // BoomerAMG: the strong-connection threshold (0..1; 0.5 suits 3D elasticity).
   double boomeramg_strong_threshold = 0.5;
-  // AUTO: systems with at most this many unknowns are factorised by CHOLMOD,
-  // larger ones go to AMG. Chosen where CHOLMOD's factor still fits the
-  // 2-core, 24 GB machine's budget comfortably on TET4_ANP's wide stencil
-  // (4.9 GB at 83,607 unknowns) and where AMG starts to win on time
-  // (docs/performance.md, "Linear solvers").
-  int auto_direct_max_unknowns = 60000;
+  // AUTO: CHOLMOD factorises a system whose supernodal factor, predicted by
+  // its symbolic analysis, takes at most this many megabytes; a larger one
+  // goes to AMG. The exact direct solve is kept wherever it fits: on nearly
+  // incompressible tissue it is faster than AMG at the sizes this machine
+  // factorises (docs/performance.md, "Linear solvers"). Newton holds two
+  // factorisations, so 2,000 MB keeps the solver near 5 GB in all.
+  int auto_direct_max_factor_mb = 2000;
   // AMG: a solve that does not converge is redone by MUMPS when the system
   // has at most this many unknowns; above, the increment fails with the
   // iterative solver's message.
@@ -77,7 +78,7 @@ struct LinearSolverSettings {
 // Which backend an implicit analysis factorises with (analysis.linear_solver).
 struct LinearSolverOptions {
   enum class Kind {
-    kAuto,       // CHOLMOD up to settings.auto_direct_max_unknowns, AMG above (the default)
+    kAuto,       // CHOLMOD while its factor fits settings.auto_direct_max_factor_mb, else AMG
     kCholmod,    // supernodal sparse Cholesky (SuiteSparse)
     kEigenLdlt,  // Eigen's simplicial LDL^T, the fallback
     kPcg,        // conjugate gradients with incomplete Cholesky (CreatePcgSolver)
@@ -138,9 +139,19 @@ std::unique_ptr<LinearSolver> CreateAmgSolver(const LinearSolverSettings& settin
 // symmetric LDL^T: the matrix's inertia tells a tangent that is not positive
 // definite (Status::Numerical), as CHOLMOD's failed pivot does.
 std::unique_ptr<LinearSolver> CreateMumpsSolver();
-// AUTO: on the first Factorize, CHOLMOD for at most
-// settings.auto_direct_max_unknowns unknowns, else AMG; Name() says which
-// and why.
+// AUTO: on the first Factorize, CHOLMOD when the factor its symbolic
+// analysis predicts takes at most settings.auto_direct_max_factor_mb, else
+// AMG; Name() says which and why.
 std::unique_ptr<LinearSolver> CreateAutoSolver(const LinearSolverOptions& options);
+
+// CHOLMOD's symbolic analysis of `a` (lower triangle read): the memory its
+// supernodal factor would take [bytes] and the factorisation's flops,
+// without computing it. Seconds on a million unknowns.
+struct FactorPrediction {
+  double bytes = 0;
+  double flops = 0;
+};
+Status PredictCholmodFactor(const Eigen::SparseMatrix<double>& a, const ThreadContext& threads,
+                            FactorPrediction* prediction);
 
 }  // namespace pba

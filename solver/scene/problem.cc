@@ -209,8 +209,8 @@ LinearSolverSettings LinearSolverSettingsFromSpec(const LinearSolverSpec& spec) 
   if (spec.boomeramg_strong_threshold != 0) {
     o.boomeramg_strong_threshold = spec.boomeramg_strong_threshold;
   }
-  if (spec.auto_direct_max_unknowns != 0)
-    o.auto_direct_max_unknowns = spec.auto_direct_max_unknowns;
+  if (spec.auto_direct_max_factor_mb != 0)
+    o.auto_direct_max_factor_mb = spec.auto_direct_max_factor_mb;
   if (spec.fallback_direct_max_unknowns) {
     o.fallback_direct_max_unknowns = *spec.fallback_direct_max_unknowns;
   }
@@ -242,10 +242,10 @@ Status ValidateLinearSolverSettings(const LinearSolverSettings& s) {
         Format("must lie in (0, 1) (0 for the default %g), got %g",
                defaults.boomeramg_strong_threshold, s.boomeramg_strong_threshold));
   }
-  if (s.auto_direct_max_unknowns < 0) {
+  if (s.auto_direct_max_factor_mb < 0) {
     return Status::InvalidArgument(
-        path + "auto_direct_max_unknowns",
-        Format("must not be negative, got %d", s.auto_direct_max_unknowns));
+        path + "auto_direct_max_factor_mb",
+        Format("must not be negative (MB), got %d", s.auto_direct_max_factor_mb));
   }
   if (s.fallback_direct_max_unknowns < 0) {
     return Status::InvalidArgument(
@@ -346,7 +346,7 @@ std::vector<std::pair<std::string, std::string>> EffectiveOptions(const Problem&
     add("analysis.linear_solver", l.KindName());
     const std::string o = "analysis.linear_solver_options.";
     if (l.kind == Kind::kAuto) {
-      add(o + "auto_direct_max_unknowns", std::to_string(ls.auto_direct_max_unknowns));
+      add(o + "auto_direct_max_factor_mb", std::to_string(ls.auto_direct_max_factor_mb));
     }
     if (l.kind == Kind::kAuto || l.kind == Kind::kAmg) {
       const bool gamg = ls.preconditioner == LinearSolverSettings::Preconditioner::kGamg;

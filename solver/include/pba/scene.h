@@ -397,7 +397,7 @@ struct LinearSolverSpec {
   int max_iterations = 0;                                 // AMG, 1..100000
   std::optional<double> gamg_threshold;                   // GAMG, [0, 0.5]
   double boomeramg_strong_threshold = 0;                  // BoomerAMG, (0, 1)
-  int auto_direct_max_unknowns = 0;                       // AUTO, >= 0
+  int auto_direct_max_factor_mb = 0;                      // AUTO [MB], >= 0
   std::optional<int> fallback_direct_max_unknowns;        // AMG, >= 0 (0: never)
 };
 
@@ -486,7 +486,7 @@ struct AnalysisSpec {
     kDynamicRelaxation,
   };
   enum class LinearSolver {
-    kAuto,       // CHOLMOD up to linear_solver_options.auto_direct_max_unknowns, AMG above
+    kAuto,       // CHOLMOD while its factor fits linear_solver_options.auto_direct_max_factor_mb
     kCholmod,    // supernodal sparse Cholesky (SuiteSparse)
     kEigenLdlt,  // Eigen's simplicial LDL^T, the fallback
     // Conjugate gradients with an incomplete Cholesky preconditioner, to a

@@ -370,7 +370,7 @@ TEST(SceneFromProto, EveryLinearSolver) {
   EXPECT_FALSE(l.gamg_threshold.has_value());
   ASSERT_TRUE(l.fallback_direct_max_unknowns.has_value());
   EXPECT_EQ(*l.fallback_direct_max_unknowns, 0);
-  EXPECT_EQ(l.auto_direct_max_unknowns, 0);
+  EXPECT_EQ(l.auto_direct_max_factor_mb, 0);
   // Out of range: the scene is refused, naming the field.
   EXPECT_EQ(
       Validate(material + "analysis: {linear_solver_options: {relative_tolerance: 2}}\n").field(),
