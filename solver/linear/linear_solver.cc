@@ -25,8 +25,15 @@ class AutoSolver final : public LinearSolver {
     return chosen_->Name() + " [AUTO: " + reason_ + "]";
   }
 
+  // A second solver for the same systems (Newton's) takes the same choice
+  // without a second analysis.
   std::unique_ptr<LinearSolver> NewOfSameKind() const override {
-    return std::make_unique<AutoSolver>(options_);
+    auto other = std::make_unique<AutoSolver>(options_);
+    if (chosen_ != nullptr) {
+      other->chosen_ = chosen_->NewOfSameKind();
+      other->reason_ = reason_;
+    }
+    return other;
   }
 
  private:

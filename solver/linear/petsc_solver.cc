@@ -26,8 +26,21 @@ struct PetscObjects {
   Vec rhs = nullptr, solution = nullptr;
 
   void Destroy() {
-    if (ksp != nullptr) KSPDestroy(&ksp);
     if (matrix != nullptr) MatDestroy(&matrix);
+    DestroySolver();
+  }
+  // A new KSP and vectors for `matrix` (a new pattern), the old ones gone.
+  Status NewSolver() {
+    DestroySolver();
+    PBA_PETSC(MatCreateVecs(matrix, &solution, &rhs));
+    PBA_PETSC(KSPCreate(PETSC_COMM_SELF, &ksp));
+    PBA_PETSC(KSPSetOperators(ksp, matrix, matrix));
+    return Status::Ok();
+  }
+
+ private:
+  void DestroySolver() {
+    if (ksp != nullptr) KSPDestroy(&ksp);
     if (rhs != nullptr) VecDestroy(&rhs);
     if (solution != nullptr) VecDestroy(&solution);
   }
@@ -218,12 +231,7 @@ class MumpsSolver final : public LinearSolver {
 
  private:
   Status Setup() {
-    if (objects_.ksp != nullptr) KSPDestroy(&objects_.ksp);
-    if (objects_.rhs != nullptr) VecDestroy(&objects_.rhs);
-    if (objects_.solution != nullptr) VecDestroy(&objects_.solution);
-    PBA_PETSC(MatCreateVecs(objects_.matrix, &objects_.solution, &objects_.rhs));
-    PBA_PETSC(KSPCreate(PETSC_COMM_SELF, &objects_.ksp));
-    PBA_PETSC(KSPSetOperators(objects_.ksp, objects_.matrix, objects_.matrix));
+    PBA_RETURN_IF_ERROR(objects_.NewSolver());
     PBA_PETSC(KSPSetType(objects_.ksp, KSPPREONLY));
     PC pc = nullptr;
     PBA_PETSC(KSPGetPC(objects_.ksp, &pc));
@@ -385,13 +393,8 @@ class AmgSolver final : public LinearSolver {
 
  private:
   Status Setup() {
-    if (objects_.ksp != nullptr) KSPDestroy(&objects_.ksp);
-    if (objects_.rhs != nullptr) VecDestroy(&objects_.rhs);
-    if (objects_.solution != nullptr) VecDestroy(&objects_.solution);
-    PBA_PETSC(MatCreateVecs(objects_.matrix, &objects_.solution, &objects_.rhs));
     if (layout_ != nullptr) PBA_RETURN_IF_ERROR(SetNearNullSpace());
-    PBA_PETSC(KSPCreate(PETSC_COMM_SELF, &objects_.ksp));
-    PBA_PETSC(KSPSetOperators(objects_.ksp, objects_.matrix, objects_.matrix));
+    PBA_RETURN_IF_ERROR(objects_.NewSolver());
     PBA_PETSC(KSPSetType(objects_.ksp, KSPCG));
     // The tolerance is on the residual itself, ||b - A x|| / ||b||.
     PBA_PETSC(KSPSetNormType(objects_.ksp, KSP_NORM_UNPRECONDITIONED));

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "assembly/assembler.h"
+#include "common/linear_systems.h"
 #include "common/scene_builders.h"
 #include "linear/linear_solver.h"
 #include "material/linear_elastic.h"
@@ -22,29 +23,15 @@ namespace {
 
 using K = BoundaryConditionSpec::Kind;
 using testing::Condition;
-
-// A 20 x 20 x 30 mm block, bottom fixed, top pressed 1.5 mm (the quickstart
-// and benchmark block), of linear elastic soft tissue.
-SceneSpec Block(double element_size_mm, AnalysisSpec::LinearSolver solver) {
-  SceneSpec s;
-  s.name = "block";
-  s.geometry.kind = GeometrySpec::Kind::kBox;
-  s.geometry.box.size_mm = {20, 20, 30};
-  s.mesh.element_size_mm = element_size_mm;
-  s.material.kind = MaterialSpec::Kind::kLinearElastic;
-  s.material.linear_elastic = {3000, 0.45};
-  s.boundary_conditions = {Condition("bottom", K::kFixed),
-                           Condition("top", K::kDisplacement, {0.0, 0.0, -1.5})};
-  s.analysis.linear_solver = solver;
-  return s;
-}
+using testing::ShiftedLaplacian;
+using testing::SoftBlock;
 
 double RelativeDifference(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
   return (a - b).norm() / b.norm();
 }
 
 TEST(PcgSolver, MatchesCholmodOnAnAssembledStiffness) {
-  const SceneSpec scene = Block(2.5, AnalysisSpec::LinearSolver::kPcg);
+  const SceneSpec scene = SoftBlock(2.5, AnalysisSpec::LinearSolver::kPcg);
   Model model;
   ASSERT_TRUE(BuildModel(scene, &model).ok());
   LinearSystem system;
@@ -109,7 +96,7 @@ TEST(PcgSolver, KeepsItsOwnCopyOfTheMatrix) {
 // fresh solver of the same kind looks at the same flag. Cleared, the same
 // solver solves.
 TEST(PcgSolver, CancelEndsTheIteration) {
-  const SceneSpec scene = Block(2.5, AnalysisSpec::LinearSolver::kPcg);
+  const SceneSpec scene = SoftBlock(2.5, AnalysisSpec::LinearSolver::kPcg);
   Model model;
   ASSERT_TRUE(BuildModel(scene, &model).ok());
   LinearSystem system;
@@ -140,21 +127,6 @@ TEST(PcgSolver, CancelEndsTheIteration) {
   EXPECT_LT((system.k * x - system.rhs).norm() / system.rhs.norm(), 1e-11);
 }
 
-// The 1D Laplacian (tridiagonal 2, -1) minus `shift` times the identity.
-Eigen::SparseMatrix<double> ShiftedLaplacian(int n, double shift) {
-  std::vector<Eigen::Triplet<double>> entries;
-  for (int i = 0; i < n; ++i) {
-    entries.emplace_back(i, i, 2.0 - shift);
-    if (i + 1 < n) {
-      entries.emplace_back(i, i + 1, -1.0);
-      entries.emplace_back(i + 1, i, -1.0);
-    }
-  }
-  Eigen::SparseMatrix<double> a(n, n);
-  a.setFromTriplets(entries.begin(), entries.end());
-  return a;
-}
-
 TEST(PcgSolver, NegativeDiagonalIsNotPositiveDefinite) {
   const auto pcg = CreatePcgSolver();
   const Status status = pcg->Factorize(ShiftedLaplacian(50, 3.0));
@@ -181,7 +153,7 @@ TEST(PcgSolver, UnheldBodyEndsWithAClearErrorNotNan) {
   // with a positive diagonal, so the preconditioner is computed; CG cannot
   // reach a load that the rigid modes would balance, and must say so after
   // its bounded number of iterations.
-  SceneSpec scene = Block(5.0, AnalysisSpec::LinearSolver::kPcg);
+  SceneSpec scene = SoftBlock(5.0, AnalysisSpec::LinearSolver::kPcg);
   scene.boundary_conditions.clear();
   Model model;
   ASSERT_TRUE(BuildModel(scene, &model).ok());
@@ -213,9 +185,9 @@ TEST(PcgSolver, UnheldBodyEndsWithAClearErrorNotNan) {
 TEST(PcgSolver, SolveSceneMatchesCholmod) {
   Solution cholmod, pcg;
   Status status =
-      SolveScene(Block(2.5, AnalysisSpec::LinearSolver::kCholmod), SolveOptions(), &cholmod);
+      SolveScene(SoftBlock(2.5, AnalysisSpec::LinearSolver::kCholmod), SolveOptions(), &cholmod);
   ASSERT_TRUE(status.ok()) << status.ToString();
-  status = SolveScene(Block(2.5, AnalysisSpec::LinearSolver::kPcg), SolveOptions(), &pcg);
+  status = SolveScene(SoftBlock(2.5, AnalysisSpec::LinearSolver::kPcg), SolveOptions(), &pcg);
   ASSERT_TRUE(status.ok()) << status.ToString();
   EXPECT_EQ(pcg.summary.linear_solver.rfind("conjugate gradient", 0), 0u)
       << pcg.summary.linear_solver;

@@ -12,6 +12,7 @@
 
 #include "assembly/assembler.h"
 #include "assembly/dof_map.h"
+#include "common/linear_systems.h"
 #include "common/scene_builders.h"
 #include "linear/linear_solver.h"
 #include "material/linear_elastic.h"
@@ -24,21 +25,8 @@ namespace {
 
 using K = BoundaryConditionSpec::Kind;
 using testing::Condition;
-
-// A 20 x 20 x 30 mm block, bottom fixed, top pressed 1.5 mm, linear elastic.
-SceneSpec Block(double element_size_mm, AnalysisSpec::LinearSolver solver) {
-  SceneSpec s;
-  s.name = "block";
-  s.geometry.kind = GeometrySpec::Kind::kBox;
-  s.geometry.box.size_mm = {20, 20, 30};
-  s.mesh.element_size_mm = element_size_mm;
-  s.material.kind = MaterialSpec::Kind::kLinearElastic;
-  s.material.linear_elastic = {3000, 0.45};
-  s.boundary_conditions = {Condition("bottom", K::kFixed),
-                           Condition("top", K::kDisplacement, {0.0, 0.0, -1.5})};
-  s.analysis.linear_solver = solver;
-  return s;
-}
+using testing::ShiftedLaplacian;
+using testing::SoftBlock;
 
 // The block's assembled stiffness, its load and the unknowns' layout.
 struct BlockSystem {
@@ -49,7 +37,7 @@ struct BlockSystem {
 };
 
 void Assemble(double element_size_mm, double poisson, BlockSystem* out) {
-  const SceneSpec scene = Block(element_size_mm, AnalysisSpec::LinearSolver::kCholmod);
+  const SceneSpec scene = SoftBlock(element_size_mm, AnalysisSpec::LinearSolver::kCholmod);
   ASSERT_TRUE(BuildModel(scene, &out->model).ok());
   ASSERT_TRUE(AssembleLinearSystem(
                   out->model.mesh,
@@ -172,22 +160,6 @@ TEST(AmgSolver, NotConvergedIsRedoneByMumpsOrRefused) {
       << status.message();
 }
 
-// The 1D Laplacian (tridiagonal 2, -1) minus `shift` times the identity.
-Eigen::SparseMatrix<double> ShiftedLaplacian(int n, double shift) {
-  std::vector<Eigen::Triplet<double>> entries;
-  for (int i = 0; i < n; ++i) {
-    entries.emplace_back(i, i, 2.0 - shift);
-    if (i + 1 < n) {
-      entries.emplace_back(i, i + 1, -1.0);
-      entries.emplace_back(i + 1, i, -1.0);
-    }
-  }
-  Eigen::SparseMatrix<double> a(n, n);
-  a.setFromTriplets(entries.begin(), entries.end());
-  a.makeCompressed();
-  return a;
-}
-
 TEST(AmgSolver, IndefiniteMatrixEndsNamingItNotInAnAnswer) {
   // Positive diagonal, about half the eigenvalues negative: CG cannot
   // converge, and MUMPS, the fallback, finds the negative pivots.
@@ -241,7 +213,7 @@ TEST(MumpsSolver, MatchesCholmodAndTellsIndefiniteAndSingular) {
   EXPECT_FALSE(mumps->Solve(Eigen::VectorXd::Ones(100), &x).ok());
 
   // A body held nowhere: six rigid-body modes, a singular matrix.
-  SceneSpec scene = Block(5.0, AnalysisSpec::LinearSolver::kMumps);
+  SceneSpec scene = SoftBlock(5.0, AnalysisSpec::LinearSolver::kMumps);
   scene.boundary_conditions.clear();
   Model model;
   ASSERT_TRUE(BuildModel(scene, &model).ok());
@@ -299,13 +271,36 @@ Eigen::Map<const Eigen::VectorXd> Displacement(const Solution& s) {
   return {s.displacement_mm.data(), static_cast<Eigen::Index>(s.displacement_mm.size())};
 }
 
+// A 10 mm neo-Hookean cube (mu = 1 kPa, bulk modulus `bulk_pa`), bottom
+// fixed, top pressed `press_mm`, NONLINEAR_STATIC from `increments` (0: the
+// default) initial increments.
+SceneSpec NeoHookeanCube(ElementType element, double element_size_mm, double bulk_pa,
+                         double press_mm, int increments, AnalysisSpec::LinearSolver solver) {
+  SceneSpec s;
+  s.name = "neo-hookean cube";
+  s.geometry.kind = GeometrySpec::Kind::kBox;
+  s.geometry.box.size_mm = {10, 10, 10};
+  s.mesh.element_size_mm = element_size_mm;
+  s.mesh.element = element;
+  s.material.kind = MaterialSpec::Kind::kNeoHookean;
+  s.material.neo_hookean = {1000, bulk_pa};
+  s.boundary_conditions = {Condition("bottom", K::kFixed),
+                           Condition("top", K::kDisplacement, {0.0, 0.0, -press_mm})};
+  s.analysis.type = AnalysisSpec::Type::kNonlinearStatic;
+  s.analysis.nonlinear.increments = increments;
+  s.analysis.linear_solver = solver;
+  return s;
+}
+
 TEST(LinearSolverScenes, AmgAndMumpsSolveTheLinearBlockAsCholmodDoes) {
   Solution cholmod, amg, mumps;
   ASSERT_TRUE(
-      SolveScene(Block(2.5, AnalysisSpec::LinearSolver::kCholmod), SolveOptions(), &cholmod).ok());
-  Status status = SolveScene(Block(2.5, AnalysisSpec::LinearSolver::kAmg), SolveOptions(), &amg);
+      SolveScene(SoftBlock(2.5, AnalysisSpec::LinearSolver::kCholmod), SolveOptions(), &cholmod)
+          .ok());
+  Status status =
+      SolveScene(SoftBlock(2.5, AnalysisSpec::LinearSolver::kAmg), SolveOptions(), &amg);
   ASSERT_TRUE(status.ok()) << status.ToString();
-  status = SolveScene(Block(2.5, AnalysisSpec::LinearSolver::kMumps), SolveOptions(), &mumps);
+  status = SolveScene(SoftBlock(2.5, AnalysisSpec::LinearSolver::kMumps), SolveOptions(), &mumps);
   ASSERT_TRUE(status.ok()) << status.ToString();
   EXPECT_LT(RelativeDifference(Displacement(amg), Displacement(cholmod)), 1e-7);
   EXPECT_LT(RelativeDifference(Displacement(mumps), Displacement(cholmod)), 1e-10);
@@ -319,19 +314,9 @@ TEST(LinearSolverScenes, AmgAndMumpsSolveTheLinearBlockAsCholmodDoes) {
 }
 
 TEST(LinearSolverScenes, NonlinearNeoHookeanWithAmgMatchesCholmod) {
-  auto scene = [](AnalysisSpec::LinearSolver solver) {
-    SceneSpec s;
-    s.name = "neo-hookean cube";
-    s.geometry.kind = GeometrySpec::Kind::kBox;
-    s.geometry.box.size_mm = {10, 10, 10};
-    s.mesh.element_size_mm = 2.0;
-    s.material.kind = MaterialSpec::Kind::kNeoHookean;
-    s.material.neo_hookean = {1000, 1e5};
-    s.boundary_conditions = {Condition("bottom", K::kFixed),
-                             Condition("top", K::kDisplacement, {0.0, 0.0, -2.0})};
-    s.analysis.type = AnalysisSpec::Type::kNonlinearStatic;
-    s.analysis.linear_solver = solver;
-    return s;
+  const auto scene = [](AnalysisSpec::LinearSolver solver) {
+    // TET4_ANP, K / mu = 100, pressed 20 % in five increments.
+    return NeoHookeanCube(ElementType::kDefault, 2.0, 1e5, 2.0, 0, solver);
   };
   Solution cholmod, amg;
   ASSERT_TRUE(
@@ -352,21 +337,8 @@ TEST(LinearSolverScenes, NonlinearNeoHookeanWithAmgMatchesCholmod) {
 // follows CHOLMOD's path (same increments and iterations) to the same
 // answer, and its lagged multigrid is set up fewer times than it solves.
 TEST(LinearSolverScenes, IndefiniteTangentsTakeTheSameNewtonPathWithAmg) {
-  auto scene = [](AnalysisSpec::LinearSolver solver) {
-    SceneSpec s;
-    s.name = "nearly incompressible cube";
-    s.geometry.kind = GeometrySpec::Kind::kBox;
-    s.geometry.box.size_mm = {10, 10, 10};
-    s.mesh.element_size_mm = 2.5;
-    s.mesh.element = ElementType::kTet10;
-    s.material.kind = MaterialSpec::Kind::kNeoHookean;
-    s.material.neo_hookean = {1000, 1e6};
-    s.boundary_conditions = {Condition("bottom", K::kFixed),
-                             Condition("top", K::kDisplacement, {0.0, 0.0, -1.0})};
-    s.analysis.type = AnalysisSpec::Type::kNonlinearStatic;
-    s.analysis.nonlinear.increments = 2;
-    s.analysis.linear_solver = solver;
-    return s;
+  const auto scene = [](AnalysisSpec::LinearSolver solver) {
+    return NeoHookeanCube(ElementType::kTet10, 2.5, 1e6, 1.0, 2, solver);
   };
   Solution cholmod, amg;
   ASSERT_TRUE(

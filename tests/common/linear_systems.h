@@ -1,0 +1,47 @@
+// Systems the linear-solver tests share: a block of soft tissue to assemble
+// and a matrix of known inertia.
+#pragma once
+
+#include <Eigen/SparseCore>
+#include <vector>
+
+#include "common/scene_builders.h"
+#include "pba/scene.h"
+
+namespace pba::testing {
+
+// A 20 x 20 x 30 mm block, bottom fixed, top pressed 1.5 mm (the quickstart
+// and benchmark block), of linear elastic soft tissue (E = 3 kPa, nu = 0.45).
+inline SceneSpec SoftBlock(double element_size_mm, AnalysisSpec::LinearSolver solver) {
+  using K = BoundaryConditionSpec::Kind;
+  SceneSpec s;
+  s.name = "block";
+  s.geometry.kind = GeometrySpec::Kind::kBox;
+  s.geometry.box.size_mm = {20, 20, 30};
+  s.mesh.element_size_mm = element_size_mm;
+  s.material.kind = MaterialSpec::Kind::kLinearElastic;
+  s.material.linear_elastic = {3000, 0.45};
+  s.boundary_conditions = {Condition("bottom", K::kFixed),
+                           Condition("top", K::kDisplacement, {0.0, 0.0, -1.5})};
+  s.analysis.linear_solver = solver;
+  return s;
+}
+
+// The 1D Laplacian (tridiagonal 2, -1) minus `shift` times the identity:
+// eigenvalues 2 - shift - 2 cos(k pi / (n + 1)), k = 1..n.
+inline Eigen::SparseMatrix<double> ShiftedLaplacian(int n, double shift) {
+  std::vector<Eigen::Triplet<double>> entries;
+  for (int i = 0; i < n; ++i) {
+    entries.emplace_back(i, i, 2.0 - shift);
+    if (i + 1 < n) {
+      entries.emplace_back(i, i + 1, -1.0);
+      entries.emplace_back(i + 1, i, -1.0);
+    }
+  }
+  Eigen::SparseMatrix<double> a(n, n);
+  a.setFromTriplets(entries.begin(), entries.end());
+  a.makeCompressed();
+  return a;
+}
+
+}  // namespace pba::testing
