@@ -7,8 +7,6 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
 #include <memory>
 #include <vector>
 
@@ -61,11 +59,13 @@ class PetscMatrix {
     if (layout != nullptr && static_cast<Eigen::Index>(layout->dof_of_unknown.size()) != a.rows()) {
       return Status::Internal("unknown layout does not match the matrix size");
     }
-    *rebuilt = !SamePattern(a);
+    *rebuilt = objects->matrix == nullptr || !SamePattern(a);
     if (*rebuilt) {
       if (objects->matrix != nullptr) MatDestroy(&objects->matrix);
-      outer_.assign(a.outerIndexPtr(), a.outerIndexPtr() + a.outerSize() + 1);
-      inner_.assign(a.innerIndexPtr(), a.innerIndexPtr() + a.nonZeros());
+      // Recorded once the new matrix exists (below): a failure on the way
+      // leaves no pattern that a later call would take for built.
+      outer_.clear();
+      inner_.clear();
       BuildPattern(a, layout);
     }
     FillValues(a, layout);
@@ -79,6 +79,8 @@ class PetscMatrix {
                                              values_.data()));
       PBA_PETSC(MatSetOption(objects->matrix, MAT_SYMMETRIC, PETSC_TRUE));
       PBA_PETSC(MatSetOption(objects->matrix, MAT_SYMMETRY_ETERNAL, PETSC_TRUE));
+      outer_.assign(a.outerIndexPtr(), a.outerIndexPtr() + a.outerSize() + 1);
+      inner_.assign(a.innerIndexPtr(), a.innerIndexPtr() + a.nonZeros());
     } else {
       // Same pattern, same order: PETSc's value array is overwritten (and
       // its state advanced, so the preconditioner sees a new matrix).
@@ -91,7 +93,6 @@ class PetscMatrix {
     return Status::Ok();
   }
 
-  PetscInt size() const { return static_cast<PetscInt>(row_start_.size() - 1); }
   // Expanded position of unknown i.
   PetscInt Position(Eigen::Index i, const UnknownLayout* layout) const {
     return layout != nullptr ? layout->dof_of_unknown[i] : static_cast<PetscInt>(i);
@@ -153,8 +154,8 @@ class PetscMatrix {
   std::vector<PetscScalar> values_;  // between building and handing over
 };
 
-// Copies b into the expanded right-hand side, solves, copies the answer
-// out; `solve` runs the KSP.
+// Copies b into the expanded right-hand side, runs the KSP, copies the
+// answer out.
 Status ExpandedSolve(const PetscMatrix& matrix, const UnknownLayout* layout, PetscObjects* objects,
                      const Eigen::VectorXd& b, Eigen::VectorXd* x) {
   PBA_PETSC(VecSet(objects->rhs, 0.0));
@@ -395,6 +396,7 @@ class AmgSolver final : public LinearSolver {
   Status Setup() {
     if (layout_ != nullptr) PBA_RETURN_IF_ERROR(SetNearNullSpace());
     PBA_RETURN_IF_ERROR(objects_.NewSolver());
+    fresh_ksp_ = true;
     PBA_PETSC(KSPSetType(objects_.ksp, KSPCG));
     // The tolerance is on the residual itself, ||b - A x|| / ||b||.
     PBA_PETSC(KSPSetNormType(objects_.ksp, KSP_NORM_UNPRECONDITIONED));
@@ -412,9 +414,6 @@ class AmgSolver final : public LinearSolver {
       PBA_PETSC(PCGAMGSetType(pc, PCGAMGAGG));
       PetscReal threshold[] = {settings_.gamg_threshold};
       PBA_PETSC(PCGAMGSetThreshold(pc, threshold, 1));
-      // Newton's tangents keep their pattern: the aggregates and
-      // prolongation of the first are kept, the Galerkin products redone.
-      PBA_PETSC(PCGAMGSetReuseInterpolation(pc, PETSC_TRUE));
       // Completes the multigrid's defaults (Chebyshev-Jacobi smoothing on
       // every level) from an options database holding nothing of the
       // user's (InitializePetsc cleared it): without it the levels keep
@@ -450,6 +449,13 @@ class AmgSolver final : public LinearSolver {
 
   // Builds the hierarchy for the current matrix, or keeps the last one.
   Status SetUpPreconditioner(bool reuse) {
+    // A new hierarchy is built in a new KSP: set up again in place, GAMG
+    // kept parts of the old one, and its smoothers could then make the
+    // preconditioner indefinite for a matrix far from the old (seen as
+    // DIVERGED_INDEFINITE_PC). The aggregation it would save is a small
+    // part of a set-up; the Galerkin products are redone either way.
+    if (!reuse && !fresh_ksp_) PBA_RETURN_IF_ERROR(Setup());
+    fresh_ksp_ = false;
     PC pc = nullptr;
     PBA_PETSC(KSPGetPC(objects_.ksp, &pc));
     PBA_PETSC(PCSetReusePreconditioner(pc, reuse ? PETSC_TRUE : PETSC_FALSE));
@@ -559,6 +565,7 @@ class AmgSolver final : public LinearSolver {
   // Iterations of the first solve with the current hierarchy (-1: none yet).
   int hierarchy_iterations_ = -1;
   bool reused_ = false;        // the current solve's hierarchy is an earlier matrix's
+  bool fresh_ksp_ = false;     // the KSP has not been set up yet
   bool rebuild_next_ = false;  // the last solve failed: no reuse at the next Factorize
   int last_iterations_ = 0, min_iterations_ = 0, max_iterations_seen_ = 0;
   double last_residual_ = 0;

@@ -135,6 +135,38 @@ TEST(AmgSolver, RefactorisesNewValuesOnTheSamePatternAndKeepsItsMatrix) {
   EXPECT_LT(RelativeDifference(x, b.direct), 1e-7);
 }
 
+// Newton's next tangent reuses the last multigrid hierarchy; when that one
+// no longer serves (here: the next matrix is far less compressible and the
+// iteration limit leaves no room), the solve is redone once with a
+// hierarchy built for the new matrix, not handed to MUMPS.
+TEST(AmgSolver, ALaggedHierarchyThatFailsIsRebuiltBeforeAnyFallback) {
+  BlockSystem compressible, stiff;
+  Assemble(2.5, 0.3, &compressible);
+  Assemble(2.5, 0.49, &stiff);
+  ASSERT_EQ(compressible.system.k.nonZeros(), stiff.system.k.nonZeros());
+  Eigen::VectorXd x;
+  // What a fresh hierarchy needs for the stiff matrix.
+  const auto fresh = CreateAmgSolver(LinearSolverSettings(), &stiff.layout, nullptr);
+  ASSERT_TRUE(fresh->Factorize(stiff.system.k).ok());
+  ASSERT_TRUE(fresh->Solve(stiff.system.rhs, &x).ok());
+  const int needed = LastIterations(fresh->Name());
+  ASSERT_GT(needed, 0);
+
+  LinearSolverSettings settings;
+  settings.max_iterations = needed + 2;
+  settings.fallback_direct_max_unknowns = 0;
+  const auto amg = CreateAmgSolver(settings, &compressible.layout, nullptr);
+  ASSERT_TRUE(amg->Factorize(compressible.system.k).ok());
+  ASSERT_TRUE(amg->Solve(compressible.system.rhs, &x).ok());
+  ASSERT_NE(amg->Name().find("1 multigrid setups"), std::string::npos) << amg->Name();
+  ASSERT_TRUE(amg->Factorize(stiff.system.k).ok());  // reuses the hierarchy
+  const Status status = amg->Solve(stiff.system.rhs, &x);
+  ASSERT_TRUE(status.ok()) << status.ToString();
+  EXPECT_LT(RelativeDifference(x, stiff.direct), 1e-7);
+  EXPECT_NE(amg->Name().find("2 multigrid setups"), std::string::npos) << amg->Name();
+  EXPECT_EQ(amg->Name().find("MUMPS"), std::string::npos) << amg->Name();
+}
+
 TEST(AmgSolver, NotConvergedIsRedoneByMumpsOrRefused) {
   BlockSystem b;
   Assemble(2.5, 0.45, &b);
