@@ -35,6 +35,12 @@ constexpr double kRoundingEnergy = 1e-20;
 // of a poor predictor.
 constexpr double kIndefiniteNewtonResidual = 1e-4;
 
+// Behind an iterative linear solver the indefinite consistent tangent is
+// factorised (SolveIndefinite) only up to this many unknowns; larger
+// systems take the definite substitutes, converging linearly past a
+// bifurcation, and the increment records no eigenvalue count.
+constexpr Eigen::Index kIterativeLdltMaxUnknowns = 60000;
+
 // Solves K du = rhs with the symmetric indefinite K by a sparse LDL^T
 // (fill-reducing ordering, no pivoting) and counts the negative pivots, which
 // by Sylvester's law of inertia are K's negative eigenvalues. False when a
@@ -272,7 +278,10 @@ Status NewtonRun::SolveLinear(const LinearSystem& system, int iteration, double 
   }
   if (status.code() != Status::Code::kNumerical) return status;
   ++indefinite_streak_;
-  if (near_equilibrium && SolveIndefinite(system, &ldlt_, du, &step_negative_)) {
+  // The sparse LDL^T costs a direct factorisation: behind an iterative
+  // solver, chosen where a factor may not fit, only small systems take it.
+  const bool ldlt_affordable = !target->Iterative() || system.k.rows() <= kIterativeLdltMaxUnknowns;
+  if (near_equilibrium && ldlt_affordable && SolveIndefinite(system, &ldlt_, du, &step_negative_)) {
     ++report_.indefinite_iterations;
     return Status::Ok();
   }

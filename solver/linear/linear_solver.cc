@@ -20,6 +20,7 @@ class AutoSolver final : public LinearSolver {
     return chosen_->Solve(b, x);
   }
 
+  bool Iterative() const override { return chosen_ != nullptr && chosen_->Iterative(); }
   std::string Name() const override {
     if (chosen_ == nullptr) return "AUTO (chosen at the first factorisation)";
     return chosen_->Name() + " [AUTO: " + reason_ + "]";

@@ -23,6 +23,9 @@ class LinearSolver {
   virtual Status Solve(const Eigen::VectorXd& b, Eigen::VectorXd* x) = 0;
   // For people, e.g. "CHOLMOD supernodal Cholesky".
   virtual std::string Name() const = 0;
+  // An iterative solver (PCG, AMG): chosen where a factorisation may not
+  // fit, so callers do not fall back on one of their own for any size.
+  virtual bool Iterative() const { return false; }
   // A fresh solver of the same kind (to hold a second factorisation).
   virtual std::unique_ptr<LinearSolver> NewOfSameKind() const = 0;
 };

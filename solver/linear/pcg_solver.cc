@@ -116,6 +116,7 @@ class PcgSolver final : public LinearSolver {
 
   // After a solve the name carries its iteration count and residual, so the
   // summary shows how hard the last system was.
+  bool Iterative() const override { return true; }
   std::string Name() const override {
     std::string name = "conjugate gradient with incomplete Cholesky (IC) preconditioner";
     if (iterations_ >= 0) {

@@ -372,6 +372,7 @@ class AmgSolver final : public LinearSolver {
     return fallback_->Solve(b, x);
   }
 
+  bool Iterative() const override { return true; }
   std::string Name() const override {
     std::string name = Format("conjugate gradients with %s (PETSc), relative tolerance %.0e",
                               settings_.PreconditionerName(), settings_.relative_tolerance);
