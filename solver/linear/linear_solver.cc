@@ -1,5 +1,7 @@
 #include "linear/linear_solver.h"
 
+#include <cmath>
+
 #include "core/format.h"
 
 namespace pba {
@@ -60,6 +62,19 @@ class AutoSolver final : public LinearSolver {
 };
 
 }  // namespace
+
+Status CheckPositiveDiagonal(const Eigen::SparseMatrix<double>& a) {
+  const Eigen::VectorXd diagonal = a.diagonal();
+  for (Eigen::Index i = 0; i < diagonal.size(); ++i) {
+    if (!(diagonal(i) > 0) || !std::isfinite(diagonal(i))) {
+      return Status::Numerical(
+          Format("the stiffness matrix is not positive definite (diagonal entry %lld is %.3g): "
+                 "a body not held against rigid motion, or a degenerate mesh",
+                 static_cast<long long>(i), diagonal(i)));
+    }
+  }
+  return Status::Ok();
+}
 
 const char* LinearSolverSettings::PreconditionerName() const {
   return preconditioner == Preconditioner::kBoomerAmg ? "hypre BoomerAMG"

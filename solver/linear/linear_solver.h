@@ -111,6 +111,12 @@ struct LinearSolverOptions {
 
 std::unique_ptr<LinearSolver> CreateLinearSolver(const LinearSolverOptions& options);
 
+// A positive definite matrix has a positive diagonal: the check the
+// iterative solvers make before iterating (an incomplete factorisation or a
+// multigrid would shift or smooth past such a matrix and CG would wander).
+// Status::Numerical names the first entry that is not positive and finite.
+Status CheckPositiveDiagonal(const Eigen::SparseMatrix<double>& a);
+
 // The backends (linear/cholmod_solver.cc, linear/eigen_ldlt_solver.cc,
 // linear/pcg_solver.cc).
 // CHOLMOD's OpenMP teams and its BLAS's threads are bounded by `threads`

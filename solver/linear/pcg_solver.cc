@@ -71,15 +71,7 @@ class PcgSolver final : public LinearSolver {
     // A positive definite matrix has a positive diagonal. The incomplete
     // factorisation would shift such a matrix into one it can factorise, and
     // CG would then wander, so this necessary condition is checked first.
-    const Eigen::VectorXd diagonal = lower_.diagonal();
-    for (Eigen::Index i = 0; i < diagonal.size(); ++i) {
-      if (!(diagonal(i) > 0)) {
-        return Status::Numerical(
-            Format("the stiffness matrix is not positive definite (diagonal entry %lld is %.3g): "
-                   "a body not held against rigid motion, or a degenerate mesh",
-                   static_cast<long long>(i), diagonal(i)));
-      }
-    }
+    PBA_RETURN_IF_ERROR(CheckPositiveDiagonal(lower_));
     // The natural ordering needs no analysis (see Preconditioner below).
     preconditioner_ = std::make_unique<Preconditioner>();
     preconditioner_->compute(lower_);

@@ -5,8 +5,12 @@
 #include <Eigen/SparseCore>
 #include <vector>
 
+#include "assembly/assembler.h"
 #include "common/scene_builders.h"
+#include "material/linear_elastic.h"
 #include "pba/scene.h"
+#include "pba/status.h"
+#include "scene/model_builder.h"
 
 namespace pba::testing {
 
@@ -25,6 +29,16 @@ inline SceneSpec SoftBlock(double element_size_mm, AnalysisSpec::LinearSolver so
                            Condition("top", K::kDisplacement, {0.0, 0.0, -1.5})};
   s.analysis.linear_solver = solver;
   return s;
+}
+
+// The small-strain stiffness and load of `model` (solver/ headers needed),
+// all of it one isotropic material of E = 3 kPa and Poisson's ratio
+// `poisson`.
+inline Status AssembleSoftTissue(const Model& model, double poisson, LinearSystem* system) {
+  return AssembleLinearSystem(
+      model.mesh,
+      ElasticityField::Uniform(IsotropicElasticity(3000, poisson), model.mesh.num_elements()),
+      model.dofs, ColourElements(model.mesh), [](double) { return true; }, system, ThreadContext());
 }
 
 // The 1D Laplacian (tridiagonal 2, -1) minus `shift` times the identity:

@@ -22,6 +22,7 @@ namespace pba {
 namespace {
 
 using K = BoundaryConditionSpec::Kind;
+using testing::AssembleSoftTissue;
 using testing::Condition;
 using testing::ShiftedLaplacian;
 using testing::SoftBlock;
@@ -35,13 +36,7 @@ TEST(PcgSolver, MatchesCholmodOnAnAssembledStiffness) {
   Model model;
   ASSERT_TRUE(BuildModel(scene, &model).ok());
   LinearSystem system;
-  ASSERT_TRUE(
-      AssembleLinearSystem(
-          model.mesh,
-          ElasticityField::Uniform(IsotropicElasticity(3000, 0.45), model.mesh.num_elements()),
-          model.dofs, ColourElements(model.mesh), [](double) { return true; }, &system,
-          ThreadContext())
-          .ok());
+  ASSERT_TRUE(AssembleSoftTissue(model, 0.45, &system).ok());
   ASSERT_GT(system.k.rows(), 1000);
 
   const auto cholmod = CreateCholmodSolver(ThreadContext());
@@ -100,13 +95,7 @@ TEST(PcgSolver, CancelEndsTheIteration) {
   Model model;
   ASSERT_TRUE(BuildModel(scene, &model).ok());
   LinearSystem system;
-  ASSERT_TRUE(
-      AssembleLinearSystem(
-          model.mesh,
-          ElasticityField::Uniform(IsotropicElasticity(3000, 0.45), model.mesh.num_elements()),
-          model.dofs, ColourElements(model.mesh), [](double) { return true; }, &system,
-          ThreadContext())
-          .ok());
+  ASSERT_TRUE(AssembleSoftTissue(model, 0.45, &system).ok());
   std::atomic<bool> cancel{true};
   LinearSolverOptions options;
   options.kind = LinearSolverOptions::Kind::kPcg;
@@ -158,13 +147,7 @@ TEST(PcgSolver, UnheldBodyEndsWithAClearErrorNotNan) {
   Model model;
   ASSERT_TRUE(BuildModel(scene, &model).ok());
   LinearSystem system;
-  ASSERT_TRUE(
-      AssembleLinearSystem(
-          model.mesh,
-          ElasticityField::Uniform(IsotropicElasticity(3000, 0.45), model.mesh.num_elements()),
-          model.dofs, ColourElements(model.mesh), [](double) { return true; }, &system,
-          ThreadContext())
-          .ok());
+  ASSERT_TRUE(AssembleSoftTissue(model, 0.45, &system).ok());
   ASSERT_EQ(system.k.rows(), 3 * model.mesh.num_nodes());
   // A load along z on every node: the rigid translation takes it all.
   Eigen::VectorXd b = Eigen::VectorXd::Zero(system.k.rows());

@@ -24,6 +24,7 @@ namespace pba {
 namespace {
 
 using K = BoundaryConditionSpec::Kind;
+using testing::AssembleSoftTissue;
 using testing::Condition;
 using testing::ShiftedLaplacian;
 using testing::SoftBlock;
@@ -39,13 +40,7 @@ struct BlockSystem {
 void Assemble(double element_size_mm, double poisson, BlockSystem* out) {
   const SceneSpec scene = SoftBlock(element_size_mm, AnalysisSpec::LinearSolver::kCholmod);
   ASSERT_TRUE(BuildModel(scene, &out->model).ok());
-  ASSERT_TRUE(AssembleLinearSystem(
-                  out->model.mesh,
-                  ElasticityField::Uniform(IsotropicElasticity(3000, poisson),
-                                           out->model.mesh.num_elements()),
-                  out->model.dofs, ColourElements(out->model.mesh), [](double) { return true; },
-                  &out->system, ThreadContext())
-                  .ok());
+  ASSERT_TRUE(AssembleSoftTissue(out->model, poisson, &out->system).ok());
   out->layout = MakeUnknownLayout(out->model.dofs, out->model.mesh.nodes);
   const auto cholmod = CreateCholmodSolver(ThreadContext());
   ASSERT_TRUE(cholmod->Factorize(out->system.k).ok());
@@ -250,13 +245,7 @@ TEST(MumpsSolver, MatchesCholmodAndTellsIndefiniteAndSingular) {
   Model model;
   ASSERT_TRUE(BuildModel(scene, &model).ok());
   LinearSystem system;
-  ASSERT_TRUE(
-      AssembleLinearSystem(
-          model.mesh,
-          ElasticityField::Uniform(IsotropicElasticity(3000, 0.45), model.mesh.num_elements()),
-          model.dofs, ColourElements(model.mesh), [](double) { return true; }, &system,
-          ThreadContext())
-          .ok());
+  ASSERT_TRUE(AssembleSoftTissue(model, 0.45, &system).ok());
   status = mumps->Factorize(system.k);
   EXPECT_EQ(status.code(), Status::Code::kNumerical) << status.ToString();
 }
