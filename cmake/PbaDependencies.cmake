@@ -48,3 +48,8 @@ target_link_libraries(pba_petsc INTERFACE PkgConfig::PETSC MPI::MPI_C)
 target_compile_definitions(pba_petsc INTERFACE OMPI_SKIP_MPICXX=1 MPICH_SKIP_MPICXX=1)
 
 find_program(GRPC_CPP_PLUGIN grpc_cpp_plugin REQUIRED)
+# What tests that start mpirun give it: Open MPI refuses to run as root
+# unless told (CI runs as root), and a test machine may have fewer cores
+# than the ranks a test starts.
+set(PBA_MPIRUN_ENVIRONMENT
+  "OMPI_ALLOW_RUN_AS_ROOT=1;OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1;OMPI_MCA_rmaps_base_oversubscribe=1")

@@ -222,7 +222,12 @@ std::string FormatSummary(const v1::Summary& summary) {
   out += SensorPeakTable(r);
   out += StructureTable(r);
   out += ProfileLines(r);
-  out += Format("Wall time    %.3f s on %d thread(s):", p.wall_time_s(), p.threads());
+  if (p.ranks() > 1) {
+    out += Format("Wall time    %.3f s on %d MPI ranks of %d thread(s):", p.wall_time_s(),
+                  p.ranks(), p.threads());
+  } else {
+    out += Format("Wall time    %.3f s on %d thread(s):", p.wall_time_s(), p.threads());
+  }
   for (const auto& phase : p.phases()) {
     out += Format(" %s %.3f s,", phase.phase().c_str(), phase.seconds());
   }

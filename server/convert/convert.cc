@@ -714,6 +714,7 @@ v1::Summary SummaryToProto(const Summary& summary) {
   v1::Performance* performance = out.mutable_performance();
   performance->set_wall_time_s(summary.wall_time_s);
   performance->set_threads(summary.threads);
+  performance->set_ranks(summary.ranks);
   for (const auto& phase : summary.phases) {
     v1::PhaseTime* p = performance->add_phases();
     p->set_phase(phase.phase);

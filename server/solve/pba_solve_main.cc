@@ -41,6 +41,7 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <csignal>
@@ -52,6 +53,7 @@
 #include <iostream>
 #include <string>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include "atlas/structure_split.h"
@@ -59,6 +61,7 @@
 #include "codec/yaml_codec.h"
 #include "convert/convert.h"
 #include "core/exit_codes.h"
+#include "core/format.h"
 #include "pba/solve.h"
 #include "pba/v1/scene.pb.h"
 #include "pba/v1/solve_event.pb.h"
@@ -132,7 +135,10 @@ enum class ProgressMode { kJson, kText, kNone };
 
 class Reporter {
  public:
-  explicit Reporter(ProgressMode mode) : mode_(mode) {}
+  // `who` names the process in error messages ("pba-solve", or with its
+  // rank in an MPI job).
+  explicit Reporter(ProgressMode mode, std::string who = "pba-solve")
+      : mode_(mode), who_(std::move(who)) {}
 
   void Progress(const ProgressEvent& event) {
     if (mode_ == ProgressMode::kJson) {
@@ -164,7 +170,7 @@ class Reporter {
 
   // Errors always reach stderr for people; in JSON mode also stdout for the server.
   int Error(const Status& status) {
-    std::fprintf(stderr, "pba-solve: error: %s\n", status.ToString().c_str());
+    std::fprintf(stderr, "%s: error: %s\n", who_.c_str(), status.ToString().c_str());
     if (mode_ == ProgressMode::kJson) {
       v1::SolveEvent out;
       out.set_kind(v1::SolveEvent::ERROR);
@@ -200,6 +206,7 @@ class Reporter {
   }
 
   ProgressMode mode_;
+  std::string who_;
 };
 
 // Whether `entry` of an output directory is something pba-solve writes
@@ -252,12 +259,20 @@ struct CheckpointFlags {
   std::string restart;  // a checkpoint.h5 to continue from; empty: from t = 0
 };
 
+// In an MPI job (mpirun -np N pba-solve) every rank runs this with the same
+// arguments and solves the same scene, sharing its linear solves; rank 0
+// alone reports progress, checks and writes --out, --export-inp and the
+// checkpoints, and the other ranks end once the solve has. Their errors go
+// to stderr under their rank.
 int Run(const std::string& scene_path, const std::string& out_dir, bool force,
         const std::string& inp_path, ProgressMode mode, int threads, const AtlasCacheFlags& cache,
-        const CheckpointFlags& checkpoint) {
-  Reporter reporter(mode);
+        CheckpointFlags checkpoint, const SolveRanks& ranks) {
+  const bool writer = ranks.rank == 0;
+  Reporter reporter(writer ? mode : ProgressMode::kNone,
+                    ranks.size > 1 ? Format("pba-solve (rank %d of %d)", ranks.rank, ranks.size)
+                                   : std::string("pba-solve"));
   // Before anything is solved: a solve of hours must not end in a refusal.
-  if (!out_dir.empty()) {
+  if (writer && !out_dir.empty()) {
     if (Status s = CheckOutputDir(out_dir, force, "pba-solve", WrittenByPbaSolve); !s.ok()) {
       return reporter.Error(s);
     }
@@ -272,13 +287,14 @@ int Run(const std::string& scene_path, const std::string& out_dir, bool force,
   Status status = SceneFromProto(scene, &spec);
   if (status.ok()) status = ValidateScene(spec);
   if (!status.ok()) return reporter.Error(status);
-  if (!inp_path.empty()) {
+  if (writer && !inp_path.empty()) {
     status = ExportAbaqusInput(spec, inp_path);
     if (!status.ok()) return reporter.Error(status);
     std::fprintf(stderr, "pba-solve: wrote %s (run it in CalculiX with: ccx -i %s)\n",
                  inp_path.c_str(), std::filesystem::path(inp_path).replace_extension().c_str());
-    if (out_dir.empty()) return kExitOk;
   }
+  if (out_dir.empty()) return kExitOk;
+  if (!writer) checkpoint.dir.clear();
 
   SolveOptions options;
   options.threads = threads;
@@ -304,6 +320,7 @@ int Run(const std::string& scene_path, const std::string& out_dir, bool force,
   Solution solution;
   status = SolveScene(spec, options, &solution);
   if (!status.ok()) return reporter.Error(status);
+  if (!writer) return kExitOk;
 
   StagingDir staging;
   status = StagingDir::Create(out_dir, &staging);
@@ -451,6 +468,17 @@ int main(int argc, char** argv) {
     return code == 0 ? pba::kExitOk : pba::kExitUsage;
   }
 
+  // In an MPI job every rank starts MPI here, before any thread of its own.
+  pba::SolveRanks ranks;
+  if (const pba::Status joined = pba::JoinRanks(&ranks); !joined.ok()) {
+    std::fprintf(stderr, "pba-solve: error: %s\n", joined.ToString().c_str());
+    return pba::kExitError;
+  }
+  if (ranks.size > 1 && threads == 0) {
+    // "Every core" is the machine's cores shared by its ranks.
+    threads = std::max(1, static_cast<int>(std::thread::hardware_concurrency()) / ranks.on_node);
+  }
+
   std::signal(SIGTERM, pba::OnSignal);
   std::signal(SIGINT, pba::OnSignal);
   std::signal(SIGXFSZ, SIG_IGN);
@@ -468,6 +496,11 @@ int main(int argc, char** argv) {
         std::fprintf(stderr, "pba-solve: --import-atlas takes --out DIR and no scene\n");
         return pba::kExitUsage;
       }
+      if (ranks.size > 1) {
+        std::fprintf(stderr, "pba-solve: --import-atlas runs as one process, not under mpirun\n");
+        pba::EndRanksWith(pba::kExitUsage);
+        return pba::kExitUsage;
+      }
       return pba::RunImport(import, out_dir, force, mode);
     }
     if (scene_path.empty()) {
@@ -479,9 +512,14 @@ int main(int argc, char** argv) {
                    "pba-solve: --out DIR is required (or --export-inp FILE to export only)\n");
       return pba::kExitUsage;
     }
-    return pba::Run(scene_path, out_dir, force, inp_path, mode, threads, cache, checkpoint);
+    const int code =
+        pba::Run(scene_path, out_dir, force, inp_path, mode, threads, cache, checkpoint, ranks);
+    // A rank that failed ends the job: the others may wait for it.
+    if (code != pba::kExitOk) pba::EndRanksWith(code);
+    return code;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "pba-solve: internal error: %s\n", e.what());
+    pba::EndRanksWith(pba::kExitError);
     return pba::kExitError;
   }
 }

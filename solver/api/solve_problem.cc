@@ -14,6 +14,7 @@
 #include "explicit/dynamic_relaxation.h"
 #include "explicit/explicit_dynamics.h"
 #include "fem/element_kind.h"
+#include "linear/petsc_runtime.h"
 #include "material/factory.h"
 
 namespace pba {
@@ -171,6 +172,7 @@ Status SolveProblem(const Problem& problem, PhaseClock* clock, Solution* solutio
         profile.name.c_str()));
   }
   summary.threads = problem.threads.threads();
+  summary.ranks = CurrentRanks().size;
   summary.wall_time_s = clock->elapsed_s();
   return Status::Ok();
 }

@@ -6,10 +6,20 @@
 #include "api/solve_problem.h"
 #include "core/phase_clock.h"
 #include "core/thread_context.h"
+#include "linear/petsc_runtime.h"
 #include "pba/solve.h"
 #include "scene/problem.h"
 
 namespace pba {
+
+Status JoinRanks(SolveRanks* ranks) {
+  ProcessRanks process;
+  PBA_RETURN_IF_ERROR(StartRanks(&process));
+  *ranks = {process.rank, process.size, process.on_node};
+  return Status::Ok();
+}
+
+void EndRanksWith(int code) { AbortOtherRanks(code); }
 
 Status SolveScene(const SceneSpec& scene, const SolveOptions& options, Solution* solution) {
   PBA_RETURN_IF_ERROR(ValidateScene(scene));

@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "core/format.h"
+#include "linear/petsc_runtime.h"
 
 namespace pba {
 namespace {
@@ -40,7 +41,9 @@ class AutoSolver final : public LinearSolver {
   }
 
  private:
-  // CHOLMOD while its predicted factor fits the budget, else AMG.
+  // CHOLMOD while its predicted factor fits the budget, else AMG. As the
+  // ranks of an MPI job, MUMPS in CHOLMOD's place: CHOLMOD is one process's,
+  // MUMPS factorises across the ranks (its factor is of the same order).
   Status Choose(const Eigen::SparseMatrix<double>& a) {
     const double budget_mb = options_.settings.auto_direct_max_factor_mb;
     FactorPrediction prediction;
@@ -51,8 +54,12 @@ class AutoSolver final : public LinearSolver {
         "%lld unknowns, predicted Cholesky factor %.0f MB %s "
         "linear_solver_options.auto_direct_max_factor_mb = %.0f",
         static_cast<long long>(a.rows()), factor_mb, direct ? "<=" : ">", budget_mb);
-    chosen_ = direct ? CreateCholmodSolver(options_.threads)
-                     : CreateAmgSolver(options_.settings, options_.layout, options_.cancel);
+    const bool ranks = CurrentRanks().size > 1;
+    if (direct) {
+      chosen_ = ranks ? CreateMumpsSolver() : CreateCholmodSolver(options_.threads);
+    } else {
+      chosen_ = CreateAmgSolver(options_.settings, options_.layout, options_.cancel);
+    }
     return Status::Ok();
   }
 

@@ -3,6 +3,7 @@
 #include <mpi.h>
 #include <petscsys.h>
 
+#include <algorithm>
 #include <csignal>
 #include <cstdlib>
 #include <iterator>
@@ -18,6 +19,7 @@ std::mutex& Mutex() {
 }
 
 bool started_mpi = false;  // this process's MPI was started here (and is finished here)
+int ranks_on_node = 1;     // found at the start (a collective call, made by every rank then)
 
 void FinishAtExit() {
   const std::lock_guard<std::mutex> lock(Mutex());
@@ -49,6 +51,12 @@ Status Start() {
     }
     started_mpi = true;
   }
+  MPI_Comm node = MPI_COMM_NULL;
+  if (MPI_Comm_split_type(MPI_COMM_WORLD, MPI_COMM_TYPE_SHARED, 0, MPI_INFO_NULL, &node) ==
+      MPI_SUCCESS) {
+    MPI_Comm_size(node, &ranks_on_node);
+    MPI_Comm_free(&node);
+  }
   static char program[] = "pba";
   static char skip_rc[] = "-skip_petscrc";
   static char no_handler[] = "-no_signal_handler";
@@ -77,6 +85,38 @@ Status InitializePetsc() {
     return Start();
   }();
   return started;
+}
+
+bool LaunchedAsMpiRank() {
+  // Open MPI's mpirun, PMIx (srun --mpi=pmix, mpirun of other MPIs), PMI-2.
+  for (const char* name : {"OMPI_COMM_WORLD_SIZE", "PMIX_RANK", "PMI_SIZE"}) {
+    if (std::getenv(name) != nullptr) return true;
+  }
+  return false;
+}
+
+ProcessRanks CurrentRanks() {
+  ProcessRanks ranks;
+  int initialized = 0, finalized = 0;
+  MPI_Initialized(&initialized);
+  MPI_Finalized(&finalized);
+  if (!initialized || finalized) return ranks;
+  MPI_Comm_rank(MPI_COMM_WORLD, &ranks.rank);
+  MPI_Comm_size(MPI_COMM_WORLD, &ranks.size);
+  ranks.on_node = std::max(1, ranks_on_node);
+  return ranks;
+}
+
+Status StartRanks(ProcessRanks* ranks) {
+  *ranks = ProcessRanks();
+  if (!LaunchedAsMpiRank()) return Status::Ok();
+  PBA_RETURN_IF_ERROR(InitializePetsc());
+  *ranks = CurrentRanks();
+  return Status::Ok();
+}
+
+void AbortOtherRanks(int code) {
+  if (CurrentRanks().size > 1) MPI_Abort(MPI_COMM_WORLD, code);
 }
 
 std::unique_lock<std::mutex> PetscLock() { return std::unique_lock<std::mutex>(Mutex()); }

@@ -20,6 +20,32 @@ namespace pba {
 // thread-safe; a failure is remembered and returned again.
 Status InitializePetsc();
 
+// The processes a solve runs on. A process launched by mpirun or srun
+// (their environment says so) is one rank of MPI_COMM_WORLD; every rank
+// runs the same solve, and the PETSc backends then share each linear solve
+// between them (petsc_solver.cc). Any other process is rank 0 of 1.
+struct ProcessRanks {
+  int rank = 0;
+  int size = 1;
+  int on_node = 1;  // ranks on this machine (MPI's shared-memory split)
+};
+
+// Whether this process was launched as a rank of an MPI job (mpirun, srun).
+bool LaunchedAsMpiRank();
+
+// For a process LaunchedAsMpiRank: starts MPI and PETSc (InitializePetsc)
+// now, so that every later decision knows the ranks, and reports them.
+// Otherwise starts nothing and reports rank 0 of 1.
+Status StartRanks(ProcessRanks* ranks);
+
+// The ranks as they stand: MPI_COMM_WORLD's once MPI runs, else rank 0 of 1.
+ProcessRanks CurrentRanks();
+
+// Ends the whole MPI job with `code` (MPI_Abort) when this process is one
+// of several ranks: one rank's failure must not leave the others waiting
+// for it in a collective call. Otherwise returns.
+void AbortOtherRanks(int code);
+
 // Held around every sequence of PETSc calls.
 std::unique_lock<std::mutex> PetscLock();
 

@@ -8,8 +8,10 @@
 
 #include "atlas/atlas_build.h"
 #include "atlas/colour_table.h"
+#include "core/format.h"
 #include "core/number_format.h"
 #include "fem/element_kind.h"
+#include "linear/petsc_runtime.h"
 #include "material/factory.h"
 #include "material/tissue_library.h"
 #include "mesh/primitive_mesher.h"
@@ -752,7 +754,40 @@ Status ValidateScene(const SceneSpec& scene) {
   PBA_RETURN_IF_ERROR(scene_checks::ValidateContacts(scene));
   PBA_RETURN_IF_ERROR(ValidateReactionSets(scene));
   PBA_RETURN_IF_ERROR(scene_checks::ValidateProfiles(scene.outputs));
-  return ValidateStructureDisplacements(scene);
+  PBA_RETURN_IF_ERROR(ValidateStructureDisplacements(scene));
+  return ValidateSceneOnRanks(scene, CurrentRanks().size);
+}
+
+Status ValidateSceneOnRanks(const SceneSpec& scene, int ranks) {
+  if (ranks < 1)
+    return Status::InvalidArgument("ranks", Format("must be at least 1, got %d", ranks));
+  if (ranks == 1) return Status::Ok();
+  const AnalysisSpec& analysis = scene.analysis;
+  if (analysis.type == AnalysisSpec::Type::kExplicitDynamic ||
+      analysis.type == AnalysisSpec::Type::kDynamicRelaxation) {
+    return Status::InvalidArgument(
+        "analysis.type",
+        Format("%s has no linear solve to share between %d MPI ranks (the ranks share the "
+               "implicit analyses' linear solves); run it as one process",
+               analysis.type == AnalysisSpec::Type::kExplicitDynamic ? "EXPLICIT_DYNAMIC"
+                                                                     : "DYNAMIC_RELAXATION",
+               ranks));
+  }
+  switch (analysis.linear_solver) {
+    case AnalysisSpec::LinearSolver::kAuto:
+    case AnalysisSpec::LinearSolver::kAmg:
+    case AnalysisSpec::LinearSolver::kMumps:
+      return Status::Ok();
+    case AnalysisSpec::LinearSolver::kCholmod:
+    case AnalysisSpec::LinearSolver::kEigenLdlt:
+    case AnalysisSpec::LinearSolver::kPcg:
+      break;
+  }
+  return Status::InvalidArgument(
+      "analysis.linear_solver",
+      Format("solves in one process; on %d MPI ranks use AUTO, AMG or MUMPS, which share the "
+             "solve between the ranks",
+             ranks));
 }
 
 }  // namespace pba

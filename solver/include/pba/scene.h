@@ -613,6 +613,14 @@ int PlaneNormalAxis(const GeometrySpec& geometry, const std::string& set);
 // fixed or prescribed in every direction), the mesh would not be absurdly
 // large. The returned Status names the field path, e.g.
 // "boundary_conditions[1].set".
+// Also, as a rank of an MPI job, ValidateSceneOnRanks with its number of ranks.
 Status ValidateScene(const SceneSpec& scene);
+
+// Whether `scene` can run on `ranks` MPI processes (mpirun -np ranks
+// pba-solve): the ranks share its linear solves, so it must have some
+// (LINEAR_STATIC, NONLINEAR_STATIC, QUASI_STATIC) and solve them with a
+// backend that works across processes (AUTO, AMG, MUMPS). Any scene runs on
+// one. The returned Status names the field that stands in the way.
+Status ValidateSceneOnRanks(const SceneSpec& scene, int ranks);
 
 }  // namespace pba

@@ -51,6 +51,24 @@ struct SolveOptions {
   std::filesystem::path restart_from;
 };
 
+// The MPI job a solve may run in: `mpirun -np N pba-solve ...` starts N
+// processes (ranks) that each run the same solve and share its linear
+// solves (the PETSc backends: AMG, MUMPS, and AUTO's choice between them),
+// so every rank ends with the same answer; rank 0 writes the results.
+struct SolveRanks {
+  int rank = 0;
+  int size = 1;
+  int on_node = 1;  // ranks on this machine: they share its cores
+};
+// In a process launched by mpirun or srun, starts MPI (and PETSc) on every
+// rank, collectively, and reports this rank; in any other process starts
+// nothing and reports rank 0 of 1. Call before SolveScene, on every rank.
+Status JoinRanks(SolveRanks* ranks);
+// Ends every rank of the MPI job with exit code `code`, when there are
+// several: a rank that stops with an error must not leave the others
+// waiting for it. In a process of its own, returns.
+void EndRanksWith(int code);
+
 struct PhaseTime {
   std::string phase;
   double seconds = 0;
@@ -252,7 +270,8 @@ struct Summary {
   // Speed.
   double wall_time_s = 0;
   std::vector<PhaseTime> phases;
-  int threads = 1;
+  int threads = 1;  // per process
+  int ranks = 1;    // MPI processes that shared the solve (JoinRanks)
 };
 
 // The fields sampled along one line of outputs.profiles, written as

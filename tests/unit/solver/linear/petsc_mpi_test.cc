@@ -1,0 +1,203 @@
+// The PETSc backends shared by the ranks of an MPI job: run under
+// `mpirun -np 2` (tests/unit/solver/CMakeLists.txt), as a user's
+// `mpirun -np 2 pba-solve` is. Each rank holds the whole system and hands
+// PETSc its own rows; every rank must end with the answer one process
+// gets, and ranks that hold different systems must stop, never mix them.
+#include <gtest/gtest.h>
+
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
+#include <cstdio>
+#include <string>
+
+#include "assembly/assembler.h"
+#include "assembly/dof_map.h"
+#include "common/linear_systems.h"
+#include "linear/linear_solver.h"
+#include "linear/petsc_runtime.h"
+#include "pba/solve.h"
+#include "scene/model_builder.h"
+
+namespace pba {
+namespace {
+
+using testing::AssembleSoftTissue;
+using testing::ShiftedLaplacian;
+using testing::SoftBlock;
+
+// The block's stiffness and load, and the answer of Eigen's LDL^T on this
+// rank alone (CHOLMOD works in one process; Eigen's factorisation is exact
+// to rounding all the same).
+struct BlockSystem {
+  Model model;
+  LinearSystem system;
+  UnknownLayout layout;
+  Eigen::VectorXd exact;
+};
+
+void Assemble(double element_size_mm, BlockSystem* out) {
+  const SceneSpec scene = SoftBlock(element_size_mm, AnalysisSpec::LinearSolver::kAmg);
+  ASSERT_TRUE(BuildModel(scene, &out->model).ok());
+  ASSERT_TRUE(AssembleSoftTissue(out->model, 0.45, &out->system).ok());
+  out->layout = MakeUnknownLayout(out->model.dofs, out->model.mesh.nodes);
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(out->system.k);
+  ASSERT_EQ(ldlt.info(), Eigen::Success);
+  out->exact = ldlt.solve(out->system.rhs);
+}
+
+double RelativeDifference(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
+  return (a - b).norm() / b.norm();
+}
+
+TEST(PetscRanks, TwoRanksAreRunning) {
+  const ProcessRanks ranks = CurrentRanks();
+  EXPECT_EQ(ranks.size, 2);
+  EXPECT_GE(ranks.on_node, 1);
+}
+
+TEST(PetscRanks, GamgSharedByTwoRanksGivesTheDirectAnswer) {
+  BlockSystem block;
+  Assemble(2.0, &block);
+  LinearSolverSettings settings;
+  settings.relative_tolerance = 1e-12;
+  const auto amg = CreateAmgSolver(settings, &block.layout, nullptr);
+  ASSERT_TRUE(amg->Factorize(block.system.k).ok());
+  Eigen::VectorXd x;
+  const Status solved = amg->Solve(block.system.rhs, &x);
+  ASSERT_TRUE(solved.ok()) << solved.ToString();
+  EXPECT_LT(RelativeDifference(x, block.exact), 1e-8);
+  EXPECT_NE(amg->Name().find("on 2 MPI ranks"), std::string::npos) << amg->Name();
+  EXPECT_EQ(amg->Name().find("redone by MUMPS"), std::string::npos) << amg->Name();
+  // Newton's next tangent: same pattern, new values (the lagged hierarchy).
+  const Eigen::SparseMatrix<double> stiffer = 2.0 * block.system.k;
+  ASSERT_TRUE(amg->Factorize(stiffer).ok());
+  ASSERT_TRUE(amg->Solve(block.system.rhs, &x).ok());
+  EXPECT_LT(RelativeDifference(2.0 * x, block.exact), 1e-8);
+}
+
+TEST(PetscRanks, BoomerAmgSharedByTwoRanksGivesTheDirectAnswer) {
+  BlockSystem block;
+  Assemble(2.5, &block);
+  LinearSolverSettings settings;
+  settings.preconditioner = LinearSolverSettings::Preconditioner::kBoomerAmg;
+  settings.relative_tolerance = 1e-12;
+  const auto amg = CreateAmgSolver(settings, &block.layout, nullptr);
+  ASSERT_TRUE(amg->Factorize(block.system.k).ok());
+  Eigen::VectorXd x;
+  const Status solved = amg->Solve(block.system.rhs, &x);
+  ASSERT_TRUE(solved.ok()) << solved.ToString();
+  EXPECT_LT(RelativeDifference(x, block.exact), 1e-8);
+}
+
+TEST(PetscRanks, ScalarAggregationWithoutLayoutSplitsTheUnknowns) {
+  BlockSystem block;
+  Assemble(3.0, &block);
+  LinearSolverSettings settings;
+  settings.relative_tolerance = 1e-12;
+  const auto amg = CreateAmgSolver(settings, nullptr, nullptr);
+  ASSERT_TRUE(amg->Factorize(block.system.k).ok());
+  Eigen::VectorXd x;
+  const Status solved = amg->Solve(block.system.rhs, &x);
+  ASSERT_TRUE(solved.ok()) << solved.ToString();
+  EXPECT_LT(RelativeDifference(x, block.exact), 1e-8);
+}
+
+TEST(PetscRanks, MumpsSharedByTwoRanksIsExactAndRefactorises) {
+  BlockSystem block;
+  Assemble(2.5, &block);
+  const auto mumps = CreateMumpsSolver();
+  ASSERT_TRUE(mumps->Factorize(block.system.k).ok());
+  Eigen::VectorXd x;
+  ASSERT_TRUE(mumps->Solve(block.system.rhs, &x).ok());
+  EXPECT_LT(RelativeDifference(x, block.exact), 1e-11);
+  EXPECT_NE(mumps->Name().find("on 2 MPI ranks"), std::string::npos) << mumps->Name();
+  const Eigen::SparseMatrix<double> stiffer = 4.0 * block.system.k;
+  ASSERT_TRUE(mumps->Factorize(stiffer).ok());
+  ASSERT_TRUE(mumps->Solve(block.system.rhs, &x).ok());
+  EXPECT_LT(RelativeDifference(4.0 * x, block.exact), 1e-11);
+}
+
+TEST(PetscRanks, MumpsInertiaAcrossRanksTellsAnIndefiniteMatrix) {
+  // Eigenvalues 2 - shift - 2 cos(k pi / 201): shift 0.5 makes about a
+  // third of them negative, whichever rank holds their rows.
+  const auto mumps = CreateMumpsSolver();
+  const Status indefinite = mumps->Factorize(ShiftedLaplacian(200, 0.5));
+  EXPECT_EQ(indefinite.code(), Status::Code::kNumerical) << indefinite.ToString();
+  EXPECT_NE(indefinite.message().find("negative"), std::string::npos) << indefinite.message();
+  const Status definite = mumps->Factorize(ShiftedLaplacian(200, -0.1));
+  EXPECT_TRUE(definite.ok()) << definite.ToString();
+}
+
+TEST(PetscRanks, AutoTakesMumpsWhereOneProcessWouldTakeCholmod) {
+  BlockSystem block;
+  Assemble(3.0, &block);
+  LinearSolverOptions options;
+  options.layout = &block.layout;
+  const auto solver = CreateLinearSolver(options);
+  ASSERT_TRUE(solver->Factorize(block.system.k).ok());
+  Eigen::VectorXd x;
+  ASSERT_TRUE(solver->Solve(block.system.rhs, &x).ok());
+  EXPECT_LT(RelativeDifference(x, block.exact), 1e-11);
+  EXPECT_NE(solver->Name().find("MUMPS"), std::string::npos) << solver->Name();
+  EXPECT_NE(solver->Name().find("AUTO"), std::string::npos) << solver->Name();
+  // Beyond the budget, AMG across the ranks.
+  options.settings.auto_direct_max_factor_mb = 0;
+  const auto iterative = CreateLinearSolver(options);
+  ASSERT_TRUE(iterative->Factorize(block.system.k).ok());
+  ASSERT_TRUE(iterative->Solve(block.system.rhs, &x).ok());
+  EXPECT_NE(iterative->Name().find("GAMG"), std::string::npos) << iterative->Name();
+}
+
+TEST(PetscRanks, RanksHoldingDifferentMatricesStopInsteadOfMixingThem) {
+  BlockSystem block;
+  Assemble(3.0, &block);
+  const double scale = 1.0 + CurrentRanks().rank;  // 1 on rank 0, 2 on rank 1
+  const Eigen::SparseMatrix<double> mine = scale * block.system.k;
+  for (const bool direct : {false, true}) {
+    const auto solver = direct ? CreateMumpsSolver()
+                               : CreateAmgSolver(LinearSolverSettings(), &block.layout, nullptr);
+    const Status status = solver->Factorize(mine);
+    EXPECT_EQ(status.code(), Status::Code::kInternal) << status.ToString();
+    EXPECT_NE(status.message().find("different"), std::string::npos) << status.message();
+  }
+  // The same matrix but different right-hand sides.
+  const auto mumps = CreateMumpsSolver();
+  ASSERT_TRUE(mumps->Factorize(block.system.k).ok());
+  Eigen::VectorXd x;
+  const Status status = mumps->Solve(scale * block.system.rhs, &x);
+  EXPECT_EQ(status.code(), Status::Code::kInternal) << status.ToString();
+  EXPECT_NE(status.message().find("right-hand sides"), std::string::npos) << status.message();
+}
+
+TEST(PetscRanks, ScenesWithoutASharedSolveAreRefusedOnRanks) {
+  SceneSpec scene = SoftBlock(3.0, AnalysisSpec::LinearSolver::kCholmod);
+  // ValidateScene knows it runs on two ranks.
+  Status status = ValidateScene(scene);
+  EXPECT_EQ(status.field(), "analysis.linear_solver") << status.ToString();
+  EXPECT_NE(status.message().find("AUTO, AMG or MUMPS"), std::string::npos) << status.message();
+  scene.analysis.linear_solver = AnalysisSpec::LinearSolver::kMumps;
+  EXPECT_TRUE(ValidateScene(scene).ok()) << ValidateScene(scene).ToString();
+}
+
+}  // namespace
+}  // namespace pba
+
+// Its own main: MPI starts before the tests, and only rank 0 prints them
+// (a failure on rank 1 still fails the run through its exit code).
+int main(int argc, char** argv) {
+  ::testing::InitGoogleTest(&argc, argv);
+  pba::SolveRanks ranks;
+  const pba::Status joined = pba::JoinRanks(&ranks);
+  if (!joined.ok() || ranks.size != 2) {
+    std::fprintf(stderr, "petsc_mpi_test: run it as mpirun -np 2 (%s, %d rank(s))\n",
+                 joined.ToString().c_str(), ranks.size);
+    return 1;
+  }
+  if (ranks.rank != 0) {
+    auto& listeners = ::testing::UnitTest::GetInstance()->listeners();
+    delete listeners.Release(listeners.default_result_printer());
+  }
+  const int result = RUN_ALL_TESTS();
+  if (result != 0) std::fprintf(stderr, "petsc_mpi_test: failures on rank %d\n", ranks.rank);
+  return result;
+}
