@@ -1,0 +1,228 @@
+// pba-solve as an MPI job, `mpirun -np 2 pba-solve SCENE --out DIR`, the way
+// users run it: the two ranks share each linear solve and must write the
+// answer one process writes (to 1e-8, relative) in the same files, once;
+// scenes the ranks cannot share are refused naming the field, and a solve
+// that breaks down ends the whole job with the serial exit code.
+
+#include <gtest/gtest.h>
+#include <hdf5.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <string>
+#include <vector>
+
+#include "common/subprocess.h"
+
+namespace pba::testing {
+namespace {
+namespace fs = std::filesystem;
+
+// Open MPI refuses root unless told; the ranks may outnumber the cores.
+const std::vector<std::string> kMpiEnvironment = {"OMPI_ALLOW_RUN_AS_ROOT=1",
+                                                  "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1",
+                                                  "OMPI_MCA_rmaps_base_oversubscribe=1"};
+
+RunResult Solve(const fs::path& scene, const fs::path& out, int ranks) {
+  std::vector<std::string> argv;
+  if (ranks > 1) argv = {PBA_MPIEXEC, "-np", std::to_string(ranks)};
+  for (const std::string& arg : {std::string(PBA_SOLVE_BIN), scene.string(), std::string("--out"),
+                                 out.string(), std::string("--progress"), std::string("json")}) {
+    argv.push_back(arg);
+  }
+  return RunProcess(argv, kMpiEnvironment, std::chrono::seconds(600));
+}
+
+// /fields/displacement of a result.h5, node by node.
+std::vector<double> ReadDisplacement(const fs::path& result) {
+  std::vector<double> values;
+  const hid_t file = H5Fopen(result.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  if (file < 0) return values;
+  const hid_t data = H5Dopen2(file, "/fields/displacement", H5P_DEFAULT);
+  if (data >= 0) {
+    const hid_t space = H5Dget_space(data);
+    hsize_t dims[2] = {0, 0};
+    H5Sget_simple_extent_dims(space, dims, nullptr);
+    values.resize(dims[0] * dims[1]);
+    if (H5Dread(data, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data()) < 0) {
+      values.clear();
+    }
+    H5Sclose(space);
+    H5Dclose(data);
+  }
+  H5Fclose(file);
+  return values;
+}
+
+// The scene text of an example with `replace` applied to it.
+fs::path Variant(const fs::path& dir, const std::string& example,
+                 const std::vector<std::pair<std::string, std::string>>& replace) {
+  std::string text = ReadFile(fs::path(PBA_EXAMPLES_DIR) / (example + ".yaml"));
+  for (const auto& [from, to] : replace) {
+    const std::size_t at = text.find(from);
+    if (at == std::string::npos) return {};
+    text.replace(at, from.size(), to);
+  }
+  const fs::path path = dir / (example + ".yaml");
+  std::ofstream(path) << text;
+  return path;
+}
+
+struct Case {
+  const char* name;
+  const char* example;
+  std::vector<std::pair<std::string, std::string>> replace;
+  const char* serial_solver;  // in the one-process summary's solver line
+  const char* ranks_solver;   // in the two-rank one
+};
+
+class RanksGiveTheSerialAnswer : public ::testing::TestWithParam<Case> {};
+
+TEST_P(RanksGiveTheSerialAnswer, SameFilesSameDisplacements) {
+  const Case& c = GetParam();
+  TempDir dir;
+  const fs::path scene = Variant(dir.path(), c.example, c.replace);
+  ASSERT_FALSE(scene.empty()) << "the example changed: " << c.example;
+  const RunResult serial = Solve(scene, dir.path() / "serial", 1);
+  ASSERT_EQ(serial.exit_code, 0) << serial.err;
+  const RunResult ranks = Solve(scene, dir.path() / "ranks", 2);
+  ASSERT_EQ(ranks.exit_code, 0) << ranks.err;
+
+  // One writer: the same files, and one DONE event on the job's stdout.
+  std::vector<std::string> serial_files, rank_files;
+  for (const auto& e : fs::directory_iterator(dir.path() / "serial")) {
+    serial_files.push_back(e.path().filename().string());
+  }
+  for (const auto& e : fs::directory_iterator(dir.path() / "ranks")) {
+    rank_files.push_back(e.path().filename().string());
+  }
+  std::sort(serial_files.begin(), serial_files.end());
+  std::sort(rank_files.begin(), rank_files.end());
+  EXPECT_EQ(serial_files, rank_files);
+  std::size_t done = 0;
+  for (std::size_t at = ranks.out.find("\"DONE\""); at != std::string::npos;
+       at = ranks.out.find("\"DONE\"", at + 1)) {
+    ++done;
+  }
+  EXPECT_EQ(done, 1u) << ranks.out;
+
+  const std::vector<double> a = ReadDisplacement(dir.path() / "serial" / "result.h5");
+  const std::vector<double> b = ReadDisplacement(dir.path() / "ranks" / "result.h5");
+  ASSERT_FALSE(a.empty());
+  ASSERT_EQ(a.size(), b.size());
+  double difference = 0, norm = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    difference += (a[i] - b[i]) * (a[i] - b[i]);
+    norm += a[i] * a[i];
+  }
+  ASSERT_GT(norm, 0);
+  const double relative = std::sqrt(difference / norm);
+  std::printf("%s: 2 ranks against 1, relative difference of the displacements %.2e\n", c.name,
+              relative);
+  EXPECT_LE(relative, 1e-8);
+
+  const std::string serial_summary = ReadFile(dir.path() / "serial" / "summary.json");
+  const std::string rank_summary = ReadFile(dir.path() / "ranks" / "summary.json");
+  EXPECT_NE(serial_summary.find(c.serial_solver), std::string::npos) << serial_summary;
+  EXPECT_NE(rank_summary.find(c.ranks_solver), std::string::npos) << rank_summary;
+  // A fallback is taken on both sides or on neither.
+  EXPECT_EQ(serial_summary.find("redone by MUMPS") == std::string::npos,
+            rank_summary.find("redone by MUMPS") == std::string::npos)
+      << serial_summary << rank_summary;
+  EXPECT_NE(rank_summary.find("on 2 MPI ranks"), std::string::npos) << rank_summary;
+  EXPECT_TRUE(std::regex_search(rank_summary, std::regex("\"ranks\": 2\\b"))) << rank_summary;
+}
+
+const Case kCases[] = {
+    // LINEAR_STATIC, multigrid on both sides, to a tolerance that makes
+    // the two iterations' answers agree to 1e-8.
+    {"linear_amg",
+     "quickstart",
+     {{"linear_solver: CHOLMOD",
+       "linear_solver: AMG\n  linear_solver_options: {relative_tolerance: 1.0e-13}"}},
+     "GAMG",
+     "GAMG"},
+    // AUTO: CHOLMOD in one process, MUMPS across the ranks.
+    {"linear_auto",
+     "quickstart",
+     {{"linear_solver: CHOLMOD", "linear_solver: AUTO"}},
+     "CHOLMOD",
+     "MUMPS"},
+    // NONLINEAR_STATIC on 10-node elements (a pressurised cavity), AUTO.
+    {"tet10_cavity", "pressurised_cavity", {}, "CHOLMOD", "MUMPS"},
+    // The same with multigrid, which K / mu = 1e4 defeats: its solves stop
+    // at 60 iterations and are redone by MUMPS, across the ranks too.
+    {"tet10_cavity_amg_fallback",
+     "pressurised_cavity",
+     {{"type: NONLINEAR_STATIC",
+       "type: NONLINEAR_STATIC\n  linear_solver: AMG\n  linear_solver_options: {max_iterations: "
+       "60}"}},
+     "redone by MUMPS",
+     "redone by MUMPS"},
+    // NONLINEAR_STATIC, nearly incompressible Mooney-Rivlin, AMG.
+    {"mooney_rivlin_amg",
+     "mooney_rivlin_uniaxial",
+     {{"type: NONLINEAR_STATIC", "type: NONLINEAR_STATIC\n  linear_solver: AMG"}},
+     "GAMG",
+     "GAMG"},
+    // QUASI_STATIC through time with a viscoelastic material, AUTO.
+    {"viscoelastic_relaxation", "relaxation", {}, "CHOLMOD", "MUMPS"},
+};
+
+INSTANTIATE_TEST_SUITE_P(Scenes, RanksGiveTheSerialAnswer, ::testing::ValuesIn(kCases),
+                         [](const ::testing::TestParamInfo<Case>& info) {
+                           return std::string(info.param.name);
+                         });
+
+TEST(PbaSolveRanks, ScenesWithoutASharedSolveAreRefusedNamingTheField) {
+  TempDir dir;
+  const std::pair<const char*, const char*> refused[] = {
+      {"gel_impact", "analysis.type"},          // EXPLICIT_DYNAMIC: no linear solve
+      {"quickstart", "analysis.linear_solver"}  // CHOLMOD: one process's
+  };
+  for (const auto& [example, field] : refused) {
+    const fs::path out = dir.path() / example;
+    const RunResult run =
+        Solve(fs::path(PBA_EXAMPLES_DIR) / (std::string(example) + ".yaml"), out, 2);
+    EXPECT_EQ(run.exit_code, 5) << example << ": " << run.err;
+    EXPECT_NE(run.err.find(field), std::string::npos) << run.err;
+    EXPECT_NE(run.out.find("\"ERROR\""), std::string::npos) << run.out;
+    EXPECT_FALSE(fs::exists(out)) << example;
+  }
+}
+
+TEST(PbaSolveRanks, ABrokenDownSolveEndsTheJobWithTheSerialCodeAndNoResult) {
+  TempDir dir;
+  // A cube crushed to beyond its height: Newton cannot apply the load.
+  const fs::path scene =
+      Variant(dir.path(), "mooney_rivlin_uniaxial", {{"z_mm: 3}", "z_mm: -12}"}});
+  ASSERT_FALSE(scene.empty());
+  const auto start = std::chrono::steady_clock::now();
+  const RunResult serial = Solve(scene, dir.path() / "serial", 1);
+  const RunResult ranks = Solve(scene, dir.path() / "ranks", 2);
+  EXPECT_EQ(serial.exit_code, 11) << serial.err;
+  EXPECT_EQ(ranks.exit_code, 11) << ranks.err;
+  EXPECT_NE(ranks.err.find("could not be applied beyond"), std::string::npos) << ranks.err;
+  EXPECT_FALSE(fs::exists(dir.path() / "ranks"));
+  // Neither rank waits for the other after the failure.
+  EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(60));
+}
+
+TEST(PbaSolveRanks, AnOutputDirectoryInTheWayIsRefusedBeforeTheSolve) {
+  TempDir dir;
+  const fs::path out = dir.path() / "taken";
+  fs::create_directories(out);
+  std::ofstream(out / "notes.txt") << "mine";
+  const RunResult run = Solve(fs::path(PBA_EXAMPLES_DIR) / "relaxation.yaml", out, 2);
+  EXPECT_NE(run.exit_code, 0) << run.err;
+  EXPECT_EQ(ReadFile(out / "notes.txt"), "mine");
+  EXPECT_FALSE(fs::exists(out / "result.h5"));
+}
+
+}  // namespace
+}  // namespace pba::testing
