@@ -53,6 +53,7 @@ void PrintJobDetails(const v1::Job& job) {
   };
   if (job.priority() != 0) rows.push_back({"Priority", std::to_string(job.priority())});
   if (job.timeout_s() > 0) rows.push_back({"Time limit", std::to_string(job.timeout_s()) + " s"});
+  if (job.ranks() > 1) rows.push_back({"MPI ranks", std::to_string(job.ranks())});
   if (job.has_atlas_import()) {
     rows.push_back({"Imports into", job.atlas_import().project()});
   }
@@ -193,6 +194,7 @@ int SubmitJob(Connection& connection, const SubmitArgs& args) {
   }
   request.set_priority(args.priority);
   request.set_timeout_s(args.timeout_s);
+  request.set_ranks(args.ranks);
   request.set_request_id(RequestIdOr(args.request_id));
   v1::Job job;
   auto context = connection.UnaryContext();
@@ -383,6 +385,11 @@ void RegisterJobCommands(CLI::App& app, CommandContext& context) {
   submit_cmd
       ->add_option("--timeout", submit->timeout_s,
                    "Wall-clock limit [s] (at most the server's); 0: the server's")
+      ->check(CLI::NonNegativeNumber);
+  submit_cmd
+      ->add_option("--ranks", submit->ranks,
+                   "MPI processes the solve runs on, sharing its linear solves (mpirun on the "
+                   "server's machine; at most its --max-ranks); 0 or 1: one")
       ->check(CLI::NonNegativeNumber);
   context.Add(submit_cmd, [submit](Connection& c) { return SubmitJob(c, *submit); });
 

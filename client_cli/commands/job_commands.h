@@ -25,6 +25,7 @@ struct SubmitArgs {
   std::string snapshot;    // PROJECT/SNAPSHOT (id or tag); empty: none
   int priority = 0;
   int timeout_s = 0;
+  int ranks = 0;  // MPI processes; 0 or 1: one
 };
 
 // "PROJECT/SNAPSHOT" into a SnapshotRef; false (with a message on stderr)

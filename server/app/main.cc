@@ -30,6 +30,7 @@
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <iostream>
 #include <system_error>
@@ -98,6 +99,21 @@ fs::path DefaultSolver() {
   return (ec ? fs::current_path() : self.parent_path()) / "pba-solve";
 }
 
+// The first `name` in a directory of PATH that is an executable file; empty
+// when there is none.
+fs::path FindInPath(const std::string& name) {
+  const char* path = std::getenv("PATH");
+  std::string dirs = path != nullptr ? path : "/usr/bin:/bin";
+  std::size_t start = 0;
+  while (start <= dirs.size()) {
+    const std::size_t end = std::min(dirs.find(':', start), dirs.size());
+    const fs::path candidate = fs::path(dirs.substr(start, end - start)) / name;
+    if (end > start && ::access(candidate.c_str(), X_OK) == 0) return candidate;
+    start = end + 1;
+  }
+  return {};
+}
+
 // The serving options as given on the command line (defaults as shown by
 // --help).
 struct ServeFlags {
@@ -114,6 +130,8 @@ struct ServeFlags {
   double solver_memory_gib = -1;  // < 0: DefaultSolverMemoryBytes
   double upload_quota_gib = 4;
   double keep_results_days = 30;
+  int max_ranks = 0;        // 0: the machine's cores
+  std::string mpirun = "";  // empty: mpirun from PATH; "none": no MPI
 };
 
 void AddServeOptions(CLI::App& app, ServeFlags* flags) {
@@ -158,6 +176,13 @@ void AddServeOptions(CLI::App& app, ServeFlags* flags) {
                  "Days a finished job's files are kept; 0: forever")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
+  app.add_option("--max-ranks", flags->max_ranks,
+                 "MPI ranks a job may ask for (pba job submit --ranks), run through mpirun on "
+                 "this machine; 0: its cores")
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--mpirun", flags->mpirun,
+                 "The mpirun that runs jobs on several ranks (default: mpirun from PATH); "
+                 "\"none\": every job runs as one process");
 }
 
 // `pba-server admin ...`: the subcommands and what they were given.
@@ -227,6 +252,11 @@ pba::ServerOptions ServerOptionsFromFlags(const ServeFlags& flags) {
   options.upload_quota_bytes = static_cast<int64_t>(flags.upload_quota_gib * (1LL << 30));
   options.keep_results =
       std::chrono::seconds(static_cast<int64_t>(flags.keep_results_days * 86400));
+  const int cores = std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+  options.max_ranks = flags.max_ranks > 0 ? flags.max_ranks : cores;
+  if (flags.mpirun != "none") {
+    options.mpirun = flags.mpirun.empty() ? FindInPath("mpirun") : fs::path(flags.mpirun);
+  }
   // Parallel solves share the cores rather than each taking all of them.
   if (flags.max_running > 1) {
     options.solver_threads =

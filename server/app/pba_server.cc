@@ -155,6 +155,13 @@ Status PbaServer::Start(const ServerOptions& options, std::unique_ptr<PbaServer>
   if (ec) return Status::Io("cannot create " + (data_dir / "jobs").string() + ": " + ec.message());
   PBA_RETURN_IF_ERROR(RestrictDataDir(data_dir));
   PBA_RETURN_IF_ERROR(CheckSolver(options.solver));
+  if (!options.mpirun.empty() && ::access(options.mpirun.c_str(), X_OK) != 0) {
+    return Status::FailedPrecondition("the mpirun " + options.mpirun.string() +
+                                      " is not an executable (use --mpirun PATH, or none)");
+  }
+  if (options.max_ranks < 1) {
+    return Status::InvalidArgument("max_ranks", "must be at least 1");
+  }
   // TLS material is read before anything is opened: a bad path is named at
   // once, not after the stores are up.
   std::string cert_pem, key_pem;
@@ -204,6 +211,7 @@ Status PbaServer::Start(const ServerOptions& options, std::unique_ptr<PbaServer>
   executor_options.solver = fs::absolute(options.solver);
   executor_options.max_running = options.max_running;
   executor_options.solver_threads = options.solver_threads;
+  executor_options.mpirun = options.mpirun;
   executor_options.atlas_cache_dir = data_dir / "cache" / "atlas";
   executor_options.atlas_cache_gib = options.atlas_cache_gib;
   executor_options.kill_grace = options.kill_grace;
@@ -224,6 +232,7 @@ Status PbaServer::Start(const ServerOptions& options, std::unique_ptr<PbaServer>
   server->service_ =
       std::make_unique<JobServiceImpl>(*server->store_, *server->executor_, server->hub_,
                                        *server->atlas_store_, *server->uploads_, data_dir);
+  server->service_->set_max_ranks(options.mpirun.empty() ? 1 : options.max_ranks);
 
   grpc::EnableDefaultHealthCheckService(true);
   grpc::reflection::InitProtoReflectionServerBuilderPlugin();

@@ -48,6 +48,10 @@ struct ServerOptions {
   std::filesystem::path solver;
   int max_running = 1;
   int solver_threads = 0;
+  // Jobs may ask for up to this many MPI ranks, run through `mpirun` (empty:
+  // no MPI; every job one process).
+  int max_ranks = 1;
+  std::filesystem::path mpirun;
   // Bound of data_dir/cache/atlas, the built atlas meshes every pba-solve
   // shares [GiB].
   double atlas_cache_gib = 2.0;

@@ -598,10 +598,11 @@ Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec) {
   return OutputsFromProto(scene.outputs(), &spec->outputs);
 }
 
-Status ValidateSceneProto(const v1::Scene& scene) {
+Status ValidateSceneProto(const v1::Scene& scene, int ranks) {
   SceneSpec spec;
   PBA_RETURN_IF_ERROR(SceneFromProto(scene, &spec));
-  return ValidateScene(spec);
+  PBA_RETURN_IF_ERROR(ValidateScene(spec));
+  return ValidateSceneOnRanks(spec, ranks);
 }
 
 v1::Summary SummaryToProto(const Summary& summary) {

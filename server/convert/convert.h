@@ -17,7 +17,9 @@ Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec);
 
 // SceneFromProto() followed by ValidateScene(): everything a server checks
 // before it accepts a scene.
-Status ValidateSceneProto(const v1::Scene& scene);
+// With `ranks` > 1, also whether the scene can share its solves between
+// that many MPI processes (ValidateSceneOnRanks).
+Status ValidateSceneProto(const v1::Scene& scene, int ranks = 1);
 
 // The summary message written to summary.json.
 v1::Summary SummaryToProto(const Summary& summary);

@@ -358,15 +358,27 @@ class JobExecutor::Attempt {
     return true;
   }
 
+  // pba-solve's command line; a job on several ranks runs it under
+  // mpirun, each rank with its share of the threads and of the memory
+  // limit (every rank inherits the limit, so each gets limit / ranks).
   SolverCommand Command(const std::vector<std::string>& input) const {
     SolverCommand command;
+    const int ranks = std::max(1, job_.ranks());
     command.program = options_.solver;
-    command.args = input;
+    if (ranks > 1) {
+      command.program = options_.mpirun;
+      // Not bound to cores: jobs running side by side would each bind
+      // their ranks to the first cores. Root needs saying so to Open MPI.
+      command.args = {"-np", std::to_string(ranks), "--bind-to", "none"};
+      if (::geteuid() == 0) command.args.push_back("--allow-run-as-root");
+      command.args.push_back(options_.solver.string());
+    }
+    command.args.insert(command.args.end(), input.begin(), input.end());
     command.args.insert(command.args.end(), {"--out", result_dir_.string(), "--progress=json"});
-    command.max_address_space_bytes = options_.max_solver_memory_bytes;
+    command.max_address_space_bytes = options_.max_solver_memory_bytes / ranks;
     if (options_.solver_threads > 0) {
       command.args.push_back("--threads");
-      command.args.push_back(std::to_string(options_.solver_threads));
+      command.args.push_back(std::to_string(std::max(1, options_.solver_threads / ranks)));
     }
     if (!options_.atlas_cache_dir.empty()) {
       command.args.insert(command.args.end(),
@@ -380,6 +392,11 @@ class JobExecutor::Attempt {
   // Starts pba-solve unless the job was cancelled or the server is stopping;
   // false when the job ended (or was re-queued) instead.
   bool Start(const std::vector<std::string>& input, SolverProcess& process) {
+    if (job_.ranks() > 1 && options_.mpirun.empty()) {
+      Fail(fmt::format("the job asks for {} MPI ranks, but this server runs no MPI (no mpirun)",
+                       job_.ranks()));
+      return false;
+    }
     const SolverCommand command = Command(input);
     {
       std::lock_guard lock(executor_.mutex_);

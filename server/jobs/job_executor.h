@@ -95,7 +95,11 @@ struct ExecutorOptions {
   std::filesystem::path solver;
   int max_running = 1;
   // --threads passed to each pba-solve; 0 passes nothing (pba-solve decides).
+  // A job on several MPI ranks passes each rank its share.
   int solver_threads = 0;
+  // The mpirun a job with ranks > 1 runs under (mpirun -np N pba-solve ...);
+  // empty: such a job fails saying the server has no MPI.
+  std::filesystem::path mpirun;
   // --atlas-cache passed to each pba-solve (built atlas meshes shared
   // between jobs) with --atlas-cache-size [GiB]; empty passes nothing.
   std::filesystem::path atlas_cache_dir;

@@ -2,6 +2,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <fstream>
 #include <map>
 #include <system_error>
@@ -48,11 +49,21 @@ Status JobServiceImpl::CheckSubmit(const std::string& user, const v1::SubmitJobR
   if (request.timeout_s() < 0) {
     return Status::InvalidArgument("timeout_s", "must not be negative");
   }
+  if (request.ranks() < 0 || request.ranks() > std::max(1, max_ranks_)) {
+    return Status::InvalidArgument("ranks", "must be within 0.." +
+                                                std::to_string(std::max(1, max_ranks_)) +
+                                                " on this server (pba-server --max-ranks), got " +
+                                                std::to_string(request.ranks()));
+  }
   job->owner = user;
   job->request_id = request.request_id();
   job->priority = request.priority();
   job->timeout_s = request.timeout_s();
+  job->ranks = request.ranks();
   if (request.has_atlas_import()) {
+    if (request.ranks() > 1) {
+      return Status::InvalidArgument("ranks", "an import runs as one process");
+    }
     if (request.has_scene() || request.has_snapshot()) {
       return Status::InvalidArgument("atlas_import",
                                      "an import is a job of its own: send no scene or snapshot");
@@ -69,7 +80,7 @@ Status JobServiceImpl::CheckSubmit(const std::string& user, const v1::SubmitJobR
     return Status::Ok();
   }
   if (!request.has_scene()) return Status::InvalidArgument("scene", "required");
-  PBA_RETURN_IF_ERROR(ValidateSceneProto(request.scene()));
+  PBA_RETURN_IF_ERROR(ValidateSceneProto(request.scene(), std::max(1, request.ranks())));
   job->scene = request.scene();
   if (!request.has_snapshot()) {
     // A job's atlas is one a result can be reproduced from: the built-in one

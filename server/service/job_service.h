@@ -59,6 +59,10 @@ class JobServiceImpl final : public v1::JobService::Service {
   JobServiceImpl(JobStore& store, Executor& executor, JobEventHub& hub, AtlasStore& users,
                  UploadStore& uploads, std::filesystem::path data_dir);
 
+  // The most MPI ranks a job may ask for (pba-server --max-ranks); 1, the
+  // default, runs every job as one process.
+  void set_max_ranks(int ranks) { max_ranks_ = ranks; }
+
   grpc::Status SubmitJob(grpc::ServerContext* context, const v1::SubmitJobRequest* request,
                          v1::Job* response) override;
   grpc::Status GetJob(grpc::ServerContext* context, const v1::GetJobRequest* request,
@@ -74,6 +78,7 @@ class JobServiceImpl final : public v1::JobService::Service {
                               grpc::ServerWriter<v1::DataChunk>* writer) override;
 
  private:
+  int max_ranks_ = 1;
   // Replaces the stored phase/progress of a running job by the live one.
   void OverlayLive(v1::Job* job) const;
   // Whether `caller` may see `job` (loaded with at least JobView::kBasic).

@@ -23,8 +23,8 @@ constexpr char kPageTokenPrefix[] = "jobs.v1:";
 constexpr char kJobColumns[] =
     "id, name, state, create_time_us, start_time_us, end_time_us, phase, progress, error, "
     "attempts, scene, summary, owner, priority, timeout_s, snapshot_project, snapshot, "
-    "atlas_import";
-constexpr int kJobColumnCount = 18;
+    "atlas_import, ranks";
+constexpr int kJobColumnCount = 19;
 
 int64_t NowMicros() {
   return std::chrono::duration_cast<std::chrono::microseconds>(
@@ -125,6 +125,7 @@ void ReadJobRow(const Statement& stmt, JobView view, v1::Job* job) {
     job->mutable_snapshot()->set_snapshot(stmt.ColumnText(16));
   }
   if (!stmt.ColumnIsNull(17)) job->mutable_atlas_import()->ParseFromString(stmt.ColumnBlob(17));
+  job->set_ranks(static_cast<int32_t>(stmt.ColumnInt(18)));
 }
 
 }  // namespace
@@ -185,8 +186,8 @@ Status JobStore::CreateJob(const NewJob& request, v1::Job* job, bool* created) {
                                                                : request.snapshot.project();
   PBA_RETURN_IF_ERROR(
       db_->Prepare("INSERT INTO jobs (id, request_id, name, state, scene, create_time_us, owner, "
-                   "priority, timeout_s, snapshot_project, snapshot, atlas_import, project) "
-                   "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
+                   "priority, timeout_s, snapshot_project, snapshot, atlas_import, project, ranks) "
+                   "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
                    &stmt));
   stmt.Bind(1, id);
   if (request_id.empty()) {
@@ -209,6 +210,7 @@ Status JobStore::CreateJob(const NewJob& request, v1::Job* job, bool* created) {
     stmt.BindNull(12);
   }
   stmt.Bind(13, project);
+  stmt.Bind(14, int64_t{request.ranks});
   PBA_RETURN_IF_ERROR(stmt.Run());
   stmt = Statement();
   PBA_RETURN_IF_ERROR(InsertEvent(MakeEvent(id, 1, v1::Job::QUEUED, "", 0, "queued")));

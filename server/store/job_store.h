@@ -37,6 +37,7 @@ struct NewJob {
   std::string owner;
   int priority = 0;
   int timeout_s = 0;
+  int ranks = 0;                                  // MPI processes; 0 or 1: one
   v1::SnapshotRef snapshot;                       // resolved: the snapshot's id
   const v1::AtlasImport* atlas_import = nullptr;  // an import job
   // Runs inside the submit's transaction once the job has its id, before

@@ -282,6 +282,10 @@ UPDATE jobs SET project = substr(name, 13)
   WHERE project = '' AND atlas_import IS NOT NULL AND name LIKE 'import into %';
 CREATE INDEX jobs_by_project ON jobs (project, number);
 )sql"},
+    // The MPI processes a job runs on (SubmitJobRequest.ranks).
+    {8, "jobs: MPI ranks", R"sql(
+ALTER TABLE jobs ADD COLUMN ranks INTEGER NOT NULL DEFAULT 0;
+)sql"},
 };
 
 int64_t NowMicros() {
