@@ -17,7 +17,7 @@ packages=(
   python3-meshio python3-h5py python3-paraview
   python3 universal-ctags
   libssl-dev
-  gnuplot-nox
+  gnuplot-nox time
   openssl
 )
 

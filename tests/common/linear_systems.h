@@ -6,7 +6,9 @@
 #include <vector>
 
 #include "assembly/assembler.h"
+#include "assembly/dof_map.h"
 #include "common/scene_builders.h"
+#include "linear/linear_solver.h"
 #include "material/linear_elastic.h"
 #include "pba/scene.h"
 #include "pba/status.h"
@@ -39,6 +41,25 @@ inline Status AssembleSoftTissue(const Model& model, double poisson, LinearSyste
       model.mesh,
       ElasticityField::Uniform(IsotropicElasticity(3000, poisson), model.mesh.num_elements()),
       model.dofs, ColourElements(model.mesh), [](double) { return true; }, system, ThreadContext());
+}
+
+// The block's assembled stiffness and load, its unknowns' layout, and
+// CHOLMOD's answer: what the linear-solver tests compare against.
+struct BlockSystem {
+  Model model;
+  LinearSystem system;
+  UnknownLayout layout;
+  Eigen::VectorXd direct;  // CHOLMOD's answer
+};
+
+inline Status AssembleBlock(double element_size_mm, double poisson, BlockSystem* out) {
+  const SceneSpec scene = SoftBlock(element_size_mm, AnalysisSpec::LinearSolver::kCholmod);
+  PBA_RETURN_IF_ERROR(BuildModel(scene, &out->model));
+  PBA_RETURN_IF_ERROR(AssembleSoftTissue(out->model, poisson, &out->system));
+  out->layout = MakeUnknownLayout(out->model.dofs, out->model.mesh.nodes);
+  const auto cholmod = CreateCholmodSolver(ThreadContext());
+  PBA_RETURN_IF_ERROR(cholmod->Factorize(out->system.k));
+  return cholmod->Solve(out->system.rhs, &out->direct);
 }
 
 // The 1D Laplacian (tridiagonal 2, -1) minus `shift` times the identity:

@@ -35,34 +35,12 @@ class MpiJobsTest : public ServerTest {
     ASSERT_TRUE(server_->Start(&log, {"--max-ranks", "2"})) << log;
   }
 
-  fs::path WriteScene(const std::string& name, const std::string& yaml) {
-    const fs::path path = dir_.path() / name;
-    std::ofstream(path) << yaml;
-    return path;
-  }
-
   // An example with `from` replaced by `to`.
   fs::path Example(const std::string& example, const std::string& from, const std::string& to) {
     std::string text = ReadFile(fs::path(PBA_EXAMPLES_DIR) / (example + ".yaml"));
     const std::size_t at = text.find(from);
     if (at != std::string::npos) text.replace(at, from.size(), to);
     return WriteScene(example + "-variant.yaml", text);
-  }
-
-  static std::string JobId(const RunResult& submitted) {
-    std::smatch match;
-    static const std::regex kPattern("Submitted job (\\S+)");
-    return std::regex_search(submitted.out, match, kPattern) ? match[1].str() : "";
-  }
-
-  bool WaitForState(const std::string& id, const std::string& state, seconds timeout) {
-    const auto deadline = std::chrono::steady_clock::now() + timeout;
-    while (std::chrono::steady_clock::now() < deadline) {
-      const RunResult status = Pba({"--json", "job", "status", id});
-      if (status.out.find("\"state\": \"" + state + "\"") != std::string::npos) return true;
-      std::this_thread::sleep_for(std::chrono::milliseconds(100));
-    }
-    return false;
   }
 };
 

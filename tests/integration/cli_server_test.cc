@@ -37,29 +37,6 @@ const std::string kLongScene = BlockSceneYaml("long-running", 50);
 
 class CliServerTest : public ServerTest {
  protected:
-  fs::path WriteScene(const std::string& name, const std::string& yaml) {
-    const fs::path path = dir_.path() / name;
-    std::ofstream(path) << yaml;
-    return path;
-  }
-
-  static std::string JobId(const RunResult& submitted) {
-    std::smatch match;
-    static const std::regex kPattern("Submitted job (\\S+)");
-    return std::regex_search(submitted.out, match, kPattern) ? match[1].str() : "";
-  }
-
-  // Polls `pba job status --json` until its "state" is `state`.
-  bool WaitForState(const std::string& id, const std::string& state, seconds timeout) {
-    const auto deadline = std::chrono::steady_clock::now() + timeout;
-    while (std::chrono::steady_clock::now() < deadline) {
-      const RunResult status = Pba({"--json", "job", "status", id});
-      if (status.out.find("\"state\": \"" + state + "\"") != std::string::npos) return true;
-      std::this_thread::sleep_for(std::chrono::milliseconds(100));
-    }
-    return false;
-  }
-
   std::string SubmitLongJob() {
     const RunResult submitted =
         Pba({"job", "submit", WriteScene("long.yaml", kLongScene).string()});

@@ -11,8 +11,10 @@
 #include <fstream>
 #include <iostream>
 #include <memory>
+#include <regex>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "common/subprocess.h"
@@ -41,6 +43,29 @@ class ServerTest : public ::testing::Test {
                 std::chrono::seconds timeout = std::chrono::seconds(120)) {
     args.insert(args.begin(), {PBA_CLI_BIN, "--server", server_->address()});
     return RunProcess(args, timeout);
+  }
+
+  std::filesystem::path WriteScene(const std::string& name, const std::string& yaml) {
+    const std::filesystem::path path = dir_.path() / name;
+    std::ofstream(path) << yaml;
+    return path;
+  }
+
+  static std::string JobId(const RunResult& submitted) {
+    std::smatch match;
+    static const std::regex kPattern("Submitted job (\\S+)");
+    return std::regex_search(submitted.out, match, kPattern) ? match[1].str() : "";
+  }
+
+  // Polls `pba job status --json` until its "state" is `state`.
+  bool WaitForState(const std::string& id, const std::string& state, std::chrono::seconds timeout) {
+    const auto deadline = std::chrono::steady_clock::now() + timeout;
+    while (std::chrono::steady_clock::now() < deadline) {
+      const RunResult status = Pba({"--json", "job", "status", id});
+      if (status.out.find("\"state\": \"" + state + "\"") != std::string::npos) return true;
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    }
+    return false;
   }
 
   // Jobs the server holds, of every state.

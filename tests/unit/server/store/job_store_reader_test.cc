@@ -105,7 +105,7 @@ TEST_F(JobStoreReaderTest, AReaderListsOnlyTheJobsTheyMaySeeInFullPages) {
 
 // A pba.db of schema version 6 (before server admins and job projects):
 // its "admin" becomes a server admin and its jobs get their projects, an
-// import's from the name its submit gave it.
+// import's from the name its submit gave it, and their ranks (one process).
 TEST(JobStoreUpgradeTest, VersionSixGainsServerAdminsAndJobProjects) {
   TempDir dir;
   const std::filesystem::path path = dir.path() / "pba.db";
@@ -114,12 +114,13 @@ TEST(JobStoreUpgradeTest, VersionSixGainsServerAdminsAndJobProjects) {
     ASSERT_TRUE(JobStore::Open(path, &jobs).ok());
   }
   {
-    // Back to version 6: what migration 7 added, undone.
+    // Back to version 6: what migrations 7 and 8 added, undone.
     std::unique_ptr<Database> db;
     ASSERT_TRUE(Database::Open(path, &db).ok());
     const Status undone = db->Exec(
+        "ALTER TABLE jobs DROP COLUMN ranks; "
         "DROP INDEX jobs_by_project; ALTER TABLE jobs DROP COLUMN project; "
-        "ALTER TABLE users DROP COLUMN server_admin; DELETE FROM schema_version WHERE version = 7;"
+        "ALTER TABLE users DROP COLUMN server_admin; DELETE FROM schema_version WHERE version >= 7;"
         "INSERT INTO users (name, token_sha256, created_us) VALUES "
         "  ('admin', printf('%064d', 1), 0), ('alice', printf('%064d', 2), 0);"
         "INSERT INTO jobs (id, name, state, scene, create_time_us, snapshot_project, snapshot, "
@@ -145,6 +146,8 @@ TEST(JobStoreUpgradeTest, VersionSixGainsServerAdminsAndJobProjects) {
   EXPECT_EQ(text("SELECT group_concat(job, ' ') FROM "
                  "(SELECT id || ':' || project AS job FROM jobs ORDER BY number)"),
             "j0000000001: j0000000002:atlas j0000000003:brain");
+  // Migration 8: every earlier job ran as one process.
+  EXPECT_EQ(text("SELECT group_concat(ranks) FROM jobs"), "0,0,0");
 }
 
 }  // namespace

@@ -2,10 +2,10 @@
 // `mpirun -np 2` (tests/unit/solver/CMakeLists.txt), as a user's
 // `mpirun -np 2 pba-solve` is. Each rank holds the whole system and hands
 // PETSc its own rows; every rank must end with the answer one process
-// gets, and ranks that hold different systems must stop, never mix them.
+// gets (CHOLMOD's, computed on each rank alone), and ranks that hold
+// different systems must stop, never mix them.
 #include <gtest/gtest.h>
 
-#include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
 #include <cstdio>
 #include <string>
@@ -21,32 +21,25 @@
 namespace pba {
 namespace {
 
-using testing::AssembleSoftTissue;
+using testing::AssembleBlock;
+using testing::BlockSystem;
 using testing::ShiftedLaplacian;
 using testing::SoftBlock;
 
-// The block's stiffness and load, and the answer of Eigen's LDL^T on this
-// rank alone (CHOLMOD works in one process; Eigen's factorisation is exact
-// to rounding all the same).
-struct BlockSystem {
-  Model model;
-  LinearSystem system;
-  UnknownLayout layout;
-  Eigen::VectorXd exact;
-};
-
 void Assemble(double element_size_mm, BlockSystem* out) {
-  const SceneSpec scene = SoftBlock(element_size_mm, AnalysisSpec::LinearSolver::kAmg);
-  ASSERT_TRUE(BuildModel(scene, &out->model).ok());
-  ASSERT_TRUE(AssembleSoftTissue(out->model, 0.45, &out->system).ok());
-  out->layout = MakeUnknownLayout(out->model.dofs, out->model.mesh.nodes);
-  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(out->system.k);
-  ASSERT_EQ(ldlt.info(), Eigen::Success);
-  out->exact = ldlt.solve(out->system.rhs);
+  const Status assembled = AssembleBlock(element_size_mm, 0.45, out);
+  ASSERT_TRUE(assembled.ok()) << assembled.ToString();
 }
 
 double RelativeDifference(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
   return (a - b).norm() / b.norm();
+}
+
+// Factorises `k` and solves for the block's load; the status of either.
+Status FactorizeAndSolve(LinearSolver* solver, const Eigen::SparseMatrix<double>& k,
+                         const BlockSystem& block, Eigen::VectorXd* x) {
+  PBA_RETURN_IF_ERROR(solver->Factorize(k));
+  return solver->Solve(block.system.rhs, x);
 }
 
 TEST(PetscRanks, TwoRanksAreRunning) {
@@ -61,18 +54,16 @@ TEST(PetscRanks, GamgSharedByTwoRanksGivesTheDirectAnswer) {
   LinearSolverSettings settings;
   settings.relative_tolerance = 1e-12;
   const auto amg = CreateAmgSolver(settings, &block.layout, nullptr);
-  ASSERT_TRUE(amg->Factorize(block.system.k).ok());
   Eigen::VectorXd x;
-  const Status solved = amg->Solve(block.system.rhs, &x);
+  const Status solved = FactorizeAndSolve(amg.get(), block.system.k, block, &x);
   ASSERT_TRUE(solved.ok()) << solved.ToString();
-  EXPECT_LT(RelativeDifference(x, block.exact), 1e-8);
+  EXPECT_LT(RelativeDifference(x, block.direct), 1e-8);
   EXPECT_NE(amg->Name().find("on 2 MPI ranks"), std::string::npos) << amg->Name();
   EXPECT_EQ(amg->Name().find("redone by MUMPS"), std::string::npos) << amg->Name();
   // Newton's next tangent: same pattern, new values (the lagged hierarchy).
   const Eigen::SparseMatrix<double> stiffer = 2.0 * block.system.k;
-  ASSERT_TRUE(amg->Factorize(stiffer).ok());
-  ASSERT_TRUE(amg->Solve(block.system.rhs, &x).ok());
-  EXPECT_LT(RelativeDifference(2.0 * x, block.exact), 1e-8);
+  ASSERT_TRUE(FactorizeAndSolve(amg.get(), stiffer, block, &x).ok());
+  EXPECT_LT(RelativeDifference(2.0 * x, block.direct), 1e-8);
 }
 
 TEST(PetscRanks, BoomerAmgSharedByTwoRanksGivesTheDirectAnswer) {
@@ -82,11 +73,10 @@ TEST(PetscRanks, BoomerAmgSharedByTwoRanksGivesTheDirectAnswer) {
   settings.preconditioner = LinearSolverSettings::Preconditioner::kBoomerAmg;
   settings.relative_tolerance = 1e-12;
   const auto amg = CreateAmgSolver(settings, &block.layout, nullptr);
-  ASSERT_TRUE(amg->Factorize(block.system.k).ok());
   Eigen::VectorXd x;
-  const Status solved = amg->Solve(block.system.rhs, &x);
+  const Status solved = FactorizeAndSolve(amg.get(), block.system.k, block, &x);
   ASSERT_TRUE(solved.ok()) << solved.ToString();
-  EXPECT_LT(RelativeDifference(x, block.exact), 1e-8);
+  EXPECT_LT(RelativeDifference(x, block.direct), 1e-8);
 }
 
 TEST(PetscRanks, ScalarAggregationWithoutLayoutSplitsTheUnknowns) {
@@ -95,26 +85,23 @@ TEST(PetscRanks, ScalarAggregationWithoutLayoutSplitsTheUnknowns) {
   LinearSolverSettings settings;
   settings.relative_tolerance = 1e-12;
   const auto amg = CreateAmgSolver(settings, nullptr, nullptr);
-  ASSERT_TRUE(amg->Factorize(block.system.k).ok());
   Eigen::VectorXd x;
-  const Status solved = amg->Solve(block.system.rhs, &x);
+  const Status solved = FactorizeAndSolve(amg.get(), block.system.k, block, &x);
   ASSERT_TRUE(solved.ok()) << solved.ToString();
-  EXPECT_LT(RelativeDifference(x, block.exact), 1e-8);
+  EXPECT_LT(RelativeDifference(x, block.direct), 1e-8);
 }
 
 TEST(PetscRanks, MumpsSharedByTwoRanksIsExactAndRefactorises) {
   BlockSystem block;
   Assemble(2.5, &block);
   const auto mumps = CreateMumpsSolver();
-  ASSERT_TRUE(mumps->Factorize(block.system.k).ok());
   Eigen::VectorXd x;
-  ASSERT_TRUE(mumps->Solve(block.system.rhs, &x).ok());
-  EXPECT_LT(RelativeDifference(x, block.exact), 1e-11);
+  ASSERT_TRUE(FactorizeAndSolve(mumps.get(), block.system.k, block, &x).ok());
+  EXPECT_LT(RelativeDifference(x, block.direct), 1e-11);
   EXPECT_NE(mumps->Name().find("on 2 MPI ranks"), std::string::npos) << mumps->Name();
   const Eigen::SparseMatrix<double> stiffer = 4.0 * block.system.k;
-  ASSERT_TRUE(mumps->Factorize(stiffer).ok());
-  ASSERT_TRUE(mumps->Solve(block.system.rhs, &x).ok());
-  EXPECT_LT(RelativeDifference(4.0 * x, block.exact), 1e-11);
+  ASSERT_TRUE(FactorizeAndSolve(mumps.get(), stiffer, block, &x).ok());
+  EXPECT_LT(RelativeDifference(4.0 * x, block.direct), 1e-11);
 }
 
 TEST(PetscRanks, MumpsInertiaAcrossRanksTellsAnIndefiniteMatrix) {
@@ -134,17 +121,15 @@ TEST(PetscRanks, AutoTakesMumpsWhereOneProcessWouldTakeCholmod) {
   LinearSolverOptions options;
   options.layout = &block.layout;
   const auto solver = CreateLinearSolver(options);
-  ASSERT_TRUE(solver->Factorize(block.system.k).ok());
   Eigen::VectorXd x;
-  ASSERT_TRUE(solver->Solve(block.system.rhs, &x).ok());
-  EXPECT_LT(RelativeDifference(x, block.exact), 1e-11);
+  ASSERT_TRUE(FactorizeAndSolve(solver.get(), block.system.k, block, &x).ok());
+  EXPECT_LT(RelativeDifference(x, block.direct), 1e-11);
   EXPECT_NE(solver->Name().find("MUMPS"), std::string::npos) << solver->Name();
   EXPECT_NE(solver->Name().find("AUTO"), std::string::npos) << solver->Name();
   // Beyond the budget, AMG across the ranks.
   options.settings.auto_direct_max_factor_mb = 0;
   const auto iterative = CreateLinearSolver(options);
-  ASSERT_TRUE(iterative->Factorize(block.system.k).ok());
-  ASSERT_TRUE(iterative->Solve(block.system.rhs, &x).ok());
+  ASSERT_TRUE(FactorizeAndSolve(iterative.get(), block.system.k, block, &x).ok());
   EXPECT_NE(iterative->Name().find("GAMG"), std::string::npos) << iterative->Name();
 }
 

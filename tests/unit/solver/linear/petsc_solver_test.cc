@@ -24,27 +24,16 @@ namespace pba {
 namespace {
 
 using K = BoundaryConditionSpec::Kind;
+using testing::AssembleBlock;
 using testing::AssembleSoftTissue;
+using testing::BlockSystem;
 using testing::Condition;
 using testing::ShiftedLaplacian;
 using testing::SoftBlock;
 
-// The block's assembled stiffness, its load and the unknowns' layout.
-struct BlockSystem {
-  Model model;
-  LinearSystem system;
-  UnknownLayout layout;
-  Eigen::VectorXd direct;  // CHOLMOD's answer
-};
-
 void Assemble(double element_size_mm, double poisson, BlockSystem* out) {
-  const SceneSpec scene = SoftBlock(element_size_mm, AnalysisSpec::LinearSolver::kCholmod);
-  ASSERT_TRUE(BuildModel(scene, &out->model).ok());
-  ASSERT_TRUE(AssembleSoftTissue(out->model, poisson, &out->system).ok());
-  out->layout = MakeUnknownLayout(out->model.dofs, out->model.mesh.nodes);
-  const auto cholmod = CreateCholmodSolver(ThreadContext());
-  ASSERT_TRUE(cholmod->Factorize(out->system.k).ok());
-  ASSERT_TRUE(cholmod->Solve(out->system.rhs, &out->direct).ok());
+  const Status assembled = AssembleBlock(element_size_mm, poisson, out);
+  ASSERT_TRUE(assembled.ok()) << assembled.ToString();
 }
 
 double RelativeDifference(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
