@@ -342,10 +342,11 @@ class PetscMatrix {
   std::vector<PetscScalar> values_;  // between building and handing over
 };
 
-// Copies b into this rank's rows of the expanded right-hand side, runs the
-// KSP, and copies the whole answer out (gathered from every rank).
-Status ExpandedSolve(const PetscMatrix& matrix, PetscObjects* objects, const Eigen::VectorXd& b,
-                     Eigen::VectorXd* x) {
+// Copies b into this rank's rows of the expanded right-hand side, runs
+// `ksp` (on objects->matrix), and copies the whole answer out (gathered
+// from every rank).
+Status ExpandedSolve(const PetscMatrix& matrix, KSP ksp, PetscObjects* objects,
+                     const Eigen::VectorXd& b, Eigen::VectorXd* x) {
   if (CurrentRanks().size > 1) {
     Digest digest;
     digest.Add(b.data(), sizeof(double) * b.size());
@@ -359,7 +360,7 @@ Status ExpandedSolve(const PetscMatrix& matrix, PetscObjects* objects, const Eig
     rhs[row - matrix.first_row()] = i >= 0 ? b(i) : 0.0;
   }
   PBA_PETSC(VecRestoreArray(objects->rhs, &rhs));
-  PBA_PETSC(KSPSolve(objects->ksp, objects->rhs, objects->solution));
+  PBA_PETSC(KSPSolve(ksp, objects->rhs, objects->solution));
   Vec whole = objects->solution;
   if (objects->gather != nullptr) {
     PBA_PETSC(VecScatterBegin(objects->gather, objects->solution, objects->everything,
@@ -378,7 +379,56 @@ Status ExpandedSolve(const PetscMatrix& matrix, PetscObjects* objects, const Eig
 
 // MUMPS as PETSc's Cholesky-type factorisation (LDL^T with pivoting, sym =
 // 2, since the matrix is only flagged symmetric), the inertia telling a
-// matrix that is not positive definite.
+// matrix that is not positive definite. Makes `ksp` such a solver of
+// `matrix` (the factor's type is chosen for it).
+Status ConfigureMumps(KSP ksp, Mat matrix) {
+  PBA_PETSC(KSPSetOperators(ksp, matrix, matrix));
+  PBA_PETSC(KSPSetType(ksp, KSPPREONLY));
+  PC pc = nullptr;
+  PBA_PETSC(KSPGetPC(ksp, &pc));
+  PBA_PETSC(PCSetType(pc, PCCHOLESKY));
+  PBA_PETSC(PCFactorSetMatSolverType(pc, MATSOLVERMUMPS));
+  PBA_PETSC(PCFactorSetUpMatSolverType(pc));
+  Mat factor = nullptr;
+  PBA_PETSC(PCFactorGetMatrix(pc, &factor));
+  // Null pivots detected (needed for the inertia); MUMPS prints nothing.
+  PBA_PETSC(MatMumpsSetIcntl(factor, 24, 1));
+  PBA_PETSC(MatMumpsSetIcntl(factor, 4, 0));
+  // Across ranks the inertia is the whole matrix's only when the root
+  // front is factorised on one process (MUMPS's ICNTL(13) = 1).
+  if (CurrentRanks().size > 1) PBA_PETSC(MatMumpsSetIcntl(factor, 13, 1));
+  return Status::Ok();
+}
+
+// Factorises `matrix`'s current values with the MUMPS `ksp`; a matrix
+// that is not positive definite gives Status::Numerical.
+Status FactorizeMumps(KSP ksp, Mat matrix) {
+  PBA_PETSC(KSPSetOperators(ksp, matrix, matrix));
+  PBA_PETSC(KSPSetUp(ksp));
+  PC pc = nullptr;
+  PBA_PETSC(KSPGetPC(ksp, &pc));
+  PCFailedReason failed = PC_NOERROR;
+  PBA_PETSC(PCGetFailedReason(pc, &failed));
+  if (failed != PC_NOERROR) {
+    return Status::Numerical(
+        Format("MUMPS could not factorise the stiffness matrix (%s): it is singular or not "
+               "positive definite (a body not held against rigid motion, or a degenerate mesh)",
+               PCFailedReasons[failed]));
+  }
+  Mat factor = nullptr;
+  PBA_PETSC(PCFactorGetMatrix(pc, &factor));
+  PetscInt negative = 0, zero = 0, positive = 0;
+  PBA_PETSC(MatGetInertia(factor, &negative, &zero, &positive));
+  if (negative > 0 || zero > 0) {
+    return Status::Numerical(
+        Format("the stiffness matrix is not positive definite: MUMPS found %d negative and %d "
+               "zero pivots (a body not held against rigid motion, an unstable state, or a "
+               "degenerate mesh)",
+               static_cast<int>(negative), static_cast<int>(zero)));
+  }
+  return Status::Ok();
+}
+
 class MumpsSolver final : public LinearSolver {
  public:
   ~MumpsSolver() override {
@@ -392,30 +442,11 @@ class MumpsSolver final : public LinearSolver {
     factorized_ = false;
     bool rebuilt = false;
     PBA_RETURN_IF_ERROR(matrix_.Load(a, nullptr, &objects_, &rebuilt));
-    if (rebuilt || objects_.ksp == nullptr) PBA_RETURN_IF_ERROR(Setup());
-    PBA_PETSC(KSPSetOperators(objects_.ksp, objects_.matrix, objects_.matrix));
-    PBA_PETSC(KSPSetUp(objects_.ksp));
-    PC pc = nullptr;
-    PBA_PETSC(KSPGetPC(objects_.ksp, &pc));
-    PCFailedReason failed = PC_NOERROR;
-    PBA_PETSC(PCGetFailedReason(pc, &failed));
-    if (failed != PC_NOERROR) {
-      return Status::Numerical(
-          Format("MUMPS could not factorise the stiffness matrix (%s): it is singular or not "
-                 "positive definite (a body not held against rigid motion, or a degenerate mesh)",
-                 PCFailedReasons[failed]));
+    if (rebuilt || objects_.ksp == nullptr) {
+      PBA_RETURN_IF_ERROR(objects_.NewSolver());
+      PBA_RETURN_IF_ERROR(ConfigureMumps(objects_.ksp, objects_.matrix));
     }
-    Mat factor = nullptr;
-    PBA_PETSC(PCFactorGetMatrix(pc, &factor));
-    PetscInt negative = 0, zero = 0, positive = 0;
-    PBA_PETSC(MatGetInertia(factor, &negative, &zero, &positive));
-    if (negative > 0 || zero > 0) {
-      return Status::Numerical(
-          Format("the stiffness matrix is not positive definite: MUMPS found %d negative and %d "
-                 "zero pivots (a body not held against rigid motion, an unstable state, or a "
-                 "degenerate mesh)",
-                 static_cast<int>(negative), static_cast<int>(zero)));
-    }
+    PBA_RETURN_IF_ERROR(FactorizeMumps(objects_.ksp, objects_.matrix));
     factorized_ = true;
     return Status::Ok();
   }
@@ -423,7 +454,7 @@ class MumpsSolver final : public LinearSolver {
   Status Solve(const Eigen::VectorXd& b, Eigen::VectorXd* x) override {
     if (!factorized_) return Status::Internal("MUMPS solve without a successful Factorize");
     const auto lock = PetscLock();
-    PBA_RETURN_IF_ERROR(ExpandedSolve(matrix_, &objects_, b, x));
+    PBA_RETURN_IF_ERROR(ExpandedSolve(matrix_, objects_.ksp, &objects_, b, x));
     if (!x->allFinite()) return Status::Numerical("MUMPS's solve produced no finite answer");
     return Status::Ok();
   }
@@ -434,25 +465,6 @@ class MumpsSolver final : public LinearSolver {
   }
 
  private:
-  Status Setup() {
-    PBA_RETURN_IF_ERROR(objects_.NewSolver());
-    PBA_PETSC(KSPSetType(objects_.ksp, KSPPREONLY));
-    PC pc = nullptr;
-    PBA_PETSC(KSPGetPC(objects_.ksp, &pc));
-    PBA_PETSC(PCSetType(pc, PCCHOLESKY));
-    PBA_PETSC(PCFactorSetMatSolverType(pc, MATSOLVERMUMPS));
-    PBA_PETSC(PCFactorSetUpMatSolverType(pc));
-    Mat factor = nullptr;
-    PBA_PETSC(PCFactorGetMatrix(pc, &factor));
-    // Null pivots detected (needed for the inertia); MUMPS prints nothing.
-    PBA_PETSC(MatMumpsSetIcntl(factor, 24, 1));
-    PBA_PETSC(MatMumpsSetIcntl(factor, 4, 0));
-    // Across ranks the inertia is the whole matrix's only when the root
-    // front is factorised on one process (MUMPS's ICNTL(13) = 1).
-    if (CurrentRanks().size > 1) PBA_PETSC(MatMumpsSetIcntl(factor, 13, 1));
-    return Status::Ok();
-  }
-
   PetscMatrix matrix_;
   PetscObjects objects_;
   bool factorized_ = false;
@@ -466,14 +478,14 @@ class AmgSolver final : public LinearSolver {
       : settings_(settings), layout_(layout), cancel_(cancel) {}
   ~AmgSolver() override {
     const auto lock = PetscLock();
+    DestroyFallback();
     objects_.Destroy();
   }
 
   Status Factorize(const Eigen::SparseMatrix<double>& a) override {
     PBA_RETURN_IF_ERROR(InitializePetsc());
     factorized_ = false;
-    fallback_.reset();
-    kept_ = Eigen::SparseMatrix<double>();
+    fallback_factorized_ = false;
     // A positive definite matrix has a positive diagonal; CG on one that is
     // not would wander, so this necessary condition is checked first (as
     // PCG does). Indefinite matrices with a positive diagonal show as a
@@ -483,6 +495,7 @@ class AmgSolver final : public LinearSolver {
     const auto lock = PetscLock();
     bool rebuilt = false;
     PBA_RETURN_IF_ERROR(matrix_.Load(a, layout_, &objects_, &rebuilt));
+    if (rebuilt) DestroyFallback();
     if (rebuilt || objects_.ksp == nullptr) {
       PBA_RETURN_IF_ERROR(Setup());
       hierarchy_iterations_ = -1;
@@ -498,10 +511,6 @@ class AmgSolver final : public LinearSolver {
     const bool reuse = hierarchy_iterations_ >= 0 && !rebuild_next_ &&
                        last_iterations_ <= 2 * hierarchy_iterations_ + 5;
     PBA_RETURN_IF_ERROR(SetUpPreconditioner(reuse));
-    // A modified-Newton step solves with this factorisation after the
-    // caller's matrix is gone: a fallback needs its own copy, kept only
-    // where there can be one.
-    if (unknowns_ <= settings_.fallback_direct_max_unknowns) kept_ = a;
     factorized_ = true;
     return Status::Ok();
   }
@@ -557,17 +566,26 @@ class AmgSolver final : public LinearSolver {
                            static_cast<long long>(unknowns_),
                            settings_.fallback_direct_max_unknowns));
     }
-    // Redone by MUMPS, whose inertia also tells an indefinite matrix.
-    if (fallback_ == nullptr) {
-      fallback_ = CreateMumpsSolver();
-      const Status factorized = fallback_->Factorize(kept_);
+    // Redone by MUMPS, whose inertia also tells an indefinite matrix: a
+    // factorisation of the matrix PETSc holds for the multigrid (a
+    // modified-Newton step solves with it after the caller's matrix is
+    // gone), kept for the next solves with this one.
+    const auto lock = PetscLock();
+    if (!fallback_factorized_) {
+      if (fallback_ == nullptr) {
+        PBA_PETSC(KSPCreate(SolverComm(), &fallback_));
+        PBA_RETURN_IF_ERROR(ConfigureMumps(fallback_, objects_.matrix));
+      }
+      const Status factorized = FactorizeMumps(fallback_, objects_.matrix);
       if (!factorized.ok()) {
-        fallback_.reset();
         return Status::Numerical(failure + "; MUMPS, the fallback: " + factorized.message());
       }
+      fallback_factorized_ = true;
     }
     ++fallbacks_;
-    return fallback_->Solve(b, x);
+    PBA_RETURN_IF_ERROR(ExpandedSolve(matrix_, fallback_, &objects_, b, x));
+    if (!x->allFinite()) return Status::Numerical("MUMPS's solve produced no finite answer");
+    return Status::Ok();
   }
 
   bool Iterative() const override { return true; }
@@ -593,6 +611,12 @@ class AmgSolver final : public LinearSolver {
   }
 
  private:
+  // The fallback's factorisation (of an earlier pattern's matrix) goes.
+  void DestroyFallback() {
+    if (fallback_ != nullptr) KSPDestroy(&fallback_);
+    fallback_factorized_ = false;
+  }
+
   Status Setup() {
     if (layout_ != nullptr) PBA_RETURN_IF_ERROR(SetNearNullSpace());
     PBA_RETURN_IF_ERROR(objects_.NewSolver());
@@ -680,7 +704,7 @@ class AmgSolver final : public LinearSolver {
                  int* iterations, double* residual) {
     const auto lock = PetscLock();
     cancelled_ = false;
-    PBA_RETURN_IF_ERROR(ExpandedSolve(matrix_, &objects_, b, x));
+    PBA_RETURN_IF_ERROR(ExpandedSolve(matrix_, objects_.ksp, &objects_, b, x));
     PetscInt its = 0;
     PBA_PETSC(KSPGetIterationNumber(objects_.ksp, &its));
     *iterations = static_cast<int>(its);
@@ -765,8 +789,8 @@ class AmgSolver final : public LinearSolver {
   PetscMatrix matrix_;
   PetscObjects objects_;
   std::unique_ptr<void, DefaultTestDeleter> default_test_;
-  Eigen::SparseMatrix<double> kept_;  // the matrix, for a fallback
-  std::unique_ptr<LinearSolver> fallback_;
+  KSP fallback_ = nullptr;            // MUMPS on objects_.matrix, once a solve needed it
+  bool fallback_factorized_ = false;  // of the matrix's current values
   Eigen::Index unknowns_ = 0;
   bool factorized_ = false;
   bool cancelled_ = false;
