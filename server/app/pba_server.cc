@@ -212,6 +212,7 @@ Status PbaServer::Start(const ServerOptions& options, std::unique_ptr<PbaServer>
   executor_options.max_running = options.max_running;
   executor_options.solver_threads = options.solver_threads;
   executor_options.mpirun = options.mpirun;
+  executor_options.max_ranks = options.max_ranks;
   executor_options.atlas_cache_dir = data_dir / "cache" / "atlas";
   executor_options.atlas_cache_gib = options.atlas_cache_gib;
   executor_options.kill_grace = options.kill_grace;

@@ -397,6 +397,11 @@ class JobExecutor::Attempt {
                        job_.ranks()));
       return false;
     }
+    if (job_.ranks() > options_.max_ranks) {
+      Fail(fmt::format("the job asks for {} MPI ranks; this server allows {} (--max-ranks)",
+                       job_.ranks(), options_.max_ranks));
+      return false;
+    }
     const SolverCommand command = Command(input);
     {
       std::lock_guard lock(executor_.mutex_);

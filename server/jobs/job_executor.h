@@ -100,6 +100,9 @@ struct ExecutorOptions {
   // The mpirun a job with ranks > 1 runs under (mpirun -np N pba-solve ...);
   // empty: such a job fails saying the server has no MPI.
   std::filesystem::path mpirun;
+  // The most ranks a job may run on (pba-server --max-ranks): a job queued
+  // under a higher limit, before a restart, fails saying so.
+  int max_ranks = 1;
   // --atlas-cache passed to each pba-solve (built atlas meshes shared
   // between jobs) with --atlas-cache-size [GiB]; empty passes nothing.
   std::filesystem::path atlas_cache_dir;

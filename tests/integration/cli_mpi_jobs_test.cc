@@ -111,5 +111,24 @@ TEST_F(MpiJobsTest, CancelEndsEveryRank) {
   EXPECT_TRUE(ChildrenNamed(server_->pid(), "mpirun").empty());
 }
 
+// A job queued on two ranks before a restart that lowered --max-ranks is
+// not run on more ranks than the server now allows: it fails saying why.
+TEST_F(MpiJobsTest, AQueuedJobOverALoweredRankLimitFailsSayingSo) {
+  const fs::path blocker = WriteScene("long.yaml", BlockSceneYaml("long-running", 50));
+  const RunResult first = Pba({"job", "submit", blocker.string()});
+  ASSERT_EQ(first.exit_code, 0) << first.err;
+  ASSERT_TRUE(WaitForState(JobId(first), "RUNNING", seconds(30)));
+  const fs::path scene = Example("quickstart", "linear_solver: CHOLMOD", "linear_solver: AUTO");
+  const RunResult queued = Pba({"job", "submit", scene.string(), "--ranks", "2"});
+  ASSERT_EQ(queued.exit_code, 0) << queued.err;
+  server_->Stop();
+  std::string log;
+  ASSERT_TRUE(server_->Start(&log, {"--max-ranks", "1"})) << log;
+  EXPECT_EQ(Pba({"job", "cancel", JobId(first)}).exit_code, 0);
+  ASSERT_TRUE(WaitForState(JobId(queued), "FAILED", seconds(60)));
+  const RunResult status = Pba({"job", "status", JobId(queued)});
+  EXPECT_NE(status.out.find("this server allows 1"), std::string::npos) << status.out;
+}
+
 }  // namespace
 }  // namespace pba::testing

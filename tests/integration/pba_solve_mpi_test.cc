@@ -6,18 +6,25 @@
 
 #include <gtest/gtest.h>
 #include <hdf5.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <regex>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "common/subprocess.h"
+#include "integration/block_scene.h"
 
 namespace pba::testing {
 namespace {
@@ -28,13 +35,16 @@ const std::vector<std::string> kMpiEnvironment = {"OMPI_ALLOW_RUN_AS_ROOT=1",
                                                   "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1",
                                                   "OMPI_MCA_rmaps_base_oversubscribe=1"};
 
-RunResult Solve(const fs::path& scene, const fs::path& out, int ranks) {
+// pba-solve SCENE --out OUT [extra...], under mpirun when `ranks` > 1.
+RunResult Solve(const fs::path& scene, const fs::path& out, int ranks,
+                const std::vector<std::string>& extra = {}) {
   std::vector<std::string> argv;
   if (ranks > 1) argv = {PBA_MPIEXEC, "-np", std::to_string(ranks)};
   for (const std::string& arg : {std::string(PBA_SOLVE_BIN), scene.string(), std::string("--out"),
                                  out.string(), std::string("--progress"), std::string("json")}) {
     argv.push_back(arg);
   }
+  argv.insert(argv.end(), extra.begin(), extra.end());
   return RunProcess(argv, kMpiEnvironment, std::chrono::seconds(600));
 }
 
@@ -57,6 +67,19 @@ std::vector<double> ReadDisplacement(const fs::path& result) {
   }
   H5Fclose(file);
   return values;
+}
+
+// The relative difference of two result.h5's displacements (infinite when
+// either is missing or they differ in size).
+double DisplacementDifference(const fs::path& a_result, const fs::path& b_result) {
+  const std::vector<double> a = ReadDisplacement(a_result), b = ReadDisplacement(b_result);
+  if (a.empty() || a.size() != b.size()) return INFINITY;
+  double difference = 0, norm = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    difference += (a[i] - b[i]) * (a[i] - b[i]);
+    norm += a[i] * a[i];
+  }
+  return norm > 0 ? std::sqrt(difference / norm) : INFINITY;
 }
 
 // The scene text of an example with `replace` applied to it.
@@ -111,17 +134,8 @@ TEST_P(RanksGiveTheSerialAnswer, SameFilesSameDisplacements) {
   }
   EXPECT_EQ(done, 1u) << ranks.out;
 
-  const std::vector<double> a = ReadDisplacement(dir.path() / "serial" / "result.h5");
-  const std::vector<double> b = ReadDisplacement(dir.path() / "ranks" / "result.h5");
-  ASSERT_FALSE(a.empty());
-  ASSERT_EQ(a.size(), b.size());
-  double difference = 0, norm = 0;
-  for (std::size_t i = 0; i < a.size(); ++i) {
-    difference += (a[i] - b[i]) * (a[i] - b[i]);
-    norm += a[i] * a[i];
-  }
-  ASSERT_GT(norm, 0);
-  const double relative = std::sqrt(difference / norm);
+  const double relative = DisplacementDifference(dir.path() / "serial" / "result.h5",
+                                                 dir.path() / "ranks" / "result.h5");
   std::printf("%s: 2 ranks against 1, relative difference of the displacements %.2e\n", c.name,
               relative);
   EXPECT_LE(relative, 1e-8);
@@ -211,6 +225,76 @@ TEST(PbaSolveRanks, ABrokenDownSolveEndsTheJobWithTheSerialCodeAndNoResult) {
   EXPECT_FALSE(fs::exists(dir.path() / "ranks"));
   // Neither rank waits for the other after the failure.
   EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(60));
+}
+
+// Checkpoints from rank 0 alone; a restart read by every rank continues to
+// the uninterrupted answer.
+TEST(PbaSolveRanks, CheckpointAndRestartOnRanksGiveTheUninterruptedAnswer) {
+  TempDir dir;
+  const fs::path first = dir.path() / "first.yaml", longer = dir.path() / "longer.yaml";
+  std::ofstream(first) << HoldSceneYaml(10);
+  std::ofstream(longer) << HoldSceneYaml(20);
+  const fs::path checkpoints = dir.path() / "checkpoints";
+  RunResult run = Solve(first, dir.path() / "first", 2,
+                        {"--checkpoint", checkpoints.string(), "--checkpoint-every", "0"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  std::vector<std::string> files;
+  for (const auto& e : fs::directory_iterator(checkpoints)) {
+    files.push_back(e.path().filename().string());
+  }
+  EXPECT_EQ(files, std::vector<std::string>{"checkpoint.h5"});
+  run = Solve(longer, dir.path() / "restarted", 2,
+              {"--restart", (checkpoints / "checkpoint.h5").string()});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_NE(ReadFile(dir.path() / "restarted" / "summary.json")
+                .find("restarted from a checkpoint at t = 10 s"),
+            std::string::npos);
+  run = Solve(longer, dir.path() / "uninterrupted", 1);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_LE(DisplacementDifference(dir.path() / "uninterrupted" / "result.h5",
+                                   dir.path() / "restarted" / "result.h5"),
+            1e-8);
+}
+
+// SIGTERM to mpirun (as a shell's Ctrl-C or a scheduler's cancel sends)
+// reaches every rank: the job ends cancelled, promptly, with nothing
+// written and no rank left running.
+TEST(PbaSolveRanks, SigtermToMpirunCancelsEveryRankAndWritesNothing) {
+  TempDir dir;
+  const fs::path scene = dir.path() / "long.yaml";
+  std::ofstream(scene) << BlockSceneYaml("long-running", 50) << "analysis: {linear_solver: AMG}\n";
+  const fs::path out = dir.path() / "result";
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    for (const std::string& entry : kMpiEnvironment) ::putenv(::strdup(entry.c_str()));
+    ::freopen("/dev/null", "w", stdout);
+    ::execl(PBA_MPIEXEC, PBA_MPIEXEC, "-np", "2", PBA_SOLVE_BIN, scene.c_str(), "--out",
+            out.c_str(), "--progress", "json", static_cast<char*>(nullptr));
+    std::_Exit(127);
+  }
+  // The ranks are mpirun's children.
+  std::vector<pid_t> ranks;
+  for (int i = 0; i < 200 && ranks.size() < 2; ++i) {
+    ranks = ChildrenNamed(pid, "pba-solve");
+    if (ranks.size() < 2) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  EXPECT_EQ(ranks.size(), 2u);
+  std::this_thread::sleep_for(std::chrono::seconds(2));
+  const auto signalled = std::chrono::steady_clock::now();
+  ::kill(pid, SIGTERM);
+  int status = 0;
+  ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+  EXPECT_LT(std::chrono::steady_clock::now() - signalled, std::chrono::seconds(15));
+  EXPECT_TRUE(!WIFEXITED(status) || WEXITSTATUS(status) != 0) << "a cancelled job reported success";
+  EXPECT_FALSE(fs::exists(out));
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir.path()), fs::directory_iterator()), 1)
+      << "a partial result was left behind";
+  for (const pid_t rank : ranks) {
+    const bool gone =
+        ::kill(rank, 0) != 0 ||
+        ReadFile("/proc/" + std::to_string(rank) + "/stat").find(") Z") != std::string::npos;
+    EXPECT_TRUE(gone) << "rank " << rank << " outlived mpirun";
+  }
 }
 
 TEST(PbaSolveRanks, AnOutputDirectoryInTheWayIsRefusedBeforeTheSolve) {

@@ -251,43 +251,13 @@ TEST(PbaSolveTest, UnknownOptionOrBadValueIsAUsageError) {
   EXPECT_NE(run.err.find("loud"), std::string::npos) << run.err;
 }
 
-// A small QUASI_STATIC hold of a viscoelastic cube, held until `end_s`,
-// meshed at `size_mm`.
-std::string HoldScene(double end_s, double size_mm = 5) {
-  std::ostringstream s;
-  s << "name: hold\n"
-       "geometry: {box: {size_mm: [10, 10, 10]}}\n"
-       "mesh: {element: TET4_ANP, element_size_mm: "
-    << size_mm
-    << "}\n"
-       "material:\n"
-       "  neo_hookean: {shear_modulus_pa: 2200, bulk_modulus_pa: 2.2e6}\n"
-       "  viscoelastic: {prony: {g: [0.5], tau_s: [2]}}\n"
-       "boundary_conditions:\n"
-       "  - {set: bottom, symmetry: {}}\n"
-       "  - {set: x_min, symmetry: {}}\n"
-       "  - {set: y_min, symmetry: {}}\n"
-       "  - {set: top, displacement: {z_mm: -1}}\n"
-       "analysis:\n"
-       "  type: QUASI_STATIC\n"
-       "  time:\n"
-       "    end_time_s: "
-    << end_s
-    << "\n"
-       "    curve: [{time_s: 0, amplitude: 0}, {time_s: 1, amplitude: 1}, {time_s: "
-    << end_s
-    << ", amplitude: 1}]\n"
-       "outputs: {reaction_sets: [top]}\n";
-  return s.str();
-}
-
 TEST(PbaSolveTest, CheckpointThenRestartExtendsTheHold) {
   TempDir dir;
   const fs::path first = dir.path() / "first.yaml", longer = dir.path() / "longer.yaml",
                  finer = dir.path() / "finer.yaml";
-  std::ofstream(first) << HoldScene(10);
-  std::ofstream(longer) << HoldScene(20);
-  std::ofstream(finer) << HoldScene(20, 2.5);
+  std::ofstream(first) << HoldSceneYaml(10);
+  std::ofstream(longer) << HoldSceneYaml(20);
+  std::ofstream(finer) << HoldSceneYaml(20, 2.5);
   const fs::path checkpoints = dir.path() / "checkpoints";
   RunResult run = RunProcess({PBA_SOLVE_BIN, first.string(), "--out", (dir.path() / "r1").string(),
                               "--progress", "none", "--checkpoint", checkpoints.string(),
