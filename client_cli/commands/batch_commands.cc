@@ -314,6 +314,7 @@ int RunBatch(Connection& connection, const BatchArgs& args) {
   options.snapshot = batch.snapshot;
   options.parallel = batch.parallel;
   options.retry_failed = args.retry_failed;
+  options.ranks = args.ranks;
   options.poll_s = args.poll_s;
   options.quiet = json;
   const std::vector<size_t> to_submit = ResumeMembers(connection, options, &batch.members);
@@ -412,6 +413,9 @@ void RegisterBatchCommands(CLI::App& app, CommandContext& context) {
   run->add_flag("--retry-failed", args->retry_failed,
                 "Resubmit members whose earlier job failed or was cancelled");
   run->add_flag("--dry-run", args->dry_run, "Check the members, submit nothing");
+  run->add_option("--ranks", args->ranks,
+                  "MPI processes each member's job runs on (pba job submit --ranks)")
+      ->check(CLI::NonNegativeNumber);
   run->add_flag("--no-plot", args->no_plot,
                 "Draw no picture of the members' histories (the plot section)");
   context.Add(run, [args](Connection& c) { return RunBatch(c, *args); });

@@ -64,6 +64,7 @@ struct BatchArgs {
   std::string file;
   std::string out;  // the table as CSV; default FILE's stem + ".csv" beside it
   bool retry_failed = false;
+  int ranks = 0;         // MPI processes per member's job
   bool dry_run = false;  // check and list the members, submit nothing
   bool no_plot = false;  // skip the plot section's picture
   double poll_s = 0.5;

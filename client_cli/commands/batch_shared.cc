@@ -198,6 +198,7 @@ int SubmitAndPoll(Connection& connection, const RunOptions& options,
       *request.mutable_scene() = m.scene;
       if (!options.snapshot.project().empty()) *request.mutable_snapshot() = options.snapshot;
       request.set_request_id(m.request_id);
+      request.set_ranks(options.ranks);
       auto context = connection.UnaryContext();
       grpc::Status status = connection.jobs().SubmitJob(context.get(), request, &m.job);
       if (!status.ok()) {

@@ -50,6 +50,7 @@ struct RunOptions {
   v1::SnapshotRef snapshot;     // every member's atlas from it, when set
   int parallel = 2;             // unfinished jobs at most
   bool retry_failed = false;    // resubmit a failed or cancelled earlier job
+  int ranks = 0;                // MPI processes per job (SubmitJobRequest.ranks); 0: one
   double poll_s = 0.5;
   bool quiet = false;  // no progress lines (--json)
 };

@@ -288,6 +288,7 @@ int RunMeshes(Connection& connection, const StudyArgs& args, const fs::path& out
   options.snapshot = study->snapshot;
   options.parallel = args.parallel;
   options.retry_failed = args.retry_failed;
+  options.ranks = args.ranks;
   options.poll_s = args.poll_s;
   options.quiet = json;
   const std::vector<size_t> to_submit = ResumeMembers(connection, options, &study->members);
@@ -639,6 +640,10 @@ void RegisterStudyCommands(CLI::App& app, CommandContext& context) {
       ->capture_default_str();
   convergence->add_flag("--retry-failed", args->retry_failed,
                         "Resubmit meshes whose earlier job failed or was cancelled");
+  convergence
+      ->add_option("--ranks", args->ranks,
+                   "MPI processes each mesh's job runs on (pba job submit --ranks)")
+      ->check(CLI::NonNegativeNumber);
   convergence->add_flag("--dry-run", args->dry_run,
                         "Print the sizes each mesh's scene gets, submit nothing");
   context.Add(convergence, [args](Connection& c) { return RunConvergenceStudy(c, *args); });

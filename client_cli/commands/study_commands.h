@@ -32,6 +32,7 @@ struct StudyArgs {
   std::string snapshot;      // PROJECT/SNAPSHOT for an atlas scene; empty: none
   double tolerance_pct = 5;  // a change below it counts as converged [%]
   bool retry_failed = false;
+  int ranks = 0;         // MPI processes per mesh's job
   bool dry_run = false;  // print each mesh's sizes, submit nothing
   double poll_s = 0.5;
 };

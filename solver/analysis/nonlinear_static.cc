@@ -424,7 +424,8 @@ void FiniteStrainRun::Estimate() {
   summary_.error.note =
       "estimated discretisation error in the energy norm, relative to the solution's; at large "
       "strain the initial-compliance norm makes it an indicator rather than a bound; refine the "
-      "mesh (mesh.element_size_mm) to reduce it";
+      "mesh (mesh.element_size_mm) to reduce it, and measure the error of a quantity that "
+      "matters with a mesh-convergence study (pba study convergence)";
   clock_.Update(1.0);
   clock_.End();
 }

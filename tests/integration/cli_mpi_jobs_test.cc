@@ -111,6 +111,29 @@ TEST_F(MpiJobsTest, CancelEndsEveryRank) {
   EXPECT_TRUE(ChildrenNamed(server_->pid(), "mpirun").empty());
 }
 
+// A batch on two ranks per member: every member's job runs through mpirun.
+TEST_F(MpiJobsTest, BatchMembersRunOnTheRanksAsked) {
+  const fs::path scene = Example("quickstart", "linear_solver: CHOLMOD", "linear_solver: AUTO");
+  const fs::path batch =
+      WriteScene("sweep.yaml", "name: sweep\nscene: " + scene.string() +
+                                   "\nparallel: 1\nmembers:\n"
+                                   "  - {name: soft, set: {}}\n"
+                                   "  - {name: pressed, set: "
+                                   "{\"boundary_conditions[1].displacement.z_mm\": "
+                                   "-1.0}}\n"
+                                   "outputs: [results.max_displacement_mm]\n");
+  const RunResult run =
+      Pba({"batch", "run", batch.string(), "--ranks", "2", "--no-plot"}, seconds(240));
+  ASSERT_EQ(run.exit_code, 0) << run.out << run.err;
+  const RunResult list = Pba({"--json", "job", "list", "--all"});
+  std::size_t on_two = 0;
+  for (std::size_t at = list.out.find("\"ranks\": 2"); at != std::string::npos;
+       at = list.out.find("\"ranks\": 2", at + 1)) {
+    ++on_two;
+  }
+  EXPECT_EQ(on_two, 2u) << list.out;
+}
+
 // A job queued on two ranks before a restart that lowered --max-ranks is
 // not run on more ranks than the server now allows: it fails saying why.
 TEST_F(MpiJobsTest, AQueuedJobOverALoweredRankLimitFailsSayingSo) {
