@@ -9,34 +9,15 @@
 #include <string>
 
 #include "common/bench_solve.h"
+#include "common/scene_builders.h"
 #include "pba/solve.h"
 
 namespace pba {
 namespace {
 
-SceneSpec Block(double element_size_mm) {
-  SceneSpec s;
-  s.name = "bench-block";
-  s.geometry.kind = GeometrySpec::Kind::kBox;
-  s.geometry.box.size_mm = {20, 20, 30};
-  s.mesh.element_size_mm = element_size_mm;
-  s.material.kind = MaterialSpec::Kind::kLinearElastic;
-  s.material.linear_elastic = {3000, 0.45};
-  BoundaryConditionSpec bottom;
-  bottom.set = "bottom";
-  bottom.kind = BoundaryConditionSpec::Kind::kFixed;
-  BoundaryConditionSpec top;
-  top.set = "top";
-  top.kind = BoundaryConditionSpec::Kind::kDisplacement;
-  top.displacement_mm = {0.0, 0.0, -1.5};
-  s.boundary_conditions = {bottom, top};
-  return s;
-}
-
 // Argument: element size in tenths of a millimetre.
 void BM_LinearStaticBlock(benchmark::State& state, AnalysisSpec::LinearSolver linear_solver) {
-  SceneSpec scene = Block(state.range(0) / 10.0);
-  scene.analysis.linear_solver = linear_solver;
+  const SceneSpec scene = testing::SoftBlock(state.range(0) / 10.0, linear_solver);
   Solution solution;
   if (!testing::SolveEachIteration(state, scene, &solution)) return;
   const Summary& s = solution.summary;

@@ -20,4 +20,21 @@ inline BoundaryConditionSpec Condition(const std::string& set, BoundaryCondition
   return bc;
 }
 
+// A 20 x 20 x 30 mm block, bottom fixed, top pressed 1.5 mm (the quickstart
+// and benchmark block), of linear elastic soft tissue (E = 3 kPa, nu = 0.45).
+inline SceneSpec SoftBlock(double element_size_mm, AnalysisSpec::LinearSolver solver) {
+  using K = BoundaryConditionSpec::Kind;
+  SceneSpec s;
+  s.name = "block";
+  s.geometry.kind = GeometrySpec::Kind::kBox;
+  s.geometry.box.size_mm = {20, 20, 30};
+  s.mesh.element_size_mm = element_size_mm;
+  s.material.kind = MaterialSpec::Kind::kLinearElastic;
+  s.material.linear_elastic = {3000, 0.45};
+  s.boundary_conditions = {Condition("bottom", K::kFixed),
+                           Condition("top", K::kDisplacement, {0.0, 0.0, -1.5})};
+  s.analysis.linear_solver = solver;
+  return s;
+}
+
 }  // namespace pba::testing

@@ -21,6 +21,9 @@ struct RunResult {
 // The whole file's bytes ("" when it cannot be read).
 std::string ReadFile(const std::filesystem::path& path);
 
+// How often `what` occurs in `text` (overlapping occurrences counted).
+std::size_t CountOf(const std::string& text, const std::string& what);
+
 // The path of program `name` in a directory of PATH (/usr/bin without
 // one); empty when there is none. RunProcess does not search PATH.
 std::string FindProgram(const std::string& name);

@@ -287,11 +287,6 @@ TEST_F(CliAtlasTest, ACommitRerunAfterALostReplyGetsTheSameRevision) {
 // reply) make nothing twice.
 TEST_F(CliAtlasTest, CreatesRerunWithTheSameRequestIdMakeOneThing) {
   SetUpPeople();
-  const auto count = [](const std::string& text, const std::string& what) {
-    int n = 0;
-    for (size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
-    return n;
-  };
   for (int run = 0; run < 2; ++run) {
     const RunResult project =
         PbaAs("alice", {"project", "create", "scratch", "--request-id", "script-p1"});
@@ -331,11 +326,11 @@ TEST_F(CliAtlasTest, CreatesRerunWithTheSameRequestIdMakeOneThing) {
 
   const RunResult audit = PbaAs("admin", {"--json", "atlas", "audit", "-p", "demo", "--all"});
   ASSERT_EQ(audit.exit_code, 0) << audit.err;
-  EXPECT_EQ(count(audit.out, "\"snapshot.create\""), 3) << audit.out;
-  EXPECT_EQ(count(audit.out, "\"structure.create\""), 1) << audit.out;
+  EXPECT_EQ(CountOf(audit.out, "\"snapshot.create\""), 3u) << audit.out;
+  EXPECT_EQ(CountOf(audit.out, "\"structure.create\""), 1u) << audit.out;
   const RunResult scratch = PbaAs("alice", {"--json", "atlas", "audit", "-p", "scratch"});
   ASSERT_EQ(scratch.exit_code, 0) << scratch.err;
-  EXPECT_EQ(count(scratch.out, "\"project.create\""), 1) << scratch.out;
+  EXPECT_EQ(CountOf(scratch.out, "\"project.create\""), 1u) << scratch.out;
 }
 
 // A watcher sees another person's changes as they happen.

@@ -126,12 +126,7 @@ TEST_F(MpiJobsTest, BatchMembersRunOnTheRanksAsked) {
       Pba({"batch", "run", batch.string(), "--ranks", "2", "--no-plot"}, seconds(240));
   ASSERT_EQ(run.exit_code, 0) << run.out << run.err;
   const RunResult list = Pba({"--json", "job", "list", "--all"});
-  std::size_t on_two = 0;
-  for (std::size_t at = list.out.find("\"ranks\": 2"); at != std::string::npos;
-       at = list.out.find("\"ranks\": 2", at + 1)) {
-    ++on_two;
-  }
-  EXPECT_EQ(on_two, 2u) << list.out;
+  EXPECT_EQ(CountOf(list.out, "\"ranks\": 2"), 2u) << list.out;
 }
 
 // A job queued on two ranks before a restart that lowered --max-ranks is

@@ -137,12 +137,7 @@ TEST_F(CliServerTest, JsonOutputIsParseableAndPaginates) {
   EXPECT_NE(page.out.find("\"next_page_token\""), std::string::npos) << page.out;
   const RunResult all = Pba({"--json", "job", "list", "--page-size", "2", "--all"});
   ASSERT_EQ(all.exit_code, 0) << all.err;
-  std::size_t count = 0;
-  for (std::size_t at = all.out.find("\"id\""); at != std::string::npos;
-       at = all.out.find("\"id\"", at + 1)) {
-    ++count;
-  }
-  EXPECT_EQ(count, 3u) << all.out;
+  EXPECT_EQ(CountOf(all.out, "\"id\""), 3u) << all.out;
 }
 
 TEST_F(CliServerTest, IdempotentSubmitWithRequestId) {
@@ -273,12 +268,7 @@ outputs:
   const RunResult lost = Pba({"batch", "run", batch.string()});
   ASSERT_EQ(lost.exit_code, 0) << lost.err;
   EXPECT_EQ(ReadFile(dir_.path() / "sweep.csv"), csv);
-  const RunResult list = Pba({"--json", "job", "list", "--all"});
-  size_t jobs = 0;
-  for (size_t at = list.out.find("\"id\""); at != std::string::npos;
-       at = list.out.find("\"id\"", at + 1))
-    ++jobs;
-  EXPECT_EQ(jobs, 4u) << list.out;
+  EXPECT_EQ(JobCount(), 4u);
 }
 
 // The example batch runs as shipped (copied with its base scene, so that its

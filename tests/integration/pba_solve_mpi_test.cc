@@ -127,12 +127,7 @@ TEST_P(RanksGiveTheSerialAnswer, SameFilesSameDisplacements) {
   std::sort(serial_files.begin(), serial_files.end());
   std::sort(rank_files.begin(), rank_files.end());
   EXPECT_EQ(serial_files, rank_files);
-  std::size_t done = 0;
-  for (std::size_t at = ranks.out.find("\"DONE\""); at != std::string::npos;
-       at = ranks.out.find("\"DONE\"", at + 1)) {
-    ++done;
-  }
-  EXPECT_EQ(done, 1u) << ranks.out;
+  EXPECT_EQ(CountOf(ranks.out, "\"DONE\""), 1u) << ranks.out;
 
   const double relative = DisplacementDifference(dir.path() / "serial" / "result.h5",
                                                  dir.path() / "ranks" / "result.h5");

@@ -69,15 +69,7 @@ class ServerTest : public ::testing::Test {
   }
 
   // Jobs the server holds, of every state.
-  size_t JobCount() {
-    const RunResult list = Pba({"--json", "job", "list", "--all"});
-    size_t jobs = 0;
-    for (size_t at = list.out.find("\"id\""); at != std::string::npos;
-         at = list.out.find("\"id\"", at + 1)) {
-      ++jobs;
-    }
-    return jobs;
-  }
+  size_t JobCount() { return CountOf(Pba({"--json", "job", "list", "--all"}).out, "\"id\""); }
 
   TempDir dir_;
   std::unique_ptr<ServerProcess> server_;
