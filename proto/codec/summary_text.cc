@@ -148,6 +148,27 @@ std::string SensorPeakTable(const v1::Results& r) {
   return out;
 }
 
+// mesh.adapt: the target, why the cycles ended, a line per cycle.
+std::string AdaptationLines(const v1::Modelled& m) {
+  if (!m.has_adaptation() || !m.adaptation().adapted()) return "";
+  const v1::Adaptation& a = m.adaptation();
+  std::string out =
+      Format("Adapted      %s: %s\n", a.reached() ? "target reached" : "TARGET NOT REACHED",
+             a.stop_reason().c_str());
+  out += Format("  %5s %10s %10s %11s %9s %9s  %s\n", "cycle", "elements", "unknowns", "est. error",
+                "wall [s]", "refined", "largest change from the cycle before");
+  for (int i = 0; i < a.cycles_size(); ++i) {
+    const v1::AdaptCycle& c = a.cycles(i);
+    const std::string change =
+        i == 0 ? "-" : Format("%.3g %% (%s)", 100 * c.change(), c.changed_quantity().c_str());
+    out += Format("  %5d %10lld %10lld %9.3g %% %9.3g %9lld  %s\n", i + 1,
+                  static_cast<long long>(c.elements()), static_cast<long long>(c.dofs()),
+                  100 * c.relative_error(), c.wall_time_s(), static_cast<long long>(c.marked()),
+                  change.c_str());
+  }
+  return out;
+}
+
 }  // namespace
 
 std::string FormatSummary(const v1::Summary& summary) {
@@ -175,6 +196,7 @@ std::string FormatSummary(const v1::Summary& summary) {
     }
     out += "Options      " + line + "\n";
   }
+  out += AdaptationLines(m);
   out += "Results\n";
   std::string at;
   if (r.max_displacement_at_mm_size() == 3) {

@@ -242,6 +242,10 @@ Status MeshFromProto(const v1::MeshOptions& mesh, MeshSpec* mesh_spec) {
                                      "unknown element type " + std::to_string(mesh.element()));
   }
   mesh_spec->element_size_mm = mesh.element_size_mm();
+  mesh_spec->adapt.target_error_percent = mesh.adapt().target_error_percent();
+  mesh_spec->adapt.max_elements = mesh.adapt().max_elements();
+  mesh_spec->adapt.max_cycles = mesh.adapt().max_cycles();
+  mesh_spec->adapt.refine_fraction = mesh.adapt().refine_fraction();
   return Status::Ok();
 }
 
@@ -605,6 +609,33 @@ Status ValidateSceneProto(const v1::Scene& scene, int ranks) {
   return ValidateSceneOnRanks(spec, ranks);
 }
 
+namespace {
+
+// mesh.adapt: the bounds, why the cycles ended, each cycle.
+void AdaptationToProto(const Adaptation& a, v1::Modelled* modelled) {
+  v1::Adaptation* out = modelled->mutable_adaptation();
+  out->set_adapted(true);
+  out->set_target_error(a.target_error);
+  out->set_max_elements(a.max_elements);
+  out->set_max_cycles(a.max_cycles);
+  out->set_refine_fraction(a.refine_fraction);
+  out->set_reached(a.reached);
+  out->set_stop_reason(a.stop_reason);
+  for (const AdaptCycle& c : a.cycles) {
+    v1::AdaptCycle* cycle = out->add_cycles();
+    cycle->set_elements(c.elements);
+    cycle->set_nodes(c.nodes);
+    cycle->set_dofs(c.dofs);
+    cycle->set_relative_error(c.relative_error);
+    cycle->set_wall_time_s(c.wall_time_s);
+    cycle->set_marked(c.marked);
+    cycle->set_change(c.change);
+    cycle->set_changed_quantity(c.changed_quantity);
+  }
+}
+
+}  // namespace
+
 v1::Summary SummaryToProto(const Summary& summary) {
   v1::Summary out;
   out.set_scene_name(summary.scene_name);
@@ -640,6 +671,7 @@ v1::Summary SummaryToProto(const Summary& summary) {
     r->set_kept(summary.reduction.kept);
     r->set_tolerance(summary.reduction.tolerance);
   }
+  if (summary.adaptation.adapted) AdaptationToProto(summary.adaptation, modelled);
 
   v1::Results* results = out.mutable_results();
   results->set_max_displacement_mm(summary.max_displacement_mm);

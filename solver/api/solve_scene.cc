@@ -1,7 +1,9 @@
 // The solver's front door (pba/solve.h): a scene is validated and resolved
 // into a Problem (scene/problem.h), meshed, and handed to SolveProblem;
-// `formulation: AUTO` goes through SolveAuto first. Nothing past this file
-// reads the scene.
+// `formulation: AUTO` goes through SolveAuto first, `mesh.adapt` through
+// SolveAdaptive (both call back here or share its steps). Nothing past
+// these files reads the scene.
+#include "api/adaptive_solve.h"
 #include "api/auto_formulation.h"
 #include "api/solve_problem.h"
 #include "core/phase_clock.h"
@@ -28,6 +30,14 @@ Status SolveScene(const SceneSpec& scene, const SolveOptions& options, Solution*
                                    "only a QUASI_STATIC analysis restarts from a checkpoint");
   }
   if (scene.formulation == Formulation::kAuto) return SolveAuto(scene, options, solution);
+  if (scene.mesh.adapt.enabled()) {
+    if (!options.restart_from.empty()) {
+      return Status::InvalidArgument("restart_from",
+                                     "a scene with mesh.adapt does not restart from a "
+                                     "checkpoint: each cycle solves anew on its own mesh");
+    }
+    return SolveAdaptive(scene, options, solution);
+  }
   *solution = Solution();
   PhaseClock clock(options, &solution->summary.phases);
 

@@ -74,8 +74,7 @@ template <std::size_t N, std::size_t E>
 int LongestEdge(const Cuts& cuts, const std::array<int, N>& v, const int (&edges)[E][2]) {
   int longest = 0;
   for (int k = 1; k < static_cast<int>(E); ++k) {
-    if (cuts.Longer(v[edges[k][0]], v[edges[k][1]], v[edges[longest][0]],
-                    v[edges[longest][1]]))
+    if (cuts.Longer(v[edges[k][0]], v[edges[k][1]], v[edges[longest][0]], v[edges[longest][1]]))
       longest = k;
   }
   return longest;
@@ -103,8 +102,8 @@ Status RefineTets(const Mesh& coarse, const std::vector<char>& marked, Mesh* fin
   }
   const int ne = coarse.num_elements();
   if (static_cast<int>(marked.size()) != ne) {
-    return Status::InvalidArgument(
-        "marked", Format("%zu entries for %d elements", marked.size(), ne));
+    return Status::InvalidArgument("marked",
+                                   Format("%zu entries for %d elements", marked.size(), ne));
   }
   const bool regions = !coarse.element_region.empty();
   if (regions && static_cast<int>(coarse.element_region.size()) != ne) {
@@ -151,7 +150,8 @@ Status RefineTets(const Mesh& coarse, const std::vector<char>& marked, Mesh* fin
         int m = cuts.Midpoint(t[i], t[j]);
         if (m < 0) {
           bool any = false;
-          for (const auto& edge : kTetEdges) any = any || cuts.Midpoint(t[edge[0]], t[edge[1]]) >= 0;
+          for (const auto& edge : kTetEdges)
+            any = any || cuts.Midpoint(t[edge[0]], t[edge[1]]) >= 0;
           if (!any) {
             next.push_back(t);
             next_region.push_back(region[e]);
@@ -165,9 +165,8 @@ Status RefineTets(const Mesh& coarse, const std::vector<char>& marked, Mesh* fin
         stack.push_back(first);
       }
       if (static_cast<int64_t>(next.size()) > bound) {
-        return Status::Internal(
-            Format("refinement of %d elements grew past %lld without ending", ne,
-                   static_cast<long long>(bound)));
+        return Status::Internal(Format("refinement of %d elements grew past %lld without ending",
+                                       ne, static_cast<long long>(bound)));
       }
     }
     current = std::move(next);
@@ -196,9 +195,7 @@ Status RefineTets(const Mesh& coarse, const std::vector<char>& marked, Mesh* fin
         for (int q = 0; q < 3; ++q) {
           const int a = t[kTriangleEdges[q][0]], b = t[kTriangleEdges[q][1]];
           if (cuts.Midpoint(a, b) < 0) continue;
-          if (k < 0 ||
-              cuts.Longer(a, b, t[kTriangleEdges[k][0]], t[kTriangleEdges[k][1]]))
-            k = q;
+          if (k < 0 || cuts.Longer(a, b, t[kTriangleEdges[k][0]], t[kTriangleEdges[k][1]])) k = q;
         }
         if (k < 0) {
           refined.triangles.push_back(t);

@@ -29,10 +29,10 @@
 namespace pba {
 
 struct RefineReport {
-  int64_t marked = 0;       // elements asked for
-  int64_t cut_edges = 0;    // edges given a midpoint (the new nodes)
-  int64_t elements = 0;     // in the refined mesh
-  int64_t propagated = 0;   // cut edges added to keep the mesh conforming
+  int64_t marked = 0;      // elements asked for
+  int64_t cut_edges = 0;   // edges given a midpoint (the new nodes)
+  int64_t elements = 0;    // in the refined mesh
+  int64_t propagated = 0;  // cut edges added to keep the mesh conforming
 };
 
 // The mesh with every element e for which marked[e] is non-zero bisected at

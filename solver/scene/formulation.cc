@@ -217,6 +217,8 @@ SceneSpec Coarsened(const SceneSpec& scene) {
   AtlasSpec& atlas = coarse.geometry.atlas;
   if (atlas.roi_radius_mm > 0) atlas.roi_element_size_mm *= 2;
   if (atlas.facet_size_mm > 0) atlas.facet_size_mm *= 2;
+  // A side run measures the model, on the scene's own (coarsened) mesh.
+  coarse.mesh.adapt = AdaptSpec();
   return coarse;
 }
 

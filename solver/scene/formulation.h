@@ -64,7 +64,8 @@ void ReduceFiniteStrain(const SceneSpec& scene, std::optional<double> max_strain
 void ReduceStructures(const SceneSpec& scene, SceneSpec* reduced,
                       std::vector<ModelDecision>* decisions);
 
-// The scene on meshes twice as coarse (element and region-of-interest sizes).
+// The scene on meshes twice as coarse (element and region-of-interest sizes),
+// without adaptive refinement.
 SceneSpec Coarsened(const SceneSpec& scene);
 
 // The largest relative difference of the results two solutions of one

@@ -385,20 +385,34 @@ Status CheckStructureNames(const SceneSpec& scene, const Mesh& mesh) {
 
 }  // namespace
 
+Status BuildBaseMesh(const SceneSpec& scene, const BuildModelOptions& options, BaseMesh* out) {
+  BaseMesh& base = *out;
+  base = BaseMesh();
+  if (scene.geometry.kind == GeometrySpec::Kind::kAtlas) {
+    auto atlas = std::make_shared<AtlasBuildResult>();
+    PBA_RETURN_IF_ERROR(BuildAtlasMesh(scene, options, &base.mesh, &base.description, atlas.get()));
+    PBA_RETURN_IF_ERROR(ProvideAtlasSets(scene, &base.mesh));
+    base.atlas = std::move(atlas);
+  } else {
+    MeshStats stats;
+    base.mesh = BuildPrimitiveMesh(scene.geometry, scene.mesh, &stats);
+    base.description = stats.description;
+  }
+  return Status::Ok();
+}
+
 Status BuildModel(const SceneSpec& scene, Model* out, const BuildModelOptions& options) {
+  BaseMesh base;
+  PBA_RETURN_IF_ERROR(BuildBaseMesh(scene, options, &base));
+  return BuildModelOn(scene, std::move(base), out);
+}
+
+Status BuildModelOn(const SceneSpec& scene, BaseMesh base, Model* out) {
   constexpr double kMm = 1e-3;
   Model& model = *out;
   model = Model();
-  MeshStats stats;
-  AtlasBuildResult atlas;
-  if (scene.geometry.kind == GeometrySpec::Kind::kAtlas) {
-    PBA_RETURN_IF_ERROR(
-        BuildAtlasMesh(scene, options, &model.mesh, &model.mesh_description, &atlas));
-    PBA_RETURN_IF_ERROR(ProvideAtlasSets(scene, &model.mesh));
-  } else {
-    model.mesh = BuildPrimitiveMesh(scene.geometry, scene.mesh, &stats);
-    model.mesh_description = stats.description;
-  }
+  model.mesh = std::move(base.mesh);
+  model.mesh_description = std::move(base.description);
   PBA_RETURN_IF_ERROR(CutPatches(scene.geometry, &model.mesh));
   PBA_RETURN_IF_ERROR(CutInclusions(scene, &model.mesh));
   PBA_RETURN_IF_ERROR(ResolveMaterials(scene, model.mesh, &model.materials));
@@ -410,7 +424,7 @@ Status BuildModel(const SceneSpec& scene, Model* out, const BuildModelOptions& o
       model.mesh_description +=
           "; 10-node: a node on every edge, on the true surface of curved faces";
     } else if (const std::optional<MidsideProjectionReport> p =
-                   CurveAtlasMidsideNodes(atlas, &model.mesh)) {
+                   base.atlas ? CurveAtlasMidsideNodes(*base.atlas, &model.mesh) : std::nullopt) {
       model.mesh_description += Format(
           "; 10-node: %lld of %lld mid-edge nodes on surfaces and interfaces moved onto the "
           "loft's smooth surfaces (%lld of them part of the way, to keep the Jacobian ratio "

@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -14,6 +15,8 @@
 #include "scene/materials.h"
 
 namespace pba {
+
+struct AtlasBuildResult;  // atlas/atlas_build.h
 
 struct Model {
   Mesh mesh;
@@ -35,7 +38,25 @@ struct BuildModelOptions {
 // in order (a later condition on the same node and component wins);
 // displacements in metres. Expects a validated scene; fails (naming it) on
 // a patch that holds no face, which only the mesh can tell.
+// BuildBaseMesh, then BuildModelOn.
 Status BuildModel(const SceneSpec& scene, Model* model, const BuildModelOptions& options = {});
+
+// The geometry meshed: the primitive's grid or the atlas's structures, with
+// the face sets the geometry names, before patches, inclusions, materials,
+// mid-edge nodes and conditions. What an adaptive solve refines
+// (mesh.adapt) and builds the model on again and again.
+struct BaseMesh {
+  Mesh mesh;                // 4-node tetrahedra or 8-node hexahedra
+  std::string description;  // how it was made, for the summary
+  // The atlas's build (null for a primitive), which curves a 10-node
+  // mesh's faces onto the atlas's smooth surfaces; holds no mesh.
+  std::shared_ptr<const AtlasBuildResult> atlas;
+};
+Status BuildBaseMesh(const SceneSpec& scene, const BuildModelOptions& options, BaseMesh* base);
+
+// The model on a base mesh: the patches cut, the inclusions, the materials,
+// the mid-edge nodes of a 10-node mesh, the conditions.
+Status BuildModelOn(const SceneSpec& scene, BaseMesh base, Model* model);
 
 // The loads of the scene's pressure and traction conditions and its gravity,
 // at full value (SI). Pressure follows the deformation in a nonlinear

@@ -474,11 +474,28 @@ Status ResolveProblem(const SceneSpec& scene, Problem* problem) {
   return Status::Ok();
 }
 
-Status BuildProblemModel(const SceneSpec& scene, const BuildModelOptions& options,
-                         Problem* problem) {
-  const Status built = BuildModel(scene, &problem->model, options);
+namespace {
+
+// What the mesh shows of a scene is a failed precondition, not a bad field.
+Status AsPrecondition(const Status& built) {
   if (built.code() != Status::Code::kInvalidArgument) return built;
   return Status::FailedPrecondition(built.field(), built.message());
+}
+
+}  // namespace
+
+Status BuildProblemModel(const SceneSpec& scene, const BuildModelOptions& options,
+                         Problem* problem) {
+  return AsPrecondition(BuildModel(scene, &problem->model, options));
+}
+
+Status BuildProblemBaseMesh(const SceneSpec& scene, const BuildModelOptions& options,
+                            BaseMesh* base) {
+  return AsPrecondition(BuildBaseMesh(scene, options, base));
+}
+
+Status BuildProblemModelOn(const SceneSpec& scene, BaseMesh base, Problem* problem) {
+  return AsPrecondition(BuildModelOn(scene, std::move(base), &problem->model));
 }
 
 Status BuildProblem(const SceneSpec& scene, const BuildModelOptions& options, Problem* problem) {

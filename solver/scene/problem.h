@@ -234,6 +234,13 @@ Status ResolveProblem(const SceneSpec& scene, Problem* problem);
 Status BuildProblemModel(const SceneSpec& scene, const BuildModelOptions& options,
                          Problem* problem);
 
+// BuildProblemModel in its two halves (model_builder.h), for a solve that
+// builds the model on a base mesh it refines (mesh.adapt); the same
+// failures.
+Status BuildProblemBaseMesh(const SceneSpec& scene, const BuildModelOptions& options,
+                            BaseMesh* base);
+Status BuildProblemModelOn(const SceneSpec& scene, BaseMesh base, Problem* problem);
+
 // ResolveProblem, then BuildProblemModel.
 Status BuildProblem(const SceneSpec& scene, const BuildModelOptions& options, Problem* problem);
 

@@ -542,6 +542,64 @@ int PlaneNormalAxis(const GeometrySpec& geometry, const std::string& set) {
 
 namespace {
 
+// mesh.adapt: bounds in range, on elements the refinement cuts and an
+// analysis that estimates its error.
+Status ValidateAdapt(const SceneSpec& scene) {
+  const AdaptSpec& adapt = scene.mesh.adapt;
+  if (!adapt.enabled()) {
+    if (adapt.max_elements != 0 || adapt.max_cycles != 0 || adapt.refine_fraction != 0) {
+      return Status::InvalidArgument("mesh.adapt.target_error_percent",
+                                     "is needed with the other mesh.adapt fields: the estimated "
+                                     "error to refine down to, in percent");
+    }
+    return Status::Ok();
+  }
+  if (!(adapt.target_error_percent > 0 && adapt.target_error_percent < 100)) {
+    return Status::InvalidArgument(
+        "mesh.adapt.target_error_percent",
+        "must be a percentage between 0 and 100 (the estimated relative error in the energy "
+        "norm to refine down to), got " +
+            ShortNumber(adapt.target_error_percent));
+  }
+  if (adapt.max_elements < 0 || adapt.max_elements > kMaxElements) {
+    return Status::InvalidArgument(
+        "mesh.adapt.max_elements",
+        Format("must be between 1 and %lld (or left out for %lld), got %lld",
+               static_cast<long long>(kMaxElements),
+               static_cast<long long>(kDefaultAdaptMaxElements),
+               static_cast<long long>(adapt.max_elements)));
+  }
+  if (adapt.max_cycles < 0 || adapt.max_cycles > 20) {
+    return Status::InvalidArgument(
+        "mesh.adapt.max_cycles",
+        Format("must be between 1 and 20 solves (or left out for %d), got %d", kDefaultAdaptCycles,
+               adapt.max_cycles));
+  }
+  if (!(adapt.refine_fraction >= 0 && adapt.refine_fraction <= 1)) {
+    return Status::InvalidArgument(
+        "mesh.adapt.refine_fraction",
+        "must be in (0, 1]: the share of the squared estimated error whose elements are "
+        "refined each cycle (or left out for " +
+            ShortNumber(kDefaultAdaptFraction) + "), got " + ShortNumber(adapt.refine_fraction));
+  }
+  if (IsHexahedral(scene.mesh.element)) {
+    return Status::InvalidArgument("mesh.adapt",
+                                   "refines tetrahedra (by bisection); a HEX8 mesh is a "
+                                   "structured grid: choose a tetrahedral element, or compare "
+                                   "element sizes with `pba study convergence`");
+  }
+  const AnalysisSpec::Type type = scene.analysis.type;
+  if (type == AnalysisSpec::Type::kExplicitDynamic ||
+      type == AnalysisSpec::Type::kDynamicRelaxation) {
+    return Status::InvalidArgument("mesh.adapt",
+                                   "needs an error estimate, which LINEAR_STATIC, "
+                                   "NONLINEAR_STATIC and QUASI_STATIC give; the explicit "
+                                   "engine's analyses (EXPLICIT_DYNAMIC, DYNAMIC_RELAXATION) "
+                                   "give none");
+  }
+  return Status::Ok();
+}
+
 // mesh: the element size, an element kind the geometry and the analysis
 // can take, and a mesh that fits in memory.
 Status ValidateMesh(const SceneSpec& scene) {
@@ -563,6 +621,8 @@ Status ValidateMesh(const SceneSpec& scene) {
                                     " elements, more than the limit of " +
                                     std::to_string(kMaxElements) + "; choose a larger size");
   }
+
+  PBA_RETURN_IF_ERROR(ValidateAdapt(scene));
 
   // The finite-strain elements serve both finite-strain analyses.
   const bool finite_strain = scene.analysis.type != AnalysisSpec::Type::kLinearStatic;

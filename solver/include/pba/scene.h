@@ -5,6 +5,7 @@
 #pragma once
 
 #include <array>
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <utility>
@@ -143,11 +144,31 @@ inline bool IsHexahedral(ElementType e) {
 // kDefault).
 const char* ElementName(ElementType element);
 
+// Adaptive refinement (mesh.adapt): the scene is solved, the error of
+// every element estimated (Zienkiewicz-Zhu, the estimate the summary
+// reports), the elements carrying `refine_fraction` of the squared error
+// halved by longest-edge bisection (mesh/refine.h), and the scene solved
+// again on the refined mesh, until the estimated relative error is at most
+// target_error_percent, another refinement would pass max_elements, or
+// max_cycles solves have run. Each cycle is in the summary; the result
+// files are the last cycle's.
+struct AdaptSpec {
+  double target_error_percent = 0;  // 0: no adaptation; else in (0, 100)
+  int64_t max_elements = 0;         // 0: kDefaultAdaptMaxElements
+  int max_cycles = 0;               // solves, counting the first; 0: kDefaultAdaptCycles
+  double refine_fraction = 0;       // (0, 1]; 0: kDefaultAdaptFraction
+  bool enabled() const { return target_error_percent != 0; }
+};
+inline constexpr int64_t kDefaultAdaptMaxElements = 500'000;
+inline constexpr int kDefaultAdaptCycles = 6;
+inline constexpr double kDefaultAdaptFraction = 0.5;
+
 struct MeshSpec {
   ElementType element = ElementType::kDefault;
   // Target edge length of the structured grid [mm]; 0 picks a twentieth of the
   // body's largest dimension.
   double element_size_mm = 0;
+  AdaptSpec adapt;
 };
 
 // Isotropic small-strain elasticity (DOMAIN.md eq. 2.21).

@@ -147,6 +147,33 @@ struct ModelDecision {
 
 // What the reduced model of `formulation: AUTO` costs and saves, from the
 // same scene on meshes twice as coarse, once reduced and once in full.
+// One solve of an adaptive refinement (mesh.adapt).
+struct AdaptCycle {
+  int64_t elements = 0;
+  int64_t nodes = 0;
+  int64_t dofs = 0;           // unknowns after constraints
+  double relative_error = 0;  // estimated energy-norm relative error, fraction
+  double wall_time_s = 0;     // of this cycle's solve, meshing included
+  int64_t marked = 0;         // elements marked for bisection after it (0: last)
+  // The largest relative change of a result the cycle shares with the one
+  // before (largest displacement, reactions, contact forces, structure
+  // displacements), and which; 0 and empty for the first.
+  double change = 0;
+  std::string changed_quantity;
+};
+
+// The adaptive refinement that made the mesh (mesh.adapt), when asked for.
+struct Adaptation {
+  bool adapted = false;
+  double target_error = 0;  // fraction
+  int64_t max_elements = 0;
+  int max_cycles = 0;
+  double refine_fraction = 0;
+  bool reached = false;     // the last cycle's estimate is within the target
+  std::string stop_reason;  // why the cycles ended, for people
+  std::vector<AdaptCycle> cycles;
+};
+
 struct ReductionEstimate {
   bool estimated = false;
   // Whether the reduced model was solved: only when estimated and the
@@ -266,6 +293,7 @@ struct Summary {
   // formulation: AUTO.
   std::vector<ModelDecision> decisions;
   ReductionEstimate reduction;
+  Adaptation adaptation;  // mesh.adapt
   ErrorEstimate error;
   // Speed.
   double wall_time_s = 0;

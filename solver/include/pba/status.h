@@ -79,6 +79,11 @@ class Status {
   // Dotted path of the offending input field, e.g. "material.linear_elastic.poissons_ratio"
   // or "boundary_conditions[1].set"; empty when no single field is to blame.
   const std::string& field() const { return field_; }
+  // The same failure (code and field), its message led by `context`, e.g.
+  // "mesh.adapt cycle 3 (12000 elements): ". Ok stays ok.
+  Status WithContext(const std::string& context) const {
+    return ok() ? *this : Status(code_, context + message_, field_);
+  }
   // "field: message" when a field is named, else the message.
   std::string ToString() const { return field_.empty() ? message_ : field_ + ": " + message_; }
 

@@ -88,6 +88,17 @@ analysis: {type: NONLINEAR_STATIC}
   EXPECT_EQ(Parse("mesh: {element: HEX8}").mesh.element, ElementType::kHex8);
   EXPECT_EQ(Parse("mesh: {element: HEX8_FULL}").mesh.element, ElementType::kHex8Full);
   EXPECT_EQ(Parse("mesh: {element: TET10_MD}").mesh.element, ElementType::kTet10Md);
+  const AdaptSpec adapt =
+      Parse(
+          "mesh: {element: TET4, adapt: {target_error_percent: 5, max_elements: 20000, "
+          "max_cycles: 4, refine_fraction: 0.3}}")
+          .mesh.adapt;
+  EXPECT_TRUE(adapt.enabled());
+  EXPECT_EQ(adapt.target_error_percent, 5);
+  EXPECT_EQ(adapt.max_elements, 20000);
+  EXPECT_EQ(adapt.max_cycles, 4);
+  EXPECT_EQ(adapt.refine_fraction, 0.3);
+  EXPECT_FALSE(Parse("mesh: {element: TET4}").mesh.adapt.enabled());
 
   // Conditions beyond the base's two.
   v1::Scene scene;
@@ -788,6 +799,33 @@ TEST(FormatSummary, NewtonLineAndAShortenedPath) {
   // A linear summary keeps its residual line.
   EXPECT_NE(codec::FormatSummary(SummaryToProto(Summary())).find("linear residual"),
             std::string::npos);
+}
+
+TEST(FormatSummary, AdaptationCyclesAndWhyTheyEnded) {
+  Summary s;
+  s.adaptation.adapted = true;
+  s.adaptation.target_error = 0.05;
+  s.adaptation.max_cycles = 6;
+  s.adaptation.stop_reason = "6 solves ran (mesh.adapt.max_cycles)";
+  s.adaptation.cycles = {{1536, 405, 945, 0.33, 0.01, 96, 0, ""},
+                         {1956, 480, 1120, 0.25, 0.02, 0, 0.055, "reaction on pressed"}};
+  const v1::Summary proto = SummaryToProto(s);
+  ASSERT_TRUE(proto.modelled().has_adaptation());
+  ASSERT_EQ(proto.modelled().adaptation().cycles_size(), 2);
+  EXPECT_EQ(proto.modelled().adaptation().cycles(1).changed_quantity(), "reaction on pressed");
+  EXPECT_EQ(proto.modelled().adaptation().cycles(0).marked(), 96);
+  std::string text = codec::FormatSummary(proto);
+  EXPECT_NE(text.find("Adapted      TARGET NOT REACHED: 6 solves ran (mesh.adapt.max_cycles)"),
+            std::string::npos)
+      << text;
+  EXPECT_NE(text.find("1956"), std::string::npos) << text;
+  EXPECT_NE(text.find("5.5 % (reaction on pressed)"), std::string::npos) << text;
+  s.adaptation.reached = true;
+  EXPECT_NE(codec::FormatSummary(SummaryToProto(s)).find("Adapted      target reached"),
+            std::string::npos);
+  // Without mesh.adapt, no such lines.
+  EXPECT_FALSE(SummaryToProto(Summary()).modelled().has_adaptation());
+  EXPECT_EQ(codec::FormatSummary(SummaryToProto(Summary())).find("Adapted"), std::string::npos);
 }
 
 TEST(FormatSummary, ErrorPerStructureWhenThereAreSeveral) {

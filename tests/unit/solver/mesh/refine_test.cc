@@ -257,8 +257,7 @@ TEST(RefineTest, NothingMarkedChangesNothing) {
   const Mesh coarse = Box(5);
   Mesh fine;
   RefineReport report;
-  ASSERT_TRUE(
-      RefineTets(coarse, std::vector<char>(coarse.num_elements(), 0), &fine, &report).ok());
+  ASSERT_TRUE(RefineTets(coarse, std::vector<char>(coarse.num_elements(), 0), &fine, &report).ok());
   EXPECT_EQ(fine.tets, coarse.tets);
   EXPECT_EQ(fine.nodes, coarse.nodes);
   EXPECT_EQ(report.cut_edges, 0);
@@ -271,8 +270,7 @@ TEST(RefineTest, RefusesWhatItCannotRefine) {
   EXPECT_EQ(wrong.code(), Status::Code::kInvalidArgument);
   EXPECT_EQ(wrong.field(), "marked");
   const Mesh quadratic = MakeQuadratic(coarse, {});
-  const Status shape =
-      RefineTets(quadratic, std::vector<char>(quadratic.num_elements(), 1), &fine);
+  const Status shape = RefineTets(quadratic, std::vector<char>(quadratic.num_elements(), 1), &fine);
   EXPECT_EQ(shape.code(), Status::Code::kInvalidArgument);
   EXPECT_EQ(shape.field(), "mesh");
 }
