@@ -229,11 +229,13 @@ std::vector<char> MarkLargestShare(const std::vector<double>& share, double frac
   std::stable_sort(order.begin(), order.end(),
                    [&](std::size_t a, std::size_t b) { return share[a] > share[b]; });
   const double wanted = std::min(fraction, 1.0) * total;
-  double carried = 0;
+  double carried = 0, last = 0;
   for (const std::size_t e : order) {
-    if (carried >= wanted) break;
+    // Past the fraction, only what ties with the last one taken.
+    if (carried >= wanted && share[e] < last * (1 - kShareTie)) break;
     marked[e] = 1;
     carried += std::max(share[e], 0.0);
+    last = share[e];
   }
   return marked;
 }

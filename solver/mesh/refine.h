@@ -50,7 +50,12 @@ Status RefineTets(const Mesh& coarse, const std::vector<char>& marked, Mesh* fin
 
 // Dorfler's bulk criterion: the fewest elements that carry at least
 // `fraction` (0..1] of the total of `share` (e.g. the estimated squared
-// error of each element), largest first; ties broken by element index.
+// error of each element), largest first, and with them every element whose
+// share ties with the last one taken (within kShareTie, relative): equal
+// errors are treated alike whatever their rounding, so a symmetric problem
+// keeps a symmetric mesh, and solves that differ only by rounding (one
+// process or several, one linear solver or another) refine alike.
+inline constexpr double kShareTie = 1e-6;
 std::vector<char> MarkLargestShare(const std::vector<double>& share, double fraction);
 
 }  // namespace pba

@@ -181,6 +181,9 @@ const Case kCases[] = {
      "GAMG"},
     // QUASI_STATIC through time with a viscoelastic material, AUTO.
     {"viscoelastic_relaxation", "relaxation", {}, "CHOLMOD", "MUMPS"},
+    // mesh.adapt, AUTO: every rank refines its copy of the mesh from the
+    // shared answer, cycle after cycle, to the same final mesh.
+    {"adaptive_block", "adaptive_block", {}, "CHOLMOD", "MUMPS"},
 };
 
 INSTANTIATE_TEST_SUITE_P(Scenes, RanksGiveTheSerialAnswer, ::testing::ValuesIn(kCases),

@@ -12,6 +12,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <regex>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -68,6 +69,35 @@ INSTANTIATE_TEST_SUITE_P(Examples, ExampleTest, ::testing::ValuesIn(Examples()),
                            }
                            return name;
                          });
+
+// mesh.adapt: the result files are the last cycle's mesh, and the summary
+// holds every cycle, the first on the scene's own mesh.
+TEST(PbaSolveTest, AnAdaptiveSceneWritesItsLastMeshAndEveryCycle) {
+  TempDir dir;
+  const fs::path out = dir.path() / "result";
+  const RunResult run =
+      RunProcess({PBA_SOLVE_BIN, (fs::path(PBA_EXAMPLES_DIR) / "adaptive_block.yaml").string(),
+                  "--out", out.string(), "--progress", "json"},
+                 std::chrono::seconds(300));
+  ASSERT_EQ(run.exit_code, 0) << run.out << run.err;
+  EXPECT_NE(run.out.find("mesh.adapt cycle 2: "), std::string::npos) << run.out;
+  const std::string summary = ReadFile(out / "summary.json");
+  std::vector<std::string> elements;
+  const std::regex pattern("\"elements\": \"([0-9]+)\"");
+  for (auto it = std::sregex_iterator(summary.begin(), summary.end(), pattern);
+       it != std::sregex_iterator(); ++it) {
+    elements.push_back((*it)[1]);
+  }
+  // modelled.elements, then one per cycle: the scene's 8 x 8 x 4 grid of
+  // 6 tetrahedra first, the last cycle's the result's.
+  ASSERT_GE(elements.size(), 4u) << summary;
+  EXPECT_EQ(elements[1], "1536");
+  EXPECT_EQ(elements.back(), elements[0]);
+  EXPECT_NE(summary.find("\"reached\": true"), std::string::npos) << summary;
+  EXPECT_NE(summary.find("within the target of 20 %"), std::string::npos) << summary;
+  const std::string xdmf = ReadFile(out / "result.xdmf");
+  EXPECT_NE(xdmf.find("NumberOfElements=\"" + elements[0] + "\""), std::string::npos) << xdmf;
+}
 
 TEST(PbaSolveTest, InvalidSceneExitsFiveAndWritesNothing) {
   TempDir dir;

@@ -278,8 +278,12 @@ TEST(RefineTest, RefusesWhatItCannotRefine) {
 TEST(RefineTest, MarkLargestShareTakesTheFewestThatCarryTheFraction) {
   EXPECT_EQ(MarkLargestShare({0.1, 0.5, 0.3, 0.1}, 0.5), (std::vector<char>{0, 1, 0, 0}));
   EXPECT_EQ(MarkLargestShare({0.1, 0.5, 0.3, 0.1}, 0.6), (std::vector<char>{0, 1, 1, 0}));
-  // Ties: the lower index first.
-  EXPECT_EQ(MarkLargestShare({0.25, 0.25, 0.25, 0.25}, 0.5), (std::vector<char>{1, 1, 0, 0}));
+  // Ties, to rounding, are taken together.
+  EXPECT_EQ(MarkLargestShare({0.25, 0.25, 0.25, 0.25}, 0.5), (std::vector<char>{1, 1, 1, 1}));
+  EXPECT_EQ(MarkLargestShare({0.2, 0.3 * (1 + 1e-12), 0.3, 0.2}, 0.3),
+            (std::vector<char>{0, 1, 1, 0}));
+  EXPECT_EQ(MarkLargestShare({0.2, 0.3 * (1 + 1e-3), 0.3, 0.2}, 0.3),
+            (std::vector<char>{0, 1, 0, 0}));
   EXPECT_EQ(MarkLargestShare({0.2, 0.8}, 1.0), (std::vector<char>{1, 1}));
   EXPECT_EQ(MarkLargestShare({0, 0}, 0.5), (std::vector<char>{0, 0}));
 }
