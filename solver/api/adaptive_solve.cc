@@ -27,6 +27,10 @@ double FinestMeanEdge(const Mesh& mesh) {
   return finest;
 }
 
+// Each cycle bisects the marked elements three times: their edges halve,
+// as in one uniform refinement, so a cycle is worth its solve.
+constexpr int kBisectionsPerCycle = 3;
+
 // The adaptation's bounds, defaults filled in.
 Adaptation Bounds(const AdaptSpec& spec) {
   Adaptation a;
@@ -140,7 +144,8 @@ Status SolveAdaptive(const SceneSpec& scene, const SolveOptions& options, Soluti
         MarkLargestShare(current.error_indicator, adaptation.refine_fraction);
     Mesh refined;
     RefineReport report;
-    PBA_RETURN_IF_ERROR(RefineTets(base.mesh, marked, &refined, &report));
+    PBA_RETURN_IF_ERROR(
+        RefineTetsRepeatedly(base.mesh, marked, kBisectionsPerCycle, &refined, &report));
     if (report.elements > adaptation.max_elements) {
       adaptation.stop_reason = Format(
           "refining again would give %lld elements, more than mesh.adapt.max_elements "

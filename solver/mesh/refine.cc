@@ -95,7 +95,7 @@ std::pair<std::array<int, N>, std::array<int, N>> Halves(const std::array<int, N
 }  // namespace
 
 Status RefineTets(const Mesh& coarse, const std::vector<char>& marked, Mesh* fine,
-                  RefineReport* report) {
+                  RefineReport* report, std::vector<int>* parent) {
   if (coarse.hexahedral() || coarse.quadratic()) {
     return Status::InvalidArgument(
         "mesh", "only a 4-node tetrahedral mesh is refined (a 10-node one through its corners)");
@@ -131,14 +131,16 @@ Status RefineTets(const Mesh& coarse, const std::vector<char>& marked, Mesh* fin
   // last one ended. Termination: every new cut is the longest edge of an
   // element with a shorter cut edge, and the lengths halve.
   std::vector<Tet> current = coarse.tets;
-  std::vector<int> region = regions ? coarse.element_region : std::vector<int>(ne, 0);
+  // Each element's coarse element, carried through the passes.
+  std::vector<int> origin(ne);
+  std::iota(origin.begin(), origin.end(), 0);
   const int64_t bound = 64 * static_cast<int64_t>(std::max(ne, 1)) + 1000000;
   for (bool changed = true; changed;) {
     changed = false;
     std::vector<Tet> next;
-    std::vector<int> next_region;
+    std::vector<int> next_origin;
     next.reserve(current.size() + current.size() / 2);
-    next_region.reserve(next.capacity());
+    next_origin.reserve(next.capacity());
     std::vector<Tet> stack;
     for (std::size_t e = 0; e < current.size(); ++e) {
       stack.assign(1, current[e]);
@@ -154,7 +156,7 @@ Status RefineTets(const Mesh& coarse, const std::vector<char>& marked, Mesh* fin
             any = any || cuts.Midpoint(t[edge[0]], t[edge[1]]) >= 0;
           if (!any) {
             next.push_back(t);
-            next_region.push_back(region[e]);
+            next_origin.push_back(origin[e]);
             continue;
           }
           m = cuts.Cut(t[i], t[j]);
@@ -170,7 +172,7 @@ Status RefineTets(const Mesh& coarse, const std::vector<char>& marked, Mesh* fin
       }
     }
     current = std::move(next);
-    region = std::move(next_region);
+    origin = std::move(next_origin);
   }
   r.cut_edges = cuts.cut_edges();
   r.propagated = r.cut_edges - asked;
@@ -212,10 +214,46 @@ Status RefineTets(const Mesh& coarse, const std::vector<char>& marked, Mesh* fin
   }
   cuts.Trim();
   out.tets = std::move(current);
-  if (regions) out.element_region = std::move(region);
+  if (regions) {
+    out.element_region.resize(origin.size());
+    for (std::size_t f = 0; f < origin.size(); ++f)
+      out.element_region[f] = coarse.element_region[origin[f]];
+  }
+  if (parent != nullptr) *parent = std::move(origin);
   r.elements = static_cast<int64_t>(out.tets.size());
   *fine = std::move(out);
   if (report != nullptr) *report = r;
+  return Status::Ok();
+}
+
+Status RefineTetsRepeatedly(const Mesh& coarse, const std::vector<char>& marked, int times,
+                            Mesh* fine, RefineReport* report) {
+  Mesh mesh = coarse;
+  std::vector<char> mark = marked;
+  // The coarse element of each element of `mesh`.
+  std::vector<int> origin(coarse.num_elements());
+  std::iota(origin.begin(), origin.end(), 0);
+  RefineReport total;
+  for (int pass = 0; pass < times; ++pass) {
+    Mesh next;
+    RefineReport r;
+    std::vector<int> parent;
+    PBA_RETURN_IF_ERROR(RefineTets(mesh, mark, &next, &r, &parent));
+    if (pass == 0) total.marked = r.marked;
+    total.cut_edges += r.cut_edges;
+    total.propagated += r.propagated;
+    total.elements = r.elements;
+    std::vector<int> next_origin(parent.size());
+    mark.assign(parent.size(), 0);
+    for (std::size_t f = 0; f < parent.size(); ++f) {
+      next_origin[f] = origin[parent[f]];
+      mark[f] = marked[next_origin[f]];
+    }
+    origin = std::move(next_origin);
+    mesh = std::move(next);
+  }
+  *fine = std::move(mesh);
+  if (report != nullptr) *report = total;
   return Status::Ok();
 }
 

@@ -44,9 +44,18 @@ struct RefineReport {
 // InvalidArgument ("mesh") for a mesh that is not 4-node tetrahedral:
 // quadratic and hexahedral meshes are refined as their linear corner mesh,
 // before the mid-edge nodes are added. InvalidArgument ("marked") when
-// `marked` has not one entry per element.
+// `marked` has not one entry per element. `parent`, when given, receives
+// the coarse element each refined element lies in.
 Status RefineTets(const Mesh& coarse, const std::vector<char>& marked, Mesh* fine,
-                  RefineReport* report = nullptr);
+                  RefineReport* report = nullptr, std::vector<int>* parent = nullptr);
+
+// RefineTets `times` times over, each time bisecting every element that
+// lies in a marked coarse element (the others only as the mesh's
+// conformity needs): three times halves the marked elements' edges, as one
+// uniform refinement would. The report counts the coarse elements marked
+// and the final mesh.
+Status RefineTetsRepeatedly(const Mesh& coarse, const std::vector<char>& marked, int times,
+                            Mesh* fine, RefineReport* report = nullptr);
 
 // Dorfler's bulk criterion: the fewest elements that carry at least
 // `fraction` (0..1] of the total of `share` (e.g. the estimated squared

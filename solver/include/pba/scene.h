@@ -147,7 +147,8 @@ const char* ElementName(ElementType element);
 // Adaptive refinement (mesh.adapt): the scene is solved, the error of
 // every element estimated (Zienkiewicz-Zhu, the estimate the summary
 // reports), the elements carrying `refine_fraction` of the squared error
-// halved by longest-edge bisection (mesh/refine.h), and the scene solved
+// bisected three times, which halves their edges (longest-edge bisection,
+// mesh/refine.h), and the scene solved
 // again on the refined mesh, until the estimated relative error is at most
 // target_error_percent, another refinement would pass max_elements, or
 // max_cycles solves have run. Each cycle is in the summary; the result

@@ -242,6 +242,43 @@ TEST(RefineTest, RefinementTowardsACornerStaysLocal) {
   EXPECT_EQ(far_fine, 0);
 }
 
+// Three bisections of the marked elements halve their edges: every element
+// inside a marked coarse one has at most an eighth of its volume, and the
+// parents RefineTets reports hold their children.
+TEST(RefineTest, ThreeBisectionsHalveTheMarkedElements) {
+  const Mesh coarse = JitteredBox(5);
+  std::vector<char> marked(coarse.num_elements(), 0);
+  for (int e = 0; e < coarse.num_elements(); e += 5) marked[e] = 1;
+  Mesh once;
+  std::vector<int> parent;
+  ASSERT_TRUE(RefineTets(coarse, marked, &once, nullptr, &parent).ok());
+  ASSERT_EQ(parent.size(), once.tets.size());
+  std::vector<double> children(coarse.num_elements(), 0);
+  for (int f = 0; f < once.num_elements(); ++f) children[parent[f]] += Volume(once, f);
+  for (int e = 0; e < coarse.num_elements(); ++e)
+    EXPECT_NEAR(children[e], Volume(coarse, e), 1e-12 * Volume(coarse, e));
+
+  Mesh fine;
+  RefineReport report;
+  ASSERT_TRUE(RefineTetsRepeatedly(coarse, marked, 3, &fine, &report).ok());
+  ExpectConforming(fine);
+  EXPECT_EQ(report.marked, (coarse.num_elements() + 4) / 5);
+  EXPECT_EQ(report.elements, fine.num_elements());
+  EXPECT_GE(fine.num_elements(), coarse.num_elements() + 7 * report.marked);
+  for (int e = 0; e < coarse.num_elements(); ++e) {
+    if (!marked[e]) continue;
+    const Eigen::Vector3d centroid = TetCorners(coarse, e).colwise().mean().transpose();
+    for (int f = 0; f < fine.num_elements(); ++f) {
+      const auto x = TetCorners(fine, f);
+      const Eigen::Matrix3d edges = (x.bottomRows<3>().rowwise() - x.row(0)).transpose();
+      const Eigen::Vector3d local = edges.inverse() * (centroid - x.row(0).transpose());
+      if ((local.array() >= -1e-12).all() && local.sum() <= 1 + 1e-12) {
+        EXPECT_LE(Volume(fine, f), Volume(coarse, e) / 8 * (1 + 1e-9));
+      }
+    }
+  }
+}
+
 TEST(RefineTest, SameInputSameMesh) {
   const Mesh coarse = JitteredBox(5);
   std::vector<char> marked(coarse.num_elements(), 0);
