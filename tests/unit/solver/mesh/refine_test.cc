@@ -102,6 +102,14 @@ void ExpectConforming(const Mesh& mesh) {
   EXPECT_EQ(once, boundary.size());
 }
 
+// Whether element e of `mesh` holds point x (within rounding).
+bool Holds(const Mesh& mesh, int e, const Eigen::Vector3d& x) {
+  const auto corners = TetCorners(mesh, e);
+  const Eigen::Matrix3d edges = (corners.bottomRows<3>().rowwise() - corners.row(0)).transpose();
+  const Eigen::Vector3d local = edges.inverse() * (x - corners.row(0).transpose());
+  return (local.array() >= -1e-12).all() && local.sum() <= 1 + 1e-12;
+}
+
 double TotalVolume(const Mesh& mesh) {
   double total = 0;
   for (int e = 0; e < mesh.num_elements(); ++e) total += Volume(mesh, e);
@@ -139,13 +147,9 @@ TEST(RefineTest, OneMarkedElementIsHalvedAndTheMeshStaysConforming) {
   const double chosen_volume = Volume(coarse, chosen);
   const Eigen::Vector3d centroid = TetCorners(coarse, chosen).colwise().mean().transpose();
   for (int e = 0; e < fine.num_elements(); ++e) {
-    const auto x = TetCorners(fine, e);
     // The element of the fine mesh holding the coarse element's centroid.
-    const Eigen::Matrix3d edges = (x.bottomRows<3>().rowwise() - x.row(0)).transpose();
-    const Eigen::Vector3d local = edges.inverse() * (centroid - x.row(0).transpose());
-    if ((local.array() >= -1e-12).all() && local.sum() <= 1 + 1e-12) {
-      EXPECT_LE(Volume(fine, e), 0.5 * chosen_volume * (1 + 1e-12));
-    }
+    if (!Holds(fine, e, centroid)) continue;
+    EXPECT_LE(Volume(fine, e), 0.5 * chosen_volume * (1 + 1e-12));
   }
   for (const auto& [name, set] : coarse.face_sets) {
     EXPECT_NEAR(FaceSetArea(fine, fine.face_sets.at(name)), FaceSetArea(coarse, set), 1e-18)
@@ -269,12 +273,8 @@ TEST(RefineTest, ThreeBisectionsHalveTheMarkedElements) {
     if (!marked[e]) continue;
     const Eigen::Vector3d centroid = TetCorners(coarse, e).colwise().mean().transpose();
     for (int f = 0; f < fine.num_elements(); ++f) {
-      const auto x = TetCorners(fine, f);
-      const Eigen::Matrix3d edges = (x.bottomRows<3>().rowwise() - x.row(0)).transpose();
-      const Eigen::Vector3d local = edges.inverse() * (centroid - x.row(0).transpose());
-      if ((local.array() >= -1e-12).all() && local.sum() <= 1 + 1e-12) {
-        EXPECT_LE(Volume(fine, f), Volume(coarse, e) / 8 * (1 + 1e-9));
-      }
+      if (!Holds(fine, f, centroid)) continue;
+      EXPECT_LE(Volume(fine, f), Volume(coarse, e) / 8 * (1 + 1e-9));
     }
   }
 }
