@@ -14,7 +14,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <string>
+#include <vector>
 
 #include "common/scene_builders.h"
 #include "pba/solve.h"
@@ -162,6 +164,46 @@ TEST(AdaptiveMeshTest, FiniteStrainAndQuadraticElements) {
     EXPECT_GT(a.cycles.back().elements, a.cycles.front().elements);
     const int per_element = element == ElementType::kTet10 ? 10 : 4;
     EXPECT_EQ(static_cast<int64_t>(solution.tets.size()), per_element * a.cycles.back().elements);
+  }
+}
+
+// The estimate against the true error, in linear elasticity and at finite
+// strain (neo-Hookean, pressed 10 %, plain TET4: conforming, so its
+// energy too bounds the exact one). The exact energy is extrapolated from
+// three uniform meshes (Aitken), which gives each mesh's true relative
+// error in the energy norm, sqrt(2 (U_h - U)) over sqrt(2 (U_h - U) +
+// 2 U_h); the estimate's effectivity, estimate over true error, must lie
+// within 0.5..2 on every mesh.
+TEST(AdaptiveMeshTest, TheEstimateTracksTheTrueErrorAtSmallAndFiniteStrain) {
+  for (const bool finite : {false, true}) {
+    std::vector<double> energy, estimate;
+    for (const double h : {5.0, 2.5, 1.25}) {
+      SceneSpec scene = HalfPressedBlock(h, 0);
+      if (finite) {
+        scene.material.kind = MaterialSpec::Kind::kNeoHookean;
+        scene.material.neo_hookean = {1000, 9667};  // nu = 0.45 at small strain
+        scene.analysis.type = AnalysisSpec::Type::kNonlinearStatic;
+        scene.boundary_conditions[1].displacement_mm = {0.0, 0.0, -1.0};
+      }
+      const Solution solution = Solve(scene);
+      energy.push_back(solution.summary.strain_energy_j);
+      estimate.push_back(solution.summary.error.relative_error);
+    }
+    ASSERT_GT(energy[0], energy[1]);
+    ASSERT_GT(energy[1], energy[2]);
+    const double exact =
+        (energy[0] * energy[2] - energy[1] * energy[1]) / (energy[0] + energy[2] - 2 * energy[1]);
+    ASSERT_GT(exact, 0);
+    ASSERT_LT(exact, energy[2]);
+    for (std::size_t k = 0; k < energy.size(); ++k) {
+      const double e2 = 2 * (energy[k] - exact);
+      const double truth = std::sqrt(e2 / (e2 + 2 * energy[k]));
+      const double effectivity = estimate[k] / truth;
+      std::printf("%s strain, mesh %zu: estimate %.3g, true error %.3g, effectivity %.2f\n",
+                  finite ? "finite" : "small", k, estimate[k], truth, effectivity);
+      EXPECT_GE(effectivity, 0.5);
+      EXPECT_LE(effectivity, 2.0);
+    }
   }
 }
 
