@@ -152,6 +152,13 @@ bool BuildStudy(const StudyArgs& args, Study* study, std::string* error) {
     *error = args.scene + ": " + e.what();
     return false;
   }
+  if (scene.mesh().adapt().target_error_percent() != 0) {
+    *error = args.scene +
+             ": mesh.adapt: a convergence study compares uniform element sizes, and each member "
+             "would refine its mesh on its own; remove mesh.adapt from the scene for the study "
+             "(an adaptive solve's summary lists its cycles)";
+    return false;
+  }
   study->name = scene.name().empty() ? fs::path(args.scene).stem().string() : scene.name();
   // The scene's own size: what its mesh is scaled from.
   const double own = scene.mesh().element_size_mm() > 0 ? scene.mesh().element_size_mm()

@@ -126,6 +126,17 @@ TEST_F(CliStudyTest, UnknownQuantityIsNamedAndNothingIsSubmitted) {
   EXPECT_FALSE(fs::exists(dir_.path() / "bad.csv.pba-study"));
 }
 
+// An adaptive scene is refused: each member would refine its own mesh.
+TEST_F(CliStudyTest, AnAdaptiveSceneIsRefusedAndNothingIsSubmitted) {
+  const RunResult run =
+      Pba({"study", "convergence", std::string(PBA_EXAMPLES_DIR) + "/adaptive_block.yaml",
+           "--quantity", "results.strain_energy_j", "--out", (dir_.path() / "a.csv").string()});
+  EXPECT_EQ(run.exit_code, kInvalid) << run.out << run.err;
+  EXPECT_NE(run.err.find("mesh.adapt"), std::string::npos) << run.err;
+  EXPECT_EQ(JobCount(), 0u);
+  EXPECT_FALSE(fs::exists(dir_.path() / "a.csv"));
+}
+
 // An atlas scene's region of interest and facets are refined with the
 // mesh: each scaled by the ratio of the element sizes (--dry-run: nothing
 // is meshed or submitted).
