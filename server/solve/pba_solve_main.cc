@@ -292,6 +292,11 @@ int Run(const std::string& scene_path, const std::string& out_dir, bool force,
     if (!status.ok()) return reporter.Error(status);
     std::fprintf(stderr, "pba-solve: wrote %s (run it in CalculiX with: ccx -i %s)\n",
                  inp_path.c_str(), std::filesystem::path(inp_path).replace_extension().c_str());
+    if (spec.mesh.adapt.enabled()) {
+      std::fprintf(stderr,
+                   "pba-solve: note: the deck holds the scene's first mesh; mesh.adapt refines "
+                   "it only while solving\n");
+    }
   }
   if (out_dir.empty()) return kExitOk;
   if (!writer) checkpoint.dir.clear();

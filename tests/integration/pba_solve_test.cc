@@ -81,6 +81,13 @@ TEST(PbaSolveTest, AnAdaptiveSceneWritesItsLastMeshAndEveryCycle) {
                  std::chrono::seconds(300));
   ASSERT_EQ(run.exit_code, 0) << run.out << run.err;
   EXPECT_NE(run.out.find("mesh.adapt cycle 2: "), std::string::npos) << run.out;
+  // An export alone writes the first mesh, and says so.
+  const RunResult exported =
+      RunProcess({PBA_SOLVE_BIN, (fs::path(PBA_EXAMPLES_DIR) / "adaptive_block.yaml").string(),
+                  "--export-inp", (dir.path() / "first.inp").string()});
+  ASSERT_EQ(exported.exit_code, 0) << exported.err;
+  EXPECT_NE(exported.err.find("the deck holds the scene's first mesh"), std::string::npos)
+      << exported.err;
   const std::string summary = ReadFile(out / "summary.json");
   std::vector<std::string> elements;
   const std::regex pattern("\"elements\": \"([0-9]+)\"");
