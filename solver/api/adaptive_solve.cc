@@ -88,16 +88,9 @@ Status SolveAdaptive(const SceneSpec& scene, const SolveOptions& options, Soluti
     }
     Problem problem = resolved;
     PBA_RETURN_IF_ERROR(BuildProblemModelOn(scene, base, &problem));
-    // Contact penalties and the tolerances not given follow the finest
-    // elements (scene/problem.cc, ResolveContacts).
-    if (refinements > 0 && first_finest_edge > 0) {
-      problem.finest_element_size_m *= FinestMeanEdge(base.mesh) / first_finest_edge;
-      for (std::size_t i = 0; i < problem.contacts.size(); ++i) {
-        if (scene.contacts[i].penetration_tolerance_mm > 0) continue;
-        problem.contacts[i].penetration_tolerance_m =
-            Contact::kToleranceFraction * problem.finest_element_size_m;
-      }
-    }
+    // Contact penalties and tolerances stay those of the scene's own mesh
+    // (ResolveProblem): every cycle solves the same problem, so the cycles
+    // differ by their meshes alone.
     clock.End();
     if (clock.cancelled()) return Status::Cancelled("cancelled during mesh");
     const int elements = problem.model.mesh.num_elements();
