@@ -179,6 +179,14 @@ Status SolveAdaptive(const SceneSpec& scene, const SolveOptions& options, Soluti
         "mesh.adapt: no checkpoints were written (each cycle solves the scene anew on its own "
         "mesh)");
   }
+  // The bounds as run, defaults included, beside the other options.
+  summary.options.emplace_back("mesh.adapt.target_error_percent",
+                               Format("%g %%", 100 * adaptation.target_error));
+  summary.options.emplace_back("mesh.adapt.max_elements",
+                               Format("%lld", static_cast<long long>(adaptation.max_elements)));
+  summary.options.emplace_back("mesh.adapt.max_cycles", Format("%d", adaptation.max_cycles));
+  summary.options.emplace_back("mesh.adapt.refine_fraction",
+                               Format("%g", adaptation.refine_fraction));
   summary.adaptation = std::move(adaptation);
   return Status::Ok();
 }

@@ -71,6 +71,16 @@ TEST(AdaptiveMeshTest, ReachesTheTargetCloserThanAUniformMeshWithMoreElements) {
     EXPECT_EQ(a.cycles[k - 1].marked > 0, true);
     EXPECT_FALSE(a.cycles[k].changed_quantity.empty());
   }
+  // The bounds as run are echoed with the other options.
+  const auto option = [&](const std::string& name) {
+    for (const auto& [key, value] : adaptive.summary.options)
+      if (key == name) return value;
+    return std::string("(absent)");
+  };
+  EXPECT_EQ(option("mesh.adapt.target_error_percent"), "20 %");
+  EXPECT_EQ(option("mesh.adapt.max_cycles"), "6");
+  EXPECT_EQ(option("mesh.adapt.max_elements"), "500000");
+  EXPECT_EQ(option("mesh.adapt.refine_fraction"), "0.5");
   // The result is the last cycle's mesh.
   EXPECT_EQ(static_cast<int64_t>(adaptive.tets.size()), 4 * a.cycles.back().elements);
   EXPECT_EQ(static_cast<int64_t>(adaptive.nodes_mm.size()), 3 * a.cycles.back().nodes);
