@@ -56,7 +56,8 @@ Status SolveAdaptive(const SceneSpec& scene, const SolveOptions& options, Soluti
 
   BaseMesh base;
   double first_finest_edge = 0;
-  Solution current, previous;
+  Solution current;
+  Summary previous;                // the cycle before's, for the change of its results
   std::vector<PhaseTime> earlier;  // a phase per cycle before the last
   double earlier_wall_s = 0;
   int refinements = 0;
@@ -76,18 +77,19 @@ Status SolveAdaptive(const SceneSpec& scene, const SolveOptions& options, Soluti
     }
     current = Solution();
     PhaseClock clock(cycle_options, &current.summary.phases);
-    if (cycle == 0) {
-      clock.Begin("mesh", 0.0, 0.05, "meshing the " + resolved.geometry);
+    clock.Begin("mesh", 0.0, 0.05,
+                cycle == 0 ? "meshing the " + resolved.geometry
+                           : Format("building the model on %d elements", base.mesh.num_elements()));
+    Problem problem = resolved;
+    {
       // CGAL and the atlas code do not take a context.
       const LibraryThreadScope bounded(resolved.threads);
-      PBA_RETURN_IF_ERROR(BuildProblemBaseMesh(scene, build, &base));
-      first_finest_edge = FinestMeanEdge(base.mesh);
-    } else {
-      clock.Begin("mesh", 0.0, 0.05,
-                  Format("building the model on %d elements", base.mesh.num_elements()));
+      if (cycle == 0) {
+        PBA_RETURN_IF_ERROR(BuildProblemBaseMesh(scene, build, &base));
+        first_finest_edge = FinestMeanEdge(base.mesh);
+      }
+      PBA_RETURN_IF_ERROR(BuildProblemModelOn(scene, base, &problem));
     }
-    Problem problem = resolved;
-    PBA_RETURN_IF_ERROR(BuildProblemModelOn(scene, base, &problem));
     // Contact penalties and tolerances stay those of the scene's own mesh
     // (ResolveProblem): every cycle solves the same problem, so the cycles
     // differ by their meshes alone.
@@ -112,8 +114,7 @@ Status SolveAdaptive(const SceneSpec& scene, const SolveOptions& options, Soluti
     record.relative_error = summary.error.relative_error;
     record.wall_time_s = summary.wall_time_s;
     if (cycle > 0) {
-      record.change =
-          LargestRelativeDifference(previous.summary, summary, &record.changed_quantity);
+      record.change = LargestRelativeDifference(previous, summary, &record.changed_quantity);
     }
     adaptation.cycles.push_back(record);
 
@@ -153,7 +154,7 @@ Status SolveAdaptive(const SceneSpec& scene, const SolveOptions& options, Soluti
     ++refinements;
     earlier.push_back({Format("mesh.adapt: cycle %d", cycle + 1), summary.wall_time_s});
     earlier_wall_s += summary.wall_time_s;
-    previous = std::move(current);
+    previous = current.summary;
   }
 
   *solution = std::move(current);
