@@ -148,11 +148,10 @@ const char* ElementName(ElementType element);
 // every element estimated (Zienkiewicz-Zhu, the estimate the summary
 // reports), the elements carrying `refine_fraction` of the squared error
 // bisected three times, which halves their edges (longest-edge bisection,
-// mesh/refine.h), and the scene solved
-// again on the refined mesh, until the estimated relative error is at most
-// target_error_percent, another refinement would pass max_elements, or
-// max_cycles solves have run. Each cycle is in the summary; the result
-// files are the last cycle's.
+// mesh/refine.h), and the scene solved again on the refined mesh, until
+// the estimated relative error is at most target_error_percent, another
+// refinement would pass max_elements, or max_cycles solves have run. Each
+// cycle is in the summary; the result files are the last cycle's.
 struct AdaptSpec {
   double target_error_percent = 0;  // 0: no adaptation; else in (0, 100)
   int64_t max_elements = 0;         // 0: kDefaultAdaptMaxElements
