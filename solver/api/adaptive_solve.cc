@@ -47,12 +47,8 @@ Adaptation Bounds(const AdaptSpec& spec) {
 Status SolveAdaptive(const SceneSpec& scene, const SolveOptions& options, Solution* solution) {
   Adaptation adaptation = Bounds(scene.mesh.adapt);
   Problem resolved;
-  PBA_RETURN_IF_ERROR(ResolveProblem(scene, &resolved));
-  resolved.threads = ThreadContext(options.threads);
-  resolved.linear_solver.threads = resolved.threads;
   BuildModelOptions build;
-  build.atlas_cache_dir = options.atlas_cache_dir;
-  build.atlas_cache_max_bytes = options.atlas_cache_max_bytes;
+  PBA_RETURN_IF_ERROR(ResolveForSolve(scene, options, &resolved, &build));
 
   BaseMesh base;
   double first_finest_edge = 0;
@@ -138,11 +134,11 @@ Status SolveAdaptive(const SceneSpec& scene, const SolveOptions& options, Soluti
         MarkLargestShare(current.error_indicator, adaptation.refine_fraction);
     Mesh refined;
     RefineReport report;
-    PBA_RETURN_IF_ERROR(
-        RefineTetsRepeatedly(base.mesh, marked, kBisectionsPerCycle, &refined, &report));
+    PBA_RETURN_IF_ERROR(RefineTetsRepeatedly(base.mesh, marked, kBisectionsPerCycle, &refined,
+                                             &report, adaptation.max_elements));
     if (report.elements > adaptation.max_elements) {
       adaptation.stop_reason = Format(
-          "refining again would give %lld elements, more than mesh.adapt.max_elements "
+          "refining again would give over %lld elements, more than mesh.adapt.max_elements "
           "(%lld); the estimated error is %.3g %%, the target %g %%",
           static_cast<long long>(report.elements), static_cast<long long>(adaptation.max_elements),
           100 * error, 100 * adaptation.target_error);

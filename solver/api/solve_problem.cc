@@ -68,6 +68,17 @@ std::string LockingNote(const Problem& problem) {
 
 }  // namespace
 
+Status ResolveForSolve(const SceneSpec& scene, const SolveOptions& options, Problem* problem,
+                       BuildModelOptions* build) {
+  PBA_RETURN_IF_ERROR(ResolveProblem(scene, problem));
+  problem->threads = ThreadContext(options.threads);
+  problem->linear_solver.threads = problem->threads;
+  *build = BuildModelOptions();
+  build->atlas_cache_dir = options.atlas_cache_dir;
+  build->atlas_cache_max_bytes = options.atlas_cache_max_bytes;
+  return Status::Ok();
+}
+
 Status SolveProblem(const Problem& problem, PhaseClock* clock, Solution* solution) {
   Summary& summary = solution->summary;
   const Model& model = problem.model;

@@ -16,4 +16,10 @@ namespace pba {
 // and cancellation).
 Status SolveProblem(const Problem& problem, PhaseClock* clock, Solution* solution);
 
+// ResolveProblem, with the threads of `options` bounding every loop and
+// library of the solve (core/thread_context.h; no OpenMP state is set for
+// good), and the model-build options (the atlas mesh cache) they give.
+Status ResolveForSolve(const SceneSpec& scene, const SolveOptions& options, Problem* problem,
+                       BuildModelOptions* build);
+
 }  // namespace pba

@@ -42,15 +42,9 @@ Status SolveScene(const SceneSpec& scene, const SolveOptions& options, Solution*
   PhaseClock clock(options, &solution->summary.phases);
 
   Problem problem;
-  PBA_RETURN_IF_ERROR(ResolveProblem(scene, &problem));
-  // Every loop and library of the solve is bounded by this count
-  // (core/thread_context.h); no OpenMP state is set for good.
-  problem.threads = ThreadContext(options.threads);
-  problem.linear_solver.threads = problem.threads;
-  clock.Begin("mesh", 0.0, 0.05, "meshing the " + problem.geometry);
   BuildModelOptions build;
-  build.atlas_cache_dir = options.atlas_cache_dir;
-  build.atlas_cache_max_bytes = options.atlas_cache_max_bytes;
+  PBA_RETURN_IF_ERROR(ResolveForSolve(scene, options, &problem, &build));
+  clock.Begin("mesh", 0.0, 0.05, "meshing the " + problem.geometry);
   {
     // The mesh phase runs CGAL and the atlas code, which do not take a
     // context.

@@ -227,7 +227,7 @@ Status RefineTets(const Mesh& coarse, const std::vector<char>& marked, Mesh* fin
 }
 
 Status RefineTetsRepeatedly(const Mesh& coarse, const std::vector<char>& marked, int times,
-                            Mesh* fine, RefineReport* report) {
+                            Mesh* fine, RefineReport* report, int64_t max_elements) {
   Mesh mesh = coarse;
   std::vector<char> mark = marked;
   // The coarse element of each element of `mesh`.
@@ -251,6 +251,7 @@ Status RefineTetsRepeatedly(const Mesh& coarse, const std::vector<char>& marked,
     }
     origin = std::move(next_origin);
     mesh = std::move(next);
+    if (max_elements > 0 && total.elements > max_elements) break;
   }
   *fine = std::move(mesh);
   if (report != nullptr) *report = total;

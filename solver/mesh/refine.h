@@ -53,9 +53,12 @@ Status RefineTets(const Mesh& coarse, const std::vector<char>& marked, Mesh* fin
 // lies in a marked coarse element (the others only as the mesh's
 // conformity needs): three times halves the marked elements' edges, as one
 // uniform refinement would. The report counts the coarse elements marked
-// and the final mesh.
+// and the final mesh. With `max_elements` > 0 it stops after the first
+// pass that passes that many elements (refinement only adds elements, so
+// the whole would too): the report's count is then that pass's, above the
+// bound, and `fine` is unspecified; memory stays within a pass of it.
 Status RefineTetsRepeatedly(const Mesh& coarse, const std::vector<char>& marked, int times,
-                            Mesh* fine, RefineReport* report = nullptr);
+                            Mesh* fine, RefineReport* report = nullptr, int64_t max_elements = 0);
 
 // Dorfler's bulk criterion: the fewest elements that carry at least
 // `fraction` (0..1] of the total of `share` (e.g. the estimated squared

@@ -279,6 +279,21 @@ TEST(RefineTest, ThreeBisectionsHalveTheMarkedElements) {
   }
 }
 
+// A bound on the elements stops the passes once one passes it.
+TEST(RefineTest, RepeatedRefinementStopsPastItsBound) {
+  const Mesh coarse = JitteredBox(5);
+  const std::vector<char> all(coarse.num_elements(), 1);
+  Mesh fine;
+  RefineReport whole, bounded;
+  ASSERT_TRUE(RefineTetsRepeatedly(coarse, all, 3, &fine, &whole).ok());
+  const int64_t bound = coarse.num_elements() + 1;
+  ASSERT_TRUE(RefineTetsRepeatedly(coarse, all, 3, &fine, &bounded, bound).ok());
+  EXPECT_GT(bounded.elements, bound);
+  EXPECT_LT(bounded.elements, whole.elements);
+  ASSERT_TRUE(RefineTetsRepeatedly(coarse, all, 3, &fine, &bounded, whole.elements).ok());
+  EXPECT_EQ(bounded.elements, whole.elements);
+}
+
 TEST(RefineTest, SameInputSameMesh) {
   const Mesh coarse = JitteredBox(5);
   std::vector<char> marked(coarse.num_elements(), 0);
