@@ -405,9 +405,16 @@ void AnalysisOptionsFromProto(const v1::Analysis& analysis, AnalysisSpec* analys
 
   const v1::LinearSolverOptions& linear = analysis.linear_solver_options();
   LinearSolverSpec& l = analysis_spec->linear_solver_options;
-  l.preconditioner = linear.preconditioner() == v1::LinearSolverOptions::BOOMERAMG
-                         ? LinearSolverSpec::Preconditioner::kBoomerAmg
-                         : LinearSolverSpec::Preconditioner::kGamg;
+  switch (linear.preconditioner()) {
+    case v1::LinearSolverOptions::BOOMERAMG:
+      l.preconditioner = LinearSolverSpec::Preconditioner::kBoomerAmg;
+      break;
+    case v1::LinearSolverOptions::PRESSURE_SCHUR:
+      l.preconditioner = LinearSolverSpec::Preconditioner::kPressureSchur;
+      break;
+    default:
+      l.preconditioner = LinearSolverSpec::Preconditioner::kGamg;
+  }
   l.relative_tolerance = linear.relative_tolerance();
   l.max_iterations = linear.max_iterations();
   if (linear.has_gamg_threshold()) l.gamg_threshold = linear.gamg_threshold();

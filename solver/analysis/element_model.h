@@ -14,6 +14,10 @@
 //   bool Evaluate(const Geometry&, const Unknowns&, const HyperelasticMaterial&,
 //                 bool with_tangent, bool drop_pressure_stiffness, Result*) const;
 //   std::string Describe() const;
+//   // Whether Result carries a volume constraint per element (mean
+//   // dilatation: volume_gradient, volumetric_weight) for a
+//   // VolumetricSplit.
+//   bool SplitsVolume() const;
 //   // Field recovery: kPoints integration points; the element's mean
 //   // volume ratio (mean dilatation; any number otherwise) and the F its
 //   // stress is evaluated with at point q.
@@ -96,6 +100,11 @@ class ElementModel final : public FiniteStrainModel {
 
   Status Assemble(const Eigen::VectorXd& u, const DofMap& dofs, const AssemblyOptions& options,
                   LinearSystem* system) const override {
+    system->split = VolumetricSplit();
+    const bool split = options.volumetric_split && element_.SplitsVolume();
+    // Each element's constraint, when asked for: dv/dx and U''(theta) / V.
+    std::vector<typename Element::Unknowns> gradients(split ? mesh_.num_elements() : 0);
+    std::vector<double> weights(gradients.size());
     const typename Element::Kernel kernel = [&](int e, auto* k, auto* f) {
       typename Element::Result r;
       if (!element_.Evaluate(geometry_[e], Element::Gather(mesh_, e, u), field_.Base(e), true,
@@ -104,12 +113,17 @@ class ElementModel final : public FiniteStrainModel {
       }
       *k = r.tangent;
       *f = -r.force;
+      if (split) {
+        gradients[e] = r.volume_gradient;
+        weights[e] = r.volumetric_weight;
+      }
       return true;
     };
     AssemblyOptions threaded = options;
     threaded.threads = threads_;
     const Status status = Element::AssembleSystem(
         mesh_, dofs, colours_, kernel, threaded, [](double) { return true; }, system);
+    if (status.ok() && split) BuildSplit(dofs, gradients, weights, &system->split);
     if (status.code() != Status::Code::kNumerical) return status;
     // The assembly stops at whichever failing element a thread met first;
     // the message names the lowest one.
@@ -140,6 +154,33 @@ class ElementModel final : public FiniteStrainModel {
   }
 
  private:
+  // The constraints on the free unknowns, one per element (VolumetricSplit).
+  void BuildSplit(const DofMap& dofs, const std::vector<typename Element::Unknowns>& gradients,
+                  const std::vector<double>& weights, VolumetricSplit* split) const {
+    const int ne = mesh_.num_elements();
+    std::vector<Eigen::Triplet<double>> entries;
+    entries.reserve(static_cast<std::size_t>(ne) * 3 * Element::kNodes);
+    split->weight.resize(ne);
+    split->volume.resize(ne);
+    split->shear_modulus.resize(ne);
+    for (int e = 0; e < ne; ++e) {
+      const auto nodes = Element::Nodes(mesh_, e);
+      for (int a = 0; a < Element::kNodes; ++a) {
+        for (int i = 0; i < 3; ++i) {
+          const int f = dofs.free_index(3 * nodes[a] + i);
+          if (f >= 0) entries.emplace_back(e, f, gradients[e](3 * a + i));
+        }
+      }
+      split->weight(e) = weights[e];
+      double volume = 0;
+      for (double v : geometry_[e].volume) volume += v;
+      split->volume(e) = volume;
+      split->shear_modulus(e) = field_.Base(e).ShearModulus();
+    }
+    split->b.resize(ne, dofs.num_free());
+    split->b.setFromTriplets(entries.begin(), entries.end());
+  }
+
   // The lowest element whose reference det J or whose F at an integration
   // point at `u` is not admissible; -1 when there is none.
   int LowestInverted(const Eigen::VectorXd& u) const {

@@ -42,6 +42,7 @@ struct Hex8Element {
                ? Hex8FiniteStrainFull(g, ue, material, with_tangent, r, drop_pressure_stiffness)
                : Hex8FiniteStrain(g, ue, material, with_tangent, r, drop_pressure_stiffness);
   }
+  bool SplitsVolume() const { return !full_integration; }
   static constexpr int kPoints = 8;
   double Dilatation(const Geometry& g, const Unknowns& ue) const { return MeanDilatation(g, ue); }
   // The mean-dilatation brick's stress comes from F_bar = (theta / J)^(1/3)

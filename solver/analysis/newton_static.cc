@@ -170,6 +170,13 @@ class NewtonRun {
   Status Cancelled() const {
     return Status::Cancelled(Format("cancelled at load factor %.4g", load_));
   }
+  // What every assembly asks for: the volume constraints apart too when
+  // the solver solves with them.
+  AssemblyOptions BaseOptions() const {
+    AssemblyOptions options;
+    options.volumetric_split = solver_->WantsVolumetricSplit();
+    return options;
+  }
   Residual EvaluateAt(const Loading& loading, const Eigen::VectorXd& state) {
     ScopedTimer timer(&report_.residual_s);
     return Evaluate(model_, loading, dofs_, state);
@@ -263,13 +270,21 @@ Status FactorizeAndSolve(LinearSolver* solver, const SparseMatrix& k, const Eige
   return solver->Solve(rhs, du);
 }
 
+// The same for an assembled tangent, with its volume constraints apart when
+// the model gave them (LinearSystem::split).
+Status FactorizeAndSolve(LinearSolver* solver, const LinearSystem& tangent,
+                         const Eigen::VectorXd& rhs, Eigen::VectorXd* du) {
+  PBA_RETURN_IF_ERROR(solver->FactorizeSplit(tangent.k, tangent.split));
+  return solver->Solve(rhs, du);
+}
+
 Status NewtonRun::SolveLinear(const LinearSystem& system, int iteration, double residual,
                               bool near_equilibrium,
                               const std::function<Status(LinearSystem*)>& assemble_approximate,
                               Eigen::VectorXd* du) {
   ScopedTimer timer(&report_.linear_solve_s);
   LinearSolver* target = good_ == solver_ ? spare_.get() : solver_;
-  const Status status = FactorizeAndSolve(target, system.k, system.rhs, du);
+  const Status status = FactorizeAndSolve(target, system, system.rhs, du);
   if (status.ok()) {
     good_ = target;
     indefinite_streak_ = 0;
@@ -307,7 +322,7 @@ Status NewtonRun::SolveApproximate(const LinearSystem& system, LinearSolver* tar
     report_.assembly_s += assembly;
     report_.linear_solve_s -= assembly;
   }
-  if (approximated && FactorizeAndSolve(target, approximate_.k, system.rhs, du).ok()) {
+  if (approximated && FactorizeAndSolve(target, approximate_, system.rhs, du).ok()) {
     ++report_.approximate_iterations;
     good_ = target;
     return Status::Ok();
@@ -339,7 +354,7 @@ Status NewtonRun::Predict(double target, const Loading& loading, Eigen::VectorXd
     }
   }
   increment.Finalize();
-  AssemblyOptions lift;
+  AssemblyOptions lift = BaseOptions();
   lift.lift_prescribed = true;
   *trial = u_;
   Eigen::VectorXd du;
@@ -395,13 +410,12 @@ Status NewtonRun::Correct(const Loading& loading, double first_energy, Eigen::Ve
     }
     {
       ScopedTimer timer(&report_.assembly_s);
-      PBA_RETURN_IF_ERROR(
-          AssembleLoaded(model_, loading, *trial, dofs_, AssemblyOptions(), &system_));
+      PBA_RETURN_IF_ERROR(AssembleLoaded(model_, loading, *trial, dofs_, BaseOptions(), &system_));
     }
     PBA_RETURN_IF_ERROR(SolveLinear(
         system_, iteration, residual, residual <= kIndefiniteNewtonResidual,
         [&](LinearSystem* out) {
-          AssemblyOptions definite;
+          AssemblyOptions definite = BaseOptions();
           definite.drop_pressure_stiffness = true;
           return AssembleLoaded(model_, loading, *trial, dofs_, definite, out);
         },

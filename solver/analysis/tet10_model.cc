@@ -45,6 +45,7 @@ struct Tet10Element {
                                                  drop_pressure_stiffness)
                : Tet10FiniteStrain(g, ue, material, with_tangent, r, drop_pressure_stiffness);
   }
+  bool SplitsVolume() const { return mean_dilatation; }
   static constexpr int kPoints = 4;
   double Dilatation(const Geometry& g, const Unknowns& ue) const {
     return mean_dilatation ? MeanDilatation(g, ue) : 0;

@@ -15,6 +15,7 @@
 #include "fem/hex8.h"
 #include "fem/tet10.h"
 #include "fem/tet4.h"
+#include "linear/linear_solver.h"
 #include "material/linear_elastic.h"
 #include "mesh/mesh.h"
 #include "pba/status.h"
@@ -46,6 +47,11 @@ struct PatternSource {
 struct LinearSystem {
   SparseMatrix k;       // K_ff, symmetric, both triangles stored
   Eigen::VectorXd rhs;  // f_f - K_fp u_p
+  // The elements' volume constraints apart, when AssemblyOptions::
+  // volumetric_split asks and the model has them (the mean-dilatation
+  // elements); else empty. Whatever is later added to k belongs to the
+  // split's A (VolumetricSplit), which is k less the constraints' term.
+  VolumetricSplit split;
   // Set by the assemblies below. The next one into this system keeps k's
   // pattern and overwrites its values when the mesh, the element kind and
   // every dof's free index are the same and k still has its size and number
@@ -78,6 +84,10 @@ struct AssemblyOptions {
   // volumetric stiffness K; Newton falls back on it when the consistent
   // tangent cannot be factorised. Models without such a term ignore it.
   bool drop_pressure_stiffness = false;
+  // Also give the tangent's volume constraints apart (LinearSystem::split),
+  // for a solver that WantsVolumetricSplit; models without one per element
+  // leave the split empty.
+  bool volumetric_split = false;
   // The threads a colour is assembled by; a colour under kMinParallelWork
   // elements is assembled by the calling thread.
   ThreadContext threads;

@@ -7,7 +7,8 @@
 // `Geometry` has grad (std::array<Eigen::Matrix<double, N, 3>, Q>, dN_a/dX
 // at each point [1/m]), volume (std::array<double, Q>, w_q det J_q [m^3]) and
 // min_jacobian; `Result` has force (3N), tangent (3N x 3N), energy, f
-// (std::array<Eigen::Matrix3d, Q>) and theta. Unknowns u_e = (u0x u0y u0z
+// (std::array<Eigen::Matrix3d, Q>), theta, and for the mean-dilatation
+// element volume_gradient (3N), volumetric_weight and reference_volume. Unknowns u_e = (u0x u0y u0z
 // u1x ...) [m].
 #pragma once
 
@@ -183,6 +184,9 @@ bool MeanDilatation(const Geometry& reference, const Eigen::Matrix<double, 3 * N
   }
   result->theta = volume / reference_volume;
   const ScalarDerivatives vol = material.Volumetric(result->theta);
+  result->volume_gradient = volume_gradient;
+  result->volumetric_weight = vol.second / reference_volume;
+  result->reference_volume = reference_volume;
   result->energy += reference_volume * vol.value;
   result->force += vol.first * volume_gradient;
   if (with_tangent) {

@@ -55,6 +55,14 @@ struct Tet10FiniteStrainResult {
   // Mean dilatation v / V: Tet10FiniteStrainMeanDilatation's volume
   // constraint; Tet10FiniteStrain reports it for information.
   double theta = 1;
+  // The mean-dilatation element's volume constraint, whose stiffness is the
+  // tangent's term (U''(theta) / V) (dv/dx) (dv/dx)^T: dv/dx [m^2],
+  // volumetric_weight = U''(theta) / V [Pa/m^3] and V [m^3]. A solver that
+  // takes the constraint's pressure as an unknown (VolumetricSplit) needs
+  // them apart. Set by Tet10FiniteStrainMeanDilatation only; zero otherwise.
+  Vector30d volume_gradient = Vector30d::Zero();
+  double volumetric_weight = 0;
+  double reference_volume = 0;
 };
 
 // Force, energy and (when `with_tangent`) tangent of one element with

@@ -24,6 +24,16 @@ class AutoSolver final : public LinearSolver {
   }
 
   bool Iterative() const override { return chosen_ != nullptr && chosen_->Iterative(); }
+  // Before the choice: whether the AMG it may choose would use the split.
+  bool WantsVolumetricSplit() const override {
+    if (chosen_ != nullptr) return chosen_->WantsVolumetricSplit();
+    return options_.settings.preconditioner == LinearSolverSettings::Preconditioner::kPressureSchur;
+  }
+  Status FactorizeSplit(const Eigen::SparseMatrix<double>& a,
+                        const VolumetricSplit& split) override {
+    if (chosen_ == nullptr) PBA_RETURN_IF_ERROR(Choose(a));
+    return chosen_->FactorizeSplit(a, split);
+  }
   std::string Name() const override {
     if (chosen_ == nullptr) return "AUTO (chosen at the first factorisation)";
     return chosen_->Name() + " [AUTO: " + reason_ + "]";
@@ -84,8 +94,15 @@ Status CheckPositiveDiagonal(const Eigen::SparseMatrix<double>& a) {
 }
 
 const char* LinearSolverSettings::PreconditionerName() const {
-  return preconditioner == Preconditioner::kBoomerAmg ? "hypre BoomerAMG"
-                                                      : "GAMG smoothed aggregation";
+  switch (preconditioner) {
+    case Preconditioner::kBoomerAmg:
+      return "hypre BoomerAMG";
+    case Preconditioner::kPressureSchur:
+      return "a displacement-pressure Schur field split (GAMG on the displacements)";
+    case Preconditioner::kGamg:
+      break;
+  }
+  return "GAMG smoothed aggregation";
 }
 
 const char* LinearSolverOptions::KindName() const {

@@ -14,6 +14,36 @@
 
 namespace pba {
 
+// A tangent written with its elements' volume constraints apart (the
+// mean-dilatation elements, TET10_MD and HEX8: one constraint per element):
+//
+//   K = A + b^T diag(weight) b
+//
+// with one row of `b` per constraint, its volume gradient dv/dx on the
+// free unknowns, and weight = U''(theta) / V. Nearly incompressible, the
+// second term dwarfs A (K / mu of 1e3 and more), and multigrid on K
+// converges ever more slowly; the same system with the constraints'
+// pressures p = diag(weight) b u as unknowns,
+//
+//   [ A   b^T          ] [u]   [r]
+//   [ b  -diag(1/weight)] [p] = [0],
+//
+// is solved at a cost that does not grow with K / mu when the pair is
+// inf-sup stable (P2/P0, TET10_MD), by a Schur-complement field split
+// (CreateAmgSolver with the PRESSURE_SCHUR preconditioner). A is K less the
+// constraints' term, so whatever else K holds (contact, follower loads) is
+// A's.
+struct VolumetricSplit {
+  Eigen::SparseMatrix<double, Eigen::RowMajor> b;  // constraints x free unknowns [m^2]
+  Eigen::VectorXd weight;                          // U''(theta) / V [Pa/m^3]
+  // Per constraint: the element's reference volume V [m^3] and its
+  // material's initial shear modulus [Pa], the scale of the pressures'
+  // preconditioner.
+  Eigen::VectorXd volume;
+  Eigen::VectorXd shear_modulus;
+  bool empty() const { return b.rows() == 0; }
+};
+
 class LinearSolver {
  public:
   virtual ~LinearSolver() = default;
@@ -28,6 +58,17 @@ class LinearSolver {
   virtual bool Iterative() const { return false; }
   // A fresh solver of the same kind (to hold a second factorisation).
   virtual std::unique_ptr<LinearSolver> NewOfSameKind() const = 0;
+  // Whether FactorizeSplit uses a VolumetricSplit (the caller then
+  // assembles one where the model has it).
+  virtual bool WantsVolumetricSplit() const { return false; }
+  // Factorises `a`, given also with its volume constraints apart (`split`,
+  // of the same a). A solver that WantsVolumetricSplit solves the mixed
+  // form, to a's answer; the others factorise `a`, as does any solver given
+  // an empty split.
+  virtual Status FactorizeSplit(const Eigen::SparseMatrix<double>& a,
+                                const VolumetricSplit& split) {
+    return Factorize(a);
+  }
 };
 
 // Where the unknowns of a system sit: for free unknown i, its node
@@ -49,6 +90,10 @@ struct LinearSolverSettings {
   enum class Preconditioner {
     kGamg,       // PETSc's smoothed aggregation, rigid-body near-null space
     kBoomerAmg,  // hypre's BoomerAMG (classical AMG), unknowns grouped by node
+    // A tangent given with its volume constraints (VolumetricSplit): its
+    // displacement-pressure form by FGMRES with a Schur-complement field
+    // split, GAMG on the displacements; a tangent without them: GAMG.
+    kPressureSchur,
   };
   Preconditioner preconditioner = Preconditioner::kGamg;
   // AMG: the solve ends when ||b - A x|| <= relative_tolerance ||b||. Newton
@@ -144,6 +189,24 @@ std::unique_ptr<LinearSolver> CreatePcgSolver(const std::atomic<bool>* cancel = 
 std::unique_ptr<LinearSolver> CreateAmgSolver(const LinearSolverSettings& settings,
                                               const UnknownLayout* layout,
                                               const std::atomic<bool>* cancel);
+// The PRESSURE_SCHUR preconditioner's solver (CreateAmgSolver gives it for
+// that setting): FactorizeSplit takes the displacement-pressure form of
+// VolumetricSplit, solved by flexible GMRES preconditioned by the upper
+// block-triangular factor [A b^T; 0 S] of [A b^T; b -1/w], with one GAMG
+// V-cycle for A^-1 and a diagonal for the Schur complement
+// S = -1/w - b A^-1 b^T: the pressure mass matrix over the shear modulus,
+// spectrally equivalent to b A^-1 b^T for an inf-sup stable pair, once A
+// also holds a share of the volumetric stiffness (the "grad-div" term; see
+// pressure_schur_solver.cc). The constraints shape only the preconditioner:
+// A is K less their term, so the operator is K's whatever they are. The
+// tolerance and the checks are AMG's, on the true residual of K; a solve
+// that does not converge (within settings.max_iterations, or three times
+// the iterations of the last converged solve) is redone by MUMPS on K below
+// settings.fallback_direct_max_unknowns, else fails naming the iterations
+// and the residual. A tangent given without a split goes to GAMG.
+std::unique_ptr<LinearSolver> CreatePressureSchurSolver(const LinearSolverSettings& settings,
+                                                        const UnknownLayout* layout,
+                                                        const std::atomic<bool>* cancel);
 // PETSc's interface to MUMPS, the multifrontal sparse direct solver, as a
 // symmetric LDL^T: the matrix's inertia tells a tangent that is not positive
 // definite (Status::Numerical), as CHOLMOD's failed pivot does.

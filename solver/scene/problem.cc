@@ -200,9 +200,16 @@ Status NonlinearOptions::Validate() const {
 
 LinearSolverSettings LinearSolverSettingsFromSpec(const LinearSolverSpec& spec) {
   LinearSolverSettings o;
-  o.preconditioner = spec.preconditioner == LinearSolverSpec::Preconditioner::kBoomerAmg
-                         ? LinearSolverSettings::Preconditioner::kBoomerAmg
-                         : LinearSolverSettings::Preconditioner::kGamg;
+  switch (spec.preconditioner) {
+    case LinearSolverSpec::Preconditioner::kBoomerAmg:
+      o.preconditioner = LinearSolverSettings::Preconditioner::kBoomerAmg;
+      break;
+    case LinearSolverSpec::Preconditioner::kPressureSchur:
+      o.preconditioner = LinearSolverSettings::Preconditioner::kPressureSchur;
+      break;
+    case LinearSolverSpec::Preconditioner::kGamg:
+      o.preconditioner = LinearSolverSettings::Preconditioner::kGamg;
+  }
   if (spec.relative_tolerance != 0) o.relative_tolerance = spec.relative_tolerance;
   if (spec.max_iterations != 0) o.max_iterations = spec.max_iterations;
   if (spec.gamg_threshold) o.gamg_threshold = *spec.gamg_threshold;
@@ -349,8 +356,13 @@ std::vector<std::pair<std::string, std::string>> EffectiveOptions(const Problem&
       add(o + "auto_direct_max_factor_mb", std::to_string(ls.auto_direct_max_factor_mb));
     }
     if (l.kind == Kind::kAuto || l.kind == Kind::kAmg) {
-      const bool gamg = ls.preconditioner == LinearSolverSettings::Preconditioner::kGamg;
-      add(o + "preconditioner", gamg ? "GAMG" : "BOOMERAMG");
+      const bool boomeramg = ls.preconditioner == LinearSolverSettings::Preconditioner::kBoomerAmg;
+      const bool gamg = !boomeramg;  // PRESSURE_SCHUR's displacements too
+      add(o + "preconditioner",
+          ls.preconditioner == LinearSolverSettings::Preconditioner::kPressureSchur
+              ? "PRESSURE_SCHUR"
+          : boomeramg ? "BOOMERAMG"
+                      : "GAMG");
       add(o + "relative_tolerance", number(ls.relative_tolerance, ""));
       add(o + "max_iterations", std::to_string(ls.max_iterations));
       if (gamg) {

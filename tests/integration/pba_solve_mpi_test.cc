@@ -179,6 +179,16 @@ const Case kCases[] = {
      {{"type: NONLINEAR_STATIC", "type: NONLINEAR_STATIC\n  linear_solver: AMG"}},
      "GAMG",
      "GAMG"},
+    // TET10_MD's element pressures as unknowns (PRESSURE_SCHUR): the mixed
+    // system's pressures split between the ranks as well.
+    {"tet10md_cavity_pressure_schur",
+     "pressurised_cavity",
+     {{"element: TET10\n", "element: TET10_MD\n"},
+      {"type: NONLINEAR_STATIC",
+       "type: NONLINEAR_STATIC\n  linear_solver: AMG\n  linear_solver_options: {preconditioner: "
+       "PRESSURE_SCHUR, relative_tolerance: 1.0e-12}"}},
+     "1152 pressures",
+     "1152 pressures"},
     // QUASI_STATIC through time with a viscoelastic material, AUTO.
     {"viscoelastic_relaxation", "relaxation", {}, "CHOLMOD", "MUMPS"},
     // mesh.adapt, AUTO: every rank refines its copy of the mesh from the

@@ -412,7 +412,9 @@ struct GravitySpec {
 // Controls of the linear solve (analysis.linear_solver_options); 0 picks the
 // default (LinearSolverSettings in linear/linear_solver.h declares them).
 struct LinearSolverSpec {
-  enum class Preconditioner { kGamg, kBoomerAmg };
+  // kPressureSchur: TET10_MD's (and HEX8's) element pressures as unknowns,
+  // FGMRES with a Schur field split; other elements get GAMG.
+  enum class Preconditioner { kGamg, kBoomerAmg, kPressureSchur };
   Preconditioner preconditioner = Preconditioner::kGamg;  // AMG
   double relative_tolerance = 0;                          // AMG, [1e-14, 1e-2]
   int max_iterations = 0;                                 // AMG, 1..100000

@@ -382,6 +382,11 @@ TEST(SceneFromProto, EveryLinearSolver) {
   ASSERT_TRUE(l.fallback_direct_max_unknowns.has_value());
   EXPECT_EQ(*l.fallback_direct_max_unknowns, 0);
   EXPECT_EQ(l.auto_direct_max_factor_mb, 0);
+  EXPECT_EQ(
+      Parse(material + "analysis: {linear_solver: AMG, linear_solver_options: {preconditioner: "
+                       "PRESSURE_SCHUR}}\n")
+          .analysis.linear_solver_options.preconditioner,
+      LinearSolverSpec::Preconditioner::kPressureSchur);
   // Out of range: the scene is refused, naming the field.
   EXPECT_EQ(
       Validate(material + "analysis: {linear_solver_options: {relative_tolerance: 2}}\n").field(),
