@@ -22,7 +22,8 @@
 // chapter 9; the augmentation: Benzi & Olshanskii, SIAM J. Sci. Comput.
 // 28:2095, 2006). The preconditioner is the upper block-triangular factor
 // [A (S b)^T; 0 S_hat]: one V-cycle per iteration, where the full
-// factorisation took two for the same iterations on the pressed cube.
+// factorisation takes two (it took as many iterations on the pressed cube
+// when both were tried; no script reruns that comparison).
 #include <petscksp.h>
 
 #include <algorithm>
@@ -53,10 +54,12 @@ using petsc_detail::SetRigidBodyNearNullSpace;
 using petsc_detail::SolveCounts;
 using petsc_detail::SolverComm;
 
-// A in the preconditioner is one GAMG V-cycle. Inner conjugate gradients
-// to 1e-2 halved the outer iterations on the pressed cube but doubled the
-// time, and broke down (not a number) where a state far from equilibrium
-// makes A indefinite; inner GMRES then ran to its limit.
+// A in the preconditioner is one GAMG V-cycle. The alternatives were tried
+// on the pressed cube while this was built (the switches were not kept, so
+// no script reruns them): inner conjugate gradients to 1e-2 took fewer
+// outer iterations but more time, and broke down (not a number) where a
+// state far from equilibrium makes A indefinite; inner GMRES ran to its
+// limit there.
 //
 // A solve stops as not converged at settings.max_iterations, or sooner at
 // kStallFactor times the iterations of the last converged solve (at least
@@ -105,10 +108,11 @@ Status CheckSplit(const Eigen::SparseMatrix<double>& k, const VolumetricSplit& s
   }
   for (Eigen::Index e = 0; e < n; ++e) {
     if (!(split.weight(e) > 0) || !std::isfinite(split.weight(e)) || !(split.volume(e) > 0) ||
-        !(split.shear_modulus(e) > 0) || !std::isfinite(split.shear_modulus(e))) {
+        !std::isfinite(split.volume(e)) || !(split.shear_modulus(e) > 0) ||
+        !std::isfinite(split.shear_modulus(e))) {
       return Status::Numerical(Format(
           "PRESSURE_SCHUR: volume constraint %lld has weight U''/V = %.3g, volume %.3g and "
-          "shear modulus %.3g; the mixed form needs all three positive",
+          "shear modulus %.3g; the mixed form needs all three positive and finite",
           static_cast<long long>(e), split.weight(e), split.volume(e), split.shear_modulus(e)));
     }
   }
@@ -125,8 +129,9 @@ Status CheckSplit(const Eigen::SparseMatrix<double>& k, const VolumetricSplit& s
 // Schur complement's diagonal would not stand for it; with gamma mu / V in
 // A ("grad-div" augmentation) it does, while A stays a moderately
 // compressible elasticity (K / mu about gamma) that GAMG solves well.
-// Measured on the pressed cube (docs/performance.md): gamma = 1 took twice
-// the iterations of 10, and 100 slowed the multigrid on A.
+// 0, 1, 10 and 100 were tried on the pressed cube while this was built (no
+// script reruns them): the iterations fell up to 10, and 100 slowed the
+// multigrid on A.
 constexpr double kGradDiv = 10;
 
 // The weights left to the pressures (w - gamma mu / V) and gamma.

@@ -20,8 +20,6 @@
 namespace pba {
 namespace {
 
-using testing::Condition;
-
 // The linear solver argument.
 AnalysisSpec::LinearSolver Solver(int64_t code, LinearSolverSpec* options) {
   switch (code) {
@@ -47,21 +45,11 @@ AnalysisSpec::LinearSolver Solver(int64_t code, LinearSolverSpec* options) {
 // GAMG, 3 = AMG with BoomerAMG, 4 = MUMPS, 5 = AMG with PRESSURE_SCHUR);
 // K / mu.
 void BM_NewtonScaling(benchmark::State& state) {
-  using K = BoundaryConditionSpec::Kind;
-  SceneSpec s;
-  s.name = "bench-scaling";
-  s.geometry.kind = GeometrySpec::Kind::kBox;
-  s.geometry.box.size_mm = {10, 10, 10};
-  s.mesh.element_size_mm = 10.0 / state.range(0);
   const ElementType elements[] = {ElementType::kTet4Anp, ElementType::kTet10,
                                   ElementType::kTet10Md};
-  s.mesh.element = elements[state.range(1)];
-  s.material.kind = MaterialSpec::Kind::kNeoHookean;
-  s.material.neo_hookean = {1000, 1000.0 * static_cast<double>(state.range(3))};
-  s.boundary_conditions = {Condition("bottom", K::kFixed),
-                           Condition("top", K::kDisplacement, {0.0, 0.0, -1.0})};
-  s.analysis.type = AnalysisSpec::Type::kNonlinearStatic;
-  s.analysis.nonlinear.increments = 2;
+  SceneSpec s = testing::NeoHookeanCube(elements[state.range(1)], 10.0 / state.range(0),
+                                        1000.0 * static_cast<double>(state.range(3)), 1.0, 2,
+                                        AnalysisSpec::LinearSolver::kCholmod);
   s.analysis.linear_solver = Solver(state.range(2), &s.analysis.linear_solver_options);
   s.outputs.reaction_sets = {"top"};
   Solution solution;

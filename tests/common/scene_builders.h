@@ -37,4 +37,27 @@ inline SceneSpec SoftBlock(double element_size_mm, AnalysisSpec::LinearSolver so
   return s;
 }
 
+// A 10 mm neo-Hookean cube (mu = 1 kPa, bulk modulus `bulk_pa`), bottom
+// fixed, top pressed `press_mm`, NONLINEAR_STATIC from `increments` (0: the
+// default) initial increments.
+inline SceneSpec NeoHookeanCube(ElementType element, double element_size_mm, double bulk_pa,
+                                double press_mm, int increments,
+                                AnalysisSpec::LinearSolver solver) {
+  using K = BoundaryConditionSpec::Kind;
+  SceneSpec s;
+  s.name = "neo-hookean cube";
+  s.geometry.kind = GeometrySpec::Kind::kBox;
+  s.geometry.box.size_mm = {10, 10, 10};
+  s.mesh.element_size_mm = element_size_mm;
+  s.mesh.element = element;
+  s.material.kind = MaterialSpec::Kind::kNeoHookean;
+  s.material.neo_hookean = {1000, bulk_pa};
+  s.boundary_conditions = {Condition("bottom", K::kFixed),
+                           Condition("top", K::kDisplacement, {0.0, 0.0, -press_mm})};
+  s.analysis.type = AnalysisSpec::Type::kNonlinearStatic;
+  s.analysis.nonlinear.increments = increments;
+  s.analysis.linear_solver = solver;
+  return s;
+}
+
 }  // namespace pba::testing

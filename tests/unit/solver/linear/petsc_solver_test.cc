@@ -28,6 +28,7 @@ using testing::AssembleBlock;
 using testing::AssembleSoftTissue;
 using testing::BlockSystem;
 using testing::Condition;
+using testing::NeoHookeanCube;
 using testing::ShiftedLaplacian;
 using testing::SoftBlock;
 
@@ -279,27 +280,6 @@ TEST(AutoSolver, ChoosesBySizeAndSaysWhy) {
 
 Eigen::Map<const Eigen::VectorXd> Displacement(const Solution& s) {
   return {s.displacement_mm.data(), static_cast<Eigen::Index>(s.displacement_mm.size())};
-}
-
-// A 10 mm neo-Hookean cube (mu = 1 kPa, bulk modulus `bulk_pa`), bottom
-// fixed, top pressed `press_mm`, NONLINEAR_STATIC from `increments` (0: the
-// default) initial increments.
-SceneSpec NeoHookeanCube(ElementType element, double element_size_mm, double bulk_pa,
-                         double press_mm, int increments, AnalysisSpec::LinearSolver solver) {
-  SceneSpec s;
-  s.name = "neo-hookean cube";
-  s.geometry.kind = GeometrySpec::Kind::kBox;
-  s.geometry.box.size_mm = {10, 10, 10};
-  s.mesh.element_size_mm = element_size_mm;
-  s.mesh.element = element;
-  s.material.kind = MaterialSpec::Kind::kNeoHookean;
-  s.material.neo_hookean = {1000, bulk_pa};
-  s.boundary_conditions = {Condition("bottom", K::kFixed),
-                           Condition("top", K::kDisplacement, {0.0, 0.0, -press_mm})};
-  s.analysis.type = AnalysisSpec::Type::kNonlinearStatic;
-  s.analysis.nonlinear.increments = increments;
-  s.analysis.linear_solver = solver;
-  return s;
 }
 
 TEST(LinearSolverScenes, AmgAndMumpsSolveTheLinearBlockAsCholmodDoes) {

@@ -25,26 +25,14 @@
 namespace pba {
 namespace {
 
-using K = BoundaryConditionSpec::Kind;
-using testing::Condition;
-
 constexpr double kShear = 1000;  // [Pa]
 
+// The shared neo-Hookean cube (mu = kShear) pressed 1 mm in two
+// increments, with PRESSURE_SCHUR for AMG and the top's reaction.
 SceneSpec PressedCube(ElementType element, double element_size_mm, double bulk_over_shear,
                       AnalysisSpec::LinearSolver solver) {
-  SceneSpec s;
-  s.name = "pressed cube";
-  s.geometry.kind = GeometrySpec::Kind::kBox;
-  s.geometry.box.size_mm = {10, 10, 10};
-  s.mesh.element_size_mm = element_size_mm;
-  s.mesh.element = element;
-  s.material.kind = MaterialSpec::Kind::kNeoHookean;
-  s.material.neo_hookean = {kShear, kShear * bulk_over_shear};
-  s.boundary_conditions = {Condition("bottom", K::kFixed),
-                           Condition("top", K::kDisplacement, {0.0, 0.0, -1.0})};
-  s.analysis.type = AnalysisSpec::Type::kNonlinearStatic;
-  s.analysis.nonlinear.increments = 2;
-  s.analysis.linear_solver = solver;
+  SceneSpec s =
+      testing::NeoHookeanCube(element, element_size_mm, kShear * bulk_over_shear, 1.0, 2, solver);
   s.analysis.linear_solver_options.preconditioner =
       LinearSolverSpec::Preconditioner::kPressureSchur;
   s.outputs.reaction_sets = {"top"};
