@@ -188,6 +188,7 @@ class FiniteStrainRun {
   Status StartHistory();
   Status Solve();
   Status Recover(StaticResult* result);
+  Status StoredEnergy(double* energy);
   void Estimate();
   void Summarise();
   double Amplitude(double load) const {
@@ -386,6 +387,27 @@ Status FiniteStrainRun::Solve() {
   return Status::Ok();
 }
 
+// The tissue's stored energy: the body's own (a contact's penalty
+// potential is no strain energy) and, where it relaxes through time, its
+// long-term part (MaterialField::LongTermResponse; what a step's Newton
+// iterations minimise is an incremental potential, not a stored energy).
+Status FiniteStrainRun::StoredEnergy(double* energy) {
+  std::optional<MaterialField::LongTermResponse> relaxed;
+  if (timed_ && field_->viscous()) {
+    relaxed.emplace(field_.get());
+    summary_.notes.push_back(
+        "strain energy of relaxing tissue: its long-term part, U + g_inf W_iso (the energy it "
+        "keeps once relaxed), without the share of the terms still relaxing: a lower bound of "
+        "the stored energy");
+  }
+  Eigen::VectorXd force;
+  *energy = 0;
+  if (!body_->InternalForce(u_, &force, energy)) {
+    return Status::Internal("an element inverted after a converged solve");
+  }
+  return Status::Ok();
+}
+
 Status FiniteStrainRun::Recover(StaticResult* result) {
   clock_.Begin("recover", 0.85, 0.95, "finite-strain fields, reactions");
   result->max_strain = body_->RecoverFields(u_, solution_);
@@ -401,11 +423,10 @@ Status FiniteStrainRun::Recover(StaticResult* result) {
     c.augmentations = report_.augmentations;
     summary_.contacts.push_back(c);
   }
-  double energy = 0;
-  if (!solid_->InternalForce(u_, &result->internal_force, &energy)) {
+  if (!solid_->InternalForce(u_, &result->internal_force, nullptr)) {
     return Status::Internal("an element inverted after a converged solve");
   }
-  result->strain_energy_j = energy;
+  PBA_RETURN_IF_ERROR(StoredEnergy(&result->strain_energy_j));
   if (!loads_->empty()) result->external_force = loads_->Force(u_);
   clock_.End();
   return Status::Ok();

@@ -174,4 +174,19 @@ double MaterialField::ShortestRelaxationTime() const {
   return shortest;
 }
 
+MaterialField::LongTermResponse::LongTermResponse(MaterialField* field)
+    : field_(field), steps_(field->steps_), offset_(field->offset_) {
+  for (std::size_t k = 0; k < field_->entries_.size(); ++k) {
+    ViscousStep relaxed;
+    relaxed.alpha = relaxed.long_term = field_->entries_[k].relaxation.LongTermFactor();
+    field_->steps_[k] = relaxed;
+  }
+  for (Vector6d& offset : field_->offset_) offset.setZero();
+}
+
+MaterialField::LongTermResponse::~LongTermResponse() {
+  field_->steps_ = std::move(steps_);
+  field_->offset_ = std::move(offset_);
+}
+
 }  // namespace pba

@@ -113,6 +113,28 @@ class MaterialField {
   // The shortest relaxation time of any material [s]; +infinity when none relaxes.
   double ShortestRelaxationTime() const;
 
+  // While one lives, At(e) is every element's fully relaxed response: its
+  // isochoric part scaled by its series' long-term factor g_inf (1 without
+  // relaxation), no history, the growth of the current step. A model's
+  // energy is then Psi_inf = U + g_inf W_iso, the free energy a relaxing
+  // body keeps once every term has relaxed: its stored energy less the
+  // unrelaxed terms' share, so a lower bound of it, and equal to it when
+  // relaxed. (Within a step At(e)'s energy is the step's incremental
+  // potential, which is no stored energy and may be negative.) The step's
+  // response is back when it ends.
+  class LongTermResponse {
+   public:
+    explicit LongTermResponse(MaterialField* field);
+    ~LongTermResponse();
+    LongTermResponse(const LongTermResponse&) = delete;
+    LongTermResponse& operator=(const LongTermResponse&) = delete;
+
+   private:
+    MaterialField* field_;
+    std::vector<ViscousStep> steps_;
+    std::vector<Vector6d> offset_;
+  };
+
  private:
   std::vector<Entry> entries_;
   std::vector<int> of_element_;

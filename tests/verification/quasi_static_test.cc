@@ -122,6 +122,58 @@ TEST(QuasiStaticTest, HoldRelaxesTowardsTheLongTermModulus) {
   }
 }
 
+// The summary's strain energy is the tissue's stored energy: for relaxing
+// tissue its long-term part (once relaxed, the energy of the long-term
+// elastic material at the same deformation; never the step's incremental
+// potential, which Newton minimises and which may be negative), the tissue's
+// alone where a plane presses it.
+TEST(QuasiStaticTest, StrainEnergyIsTheTissuesStoredEnergy) {
+  // Held 600 s (12 tau_max): relaxed to within exp(-12).
+  Solution relaxing;
+  Status status = SolveScene(RampAndHold(0.1, 1.0, 600, 100), SolveOptions(), &relaxing);
+  ASSERT_TRUE(status.ok()) << status.ToString();
+  // The same compression of the long-term elastic material.
+  SceneSpec elastic = RampAndHold(0.1, 1.0, 1.0, 0.25);
+  const PronySeries series{elastic.material.viscoelastic.g, elastic.material.viscoelastic.tau_s};
+  elastic.material.ogden.terms[0].mu_pa *= series.LongTermFactor();
+  elastic.material.viscoelastic = ViscoelasticSpec();
+  elastic.analysis.type = AnalysisSpec::Type::kNonlinearStatic;
+  elastic.analysis.time = decltype(elastic.analysis.time)();
+  Solution relaxed;
+  status = SolveScene(elastic, SolveOptions(), &relaxed);
+  ASSERT_TRUE(status.ok()) << status.ToString();
+  const double held = relaxing.summary.strain_energy_j, long_term = relaxed.summary.strain_energy_j;
+  std::printf("strain energy held 599 s %.8g J, long-term elastic %.8g J\n", held, long_term);
+  EXPECT_GT(long_term, 0);
+  EXPECT_NEAR(held / long_term, 1, 1e-4);
+  bool noted = false;
+  for (const std::string& note : relaxing.summary.notes) {
+    noted = noted || note.find("strain energy of relaxing tissue") != std::string::npos;
+  }
+  EXPECT_TRUE(noted);
+
+  // The top pressed by a frictionless plane instead of prescribed: the
+  // same compression (to a tight penetration tolerance), the same energy.
+  SceneSpec pressed = elastic;
+  pressed.boundary_conditions.pop_back();
+  ContactSpec plane;
+  plane.name = "plate";
+  plane.set = "top";
+  plane.shape = ContactSpec::Shape::kPlane;
+  plane.position_mm = {5, 5, kSide + 2};  // moved down to touch the top
+  plane.start_touching = true;
+  plane.axis = {0, 0, -1};
+  plane.motion_mm = {0, 0, -0.1 * kSide};
+  plane.penetration_tolerance_mm = 1e-5;
+  pressed.contacts = {plane};
+  Solution contact;
+  status = SolveScene(pressed, SolveOptions(), &contact);
+  ASSERT_TRUE(status.ok()) << status.ToString();
+  std::printf("strain energy pressed by a plane %.8g J, prescribed %.8g J\n",
+              contact.summary.strain_energy_j, long_term);
+  EXPECT_NEAR(contact.summary.strain_energy_j / long_term, 1, 1e-3);
+}
+
 TEST(QuasiStaticTest, FasterRampsAreStiffer) {
   double last = 0;
   for (double ramp_s : {100.0, 10.0, 1.0, 0.1}) {
