@@ -55,15 +55,15 @@ class AutoSolver final : public LinearSolver {
   // ranks of an MPI job, MUMPS in CHOLMOD's place: CHOLMOD is one process's,
   // MUMPS factorises across the ranks (its factor is of the same order).
   Status Choose(const Eigen::SparseMatrix<double>& a) {
-    const double budget_mb = options_.settings.auto_direct_max_factor_mb;
+    std::string budget_source;
+    const double budget_mb = Budget(&budget_source);
     FactorPrediction prediction;
     PBA_RETURN_IF_ERROR(PredictCholmodFactor(a, options_.threads, &prediction));
     const double factor_mb = prediction.bytes / (1024.0 * 1024.0);
     const bool direct = factor_mb <= budget_mb;
-    reason_ = Format(
-        "%lld unknowns, predicted Cholesky factor %.0f MB %s "
-        "linear_solver_options.auto_direct_max_factor_mb = %.0f",
-        static_cast<long long>(a.rows()), factor_mb, direct ? "<=" : ">", budget_mb);
+    reason_ = Format("%lld unknowns, predicted Cholesky factor %.0f MB %s %.0f MB (%s)",
+                     static_cast<long long>(a.rows()), factor_mb, direct ? "<=" : ">", budget_mb,
+                     budget_source.c_str());
     const bool ranks = CurrentRanks().size > 1;
     if (direct) {
       chosen_ = ranks ? CreateMumpsSolver() : CreateCholmodSolver(options_.threads);
@@ -71,6 +71,24 @@ class AutoSolver final : public LinearSolver {
       chosen_ = CreateAmgSolver(options_.settings, options_.layout, options_.cancel);
     }
     return Status::Ok();
+  }
+
+  // The largest factor CHOLMOD is given [MB]: the scene's, else a quarter
+  // of the memory the solve may take (Newton holds two factorisations, and
+  // the mesh, the tangent and the solver's work need the rest).
+  double Budget(std::string* source) const {
+    const int set = options_.settings.auto_direct_max_factor_mb;
+    if (set > 0) {
+      *source = "linear_solver_options.auto_direct_max_factor_mb";
+      return set;
+    }
+    const double memory = SolveMemoryBytes();
+    if (!(memory > 0)) {
+      *source = "the machine's memory could not be read";
+      return LinearSolverSettings::kFallbackDirectFactorMb;
+    }
+    *source = Format("a quarter of the %.1f GiB the solve may take", memory / (1 << 30));
+    return memory / 4 / (1024.0 * 1024.0);
   }
 
   LinearSolverOptions options_;

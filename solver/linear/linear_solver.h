@@ -110,11 +110,17 @@ struct LinearSolverSettings {
   double boomeramg_strong_threshold = 0.5;
   // AUTO: CHOLMOD factorises a system whose supernodal factor, predicted by
   // its symbolic analysis, takes at most this many megabytes; a larger one
-  // goes to AMG. The exact direct solve is kept wherever it fits: on nearly
-  // incompressible tissue it is faster than AMG at the sizes this machine
-  // factorises (docs/performance.md, "Linear solvers"). Newton holds two
-  // factorisations, so 2,000 MB keeps the solver near 5 GB in all.
-  int auto_direct_max_factor_mb = 2000;
+  // goes to AMG. 0 (the default): a quarter of the memory the solve may
+  // take (SolveMemoryBytes: the machine's, or the address-space limit
+  // pba-server gives each job), as Newton holds two factorisations and the
+  // mesh, the tangent and the solver's work need the rest. The exact direct
+  // solve is kept wherever it fits: on nearly incompressible tissue it is
+  // faster than AMG at the sizes a factor fits, and AMG on TET4_ANP at
+  // K/mu = 1e3 may not converge at all (docs/performance.md, "Linear
+  // solvers").
+  int auto_direct_max_factor_mb = 0;
+  // The budget when the machine's memory cannot be read.
+  static constexpr int kFallbackDirectFactorMb = 2000;
   // AMG: a solve that does not converge is redone by MUMPS when the system
   // has at most this many unknowns; above, the increment fails with the
   // iterative solver's message.

@@ -2,6 +2,8 @@
 
 #include <mpi.h>
 #include <petscsys.h>
+#include <sys/resource.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <csignal>
@@ -113,6 +115,24 @@ Status StartRanks(ProcessRanks* ranks) {
   PBA_RETURN_IF_ERROR(InitializePetsc());
   *ranks = CurrentRanks();
   return Status::Ok();
+}
+
+double SolveMemoryBytes() {
+  const ProcessRanks ranks = CurrentRanks();
+  const double physical =
+      static_cast<double>(::sysconf(_SC_PHYS_PAGES)) * static_cast<double>(::sysconf(_SC_PAGESIZE));
+  double memory = physical > 0 ? physical : 0;
+  struct rlimit space {};
+  if (::getrlimit(RLIMIT_AS, &space) == 0 && space.rlim_cur != RLIM_INFINITY) {
+    memory = std::min(memory, static_cast<double>(space.rlim_cur) * ranks.on_node);
+  }
+  if (ranks.size > 1) {
+    double least = memory;
+    if (MPI_Allreduce(&memory, &least, 1, MPI_DOUBLE, MPI_MIN, MPI_COMM_WORLD) == MPI_SUCCESS) {
+      memory = least;
+    }
+  }
+  return memory;
 }
 
 void AbortOtherRanks(int code) {

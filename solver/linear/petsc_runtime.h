@@ -41,6 +41,14 @@ Status StartRanks(ProcessRanks* ranks);
 // The ranks as they stand: MPI_COMM_WORLD's once MPI runs, else rank 0 of 1.
 ProcessRanks CurrentRanks();
 
+// The memory one solve may take on this machine [bytes]: its physical
+// memory, or less where an address-space limit bounds each process
+// (RLIMIT_AS: pba-server's --solver-memory), that limit times the ranks on
+// the machine. Across the ranks of an MPI job the least of their figures,
+// so that every rank decides alike: a collective call then, made by every
+// rank at the same point.
+double SolveMemoryBytes();
+
 // Ends the whole MPI job with `code` (MPI_Abort) when this process is one
 // of several ranks: one rank's failure must not leave the others waiting
 // for it in a collective call. Otherwise returns.

@@ -353,7 +353,10 @@ std::vector<std::pair<std::string, std::string>> EffectiveOptions(const Problem&
     add("analysis.linear_solver", l.KindName());
     const std::string o = "analysis.linear_solver_options.";
     if (l.kind == Kind::kAuto) {
-      add(o + "auto_direct_max_factor_mb", std::to_string(ls.auto_direct_max_factor_mb));
+      add(o + "auto_direct_max_factor_mb",
+          ls.auto_direct_max_factor_mb > 0
+              ? std::to_string(ls.auto_direct_max_factor_mb)
+              : "0 (a quarter of the memory the solve may take; the solver line gives it)");
     }
     if (l.kind == Kind::kAuto || l.kind == Kind::kAmg) {
       const bool boomeramg = ls.preconditioner == LinearSolverSettings::Preconditioner::kBoomerAmg;

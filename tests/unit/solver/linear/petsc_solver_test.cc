@@ -4,6 +4,8 @@
 // converge and a cancel each end in the Status that says so, never in an
 // unconverged answer passed on as converged.
 #include <gtest/gtest.h>
+#include <sys/resource.h>
+#include <unistd.h>
 
 #include <Eigen/SparseCore>
 #include <atomic>
@@ -14,7 +16,9 @@
 #include "assembly/dof_map.h"
 #include "common/linear_systems.h"
 #include "common/scene_builders.h"
+#include "core/format.h"
 #include "linear/linear_solver.h"
+#include "linear/petsc_runtime.h"
 #include "material/linear_elastic.h"
 #include "pba/solve.h"
 #include "scene/model_builder.h"
@@ -255,9 +259,9 @@ TEST(AutoSolver, ChoosesBySizeAndSaysWhy) {
   EXPECT_NE(small->Name().find("AUTO: " + std::to_string(b.system.k.rows()) + " unknowns"),
             std::string::npos)
       << small->Name();
-  EXPECT_NE(small->Name().find("MB <= linear_solver_options.auto_direct_max_factor_mb = 2000"),
-            std::string::npos)
-      << small->Name();
+  // The default budget: a quarter of the memory the solve may take.
+  EXPECT_NE(small->Name().find("MB (a quarter of the "), std::string::npos) << small->Name();
+  EXPECT_NE(small->Name().find(" GiB the solve may take)"), std::string::npos) << small->Name();
   // The prediction is CHOLMOD's own: between the matrix's lower triangle
   // and a dense triangle.
   FactorPrediction prediction;
@@ -267,15 +271,49 @@ TEST(AutoSolver, ChoosesBySizeAndSaysWhy) {
   EXPECT_LT(prediction.bytes, 8.0 * n * n);
   EXPECT_GT(prediction.flops, 0);
 
-  options.settings.auto_direct_max_factor_mb = 0;  // no factor fits
+  // A budget the scene sets, below this factor.
+  ASSERT_GT(prediction.bytes, 1024.0 * 1024.0);
+  options.settings.auto_direct_max_factor_mb = 1;
   const auto large = CreateLinearSolver(options);
   ASSERT_TRUE(large->Factorize(b.system.k).ok());
   ASSERT_TRUE(large->Solve(b.system.rhs, &x).ok());
   EXPECT_LT(RelativeDifference(x, b.direct), 1e-7);
   EXPECT_NE(large->Name().find("GAMG"), std::string::npos) << large->Name();
-  EXPECT_NE(large->Name().find("MB > linear_solver_options.auto_direct_max_factor_mb = 0"),
+  EXPECT_NE(large->Name().find("MB > 1 MB (linear_solver_options.auto_direct_max_factor_mb)"),
             std::string::npos)
       << large->Name();
+}
+
+// AUTO's default budget follows what the process may take: under an
+// address-space limit below the machine's memory (pba-server's
+// --solver-memory), a quarter of that limit.
+TEST(AutoSolver, DefaultBudgetIsAQuarterOfTheMemoryTheSolveMayTake) {
+  BlockSystem b;
+  Assemble(2.5, 0.45, &b);
+  const double physical =
+      static_cast<double>(::sysconf(_SC_PHYS_PAGES)) * static_cast<double>(::sysconf(_SC_PAGESIZE));
+  ASSERT_GT(physical, 0);
+  EXPECT_DOUBLE_EQ(SolveMemoryBytes(), physical);
+  struct rlimit saved {};
+  ASSERT_EQ(::getrlimit(RLIMIT_AS, &saved), 0);
+  // Half the machine, but not below what this test process has mapped.
+  const rlim_t limit = static_cast<rlim_t>(physical / 2);
+  if (saved.rlim_max != RLIM_INFINITY && saved.rlim_max < limit) GTEST_SKIP();
+  struct rlimit lowered = saved;
+  lowered.rlim_cur = limit;
+  ASSERT_EQ(::setrlimit(RLIMIT_AS, &lowered), 0);
+  const double memory = SolveMemoryBytes();
+  LinearSolverOptions options;
+  options.layout = &b.layout;
+  const auto solver = CreateLinearSolver(options);
+  const Status status = solver->Factorize(b.system.k);
+  ASSERT_EQ(::setrlimit(RLIMIT_AS, &saved), 0);
+  ASSERT_TRUE(status.ok()) << status.ToString();
+  EXPECT_DOUBLE_EQ(memory, static_cast<double>(limit));
+  const std::string budget = Format("<= %.0f MB (a quarter of the %.1f GiB the solve may take)",
+                                    static_cast<double>(limit) / 4 / (1024.0 * 1024.0),
+                                    static_cast<double>(limit) / (1 << 30));
+  EXPECT_NE(solver->Name().find(budget), std::string::npos) << solver->Name();
 }
 
 Eigen::Map<const Eigen::VectorXd> Displacement(const Solution& s) {
