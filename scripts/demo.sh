@@ -22,37 +22,16 @@ cmake --build "$build" -j "${PBA_JOBS:-2}" --target pba pba-server pba-solve
 
 bin=$build/bin
 data=$(mktemp -d "${TMPDIR:-/tmp}/pba-demo.XXXXXX")
-server_pid=""
+# shellcheck source=scripts/local_server.sh
+source "$root/scripts/local_server.sh"
 stop_server() {
-  if [ -n "$server_pid" ] && kill -0 "$server_pid" 2>/dev/null; then
-    kill -TERM "$server_pid"
-    wait "$server_pid" || true
-    echo "== server stopped"
-  fi
-  server_pid=""
+  if stop_local_server; then echo "== server stopped"; fi
 }
 trap stop_server EXIT
 
 echo "== starting pba-server (data directory $data/server)"
-"$bin/pba-server" --data "$data/server" --listen 127.0.0.1:0 >"$data/server.out" 2>"$data/server.log" &
-server_pid=$!
-address=""
-for _ in $(seq 1 100); do
-  address=$(sed -n 's/^pba-server listening on //p' "$data/server.out")
-  [ -n "$address" ] && break
-  if ! kill -0 "$server_pid" 2>/dev/null; then
-    echo "pba-server did not start; its log:" >&2
-    cat "$data/server.log" >&2
-    exit 1
-  fi
-  sleep 0.1
-done
-[ -n "$address" ] || { echo "pba-server did not report its address in 10 s" >&2; exit 1; }
+start_local_server "$bin" "$data"
 echo "   listening on $address"
-# The first start made the user 'admin' and wrote its token there; `pba login
-# --token-file` would keep it, PBA_TOKEN lends it to these commands only.
-PBA_TOKEN=$(cat "$data/server/admin.token")
-export PBA_TOKEN
 echo "   signed in as admin (token in $data/server/admin.token)"
 pba=("$bin/pba" --server "$address")
 

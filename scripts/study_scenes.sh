@@ -26,29 +26,15 @@ for tool in pba pba-server pba-solve; do
 done
 
 data=$(mktemp -d "${TMPDIR:-/tmp}/pba-study.XXXXXX")
-server_pid=""
+# shellcheck source=scripts/local_server.sh
+source "$root/scripts/local_server.sh"
 stop_server() {
-  if [ -n "$server_pid" ] && kill -0 "$server_pid" 2>/dev/null; then
-    kill -TERM "$server_pid"
-    wait "$server_pid" || true
-  fi
+  stop_local_server || true
   rm -rf "$data"
 }
 trap stop_server EXIT
-
-"$bin/pba-server" --data "$data/server" --listen 127.0.0.1:0 --max-running 1 \
-  >"$data/server.out" 2>"$data/server.log" &
-server_pid=$!
-address=""
-for _ in $(seq 1 100); do
-  address=$(sed -n 's/^pba-server listening on //p' "$data/server.out")
-  [ -n "$address" ] && break
-  kill -0 "$server_pid" 2>/dev/null || { cat "$data/server.log" >&2; exit 1; }
-  sleep 0.1
-done
-[ -n "$address" ] || { echo "pba-server did not report its address in 10 s" >&2; exit 1; }
-PBA_TOKEN=$(cat "$data/server/admin.token")
-export PBA_TOKEN
+# One job at a time, so that each mesh's wall time is its own.
+start_local_server "$bin" "$data" --max-running 1
 
 # Each scene's key results (paths into its summary, docs/results.md) and
 # element sizes, the example's own among them (a region of interest's size

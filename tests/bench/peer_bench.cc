@@ -22,26 +22,15 @@
 namespace pba {
 namespace {
 
-using testing::Condition;
-
 // The agreement the HEX8_FULL rows must reach; a larger difference is
 // flagged in the row's label.
 constexpr double kAgreement = 1e-5;
 
+// The shared pressed cube (common/scene_builders.h), the top's reaction kept.
 SceneSpec PressedCube(int cells, ElementType element) {
-  using K = BoundaryConditionSpec::Kind;
-  SceneSpec s;
+  SceneSpec s = testing::NeoHookeanCube(element, 10.0 / cells, 1e5, 3.0, 10,
+                                        AnalysisSpec::LinearSolver::kAuto);
   s.name = "bench-peer-cube";
-  s.geometry.kind = GeometrySpec::Kind::kBox;
-  s.geometry.box.size_mm = {10, 10, 10};
-  s.mesh.element_size_mm = 10.0 / cells;
-  s.mesh.element = element;
-  s.material.kind = MaterialSpec::Kind::kNeoHookean;
-  s.material.neo_hookean = {1000, 1e5};
-  s.boundary_conditions = {Condition("bottom", K::kFixed),
-                           Condition("top", K::kDisplacement, {0.0, 0.0, -3.0})};
-  s.analysis.type = AnalysisSpec::Type::kNonlinearStatic;
-  s.analysis.nonlinear.increments = 10;
   s.outputs.reaction_sets = {"top"};
   return s;
 }
