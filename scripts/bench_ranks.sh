@@ -4,8 +4,9 @@
 # increments) solved by pba-solve as one process and by `mpirun -np N`,
 # each run alone. Prints one table row per run: the unknowns, Newton
 # iterations, the conjugate-gradient iterations per solve (range; "-" for a
-# direct solver), assembly and linear-solve time per Newton iteration,
-# wall time and the peak memory of the largest process.
+# direct solver), assembly, linear-solve and residual time per Newton
+# iteration (the residuals: the line search's evaluations), wall time and
+# the peak memory of the largest process.
 #
 # Usage: scripts/bench_ranks.sh [ranks...]           (default: 1 2)
 #   PBA_BENCH_CASES: "element:cells:K/mu:solver ..."  (default below)
@@ -26,8 +27,8 @@ export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 export OMPI_MCA_rmaps_base_oversubscribe=1
 
 echo "machine: $(nproc) cores, $(awk '/MemTotal/ {printf "%.0f GB", $2 / 1048576}' /proc/meminfo); commit $(git -C "$root" rev-parse --short HEAD)"
-echo "| element | cells per edge | K/μ | unknowns | solver | ranks | threads per rank | Newton iterations | CG iterations | assembly per iteration | linear solve per iteration | wall time | peak memory (largest rank) |"
-echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+echo "| element | cells per edge | K/μ | unknowns | solver | ranks | threads per rank | Newton iterations | CG iterations | assembly per iteration | linear solve per iteration | residuals per iteration | wall time | peak memory (largest rank) |"
+echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
 for case in $cases; do
   IFS=: read -r element cells k_mu solver <<<"$case"
   scene=$work/cube.yaml
@@ -67,7 +68,8 @@ if "redone by MUMPS" in m["linear_solver"]:
     cg += " (fallbacks)"
 print(f"| {element} | {cells} | {k_mu} | {int(m['dofs']):,} | {solver} | {ranks} | {p['threads']} "
       f"| {c['newton_iterations']} | {cg} | {c['assembly_s'] / its:.2f} s "
-      f"| {c['linear_solve_s'] / its:.2f} s | {p['wall_time_s']:.1f} s "
+      f"| {c['linear_solve_s'] / its:.2f} s | {c['residual_s'] / its:.2f} s "
+      f"| {p['wall_time_s']:.1f} s "
       f"| {int(rss_kb) / 1024:,.0f} MB |")
 PY
   done

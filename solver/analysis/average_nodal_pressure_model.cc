@@ -8,6 +8,7 @@
 
 #include "analysis/element_fields.h"
 #include "fem/tet4_finite_strain.h"
+#include "linear/petsc_runtime.h"
 #include "material/hyperelastic.h"
 
 namespace pba {
@@ -244,24 +245,45 @@ class NodalPressureModel final : public FiniteStrainModel {
                      double* energy) const override {
     *force = Eigen::VectorXd::Zero(u.size());
     State state;
-    if (Evaluate(u, false, false, &state) >= 0) return false;
-    GatherForce(state, force);
+    if (Evaluate(u, false, false, nullptr, &state) >= 0) return false;
+    GatherForce(state, nullptr, force);
     if (energy) *energy = state.energy;
     return force->allFinite() && std::isfinite(state.energy);
   }
 
+  // As Assemble's share: every element's volume, the stress of those that
+  // touch `own`'s nodes.
+  bool InternalForceShare(const Eigen::VectorXd& u, const std::vector<char>& own,
+                          Eigen::VectorXd* force) const override {
+    *force = Eigen::VectorXd::Zero(u.size());
+    const std::vector<char> touches = Touching(own);
+    State state;
+    if (Evaluate(u, false, false, &touches, &state) >= 0) return false;
+    GatherForce(state, &own, force);
+    return force->allFinite();
+  }
+
+  // Partitioned between ranks (options.own_nodes), a rank evaluates the
+  // stress and tangent of the elements that touch its nodes, and the
+  // volumes and their gradients of every element (cheap, and the nodal
+  // pressures of those elements' corners need their whole patches); every
+  // rank finds the same inverted element, as all see every det F.
   Status Assemble(const Eigen::VectorXd& u, const DofMap& dofs, const AssemblyOptions& options,
                   LinearSystem* system) const override {
+    const std::vector<char>* own = options.own_nodes;
+    const std::vector<char> touches = own != nullptr ? Touching(*own) : std::vector<char>();
     State state;
-    const int bad = Evaluate(u, true, options.drop_pressure_stiffness, &state);
+    const int bad = Evaluate(u, true, options.drop_pressure_stiffness,
+                             own != nullptr ? &touches : nullptr, &state);
     if (bad >= 0) {
       return Status::Numerical("element " + std::to_string(bad) +
                                " could not be evaluated (inverted: det F <= 0)");
     }
     Eigen::VectorXd force = Eigen::VectorXd::Zero(u.size());
-    GatherForce(state, &force);
-    const std::vector<Eigen::Matrix3d> blocks = NodeBlocks(state);
+    GatherForce(state, own, &force);
+    const std::vector<Eigen::Matrix3d> blocks = NodeBlocks(state, own);
     FillSystem(force, blocks, dofs, options, system);
+    if (own != nullptr) PBA_RETURN_IF_ERROR(SumOverRanks(system->rhs.data(), dofs.num_free()));
     return Status::Ok();
   }
 
@@ -286,10 +308,20 @@ class NodalPressureModel final : public FiniteStrainModel {
   }
 
  private:
+  // Per element: whether it touches one of `own`'s nodes.
+  std::vector<char> Touching(const std::vector<char>& own) const {
+    std::vector<char> touches(mesh_.num_elements());
+    for (int e = 0; e < mesh_.num_elements(); ++e) touches[e] = TouchesAny(mesh_.tets[e], own);
+    return touches;
+  }
+
   // Elements and nodes at `u`. Returns the lowest index of an element that is
-  // inverted or not finite, -1 when all are fine.
+  // inverted or not finite, -1 when all are fine. With `evaluated` (one flag
+  // per element; may be null), the elements not flagged get only their
+  // volume and its gradient, which the nodal pressures need (no stress, no
+  // force, no tangent), and the energy is not the body's.
   int Evaluate(const Eigen::VectorXd& u, bool with_tangent, bool drop_pressure_stiffness,
-               State* state) const {
+               const std::vector<char>* evaluated, State* state) const {
     const int ne = mesh_.num_elements(), nn = mesh_.num_nodes();
     state->elements.resize(ne);
     if (with_tangent) state->tangents.resize(ne);
@@ -310,12 +342,6 @@ class NodalPressureModel final : public FiniteStrainModel {
         continue;
       }
       const double v0 = reference_volume_[e];
-      Vector6d stress;
-      Matrix6d tangent;
-      field_.At(e).Isochoric(s.f, &s.iso_energy, &stress, with_tangent ? &tangent : nullptr);
-      s.iso_energy *= v0;
-      const BMatrix b = GreenLagrangeVariation(g, s.f);
-      s.force = v0 * b.transpose() * stress;
       s.volume = v0 * j;
       // cof F by columns: (f2 x f3, f3 x f1, f1 x f2), no inverse needed.
       Eigen::Matrix3d cof;
@@ -325,6 +351,17 @@ class NodalPressureModel final : public FiniteStrainModel {
       for (int a = 0; a < 4; ++a) {
         s.volume_gradient.segment<3>(3 * a) = v0 * cof * g.grad.row(a).transpose();
       }
+      if (evaluated != nullptr && !(*evaluated)[e]) {
+        s.force.setZero();
+        s.iso_energy = 0;
+        continue;
+      }
+      Vector6d stress;
+      Matrix6d tangent;
+      field_.At(e).Isochoric(s.f, &s.iso_energy, &stress, with_tangent ? &tangent : nullptr);
+      s.iso_energy *= v0;
+      const BMatrix b = GreenLagrangeVariation(g, s.f);
+      s.force = v0 * b.transpose() * stress;
       if (with_tangent) {
         Matrix12d& k = state->tangents[e];
         k = v0 * b.transpose() * tangent * b;
@@ -357,6 +394,7 @@ class NodalPressureModel final : public FiniteStrainModel {
 
 #pragma omp parallel for schedule(static) num_threads(threads_.threads()) if (parallel_) reduction(+ : energy)
     for (int e = 0; e < ne; ++e) {
+      if (evaluated != nullptr && !(*evaluated)[e]) continue;
       ElementState& s = state->elements[e];
       energy += s.iso_energy;
       double pbar = 0;
@@ -378,11 +416,13 @@ class NodalPressureModel final : public FiniteStrainModel {
     return -1;
   }
 
-  // Full internal force, node by node (a gather: no two threads write one entry).
-  void GatherForce(const State& state, Eigen::VectorXd* force) const {
+  // Full internal force, node by node (a gather: no two threads write one
+  // entry); with `own` (may be null), on those nodes only, zero elsewhere.
+  void GatherForce(const State& state, const std::vector<char>* own, Eigen::VectorXd* force) const {
     const int nn = mesh_.num_nodes();
 #pragma omp parallel for schedule(static) num_threads(threads_.threads()) if (parallel_)
     for (int a = 0; a < nn; ++a) {
+      if (own != nullptr && !(*own)[a]) continue;
       Eigen::Vector3d f = Eigen::Vector3d::Zero();
       for (int t = incidence_.begin(a); t < incidence_.end(a); ++t) {
         f += state.elements[incidence_.index[t]].force.segment<3>(3 * incidence_corner_[t]);
@@ -395,7 +435,9 @@ class NodalPressureModel final : public FiniteStrainModel {
   // column node c and row node b = wide_.index[k], k in c's row of wide_.
   // Each column is gathered by one thread from the element tangents and the
   // nodal g_a g_a^T terms, so the pass needs neither colouring nor locks.
-  std::vector<Eigen::Matrix3d> NodeBlocks(const State& state) const {
+  // With `own` (may be null), the columns of those nodes only (the others'
+  // blocks are left unset).
+  std::vector<Eigen::Matrix3d> NodeBlocks(const State& state, const std::vector<char>* own) const {
     const int nn = mesh_.num_nodes();
     const NodalGroups& groups = *groups_;
     // g_g = dv_g/dx on the patch of the group's node, one vector per patch
@@ -423,6 +465,7 @@ class NodalPressureModel final : public FiniteStrainModel {
     std::vector<Eigen::Matrix3d> blocks(wide_.index.size());
 #pragma omp parallel for schedule(static) num_threads(threads_.threads()) if (parallel_)
     for (int c = 0; c < nn; ++c) {
+      if (own != nullptr && !(*own)[c]) continue;
       for (int k = wide_.begin(c); k < wide_.end(c); ++k) blocks[k].setZero();
       for (int t = incidence_.begin(c); t < incidence_.end(c); ++t) {
         const int e = incidence_.index[t], j = incidence_corner_[t];
@@ -460,9 +503,13 @@ class NodalPressureModel final : public FiniteStrainModel {
     }
     // Free unknowns are numbered in dof order, so walking nodes and rows in
     // ascending order yields sorted columns with sorted row indices.
+    // A partitioned assembly fills its own nodes' columns and rows only.
+    const std::vector<char>* own = options.own_nodes;
+    system->own_nodes = own;
     std::vector<int> outer(nf + 1, 0);
 #pragma omp parallel for schedule(static) num_threads(threads_.threads()) if (parallel_)
     for (int c = 0; c < nn; ++c) {
+      if (own != nullptr && !(*own)[c]) continue;
       int count = 0;
       for (int k = wide_.begin(c); k < wide_.end(c); ++k) count += free_of_node[wide_.index[k]];
       for (int q = 0; q < 3; ++q) {
@@ -480,6 +527,7 @@ class NodalPressureModel final : public FiniteStrainModel {
     double* values = k.valuePtr();
 #pragma omp parallel for schedule(static) num_threads(threads_.threads()) if (parallel_)
     for (int c = 0; c < nn; ++c) {
+      if (own != nullptr && !(*own)[c]) continue;
       for (int q = 0; q < 3; ++q) {
         const int j = dofs.free_index(3 * c + q);
         if (j < 0) continue;
@@ -497,9 +545,10 @@ class NodalPressureModel final : public FiniteStrainModel {
       }
     }
 
-    system->rhs.resize(nf);
+    system->rhs.setZero(nf);
 #pragma omp parallel for schedule(static) num_threads(threads_.threads()) if (parallel_)
     for (int b = 0; b < nn; ++b) {
+      if (own != nullptr && !(*own)[b]) continue;
       for (int r = 0; r < 3; ++r) {
         const int i = dofs.free_index(3 * b + r);
         if (i < 0) continue;

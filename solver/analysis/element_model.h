@@ -73,6 +73,19 @@ class ElementModel final : public FiniteStrainModel {
 
   bool InternalForce(const Eigen::VectorXd& u, Eigen::VectorXd* force,
                      double* energy) const override {
+    return Forces(u, nullptr, force, energy);
+  }
+  bool InternalForceShare(const Eigen::VectorXd& u, const std::vector<char>& own,
+                          Eigen::VectorXd* force) const override {
+    if (!Forces(u, &own, force, nullptr)) return false;
+    KeepRowsOf(own, force);
+    return true;
+  }
+
+  // The force of every element, or with `own` (may be null) of those that
+  // touch its nodes.
+  bool Forces(const Eigen::VectorXd& u, const std::vector<char>* own, Eigen::VectorXd* force,
+              double* energy) const {
     *force = Eigen::VectorXd::Zero(u.size());
     bool ok = true;
     double total = 0;
@@ -81,6 +94,7 @@ class ElementModel final : public FiniteStrainModel {
     reduction(&& : ok) reduction(+ : total)
       for (std::size_t k = 0; k < colour.size(); ++k) {
         const int e = colour[k];
+        if (own != nullptr && !TouchesAny(Element::Nodes(mesh_, e), *own)) continue;
         typename Element::Result r;
         if (!element_.Evaluate(geometry_[e], Element::Gather(mesh_, e, u), field_.Base(e), false,
                                false, &r)) {
@@ -102,6 +116,9 @@ class ElementModel final : public FiniteStrainModel {
                   LinearSystem* system) const override {
     system->split = VolumetricSplit();
     const bool split = options.volumetric_split && element_.SplitsVolume();
+    if (split && options.own_nodes != nullptr) {
+      return Status::Internal("a volumetric split is not assembled partitioned between ranks");
+    }
     // Each element's constraint, when asked for: dv/dx and U''(theta) / V.
     std::vector<typename Element::Unknowns> gradients(split ? mesh_.num_elements() : 0);
     std::vector<double> weights(gradients.size());

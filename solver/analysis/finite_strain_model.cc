@@ -31,29 +31,13 @@ class Tet4Model final : public FiniteStrainModel {
 
   bool InternalForce(const Eigen::VectorXd& u, Eigen::VectorXd* force,
                      double* energy) const override {
-    *force = Eigen::VectorXd::Zero(u.size());
-    bool ok = true;
-    double total = 0;
-    for (const auto& colour : colours_) {
-      // A colour too small to repay starting a team runs on one thread (a
-      // Newton solve on a small mesh evaluates the force thousands of times).
-#pragma omp parallel for schedule(static) num_threads(threads_.threads()) \
-    reduction(&& : ok) reduction(+ : total) if (threads_.Parallel(colour.size()))
-      for (std::size_t k = 0; k < colour.size(); ++k) {
-        const int e = colour[k];
-        Tet4FiniteStrainResult r;
-        if (!Tet4FiniteStrain(geometry_[e], GatherElement(mesh_, e, u), field_.At(e), false, &r)) {
-          ok = false;
-          continue;
-        }
-        total += r.energy;
-        for (int a = 0; a < 4; ++a) {
-          force->segment<3>(3 * mesh_.tets[e][a]) += r.force.segment<3>(3 * a);
-        }
-      }
-    }
-    if (energy) *energy = total;
-    return ok && force->allFinite() && std::isfinite(total);
+    return Forces(u, nullptr, force, energy);
+  }
+  bool InternalForceShare(const Eigen::VectorXd& u, const std::vector<char>& own,
+                          Eigen::VectorXd* force) const override {
+    if (!Forces(u, &own, force, nullptr)) return false;
+    KeepRowsOf(own, force);
+    return true;
   }
 
   Status Assemble(const Eigen::VectorXd& u, const DofMap& dofs, const AssemblyOptions& options,
@@ -85,6 +69,36 @@ class Tet4Model final : public FiniteStrainModel {
   }
 
  private:
+  // The force of every element, or with `own` (may be null) of those that
+  // touch its nodes.
+  bool Forces(const Eigen::VectorXd& u, const std::vector<char>* own, Eigen::VectorXd* force,
+              double* energy) const {
+    *force = Eigen::VectorXd::Zero(u.size());
+    bool ok = true;
+    double total = 0;
+    for (const auto& colour : colours_) {
+      // A colour too small to repay starting a team runs on one thread (a
+      // Newton solve on a small mesh evaluates the force thousands of times).
+#pragma omp parallel for schedule(static) num_threads(threads_.threads()) \
+    reduction(&& : ok) reduction(+ : total) if (threads_.Parallel(colour.size()))
+      for (std::size_t k = 0; k < colour.size(); ++k) {
+        const int e = colour[k];
+        if (own != nullptr && !TouchesAny(mesh_.tets[e], *own)) continue;
+        Tet4FiniteStrainResult r;
+        if (!Tet4FiniteStrain(geometry_[e], GatherElement(mesh_, e, u), field_.At(e), false, &r)) {
+          ok = false;
+          continue;
+        }
+        total += r.energy;
+        for (int a = 0; a < 4; ++a) {
+          force->segment<3>(3 * mesh_.tets[e][a]) += r.force.segment<3>(3 * a);
+        }
+      }
+    }
+    if (energy) *energy = total;
+    return ok && force->allFinite() && std::isfinite(total);
+  }
+
   const Mesh& mesh_;
   std::unique_ptr<MaterialField> owned_;  // a uniform field made for one material
   const MaterialField& field_;
@@ -116,6 +130,19 @@ std::unique_ptr<FiniteStrainModel> MakeFiniteStrainModel(ElementType element, co
   }
   std::fprintf(stderr, "pba: MakeFiniteStrainModel needs a resolved element type\n");
   std::abort();
+}
+
+bool FiniteStrainModel::InternalForceShare(const Eigen::VectorXd& u, const std::vector<char>& own,
+                                           Eigen::VectorXd* force) const {
+  const bool ok = InternalForce(u, force, nullptr);
+  KeepRowsOf(own, force);
+  return ok;
+}
+
+void KeepRowsOf(const std::vector<char>& own, Eigen::VectorXd* force) {
+  for (std::size_t n = 0; n < own.size(); ++n) {
+    if (!own[n]) force->segment<3>(3 * static_cast<Eigen::Index>(n)).setZero();
+  }
 }
 
 BodyForce FiniteStrainModel::Force(const Eigen::VectorXd& u, const Eigen::VectorXd* v,

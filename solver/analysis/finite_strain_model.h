@@ -31,6 +31,15 @@ class FiniteStrainModel : public DiscreteBody {
   virtual bool InternalForce(const Eigen::VectorXd& u, Eigen::VectorXd* force,
                              double* energy) const = 0;
 
+  // A rank's share of InternalForce across MPI ranks (see AssemblyOptions::
+  // own_nodes): the rows of the nodes flagged in `own` (one flag per node),
+  // from the elements that touch them, and zero elsewhere, so that the
+  // ranks' shares add up to the whole force, each row from one rank.
+  // Returns false as InternalForce does, for the elements it evaluated. The
+  // default evaluates the whole force and keeps the share.
+  virtual bool InternalForceShare(const Eigen::VectorXd& u, const std::vector<char>& own,
+                                  Eigen::VectorXd* force) const;
+
   // Tangent stiffness on the free unknowns of `dofs` and rhs = -f_int on
   // them at `u` (with options.lift_prescribed, also minus K_fp times the
   // prescribed values of `dofs`). Returns kNumerical when an element is
@@ -56,6 +65,10 @@ class FiniteStrainModel : public DiscreteBody {
   const Mesh* history_mesh_ = nullptr;
   ThreadContext history_threads_;
 };
+
+// Zeroes the rows (3 per node) of the nodes not flagged in `own`: what a
+// rank's share of a force vector keeps.
+void KeepRowsOf(const std::vector<char>& own, Eigen::VectorXd* force);
 
 // Plain 4-node tetrahedra, each with its own F (locks when nearly
 // incompressible; kept to show the difference). `mesh` and `material` must

@@ -5,8 +5,10 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <vector>
 
 #include "core/format.h"
+#include "linear/petsc_runtime.h"
 
 namespace pba {
 namespace {
@@ -85,11 +87,20 @@ struct Residual {
   Eigen::VectorXd free;
   double work = 0;  // |u . f_int|, the scale of the state's energy
 };
+// With `own` (may be null), partitioned between MPI ranks: each evaluates
+// its nodes' share, all agree on whether every element was admissible, and
+// the shares are added up.
 Residual Evaluate(const FiniteStrainModel& model, const Loading& loading, const DofMap& dofs,
-                  const Eigen::VectorXd& u) {
+                  const Eigen::VectorXd& u, const std::vector<char>* own) {
   Residual r;
   Eigen::VectorXd force;
-  if (!model.InternalForce(u, &force, nullptr)) return r;
+  if (own == nullptr) {
+    if (!model.InternalForce(u, &force, nullptr)) return r;
+  } else {
+    int failed = model.InternalForceShare(u, *own, &force) ? 0 : 1;
+    if (!MaxOverRanks(&failed, 1).ok() || failed != 0) return r;
+    if (!SumOverRanks(force.data(), static_cast<int>(force.size())).ok()) return r;
+  }
   r.work = std::abs(u.dot(force));
   double scale = force.norm();
   if (loading.active()) {
@@ -125,7 +136,16 @@ Status AssembleLoaded(const FiniteStrainModel& model, const Loading& loading,
     // Should an entry be missing after all, coeffRef inserts it and k is
     // compressed again (the next assembly then builds a new pattern).
     const SparseMatrix stiffness = loading.loads->Stiffness(u, dofs, loading.factor);
+    // A partitioned tangent holds its rank's columns only.
+    std::vector<char> column(stiffness.outerSize(), 1);
+    if (options.own_nodes != nullptr) {
+      for (int dof = 0; dof < dofs.num_dofs(); ++dof) {
+        const int f = dofs.free_index(dof);
+        if (f >= 0) column[f] = (*options.own_nodes)[dof / 3];
+      }
+    }
     for (int col = 0; col < stiffness.outerSize(); ++col) {
+      if (!column[col]) continue;
       for (SparseMatrix::InnerIterator it(stiffness, col); it; ++it) {
         system->k.coeffRef(it.row(), col) += it.value();
       }
@@ -171,24 +191,41 @@ class NewtonRun {
     return Status::Cancelled(Format("cancelled at load factor %.4g", load_));
   }
   // What every assembly asks for: the volume constraints apart too when
-  // the solver solves with them.
+  // the solver solves with them; across MPI ranks, only this rank's share
+  // of the tangent once both solvers read no more (AUTO reads the first
+  // tangents whole to choose).
   AssemblyOptions BaseOptions() const {
     AssemblyOptions options;
     options.volumetric_split = solver_->WantsVolumetricSplit();
+    if (!options.volumetric_split) options.own_nodes = OwnNodes();
     return options;
   }
+  // This rank's nodes once both solvers read only theirs; null otherwise.
+  const std::vector<char>* OwnNodes() const {
+    return spare_->OwnNodes() != nullptr ? solver_->OwnNodes() : nullptr;
+  }
+  // The residual at `state`, partitioned as the tangents are.
   Residual EvaluateAt(const Loading& loading, const Eigen::VectorXd& state) {
     ScopedTimer timer(&report_.residual_s);
-    return Evaluate(model_, loading, dofs_, state);
+    return Evaluate(model_, loading, dofs_, state, OwnNodes());
   }
-  Status SolveLinear(const LinearSystem& system, int iteration, double residual,
-                     bool near_equilibrium,
-                     const std::function<Status(LinearSystem*)>& assemble_approximate,
+  // The tangent and rhs at a state with `options` (Assemble below, bound
+  // to the state), for the substitutes SolveLinear may need.
+  using Reassemble = std::function<Status(const AssemblyOptions&, LinearSystem*)>;
+  // AssembleLoaded, counting the tangents and those assembled partitioned.
+  Status Assemble(const Loading& loading, const Eigen::VectorXd& u, const DofMap& dofs,
+                  const AssemblyOptions& options, LinearSystem* system) {
+    ++report_.tangents;
+    if (options.own_nodes != nullptr) ++report_.partitioned_tangents;
+    return AssembleLoaded(model_, loading, u, dofs, options, system);
+  }
+  // Solves with `system`, assembled with `options`.
+  Status SolveLinear(const LinearSystem& system, const AssemblyOptions& options, int iteration,
+                     double residual, bool near_equilibrium, const Reassemble& reassemble,
                      Eigen::VectorXd* du);
-  Status SolveApproximate(const LinearSystem& system, LinearSolver* target, int iteration,
-                          double residual,
-                          const std::function<Status(LinearSystem*)>& assemble_approximate,
-                          Eigen::VectorXd* du);
+  Status SolveApproximate(const LinearSystem& system, const AssemblyOptions& options,
+                          LinearSolver* target, int iteration, double residual,
+                          const Reassemble& reassemble, Eigen::VectorXd* du);
   Status Predict(double target, const Loading& loading, Eigen::VectorXd* trial,
                  double* first_energy);
   Attempt Increment(double target, const Loading& loading, bool* cancelled);
@@ -242,6 +279,7 @@ class NewtonRun {
   LinearSolver* good_ = nullptr;  // holds the last positive definite factorisation
   SparseMatrix shifted_;
   LinearSystem approximate_;
+  LinearSystem whole_;  // a partitioned tangent assembled whole, for LDL^T
   // Consecutive iterations whose consistent tangent was not positive
   // definite: when an increment fails with the tangent still indefinite
   // close to equilibrium, the equilibrium itself may be unstable.
@@ -278,10 +316,9 @@ Status FactorizeAndSolve(LinearSolver* solver, const LinearSystem& tangent,
   return solver->Solve(rhs, du);
 }
 
-Status NewtonRun::SolveLinear(const LinearSystem& system, int iteration, double residual,
-                              bool near_equilibrium,
-                              const std::function<Status(LinearSystem*)>& assemble_approximate,
-                              Eigen::VectorXd* du) {
+Status NewtonRun::SolveLinear(const LinearSystem& system, const AssemblyOptions& options,
+                              int iteration, double residual, bool near_equilibrium,
+                              const Reassemble& reassemble, Eigen::VectorXd* du) {
   ScopedTimer timer(&report_.linear_solve_s);
   LinearSolver* target = good_ == solver_ ? spare_.get() : solver_;
   const Status status = FactorizeAndSolve(target, system, system.rhs, du);
@@ -296,28 +333,48 @@ Status NewtonRun::SolveLinear(const LinearSystem& system, int iteration, double 
   // The sparse LDL^T costs a direct factorisation: behind an iterative
   // solver, chosen where a factor may not fit, only small systems take it.
   const bool ldlt_affordable = !target->Iterative() || system.k.rows() <= kIterativeLdltMaxUnknowns;
-  if (near_equilibrium && ldlt_affordable && SolveIndefinite(system, &ldlt_, du, &step_negative_)) {
-    ++report_.indefinite_iterations;
-    return Status::Ok();
+  if (near_equilibrium && ldlt_affordable) {
+    // A partitioned tangent is whole on no rank: every rank assembles the
+    // whole of it for the LDL^T (all are here together, as the failed
+    // factorisation or solve was collective).
+    const LinearSystem* whole = &system;
+    bool assembled = true;
+    if (system.own_nodes != nullptr) {
+      AssemblyOptions all = options;
+      all.own_nodes = nullptr;
+      double assembly = 0;
+      {
+        ScopedTimer assembling(&assembly);
+        assembled = reassemble(all, &whole_).ok();
+      }
+      report_.assembly_s += assembly;
+      report_.linear_solve_s -= assembly;
+      whole = &whole_;
+    }
+    if (assembled && SolveIndefinite(*whole, &ldlt_, du, &step_negative_)) {
+      ++report_.indefinite_iterations;
+      return Status::Ok();
+    }
   }
   step_negative_ = -1;
-  return SolveApproximate(system, target, iteration, residual, assemble_approximate, du);
+  return SolveApproximate(system, options, target, iteration, residual, reassemble, du);
 }
 
 // The substitutes for a tangent that is not positive definite, in turn: the
 // tangent without initial-stress terms, the last positive definite one, a
 // shifted one.
-Status NewtonRun::SolveApproximate(const LinearSystem& system, LinearSolver* target, int iteration,
-                                   double residual,
-                                   const std::function<Status(LinearSystem*)>& assemble_approximate,
-                                   Eigen::VectorXd* du) {
+Status NewtonRun::SolveApproximate(const LinearSystem& system, const AssemblyOptions& options,
+                                   LinearSolver* target, int iteration, double residual,
+                                   const Reassemble& reassemble, Eigen::VectorXd* du) {
   bool approximated = false;
   {
     // The approximate tangent's assembly counts as assembly, not solving.
     double assembly = 0;
     {
       ScopedTimer assembling(&assembly);
-      approximated = assemble_approximate(&approximate_).ok();
+      AssemblyOptions definite = options;
+      definite.drop_pressure_stiffness = true;
+      approximated = reassemble(definite, &approximate_).ok();
     }
     report_.assembly_s += assembly;
     report_.linear_solve_s -= assembly;
@@ -363,15 +420,13 @@ Status NewtonRun::Predict(double target, const Loading& loading, Eigen::VectorXd
   Status status;
   {
     ScopedTimer timer(&report_.assembly_s);
-    status = AssembleLoaded(model_, loading, u_, increment, lift, &system_);
+    status = Assemble(loading, u_, increment, lift, &system_);
   }
   if (status.ok() && dofs_.num_free() > 0) {
     status = SolveLinear(
-        system_, 0, 0.0, unstable_branch_,
-        [&](LinearSystem* out) {
-          AssemblyOptions definite = lift;
-          definite.drop_pressure_stiffness = true;
-          return AssembleLoaded(model_, loading, u_, increment, definite, out);
+        system_, lift, 0, 0.0, unstable_branch_,
+        [&](const AssemblyOptions& options, LinearSystem* out) {
+          return Assemble(loading, u_, increment, options, out);
         },
         &du);
   }
@@ -408,16 +463,15 @@ Status NewtonRun::Correct(const Loading& loading, double first_energy, Eigen::Ve
       *cancelled = true;
       return Cancelled();
     }
+    const AssemblyOptions options = BaseOptions();
     {
       ScopedTimer timer(&report_.assembly_s);
-      PBA_RETURN_IF_ERROR(AssembleLoaded(model_, loading, *trial, dofs_, BaseOptions(), &system_));
+      PBA_RETURN_IF_ERROR(Assemble(loading, *trial, dofs_, options, &system_));
     }
     PBA_RETURN_IF_ERROR(SolveLinear(
-        system_, iteration, residual, residual <= kIndefiniteNewtonResidual,
-        [&](LinearSystem* out) {
-          AssemblyOptions definite = BaseOptions();
-          definite.drop_pressure_stiffness = true;
-          return AssembleLoaded(model_, loading, *trial, dofs_, definite, out);
+        system_, options, iteration, residual, residual <= kIndefiniteNewtonResidual,
+        [&](const AssemblyOptions& again, LinearSystem* out) {
+          return Assemble(loading, *trial, dofs_, again, out);
         },
         &du));
     const double energy = std::abs(du.dot(current.free));

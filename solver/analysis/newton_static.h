@@ -115,6 +115,10 @@ struct NewtonReport {
   double assembly_s = 0;
   double linear_solve_s = 0;
   double residual_s = 0;
+  // Tangents assembled, and of them those assembled partitioned between MPI
+  // ranks (AssemblyOptions::own_nodes).
+  int tangents = 0;
+  int partitioned_tangents = 0;
 };
 
 // Where the solve is, for progress reports and cancellation.

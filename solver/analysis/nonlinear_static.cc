@@ -22,6 +22,7 @@
 #include "fem/point_kinematics.h"
 #include "fem/tet4_finite_strain.h"
 #include "linear/linear_solver.h"
+#include "linear/petsc_runtime.h"
 #include "material/factory.h"
 #include "material/hyperelastic.h"
 #include "material/linear_elastic.h"
@@ -161,6 +162,13 @@ void NoteNewtonReport(const NewtonReport& report, Summary* summary) {
   if (report.cuts > 0) {
     summary->notes.push_back(Format("%d load increment(s) were cut back and retried; first: %s",
                                     report.cuts, report.cut_reasons.front().c_str()));
+  }
+  if (report.partitioned_tangents > 0) {
+    summary->notes.push_back(Format(
+        "%d of %d tangent stiffnesses were assembled partitioned between the %d MPI ranks (each "
+        "rank the columns of its share of the nodes, with the elements that touch them; the "
+        "others whole: the first ones, while AUTO chose its solver, and any a substitute needed)",
+        report.partitioned_tangents, report.tangents, CurrentRanks().size));
   }
 }
 

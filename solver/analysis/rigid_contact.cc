@@ -41,6 +41,17 @@ class ContactModel : public FiniteStrainModel {
     return force->allFinite() && (energy == nullptr || std::isfinite(*energy));
   }
 
+  // The body's share, and the contacts' forces on the same rows.
+  bool InternalForceShare(const Eigen::VectorXd& u, const std::vector<char>& own,
+                          Eigen::VectorXd* force) const override {
+    if (!body_.InternalForceShare(u, own, force)) return false;
+    Eigen::VectorXd contact = Eigen::VectorXd::Zero(u.size());
+    for (const RigidContact* c : contacts_) c->AddInternalForce(u, &contact, nullptr);
+    KeepRowsOf(own, &contact);
+    *force += contact;
+    return force->allFinite();
+  }
+
   Status Assemble(const Eigen::VectorXd& u, const DofMap& dofs, const AssemblyOptions& options,
                   LinearSystem* system) const override {
     PBA_RETURN_IF_ERROR(body_.Assemble(u, dofs, options, system));
@@ -196,6 +207,9 @@ void RigidContact::AddTangent(const Eigen::VectorXd& u, const DofMap& dofs, Line
     }
     const Eigen::Vector3d force = area * (s.pressure * s.normal + s.traction);  // on the tissue
     const int node = nodes_[k];
+    // A partitioned tangent holds its rank's columns only (the right-hand
+    // side is whole by now).
+    const bool column = options.own_nodes == nullptr || (*options.own_nodes)[node];
     for (int i = 0; i < 3; ++i) {
       const int fi = dofs.free_index(3 * node + i);
       if (fi < 0) continue;
@@ -204,6 +218,7 @@ void RigidContact::AddTangent(const Eigen::VectorXd& u, const DofMap& dofs, Line
         const int dof_j = 3 * node + j;
         const int fj = dofs.free_index(dof_j);
         if (fj >= 0) {
+          if (!column) continue;
           system->k.coeffRef(fi, fj) += block(i, j);
           inserted = inserted || !system->k.isCompressed();
         } else if (options.lift_prescribed) {

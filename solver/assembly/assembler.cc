@@ -5,6 +5,7 @@
 #include <atomic>
 #include <bitset>
 
+#include "linear/petsc_runtime.h"
 #include "mesh/quadratic.h"
 
 namespace pba {
@@ -19,14 +20,19 @@ constexpr int kMaxColours = 256;
 // so walking nodes and components in ascending order gives sorted columns
 // with sorted rows. The exact size is counted first and the row indices
 // written straight into k, so that no growing vector or second copy of the
-// pattern coexists with the matrix.
+// pattern coexists with the matrix. With `own` (AssemblyOptions::own_nodes;
+// may be null) only those nodes' columns have entries.
 template <typename NodesOf>
-void BuildPattern(const Mesh& mesh, const NodesOf& nodes_of, const DofMap& dofs, SparseMatrix* k) {
+void BuildPattern(const Mesh& mesh, const NodesOf& nodes_of, const DofMap& dofs,
+                  const std::vector<char>* own, SparseMatrix* k) {
   const int n = mesh.num_nodes();
   std::vector<std::vector<int>> neighbours(n);
   for (int e = 0; e < mesh.num_elements(); ++e) {
     const auto t = nodes_of(e);
-    for (int a : t) neighbours[a].insert(neighbours[a].end(), t.begin(), t.end());
+    for (int a : t) {
+      if (own == nullptr || (*own)[a])
+        neighbours[a].insert(neighbours[a].end(), t.begin(), t.end());
+    }
   }
   std::vector<int> free_of_node(n, 0);
   for (int a = 0; a < n; ++a) {
@@ -75,12 +81,13 @@ void BuildPattern(const Mesh& mesh, const NodesOf& nodes_of, const DofMap& dofs,
 // elements of `nodes_per_element` nodes of `mesh` under `dofs` (see
 // LinearSystem::pattern_source).
 bool SamePattern(const LinearSystem& system, const Mesh& mesh, int nodes_per_element,
-                 const DofMap& dofs) {
+                 const DofMap& dofs, const std::vector<char>* own) {
   const PatternSource& source = system.pattern_source;
   const int n = dofs.num_free();
-  if (source.mesh != &mesh || source.num_elements != mesh.num_elements() ||
-      source.nodes_per_element != nodes_per_element || system.k.rows() != n ||
-      system.k.cols() != n || !system.k.isCompressed() || system.k.nonZeros() != source.non_zeros ||
+  if (source.mesh != &mesh || source.own_nodes != own ||
+      source.num_elements != mesh.num_elements() || source.nodes_per_element != nodes_per_element ||
+      system.k.rows() != n || system.k.cols() != n || !system.k.isCompressed() ||
+      system.k.nonZeros() != source.non_zeros ||
       static_cast<int>(source.free_index.size()) != dofs.num_dofs()) {
     return false;
   }
@@ -148,16 +155,18 @@ Status AssembleElements(const Mesh& mesh, const NodesOf& nodes_of, const DofMap&
                         const std::function<bool(double)>& keep_going, LinearSystem* system) {
   constexpr int kUnknowns = 3 * N;
   SparseMatrix& matrix = system->k;
-  const bool reused = SamePattern(*system, mesh, N, dofs);
+  const std::vector<char>* own = options.own_nodes;
+  const bool reused = SamePattern(*system, mesh, N, dofs, own);
   if (reused) {
     std::fill(matrix.valuePtr(), matrix.valuePtr() + matrix.nonZeros(), 0.0);
   } else {
     // The old matrix goes first, so that it never coexists with the new one.
     system->pattern_source = PatternSource();
     matrix = SparseMatrix();
-    BuildPattern(mesh, nodes_of, dofs, &matrix);
+    BuildPattern(mesh, nodes_of, dofs, own, &matrix);
     PatternSource& source = system->pattern_source;
     source.mesh = &mesh;
+    source.own_nodes = own;
     source.num_elements = mesh.num_elements();
     source.nodes_per_element = N;
     source.free_index.resize(dofs.num_dofs());
@@ -175,9 +184,11 @@ Status AssembleElements(const Mesh& mesh, const NodesOf& nodes_of, const DofMap&
     return at != end && *at == row ? static_cast<int>(at - inner) : -1;
   };
   system->rhs.setZero(dofs.num_free());
+  system->own_nodes = own;
   double* rhs = system->rhs.data();
   std::atomic<int> failed{-1};
   std::atomic<bool> missing{false};  // an element entry not in k's pattern
+  bool cancelled = false;
 
   std::size_t done = 0;
   const std::size_t total = static_cast<std::size_t>(mesh.num_elements());
@@ -185,7 +196,8 @@ Status AssembleElements(const Mesh& mesh, const NodesOf& nodes_of, const DofMap&
   // is assembled by one thread; so is a colour too small to repay starting
   // a team (a Newton solve on a small mesh assembles thousands of times,
   // and oversubscribed threads make each parallel region cost milliseconds).
-  for (std::size_t c = 0; c < colours.size() && failed.load() < 0 && !missing.load(); ++c) {
+  for (std::size_t c = 0; c < colours.size() && failed.load() < 0 && !missing.load() && !cancelled;
+       ++c) {
     const std::vector<int>& elements = colours[c];
     const bool serial = c + 1 == static_cast<std::size_t>(kMaxColours) ||
                         !options.threads.Parallel(elements.size());
@@ -195,31 +207,44 @@ Status AssembleElements(const Mesh& mesh, const NodesOf& nodes_of, const DofMap&
         continue;
       }
       const int e = elements[k];
+      const auto nodes = nodes_of(e);
+      // A partitioned assembly: the elements that touch this rank's nodes,
+      // into those nodes' columns of K and rows of the right-hand side.
+      bool mine[N];
+      bool any = false;
+      for (int a = 0; a < N; ++a) {
+        mine[a] = own == nullptr || (*own)[nodes[a]];
+        any = any || mine[a];
+      }
+      if (!any) continue;
       Eigen::Matrix<double, kUnknowns, kUnknowns> ke;
       Eigen::Matrix<double, kUnknowns, 1> fe;
       if (!kernel(e, &ke, &fe)) {
         failed.store(e);
         continue;
       }
-      int free[kUnknowns];
+      // free: the unknown's index in K (-1: prescribed); row: the same
+      // where this rank assembles the unknown's row and column, else -1.
+      int free[kUnknowns], row[kUnknowns];
       double up[kUnknowns];
-      const auto nodes = nodes_of(e);
       for (int a = 0; a < N; ++a) {
         for (int i = 0; i < 3; ++i) {
           const int dof = 3 * nodes[a] + i;
           free[3 * a + i] = dofs.free_index(dof);
+          row[3 * a + i] = mine[a] ? free[3 * a + i] : -1;
           up[3 * a + i] =
               options.lift_prescribed && dofs.prescribed(dof) ? dofs.prescribed_value(dof) : 0.0;
         }
       }
       for (int p = 0; p < kUnknowns; ++p) {
-        if (free[p] >= 0) rhs[free[p]] += fe(p);
+        if (row[p] >= 0) rhs[row[p]] += fe(p);
       }
       for (int q = 0; q < kUnknowns; ++q) {
+        if (free[q] >= 0 && row[q] < 0) continue;  // another rank's column
         if (free[q] < 0) {
           if (up[q] == 0.0) continue;
           for (int p = 0; p < kUnknowns; ++p) {
-            if (free[p] >= 0) rhs[free[p]] -= ke(p, q) * up[q];
+            if (row[p] >= 0) rhs[row[p]] -= ke(p, q) * up[q];
           }
           continue;
         }
@@ -237,21 +262,30 @@ Status AssembleElements(const Mesh& mesh, const NodesOf& nodes_of, const DofMap&
     done += elements.size();
     if (failed.load() < 0 && !missing.load() &&
         !keep_going(static_cast<double>(done) / static_cast<double>(total))) {
-      return Status::Cancelled("cancelled during assembly");
+      cancelled = true;
     }
   }
-  if (failed.load() >= 0) {
-    return Status::Numerical("element " + std::to_string(failed.load()) +
+  // What one rank of a partitioned assembly met, every rank acts on: an
+  // error on one, a return on the others, would leave them waiting.
+  int outcome[4] = {failed.load(), missing.load() ? 1 : 0, missing.load() && !reused ? 1 : 0,
+                    cancelled ? 1 : 0};
+  if (own != nullptr) PBA_RETURN_IF_ERROR(MaxOverRanks(outcome, 4));
+  if (outcome[3] != 0) return Status::Cancelled("cancelled during assembly");
+  if (outcome[0] >= 0) {
+    return Status::Numerical("element " + std::to_string(outcome[0]) +
                              " could not be evaluated (inverted: det F <= 0)");
   }
-  if (missing.load()) {
+  if (outcome[2] != 0) {
+    return Status::Internal("assembly: an element entry is missing from the pattern");
+  }
+  if (outcome[1] != 0) {
     // A reused pattern that lacks an entry: k was changed since it was
     // assembled (or the mesh was), so the pattern is built anew. A pattern
     // just built holds every element entry by construction.
-    if (!reused) return Status::Internal("assembly: an element entry is missing from the pattern");
     system->pattern_source = PatternSource();
     return AssembleElements<N>(mesh, nodes_of, dofs, colours, kernel, options, keep_going, system);
   }
+  if (own != nullptr) PBA_RETURN_IF_ERROR(SumOverRanks(system->rhs.data(), dofs.num_free()));
   return Status::Ok();
 }
 

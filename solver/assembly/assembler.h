@@ -40,8 +40,9 @@ struct PatternSource {
   const Mesh* mesh = nullptr;  // compared, never dereferenced
   int num_elements = 0;
   int nodes_per_element = 0;
-  std::vector<int> free_index;  // DofMap::free_index of every dof
-  Eigen::Index non_zeros = 0;   // of k when the pattern was built
+  std::vector<int> free_index;                   // DofMap::free_index of every dof
+  Eigen::Index non_zeros = 0;                    // of k when the pattern was built
+  const std::vector<char>* own_nodes = nullptr;  // AssemblyOptions::own_nodes; compared only
 };
 
 struct LinearSystem {
@@ -58,7 +59,22 @@ struct LinearSystem {
   // of entries; otherwise k is released and rebuilt. Code that writes k by
   // other means need not clear it (see AssembleSystem).
   PatternSource pattern_source;
+  // Set by an assembly partitioned between MPI ranks (AssemblyOptions::
+  // own_nodes): k then holds only the columns of these nodes, so it is a
+  // whole matrix to no one but a solver that reads only those
+  // (LinearSolver::OwnNodes). Null: k is whole.
+  const std::vector<char>* own_nodes = nullptr;
 };
+
+// Whether any of an element's `nodes` is flagged in `own` (a rank's nodes,
+// AssemblyOptions::own_nodes).
+template <typename Nodes>
+bool TouchesAny(const Nodes& nodes, const std::vector<char>& own) {
+  for (int a : nodes) {
+    if (own[a]) return true;
+  }
+  return false;
+}
 
 // Computes one element's stiffness `k` and force `f` (both in the element's
 // 12 unknowns); returns false to stop the assembly (for example an inverted
@@ -91,6 +107,20 @@ struct AssemblyOptions {
   // The threads a colour is assembled by; a colour under kMinParallelWork
   // elements is assembled by the calling thread.
   ThreadContext threads;
+  // Across the ranks of an MPI job, each rank's share of the tangent (null,
+  // the default: the whole of it): one flag per mesh node, set for the
+  // nodes whose columns this rank assembles, with every element that
+  // touches one (so an element on the border between two ranks is
+  // evaluated by both). K then holds only those columns, exactly the whole
+  // matrix's; the right-hand side is assembled on those nodes' rows and
+  // added up over the ranks (SumOverRanks: one term per entry, so it is
+  // exact), so every rank ends with the whole of it, as in one process.
+  // The element work is split between the ranks and K's memory with it.
+  // Every rank must assemble at the same point (collective calls), and a
+  // failure on one rank (an inverted element) is every rank's. Models
+  // without a volumetric split honour it (AssembleSystem*, TET4_ANP); the
+  // split is not partitioned.
+  const std::vector<char>* own_nodes = nullptr;
 };
 
 // Assembles K_ff = sum k and rhs_f = sum f (minus K_fp u_p when lifting).

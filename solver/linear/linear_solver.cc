@@ -24,6 +24,10 @@ class AutoSolver final : public LinearSolver {
   }
 
   bool Iterative() const override { return chosen_ != nullptr && chosen_->Iterative(); }
+  // Whole matrices until it has chosen (CHOLMOD's analysis reads them).
+  const std::vector<char>* OwnNodes() const override {
+    return chosen_ != nullptr ? chosen_->OwnNodes() : nullptr;
+  }
   // Before the choice: whether the AMG it may choose would use the split.
   bool WantsVolumetricSplit() const override {
     if (chosen_ != nullptr) return chosen_->WantsVolumetricSplit();
@@ -66,7 +70,7 @@ class AutoSolver final : public LinearSolver {
                      budget_source.c_str());
     const bool ranks = CurrentRanks().size > 1;
     if (direct) {
-      chosen_ = ranks ? CreateMumpsSolver() : CreateCholmodSolver(options_.threads);
+      chosen_ = ranks ? CreateMumpsSolver(options_.layout) : CreateCholmodSolver(options_.threads);
     } else {
       chosen_ = CreateAmgSolver(options_.settings, options_.layout, options_.cancel);
     }
@@ -156,7 +160,7 @@ std::unique_ptr<LinearSolver> CreateLinearSolver(const LinearSolverOptions& opti
     case LinearSolverOptions::Kind::kAmg:
       return CreateAmgSolver(options.settings, options.layout, options.cancel);
     case LinearSolverOptions::Kind::kMumps:
-      return CreateMumpsSolver();
+      return CreateMumpsSolver(options.layout);
     case LinearSolverOptions::Kind::kAuto:
       break;
   }

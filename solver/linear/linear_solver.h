@@ -69,6 +69,15 @@ class LinearSolver {
                                 const VolumetricSplit& split) {
     return Factorize(a);
   }
+  // Across the ranks of an MPI job, a solver that reads only this rank's
+  // share of each matrix it is given: one flag per node of its layout, set
+  // for the nodes whose columns (by symmetry, rows) this rank hands to
+  // PETSc. The other columns of a matrix may then be left out (empty or
+  // anything), which a partitioned assembly does (AssemblyOptions::
+  // own_nodes). Null, the default: the solver reads whole matrices (one
+  // process; CHOLMOD, Eigen's, PCG; PRESSURE_SCHUR, which forms its blocks
+  // from the whole tangent; AUTO until it has chosen).
+  virtual const std::vector<char>* OwnNodes() const { return nullptr; }
 };
 
 // Where the unknowns of a system sit: for free unknown i, its node
@@ -216,7 +225,10 @@ std::unique_ptr<LinearSolver> CreatePressureSchurSolver(const LinearSolverSettin
 // PETSc's interface to MUMPS, the multifrontal sparse direct solver, as a
 // symmetric LDL^T: the matrix's inertia tells a tangent that is not positive
 // definite (Status::Numerical), as CHOLMOD's failed pivot does.
-std::unique_ptr<LinearSolver> CreateMumpsSolver();
+// With a `layout` (not owned; may be null) it factorises the system
+// expanded to whole nodes, split between MPI ranks by node as AMG's is (and
+// then gives OwnNodes); without one, an even share of the unknowns per rank.
+std::unique_ptr<LinearSolver> CreateMumpsSolver(const UnknownLayout* layout = nullptr);
 // AUTO: on the first Factorize, CHOLMOD when the factor its symbolic
 // analysis predicts takes at most settings.auto_direct_max_factor_mb, else
 // AMG; Name() says which and why.

@@ -51,6 +51,18 @@ void BisectNodes(const std::vector<double>& coordinates, std::vector<int> nodes,
   BisectNodes(coordinates, std::move(upper), parts - first_parts, order, sizes);
 }
 
+std::vector<char> NodesOfRank(const UnknownLayout& layout, int rank, int ranks) {
+  std::vector<int> all(layout.num_nodes()), order;
+  for (int n = 0; n < layout.num_nodes(); ++n) all[n] = n;
+  std::vector<PetscInt> sizes;
+  BisectNodes(layout.coordinates, std::move(all), ranks, &order, &sizes);
+  std::vector<char> own(layout.num_nodes(), 0);
+  PetscInt first = 0;
+  for (int r = 0; r < rank; ++r) first += sizes[r];
+  for (PetscInt p = first; p < first + sizes[rank]; ++p) own[order[p]] = 1;
+  return own;
+}
+
 // Copies b into this rank's rows of the expanded right-hand side, runs
 // `ksp` (on objects->matrix), and copies the whole answer out (gathered
 // from every rank).

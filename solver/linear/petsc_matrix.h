@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <utility>
 #include <vector>
@@ -111,16 +112,23 @@ struct PetscObjects {
 void BisectNodes(const std::vector<double>& coordinates, std::vector<int> nodes, int parts,
                  std::vector<int>* order, std::vector<PetscInt>* sizes);
 
+// The nodes of `layout` whose rows the rank `rank` of `ranks` takes (as
+// PetscMatrix splits them, by BisectNodes): one flag per node.
+std::vector<char> NodesOfRank(const UnknownLayout& layout, int rank, int ranks);
+
 // A symmetric matrix handed over in Eigen's compressed column storage, kept
 // as PETSc's row storage of the same matrix (symmetric: columns are rows),
 // optionally expanded to every degree of freedom of the mesh's nodes so
 // that each node's three unknowns form a block (prescribed ones get a
 // diagonal entry of the matrix's scale and a zero right-hand side).
 //
-// Across the ranks of an MPI job every rank holds the whole matrix and
-// hands PETSc its own rows: whole nodes, grouped by recursive coordinate
-// bisection so that a rank's rows couple mostly to each other (without a
-// layout, an even split of the unknowns in their order).
+// Across the ranks of an MPI job every rank hands PETSc its own rows:
+// whole nodes, grouped by recursive coordinate bisection so that a rank's
+// rows couple mostly to each other (without a layout, an even split of the
+// unknowns in their order). With a layout only those rows (as columns of
+// the symmetric matrix) are read, so a rank may be given a matrix that
+// holds nothing else (a partitioned assembly); without one every rank
+// holds the whole matrix.
 class PetscMatrix {
  public:
   // Builds `objects->matrix` for `a`'s pattern, or refills its values when
@@ -131,8 +139,14 @@ class PetscMatrix {
     if (layout != nullptr && static_cast<Eigen::Index>(layout->dof_of_unknown.size()) != a.rows()) {
       return Status::Internal("unknown layout does not match the matrix size");
     }
-    PBA_RETURN_IF_ERROR(CheckSameOnEveryRank(a));
+    PBA_RETURN_IF_ERROR(CheckSameOnEveryRank(a, layout));
     *rebuilt = objects->matrix == nullptr || !SamePattern(a) || layout != layout_;
+    if (CurrentRanks().size > 1) {
+      // Each rank's own pattern decides; a new PETSc matrix is made by all.
+      int any = *rebuilt ? 1 : 0;
+      PBA_RETURN_IF_ERROR(Reduce(&any, MPI_INT, MPI_MAX));
+      *rebuilt = any != 0;
+    }
     if (*rebuilt) {
       if (objects->matrix != nullptr) MatDestroy(&objects->matrix);
       // Recorded once the new matrix exists (below): a failure on the way
@@ -141,7 +155,7 @@ class PetscMatrix {
       inner_.clear();
       BuildPattern(a, layout);
     }
-    FillValues(a);
+    PBA_RETURN_IF_ERROR(FillValues(a));
     if (*rebuilt) {
       PBA_RETURN_IF_ERROR(Create(objects));
       outer_.assign(a.outerIndexPtr(), a.outerIndexPtr() + a.outerSize() + 1);
@@ -176,6 +190,36 @@ class PetscMatrix {
   }
   // The unknown at expanded row `row`; -1 for a prescribed one.
   Eigen::Index UnknownAt(PetscInt row) const { return unknown_at_[row]; }
+  // Status::Numerical naming the first of this rank's unknowns whose
+  // diagonal entry in `a` (as loaded last) is not positive and finite, the
+  // least such unknown over the ranks (every rank gets the same answer);
+  // for a matrix of which each rank holds its own columns.
+  Status CheckPositiveDiagonal(const Eigen::SparseMatrix<double>& a) const {
+    int bad = -1;
+    double value = 0;
+    for (PetscInt r = first_row_; r < last_row_ && bad < 0; ++r) {
+      const Eigen::Index j = unknown_at_[r];
+      if (j < 0) continue;
+      const double d = Diagonal(a, j);
+      if (!(d > 0) || !std::isfinite(d)) {
+        bad = static_cast<int>(j);
+        value = d;
+      }
+    }
+    // The least unknown: the largest of its negation (none: the least int).
+    constexpr int kNone = std::numeric_limits<int>::min();
+    int worst = bad < 0 ? kNone : -bad - 1;
+    PBA_RETURN_IF_ERROR(Reduce(&worst, MPI_INT, MPI_MAX));
+    if (worst == kNone) return Status::Ok();
+    const int unknown = -worst - 1;
+    double shared = unknown == bad ? value : 0;  // from the rank that found it
+    PBA_RETURN_IF_ERROR(Reduce(&shared, MPI_DOUBLE, MPI_SUM));
+    return Status::Numerical(
+        Format("the stiffness matrix is not positive definite (diagonal entry %d is %.3g): "
+               "a body not held against rigid motion, an unstable state, or a degenerate mesh",
+               unknown, shared));
+  }
+
   // This rank's rows [first_row(), last_row()).
   PetscInt first_row() const { return first_row_; }
   PetscInt last_row() const { return last_row_; }
@@ -183,15 +227,43 @@ class PetscMatrix {
   int NodeAt(PetscInt row) const { return node_at_[row / 3]; }
 
  private:
-  Status CheckSameOnEveryRank(const Eigen::SparseMatrix<double>& a) const {
+  // Whole matrices must be the same on every rank. Of a layout's system,
+  // which a rank may hold only its own columns of, the layout must be (the
+  // same mesh and free unknowns): the right-hand side, which every rank
+  // holds whole, is compared at each solve (ExpandedSolve).
+  static Status CheckSameOnEveryRank(const Eigen::SparseMatrix<double>& a,
+                                     const UnknownLayout* layout) {
     if (CurrentRanks().size <= 1) return Status::Ok();
     Digest digest;
     digest.AddValue(static_cast<std::int64_t>(a.rows()));
+    if (layout != nullptr) {
+      digest.Add(layout->dof_of_unknown.data(), sizeof(int) * layout->dof_of_unknown.size());
+      digest.Add(layout->coordinates.data(), sizeof(double) * layout->coordinates.size());
+      return digest.CheckSameOnEveryRank("meshes or free unknowns");
+    }
     digest.AddValue(static_cast<std::int64_t>(a.nonZeros()));
     digest.Add(a.outerIndexPtr(), sizeof(int) * (a.outerSize() + 1));
     digest.Add(a.innerIndexPtr(), sizeof(int) * a.nonZeros());
     digest.Add(a.valuePtr(), sizeof(double) * a.nonZeros());
     return digest.CheckSameOnEveryRank("stiffness matrices");
+  }
+
+  // One value reduced over the ranks in place (PetscLock is held: not
+  // SumOverRanks, which takes it).
+  static Status Reduce(void* value, MPI_Datatype type, MPI_Op op) {
+    if (CurrentRanks().size <= 1) return Status::Ok();
+    if (MPI_Allreduce(MPI_IN_PLACE, value, 1, type, op, PETSC_COMM_WORLD) != MPI_SUCCESS) {
+      return Status::Internal("the MPI ranks could not combine their matrices' figures");
+    }
+    return Status::Ok();
+  }
+
+  // a(j, j), 0 when the column lacks it.
+  static double Diagonal(const Eigen::SparseMatrix<double>& a, Eigen::Index j) {
+    const int* begin = a.innerIndexPtr() + a.outerIndexPtr()[j];
+    const int* end = a.innerIndexPtr() + a.outerIndexPtr()[j + 1];
+    const int* at = std::lower_bound(begin, end, static_cast<int>(j));
+    return at != end && *at == j ? a.valuePtr()[at - a.innerIndexPtr()] : 0.0;
   }
 
   bool SamePattern(const Eigen::SparseMatrix<double>& a) const {
@@ -267,16 +339,27 @@ class PetscMatrix {
     }
   }
 
-  void FillValues(const Eigen::SparseMatrix<double>& a) {
+  Status FillValues(const Eigen::SparseMatrix<double>& a) {
     // A prescribed row's diagonal: the mean free diagonal, so that the
-    // expanded matrix is no worse scaled than the free one.
+    // expanded matrix is no worse scaled than the free one; across ranks
+    // each adds up its own rows' (all a rank may hold).
     double scale = 1;
-    if (a.rows() > 0) scale = a.diagonal().cwiseAbs().mean();
+    if (layout_ != nullptr && CurrentRanks().size > 1) {
+      double sum = 0;
+      for (PetscInt r = first_row_; r < last_row_; ++r) {
+        if (unknown_at_[r] >= 0) sum += std::abs(Diagonal(a, unknown_at_[r]));
+      }
+      PBA_RETURN_IF_ERROR(Reduce(&sum, MPI_DOUBLE, MPI_SUM));
+      if (a.rows() > 0) scale = sum / static_cast<double>(a.rows());
+    } else if (a.rows() > 0) {
+      scale = a.diagonal().cwiseAbs().mean();
+    }
     if (!(scale > 0) || !std::isfinite(scale)) scale = 1;
     values_.resize(source_.size());
     for (std::size_t e = 0; e < source_.size(); ++e) {
       values_[e] = source_[e] < 0 ? scale : a.valuePtr()[source_[e]];
     }
+    return Status::Ok();
   }
 
   Status Create(PetscObjects* objects) {

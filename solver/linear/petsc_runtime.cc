@@ -135,6 +135,25 @@ double SolveMemoryBytes() {
   return memory;
 }
 
+Status SumOverRanks(double* values, int count) {
+  if (CurrentRanks().size <= 1) return Status::Ok();
+  const auto lock = PetscLock();
+  if (MPI_Allreduce(MPI_IN_PLACE, values, count, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD) !=
+      MPI_SUCCESS) {
+    return Status::Internal("the MPI ranks could not add up their values");
+  }
+  return Status::Ok();
+}
+
+Status MaxOverRanks(int* values, int count) {
+  if (CurrentRanks().size <= 1) return Status::Ok();
+  const auto lock = PetscLock();
+  if (MPI_Allreduce(MPI_IN_PLACE, values, count, MPI_INT, MPI_MAX, MPI_COMM_WORLD) != MPI_SUCCESS) {
+    return Status::Internal("the MPI ranks could not compare their values");
+  }
+  return Status::Ok();
+}
+
 void AbortOtherRanks(int code) {
   if (CurrentRanks().size > 1) MPI_Abort(MPI_COMM_WORLD, code);
 }

@@ -49,6 +49,15 @@ ProcessRanks CurrentRanks();
 // rank at the same point.
 double SolveMemoryBytes();
 
+// Across the ranks of an MPI job, each of `count` values becomes the sum
+// (SumOverRanks) or the largest (MaxOverRanks) of the ranks' values, on
+// every rank: collective calls, made by every rank at the same point. A
+// partitioned assembly adds up its rows with the sum, each entry having
+// one nonzero term, so the result is exact and alike on every rank. In a
+// process of its own they change nothing. They take PetscLock.
+Status SumOverRanks(double* values, int count);
+Status MaxOverRanks(int* values, int count);
+
 // Ends the whole MPI job with `code` (MPI_Abort) when this process is one
 // of several ranks: one rank's failure must not leave the others waiting
 // for it in a collective call. Otherwise returns.

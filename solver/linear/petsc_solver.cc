@@ -35,8 +35,20 @@ using petsc_detail::SetRigidBodyNearNullSpace;
 using petsc_detail::SolveCounts;
 using petsc_detail::SolverComm;
 
+// Across ranks with a layout: this rank's nodes (PetscMatrix's split), for
+// OwnNodes; empty otherwise.
+std::vector<char> OwnNodesOf(const UnknownLayout* layout) {
+  const ProcessRanks ranks = CurrentRanks();
+  if (layout == nullptr || ranks.size <= 1) return {};
+  return petsc_detail::NodesOfRank(*layout, ranks.rank, ranks.size);
+}
+
 class MumpsSolver final : public LinearSolver {
  public:
+  // The layout only matters across ranks: one process factorises the
+  // system as given.
+  explicit MumpsSolver(const UnknownLayout* layout)
+      : layout_(CurrentRanks().size > 1 ? layout : nullptr), own_nodes_(OwnNodesOf(layout_)) {}
   ~MumpsSolver() override {
     const auto lock = PetscLock();
     objects_.Destroy();
@@ -47,7 +59,7 @@ class MumpsSolver final : public LinearSolver {
     const auto lock = PetscLock();
     factorized_ = false;
     bool rebuilt = false;
-    PBA_RETURN_IF_ERROR(matrix_.Load(a, nullptr, &objects_, &rebuilt));
+    PBA_RETURN_IF_ERROR(matrix_.Load(a, layout_, &objects_, &rebuilt));
     if (rebuilt || objects_.ksp == nullptr) {
       PBA_RETURN_IF_ERROR(objects_.NewSolver());
       PBA_RETURN_IF_ERROR(ConfigureMumps(objects_.ksp, objects_.matrix));
@@ -67,10 +79,15 @@ class MumpsSolver final : public LinearSolver {
 
   std::string Name() const override { return "MUMPS multifrontal LDL^T (PETSc)" + OnRanks(); }
   std::unique_ptr<LinearSolver> NewOfSameKind() const override {
-    return std::make_unique<MumpsSolver>();
+    return std::make_unique<MumpsSolver>(layout_);
+  }
+  const std::vector<char>* OwnNodes() const override {
+    return own_nodes_.empty() ? nullptr : &own_nodes_;
   }
 
  private:
+  const UnknownLayout* layout_;  // not owned; null on one process
+  std::vector<char> own_nodes_;
   PetscMatrix matrix_;
   PetscObjects objects_;
   bool factorized_ = false;
@@ -81,7 +98,11 @@ class AmgSolver final : public LinearSolver {
  public:
   AmgSolver(const LinearSolverSettings& settings, const UnknownLayout* layout,
             const std::atomic<bool>* cancel)
-      : settings_(settings), layout_(layout), cancel_(cancel), test_(cancel) {}
+      : settings_(settings),
+        layout_(layout),
+        cancel_(cancel),
+        own_nodes_(OwnNodesOf(layout)),
+        test_(cancel) {}
   ~AmgSolver() override {
     const auto lock = PetscLock();
     DestroyFallback();
@@ -95,12 +116,14 @@ class AmgSolver final : public LinearSolver {
     // A positive definite matrix has a positive diagonal; CG on one that is
     // not would wander, so this necessary condition is checked first (as
     // PCG does). Indefinite matrices with a positive diagonal show as a
-    // failed solve.
-    PBA_RETURN_IF_ERROR(CheckPositiveDiagonal(a));
+    // failed solve. Across ranks each checks its own columns, all it may
+    // hold (OwnNodes), once the matrix is loaded.
+    if (own_nodes_.empty()) PBA_RETURN_IF_ERROR(CheckPositiveDiagonal(a));
     unknowns_ = a.rows();
     const auto lock = PetscLock();
     bool rebuilt = false;
     PBA_RETURN_IF_ERROR(matrix_.Load(a, layout_, &objects_, &rebuilt));
+    if (!own_nodes_.empty()) PBA_RETURN_IF_ERROR(matrix_.CheckPositiveDiagonal(a));
     if (rebuilt) DestroyFallback();
     if (rebuilt || objects_.ksp == nullptr) {
       PBA_RETURN_IF_ERROR(Setup());
@@ -210,6 +233,9 @@ class AmgSolver final : public LinearSolver {
 
   std::unique_ptr<LinearSolver> NewOfSameKind() const override {
     return std::make_unique<AmgSolver>(settings_, layout_, cancel_);
+  }
+  const std::vector<char>* OwnNodes() const override {
+    return own_nodes_.empty() ? nullptr : &own_nodes_;
   }
 
  private:
@@ -343,6 +369,7 @@ class AmgSolver final : public LinearSolver {
   LinearSolverSettings settings_;
   const UnknownLayout* layout_;      // not owned; may be null
   const std::atomic<bool>* cancel_;  // not owned; may be null
+  std::vector<char> own_nodes_;      // across ranks with a layout (OwnNodesOf)
   PetscMatrix matrix_;
   PetscObjects objects_;
   CancellableTest test_;
@@ -370,6 +397,8 @@ std::unique_ptr<LinearSolver> CreateAmgSolver(const LinearSolverSettings& settin
   return std::make_unique<AmgSolver>(settings, layout, cancel);
 }
 
-std::unique_ptr<LinearSolver> CreateMumpsSolver() { return std::make_unique<MumpsSolver>(); }
+std::unique_ptr<LinearSolver> CreateMumpsSolver(const UnknownLayout* layout) {
+  return std::make_unique<MumpsSolver>(layout);
+}
 
 }  // namespace pba

@@ -102,6 +102,9 @@ struct Case {
   std::vector<std::pair<std::string, std::string>> replace;
   const char* serial_solver;  // in the one-process summary's solver line
   const char* ranks_solver;   // in the two-rank one
+  // Newton's tangents assembled partitioned on the ranks (the summary's
+  // note), as they are for every solver that reads only its ranks' share.
+  bool partitioned = false;
 };
 
 class RanksGiveTheSerialAnswer : public ::testing::TestWithParam<Case> {};
@@ -144,6 +147,17 @@ TEST_P(RanksGiveTheSerialAnswer, SameFilesSameDisplacements) {
             rank_summary.find("redone by MUMPS") == std::string::npos)
       << serial_summary << rank_summary;
   EXPECT_NE(rank_summary.find("on 2 MPI ranks"), std::string::npos) << rank_summary;
+  const std::regex partitioned(
+      "\"([1-9][0-9]*) of ([0-9]+) tangent stiffnesses were assembled "
+      "partitioned between the 2 MPI ranks");
+  std::smatch tangents;
+  EXPECT_EQ(std::regex_search(rank_summary, tangents, partitioned), c.partitioned) << rank_summary;
+  if (c.partitioned && !tangents.empty()) {
+    // Whole are only the first ones (AUTO reads a tangent to choose, for
+    // each of Newton's two solvers) and those a substitute needed.
+    EXPECT_GE(2 * std::stoi(tangents[1]), std::stoi(tangents[2])) << rank_summary;
+  }
+  EXPECT_EQ(serial_summary.find("assembled partitioned"), std::string::npos) << serial_summary;
   EXPECT_TRUE(std::regex_search(rank_summary, std::regex("\"ranks\": 2\\b"))) << rank_summary;
 }
 
@@ -163,7 +177,7 @@ const Case kCases[] = {
      "CHOLMOD",
      "MUMPS"},
     // NONLINEAR_STATIC on 10-node elements (a pressurised cavity), AUTO.
-    {"tet10_cavity", "pressurised_cavity", {}, "CHOLMOD", "MUMPS"},
+    {"tet10_cavity", "pressurised_cavity", {}, "CHOLMOD", "MUMPS", true},
     // The same with multigrid, which K / mu = 1e4 defeats: its solves stop
     // at 60 iterations and are redone by MUMPS, across the ranks too.
     {"tet10_cavity_amg_fallback",
@@ -172,13 +186,28 @@ const Case kCases[] = {
        "type: NONLINEAR_STATIC\n  linear_solver: AMG\n  linear_solver_options: {max_iterations: "
        "60}"}},
      "redone by MUMPS",
-     "redone by MUMPS"},
+     "redone by MUMPS",
+     true},
     // NONLINEAR_STATIC, nearly incompressible Mooney-Rivlin, AMG.
     {"mooney_rivlin_amg",
      "mooney_rivlin_uniaxial",
      {{"type: NONLINEAR_STATIC", "type: NONLINEAR_STATIC\n  linear_solver: AMG"}},
      "GAMG",
-     "GAMG"},
+     "GAMG",
+     true},
+    // A rigid punch's contact adds to the tangent after the tissue's
+    // partitioned assembly; MUMPS on both sides.
+    {"contact_mumps",
+     "mooney_rivlin_uniaxial",
+     {{"element_size_mm: 5", "element_size_mm: 2.5"},
+      {"  - {set: top, displacement: {z_mm: 3}}\n",
+       "contacts:\n  - {name: punch, set: top, shape: FLAT_PUNCH, position_mm: [0, 0, 10], "
+       "axis: [0, 0, -1], radius_mm: 4, motion_mm: [0, 0, -1.5]}\n"},
+      {"type: NONLINEAR_STATIC", "type: NONLINEAR_STATIC\n  linear_solver: MUMPS"},
+      {"reaction_sets: [top]", "reaction_sets: [top, bottom]"}},
+     "MUMPS",
+     "MUMPS",
+     true},
     // TET10_MD's element pressures as unknowns (PRESSURE_SCHUR): the mixed
     // system's pressures split between the ranks as well.
     {"tet10md_cavity_pressure_schur",
@@ -190,7 +219,7 @@ const Case kCases[] = {
      "1152 pressures",
      "1152 pressures"},
     // QUASI_STATIC through time with a viscoelastic material, AUTO.
-    {"viscoelastic_relaxation", "relaxation", {}, "CHOLMOD", "MUMPS"},
+    {"viscoelastic_relaxation", "relaxation", {}, "CHOLMOD", "MUMPS", true},
     // mesh.adapt, AUTO: every rank refines its copy of the mesh from the
     // shared answer, cycle after cycle, to the same final mesh.
     {"adaptive_block", "adaptive_block", {}, "CHOLMOD", "MUMPS"},

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <functional>
 #include <memory>
 #include <string>
@@ -125,6 +126,90 @@ INSTANTIATE_TEST_SUITE_P(EveryElementAndMaterial, FiniteStrainModels,
                                                              static_cast<int>(Elements().size())),
                                             ::testing::Range(0, 5)),
                          CaseName);
+
+// Across MPI ranks each rank assembles the columns of its own nodes, with
+// every element that touches one, and its own nodes' rows of the right-hand
+// side, which the ranks then add up (AssemblyOptions::own_nodes). On one
+// process that sum is the caller's, so each share is assembled here in
+// turn: its columns must be the whole tangent's, bit for bit, its other
+// columns empty, and the shares' right-hand sides must add up to the
+// whole one, prescribed values lifted; the same for the internal force
+// (InternalForceShare). Three shares, cut across the cube
+// and not along any element, so that elements straddle them.
+TEST(PartitionedAssembly, OwnColumnsAreTheWholeTangentsAndRightHandSidesAddUp) {
+  const auto material = Materials()[0].make();
+  for (const ElementCase& element : Elements()) {
+    SCOPED_TRACE(element.name);
+    const double size_mm = kSize * 1e3;
+    Mesh mesh = testing::BoxMesh(size_mm, size_mm, size_mm, size_mm / 3, element.mesh_element);
+    if (element.quadratic) mesh = MakeQuadratic(mesh);
+    const auto model = element.make(mesh, *material);
+    const Eigen::VectorXd u = testing::RandomSmoothDisplacement(mesh, 0.04, 7, kSize);
+    // Bottom held, top pressed down; the rest free.
+    DofMap dofs(mesh.num_nodes());
+    for (int n = 0; n < mesh.num_nodes(); ++n) {
+      const double z = mesh.nodes(n, 2);
+      for (int c = 0; c < 3; ++c) {
+        if (z < 1e-9) dofs.Prescribe(n, c, 0.0);
+      }
+      if (z > kSize - 1e-9) dofs.Prescribe(n, 2, -0.02 * kSize);
+    }
+    dofs.Finalize();
+    AssemblyOptions options;
+    options.lift_prescribed = true;
+    LinearSystem whole;
+    ASSERT_TRUE(model->Assemble(u, dofs, options, &whole).ok());
+    ASSERT_EQ(whole.own_nodes, nullptr);
+
+    std::vector<int> node_of_unknown(dofs.num_free());
+    for (int dof = 0; dof < dofs.num_dofs(); ++dof) {
+      if (dofs.free_index(dof) >= 0) node_of_unknown[dofs.free_index(dof)] = dof / 3;
+    }
+    Eigen::VectorXd whole_force;
+    ASSERT_TRUE(model->InternalForce(u, &whole_force, nullptr));
+    Eigen::VectorXd sum = Eigen::VectorXd::Zero(dofs.num_free());
+    Eigen::VectorXd force_sum = Eigen::VectorXd::Zero(whole_force.size());
+    for (int share = 0; share < 3; ++share) {
+      std::vector<char> own(mesh.num_nodes());
+      for (int n = 0; n < mesh.num_nodes(); ++n) {
+        const double t = (mesh.nodes(n, 0) + 0.7 * mesh.nodes(n, 1)) / (1.7 * kSize);
+        own[n] = std::min(2, static_cast<int>(3 * t)) == share;
+      }
+      options.own_nodes = &own;
+      LinearSystem part;
+      ASSERT_TRUE(model->Assemble(u, dofs, options, &part).ok());
+      EXPECT_EQ(part.own_nodes, &own);
+      ASSERT_EQ(part.k.rows(), whole.k.rows());
+      Eigen::Index owned_columns = 0;
+      for (int j = 0; j < dofs.num_free(); ++j) {
+        const Eigen::VectorXd mine = part.k.col(j), all = whole.k.col(j);
+        if (own[node_of_unknown[j]]) {
+          ++owned_columns;
+          EXPECT_EQ(mine, all) << "column " << j;
+        } else {
+          EXPECT_EQ(part.k.col(j).nonZeros(), 0) << "column " << j << " is another share's";
+        }
+        if (!own[node_of_unknown[j]]) {
+          EXPECT_EQ(part.rhs(j), 0.0) << "row " << j << " is another share's";
+        }
+      }
+      EXPECT_GT(owned_columns, 0);
+      EXPECT_LT(owned_columns, dofs.num_free());
+      sum += part.rhs;
+      // The residual's share, the same way.
+      Eigen::VectorXd force;
+      ASSERT_TRUE(model->InternalForceShare(u, own, &force));
+      for (int n = 0; n < mesh.num_nodes(); ++n) {
+        if (!own[n]) {
+          EXPECT_TRUE(force.segment<3>(3 * n).isZero(0)) << "node " << n;
+        }
+      }
+      force_sum += force;
+    }
+    EXPECT_EQ(sum, whole.rhs);
+    EXPECT_EQ(force_sum, whole_force);
+  }
+}
 
 }  // namespace
 }  // namespace pba

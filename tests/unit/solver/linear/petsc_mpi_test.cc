@@ -1,18 +1,23 @@
 // The PETSc backends shared by the ranks of an MPI job: run under
 // `mpirun -np 2` (tests/unit/solver/CMakeLists.txt), as a user's
-// `mpirun -np 2 pba-solve` is. Each rank holds the whole system and hands
-// PETSc its own rows; every rank must end with the answer one process
-// gets (CHOLMOD's, computed on each rank alone), and ranks that hold
-// different systems must stop, never mix them.
+// `mpirun -np 2 pba-solve` is. Each rank hands PETSc its own rows, of the
+// whole system or of the share of it a partitioned assembly leaves it;
+// every rank must end with the answer one process gets (CHOLMOD's,
+// computed on each rank alone), and ranks that hold different systems
+// must stop, never mix them.
 #include <gtest/gtest.h>
 
 #include <Eigen/SparseCore>
+#include <algorithm>
 #include <cstdio>
+#include <memory>
 #include <string>
+#include <vector>
 
 #include "assembly/assembler.h"
 #include "assembly/dof_map.h"
 #include "common/linear_systems.h"
+#include "core/format.h"
 #include "linear/linear_solver.h"
 #include "linear/petsc_runtime.h"
 #include "pba/solve.h"
@@ -132,23 +137,86 @@ TEST(PetscRanks, AutoTakesMumpsWhereOneProcessWouldTakeCholmod) {
   EXPECT_NE(iterative->Name().find("GAMG"), std::string::npos) << iterative->Name();
 }
 
+// The matrix a partitioned assembly leaves a rank: the columns of its own
+// nodes, nothing else.
+Eigen::SparseMatrix<double> OwnColumns(const Eigen::SparseMatrix<double>& k,
+                                       const UnknownLayout& layout, const std::vector<char>& own) {
+  Eigen::SparseMatrix<double> part = k;
+  part.prune([&](Eigen::Index, Eigen::Index col, double) {
+    return own[layout.dof_of_unknown[col] / 3] != 0;
+  });
+  return part;
+}
+
+TEST(PetscRanks, SolversGivenOnlyTheirRanksColumnsGiveTheWholeAnswer) {
+  BlockSystem block;
+  Assemble(2.5, &block);
+  LinearSolverSettings settings;
+  settings.relative_tolerance = 1e-12;
+  const std::unique_ptr<LinearSolver> solvers[] = {
+      CreateAmgSolver(settings, &block.layout, nullptr), CreateMumpsSolver(&block.layout)};
+  for (const auto& solver : solvers) {
+    SCOPED_TRACE(solver->Name());
+    const std::vector<char>* own = solver->OwnNodes();
+    ASSERT_NE(own, nullptr);
+    ASSERT_EQ(static_cast<int>(own->size()), block.layout.num_nodes());
+    // The ranks share the nodes out, each some.
+    double mine = std::count(own->begin(), own->end(), 1), all = mine;
+    ASSERT_TRUE(SumOverRanks(&all, 1).ok());
+    EXPECT_GT(mine, 0);
+    EXPECT_EQ(all, block.layout.num_nodes());
+    const Eigen::SparseMatrix<double> part = OwnColumns(block.system.k, block.layout, *own);
+    EXPECT_LT(part.nonZeros(), block.system.k.nonZeros());
+    Eigen::VectorXd x;
+    const Status solved = FactorizeAndSolve(solver.get(), part, block, &x);
+    ASSERT_TRUE(solved.ok()) << solved.ToString();
+    EXPECT_LT(RelativeDifference(x, block.direct), 1e-8);
+  }
+  // A diagonal entry that is not positive in one rank's columns: every
+  // rank stops, naming it.
+  const std::vector<char>& own = *solvers[0]->OwnNodes();
+  Eigen::SparseMatrix<double> part = OwnColumns(block.system.k, block.layout, own);
+  Eigen::Index first = -1;
+  for (Eigen::Index j = 0; j < part.cols() && first < 0; ++j) {
+    if (own[block.layout.dof_of_unknown[j] / 3]) first = j;
+  }
+  double named = 0;
+  if (CurrentRanks().rank == 1) {
+    part.coeffRef(first, first) = -1;
+    named = static_cast<double>(first);
+  }
+  ASSERT_TRUE(SumOverRanks(&named, 1).ok());
+  const auto amg = CreateAmgSolver(settings, &block.layout, nullptr);
+  const Status status = amg->Factorize(part);
+  EXPECT_EQ(status.code(), Status::Code::kNumerical) << status.ToString();
+  EXPECT_NE(status.message().find(Format("diagonal entry %d is -1", static_cast<int>(named))),
+            std::string::npos)
+      << status.message();
+}
+
 TEST(PetscRanks, RanksHoldingDifferentMatricesStopInsteadOfMixingThem) {
   BlockSystem block;
   Assemble(3.0, &block);
   const double scale = 1.0 + CurrentRanks().rank;  // 1 on rank 0, 2 on rank 1
-  const Eigen::SparseMatrix<double> mine = scale * block.system.k;
-  for (const bool direct : {false, true}) {
-    const auto solver = direct ? CreateMumpsSolver()
-                               : CreateAmgSolver(LinearSolverSettings(), &block.layout, nullptr);
-    const Status status = solver->Factorize(mine);
-    EXPECT_EQ(status.code(), Status::Code::kInternal) << status.ToString();
-    EXPECT_NE(status.message().find("different"), std::string::npos) << status.message();
-  }
+  // Whole matrices (no layout) are compared whole.
+  const auto mumps_whole = CreateMumpsSolver();
+  Status status = mumps_whole->Factorize(scale * block.system.k);
+  EXPECT_EQ(status.code(), Status::Code::kInternal) << status.ToString();
+  EXPECT_NE(status.message().find("different stiffness matrices"), std::string::npos)
+      << status.message();
+  // A layout's systems, of which a rank may hold only its columns, by their
+  // meshes: rank 1's is moved.
+  UnknownLayout moved = block.layout;
+  for (double& c : moved.coordinates) c *= scale;
+  const auto amg = CreateAmgSolver(LinearSolverSettings(), &moved, nullptr);
+  status = amg->Factorize(block.system.k);
+  EXPECT_EQ(status.code(), Status::Code::kInternal) << status.ToString();
+  EXPECT_NE(status.message().find("different meshes"), std::string::npos) << status.message();
   // The same matrix but different right-hand sides.
   const auto mumps = CreateMumpsSolver();
   ASSERT_TRUE(mumps->Factorize(block.system.k).ok());
   Eigen::VectorXd x;
-  const Status status = mumps->Solve(scale * block.system.rhs, &x);
+  status = mumps->Solve(scale * block.system.rhs, &x);
   EXPECT_EQ(status.code(), Status::Code::kInternal) << status.ToString();
   EXPECT_NE(status.message().find("right-hand sides"), std::string::npos) << status.message();
 }
