@@ -107,24 +107,21 @@ struct Case {
   bool partitioned = false;
 };
 
-class RanksGiveTheSerialAnswer : public ::testing::TestWithParam<Case> {};
-
-TEST_P(RanksGiveTheSerialAnswer, SameFilesSameDisplacements) {
-  const Case& c = GetParam();
-  TempDir dir;
-  const fs::path scene = Variant(dir.path(), c.example, c.replace);
-  ASSERT_FALSE(scene.empty()) << "the example changed: " << c.example;
-  const RunResult serial = Solve(scene, dir.path() / "serial", 1);
+// `scene` solved by one process and by two ranks into `dir`: the same
+// files, written once, the same displacements to 1e-8, the solvers and
+// the partitioned assembly `c` names in the summaries.
+void ExpectRanksGiveTheSerialAnswer(const fs::path& dir, const fs::path& scene, const Case& c) {
+  const RunResult serial = Solve(scene, dir / "serial", 1);
   ASSERT_EQ(serial.exit_code, 0) << serial.err;
-  const RunResult ranks = Solve(scene, dir.path() / "ranks", 2);
+  const RunResult ranks = Solve(scene, dir / "ranks", 2);
   ASSERT_EQ(ranks.exit_code, 0) << ranks.err;
 
   // One writer: the same files, and one DONE event on the job's stdout.
   std::vector<std::string> serial_files, rank_files;
-  for (const auto& e : fs::directory_iterator(dir.path() / "serial")) {
+  for (const auto& e : fs::directory_iterator(dir / "serial")) {
     serial_files.push_back(e.path().filename().string());
   }
-  for (const auto& e : fs::directory_iterator(dir.path() / "ranks")) {
+  for (const auto& e : fs::directory_iterator(dir / "ranks")) {
     rank_files.push_back(e.path().filename().string());
   }
   std::sort(serial_files.begin(), serial_files.end());
@@ -132,14 +129,14 @@ TEST_P(RanksGiveTheSerialAnswer, SameFilesSameDisplacements) {
   EXPECT_EQ(serial_files, rank_files);
   EXPECT_EQ(CountOf(ranks.out, "\"DONE\""), 1u) << ranks.out;
 
-  const double relative = DisplacementDifference(dir.path() / "serial" / "result.h5",
-                                                 dir.path() / "ranks" / "result.h5");
+  const double relative =
+      DisplacementDifference(dir / "serial" / "result.h5", dir / "ranks" / "result.h5");
   std::printf("%s: 2 ranks against 1, relative difference of the displacements %.2e\n", c.name,
               relative);
   EXPECT_LE(relative, 1e-8);
 
-  const std::string serial_summary = ReadFile(dir.path() / "serial" / "summary.json");
-  const std::string rank_summary = ReadFile(dir.path() / "ranks" / "summary.json");
+  const std::string serial_summary = ReadFile(dir / "serial" / "summary.json");
+  const std::string rank_summary = ReadFile(dir / "ranks" / "summary.json");
   EXPECT_NE(serial_summary.find(c.serial_solver), std::string::npos) << serial_summary;
   EXPECT_NE(rank_summary.find(c.ranks_solver), std::string::npos) << rank_summary;
   // A fallback is taken on both sides or on neither.
@@ -159,6 +156,16 @@ TEST_P(RanksGiveTheSerialAnswer, SameFilesSameDisplacements) {
   }
   EXPECT_EQ(serial_summary.find("assembled partitioned"), std::string::npos) << serial_summary;
   EXPECT_TRUE(std::regex_search(rank_summary, std::regex("\"ranks\": 2\\b"))) << rank_summary;
+}
+
+class RanksGiveTheSerialAnswer : public ::testing::TestWithParam<Case> {};
+
+TEST_P(RanksGiveTheSerialAnswer, SameFilesSameDisplacements) {
+  const Case& c = GetParam();
+  TempDir dir;
+  const fs::path scene = Variant(dir.path(), c.example, c.replace);
+  ASSERT_FALSE(scene.empty()) << "the example changed: " << c.example;
+  ExpectRanksGiveTheSerialAnswer(dir.path(), scene, c);
 }
 
 const Case kCases[] = {
@@ -229,6 +236,40 @@ INSTANTIATE_TEST_SUITE_P(Scenes, RanksGiveTheSerialAnswer, ::testing::ValuesIn(k
                          [](const ::testing::TestParamInfo<Case>& info) {
                            return std::string(info.param.name);
                          });
+
+// A bonded TET4_ANP cube compressed by half passes a bifurcation (the
+// tangent turns indefinite near 42 %), past which Newton steps with the
+// indefinite tangent's LDL^T: across ranks every rank then assembles the
+// tangent whole for it, and the ranks land on the serial answer and say
+// the same about the instability.
+TEST(PbaSolveRanks, PastABifurcationTheRanksTakeTheSerialPath) {
+  TempDir dir;
+  const fs::path scene = dir.path() / "half_compressed.yaml";
+  std::ofstream(scene) << "name: half-compressed\n"
+                          "geometry: {box: {size_mm: [10, 10, 10]}}\n"
+                          "mesh: {element: TET4_ANP, element_size_mm: 2.5}\n"
+                          "material: {neo_hookean: {shear_modulus_pa: 1000, "
+                          "bulk_modulus_pa: 1000000}}\n"
+                          "boundary_conditions:\n"
+                          "  - {set: bottom, fixed: {}}\n"
+                          "  - {set: top, displacement: {x_mm: 0, y_mm: 0, z_mm: -5}}\n"
+                          "analysis:\n"
+                          "  type: NONLINEAR_STATIC\n"
+                          "  linear_solver: MUMPS\n"
+                          "  nonlinear: {increments: 20}\n"
+                          "outputs: {reaction_sets: [top]}\n";
+  const Case c{"half_compressed", "", {}, "MUMPS", "MUMPS", true};
+  ExpectRanksGiveTheSerialAnswer(dir.path(), scene, c);
+  const std::string serial_summary = ReadFile(dir.path() / "serial" / "summary.json");
+  const std::string rank_summary = ReadFile(dir.path() / "ranks" / "summary.json");
+  const std::regex told(
+      "(\\d+) increment\\(s\\) converged to an equilibrium whose tangent "
+      "stiffness has up to (\\d+) negative eigenvalue");
+  std::smatch serial_told, rank_told;
+  ASSERT_TRUE(std::regex_search(serial_summary, serial_told, told)) << serial_summary;
+  ASSERT_TRUE(std::regex_search(rank_summary, rank_told, told)) << rank_summary;
+  EXPECT_EQ(serial_told.str(0), rank_told.str(0));
+}
 
 TEST(PbaSolveRanks, ScenesWithoutASharedSolveAreRefusedNamingTheField) {
   TempDir dir;
