@@ -11,7 +11,7 @@ packages=(
   libgrpc++-dev libgrpc-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler
   libsqlite3-dev
   libpetsc-real-dev libopenmpi-dev openmpi-bin
-  libyaml-cpp-dev libcli11-dev libspdlog-dev libfmt-dev
+  libyaml-cpp-dev libcli11-dev libspdlog-dev libfmt-dev libtinyxml2-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   calculix-ccx
   python3-meshio python3-h5py python3-paraview
@@ -19,6 +19,7 @@ packages=(
   libssl-dev
   gnuplot-nox time
   openssl
+  mricron-data
 )
 
 missing=()

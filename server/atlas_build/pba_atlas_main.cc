@@ -391,7 +391,8 @@ void AddBuildCommand(CLI::App& app, CommandLine& line) {
       ->excludes(plates_option)
       ->excludes(labels_option);
   build->add_option("--colour-table", line.colour_table,
-                    "Label table for --labels (CSV: label,name,r,g,b); default the built-in one");
+                    "Label table for --labels (PBA CSV, MRIcron .txt with its .lut, FSL .xml, "
+                    "Slicer .ctbl/.csv/.tsv, ITK-SNAP .txt); default the built-in one");
   AddMeshOptions(build, line.build);
   build
       ->add_option("--roi", line.roi,
@@ -434,7 +435,8 @@ CLI::App* AddSplitCommand(CLI::App& app, CommandLine& line) {
           ->excludes(split_plates_option);
   split
       ->add_option("--colour-table", line.split_colour_table,
-                   "Label table for --labels (CSV: label,name,r,g,b); default the built-in one")
+                   "Label table for --labels (PBA CSV, MRIcron .txt with its .lut, FSL .xml, "
+                   "Slicer .ctbl/.csv/.tsv, ITK-SNAP .txt); default the built-in one")
       ->needs(split_labels_option);
   split->add_option("--synthetic-voxel-mm", line.split.source.synthetic_voxel_mm,
                     "Voxel edge of the painted synthetic atlas [mm]");

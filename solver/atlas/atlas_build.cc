@@ -7,6 +7,7 @@
 #include <numbers>
 #include <string>
 
+#include "atlas/label_table.h"
 #include "atlas/label_volume_io.h"
 #include "atlas/loft.h"
 #include "atlas/midside_projection.h"
@@ -246,6 +247,19 @@ std::vector<std::vector<int>> RegionLabelSets(const LoftField& loft,
   return sets;
 }
 
+// A label volume's table: the built-in one without `path`, else the file
+// in whichever format it is, its notes into the result's.
+Status ReadVolumeTable(const std::filesystem::path& path, AtlasBuildResult* result) {
+  if (path.empty()) {
+    result->colours = ColourTable::Builtin();
+    return Status::Ok();
+  }
+  LabelTableRead read;
+  PBA_RETURN_IF_ERROR(ReadLabelTable(path, &result->colours, &read));
+  result->notes.insert(result->notes.end(), read.notes.begin(), read.notes.end());
+  return Status::Ok();
+}
+
 }  // namespace
 
 std::optional<MidsideProjectionReport> CurveAtlasMidsideNodes(const AtlasBuildResult& result,
@@ -339,13 +353,8 @@ Status BuildAtlas(const AtlasBuildOptions& options, AtlasBuildResult* result) {
                     options.input.string(),
                     Format("voxels of %g x %g x %g mm", v.spacing_mm().x(), v.spacing_mm().y(),
                            v.spacing_mm().z())));
-    if (composed_volume) {
-      // The colours came with the structures.
-    } else if (options.colour_table.empty()) {
-      result->colours = ColourTable::Builtin();
-    } else if (Status s = ReadColourTableCsv(options.colour_table, &result->colours); !s.ok()) {
-      return s;
-    }
+    // A composed volume's colours came with the structures.
+    if (!composed_volume) PBA_RETURN_IF_ERROR(ReadVolumeTable(options.colour_table, result));
     result->times.source_s = SecondsSince(start);
   } else {
     PlateStack stack;

@@ -110,9 +110,16 @@ Status DescribeSourceContent(const AtlasBuildOptions& options, std::string* text
   if (options.colour_table.empty()) {
     text->append("colour_table built-in\n");
   } else {
-    std::string digest;
-    PBA_RETURN_IF_ERROR(FileSha256Hex(options.colour_table, &digest));
-    text->append("colour_table " + digest + "\n");
+    // Every file the table is read from (an MRIcron .txt and its .lut).
+    std::filesystem::path lut = options.colour_table;
+    lut.replace_extension(".lut");
+    for (const std::filesystem::path& file : {options.colour_table, lut}) {
+      std::error_code error;
+      if (file != options.colour_table && !std::filesystem::is_regular_file(file, error)) continue;
+      std::string digest;
+      PBA_RETURN_IF_ERROR(FileSha256Hex(file, &digest));
+      text->append("colour_table " + digest + "\n");
+    }
   }
   return Status::Ok();
 }

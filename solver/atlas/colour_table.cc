@@ -81,18 +81,6 @@ std::string_view Trim(std::string_view s) {
   return s;
 }
 
-std::vector<std::string_view> SplitCommas(std::string_view line) {
-  std::vector<std::string_view> fields;
-  size_t start = 0;
-  while (true) {
-    const size_t comma = line.find(',', start);
-    fields.push_back(Trim(line.substr(start, comma - start)));
-    if (comma == std::string_view::npos) break;
-    start = comma + 1;
-  }
-  return fields;
-}
-
 bool ParseInt(std::string_view s, int min, int max, int* value) {
   if (s.empty()) return false;
   const auto [end, error] = std::from_chars(s.data(), s.data() + s.size(), *value);
@@ -102,6 +90,34 @@ bool ParseInt(std::string_view s, int min, int max, int* value) {
 std::string RgbText(int r, int g, int b) { return Format("%d %d %d", r, g, b); }
 
 }  // namespace
+
+bool SplitDelimited(std::string_view line, char delimiter, std::vector<std::string>* fields) {
+  fields->clear();
+  std::string field;
+  bool quoted = false;
+  for (size_t i = 0; i < line.size(); ++i) {
+    const char c = line[i];
+    if (quoted) {
+      if (c == '"' && i + 1 < line.size() && line[i + 1] == '"') {
+        field += '"';
+        ++i;
+      } else if (c == '"') {
+        quoted = false;
+      } else {
+        field += c;
+      }
+    } else if (c == '"') {
+      quoted = true;
+    } else if (c == delimiter) {
+      fields->push_back(std::string(Trim(field)));
+      field.clear();
+    } else {
+      field += c;
+    }
+  }
+  fields->push_back(std::string(Trim(field)));
+  return !quoted;
+}
 
 const ColourTable& ColourTable::Builtin() {
   static const ColourTable table = [] {
@@ -123,9 +139,6 @@ Status ColourTable::FromEntries(std::vector<ColourEntry> entries, ColourTable* t
       return Status::InvalidArgument("label", where + ": label 0 is reserved for background");
     }
     if (e.name.empty()) return Status::InvalidArgument("name", where + ": empty name");
-    if (e.name.find(',') != std::string::npos) {
-      return Status::InvalidArgument("name", where + ": a name may not contain a comma");
-    }
     if (e.r == 0 && e.g == 0 && e.b == 0) {
       return Status::InvalidArgument("rgb", where + ": RGB 0 0 0 is reserved for background");
     }
@@ -193,7 +206,7 @@ const ColourEntry* ColourTable::FindByRgb(uint8_t r, uint8_t g, uint8_t b) const
 std::string FormatColourTableCsv(const ColourTable& table) {
   std::string text = std::string("# ") + kSyntheticAtlasNotice + "\nlabel,name,r,g,b\n";
   for (const ColourEntry& e : table.entries()) {
-    text += Format("%d,%s,%d,%d,%d\n", e.label, e.name.c_str(), e.r, e.g, e.b);
+    text += Format("%d,%s,%d,%d,%d\n", e.label, CsvQuoted(e.name).c_str(), e.r, e.g, e.b);
   }
   return text;
 }
@@ -216,7 +229,8 @@ Status ParseColourTableCsv(std::string_view text, const std::string& source, Col
     const auto error = [&](const std::string& what) {
       return Status::InvalidArgument(source, Format("line %d: ", line_number) + what);
     };
-    const std::vector<std::string_view> f = SplitCommas(line);
+    std::vector<std::string> f;
+    if (!SplitDelimited(line, ',', &f)) return error("an unterminated quote");
     if (!header_seen) {
       if (f.size() != 5 || f[0] != "label" || f[1] != "name" || f[2] != "r" || f[3] != "g" ||
           f[4] != "b") {

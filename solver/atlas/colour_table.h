@@ -12,8 +12,9 @@
 //   label,name,r,g,b
 //   1,Corpus callosum,130,75,130
 //   ...
-// Lines starting with '#' and blank lines are skipped; names may not contain
-// commas; fields are trimmed of surrounding spaces.
+// Lines starting with '#' and blank lines are skipped; a name holding a
+// comma is written in double quotes; fields are trimmed of surrounding
+// spaces.
 #pragma once
 
 #include <cstdint>
@@ -98,9 +99,10 @@ class ColourTable {
   // The 44 entries of the atlas, ids as in AtlasLabel.
   static const ColourTable& Builtin();
 
-  // Validates and builds a table: labels >= 1, names non-empty without
-  // commas, no label, name or colour twice, no entry coloured 0 0 0
-  // (background). Entries are kept sorted by label.
+  // Validates and builds a table: labels >= 1, names non-empty, no label,
+  // name or colour twice, no entry coloured 0 0 0 (background). Entries are
+  // kept sorted by label. (A label table read as atlases ship it, with
+  // colours repeated or black, is made one by ReadLabelTable.)
   static Status FromEntries(std::vector<ColourEntry> entries, ColourTable* table);
 
   const std::vector<ColourEntry>& entries() const { return entries_; }
@@ -120,6 +122,11 @@ class ColourTable {
 // `field` when there is none.
 Status EntriesNamed(const ColourTable& table, const std::string& name, const std::string& field,
                     std::vector<const ColourEntry*>* entries);
+
+// The fields of one line split at `delimiter`, each trimmed of spaces; a
+// field in double quotes may hold the delimiter ("" inside is a quote), as
+// a name with a comma is written. False on an unterminated quote.
+bool SplitDelimited(std::string_view line, char delimiter, std::vector<std::string>* fields);
 
 // The CSV text described at the top of this file, notice comment first.
 std::string FormatColourTableCsv(const ColourTable& table);

@@ -37,15 +37,8 @@ std::string TextCell(const ReportCell& cell, const ReportColumn& column) {
 
 std::string CsvCell(const ReportCell& cell) {
   switch (cell.kind) {
-    case ReportCell::Kind::kText: {
-      if (cell.text.find_first_of(",\"\r\n") == std::string::npos) return cell.text;
-      std::string quoted = "\"";
-      for (char ch : cell.text) {
-        if (ch == '"') quoted += '"';
-        quoted += ch;
-      }
-      return quoted + "\"";
-    }
+    case ReportCell::Kind::kText:
+      return CsvQuoted(cell.text);
     case ReportCell::Kind::kInteger:
       return std::to_string(cell.integer);
     case ReportCell::Kind::kReal:

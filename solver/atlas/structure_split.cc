@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "atlas/contours.h"
+#include "atlas/label_table.h"
 #include "atlas/label_volume_io.h"
 #include "atlas/synthetic_atlas.h"
 #include "core/atomic_write.h"
@@ -199,7 +200,8 @@ Status WriteSplit(const SplitOptions& options, const fs::path& dir, SplitResult*
     PBA_RETURN_IF_ERROR(ReadLabelVolume(source.input, "source.input", &volume));
     ColourTable colours = ColourTable::Builtin();
     if (!source.colour_table.empty()) {
-      PBA_RETURN_IF_ERROR(ReadColourTableCsv(source.colour_table, &colours));
+      LabelTableRead read;
+      PBA_RETURN_IF_ERROR(ReadLabelTable(source.colour_table, &colours, &read));
     }
     PBA_RETURN_IF_ERROR(SplitVolume(volume, colours, options.structures, dir, result));
   } else {

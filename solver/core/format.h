@@ -40,4 +40,16 @@ inline std::string JsonQuoted(std::string_view s) {
   return out + "\"";
 }
 
+// `s` as a CSV field: as it is, or in double quotes (with each quote
+// doubled) when it holds a comma, a quote or a line break.
+inline std::string CsvQuoted(std::string_view s) {
+  if (s.find_first_of(",\"\r\n") == std::string_view::npos) return std::string(s);
+  std::string out = "\"";
+  for (char ch : s) {
+    if (ch == '"') out += '"';
+    out += ch;
+  }
+  return out + "\"";
+}
+
 }  // namespace pba

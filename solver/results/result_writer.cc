@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "core/atomic_write.h"
+#include "core/format.h"
 #include "io/h5_writer.h"
 #include "io/line_plot.h"
 #include "mesh/element_shape.h"
@@ -144,21 +145,13 @@ std::string XdmfText(const std::string& scene_name, const OutputOptions& outputs
   return x + "  </Domain>\n</Xdmf>\n";
 }
 
-// A CSV field, quoted when it holds a comma or a quote.
-std::string CsvField(const std::string& text) {
-  if (text.find_first_of(",\"") == std::string::npos) return text;
-  std::string quoted = "\"";
-  for (char c : text) quoted += c == '"' ? std::string("\"\"") : std::string(1, c);
-  return quoted + "\"";
-}
-
 // history.csv (one row per step) and history.png: every force column
 // ("[N]") whose values are not all zero, as its magnitude per reaction set
 // or contact, against time.
 Status WriteHistory(const Solution& solution, const std::filesystem::path& dir) {
   const auto& columns = solution.history_columns;
   std::string csv;
-  for (std::size_t c = 0; c < columns.size(); ++c) csv += (c ? "," : "") + CsvField(columns[c]);
+  for (std::size_t c = 0; c < columns.size(); ++c) csv += (c ? "," : "") + CsvQuoted(columns[c]);
   csv += "\n";
   char number[32];
   for (const auto& row : solution.history) {
@@ -214,7 +207,7 @@ Status WriteProfiles(const Solution& solution, const std::filesystem::path& dir)
     if (!plain) return Status::Internal("profile name '" + table.name + "' cannot name a file");
     std::string csv;
     for (std::size_t c = 0; c < table.columns.size(); ++c) {
-      csv += (c ? "," : "") + CsvField(table.columns[c]);
+      csv += (c ? "," : "") + CsvQuoted(table.columns[c]);
     }
     csv += "\n";
     for (const auto& row : table.rows) {
@@ -238,7 +231,7 @@ Status WriteProfiles(const Solution& solution, const std::filesystem::path& dir)
 Status WriteSensors(const Solution& solution, const std::filesystem::path& dir) {
   const auto& columns = solution.sensor_columns;
   std::string csv;
-  for (std::size_t c = 0; c < columns.size(); ++c) csv += (c ? "," : "") + CsvField(columns[c]);
+  for (std::size_t c = 0; c < columns.size(); ++c) csv += (c ? "," : "") + CsvQuoted(columns[c]);
   csv += "\n";
   char number[32];
   for (const auto& row : solution.sensor_rows) {

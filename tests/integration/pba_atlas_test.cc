@@ -13,6 +13,7 @@
 #include <set>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "atlas/colour_table.h"
 #include "common/subprocess.h"
@@ -322,6 +323,59 @@ TEST_F(PbaAtlasTest, SplitGivesAStructureSetThatBuilds) {
   EXPECT_EQ(run.exit_code, 13);  // io
   EXPECT_NE(run.err.find("not an empty directory"), std::string::npos) << run.err;
   EXPECT_EQ(ReadFile(set / "manifest.json"), manifest);
+}
+
+// A real public atlas as Debian's mricron-data ships it: AAL's label volume
+// with its MRIcron table and .lut, in one command; a table in no known
+// format, or one that lacks a label of the volume, exits 5 naming it.
+TEST_F(PbaAtlasTest, AalMeshesFromTheFilesItShipsWith) {
+  const fs::path templates = "/usr/share/mricron/templates";
+  const fs::path out = dir_.path() / "aal";
+  std::vector<std::string> argv = {PBA_ATLAS_BIN,
+                                   "build",
+                                   "-o",
+                                   out.string(),
+                                   "--labels",
+                                   (templates / "aal.nii.gz").string(),
+                                   "--colour-table",
+                                   (templates / "aal.nii.txt").string(),
+                                   "--no-pictures"};
+  for (const std::string& option : Coarse()) argv.push_back(option);
+  RunResult run = RunProcess(argv);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  ExpectQualityReport(out, 116);
+  EXPECT_NE(run.out.find("note: aal.nii.txt: MRIcron, colours from its .lut"), std::string::npos)
+      << run.out;
+  EXPECT_NE(run.out.find("(16 black, 58 repeating another's colour in the table)"),
+            std::string::npos)
+      << run.out;
+
+  // The first 44 lines of the table, with its .lut beside: the volume's
+  // label 45 has no name.
+  const fs::path cut = dir_.path() / "cut";
+  fs::create_directories(cut);
+  {
+    std::ifstream in(templates / "aal.nii.txt");
+    std::ofstream table(cut / "aal.nii.txt");
+    std::string line;
+    for (int i = 0; i < 44 && std::getline(in, line); ++i) table << line << '\n';
+  }
+  fs::copy_file(templates / "aal.nii.lut", cut / "aal.nii.lut");
+  const fs::path refused = dir_.path() / "refused";
+  argv[3] = refused.string();
+  argv[7] = (cut / "aal.nii.txt").string();
+  run = RunProcess(argv);
+  EXPECT_EQ(run.exit_code, 5) << run.err;
+  EXPECT_NE(run.err.find("label 45 of the label volume has no entry"), std::string::npos)
+      << run.err;
+  EXPECT_FALSE(fs::exists(refused));
+  std::ofstream(cut / "table.txt") << "this is prose, not a label table\n";
+  argv[7] = (cut / "table.txt").string();
+  run = RunProcess(argv);
+  EXPECT_EQ(run.exit_code, 5) << run.err;
+  EXPECT_NE(run.err.find("table.txt"), std::string::npos) << run.err;
+  EXPECT_NE(run.err.find("not a label table PBA reads"), std::string::npos) << run.err;
+  EXPECT_FALSE(fs::exists(refused));
 }
 
 TEST_F(PbaAtlasTest, BadInputExitsFiveNamingItAndWritesNothing) {
