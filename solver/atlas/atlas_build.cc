@@ -247,10 +247,12 @@ std::vector<std::vector<int>> RegionLabelSets(const LoftField& loft,
   return sets;
 }
 
-// A label volume's table: the built-in one without `path`, else the file
-// in whichever format it is, its notes into the result's.
+// A label volume's table: the file at `path` in whichever format it is,
+// its notes into the result's; without one, the built-in table, for the
+// synthetic atlas's own volume only (LabelVolumeNeedsATable).
 Status ReadVolumeTable(const std::filesystem::path& path, AtlasBuildResult* result) {
   if (path.empty()) {
+    PBA_RETURN_IF_ERROR(LabelVolumeNeedsATable(result->volume, "colour_table"));
     result->colours = ColourTable::Builtin();
     return Status::Ok();
   }

@@ -10,6 +10,7 @@
 #include <set>
 #include <sstream>
 
+#include "atlas/label_volume.h"
 #include "core/format.h"
 
 namespace pba {
@@ -502,6 +503,15 @@ Status ParseLabelTable(std::string_view text, std::string_view extension, std::s
   read->format = result.format;
   read->notes = std::move(result.notes);
   return Status::Ok();
+}
+
+Status LabelVolumeNeedsATable(const LabelVolume& volume, const std::string& field) {
+  if (volume.description() == kSyntheticAtlasNotice) return Status::Ok();
+  return Status::InvalidArgument(
+      field,
+      "a label volume needs its label table (--colour-table; PBA CSV, MRIcron, FSL, Slicer or "
+      "ITK-SNAP): without one its values would take the synthetic atlas's names, wrong for any "
+      "other atlas; only the synthetic atlas's own volume goes without");
 }
 
 Status ReadLabelTable(const std::filesystem::path& path, ColourTable* table, LabelTableRead* read) {

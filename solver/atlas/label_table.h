@@ -62,4 +62,12 @@ Status ReadLabelTable(const std::filesystem::path& path, ColourTable* table, Lab
 Status ParseLabelTable(std::string_view text, std::string_view extension, std::string_view lut,
                        const std::string& source, ColourTable* table, LabelTableRead* read);
 
+// Without a table, a label volume's values would be read as the synthetic
+// atlas's names, silently wrong for any other atlas: kInvalidArgument on
+// `field` unless `volume` is the synthetic atlas's own (its description is
+// kSyntheticAtlasNotice, as MakeSyntheticAtlas and the files PBA writes
+// from it say).
+class LabelVolume;
+Status LabelVolumeNeedsATable(const LabelVolume& volume, const std::string& field);
+
 }  // namespace pba

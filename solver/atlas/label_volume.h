@@ -11,6 +11,7 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <string>
 #include <vector>
 
 namespace pba {
@@ -52,7 +53,14 @@ class LabelVolume {
   // Label of the nearest voxel, 0 outside the grid.
   uint16_t SampleNearest(const Eigen::Vector3d& p_mm) const;
 
+  // What the file says the volume is (NIfTI's descrip, NRRD's content;
+  // at most 79 characters): the synthetic atlas's volume carries
+  // kSyntheticAtlasNotice, which lets it go without a label table.
+  const std::string& description() const { return description_; }
+  void set_description(std::string text) { description_ = std::move(text); }
+
  private:
+  std::string description_;
   std::array<int, 3> dims_ = {0, 0, 0};
   Eigen::Vector3d origin_mm_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d spacing_mm_ = Eigen::Vector3d::Ones();

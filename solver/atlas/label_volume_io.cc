@@ -197,7 +197,9 @@ Status WriteNifti(const LabelVolume& volume, const fs::path& file) {
   nim->qto_xyz = nifti_quatern_to_mat44(0, 0, 0, nim->qoffset_x, nim->qoffset_y, nim->qoffset_z,
                                         nim->dx, nim->dy, nim->dz, 1);
   nim->sto_xyz = nim->qto_xyz;
-  std::strncpy(nim->descrip, "PBA label volume", sizeof(nim->descrip) - 1);
+  const std::string description =
+      volume.description().empty() ? "PBA label volume" : volume.description();
+  std::strncpy(nim->descrip, description.c_str(), sizeof(nim->descrip) - 1);
   return AtomicWrite(file, suffix, [&](int, const std::string& temporary) {
     if (nifti_set_filenames(nim.get(), temporary.c_str(), 0, 1) != 0) {
       return Status::Io("NIfTI library rejected the file name " + temporary);
@@ -336,7 +338,9 @@ Status ReadNifti(const fs::path& file, LabelVolume* volume) {
         path,
         Format("data holds %zu of the %zu bytes the header describes (truncated)", done, want));
   }
-  return AxisAlignedToVolume(n, m, origin, labels, path, volume);
+  PBA_RETURN_IF_ERROR(AxisAlignedToVolume(n, m, origin, labels, path, volume));
+  volume->set_description(std::string(nim->descrip, strnlen(nim->descrip, sizeof(nim->descrip))));
+  return Status::Ok();
 }
 
 // ---- NRRD -----------------------------------------------------------------
@@ -447,6 +451,11 @@ Status WriteNrrd(const LabelVolume& volume, const fs::path& file, NrrdEncoding e
   std::string header = "NRRD0004\n";
   header += "# PBA label volume; format: http://teem.sourceforge.net/nrrd/format.html\n";
   header += "type: uint16\ndimension: 3\nspace: right-anterior-superior\n";
+  if (!volume.description().empty()) {
+    std::string content = volume.description();
+    for (char& c : content) c = static_cast<unsigned char>(c) < 0x20 ? ' ' : c;
+    header += "content: " + content + "\n";
+  }
   header += Format("sizes: %d %d %d\n", volume.nx(), volume.ny(), volume.nz());
   header += "space directions: " + Vector({h.x(), 0, 0}) + " " + Vector({0, h.y(), 0}) + " " +
             Vector({0, 0, h.z()}) + "\n";
@@ -614,7 +623,9 @@ Status ReadNrrd(const fs::path& file, LabelVolume* volume) {
                           : ToLabels<uint32_t>(d, count, 0, n, path, &labels);
   }
   PBA_RETURN_IF_ERROR(converted);
-  return AxisAlignedToVolume(n, m, origin, labels, path, volume);
+  PBA_RETURN_IF_ERROR(AxisAlignedToVolume(n, m, origin, labels, path, volume));
+  volume->set_description(field("content"));
+  return Status::Ok();
 }
 
 Status ReadLabelVolume(const fs::path& file, const std::string& field, LabelVolume* volume) {

@@ -202,6 +202,8 @@ Status WriteSplit(const SplitOptions& options, const fs::path& dir, SplitResult*
     if (!source.colour_table.empty()) {
       LabelTableRead read;
       PBA_RETURN_IF_ERROR(ReadLabelTable(source.colour_table, &colours, &read));
+    } else {
+      PBA_RETURN_IF_ERROR(LabelVolumeNeedsATable(volume, "source.colour_table"));
     }
     PBA_RETURN_IF_ERROR(SplitVolume(volume, colours, options.structures, dir, result));
   } else {

@@ -412,6 +412,8 @@ LabelVolume MakeSyntheticAtlas(const SyntheticAtlasOptions& options) {
   }
   painter.PaintEllipsoid(AxisAligned(V3(-22, -25, -5), V3(3, 4, 2.5)), kCorpusGeniculatumLaterale);
   painter.PaintEllipsoid(AxisAligned(V3(-15, -26, -5), V3(2.5, 3, 2.5)), kCorpusGeniculatumMediale);
+  // Its files say what it is, and it goes without a label table.
+  v.set_description(kSyntheticAtlasNotice);
   return v;
 }
 

@@ -13,6 +13,7 @@
 
 #include "atlas/label_volume_io.h"
 #include "atlas/plates.h"
+#include "atlas/synthetic_atlas.h"
 
 namespace pba {
 namespace {
@@ -27,6 +28,14 @@ class AtlasBuildTest : public ::testing::Test {
     fs::create_directories(dir_);
   }
   void TearDown() override { fs::remove_all(dir_); }
+  // The built-in table as a file: the hand-made volumes below use its
+  // labels, and a label volume other than the synthetic atlas's own
+  // needs its table.
+  fs::path BuiltinTable() const {
+    const fs::path table = dir_ / "builtin.csv";
+    EXPECT_TRUE(WriteColourTableCsv(ColourTable::Builtin(), table).ok());
+    return table;
+  }
   fs::path dir_;
 };
 
@@ -94,6 +103,7 @@ TEST_F(AtlasBuildTest, SmallStructuresGetSmallerFacets) {
     AtlasBuildOptions options;
     options.source = AtlasBuildOptions::Source::kLabelVolume;
     options.input = file;
+    options.colour_table = BuiltinTable();
     options.cell_size_mm = options.facet_size_mm = 4;
     options.facets_per_section = facets_per_section;
     options.odt_iterations = 0;
@@ -134,6 +144,7 @@ TEST_F(AtlasBuildTest, TableEntriesAbsentFromTheVolumeAreListed) {
   AtlasBuildOptions options;
   options.source = AtlasBuildOptions::Source::kLabelVolume;
   options.input = file;
+  options.colour_table = BuiltinTable();
   options.cell_size_mm = options.facet_size_mm = 8;
   options.odt_iterations = 0;
   AtlasBuildResult result;
@@ -153,6 +164,7 @@ TEST_F(AtlasBuildTest, AStructureAskedForButAbsentIsNamed) {
   AtlasBuildOptions options;
   options.source = AtlasBuildOptions::Source::kLabelVolume;
   options.input = file;
+  options.colour_table = BuiltinTable();
   AtlasBuildResult result;
   for (const std::string name : {"Putamen", "Thalamus"}) {
     options.structures = {"Substantia nigra", name};
@@ -169,6 +181,44 @@ TEST_F(AtlasBuildTest, AStructureAskedForButAbsentIsNamed) {
       << s.message();
 }
 
+// Without a table a label volume's values would take the synthetic atlas's
+// names: refused, naming the option, unless the volume is the synthetic
+// atlas's own, which says so in its file.
+TEST_F(AtlasBuildTest, ALabelVolumeWithoutItsTableIsRefusedUnlessItIsTheSyntheticAtlas) {
+  const fs::path file = dir_ / "ball.nii.gz";
+  ASSERT_TRUE(WriteNifti(CubeWithASmallBall(), file).ok());
+  AtlasBuildOptions options;
+  options.source = AtlasBuildOptions::Source::kLabelVolume;
+  options.input = file;
+  options.cell_size_mm = options.facet_size_mm = 8;
+  options.odt_iterations = 0;
+  AtlasBuildResult result;
+  Status s = BuildAtlas(options, &result);
+  EXPECT_EQ(s.code(), Status::Code::kInvalidArgument) << s.ToString();
+  EXPECT_EQ(s.field(), "colour_table");
+  EXPECT_NE(s.message().find("a label volume needs its label table"), std::string::npos)
+      << s.message();
+
+  SyntheticAtlasOptions synthetic;
+  synthetic.voxel_size_mm = 3;
+  const LabelVolume atlas = MakeSyntheticAtlas(synthetic);
+  EXPECT_EQ(atlas.description(), kSyntheticAtlasNotice);
+  for (const char* name : {"synthetic.nii.gz", "synthetic.nrrd"}) {
+    const fs::path own = dir_ / name;
+    ASSERT_TRUE((std::string(name).find("nrrd") != std::string::npos
+                     ? WriteNrrd(atlas, own, NrrdEncoding::kGzip)
+                     : WriteNifti(atlas, own))
+                    .ok());
+    LabelVolume read;
+    ASSERT_TRUE(ReadLabelVolume(own, "input", &read).ok());
+    EXPECT_EQ(read.description(), kSyntheticAtlasNotice) << name;
+  }
+  options.input = dir_ / "synthetic.nii.gz";
+  options.cell_size_mm = options.facet_size_mm = 12;
+  s = BuildAtlas(options, &result);
+  EXPECT_TRUE(s.ok()) << s.ToString();
+}
+
 // Voxels or pixels in the wrong unit: the atlas would be 40 um or 40 m
 // across. Refused naming the size, before anything is meshed.
 TEST_F(AtlasBuildTest, AbsurdVoxelAndPixelSizesAreRefused) {
@@ -180,6 +230,7 @@ TEST_F(AtlasBuildTest, AbsurdVoxelAndPixelSizesAreRefused) {
   AtlasBuildOptions options;
   options.source = AtlasBuildOptions::Source::kLabelVolume;
   options.input = file;
+  options.colour_table = BuiltinTable();
   AtlasBuildResult result;
   Status s = BuildAtlas(options, &result);
   EXPECT_EQ(s.code(), Status::Code::kInvalidArgument);
@@ -312,6 +363,7 @@ TEST_F(AtlasBuildTest, QuadraticMeshFromALabelVolumeKeepsItsMidpoints) {
   AtlasBuildOptions options;
   options.source = AtlasBuildOptions::Source::kLabelVolume;
   options.input = file;
+  options.colour_table = BuiltinTable();
   options.cell_size_mm = options.facet_size_mm = 4;
   options.facets_per_section = 0;
   options.odt_iterations = 0;
