@@ -2,6 +2,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "assembly/dof_map.h"
 #include "mesh/mesh.h"
@@ -14,5 +15,18 @@ namespace pba {
 // Returns "" when none is free, else a description such as
 // "rotation about z through (10, 10, 15) mm".
 std::string DescribeFreeRigidModes(const Mesh& mesh, const DofMap& dofs);
+
+// The mesh's pieces: elements that share a face (three corners or more)
+// are in one piece. Returns each element's piece, 0 .. *pieces - 1.
+std::vector<int> MeshPieces(const Mesh& mesh, int* pieces);
+
+// A mesh in several pieces (a real atlas's meshes can hold fragments, and
+// parts joined to the rest only by an edge or a corner) is held only when
+// each piece is: a piece the constraints leave free makes the stiffness
+// singular, and the solve would wander or stop without a word. Returns ""
+// when every piece is held, else a description of those that are not
+// (their elements, structures, centre, how they touch the rest, their
+// free motions; the first five).
+std::string DescribeLoosePieces(const Mesh& mesh, const DofMap& dofs);
 
 }  // namespace pba

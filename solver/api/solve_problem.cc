@@ -91,6 +91,13 @@ Status SolveProblem(const Problem& problem, PhaseClock* clock, Solution* solutio
     return Status::FailedPrecondition("the boundary conditions leave the body free to move: " +
                                       free_modes + "; hold it with further conditions");
   }
+  const std::string loose = dynamic ? "" : DescribeLoosePieces(mesh, dofs);
+  if (!loose.empty()) {
+    return Status::FailedPrecondition(
+        loose +
+        ". A piece nothing holds makes the stiffness singular; hold it, leave its structures out "
+        "(geometry.atlas.structures), or mesh so that it joins the rest by faces");
+  }
   summary.scene_name = problem.name;
   summary.geometry = problem.geometry;
   summary.element_type = ElementSummaryName(problem);
