@@ -332,8 +332,16 @@ Status Detect(std::string_view text, std::string_view extension, const std::stri
 // Distinct display colours: hues a golden angle apart, three levels of
 // saturation and value, none black and none `taken`.
 uint32_t NextColour(int* counter, const std::set<uint32_t>& taken) {
+  // Past the hues' few thousand distinct 8-bit colours, every colour in
+  // turn: a table of up to 65,535 structures always gets its colours.
+  constexpr int kHues = 20000;
+  while (*counter >= kHues) {
+    const uint32_t packed = static_cast<uint32_t>((*counter)++ - kHues + 1);
+    if (taken.count(packed) == 0) return packed;
+  }
   while (true) {
     const int k = (*counter)++;
+    if (k >= kHues) return NextColour(counter, taken);
     const double hue = std::fmod(k * 137.50776405, 360.0) / 60.0;
     const double s = 0.55 + 0.15 * (k % 3), v = 0.95 - 0.15 * ((k / 3) % 3);
     const double c = v * s, x = c * (1 - std::abs(std::fmod(hue, 2.0) - 1)), m = v - c;

@@ -14,6 +14,7 @@
 
 #include "atlas/label_volume_io.h"
 #include "common/subprocess.h"
+#include "core/format.h"
 
 namespace pba {
 namespace {
@@ -211,6 +212,19 @@ TEST(LabelTable, PbaCsvTakesRepeatedAndBlackColoursAndCommasRoundTrip) {
   ASSERT_TRUE(back.ok()) << back.ToString();
   EXPECT_EQ(again.FindByLabel(1)->name, "Gyrus, left");
   EXPECT_EQ(Packed(*again.FindByLabel(3)), Packed(*table.FindByLabel(3)));
+}
+
+// A table as large as a label volume allows, with no colours: each gets
+// its own (and the reading ends).
+TEST(LabelTable, EveryValueOfALargeTableWithoutColoursGetsItsOwn) {
+  std::string text;
+  for (int value = 1; value <= 65535; ++value) text += Format("%d structure_%d\n", value, value);
+  ColourTable table;
+  LabelTableRead read;
+  const Status status = Parse(text, ".txt", &table, &read);
+  ASSERT_TRUE(status.ok()) << status.ToString();
+  EXPECT_EQ(table.size(), 65535);
+  ExpectDistinctColours(table);
 }
 
 struct Bad {
