@@ -308,7 +308,9 @@ Status Detect(std::string_view text, std::string_view extension, const std::stri
   long ignored = 0;
   if (lower.rfind("labelvalue", 0) == 0) {
     *format = LabelTableFormat::kSlicerCsv;
-  } else if (lower == "label,name,r,g,b") {
+  } else if (std::vector<std::string> f;
+             SplitDelimited(lower, ',', &f) &&
+             f == std::vector<std::string>{"label", "name", "r", "g", "b"}) {
     *format = LabelTableFormat::kPbaCsv;
   } else if (text.find("ITK-SnAP") != std::string_view::npos ||
              (first.find('"') != std::string_view::npos && AllChannels(Tokens(first), 1))) {

@@ -195,7 +195,7 @@ TEST(LabelTable, FslAtlasXml) {
 
 TEST(LabelTable, PbaCsvTakesRepeatedAndBlackColoursAndCommasRoundTrip) {
   const std::string text =
-      "label,name,r,g,b\n"
+      "label, name, r, g, b\n"
       "1,\"Gyrus, left\",10,20,30\n"
       "2,Other,10,20,30\n"
       "3,Dark,0,0,0\n";
