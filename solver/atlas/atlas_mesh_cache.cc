@@ -10,6 +10,7 @@
 #include <utility>
 #include <vector>
 
+#include "atlas/label_table.h"
 #include "atlas/structure_set.h"
 #include "core/atomic_write.h"
 #include "core/format.h"
@@ -111,11 +112,7 @@ Status DescribeSourceContent(const AtlasBuildOptions& options, std::string* text
     text->append("colour_table built-in\n");
   } else {
     // Every file the table is read from (an MRIcron .txt and its .lut).
-    std::filesystem::path lut = options.colour_table;
-    lut.replace_extension(".lut");
-    for (const std::filesystem::path& file : {options.colour_table, lut}) {
-      std::error_code error;
-      if (file != options.colour_table && !std::filesystem::is_regular_file(file, error)) continue;
+    for (const std::filesystem::path& file : LabelTableFiles(options.colour_table)) {
       std::string digest;
       PBA_RETURN_IF_ERROR(FileSha256Hex(file, &digest));
       text->append("colour_table " + digest + "\n");

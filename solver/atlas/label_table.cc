@@ -280,6 +280,8 @@ Status ParseFslXml(std::string_view text, const std::string& source, std::vector
     if (label->QueryInt64Attribute("index", &index) != tinyxml2::XML_SUCCESS) {
       return Status::InvalidArgument(source, Format("<label> %d has no integer index", n));
     }
+    // Bounded before the + 1; Finish names a value outside 1..65535.
+    index = std::clamp<int64_t>(index, -1, 65536);
     RawEntry e;
     e.label = static_cast<long>(index + (probabilistic ? 1 : 0));
     e.name = label->GetText() ? std::string(Trim(label->GetText())) : "";
@@ -524,30 +526,39 @@ Status LabelVolumeNeedsATable(const LabelVolume& volume, const std::string& fiel
       "other atlas; only the synthetic atlas's own volume goes without");
 }
 
-Status ReadLabelTable(const std::filesystem::path& path, ColourTable* table, LabelTableRead* read) {
-  std::string text, lut;
-  PBA_RETURN_IF_ERROR(ReadBounded(path, kMaxLabelTableBytes, &text));
+std::vector<std::filesystem::path> LabelTableFiles(const std::filesystem::path& path) {
   std::vector<std::filesystem::path> files = {path};
   // An MRIcron table's colours: the .lut of the same stem ("aal.nii.txt",
   // "aal.nii.lut").
-  std::filesystem::path lut_path = path;
-  lut_path.replace_extension(".lut");
+  std::filesystem::path lut = path;
+  lut.replace_extension(".lut");
   std::error_code error;
-  if (Lower(path.extension().string()) == ".txt" && lut_path != path &&
-      std::filesystem::is_regular_file(lut_path, error)) {
-    const std::uintmax_t size = std::filesystem::file_size(lut_path, error);
+  if (Lower(path.extension().string()) == ".txt" && lut != path &&
+      std::filesystem::is_regular_file(lut, error)) {
+    files.push_back(lut);
+  }
+  return files;
+}
+
+Status ReadLabelTable(const std::filesystem::path& path, ColourTable* table, LabelTableRead* read) {
+  std::string text, lut;
+  PBA_RETURN_IF_ERROR(ReadBounded(path, kMaxLabelTableBytes, &text));
+  const std::vector<std::filesystem::path> files = LabelTableFiles(path);
+  if (files.size() > 1) {
+    std::error_code error;
+    const std::uintmax_t size = std::filesystem::file_size(files[1], error);
     if (error || size != 768) {
       return Status::InvalidArgument(
-          lut_path.filename().string(),
+          files[1].filename().string(),
           error ? "cannot be read: " + error.message()
                 : Format("%ju bytes, not an MRIcron .lut's 768 (256 red, green, blue)", size));
     }
-    PBA_RETURN_IF_ERROR(ReadBounded(lut_path, 768, &lut));
+    PBA_RETURN_IF_ERROR(ReadBounded(files[1], 768, &lut));
   }
   PBA_RETURN_IF_ERROR(
       ParseLabelTable(text, path.extension().string(), lut, path.filename().string(), table, read));
-  if (read->format == LabelTableFormat::kMricron && !lut.empty()) files.push_back(lut_path);
-  read->files = std::move(files);
+  read->files = {path};
+  if (read->format == LabelTableFormat::kMricron && !lut.empty()) read->files.push_back(files[1]);
   return Status::Ok();
 }
 

@@ -50,6 +50,11 @@ struct LabelTableRead {
 // The largest table file read [bytes]; a larger one is refused unread.
 inline constexpr std::uintmax_t kMaxLabelTableBytes = 16u << 20;
 
+// The files a table at `path` is read from: itself, and for a .txt the
+// .lut of the same stem beside it, if there is one (an MRIcron table's
+// colours). The mesh cache keys on their contents.
+std::vector<std::filesystem::path> LabelTableFiles(const std::filesystem::path& path);
+
 // Reads the table at `path` in whichever of the formats above it is. An
 // unknown format, a malformed line (named by its number), a value outside
 // 1..65535, a value or name given twice, an empty name: kInvalidArgument

@@ -245,6 +245,9 @@ TEST(LabelTable, BadTablesAreRefusedSayingWhy) {
       {"0 Background\n", ".txt", "names no structure"},
       {"<atlas><data>", ".xml", "not well-formed XML"},
       {"<atlas><header><type>Other</type></header><data/></atlas>", ".xml", "'other'"},
+      {"<atlas><header><type>Probabilistic</type></header><data><label "
+       "index=\"9223372036854775807\">Far</label></data></atlas>",
+       ".xml", "outside 1..65535"},
       {"1 Ok 10 20 30 255\nx bad 1 2 3 4\n", ".ctbl", "line 2: expected 'value name r g b a'"},
   };
   for (const Bad& c : cases) {
