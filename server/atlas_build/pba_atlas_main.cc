@@ -9,6 +9,11 @@
 //   pba-atlas split -o DIR [--plates DIR | --labels FILE] [--structure NAME]...
 //                                    the atlas as a structure set, one file
 //                                    per structure (structure_split.h)
+//   pba-atlas labels -o DIR --labels FILE --colour-table FILE [--fill NAME]
+//                    [--merge NEW=A,B] [--over VOLUME,TABLE] [--cut-sphere ...] ...
+//                                    label algebra (label_algebra.h) on a
+//                                    label volume; build takes the same
+//                                    steps and meshes the result
 //
 // The output directory appears whole or not at all (StagingDir; SplitAtlas
 // for split, which refuses a directory that is there and not empty). plates
@@ -22,9 +27,12 @@
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <optional>
 #include <sstream>
 #include <string>
@@ -33,11 +41,14 @@
 #include "atlas/atlas_build.h"
 #include "atlas/atlas_pictures.h"
 #include "atlas/contours.h"
+#include "atlas/label_algebra.h"
 #include "atlas/label_volume_io.h"
 #include "atlas/structure_split.h"
 #include "atlas/synthetic_atlas.h"
 #include "core/atomic_write.h"
 #include "core/exit_codes.h"
+#include "core/format.h"
+#include "core/yaml_guard.h"
 #include "io/mesh_export.h"
 #include "solve/staging_dir.h"
 
@@ -62,8 +73,9 @@ bool WrittenByPbaAtlas(const std::filesystem::directory_entry& entry) {
   const std::string name = entry.path().filename().string();
   if (entry.is_symlink(ec)) return false;
   if (entry.is_regular_file(ec)) {
-    for (const char* known : {"labels.nii.gz", "quality.txt", "quality.csv", "quality.json",
-                              "validation.txt", "validation.csv", "validation.json"}) {
+    for (const char* known :
+         {"labels.nii.gz", "labels.csv", "structures.csv", "quality.txt", "quality.csv",
+          "quality.json", "validation.txt", "validation.csv", "validation.json"}) {
       if (name == known) return true;
     }
     return name.rfind("atlas.", 0) == 0;
@@ -185,6 +197,9 @@ int RunBuild(AtlasBuildOptions options, const Pictures& pictures, const std::str
   if (Status s = WriteNifti(result.volume, staging.path() / "labels.nii.gz"); !s.ok()) {
     return Fail(s);
   }
+  if (Status s = WriteColourTableCsv(result.colours, staging.path() / "labels.csv"); !s.ok()) {
+    return Fail(s);
+  }
   // The mesh in the forms people open it with: ParaView (.vtu, .xdmf +
   // .h5), Gmsh (.msh) and Abaqus / CalculiX (.inp); millimetres, regions
   // named after the structures.
@@ -282,6 +297,187 @@ int RunBuild(AtlasBuildOptions options, const Pictures& pictures, const std::str
   return kExitOk;
 }
 
+// Label algebra given as flags (label_algebra.h), applied in the order
+// the flags come on the command line; --steps splices a YAML file's steps
+// in at its place.
+struct LabelFlags {
+  std::vector<std::string> keep, drop, merge, rename, fill, over, under, resample, sphere, cylinder,
+      mask, steps;
+  double closing_mm = 0;
+  double min_piece_mm3 = LabelStep().min_piece_mm3;
+  // Each step flag's option, with its values in the order given.
+  std::vector<std::pair<const CLI::Option*, const std::vector<std::string>*>> options;
+};
+
+// "A=B" at its first '='; false without one or with an empty side.
+bool SplitAtEquals(const std::string& text, std::string* left, std::string* right) {
+  const std::size_t at = text.find('=');
+  if (at == std::string::npos || at == 0 || at + 1 == text.size()) return false;
+  *left = text.substr(0, at);
+  *right = text.substr(at + 1);
+  return true;
+}
+
+// Comma-separated names (a name with a comma in double quotes).
+Status FlagNames(const std::string& flag, const std::string& text,
+                 std::vector<std::string>* names) {
+  if (!SplitDelimited(text, ',', names) ||
+      std::any_of(names->begin(), names->end(), [](const std::string& n) { return n.empty(); })) {
+    return Status::InvalidArgument(
+        flag, "expected comma-separated structure names, got \"" + text + "\"");
+  }
+  return Status::Ok();
+}
+
+// `count` comma-separated numbers.
+Status FlagNumbers(const std::string& flag, const std::string& text, std::size_t count,
+                   std::vector<double>* numbers) {
+  std::vector<std::string> fields;
+  numbers->clear();
+  if (SplitDelimited(text, ',', &fields) && fields.size() == count) {
+    for (const std::string& f : fields) {
+      char* end = nullptr;
+      const double x = std::strtod(f.c_str(), &end);
+      if (f.empty() || *end != '\0' || !std::isfinite(x)) break;
+      numbers->push_back(x);
+    }
+  }
+  if (numbers->size() != count) {
+    return Status::InvalidArgument(
+        flag, Format("expected %zu comma-separated numbers, got \"%s\"", count, text.c_str()));
+  }
+  return Status::Ok();
+}
+
+// A cut flag's value: the region's text, and after '=' what the cut
+// becomes.
+void CutInto(const std::string& value, std::string* region, LabelStep* step) {
+  std::string name;
+  if (!SplitAtEquals(value, region, &name)) {
+    *region = value;
+    return;
+  }
+  step->name = name;
+}
+
+// One step flag's value as steps (one, or a --steps file's).
+Status FlagStep(const LabelFlags& flags, const std::string& flag, const std::string& value,
+                std::vector<LabelStep>* steps) {
+  LabelStep step;
+  std::string a, b;
+  std::vector<double> x;
+  if (flag == "--keep" || flag == "--drop") {
+    step.kind = flag == "--keep" ? LabelStep::Kind::kKeep : LabelStep::Kind::kDrop;
+    PBA_RETURN_IF_ERROR(FlagNames(flag, value, &step.structures));
+  } else if (flag == "--merge") {
+    step.kind = LabelStep::Kind::kMerge;
+    if (!SplitAtEquals(value, &step.name, &a)) {
+      return Status::InvalidArgument(flag, "expected NEW=A,B,..., got \"" + value + "\"");
+    }
+    PBA_RETURN_IF_ERROR(FlagNames(flag, a, &step.structures));
+  } else if (flag == "--rename") {
+    step.kind = LabelStep::Kind::kRename;
+    if (!SplitAtEquals(value, &step.from, &step.name)) {
+      return Status::InvalidArgument(flag, "expected OLD=NEW, got \"" + value + "\"");
+    }
+  } else if (flag == "--fill") {
+    step.kind = LabelStep::Kind::kFill;
+    step.name = value;
+    step.closing_mm = flags.closing_mm;
+    step.min_piece_mm3 = flags.min_piece_mm3;
+  } else if (flag == "--over" || flag == "--under") {
+    step.kind = LabelStep::Kind::kOverlay;
+    step.under = flag == "--under";
+    std::vector<std::string> files;
+    if (!SplitDelimited(value, ',', &files) || files.size() != 2) {
+      return Status::InvalidArgument(flag, "expected VOLUME,TABLE, got \"" + value + "\"");
+    }
+    step.volume = files[0];
+    step.table = files[1];
+  } else if (flag == "--resample") {
+    step.kind = LabelStep::Kind::kResample;
+    PBA_RETURN_IF_ERROR(FlagNumbers(flag, value, 1, &x));
+    step.voxel_mm = x[0];
+  } else if (flag == "--cut-sphere" || flag == "--cut-cylinder") {
+    step.kind = LabelStep::Kind::kCut;
+    CutInto(value, &a, &step);
+    const bool sphere = flag == "--cut-sphere";
+    PBA_RETURN_IF_ERROR(FlagNumbers(flag, a, sphere ? 4 : 7, &x));
+    step.region.kind = sphere ? LabelRegion::Kind::kSphere : LabelRegion::Kind::kCylinder;
+    step.region.centre_mm = {x[0], x[1], x[2]};
+    if (!sphere) step.region.end_mm = {x[3], x[4], x[5]};
+    step.region.radius_mm = x.back();
+  } else if (flag == "--cut-mask") {
+    step.kind = LabelStep::Kind::kCut;
+    CutInto(value, &a, &step);
+    step.region.kind = LabelRegion::Kind::kMask;
+    step.region.mask = a;
+  } else {  // --steps
+    std::string text;
+    PBA_RETURN_IF_ERROR(ReadYamlFileText(value, flag, &text));
+    std::vector<LabelStep> read;
+    PBA_RETURN_IF_ERROR(ParseLabelSteps(text, std::filesystem::path(value).filename().string(),
+                                        std::filesystem::path(value).parent_path(), &read));
+    steps->insert(steps->end(), read.begin(), read.end());
+    return Status::Ok();
+  }
+  steps->push_back(std::move(step));
+  return Status::Ok();
+}
+
+// The steps the flags of `app` give, in their order on the command line.
+Status CollectLabelSteps(const CLI::App& app, const LabelFlags& flags,
+                         std::vector<LabelStep>* steps) {
+  std::map<const CLI::Option*, std::size_t> used;
+  for (const CLI::Option* option : app.parse_order()) {
+    for (const auto& [known, values] : flags.options) {
+      if (known != option) continue;
+      const std::size_t n = used[option]++;
+      if (n >= values->size()) return Status::Internal("label step flags out of step");
+      PBA_RETURN_IF_ERROR(FlagStep(flags, "--" + option->get_single_name(), (*values)[n], steps));
+    }
+  }
+  return Status::Ok();
+}
+
+// The label algebra's flags, on build and labels alike.
+void AddLabelFlags(CLI::App* app, LabelFlags& flags) {
+  const auto step = [&](const char* name, std::vector<std::string>& values, const char* help) {
+    CLI::Option* option = app->add_option(name, values, help)->take_all()->expected(1);
+    option->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+    flags.options.emplace_back(option, &values);
+  };
+  step("--keep", flags.keep,
+       "Label algebra, in the order given: keep only these structures (A,B,...)");
+  step("--drop", flags.drop, "Make these structures background (A,B,...)");
+  step("--merge", flags.merge, "One structure NEW, the union of A, B, ... (NEW=A,B,...)");
+  step("--rename", flags.rename, "Rename a structure (OLD=NEW)");
+  step("--fill", flags.fill,
+       "The background the atlas encloses becomes this structure (AAL: \"White matter\")");
+  step("--over", flags.over,
+       "Lay a second atlas's structures over this one's (VOLUME,TABLE; resampled to this grid)");
+  step("--under", flags.under,
+       "Lay a second atlas's structures into this one's background only "
+       "(VOLUME,TABLE)");
+  step("--resample", flags.resample, "Resample to voxels of this edge [mm] (majority label)");
+  step("--cut-sphere", flags.sphere,
+       "Cut a sphere out of every structure (X,Y,Z,R [mm]; =NAME: the cut becomes NAME)");
+  step("--cut-cylinder", flags.cylinder,
+       "Cut a cylinder (X0,Y0,Z0,X1,Y1,Z1,R [mm]: axis ends and radius; =NAME as above)");
+  step("--cut-mask", flags.mask, "Cut the nonzero voxels of a mask volume (FILE; =NAME as above)");
+  step("--steps", flags.steps,
+       "Label algebra steps from a YAML file (keep, drop, merge, rename, fill, overlay, resample, "
+       "cut: docs/atlas.md)");
+  app->add_option("--closing-mm", flags.closing_mm,
+                  "--fill: close gaps in the atlas up to twice this [mm] before finding what it "
+                  "encloses")
+      ->capture_default_str();
+  app->add_option("--min-piece-mm3", flags.min_piece_mm3,
+                  "--fill: enclosed pieces smaller than this [mm^3] stay background (the largest "
+                  "is always filled)")
+      ->capture_default_str();
+}
+
 // The command line as CLI11 fills it. The subcommands share -o and --force:
 // only one of them runs.
 struct CommandLine {
@@ -299,6 +495,9 @@ struct CommandLine {
 
   SplitOptions split;
   std::string split_plates, split_labels, split_colour_table;
+
+  LabelFlags build_steps, label_steps;  // build's and labels' label algebra
+  std::string steps_labels, steps_colour_table;
 };
 
 constexpr char kOutHelp[] =
@@ -371,7 +570,7 @@ void AddMeshOptions(CLI::App* build, AtlasBuildOptions& options) {
                     "of the facet size");
 }
 
-void AddBuildCommand(CLI::App& app, CommandLine& line) {
+CLI::App* AddBuildCommand(CLI::App& app, CommandLine& line) {
   CLI::App* build = app.add_subcommand(
       "build",
       "Mesh an atlas: the synthetic one (default), a plate directory or a label volume; writes "
@@ -414,8 +613,10 @@ void AddBuildCommand(CLI::App& app, CommandLine& line) {
                   "With --structure: mesh every other structure as one region, \"Surrounding "
                   "tissue\", instead of dropping it");
   AddPictureOptions(build, line);
+  AddLabelFlags(build, line.build_steps);
   build->add_option("--format", line.format_name, "Report form on stdout")
       ->check(CLI::IsMember({"text", "csv", "json"}));
+  return build;
 }
 
 CLI::App* AddSplitCommand(CLI::App& app, CommandLine& line) {
@@ -446,6 +647,68 @@ CLI::App* AddSplitCommand(CLI::App& app, CommandLine& line) {
   return split;
 }
 
+CLI::App* AddLabelsCommand(CLI::App& app, CommandLine& line) {
+  CLI::App* labels = app.add_subcommand(
+      "labels",
+      "Label algebra on a label volume and its table: keep, drop, merge, rename, fill enclosed "
+      "background, lay a second atlas over or under, resample, cut a region out; writes "
+      "labels.nii.gz, labels.csv (its table) and structures.csv, which build --labels reads");
+  labels->add_option("-o,--out", line.out_dir, kOutHelp)->required();
+  labels->add_flag("--force", line.force, kForceHelp);
+  labels->add_option("--labels", line.steps_labels, "Label volume (.nii, .nii.gz or .nrrd)")
+      ->required();
+  labels->add_option("--colour-table", line.steps_colour_table,
+                     "Its label table (PBA CSV, MRIcron .txt with its .lut, FSL .xml, Slicer "
+                     ".ctbl/.csv/.tsv, ITK-SNAP .txt)");
+  AddLabelFlags(labels, line.label_steps);
+  return labels;
+}
+
+// Each structure's label, voxels and volume.
+std::string StructuresCsv(const LabelAtlas& atlas) {
+  const std::vector<int64_t> counts = CountLabels(atlas.volume);
+  std::string text = "label,name,voxels,volume_cm3\n";
+  for (const ColourEntry& e : atlas.table.entries()) {
+    text += Format("%d,%s,%lld,%.3f\n", e.label, CsvQuoted(e.name).c_str(),
+                   static_cast<long long>(counts[e.label]),
+                   counts[e.label] * atlas.volume.voxel_volume_mm3() / 1000);
+  }
+  return text;
+}
+
+int RunLabels(const CLI::App& app, CommandLine& line) {
+  std::vector<LabelStep> steps;
+  if (Status s = CollectLabelSteps(app, line.label_steps, &steps); !s.ok()) return Fail(s);
+  if (steps.empty()) {
+    return Fail(Status::InvalidArgument("labels", "no step given (--fill, --merge, --over, ...)"));
+  }
+  if (Status s = CheckOutput(line.out_dir, line.force); !s.ok()) return Fail(s);
+  LabelAtlas atlas;
+  std::vector<std::string> notes;
+  if (Status s = ReadLabelAtlas(line.steps_labels, line.steps_colour_table, "labels",
+                                "colour_table", &atlas, &notes);
+      !s.ok()) {
+    return Fail(s);
+  }
+  if (Status s = ApplyLabelSteps(steps, &atlas, &notes); !s.ok()) return Fail(s);
+  StagingDir staging;
+  if (Status s = StagingDir::Create(line.out_dir, &staging); !s.ok()) return Fail(s);
+  for (Status s : {WriteNifti(atlas.volume, staging.path() / "labels.nii.gz"),
+                   WriteColourTableCsv(atlas.table, staging.path() / "labels.csv"),
+                   AtomicWriteText(staging.path() / "structures.csv", StructuresCsv(atlas)),
+                   staging.Commit()}) {
+    if (!s.ok()) return Fail(s);
+  }
+  for (const std::string& note : notes) std::printf("%s\n", note.c_str());
+  std::printf(
+      "%d structures on %d x %d x %d voxels of %g x %g x %g mm; wrote %s "
+      "(labels.nii.gz, labels.csv, structures.csv)\n",
+      atlas.table.size(), atlas.volume.nx(), atlas.volume.ny(), atlas.volume.nz(),
+      atlas.volume.spacing_mm().x(), atlas.volume.spacing_mm().y(), atlas.volume.spacing_mm().z(),
+      line.out_dir.c_str());
+  return kExitOk;
+}
+
 // split with its source from the flags: plates, a label volume, else the
 // synthetic atlas.
 int RunSplitCommand(CommandLine& line) {
@@ -462,8 +725,11 @@ int RunSplitCommand(CommandLine& line) {
 
 // build with its options completed from the flags: the source, the
 // structures, the region of interest, the report form and the pictures.
-int RunBuildCommand(CommandLine& line) {
+int RunBuildCommand(const CLI::App& app, CommandLine& line) {
   AtlasBuildOptions& options = line.build;
+  if (Status s = CollectLabelSteps(app, line.build_steps, &options.label_steps); !s.ok()) {
+    return Fail(s);
+  }
   if (!line.plates_dir.empty()) {
     options.source = AtlasBuildOptions::Source::kPlates;
     options.input = line.plates_dir;
@@ -498,8 +764,9 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   pba::CommandLine line;
   CLI::App* plates = pba::AddPlatesCommand(app, line);
-  pba::AddBuildCommand(app, line);
+  CLI::App* build = pba::AddBuildCommand(app, line);
   CLI::App* split = pba::AddSplitCommand(app, line);
+  CLI::App* labels = pba::AddLabelsCommand(app, line);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -509,7 +776,8 @@ int main(int argc, char** argv) {
   try {
     if (plates->parsed()) return pba::RunPlates(line.out_dir, line.voxel_mm, line.force);
     if (split->parsed()) return pba::RunSplitCommand(line);
-    return pba::RunBuildCommand(line);
+    if (labels->parsed()) return pba::RunLabels(*labels, line);
+    return pba::RunBuildCommand(*build, line);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "pba-atlas: internal error: %s\n", e.what());
     return pba::kExitError;

@@ -280,6 +280,9 @@ Status AtlasBuildOptions::Validate() const {
     return Status::InvalidArgument("plates_dir",
                                    "the synthetic atlas needs a directory for its plates");
   }
+  if (!label_steps.empty() && source != Source::kLabelVolume) {
+    return Status::InvalidArgument("label_steps", "label algebra works on a label volume source");
+  }
   if (!positive(synthetic_voxel_mm)) {
     return Status::InvalidArgument("synthetic_voxel_mm", "must be positive");
   }
@@ -357,6 +360,13 @@ Status BuildAtlas(const AtlasBuildOptions& options, AtlasBuildResult* result) {
                            v.spacing_mm().z())));
     // A composed volume's colours came with the structures.
     if (!composed_volume) PBA_RETURN_IF_ERROR(ReadVolumeTable(options.colour_table, result));
+    if (!options.label_steps.empty()) {
+      LabelAtlas atlas{std::move(result->volume), std::move(result->colours)};
+      const Status applied = ApplyLabelSteps(options.label_steps, &atlas, &result->notes);
+      result->volume = std::move(atlas.volume);
+      result->colours = std::move(atlas.table);
+      PBA_RETURN_IF_ERROR(applied);
+    }
     result->times.source_s = SecondsSince(start);
   } else {
     PlateStack stack;

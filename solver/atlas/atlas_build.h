@@ -40,6 +40,7 @@
 
 #include "atlas/colour_table.h"
 #include "atlas/geometric_validation.h"
+#include "atlas/label_algebra.h"
 #include "atlas/label_mesher.h"
 #include "atlas/label_volume.h"
 #include "atlas/loft.h"
@@ -122,6 +123,10 @@ struct AtlasBuildOptions {
   // kSurroundingTissue (region label 0: it is on no plate).
   std::vector<std::string> structures;
   bool merge_rest = false;
+  // kLabelVolume: label algebra on the volume and its table before
+  // anything else (label_algebra.h): fill, merge, overlay, cut...; each
+  // step's note goes into the result's notes.
+  std::vector<LabelStep> label_steps;
 
   Status Validate() const;
   // The threads the geometric validation runs on (the mesher runs on one):

@@ -118,6 +118,15 @@ Status DescribeSourceContent(const AtlasBuildOptions& options, std::string* text
       text->append("colour_table " + digest + "\n");
     }
   }
+  // The label algebra, and the contents of every file it reads.
+  if (!options.label_steps.empty()) {
+    text->append(DescribeLabelSteps(options.label_steps));
+    for (const std::filesystem::path& file : LabelStepFiles(options.label_steps)) {
+      std::string digest;
+      PBA_RETURN_IF_ERROR(FileSha256Hex(file, &digest));
+      text->append("label_step_file " + digest + "\n");
+    }
+  }
   return Status::Ok();
 }
 

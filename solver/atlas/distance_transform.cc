@@ -84,4 +84,30 @@ void SquaredDistanceTransform3d(const std::vector<uint8_t>& feature, int nx, int
   }
 }
 
+void SquaredDistanceTransform3dMm(const std::vector<uint8_t>& feature, int nx, int ny, int nz,
+                                  const double spacing_mm[3], std::vector<double>* out) {
+  const int n[3] = {nx, ny, nz};
+  const size_t stride[3] = {1, static_cast<size_t>(nx), static_cast<size_t>(nx) * ny};
+  const size_t total = stride[2] * nz;
+  out->resize(total);
+  for (size_t i = 0; i < total; ++i) (*out)[i] = feature[i] ? 0.0 : kFar;
+  const int longest = std::max({nx, ny, nz});
+  std::vector<double> f(longest), d(longest), z(longest + 1);
+  std::vector<int> v(longest);
+  // One axis at a time: along axis a, min_p (h^2 (q - p)^2 + g[p]) is h^2
+  // times the unit-spacing transform of g / h^2.
+  for (int a = 0; a < 3; ++a) {
+    const double h2 = spacing_mm[a] * spacing_mm[a];
+    const int b = a == 0 ? 1 : 0, c = a == 2 ? 1 : 2;
+    for (int jb = 0; jb < n[b]; ++jb) {
+      for (int jc = 0; jc < n[c]; ++jc) {
+        const size_t base = jb * stride[b] + jc * stride[c];
+        for (int q = 0; q < n[a]; ++q) f[q] = (*out)[base + q * stride[a]] / h2;
+        SquaredDistance1d(f.data(), n[a], d.data(), v.data(), z.data());
+        for (int q = 0; q < n[a]; ++q) (*out)[base + q * stride[a]] = d[q] * h2;
+      }
+    }
+  }
+}
+
 }  // namespace pba

@@ -47,4 +47,9 @@ void SquaredDistanceTransform2d(const std::vector<uint8_t>& feature, int w, int 
 void SquaredDistanceTransform3d(const std::vector<uint8_t>& feature, int nx, int ny, int nz,
                                 std::vector<double>* out);
 
+// The same between voxel centres [mm^2] on a grid of voxels
+// spacing_mm[0] x [1] x [2]: anisotropic voxels measured as they are.
+void SquaredDistanceTransform3dMm(const std::vector<uint8_t>& feature, int nx, int ny, int nz,
+                                  const double spacing_mm[3], std::vector<double>* out);
+
 }  // namespace pba

@@ -517,6 +517,18 @@ Status ParseLabelTable(std::string_view text, std::string_view extension, std::s
   return Status::Ok();
 }
 
+void ChooseDisplayColour(const ColourTable& table, ColourEntry* entry) {
+  std::set<uint32_t> taken;
+  for (const ColourEntry& e : table.entries()) {
+    taken.insert((uint32_t(e.r) << 16) | (uint32_t(e.g) << 8) | uint32_t(e.b));
+  }
+  int counter = 0;
+  const uint32_t packed = NextColour(&counter, taken);
+  entry->r = static_cast<uint8_t>(packed >> 16);
+  entry->g = static_cast<uint8_t>(packed >> 8);
+  entry->b = static_cast<uint8_t>(packed);
+}
+
 Status LabelVolumeNeedsATable(const LabelVolume& volume, const std::string& field) {
   if (volume.description() == kSyntheticAtlasNotice) return Status::Ok();
   return Status::InvalidArgument(

@@ -67,6 +67,11 @@ Status ReadLabelTable(const std::filesystem::path& path, ColourTable* table, Lab
 Status ParseLabelTable(std::string_view text, std::string_view extension, std::string_view lut,
                        const std::string& source, ColourTable* table, LabelTableRead* read);
 
+// Gives `entry` a display colour that is neither black nor any colour of
+// `table`'s entries (the colours ReadLabelTable chooses): for a structure
+// the label algebra adds (label_algebra.h).
+void ChooseDisplayColour(const ColourTable& table, ColourEntry* entry);
+
 // Without a table, a label volume's values would be read as the synthetic
 // atlas's names, silently wrong for any other atlas: kInvalidArgument on
 // `field` unless `volume` is the synthetic atlas's own (its description is
