@@ -262,6 +262,31 @@ Status ReadVolumeTable(const std::filesystem::path& path, AtlasBuildResult* resu
   return Status::Ok();
 }
 
+// A label volume source: the volume (unless a structure set composed it),
+// its extent checked, its table, and the label algebra on both.
+Status ReadVolumeSource(const AtlasBuildOptions& options, bool composed_volume,
+                        AtlasBuildResult* result) {
+  if (!composed_volume) {
+    PBA_RETURN_IF_ERROR(ReadLabelVolume(options.input, "input", &result->volume));
+  }
+  const LabelVolume& v = result->volume;
+  PBA_RETURN_IF_ERROR(
+      CheckExtent(Eigen::Vector3d(v.nx(), v.ny(), v.nz()).cwiseProduct(v.spacing_mm()), "input",
+                  options.input.string(),
+                  Format("voxels of %g x %g x %g mm", v.spacing_mm().x(), v.spacing_mm().y(),
+                         v.spacing_mm().z())));
+  // A composed volume's colours came with the structures.
+  if (!composed_volume) PBA_RETURN_IF_ERROR(ReadVolumeTable(options.colour_table, result));
+  if (!options.label_steps.empty()) {
+    LabelAtlas atlas{std::move(result->volume), std::move(result->colours)};
+    const Status applied = ApplyLabelSteps(options.label_steps, &atlas, &result->notes);
+    result->volume = std::move(atlas.volume);
+    result->colours = std::move(atlas.table);
+    PBA_RETURN_IF_ERROR(applied);
+  }
+  return Status::Ok();
+}
+
 }  // namespace
 
 std::optional<MidsideProjectionReport> CurveAtlasMidsideNodes(const AtlasBuildResult& result,
@@ -349,24 +374,7 @@ Status BuildAtlas(const AtlasBuildOptions& options, AtlasBuildResult* result) {
     }
   }
   if (options.source == AtlasBuildOptions::Source::kLabelVolume || composed_volume) {
-    if (!composed_volume) {
-      if (Status s = ReadLabelVolume(options.input, "input", &result->volume); !s.ok()) return s;
-    }
-    const LabelVolume& v = result->volume;
-    PBA_RETURN_IF_ERROR(
-        CheckExtent(Eigen::Vector3d(v.nx(), v.ny(), v.nz()).cwiseProduct(v.spacing_mm()), "input",
-                    options.input.string(),
-                    Format("voxels of %g x %g x %g mm", v.spacing_mm().x(), v.spacing_mm().y(),
-                           v.spacing_mm().z())));
-    // A composed volume's colours came with the structures.
-    if (!composed_volume) PBA_RETURN_IF_ERROR(ReadVolumeTable(options.colour_table, result));
-    if (!options.label_steps.empty()) {
-      LabelAtlas atlas{std::move(result->volume), std::move(result->colours)};
-      const Status applied = ApplyLabelSteps(options.label_steps, &atlas, &result->notes);
-      result->volume = std::move(atlas.volume);
-      result->colours = std::move(atlas.table);
-      PBA_RETURN_IF_ERROR(applied);
-    }
+    PBA_RETURN_IF_ERROR(ReadVolumeSource(options, composed_volume, result));
     result->times.source_s = SecondsSince(start);
   } else {
     PlateStack stack;

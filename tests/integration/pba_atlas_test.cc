@@ -8,8 +8,10 @@
 #include <gtest/gtest.h>
 #include <yaml-cpp/yaml.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <set>
 #include <sstream>
 #include <string>
@@ -376,6 +378,142 @@ TEST_F(PbaAtlasTest, AalMeshesFromTheFilesItShipsWith) {
   EXPECT_NE(run.err.find("table.txt"), std::string::npos) << run.err;
   EXPECT_NE(run.err.find("not a label table PBA reads"), std::string::npos) << run.err;
   EXPECT_FALSE(fs::exists(refused));
+}
+
+// structures.csv of pba-atlas labels: volume [cm^3] by name.
+std::map<std::string, double> StructureVolumes(const fs::path& file) {
+  std::ifstream in(file);
+  std::string line;
+  std::getline(in, line);
+  EXPECT_EQ(line, "label,name,voxels,volume_cm3");
+  std::map<std::string, double> volumes;
+  while (std::getline(in, line)) {
+    const std::size_t first = line.find(','), last = line.rfind(',');
+    const std::size_t voxels = line.rfind(',', last - 1);
+    volumes[line.substr(first + 1, voxels - first - 1)] = std::stod(line.substr(last + 1));
+  }
+  return volumes;
+}
+
+// Label algebra on real atlases as Debian ships them: AAL's white matter
+// (label 0 there) filled, JHU's white-matter tracts laid over it, a
+// resection cut; written with its table, then meshed in one command with
+// the same steps given to build.
+TEST_F(PbaAtlasTest, AalFilledWithJhuTractsOverItAndACutInOneCommand) {
+  const fs::path t = "/usr/share/mricron/templates";
+  const std::string jhu = (t / "JHU-WhiteMatter-labels-1mm.nii.gz").string() + "," +
+                          (t / "JHU-WhiteMatter-labels-1mm.nii.txt").string();
+  const fs::path labels = dir_.path() / "labels";
+  std::vector<std::string> steps = {"--fill",       "White matter",
+                                    "--closing-mm", "7",
+                                    "--over",       jhu,
+                                    "--cut-sphere", "30,20,40,12=Resection cavity"};
+  std::vector<std::string> argv = {PBA_ATLAS_BIN,
+                                   "labels",
+                                   "-o",
+                                   labels.string(),
+                                   "--labels",
+                                   (t / "aal.nii.gz").string(),
+                                   "--colour-table",
+                                   (t / "aal.nii.txt").string()};
+  argv.insert(argv.end(), steps.begin(), steps.end());
+  RunResult run = RunProcess(argv);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_NE(run.out.find("labels[0] fill: \"White matter\" (label 117)"), std::string::npos)
+      << run.out;
+  EXPECT_NE(run.out.find("labels[1] overlay: 48 structures of JHU"), std::string::npos) << run.out;
+  EXPECT_NE(run.out.find("labels[2] cut: a sphere of 12 mm"), std::string::npos) << run.out;
+  ColourTable table;
+  ASSERT_TRUE(ReadColourTableCsv(labels / "labels.csv", &table).ok());
+  EXPECT_EQ(table.size(), 116 + 1 + 48 + 1);
+  const std::map<std::string, double> volumes = StructureVolumes(labels / "structures.csv");
+  EXPECT_EQ(volumes.size(), 166u);
+  // A 12 mm sphere: 7.24 cm^3, all of it brain at this point.
+  EXPECT_NEAR(volumes.at("Resection cavity"), 4.0 / 3 * M_PI * 1.728, 0.1);
+  EXPECT_GT(volumes.at("White matter"), 100);
+  EXPECT_GT(volumes.at("Genu_of_corpus_callosum"), 1);
+
+  // The steps on build: the same atlas, meshed.
+  const fs::path out = dir_.path() / "mesh";
+  argv = {PBA_ATLAS_BIN,
+          "build",
+          "-o",
+          out.string(),
+          "--labels",
+          (t / "aal.nii.gz").string(),
+          "--colour-table",
+          (t / "aal.nii.txt").string(),
+          "--no-pictures"};
+  argv.insert(argv.end(), steps.begin(), steps.end());
+  for (const std::string& option : Coarse()) argv.push_back(option);
+  run = RunProcess(argv);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_NE(run.out.find("note: labels[0] fill: \"White matter\""), std::string::npos) << run.out;
+  ExpectQualityReport(out, 166);
+  ColourTable built;
+  ASSERT_TRUE(ReadColourTableCsv(out / "labels.csv", &built).ok());
+  EXPECT_EQ(built.size(), 166);
+  // The mesh holds the voxels' volume: 3 % overall at this coarse size.
+  const YAML::Node report = YAML::LoadFile((out / "quality.json").string());
+  double voxels = 0, mesh = 0;
+  for (const YAML::Node& row : report["rows"]) {
+    voxels += volumes.at(row["structure"].as<std::string>());
+    mesh += row["volume_mm3"].as<double>() / 1000;
+  }
+  EXPECT_NEAR(mesh, voxels, 0.03 * voxels);
+}
+
+// Steps run in the order given; a step naming a structure the atlas does
+// not have (then) exits 5 naming the step and the name, and writes nothing.
+TEST_F(PbaAtlasTest, LabelStepsRunInTheirOrderAndABadOneWritesNothing) {
+  const fs::path t = "/usr/share/mricron/templates";
+  const fs::path out = dir_.path() / "labels";
+  const std::vector<std::string> base = {PBA_ATLAS_BIN,
+                                         "labels",
+                                         "-o",
+                                         out.string(),
+                                         "--labels",
+                                         (t / "aal.nii.gz").string(),
+                                         "--colour-table",
+                                         (t / "aal.nii.txt").string()};
+  const auto with = [&](std::vector<std::string> extra) {
+    std::vector<std::string> argv = base;
+    argv.insert(argv.end(), extra.begin(), extra.end());
+    return RunProcess(argv);
+  };
+  RunResult run = with({"--drop", "Caudate_L", "--merge", "Caudate=Caudate_L,Caudate_R"});
+  EXPECT_EQ(run.exit_code, 5) << run.err;
+  EXPECT_NE(run.err.find("labels[1].structures: (merge) no structure \"Caudate_L\""),
+            std::string::npos)
+      << run.err;
+  EXPECT_FALSE(fs::exists(out));
+
+  run = with({"--merge", "Caudate=Caudate_L,Caudate_R", "--drop", "Caudate"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const std::map<std::string, double> volumes = StructureVolumes(out / "structures.csv");
+  EXPECT_EQ(volumes.size(), 114u);
+  EXPECT_EQ(volumes.count("Caudate"), 0u);
+
+  const fs::path bad = dir_.path() / "bad";
+  std::ofstream(dir_.path() / "steps.yaml") << "- fill: {name: White matter}\n- grow: [A]\n";
+  run = RunProcess({PBA_ATLAS_BIN, "labels", "-o", bad.string(), "--labels",
+                    (t / "aal.nii.gz").string(), "--colour-table", (t / "aal.nii.txt").string(),
+                    "--steps", (dir_.path() / "steps.yaml").string()});
+  EXPECT_EQ(run.exit_code, 5) << run.err;
+  EXPECT_NE(run.err.find("steps.yaml[1].grow: unknown step"), std::string::npos) << run.err;
+  EXPECT_FALSE(fs::exists(bad));
+  run = RunProcess({PBA_ATLAS_BIN, "labels", "-o", bad.string(), "--labels",
+                    (t / "aal.nii.gz").string(), "--colour-table", (t / "aal.nii.txt").string(),
+                    "--cut-sphere", "1,2,3"});
+  EXPECT_EQ(run.exit_code, 5) << run.err;
+  EXPECT_NE(run.err.find("--cut-sphere: expected 4 comma-separated numbers"), std::string::npos)
+      << run.err;
+  // Without a table, a label volume that is not the synthetic atlas's.
+  run = RunProcess({PBA_ATLAS_BIN, "labels", "-o", bad.string(), "--labels",
+                    (t / "aal.nii.gz").string(), "--fill", "White matter"});
+  EXPECT_EQ(run.exit_code, 5) << run.err;
+  EXPECT_NE(run.err.find("colour_table"), std::string::npos) << run.err;
+  EXPECT_FALSE(fs::exists(bad));
 }
 
 TEST_F(PbaAtlasTest, BadInputExitsFiveNamingItAndWritesNothing) {
