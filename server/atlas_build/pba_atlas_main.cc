@@ -302,7 +302,7 @@ int RunBuild(AtlasBuildOptions options, const Pictures& pictures, const std::str
 // in at its place.
 struct LabelFlags {
   std::vector<std::string> keep, drop, merge, rename, fill, over, under, resample, sphere, cylinder,
-      mask, steps;
+      mask, islands, steps;
   double closing_mm = 0;
   double min_piece_mm3 = LabelStep().min_piece_mm3;
   // Each step flag's option, with its values in the order given.
@@ -394,6 +394,10 @@ Status FlagStep(const LabelFlags& flags, const std::string& flag, const std::str
     }
     step.volume = files[0];
     step.table = files[1];
+  } else if (flag == "--drop-islands") {
+    step.kind = LabelStep::Kind::kIslands;
+    PBA_RETURN_IF_ERROR(FlagNumbers(flag, value, 1, &x));
+    step.min_piece_mm3 = x[0];
   } else if (flag == "--resample") {
     step.kind = LabelStep::Kind::kResample;
     PBA_RETURN_IF_ERROR(FlagNumbers(flag, value, 1, &x));
@@ -465,6 +469,9 @@ void AddLabelFlags(CLI::App* app, LabelFlags& flags) {
   step("--cut-cylinder", flags.cylinder,
        "Cut a cylinder (X0,Y0,Z0,X1,Y1,Z1,R [mm]: axis ends and radius; =NAME as above)");
   step("--cut-mask", flags.mask, "Cut the nonzero voxels of a mask volume (FILE; =NAME as above)");
+  step("--drop-islands", flags.islands,
+       "Make background every piece of the atlas (voxels joined by faces) under this volume "
+       "[mm^3], the largest kept");
   step("--steps", flags.steps,
        "Label algebra steps from a YAML file (keep, drop, merge, rename, fill, overlay, resample, "
        "cut: docs/atlas.md)");
@@ -497,6 +504,7 @@ struct CommandLine {
   std::string split_plates, split_labels, split_colour_table;
 
   LabelFlags build_steps, label_steps;  // build's and labels' label algebra
+  bool keep_islands = false;
   std::string steps_labels, steps_colour_table;
 };
 
@@ -609,6 +617,10 @@ CLI::App* AddBuildCommand(CLI::App& app, CommandLine& line) {
       ->check(CLI::NonNegativeNumber);
   build->add_option("--structure", line.structures,
                     "Keep only this structure (colour-table name; repeat for several)");
+  build->add_flag(
+      "--keep-islands", line.keep_islands,
+      "Keep every piece of a label volume; by default pieces under 0.1 % of the largest piece's "
+      "volume (fragments that would touch nothing, or hang on an edge) become background");
   build->add_flag("--merge-rest", line.build.merge_rest,
                   "With --structure: mesh every other structure as one region, \"Surrounding "
                   "tissue\", instead of dropping it");
@@ -742,6 +754,7 @@ int RunBuildCommand(const CLI::App& app, CommandLine& line) {
     options.input = line.structures_dir;
   }
   options.structures = line.structures;
+  if (line.keep_islands) options.island_share = 0;
   options.threads = ThreadContext(line.threads);
   if (!line.roi.empty()) {
     options.roi_centre_mm = {line.roi[0], line.roi[1], line.roi[2]};

@@ -1,11 +1,23 @@
 #include "convert/convert.h"
 
+#include <google/protobuf/util/json_util.h>
+
 #include <array>
 #include <string>
 #include <utility>
 
 namespace pba {
 namespace {
+
+// A label step as JSON with the proto's field names: the form
+// atlas/label_algebra.h's ParseLabelSteps reads.
+std::string StepJson(const v1::LabelStep& step) {
+  google::protobuf::util::JsonPrintOptions options;
+  options.preserve_proto_field_names = true;
+  std::string out;
+  (void)google::protobuf::util::MessageToJsonString(step, &out, options);
+  return out;
+}
 
 // Copies a list that must hold exactly three values (x, y, z); otherwise
 // refuses it naming `path` and what the three are ("edge lengths (x, y, z)
@@ -185,6 +197,13 @@ Status GeometryFromProto(const v1::Geometry& geometry, GeometrySpec* geometry_sp
       }
       out.roi_radius_mm = a.roi_radius_mm();
       out.roi_element_size_mm = a.roi_element_size_mm();
+      if (a.labels_size() > 0) {
+        out.label_steps_json = "[";
+        for (int i = 0; i < a.labels_size(); ++i) {
+          out.label_steps_json += (i > 0 ? "," : "") + StepJson(a.labels(i));
+        }
+        out.label_steps_json += "]";
+      }
       break;
     }
     case v1::Geometry::SHAPE_NOT_SET:
@@ -609,9 +628,11 @@ Status SceneFromProto(const v1::Scene& scene, SceneSpec* spec) {
   return OutputsFromProto(scene.outputs(), &spec->outputs);
 }
 
-Status ValidateSceneProto(const v1::Scene& scene, int ranks) {
+Status ValidateSceneProto(const v1::Scene& scene, int ranks,
+                          const std::vector<std::string>& atlas_structures) {
   SceneSpec spec;
   PBA_RETURN_IF_ERROR(SceneFromProto(scene, &spec));
+  spec.geometry.atlas.known_structures = atlas_structures;
   PBA_RETURN_IF_ERROR(ValidateScene(spec));
   return ValidateSceneOnRanks(spec, ranks);
 }

@@ -80,9 +80,10 @@ Status JobServiceImpl::CheckSubmit(const std::string& user, const v1::SubmitJobR
     return Status::Ok();
   }
   if (!request.has_scene()) return Status::InvalidArgument("scene", "required");
-  PBA_RETURN_IF_ERROR(ValidateSceneProto(request.scene(), std::max(1, request.ranks())));
-  job->scene = request.scene();
+  const int ranks = std::max(1, request.ranks());
   if (!request.has_snapshot()) {
+    PBA_RETURN_IF_ERROR(ValidateSceneProto(request.scene(), ranks));
+    job->scene = request.scene();
     // A job's atlas is one a result can be reproduced from: the built-in one
     // (versioned with the software) or a snapshot, never a file on the
     // server that may change or vanish.
@@ -114,6 +115,12 @@ Status JobServiceImpl::CheckSubmit(const std::string& user, const v1::SubmitJobR
     return Status::FailedPrecondition("snapshot " + ref.snapshot() + " of project '" +
                                       ref.project() + "' has no structures");
   }
+  // The scene names the snapshot's structures, not the synthetic atlas's
+  // (the rights to the snapshot checked first, by ResolveSnapshot).
+  std::vector<std::string> names;
+  for (const auto& [name, revision] : snapshot.revisions) names.push_back(name);
+  PBA_RETURN_IF_ERROR(ValidateSceneProto(request.scene(), ranks, names));
+  job->scene = request.scene();
   job->snapshot.set_project(ref.project());
   job->snapshot.set_snapshot(std::to_string(snapshot.id));
   return Status::Ok();

@@ -65,6 +65,7 @@
 #include "pba/solve.h"
 #include "pba/v1/scene.pb.h"
 #include "pba/v1/solve_event.pb.h"
+#include "scene/model_builder.h"
 #include "solve/staging_dir.h"
 
 namespace pba {
@@ -285,6 +286,10 @@ int Run(const std::string& scene_path, const std::string& out_dir, bool force,
   }
   SceneSpec spec;
   Status status = SceneFromProto(scene, &spec);
+  // Structure names checked against the atlas the scene is built from.
+  if (status.ok() && spec.geometry.kind == GeometrySpec::Kind::kAtlas) {
+    spec.geometry.atlas.known_structures = KnownAtlasStructures(spec.geometry.atlas);
+  }
   if (status.ok()) status = ValidateScene(spec);
   if (!status.ok()) return reporter.Error(status);
   if (writer && !inp_path.empty()) {

@@ -295,7 +295,9 @@ class AtlasStore {
   Status ListSnapshots(const std::string& user, const std::string& project, int page_size,
                        const std::string& page_token, std::vector<SnapshotInfo>* snapshots,
                        std::string* next_page_token);
-  // `tag_or_id` is a tag or a decimal snapshot id; members are loaded.
+  // `tag_or_id` is a tag, a decimal snapshot id, or the name given at
+  // snapshot or import time when one snapshot alone has it (a name several
+  // share is refused, listing their ids); members are loaded.
   Status ResolveSnapshot(const std::string& user, const std::string& project,
                          const std::string& tag_or_id, SnapshotInfo* snapshot);
 
@@ -419,6 +421,10 @@ class AtlasStore {
                       Revision* revision, bool* found);
   // The lock on `structure`, without its id, if any.
   Status PublicLock(const StructureRef& ref, int64_t structure, std::optional<LockInfo>* lock);
+  // The id of the one snapshot of the project named `name` (0: none);
+  // kInvalidArgument when several are. Under mutex_.
+  Status SnapshotNamed(int64_t project_id, const std::string& project, const std::string& name,
+                       int64_t* id);
   Status LoadSnapshot(const std::string& project, int64_t project_id, int64_t id, bool with_members,
                       SnapshotInfo* snapshot, bool* found);
   Status Audit(std::optional<int64_t> user, std::optional<int64_t> project,

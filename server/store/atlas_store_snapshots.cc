@@ -200,6 +200,33 @@ Status AtlasStore::ListSnapshots(const std::string& user, const std::string& pro
   return Status::Ok();
 }
 
+Status AtlasStore::SnapshotNamed(int64_t project_id, const std::string& project,
+                                 const std::string& name, int64_t* id) {
+  Statement stmt;
+  PBA_RETURN_IF_ERROR(db_->Prepare(
+      "SELECT id FROM snapshots WHERE project = ? AND name = ? ORDER BY id LIMIT 6", &stmt));
+  stmt.Bind(1, project_id).Bind(2, name);
+  std::vector<int64_t> ids;
+  while (true) {
+    bool row = false;
+    PBA_RETURN_IF_ERROR(stmt.Step(&row));
+    if (!row) break;
+    ids.push_back(stmt.ColumnInt(0));
+  }
+  if (ids.size() == 1) *id = ids[0];
+  if (ids.size() > 1) {
+    std::string list;
+    for (std::size_t i = 0; i < ids.size() && i < 5; ++i) {
+      list += (i > 0 ? ", " : "") + std::to_string(ids[i]);
+    }
+    return Status::InvalidArgument("snapshot", "several snapshots of project " + Quoted(project) +
+                                                   " are named " + Quoted(name) + " (" + list +
+                                                   (ids.size() > 5 ? ", ..." : "") +
+                                                   "): name one by its id or a tag");
+  }
+  return Status::Ok();
+}
+
 Status AtlasStore::ResolveSnapshot(const std::string& user, const std::string& project,
                                    const std::string& tag_or_id, SnapshotInfo* snapshot) {
   PBA_RETURN_IF_ERROR(CheckName("snapshot", tag_or_id));
@@ -217,14 +244,17 @@ Status AtlasStore::ResolveSnapshot(const std::string& user, const std::string& p
     bool row = false;
     PBA_RETURN_IF_ERROR(stmt.Bind(1, caller.project).Bind(2, tag_or_id).Step(&row));
     if (row) id = stmt.ColumnInt(0);
+    stmt = Statement();
+    // Not a tag: the snapshot of that name, if one alone has it.
+    if (id == 0) PBA_RETURN_IF_ERROR(SnapshotNamed(caller.project, project, tag_or_id, &id));
   }
   bool found = false;
   if (id > 0) {
     PBA_RETURN_IF_ERROR(LoadSnapshot(project, caller.project, id, true, snapshot, &found));
   }
   if (!found) {
-    return Status::NotFound("project " + Quoted(project) + " has no snapshot tagged or numbered " +
-                            Quoted(tag_or_id));
+    return Status::NotFound("project " + Quoted(project) +
+                            " has no snapshot tagged, numbered or named " + Quoted(tag_or_id));
   }
   return Status::Ok();
 }

@@ -37,6 +37,11 @@ constexpr double kRoundingEnergy = 1e-20;
 // of a poor predictor.
 constexpr double kIndefiniteNewtonResidual = 1e-4;
 
+// An attempt whose last NewtonOptions::stagnation_iterations iterations
+// left more than this share of the residual has stagnated: at that pace
+// (under 1 % per iteration) its whole budget could not converge.
+constexpr double kStagnantShare = 0.95;
+
 // Behind an iterative linear solver the indefinite consistent tangent is
 // factorised (SolveIndefinite) only up to this many unknowns; larger
 // systems take the definite substitutes, converging linearly past a
@@ -458,6 +463,11 @@ Status NewtonRun::Correct(const Loading& loading, double first_energy, Eigen::Ve
   int budget = options_.max_iterations;
   int& iteration = attempt->iteration;
   double& residual = attempt->residual;
+  // The residual's norm [N] after each iteration of this attempt (first:
+  // the predictor's), for the stagnation test: absolute, since the relative
+  // residual of a body whose internal force vanishes as it converges (free
+  // growth) stays near 1.
+  std::vector<double> history = {current.free.norm()};
   for (iteration = 1; iteration <= budget; ++iteration) {
     if (!keep_going_({load_, iteration, residual})) {
       *cancelled = true;
@@ -514,6 +524,7 @@ Status NewtonRun::Correct(const Loading& loading, double first_energy, Eigen::Ve
         budget = iteration + options_.max_iterations;
         current = EvaluateAt(loading, *trial);
         residual = current.relative;
+        history = {current.free.norm()};  // new equations: the stagnation test starts again
         continue;
       }
       attempt->converged = true;
@@ -521,6 +532,17 @@ Status NewtonRun::Correct(const Loading& loading, double first_energy, Eigen::Ve
     }
     if (residual > 1e6) {
       return Status::Numerical(Format("diverging (relative residual %.3g)", residual));
+    }
+    history.push_back(current.free.norm());
+    const int window = options_.stagnation_iterations;
+    if (window > 0 && static_cast<int>(history.size()) > window &&
+        history.back() > kStagnantShare * history[history.size() - 1 - window]) {
+      ++report_.stagnations;
+      return Status::Numerical(Format(
+          "the residual stagnated at %.3g (relative): the last %d Newton iterations lowered it "
+          "by %.2g %% in all (a load the body cannot carry, a part held by nothing, a degenerate "
+          "element or material)",
+          residual, window, 100 * (1 - history.back() / history[history.size() - 1 - window])));
     }
   }
   return Status::Ok();

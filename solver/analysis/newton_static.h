@@ -48,6 +48,13 @@ struct NewtonOptions {
   double max_increment = 0.5;   // largest load-factor increment when growing
   int quick_iterations = 4;     // an increment this quick lets the next grow 1.5x
   bool line_search = true;
+  // An attempt whose last this-many iterations together lowered the
+  // relative residual by less than 5 % has stagnated (at that pace its
+  // budget could not converge): it ends at once, as one that does not
+  // converge, saying so, and the increment is cut; an unbalanceable load,
+  // a singular or inconsistent system would otherwise spend every
+  // iteration of every cut at full cost. 0: never.
+  int stagnation_iterations = 5;
   // Called with each converged increment's load factor and full displacement.
   std::function<void(double load_factor, const Eigen::VectorXd& u)> on_increment;
 
@@ -99,7 +106,8 @@ struct IncrementRecord {
 struct NewtonReport {
   std::vector<IncrementRecord> increments;  // converged ones
   int total_iterations = 0;
-  int cuts = 0;  // increments cut back and retried
+  int cuts = 0;         // increments cut back and retried
+  int stagnations = 0;  // attempts ended because the residual stagnated (stagnation_iterations)
   // Iterations whose consistent tangent was not positive definite and that
   // used the tangent without pressure initial-stress terms instead, or
   // (modified) an earlier positive definite tangent.

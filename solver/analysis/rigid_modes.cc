@@ -70,45 +70,6 @@ std::string DescribeFreeRigidModes(const Mesh& mesh, const DofMap& dofs) {
   return FreeModes(mesh, dofs, {});
 }
 
-std::vector<int> MeshPieces(const Mesh& mesh, int* pieces) {
-  const int ne = mesh.num_elements();
-  std::vector<std::vector<int>> around(mesh.num_nodes());
-  for (int e = 0; e < ne; ++e) {
-    for (int a : mesh.ElementCorners(e)) around[a].push_back(e);
-  }
-  std::vector<int> parent(ne);
-  for (int e = 0; e < ne; ++e) parent[e] = e;
-  const auto root = [&](int e) {
-    while (parent[e] != e) e = parent[e] = parent[parent[e]];
-    return e;
-  };
-  std::vector<int> candidates;
-  for (int e = 0; e < ne; ++e) {
-    // An element met through three of e's corners shares a face with it.
-    candidates.clear();
-    for (int a : mesh.ElementCorners(e)) {
-      for (int f : around[a]) {
-        if (f > e) candidates.push_back(f);
-      }
-    }
-    std::sort(candidates.begin(), candidates.end());
-    for (std::size_t i = 0; i < candidates.size();) {
-      std::size_t j = i;
-      while (j < candidates.size() && candidates[j] == candidates[i]) ++j;
-      if (j - i >= 3) parent[root(candidates[i])] = root(e);
-      i = j;
-    }
-  }
-  std::vector<int> piece(ne, -1), number(ne, -1);
-  *pieces = 0;
-  for (int e = 0; e < ne; ++e) {
-    const int r = root(e);
-    if (number[r] < 0) number[r] = (*pieces)++;
-    piece[e] = number[r];
-  }
-  return piece;
-}
-
 std::string DescribeLoosePieces(const Mesh& mesh, const DofMap& dofs) {
   int pieces = 0;
   const std::vector<int> piece = MeshPieces(mesh, &pieces);

@@ -16,9 +16,7 @@ namespace pba {
 // "rotation about z through (10, 10, 15) mm".
 std::string DescribeFreeRigidModes(const Mesh& mesh, const DofMap& dofs);
 
-// The mesh's pieces: elements that share a face (three corners or more)
-// are in one piece. Returns each element's piece, 0 .. *pieces - 1.
-std::vector<int> MeshPieces(const Mesh& mesh, int* pieces);
+// MeshPieces (mesh/mesh.h) finds the pieces.
 
 // A mesh in several pieces (a real atlas's meshes can hold fragments, and
 // parts joined to the rest only by an edge or a corner) is held only when

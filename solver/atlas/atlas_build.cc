@@ -284,7 +284,33 @@ Status ReadVolumeSource(const AtlasBuildOptions& options, bool composed_volume,
     result->colours = std::move(atlas.table);
     PBA_RETURN_IF_ERROR(applied);
   }
+  if (options.source == AtlasBuildOptions::Source::kLabelVolume && options.island_share > 0) {
+    LabelAtlas atlas{std::move(result->volume), std::move(result->colours)};
+    if (DropIslands(options.island_share, &atlas, &result->islands)) {
+      result->notes.push_back(result->islands);
+    }
+    result->volume = std::move(atlas.volume);
+    result->colours = std::move(atlas.table);
+  }
   return Status::Ok();
+}
+
+// A mesh in several pieces joined by no face: each, in a note.
+void NoteMeshPieces(AtlasBuildResult* result) {
+  const std::vector<int> piece = MeshPieces(result->mesh, &result->pieces);
+  if (result->pieces <= 1) return;
+  std::vector<int> count(result->pieces, 0);
+  for (int p : piece) ++count[p];
+  std::sort(count.rbegin(), count.rend());
+  std::string sizes;
+  for (std::size_t i = 0; i < count.size() && i < 6; ++i) {
+    sizes += (i > 0 ? ", " : "") + std::to_string(count[i]);
+  }
+  if (count.size() > 6) sizes += ", ...";
+  result->notes.push_back(Format(
+      "the mesh is in %d pieces joined by no face (%s tetrahedra): a scene must hold each of "
+      "them, or its solve is refused naming those it does not",
+      result->pieces, sizes.c_str()));
 }
 
 }  // namespace
@@ -305,13 +331,19 @@ Status AtlasBuildOptions::Validate() const {
     return Status::InvalidArgument("plates_dir",
                                    "the synthetic atlas needs a directory for its plates");
   }
+  if (!(island_share >= 0 && island_share < 1)) {
+    return Status::InvalidArgument("island_share", "must lie in [0, 1)");
+  }
   if (!label_steps.empty() && source != Source::kLabelVolume) {
     return Status::InvalidArgument("label_steps", "label algebra works on a label volume source");
   }
   if (!positive(synthetic_voxel_mm)) {
     return Status::InvalidArgument("synthetic_voxel_mm", "must be positive");
   }
-  if (!positive(loft_voxel_mm)) return Status::InvalidArgument("loft_voxel_mm", "must be positive");
+  if (!positive(loft_voxel_mm) && !(source == Source::kStructures && loft_voxel_mm == 0)) {
+    return Status::InvalidArgument("loft_voxel_mm",
+                                   "must be positive (or, for a structure set, 0: its masks' own)");
+  }
   if (!positive(cell_size_mm)) return Status::InvalidArgument("cell_size_mm", "must be positive");
   if (!positive(facet_size_mm)) return Status::InvalidArgument("facet_size_mm", "must be positive");
   if (!std::isfinite(facets_per_section) || facets_per_section < 0) {
@@ -393,7 +425,7 @@ Status BuildAtlas(const AtlasBuildOptions& options, AtlasBuildResult* result) {
     result->times.source_s = SecondsSince(start);
     start = Clock::now();
     LoftOptions loft_options;
-    loft_options.voxel_size_mm = options.loft_voxel_mm;
+    loft_options.voxel_size_mm = options.loft_voxel_mm > 0 ? options.loft_voxel_mm : 1.5;
     auto loft = std::make_shared<LoftField>();
     if (Status s = loft->Build(stack, loft_options); !s.ok()) return s;
     result->volume = loft->volume();
@@ -436,6 +468,7 @@ Status BuildAtlas(const AtlasBuildOptions& options, AtlasBuildResult* result) {
     }
     result->times.improve_s = SecondsSince(start);
   }
+  NoteMeshPieces(result);
   if (options.quadratic) {
     start = Clock::now();
     result->mesh = MakeQuadratic(result->mesh);

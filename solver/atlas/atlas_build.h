@@ -73,7 +73,8 @@ struct AtlasBuildOptions {
   // kSynthetic: voxel edge of the painted atlas [mm].
   double synthetic_voxel_mm = 1.0;
   // Plates: voxel edge of the lofted label volume [mm]; structure sets:
-  // also of the label volume composed from masks and surfaces.
+  // also of the label volume composed from masks and surfaces, where 0
+  // takes the masks' own voxels (ComposeOptions) and lofts at 1.5 mm.
   double loft_voxel_mm = 1.0;
   // Tetrahedron size inside the structures and on their surfaces [mm]
   // (LabelMeshOptions::cell_size_mm and facet_size_mm; facet distance
@@ -127,6 +128,12 @@ struct AtlasBuildOptions {
   // anything else (label_algebra.h): fill, merge, overlay, cut...; each
   // step's note goes into the result's notes.
   std::vector<LabelStep> label_steps;
+  // kLabelVolume, after the label algebra: pieces of the atlas (voxels
+  // joined by faces) under this share of the largest piece's volume become
+  // background, named in a note and in `islands` (DropIslands): a
+  // fragment that touches nothing, or hangs on an edge or a corner, would
+  // leave the stiffness singular. 0: none.
+  double island_share = 1e-3;
 
   Status Validate() const;
   // The threads the geometric validation runs on (the mesher runs on one):
@@ -171,6 +178,11 @@ struct AtlasBuildResult {
   // kStructures: what composing the set found worth saying (overlaps of
   // structures, and who kept the disputed pixels or voxels).
   std::vector<std::string> notes;
+  // What DropIslands made background (empty: nothing), also in `notes`.
+  std::string islands;
+  // The mesh's pieces joined by faces (MeshPieces); more than one is in
+  // `notes`.
+  int pieces = 1;
 };
 
 Status BuildAtlas(const AtlasBuildOptions& options, AtlasBuildResult* result);

@@ -26,7 +26,7 @@ namespace {
 // way of reading a source), or when the atlas build makes a different mesh
 // from the same input without a new solver version (the version is the
 // project's, not a commit's), so old entries stop matching.
-constexpr int kKeyFormatVersion = 1;
+constexpr int kKeyFormatVersion = 2;  // 2: label volumes lose their islands (island_share)
 
 // The entry file: magic, format version, a byte-order mark (entries hold
 // the host's native integers and doubles: a cache directory shared with a
@@ -317,6 +317,7 @@ Status AtlasMeshCacheKey(const AtlasBuildOptions& options, std::string* key) {
   text += Format("roi_centre_mm %.17g %.17g %.17g\nroi_radius_mm %.17g\nroi_size_mm %.17g\n",
                  options.roi_centre_mm.x(), options.roi_centre_mm.y(), options.roi_centre_mm.z(),
                  options.roi_radius_mm, options.roi_size_mm);
+  text += Format("island_share %.17g\n", options.island_share);
   text += Format("quadratic %d\nmerge_rest %d\nstructures %zu\n", options.quadratic ? 1 : 0,
                  options.merge_rest ? 1 : 0, options.structures.size());
   for (const std::string& s : options.structures) text += "structure " + Quoted(s) + "\n";

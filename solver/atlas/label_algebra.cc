@@ -361,6 +361,71 @@ Status Fill(const LabelStep& step, const std::string& field, LabelAtlas* atlas, 
   return Status::Ok();
 }
 
+// ---- islands
+
+// The atlas's pieces (nonzero voxels joined by faces): each voxel's piece
+// (0: background), and the pieces' sizes (entry 0 unused).
+void AtlasPieces(const LabelVolume& v, std::vector<int32_t>* piece, std::vector<int64_t>* sizes) {
+  PaddedGrid g;
+  for (int a = 0; a < 3; ++a) g.n[a] = v.dims()[a];
+  std::vector<uint8_t> solid(g.size());
+  for (int64_t i = 0; i < v.num_voxels(); ++i) solid[i] = v.labels()[i] != 0;
+  piece->assign(g.size(), 0);
+  *sizes = {0};
+  for (size_t s = 0; s < g.size(); ++s) {
+    const int32_t mark = static_cast<int32_t>(sizes->size());
+    if (const int64_t count = Flood<int32_t>(g, solid, s, mark, piece); count > 0) {
+      sizes->push_back(count);
+    }
+  }
+}
+
+// Pieces under `min_voxels` (the largest kept) made background; false
+// when there is none.
+bool DropPiecesBelow(double min_voxels, LabelAtlas* atlas, std::string* note) {
+  LabelVolume& v = atlas->volume;
+  std::vector<int32_t> piece;
+  std::vector<int64_t> sizes;
+  AtlasPieces(v, &piece, &sizes);
+  if (sizes.size() <= 2) return false;
+  const std::size_t largest = std::max_element(sizes.begin(), sizes.end()) - sizes.begin();
+  std::vector<uint8_t> drop(sizes.size(), 0);
+  int dropped = 0;
+  for (std::size_t p = 1; p < sizes.size(); ++p) {
+    drop[p] = p != largest && sizes[p] < min_voxels;
+    dropped += drop[p];
+  }
+  if (dropped == 0) return false;
+  std::vector<int64_t> taken(65536, 0);
+  int64_t total = 0;
+  for (int64_t i = 0; i < v.num_voxels(); ++i) {
+    if (!drop[piece[i]]) continue;
+    ++taken[v.labels()[i]];
+    ++total;
+    v.mutable_labels()[i] = 0;
+  }
+  const int kept = static_cast<int>(sizes.size()) - 1 - dropped;
+  *note = Format(
+      "%d island%s of the atlas (pieces joined to the rest by no face: they would mesh "
+      "as parts touching nothing, or hinged on an edge or a corner) made background: "
+      "%s (%s); %d piece%s kept, the largest %s",
+      dropped, dropped == 1 ? "" : "s", Volume(total, v).c_str(),
+      LargestShares(atlas->table, taken, v).c_str(), kept, kept == 1 ? "" : "s",
+      Volume(sizes[largest], v).c_str());
+  return true;
+}
+
+Status Islands(const LabelStep& step, const std::string& field, LabelAtlas* atlas,
+               std::string* note) {
+  if (!(std::isfinite(step.min_piece_mm3) && step.min_piece_mm3 >= 0)) {
+    return Status::InvalidArgument(field + ".min_piece_mm3", "must be >= 0");
+  }
+  if (!DropPiecesBelow(step.min_piece_mm3 / atlas->volume.voxel_volume_mm3(), atlas, note)) {
+    *note = Format("no island under %g mm^3", step.min_piece_mm3);
+  }
+  return Status::Ok();
+}
+
 // ---- overlay
 
 Status ReadSecondAtlas(const LabelStep& step, const std::string& field, LabelAtlas* top,
@@ -650,6 +715,8 @@ Status ApplyStep(const LabelStep& step, const std::string& field, LabelAtlas* at
       return Resample(step, field, atlas, note);
     case LabelStep::Kind::kCut:
       return Cut(step, field, atlas, note);
+    case LabelStep::Kind::kIslands:
+      return Islands(step, field, atlas, note);
   }
   return Status::Internal("unknown label step");
 }
@@ -674,8 +741,20 @@ const char* LabelStepName(LabelStep::Kind kind) {
       return "resample";
     case LabelStep::Kind::kCut:
       return "cut";
+    case LabelStep::Kind::kIslands:
+      return "islands";
   }
   return "?";
+}
+
+bool DropIslands(double share, LabelAtlas* atlas, std::string* note) {
+  if (!(share > 0)) return false;
+  std::vector<int32_t> piece;
+  std::vector<int64_t> sizes;
+  AtlasPieces(atlas->volume, &piece, &sizes);
+  if (sizes.size() <= 2) return false;
+  const int64_t largest = *std::max_element(sizes.begin(), sizes.end());
+  return DropPiecesBelow(share * largest, atlas, note);
 }
 
 Status ReadLabelAtlas(const std::filesystem::path& volume, const std::filesystem::path& table,
@@ -839,13 +918,18 @@ Status ParseStep(const YAML::Node& node, const std::string& at, const std::files
                  LabelStep* step) {
   if (!node.IsMap() || node.size() != 1) {
     return Status::InvalidArgument(
-        at, "expected one step: keep, drop, merge, rename, fill, overlay, resample or cut");
+        at,
+        "expected one step: keep, drop, merge, rename, fill, overlay, resample, cut or islands");
   }
   const std::string kind = node.begin()->first.as<std::string>();
   const YAML::Node m = node.begin()->second;
   const std::string in = at + "." + kind;
   if (kind == "keep" || kind == "drop") {
     step->kind = kind == "keep" ? LabelStep::Kind::kKeep : LabelStep::Kind::kDrop;
+    if (m.IsMap()) {  // {structures: [...]}, as a scene writes it
+      PBA_RETURN_IF_ERROR(CheckMap(m, in, {"structures"}, {"structures"}));
+      return ReadNames(m["structures"], in + ".structures", &step->structures);
+    }
     return ReadNames(m, in, &step->structures);
   }
   if (kind == "merge") {
@@ -892,6 +976,11 @@ Status ParseStep(const YAML::Node& node, const std::string& at, const std::files
     PBA_RETURN_IF_ERROR(CheckMap(m, in, {"voxel_mm"}, {"voxel_mm"}));
     return ReadNumber(m["voxel_mm"], in + ".voxel_mm", &step->voxel_mm);
   }
+  if (kind == "islands") {
+    step->kind = LabelStep::Kind::kIslands;
+    PBA_RETURN_IF_ERROR(CheckMap(m, in, {"min_piece_mm3"}, {"min_piece_mm3"}));
+    return ReadNumber(m["min_piece_mm3"], in + ".min_piece_mm3", &step->min_piece_mm3);
+  }
   if (kind == "cut") {
     step->kind = LabelStep::Kind::kCut;
     PBA_RETURN_IF_ERROR(
@@ -904,7 +993,7 @@ Status ParseStep(const YAML::Node& node, const std::string& at, const std::files
   }
   return Status::InvalidArgument(
       at + "." + kind,
-      "unknown step (known: keep, drop, merge, rename, fill, overlay, resample, cut)");
+      "unknown step (known: keep, drop, merge, rename, fill, overlay, resample, cut, islands)");
 }
 
 std::string Names(const std::vector<std::string>& names) {

@@ -17,6 +17,10 @@
 //              background (under) - JHU white matter over AAL
 //   resample   to a voxel edge of voxel_mm: each new voxel takes the label
 //              most of its samples have (nearest neighbour when refining)
+//   islands    pieces of the atlas (voxels joined by faces) smaller than
+//              min_piece_mm3, the largest always kept, become background:
+//              fragments that would mesh as parts touching nothing, or
+//              joined to the rest by an edge or a corner only
 //   cut        a region - a sphere, a cylinder, a mask file, or structures
 //              of this atlas grown by a margin - taken out of structures
 //              (all, or those named): the difference of structures, and
@@ -67,7 +71,7 @@ struct LabelRegion {
 };
 
 struct LabelStep {
-  enum class Kind { kKeep, kDrop, kMerge, kRename, kFill, kOverlay, kResample, kCut };
+  enum class Kind { kKeep, kDrop, kMerge, kRename, kFill, kOverlay, kResample, kCut, kIslands };
   Kind kind = Kind::kKeep;
   // keep, drop, merge: the structures; overlay: the second atlas's
   // structures laid on (empty: all); cut: the structures cut (empty: all).
@@ -77,7 +81,8 @@ struct LabelStep {
   std::string name;
   std::string from;  // rename: the structure renamed
   // fill: the closing radius [mm] (0: only background no path leads out
-  // of) and the smallest piece kept besides the largest [mm^3].
+  // of) and the smallest piece kept besides the largest [mm^3]; islands:
+  // the smallest piece of the atlas kept besides the largest [mm^3].
   double closing_mm = 0;
   double min_piece_mm3 = 1000;
   // overlay: the second atlas; under: only where this one is background.
@@ -88,6 +93,11 @@ struct LabelStep {
 };
 
 const char* LabelStepName(LabelStep::Kind kind);
+
+// The automatic form of the islands step, which BuildAtlas runs on every
+// label volume: pieces under `share` of the largest piece's volume become
+// background; false (and no note) when there is none.
+bool DropIslands(double share, LabelAtlas* atlas, std::string* note);
 
 // Reads a label volume and its table (label_table.h: any format); an empty
 // `table` is the built-in one, for the synthetic atlas's own volume only.
@@ -105,13 +115,14 @@ Status ApplyLabelSteps(const std::vector<LabelStep>& steps, LabelAtlas* atlas,
 
 // The steps of a YAML sequence (a file of them, or a scene's
 // geometry.atlas.labels), each a map with one key, the step's kind:
-//   - keep: [Caudate_L, Caudate_R]
+//   - keep: [Caudate_L, Caudate_R]     (or keep: {structures: [...]})
 //   - drop: [Cerebelum_3_L]
 //   - merge: {structures: [Caudate_L, Caudate_R], name: Caudate}
 //   - rename: {from: Caudate, to: Caudate nucleus}
 //   - fill: {name: White matter, closing_mm: 4, min_piece_mm3: 1000}
 //   - overlay: {volume: jhu.nii.gz, table: jhu.txt, structures: [...], under: false}
 //   - resample: {voxel_mm: 2}
+//   - islands: {min_piece_mm3: 100}
 //   - cut: {sphere: {centre_mm: [x, y, z], radius_mm: 10}, structures: [...], name: Cavity}
 //          {cylinder: {from_mm: [..], to_mm: [..], radius_mm: 5}}
 //          {mask: cavity.nii.gz}

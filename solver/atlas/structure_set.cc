@@ -420,9 +420,16 @@ void StructureBox(const StructureEntry& e, const Loaded& loaded, size_t i, doubl
 
 Status ComposeVolume(const StructureSet& set, const Loaded& loaded, const std::vector<int>& order,
                      const ComposeOptions& options, ComposedAtlas* atlas) {
-  const double v = options.voxel_size_mm;
+  double v = options.voxel_size_mm;
+  if (v == 0) {  // the masks' own voxels
+    v = INFINITY;
+    for (const LabelVolume& mask : loaded.masks) {
+      if (mask.num_voxels() > 0) v = std::min(v, mask.spacing_mm().minCoeff());
+    }
+    if (!std::isfinite(v)) v = 1.0;
+  }
   if (!(v > 0) || !std::isfinite(v)) {
-    return Status::InvalidArgument("voxel_size_mm", "must be positive");
+    return Status::InvalidArgument("voxel_size_mm", "must be positive (or 0: the masks' own)");
   }
   Eigen::Vector3d lo = Eigen::Vector3d::Constant(INFINITY);
   Eigen::Vector3d hi = Eigen::Vector3d::Constant(-INFINITY);

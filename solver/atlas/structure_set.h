@@ -92,7 +92,9 @@ struct ComposeOptions {
   // pixel_size_mm the contours carry, else 0.5.
   double pixel_size_mm = 0;
   // Voxel edge of the label volume composed when any structure is a mask
-  // or a surface [mm].
+  // or a surface [mm]; 0: the masks' own (the smallest voxel edge any mask
+  // has, so masks on one grid are taken voxel for voxel), 1 mm without
+  // masks.
   double voxel_size_mm = 1.0;
   // A label volume even when every structure is contours (their lofts
   // voxelised): for measuring volumes and overlaps in mm^3.

@@ -72,6 +72,10 @@ struct Mesh {
 };
 
 // Corner coordinates of tetrahedron `e`, one row per node [m].
+// The mesh's pieces: elements that share a face (three corners or more)
+// are in one piece. Returns each element's piece, 0 .. *pieces - 1.
+std::vector<int> MeshPieces(const Mesh& mesh, int* pieces);
+
 Eigen::Matrix<double, 4, 3> TetCorners(const Mesh& mesh, int e);
 
 // Corner coordinates of hexahedron `e`, one row per node in the C3D8 order

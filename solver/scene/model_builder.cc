@@ -11,6 +11,7 @@
 
 #include "atlas/atlas_build.h"
 #include "atlas/atlas_mesh_cache.h"
+#include "atlas/label_table.h"
 #include "atlas/structure_set.h"
 #include "core/format.h"
 #include "mesh/primitive_mesher.h"
@@ -258,6 +259,42 @@ void StoreAtlasMesh(const BuildModelOptions& cache, const AtlasCacheUse& use, co
 // `built` keeps what a 10-node pass needs later (the loft, the regions'
 // labels); its mesh is moved into `mesh`. With a cache directory a 4-node
 // mesh may come from the cache, and then `built` holds nothing else.
+}  // namespace
+
+std::vector<std::string> KnownAtlasStructures(const AtlasSpec& a) {
+  std::vector<std::string> names;
+  if (a.source.empty() || a.source == "synthetic") return names;
+  std::error_code ec;
+  if (IsStructureSetDir(a.source)) {
+    StructureSet set;
+    if (!ReadStructureSet(a.source, &set).ok()) return {};
+    for (const StructureEntry& entry : set.structures) names.push_back(entry.name);
+  } else if (!std::filesystem::is_directory(a.source, ec) && !a.colour_table.empty()) {
+    ColourTable table;
+    LabelTableRead read;
+    if (!ReadLabelTable(a.colour_table, &table, &read).ok()) return {};
+    for (const ColourEntry& entry : table.entries()) names.push_back(entry.name);
+  }
+  // The names label algebra adds (those it takes away are found missing
+  // when the atlas is built).
+  std::vector<LabelStep> steps;
+  if (names.empty() || a.label_steps_json.empty() ||
+      !ParseLabelSteps(a.label_steps_json, "labels", {}, &steps).ok()) {
+    return names;
+  }
+  for (const LabelStep& step : steps) {
+    if (!step.name.empty()) names.push_back(step.name);
+    if (step.kind != LabelStep::Kind::kOverlay) continue;
+    ColourTable table;
+    LabelTableRead read;
+    if (!ReadLabelTable(step.table, &table, &read).ok()) return {};
+    for (const ColourEntry& entry : table.entries()) names.push_back(entry.name);
+  }
+  return names;
+}
+
+namespace {
+
 Status BuildAtlasMesh(const SceneSpec& scene, const BuildModelOptions& cache, Mesh* mesh,
                       std::string* description, AtlasBuildResult* built) {
   const AtlasSpec& a = scene.geometry.atlas;
@@ -280,6 +317,12 @@ Status BuildAtlasMesh(const SceneSpec& scene, const BuildModelOptions& cache, Me
   }
   const double h = EffectiveElementSize(scene.geometry, scene.mesh);
   options.synthetic_voxel_mm = options.loft_voxel_mm = a.voxel_size_mm > 0 ? a.voxel_size_mm : 1.5;
+  // A structure set's masks (a snapshot of an imported label volume) keep
+  // their own voxels unless the scene asks for others: resampled, a 1 mm
+  // atlas would lose its thin parts and its mesh quality.
+  if (options.source == AtlasBuildOptions::Source::kStructures && a.voxel_size_mm == 0) {
+    options.loft_voxel_mm = 0;
+  }
   options.cell_size_mm = h;
   options.facet_size_mm = a.facet_size_mm > 0 ? a.facet_size_mm : h / 2;
   // The scene's sizes everywhere: a structure too small for them is named in
@@ -289,6 +332,10 @@ Status BuildAtlasMesh(const SceneSpec& scene, const BuildModelOptions& cache, Me
   options.optimisation_time_limit_s = 20;
   options.structures = a.structures;
   options.merge_rest = a.merge_rest;
+  if (!a.label_steps_json.empty()) {
+    PBA_RETURN_IF_ERROR(
+        ParseLabelSteps(a.label_steps_json, "geometry.atlas.labels", {}, &options.label_steps));
+  }
   options.roi_centre_mm =
       Eigen::Vector3d(a.roi_centre_mm[0], a.roi_centre_mm[1], a.roi_centre_mm[2]);
   options.roi_radius_mm = a.roi_radius_mm;
@@ -299,7 +346,8 @@ Status BuildAtlasMesh(const SceneSpec& scene, const BuildModelOptions& cache, Me
                                         &cached);
       !s.ok()) {
     // The build's fields, as the scene names them.
-    const std::string field = s.field() == "structures" || s.field().rfind("structures[", 0) == 0
+    const std::string field = s.field() == "structures" || s.field().rfind("structures[", 0) == 0 ||
+                                      s.field().rfind("labels[", 0) == 0
                                   ? "geometry.atlas." + s.field()
                               : s.field() == "input" ? "geometry.atlas.source"
                               : s.field().empty()    ? ""
@@ -328,10 +376,14 @@ Status BuildAtlasMesh(const SceneSpec& scene, const BuildModelOptions& cache, Me
     description->append(
         Format(", %d dropped (not asked for)", static_cast<int>(result.dropped.size())));
   }
-  description->append(
-      Format("; CGAL Mesh_3 from %.3g mm voxels, %.3g mm elements, %.3g mm on "
-             "surfaces",
-             options.loft_voxel_mm, options.cell_size_mm, options.facet_size_mm));
+  // The voxels the mesh was made from: the label volume's own, the loft's,
+  // or the structure set's composition.
+  const Eigen::Vector3d& v = result.volume.spacing_mm();
+  const std::string voxels = v.maxCoeff() - v.minCoeff() <= 1e-9 * v.maxCoeff()
+                                 ? Format("%.3g mm", v.x())
+                                 : Format("%.3g x %.3g x %.3g mm", v.x(), v.y(), v.z());
+  description->append(Format("; CGAL Mesh_3 from %s voxels, %.3g mm elements, %.3g mm on surfaces",
+                             voxels.c_str(), options.cell_size_mm, options.facet_size_mm));
   for (const std::string& step : result.mesher.time_limit_reached) {
     description->append(
         Format(" (its %s step stopped at its time limit: the mesh depends on the "
@@ -343,6 +395,7 @@ Status BuildAtlasMesh(const SceneSpec& scene, const BuildModelOptions& cache, Me
                                a.roi_radius_mm, a.roi_centre_mm[0], a.roi_centre_mm[1],
                                a.roi_centre_mm[2]));
   }
+  if (!result.islands.empty()) description->append("; " + result.islands);
   std::string empty;
   for (size_t r = 0; r < result.quality.regions.size(); ++r) {
     if (result.quality.regions[r].count > 0) continue;

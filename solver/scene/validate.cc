@@ -1,6 +1,7 @@
 // Scene checks that need no mesh; every failure names its field path.
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <optional>
@@ -8,6 +9,7 @@
 
 #include "atlas/atlas_build.h"
 #include "atlas/colour_table.h"
+#include "atlas/label_algebra.h"
 #include "core/format.h"
 #include "core/number_format.h"
 #include "fem/element_kind.h"
@@ -26,6 +28,51 @@ namespace pba {
 namespace {}  // namespace
 
 namespace scene_checks {
+namespace {
+
+// Whether the scene's structure names are the synthetic atlas's: its
+// source is the synthetic atlas and no other names were given.
+bool SyntheticNames(const AtlasSpec& a) {
+  return a.known_structures.empty() && (a.source.empty() || a.source == "synthetic");
+}
+
+// A structure (or a group, "Thalamus") of the atlas the scene is built
+// from, where its names are known before meshing.
+Status CheckKnownStructure(const AtlasSpec& a, const std::string& structure,
+                           const std::string& context, const std::string& path) {
+  if (SyntheticNames(a)) {
+    if (ColourTable::Builtin().FindByName(structure) != nullptr) return Status::Ok();
+    return Status::InvalidArgument(
+        path, context + "the synthetic atlas has no structure \"" + structure + "\"");
+  }
+  const std::vector<std::string>& known = a.known_structures;
+  if (known.empty()) return Status::Ok();  // known once the atlas is built
+  for (const std::string& name : known) {
+    if (name == structure || InStructureGroup(name, structure)) return Status::Ok();
+  }
+  // The names that share the most leading characters, as a hint.
+  std::vector<std::pair<int, std::string>> near;
+  for (const std::string& name : known) {
+    int common = 0;
+    while (common < static_cast<int>(std::min(name.size(), structure.size())) &&
+           std::tolower(static_cast<unsigned char>(name[common])) ==
+               std::tolower(static_cast<unsigned char>(structure[common]))) {
+      ++common;
+    }
+    near.emplace_back(-common, name);
+  }
+  std::sort(near.begin(), near.end());
+  std::string hint;
+  for (std::size_t i = 0; i < near.size() && i < 4 && near[i].first < 0; ++i) {
+    hint += (hint.empty() ? "" : ", ") + ("\"" + near[i].second + "\"");
+  }
+  return Status::InvalidArgument(
+      path, context + Format("the atlas (%zu structures) has no structure \"%s\"%s", known.size(),
+                             structure.c_str(),
+                             hint.empty() ? "" : ("; nearest names: " + hint).c_str()));
+}
+
+}  // namespace
 
 bool PositiveFinite(double value) { return std::isfinite(value) && value > 0; }
 
@@ -99,10 +146,22 @@ Status ValidateGeometry(const GeometrySpec& geometry) {
                                          "must be finite");
         }
       }
+      if (!a.label_steps_json.empty()) {
+        if (a.source.empty() || a.source == "synthetic") {
+          return Status::InvalidArgument(
+              "geometry.atlas.labels",
+              "label algebra works on a label volume source (geometry.atlas.source with its "
+              "colour_table), not the synthetic atlas or a snapshot");
+        }
+        std::vector<LabelStep> steps;
+        PBA_RETURN_IF_ERROR(
+            ParseLabelSteps(a.label_steps_json, "geometry.atlas.labels", {}, &steps));
+      }
       for (std::size_t i = 0; i < a.structures.size(); ++i) {
-        if (a.structures[i].empty()) {
-          return Status::InvalidArgument("geometry.atlas.structures[" + std::to_string(i) + "]",
-                                         "is empty");
+        const std::string field = "geometry.atlas.structures[" + std::to_string(i) + "]";
+        if (a.structures[i].empty()) return Status::InvalidArgument(field, "is empty");
+        if (!a.known_structures.empty()) {
+          PBA_RETURN_IF_ERROR(scene_checks::CheckKnownStructure(a, a.structures[i], "", field));
         }
       }
       return Status::Ok();
@@ -181,12 +240,7 @@ Status CheckStructure(const GeometrySpec& geometry, const std::string& structure
         path, context + "\"" + structure +
                   "\" is not among geometry.atlas.structures, so the mesh will not have it");
   }
-  const bool synthetic = a.source.empty() || a.source == "synthetic";
-  if (synthetic && ColourTable::Builtin().FindByName(structure) == nullptr) {
-    return Status::InvalidArgument(
-        path, context + "the synthetic atlas has no structure \"" + structure + "\"");
-  }
-  return Status::Ok();
+  return CheckKnownStructure(a, structure, context, path);
 }
 
 }  // namespace
@@ -230,8 +284,11 @@ bool IsAtlasStructureName(const GeometrySpec& geometry, const std::string& name)
   const AtlasSpec& a = geometry.atlas;
   if (name == kSurroundingTissue) return true;
   if (std::find(a.structures.begin(), a.structures.end(), name) != a.structures.end()) return true;
-  const bool synthetic = a.source.empty() || a.source == "synthetic";
-  return synthetic && ColourTable::Builtin().FindByName(name) != nullptr;
+  if (!a.known_structures.empty()) {
+    return std::find(a.known_structures.begin(), a.known_structures.end(), name) !=
+           a.known_structures.end();
+  }
+  return SyntheticNames(a) && ColourTable::Builtin().FindByName(name) != nullptr;
 }
 
 Status CheckFaceSet(const GeometrySpec& geometry, const std::string& set, const std::string& path) {

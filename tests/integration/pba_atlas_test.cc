@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "atlas/colour_table.h"
+#include "atlas/label_volume_io.h"
 #include "common/subprocess.h"
 #include "io/png_io.h"
 
@@ -514,6 +515,71 @@ TEST_F(PbaAtlasTest, LabelStepsRunInTheirOrderAndABadOneWritesNothing) {
   EXPECT_EQ(run.exit_code, 5) << run.err;
   EXPECT_NE(run.err.find("colour_table"), std::string::npos) << run.err;
   EXPECT_FALSE(fs::exists(bad));
+}
+
+// A label volume as real atlases come: a block, a fragment that touches
+// nothing, and a cube hinged on one of the block's edges. Meshed as it
+// is, the mesh is in pieces and says so (two: the mesher joins the hinged
+// cube to the block through a few faces along the edge); by default both
+// islands become background with a note, and a scene on the volume
+// solves, its summary saying what was dropped.
+TEST_F(PbaAtlasTest, AFragmentAndAnEdgeHingeAreDroppedWithANoteAndTheSceneSolves) {
+  LabelVolume volume({36, 36, 36}, Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones());
+  for (int k = 0; k < 36; ++k) {
+    for (int j = 0; j < 36; ++j) {
+      for (int i = 0; i < 36; ++i) {
+        const auto in = [&](int lo, int hi, int x) { return x >= lo && x <= hi; };
+        if (in(2, 31, i) && in(2, 31, j) && in(2, 31, k)) volume.set(i, j, k, 1);
+        if (in(2, 4, i) && in(33, 35, j) && in(2, 3, k)) volume.set(i, j, k, 2);      // apart
+        if (in(32, 34, i) && in(32, 34, j) && in(10, 11, k)) volume.set(i, j, k, 3);  // an edge
+      }
+    }
+  }
+  const fs::path labels = dir_.path() / "pieces.nii.gz", table = dir_.path() / "pieces.csv";
+  ASSERT_TRUE(WriteNifti(volume, labels).ok());
+  std::ofstream(table) << "label,name,r,g,b\n1,Block,200,100,50\n2,Fragment,50,200,100\n"
+                          "3,Hinged,50,100,200\n";
+  const auto build = [&](const fs::path& out, bool keep) {
+    std::vector<std::string> argv = {
+        PBA_ATLAS_BIN,    "build",        "-o",        out.string(), "--labels",   labels.string(),
+        "--colour-table", table.string(), "--cell-mm", "2",          "--facet-mm", "2",
+        "--no-pictures"};
+    if (keep) argv.push_back("--keep-islands");
+    return RunProcess(argv);
+  };
+  RunResult run = build(dir_.path() / "kept", true);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_NE(run.out.find("note: the mesh is in 2 pieces joined by no face"), std::string::npos)
+      << run.out;
+  ExpectQualityReport(dir_.path() / "kept", 3);
+
+  run = build(dir_.path() / "dropped", false);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_NE(run.out.find("note: 2 islands of the atlas"), std::string::npos) << run.out;
+  EXPECT_NE(run.out.find("36 voxels, 0.04 cm^3 (Fragment 0.02 cm^3, Hinged 0.02 cm^3)"),
+            std::string::npos)
+      << run.out;
+  EXPECT_EQ(run.out.find("pieces joined by no face"), std::string::npos) << run.out;
+  ExpectQualityReport(dir_.path() / "dropped", 1);
+
+  const fs::path scene = dir_.path() / "pieces.yaml";
+  std::ofstream(scene)
+      << "geometry:\n  atlas: {source: " << labels.string() << ", colour_table: " << table.string()
+      << "}\n  patches:\n"
+         "    - {name: base, set: surface, plane_point_mm: [0, 0, 2], plane_normal: [0, 0, -1]}\n"
+         "    - {name: lid, set: surface, plane_point_mm: [0, 0, 31], plane_normal: [0, 0, 1]}\n"
+         "mesh: {element_size_mm: 4}\n"
+         "material: {linear_elastic: {youngs_modulus_pa: 3000, poissons_ratio: 0.45}}\n"
+         "boundary_conditions:\n  - {set: base, fixed: {}}\n"
+         "  - {set: lid, displacement: {x_mm: 0, y_mm: 0, z_mm: -0.3}}\n"
+         "analysis: {type: LINEAR_STATIC}\n";
+  const fs::path result = dir_.path() / "result";
+  run = RunProcess({PBA_SOLVE_BIN, scene.string(), "--out", result.string(), "--progress", "none"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  std::ifstream in(result / "summary.json");
+  std::stringstream summary;
+  summary << in.rdbuf();
+  EXPECT_NE(summary.str().find("2 islands of the atlas"), std::string::npos) << summary.str();
 }
 
 TEST_F(PbaAtlasTest, BadInputExitsFiveNamingItAndWritesNothing) {

@@ -124,6 +124,35 @@ TEST(PbaSolveTest, InvalidSceneExitsFiveAndWritesNothing) {
   EXPECT_EQ(std::distance(fs::directory_iterator(dir.path()), fs::directory_iterator()), 1);
 }
 
+// A scene on a real atlas, AAL with its table as Debian ships it, names
+// AAL's structures: one it lacks is refused at once (before meshing),
+// naming the nearest, and nothing is written.
+TEST(PbaSolveTest, StructureNamesAreCheckedAgainstTheAtlasTable) {
+  TempDir dir;
+  const fs::path scene = dir.path() / "aal.yaml";
+  std::ofstream(scene)
+      << "geometry:\n  atlas:\n    source: /usr/share/mricron/templates/aal.nii.gz\n"
+         "    colour_table: /usr/share/mricron/templates/aal.nii.txt\n"
+         "mesh: {element_size_mm: 8}\n"
+         "material: {neo_hookean: {shear_modulus_pa: 1000, bulk_modulus_pa: 1e6}}\n"
+         "region_materials:\n  - structures: [Precentral_L, Thalamus_X]\n"
+         "    material: {neo_hookean: {shear_modulus_pa: 2000, bulk_modulus_pa: 2e6}}\n"
+         "boundary_conditions: [{set: 'surface:Precentral_R', fixed: {}}]\n"
+         "analysis: {type: NONLINEAR_STATIC}\n";
+  const fs::path out = dir.path() / "result";
+  const auto start = std::chrono::steady_clock::now();
+  const RunResult run =
+      RunProcess({PBA_SOLVE_BIN, scene.string(), "--out", out.string(), "--progress", "none"});
+  EXPECT_EQ(run.exit_code, 5) << run.err;
+  EXPECT_NE(run.err.find("region_materials[0].structures[1]"), std::string::npos) << run.err;
+  EXPECT_NE(run.err.find("the atlas (116 structures) has no structure \"Thalamus_X\"; nearest "
+                         "names: \"Thalamus_L\", \"Thalamus_R\""),
+            std::string::npos)
+      << run.err;
+  EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(20));
+  EXPECT_FALSE(fs::exists(out));
+}
+
 TEST(PbaSolveTest, UnknownFieldNamesPathAndLine) {
   TempDir dir;
   const fs::path scene = dir.path() / "typo.yaml";

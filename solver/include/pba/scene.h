@@ -61,6 +61,17 @@ struct AtlasSpec {
   std::array<double, 3> roi_centre_mm{0, 0, 0};
   double roi_radius_mm = 0;
   double roi_element_size_mm = 0;
+  // geometry.atlas.labels, the label algebra on a label volume source, as a
+  // JSON list of steps (the form atlas/label_algebra.h reads); empty: none.
+  std::string label_steps_json;
+  // Not read from a scene: the names of the structures the atlas the scene
+  // is built from has, set before validation by whoever knows them (the
+  // server from a snapshot's structures, pba-solve from the source's table:
+  // KnownAtlasStructures). Every structure the scene names (region
+  // materials, surfaces, interfaces, outputs, structures kept) is then
+  // checked against them; empty: the synthetic atlas's names when the
+  // source is the synthetic atlas, else unchecked until the atlas is built.
+  std::vector<std::string> known_structures;
 };
 
 // A face set cut out of another: the faces of `set` whose nodes all lie

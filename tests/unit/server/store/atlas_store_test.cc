@@ -594,6 +594,30 @@ TEST_F(AtlasStoreTest, SnapshotsPinHeadsAndTagsAreUniquePerProject) {
   EXPECT_EQ(counts.at("snapshot.tag"), 1);
 }
 
+// A snapshot is found by the name it was given when one alone has it; a
+// name several share is refused listing them; a tag wins over a name.
+TEST_F(AtlasStoreTest, ASnapshotIsFoundByItsNameWhenOneAloneHasIt) {
+  SnapshotInfo first, second, resolved;
+  ASSERT_OK(store_->CreateSnapshot("bob", "atlas", "after smoothing", &first));
+  ASSERT_OK(store_->ResolveSnapshot("carol", "atlas", "after smoothing", &resolved));
+  EXPECT_EQ(resolved.id, first.id);
+  EXPECT_EQ(resolved.revisions, first.revisions);
+  EXPECT_STATUS(store_->ResolveSnapshot("carol", "atlas", "before smoothing", &resolved),
+                Status::Code::kNotFound, "tagged, numbered or named 'before smoothing'");
+  ASSERT_OK(store_->CreateSnapshot("bob", "atlas", "after smoothing", &second));
+  EXPECT_STATUS(store_->ResolveSnapshot("carol", "atlas", "after smoothing", &resolved),
+                Status::Code::kInvalidArgument,
+                "are named 'after smoothing' (" + std::to_string(first.id) + ", " +
+                    std::to_string(second.id) + "): name one by its id or a tag");
+  ASSERT_OK(store_->Tag("bob", "atlas", second.id, "after smoothing"));
+  ASSERT_OK(store_->ResolveSnapshot("carol", "atlas", "after smoothing", &resolved));
+  EXPECT_EQ(resolved.id, second.id);
+  // Not across projects.
+  ASSERT_OK(store_->CreateProject("dave", "other"));
+  EXPECT_STATUS(store_->ResolveSnapshot("dave", "other", "after smoothing", &resolved),
+                Status::Code::kNotFound, "named");
+}
+
 TEST_F(AtlasStoreTest, TheAuditLogNamesWhoDidWhatToWhichRevisionNewestFirst) {
   const LockInfo lock = Lock("bob");
   now_ += kSecond;

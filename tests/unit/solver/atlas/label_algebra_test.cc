@@ -369,6 +369,43 @@ TEST(LabelAlgebraTest, MajorityResampleKeepsABlockAndSaysWhatVanished) {
       << notes[0];
 }
 
+// Pieces joined by no face (an island apart, a cube on an edge) go; a
+// piece joined by a face stays; the largest always stays.
+TEST(LabelAlgebraTest, IslandsUnderTheSizeBecomeBackground) {
+  LabelAtlas atlas = MakeAtlas(20, 3);
+  Paint(&atlas.volume, 1, [](const Eigen::Vector3d& p) { return p.maxCoeff() <= 9; });  // 1000
+  Paint(&atlas.volume, 2, [](const Eigen::Vector3d& p) {  // 8, on an edge of A
+    return p.x() >= 10 && p.x() <= 11 && p.y() >= 10 && p.y() <= 11 && p.z() <= 1;
+  });
+  Paint(&atlas.volume, 3, [](const Eigen::Vector3d& p) {  // 27, apart
+    return p.minCoeff() >= 15 && p.maxCoeff() <= 17;
+  });
+  atlas.volume.set(10, 0, 0, 3);  // C also has a voxel on a face of A: it stays
+  const LabelAtlas before = atlas;
+  LabelStep step;
+  step.kind = LabelStep::Kind::kIslands;
+  step.min_piece_mm3 = 20;
+  std::vector<std::string> notes;
+  ASSERT_TRUE(ApplyLabelSteps({step}, &atlas, &notes).ok());
+  EXPECT_EQ(Count(atlas, "A"), 1000);
+  EXPECT_EQ(Count(atlas, "B"), 0);
+  EXPECT_EQ(Count(atlas, "C"), 28);
+  EXPECT_NE(notes[0].find("1 island of the atlas"), std::string::npos) << notes[0];
+  EXPECT_NE(notes[0].find("2 pieces kept, the largest 1001 voxels"), std::string::npos) << notes[0];
+  // The automatic form, relative to the largest piece: 2 % keeps C's 27, 3 % does not.
+  atlas = before;
+  std::string note;
+  ASSERT_TRUE(DropIslands(0.02, &atlas, &note));
+  EXPECT_EQ(Count(atlas, "B"), 0);
+  EXPECT_EQ(Count(atlas, "C"), 28);
+  atlas = before;
+  ASSERT_TRUE(DropIslands(0.03, &atlas, &note));
+  EXPECT_EQ(Count(atlas, "C"), 1);
+  LabelAtlas whole = MakeAtlas(5, 1);
+  Paint(&whole.volume, 1, [](const Eigen::Vector3d&) { return true; });
+  EXPECT_FALSE(DropIslands(0.5, &whole, &note));
+}
+
 TEST(LabelAlgebraTest, StepsReadFromYaml) {
   const std::string yaml = R"(
 - fill: {name: White matter, closing_mm: 7}
@@ -382,10 +419,15 @@ TEST(LabelAlgebraTest, StepsReadFromYaml) {
 - cut: {cylinder: {from_mm: [0, 0, 0], to_mm: [0, 0, 9], radius_mm: 2}, structures: [A]}
 - cut: {mask: m.nii.gz}
 - cut: {around: {structures: [T], margin_mm: 2}}
+- islands: {min_piece_mm3: 50}
+- keep: {structures: [A]}
 )";
   std::vector<LabelStep> steps;
   ASSERT_TRUE(ParseLabelSteps(yaml, "steps", "/base", &steps).ok());
-  ASSERT_EQ(steps.size(), 11u);
+  ASSERT_EQ(steps.size(), 13u);
+  EXPECT_EQ(steps[11].kind, LabelStep::Kind::kIslands);
+  EXPECT_EQ(steps[11].min_piece_mm3, 50);
+  EXPECT_EQ(steps[12].structures, std::vector<std::string>{"A"});
   EXPECT_EQ(steps[0].kind, LabelStep::Kind::kFill);
   EXPECT_EQ(steps[0].name, "White matter");
   EXPECT_EQ(steps[0].closing_mm, 7);

@@ -451,6 +451,37 @@ TEST_F(StructureSetTest, MasksSurfacesAndContoursComposeToOneVolume) {
   EXPECT_EQ(counts[atlas.colours.FindByName("Sheet")->label], 5 * 5);
 }
 
+// Voxel size 0: masks on a 0.7 mm grid are taken at their own voxels,
+// voxel for voxel, not resampled (a snapshot of an imported label volume).
+TEST_F(StructureSetTest, MasksComposeAtTheirOwnVoxelsWhenNoSizeIsGiven) {
+  const double h = 0.7;
+  LabelVolume a({10, 9, 8}, Eigen::Vector3d(2.1, -1.4, 0.7), Eigen::Vector3d::Constant(h));
+  LabelVolume b = a;
+  int64_t in_a = 0, in_b = 0;
+  for (int k = 1; k < 7; ++k) {
+    for (int j = 1; j < 8; ++j) {
+      for (int i = 1; i < 9; ++i) {
+        const bool left = i < 4 || (i == 4 && j % 2 == 0);  // a ragged boundary
+        (left ? a : b).set(i, j, k, 1);
+        ++(left ? in_a : in_b);
+      }
+    }
+  }
+  ASSERT_TRUE(WriteNifti(a, dir_ / "a.nii.gz").ok());
+  ASSERT_TRUE(WriteNifti(b, dir_ / "b.nii.gz").ok());
+  StructureSet set;
+  set.structures.push_back(Entry("A", "a.nii.gz", StructureFormat::kNifti, 10));
+  set.structures.push_back(Entry("B", "b.nii.gz", StructureFormat::kNifti, 20));
+  ComposedAtlas atlas;
+  const Status s = Compose(set, &atlas, 0);
+  ASSERT_TRUE(s.ok()) << s.ToString();
+  ASSERT_TRUE(atlas.volume.has_value());
+  EXPECT_NEAR(atlas.volume->spacing_mm().x(), h, 1e-6);
+  const std::vector<int64_t> counts = CountLabels(*atlas.volume);
+  EXPECT_EQ(counts[atlas.colours.FindByName("A")->label], in_a);
+  EXPECT_EQ(counts[atlas.colours.FindByName("B")->label], in_b);
+}
+
 TEST_F(StructureSetTest, VolumeOverlapsAreReportedInCubicMillimetres) {
   WriteText(dir_ / "one.stl", StlCube(Eigen::Vector3d(0, 0, 0), 10));
   WriteText(dir_ / "two.stl", StlCube(Eigen::Vector3d(5, 0, 0), 10));

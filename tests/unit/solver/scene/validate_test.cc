@@ -354,6 +354,56 @@ MaterialSpec Linear() {
   return m;
 }
 
+// A scene on an atlas other than the synthetic one (a snapshot, a label
+// volume with its table) names that atlas's structures: checked against
+// the names known before meshing, refused naming the nearest ones.
+TEST(ValidateAtlasNamesTest, StructuresAreCheckedAgainstTheAtlasUsed) {
+  SceneSpec s = QuasiStaticScene();
+  s.material_library.clear();  // its tissues name the synthetic atlas's structures
+  s.geometry.atlas.structures = {"Putamen_L", "Precentral"};
+  s.region_materials[0].structures = {"Putamen_L"};
+  s.contacts[0].set = "surface:Precentral_R";
+  s.outputs.structure_displacements = {"Putamen_L", "Precentral", "tumour", "*"};
+  // Unknown names with the synthetic atlas: refused as today.
+  Status status = ValidateScene(s);
+  EXPECT_NE(status.message().find("the synthetic atlas has no structure"), std::string::npos)
+      << status.ToString();
+  // A snapshot's names (the source left empty: the server stages it).
+  s.geometry.atlas.known_structures = {"Putamen_L", "Putamen_R", "Precentral: left",
+                                       "Precentral_R"};
+  status = ValidateScene(s);
+  EXPECT_NE(status.field(), "region_materials[0].structures[0]") << status.ToString();
+  EXPECT_EQ(status.message().find("has no structure"), std::string::npos) << status.ToString();
+  // surface:Precentral_R is not kept by geometry.atlas.structures.
+  s.geometry.atlas.structures.push_back("Precentral_R");
+  EXPECT_TRUE(ValidateScene(s).ok()) << ValidateScene(s).ToString();
+
+  s.region_materials[0].structures = {"Putamen_X"};
+  status = ValidateScene(s);
+  EXPECT_EQ(status.field(), "region_materials[0].structures[0]");
+  EXPECT_NE(status.message().find("not among geometry.atlas.structures"), std::string::npos)
+      << status.ToString();
+  s.geometry.atlas.structures.clear();
+  status = ValidateScene(s);
+  EXPECT_EQ(status.field(), "region_materials[0].structures[0]");
+  EXPECT_NE(status.message().find("the atlas (4 structures) has no structure \"Putamen_X\"; "
+                                  "nearest names: \"Putamen_L\", \"Putamen_R\""),
+            std::string::npos)
+      << status.ToString();
+  s.region_materials[0].structures = {"Putamen_L"};
+  s.geometry.atlas.structures = {"Caudate_L"};
+  status = ValidateScene(s);
+  EXPECT_EQ(status.field(), "geometry.atlas.structures[0]");
+  EXPECT_NE(status.message().find("has no structure \"Caudate_L\""), std::string::npos);
+
+  // A label volume whose names are not known before meshing: not checked.
+  s.geometry.atlas.structures.clear();
+  s.geometry.atlas.known_structures.clear();
+  s.geometry.atlas.source = "atlas.nii.gz";
+  s.region_materials[0].structures = {"Anything"};
+  EXPECT_TRUE(ValidateScene(s).ok()) << ValidateScene(s).ToString();
+}
+
 TEST(ValidateQuasiStaticGoodTest, EveryNewFieldIsAccepted) {
   const SceneSpec s = QuasiStaticScene();
   EXPECT_TRUE(ValidateScene(s).ok()) << ValidateScene(s).ToString();
