@@ -65,7 +65,6 @@
 #include "pba/solve.h"
 #include "pba/v1/scene.pb.h"
 #include "pba/v1/solve_event.pb.h"
-#include "scene/model_builder.h"
 #include "solve/staging_dir.h"
 
 namespace pba {

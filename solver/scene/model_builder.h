@@ -34,14 +34,6 @@ struct BuildModelOptions {
   std::uint64_t atlas_cache_max_bytes = std::uint64_t{2} << 30;
 };
 
-// The structure names of a scene atlas's source where they can be read
-// before meshing: a structure set's manifest, a label volume's table (in
-// any format label_table.h reads). None for the synthetic atlas (its names
-// are built in), a plate directory, a label volume without a table, or a
-// source that cannot be read (the build then says what is wrong): for
-// AtlasSpec::known_structures.
-std::vector<std::string> KnownAtlasStructures(const AtlasSpec& atlas);
-
 // Meshes the geometry, cuts its patches and applies the boundary conditions
 // in order (a later condition on the same node and component wins);
 // displacements in metres. Expects a validated scene; fails (naming it) on

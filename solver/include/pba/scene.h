@@ -641,6 +641,14 @@ std::vector<std::string> FaceSetNames(const GeometrySpec& geometry);
 // one), or -1 when the set is curved (the cylinder's side) or unknown.
 int PlaneNormalAxis(const GeometrySpec& geometry, const std::string& set);
 
+// The structure names of a scene atlas's source where they can be read
+// before meshing: a structure set's manifest, a label volume's table (in
+// any format label_table.h reads). None for the synthetic atlas (its names
+// are built in), a plate directory, a label volume without a table, or a
+// source that cannot be read (the build then says what is wrong): for
+// AtlasSpec::known_structures.
+std::vector<std::string> KnownAtlasStructures(const AtlasSpec& atlas);
+
 // Checks everything that can be checked without meshing: a geometry and a
 // material are given, sizes and moduli are in range, every boundary condition
 // names an existing set, the body cannot move as a rigid body (some set is
