@@ -304,6 +304,19 @@ Status Fill(const LabelStep& step, const std::string& field, LabelAtlas* atlas, 
   ColourEntry entry;
   PBA_RETURN_IF_ERROR(NewEntry(atlas->table, step.name, field + ".name", &entry));
   LabelVolume& v = atlas->volume;
+  // The closing works on the grid padded by its radius: bounded as a label
+  // volume is (its distances take 8 bytes a voxel).
+  double padded = 1;
+  for (int a = 0; a < 3; ++a) {
+    padded *= v.dims()[a] + 2 * (1 + std::ceil(step.closing_mm / v.spacing_mm().minCoeff()));
+  }
+  if (padded > static_cast<double>(kMaxLabelVolumeVoxels)) {
+    return Status::InvalidArgument(
+        field + ".closing_mm",
+        Format("a %g mm closing on this grid needs %.3g voxels, over the %zu a label volume may "
+               "hold: resample to coarser voxels first",
+               step.closing_mm, padded, kMaxLabelVolumeVoxels));
+  }
   PaddedGrid g;
   const std::vector<uint8_t> enclosed = Enclosed(v, step.closing_mm, &g);
   // Its 6-connected pieces, numbered from 1, and their sizes.
