@@ -262,12 +262,13 @@ int RunBuild(AtlasBuildOptions options, const Pictures& pictures, const std::str
     const ImproveStats& i = result.improvement;
     if (i.min_dihedral_before_deg > 0) {
       std::printf(
-          "improvement: smallest dihedral angle %.2f -> %.2f deg, %d -> %d tetrahedra "
-          "below the target; %d edge removals, %d 2-3 flips, %d node moves, %d "
-          "slivers moved across an interface (%.3g mm^3)\n",
-          i.min_dihedral_before_deg, i.min_dihedral_after_deg, i.below_target_before,
-          i.below_target_after, i.flips_32 + i.flips_44 + i.edge_removals, i.flips_23,
-          i.smoothed_nodes, result.relabelled.tetrahedra, result.relabelled.volume_m3 * 1e9);
+          "improvement: smallest dihedral angle %.2f -> %.2f deg, largest aspect ratio %.3g -> "
+          "%.3g, %d -> %d tetrahedra below the target; %d edge removals, %d 2-3 flips, %d node "
+          "moves, %d slivers moved across an interface (%.3g mm^3)\n",
+          i.min_dihedral_before_deg, i.min_dihedral_after_deg, i.max_aspect_ratio_before,
+          i.max_aspect_ratio_after, i.below_target_before, i.below_target_after,
+          i.flips_32 + i.flips_44 + i.edge_removals, i.flips_23, i.smoothed_nodes,
+          result.relabelled.tetrahedra, result.relabelled.volume_m3 * 1e9);
     }
     if (const std::optional<MidsideProjectionReport>& p = result.projection) {
       std::printf(
@@ -570,6 +571,11 @@ void AddMeshOptions(CLI::App* build, AtlasBuildOptions& options) {
                    "this [deg]; 0: none")
       ->capture_default_str();
   build
+      ->add_option("--improve-aspect", options.improve_aspect_ratio,
+                   "With --improve-deg, also on tetrahedra whose aspect ratio is above this "
+                   "(>= 1.5; 0: the angle alone)")
+      ->capture_default_str();
+  build
       ->add_option("--odt", options.odt_iterations,
                    "Passes of ODT smoothing before sliver removal; 0: none")
       ->capture_default_str();
@@ -619,8 +625,9 @@ CLI::App* AddBuildCommand(CLI::App& app, CommandLine& line) {
                     "Keep only this structure (colour-table name; repeat for several)");
   build->add_flag(
       "--keep-islands", line.keep_islands,
-      "Keep every piece of a label volume; by default pieces under 0.1 % of the largest piece's "
-      "volume (fragments that would touch nothing, or hang on an edge) become background");
+      "Keep every piece of a label volume and of its mesh; by default pieces under 0.1 % of the "
+      "largest piece's volume (fragments that would touch nothing, or hang on an edge) become "
+      "background, and are taken out of the mesh");
   build->add_flag("--merge-rest", line.build.merge_rest,
                   "With --structure: mesh every other structure as one region, \"Surrounding "
                   "tissue\", instead of dropping it");

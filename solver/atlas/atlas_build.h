@@ -56,6 +56,13 @@
 
 namespace pba {
 
+// The bounds an atlas mesh is judged by, per structure (docs/atlas.md):
+// 99 % of its tetrahedra with an aspect ratio under kAspectRatioP99Bound
+// and every dihedral angle over kMinDihedralBoundDeg. A build names the
+// structures that miss them in a note.
+inline constexpr double kAspectRatioP99Bound = 5;
+inline constexpr double kMinDihedralBoundDeg = 5;
+
 struct AtlasBuildOptions {
   enum class Source { kSynthetic, kPlates, kLabelVolume, kStructures };
   Source source = Source::kSynthetic;
@@ -99,6 +106,10 @@ struct AtlasBuildOptions {
   // angle is below this [degrees], without changing any structure's
   // geometry; 0: none.
   double improve_target_deg = 15;
+  // And on every tetrahedron whose aspect ratio is above this
+  // (ImproveOptions::target_aspect_ratio): interior needles and caps that
+  // keep good angles; 0: the angle alone.
+  double improve_aspect_ratio = 4;
   // Bound on each of the mesher's optimisation steps [s]
   // (LabelMeshOptions::optimisation_time_limit_s): a safeguard, generous so
   // that the iteration count and the sliver bound end them, not the
@@ -132,7 +143,10 @@ struct AtlasBuildOptions {
   // joined by faces) under this share of the largest piece's volume become
   // background, named in a note and in `islands` (DropIslands): a
   // fragment that touches nothing, or hangs on an edge or a corner, would
-  // leave the stiffness singular. 0: none.
+  // leave the stiffness singular. The mesh's own pieces (joined by faces)
+  // under this share are taken out of it too, from any source (the mesher
+  // can leave a tetrahedron hanging by an edge where voxels meet at one).
+  // 0: none.
   double island_share = 1e-3;
 
   Status Validate() const;
@@ -180,6 +194,12 @@ struct AtlasBuildResult {
   std::vector<std::string> notes;
   // What DropIslands made background (empty: nothing), also in `notes`.
   std::string islands;
+  // After the improvement: slivers in folds of the outer surface taken out
+  // (PeelBoundarySlivers), and the mesh's fragments under island_share of
+  // the largest piece's volume (DropMeshFragments, `fragments` of them);
+  // both in `notes` when not empty.
+  RemovedTetrahedra peeled, dropped_fragments;
+  int fragments = 0;
   // The mesh's pieces joined by faces (MeshPieces); more than one is in
   // `notes`.
   int pieces = 1;

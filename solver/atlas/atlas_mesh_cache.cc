@@ -26,7 +26,9 @@ namespace {
 // way of reading a source), or when the atlas build makes a different mesh
 // from the same input without a new solver version (the version is the
 // project's, not a commit's), so old entries stop matching.
-constexpr int kKeyFormatVersion = 2;  // 2: label volumes lose their islands (island_share)
+// 2: label volumes lose their islands (island_share); 3: improvement on the
+// aspect ratio too, boundary slivers peeled, mesh fragments dropped.
+constexpr int kKeyFormatVersion = 3;
 
 // The entry file: magic, format version, a byte-order mark (entries hold
 // the host's native integers and doubles: a cache directory shared with a
@@ -313,6 +315,7 @@ Status AtlasMeshCacheKey(const AtlasBuildOptions& options, std::string* key) {
                  options.cell_size_mm, options.facet_size_mm, options.facet_distance_mm);
   text += Format("facets_per_section %.17g\nodt_iterations %d\nimprove_target_deg %.17g\n",
                  options.facets_per_section, options.odt_iterations, options.improve_target_deg);
+  text += Format("improve_aspect_ratio %.17g\n", options.improve_aspect_ratio);
   text += Format("optimisation_time_limit_s %.17g\n", options.optimisation_time_limit_s);
   text += Format("roi_centre_mm %.17g %.17g %.17g\nroi_radius_mm %.17g\nroi_size_mm %.17g\n",
                  options.roi_centre_mm.x(), options.roi_centre_mm.y(), options.roi_centre_mm.z(),

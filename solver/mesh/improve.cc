@@ -3,6 +3,7 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <numbers>
 #include <set>
@@ -11,6 +12,7 @@
 #include <utility>
 #include <vector>
 
+#include "mesh/quality.h"
 #include "mesh/tet_angles.h"
 #include "mesh/tet_topology.h"
 
@@ -51,6 +53,9 @@ struct Plan {
   enum class Kind { kNone, kFlip23, kEdgeRemoval };
   Kind kind = Kind::kNone;
   double old_quality = 0;  // smallest angle of `old_tets` [rad]
+  // Smallest dihedral angle of `old_tets` and of `new_tets` [rad] (the
+  // quality itself for the angle alone).
+  double old_angle = 0, new_angle = 0;
   double quality = kInvalidTet;
   std::vector<int> old_tets;
   std::vector<Tet> new_tets;
@@ -63,8 +68,21 @@ class Improver {
   Improver(const ImproveOptions& options, Mesh* mesh)
       : options_(options),
         mesh_(*mesh),
-        topology_(mesh),
-        target_(options.target_min_dihedral_deg * kRadiansPerDegree) {}
+        measure_(MeasureOf(options)),
+        topology_(mesh, measure_),
+        target_(options.target_aspect_ratio > 0
+                    ? 1 / options.target_aspect_ratio
+                    : options.target_min_dihedral_deg * kRadiansPerDegree),
+        angle_target_(options.target_min_dihedral_deg * kRadiansPerDegree) {}
+
+  static TetMeasure MeasureOf(const ImproveOptions& options) {
+    TetMeasure measure;
+    if (options.target_aspect_ratio > 0) {
+      measure.angle_scale =
+          options.target_min_dihedral_deg * kRadiansPerDegree * options.target_aspect_ratio;
+    }
+    return measure;
+  }
 
   // Checks the mesh, builds the adjacency and finds the nodes that stay;
   // on error the mesh is untouched.
@@ -95,19 +113,58 @@ class Improver {
   // true when the smallest angle over the tetrahedra that changed has
   // risen, else everything is undone.
   bool ApplyAndSmooth(const Plan& plan);
+  // The smallest dihedral angle of tetrahedron t [rad].
+  double Angle(const Tet& t) const {
+    return TetQuality(topology_.node(t[0]), topology_.node(t[1]), topology_.node(t[2]),
+                      topology_.node(t[3]));
+  }
+  // Of tetrahedra `tets` (slots), or of `new_tets` (corners), the smallest.
+  double SmallestAngle(const std::vector<int>& tets) const {
+    double smallest = kPi;
+    for (int e : tets) smallest = std::min(smallest, Angle(topology_.tet(e)));
+    return smallest;
+  }
+  double SmallestAngle(const std::vector<Tet>& tets) const {
+    double smallest = kPi;
+    for (const Tet& t : tets) smallest = std::min(smallest, Angle(t));
+    return smallest;
+  }
+  // With the aspect ratio in the measure a change must also keep the
+  // smallest dihedral angle of what it touches at or above the lower of
+  // what it was and the angle target: the measure alone would trade a
+  // sliver for a better aspect ratio nearby, and the mesh's smallest angle
+  // could fall.
+  bool KeepsAngles(double old_angle, double new_angle) const {
+    return measure_.angle_scale == 0 || new_angle >= std::min(old_angle, angle_target_);
+  }
+  void SetAngles(Plan* plan) const {
+    if (measure_.angle_scale == 0) {
+      plan->old_angle = plan->old_quality;
+      plan->new_angle = plan->quality;
+      return;
+    }
+    plan->old_angle = SmallestAngle(plan->old_tets);
+    plan->new_angle = SmallestAngle(plan->new_tets);
+  }
   bool Protected(int a, int b, int c) const {
     return protected_faces_.count(SortedTriangle(a, b, c)) != 0;
   }
 
   const ImproveOptions& options_;
   const Mesh& mesh_;
+  const TetMeasure measure_;
   TetTopology topology_;
-  const double target_;                                         // [rad]
+  const double target_;                                         // of measure_
+  const double angle_target_;                                   // [rad]
   std::vector<char> fixed_;                                     // node may not move
   std::unordered_set<Triangle, TriangleHash> protected_faces_;  // face set triangles, sorted
   // When each node last failed to move (TetTopology's clock): smoothing it
   // again before anything around it changes would fail again.
   std::vector<long> failed_at_;
+  // The same for each tetrahedron slot (-1: never failed): ImproveTet on
+  // it changed nothing then (its trials undone leave the corners' times as
+  // they were), and would again while nothing around its corners changes.
+  std::vector<long> failed_tet_at_;
   // The slivers whose neighbours ImproveAround has worked on (sorted corners).
   std::set<Tet> surrounded_;
   ImproveStats stats_;
@@ -222,9 +279,9 @@ void Improver::PlanEdgeRemoval(int a, int b, bool improve, Plan* plan) const {
       for (int k = i + 1; k < j; ++k) {
         double q = std::min(best[i][k], best[k][j]);
         if (q <= best[i][j] || q <= floor) continue;
-        q = std::min(q, TetQuality(x[i], x[k], x[j], xb));
+        q = std::min(q, measure_(x[i], x[k], x[j], xb));
         if (q <= best[i][j] || q <= floor) continue;
-        q = std::min(q, TetQuality(x[i], x[j], x[k], xa));
+        q = std::min(q, measure_(x[i], x[j], x[k], xa));
         if (q > best[i][j]) {
           best[i][j] = q;
           split[i][j] = k;
@@ -248,11 +305,12 @@ void Improver::PlanEdgeRemoval(int a, int b, bool improve, Plan* plan) const {
     const int k = split[i][j];
     plan->new_tets.push_back({ring[i], ring[k], ring[j], b});
     plan->new_tets.push_back({ring[i], ring[j], ring[k], a});
-    plan->new_quality.push_back(TetQuality(x[i], x[k], x[j], xb));
-    plan->new_quality.push_back(TetQuality(x[i], x[j], x[k], xa));
+    plan->new_quality.push_back(measure_(x[i], x[k], x[j], xb));
+    plan->new_quality.push_back(measure_(x[i], x[j], x[k], xa));
     stack[depth++] = {i, k};
     stack[depth++] = {k, j};
   }
+  SetAngles(plan);
 }
 
 // The 2-3 flip across the face (p, q, r) of `e` opposite its corner a: with
@@ -285,6 +343,7 @@ void Improver::PlanFlip23(int e, int corner, bool improve, Plan* plan) const {
   plan->old_tets = {e, other};
   plan->new_tets.assign(news, news + 3);
   plan->new_quality.assign(quality, quality + 3);
+  SetAngles(plan);
 }
 
 void Improver::Apply(const Plan& plan, Journal* journal) {
@@ -317,10 +376,11 @@ bool Improver::ApplyAndSmooth(const Plan& plan) {
   if (free_nodes.empty()) return false;
   // The smallest angle around each free node before: its tetrahedra change
   // if it moves.
-  std::vector<double> star_before(free_nodes.size(), kPi);
+  std::vector<double> star_before(free_nodes.size(), kPi), angle_before(free_nodes.size(), kPi);
   for (std::size_t i = 0; i < free_nodes.size(); ++i) {
     for (int e : topology_.around(free_nodes[i]))
       star_before[i] = std::min(star_before[i], topology_.quality(e));
+    if (measure_.angle_scale > 0) angle_before[i] = SmallestAngle(topology_.around(free_nodes[i]));
   }
   Journal journal;
   Apply(plan, &journal);
@@ -330,16 +390,21 @@ bool Improver::ApplyAndSmooth(const Plan& plan) {
   // The smallest angle over what changed: the replaced tetrahedra and the
   // stars of the nodes that moved, before and after.
   double before = plan.old_quality, after = kPi;
+  double old_angle = plan.old_angle, new_angle = kPi;
   for (int e : journal.added) after = std::min(after, topology_.quality(e));
+  if (measure_.angle_scale > 0) new_angle = SmallestAngle(journal.added);
   for (std::size_t i = 0; i < free_nodes.size(); ++i) {
     const int v = free_nodes[i];
     if (std::none_of(journal.moved.begin(), journal.moved.end(),
                      [v](const auto& moved) { return moved.first == v; }))
       continue;
     before = std::min(before, star_before[i]);
+    old_angle = std::min(old_angle, angle_before[i]);
     for (int e : topology_.around(v)) after = std::min(after, topology_.quality(e));
+    if (measure_.angle_scale > 0)
+      new_angle = std::min(new_angle, SmallestAngle(topology_.around(v)));
   }
-  if (!(after > before)) {
+  if (!(after > before) || !KeepsAngles(old_angle, new_angle)) {
     topology_.Undo(journal);
     return false;
   }
@@ -369,7 +434,7 @@ bool Improver::SmoothNode(int v, Journal* journal) {
     centroid += (star[s][0] + star[s][1] + star[s][2]) / 3;
   }
   centroid /= static_cast<double>(around.size());
-  const StarObjective objective(star);
+  const StarObjective objective(star, measure_);
   Vec3 best_x = topology_.node(v);
   double best = old_quality;
   if (const double q = objective.Value(centroid, best); q > best) {
@@ -377,7 +442,12 @@ bool Improver::SmoothNode(int v, Journal* journal) {
     best_x = centroid;
   }
   if (best > 0) best = objective.Ascend(&best_x, best);
-  if (!(best > old_quality)) {
+  bool keeps = true;
+  if (best > old_quality && measure_.angle_scale > 0) {
+    const StarObjective angles(star);
+    keeps = KeepsAngles(angles.Value(topology_.node(v)), angles.Value(best_x));
+  }
+  if (!(best > old_quality) || !keeps) {
     failed_at_[v] = topology_.clock();
     return false;
   }
@@ -405,13 +475,18 @@ bool Improver::ImproveTet(int e, double target) {
     if (!improve && !options_.smooth) break;
     std::vector<Plan> plans;
     Plan plan;
+    // An improving plan is taken as it is, so it must keep the angles
+    // now; another is judged after its smoothing (ApplyAndSmooth).
+    const auto usable = [&](const Plan& p) {
+      return p.kind != Plan::Kind::kNone && (!improve || KeepsAngles(p.old_angle, p.new_angle));
+    };
     for (const auto& edge : kEdges) {
       PlanEdgeRemoval(t[edge[0]], t[edge[1]], improve, &plan);
-      if (plan.kind != Plan::Kind::kNone) plans.push_back(plan);
+      if (usable(plan)) plans.push_back(plan);
     }
     for (int corner = 0; corner < 4; ++corner) {
       PlanFlip23(e, corner, improve, &plan);
-      if (plan.kind != Plan::Kind::kNone) plans.push_back(plan);
+      if (usable(plan)) plans.push_back(plan);
     }
     std::stable_sort(plans.begin(), plans.end(),
                      [](const Plan& x, const Plan& y) { return x.quality > y.quality; });
@@ -457,21 +532,27 @@ bool Improver::ImproveAround(int e) {
 }
 
 void Improver::Run(ImproveStats* stats) {
-  const auto measure = [&](double* smallest, int* below) {
+  const auto measure = [&](double* smallest, double* largest_aspect, int* below) {
     *smallest = kPi;
+    *largest_aspect = 0;
     *below = 0;
     for (int e = 0; e < topology_.num_slots(); ++e) {
       if (!topology_.alive(e)) continue;
-      *smallest = std::min(*smallest, topology_.quality(e));
       *below += topology_.quality(e) < target_;
+      Eigen::Matrix<double, 4, 3> x;
+      for (int c = 0; c < 4; ++c) x.row(c) = topology_.node(topology_.tet(e)[c]).transpose();
+      *smallest = std::min(*smallest, TetQuality(x.row(0), x.row(1), x.row(2), x.row(3)));
+      *largest_aspect = std::max(*largest_aspect, TetAspectRatio(x));
     }
     *smallest = std::max(*smallest, 0.0) / kRadiansPerDegree;
   };
-  measure(&stats_.min_dihedral_before_deg, &stats_.below_target_before);
+  measure(&stats_.min_dihedral_before_deg, &stats_.max_aspect_ratio_before,
+          &stats_.below_target_before);
   // Worst first: the order in which the slivers' neighbourhoods are taken.
-  // A pass that leaves as many tetrahedra below the target as it found is
-  // followed by one over the neighbours of those left (ImproveAround);
-  // passes end when one of those changes nothing.
+  // A pass that lifts fewer than 5 % of the tetrahedra below the target it
+  // found is followed by one over the neighbours of the slivers left
+  // (ImproveAround); passes end when one of those changes nothing or lifts
+  // fewer than 5 % too.
   const auto below = [&](std::vector<std::pair<double, int>>* work) {
     work->clear();
     for (int e = 0; e < topology_.num_slots(); ++e) {
@@ -490,13 +571,35 @@ void Improver::Run(ImproveStats* stats) {
     for (const auto& [quality, e] : work) {
       // A slot may have been freed, or reused by a newer tetrahedron.
       if (!topology_.alive(e) || topology_.quality(e) >= target_) continue;
-      changed |= around ? ImproveAround(e) : ImproveTet(e, target_);
+      if (around) {
+        // The neighbours are worked on for slivers (below the angle
+        // target), not for a tetrahedron that only the aspect ratio holds
+        // back: the cost is the same, the gain small.
+        if (measure_.angle_scale == 0 || Angle(topology_.tet(e)) < angle_target_)
+          changed |= ImproveAround(e);
+        continue;
+      }
+      // Nothing has changed at its corners since it last failed.
+      if (e < static_cast<int>(failed_tet_at_.size()) && failed_tet_at_[e] >= 0 &&
+          std::all_of(topology_.tet(e).begin(), topology_.tet(e).end(),
+                      [&](int n) { return topology_.changed_at(n) <= failed_tet_at_[e]; }))
+        continue;
+      if (ImproveTet(e, target_)) {
+        changed = true;
+      } else {
+        if (e >= static_cast<int>(failed_tet_at_.size())) failed_tet_at_.resize(e + 1, -1);
+        failed_tet_at_[e] = topology_.clock();
+      }
     }
     below(&work);
-    if (around && !changed) break;
-    around = !around && work.size() >= found;
+    // Fewer than 5 % of them lifted above the target: the passes that are
+    // left would lift fewer still.
+    const bool stalled = 20 * (found - std::min(found, work.size())) < found;
+    if (around && (!changed || stalled)) break;
+    around = !around && stalled;
   }
-  measure(&stats_.min_dihedral_after_deg, &stats_.below_target_after);
+  measure(&stats_.min_dihedral_after_deg, &stats_.max_aspect_ratio_after,
+          &stats_.below_target_after);
   topology_.Compact();
   if (stats != nullptr) *stats = stats_;
 }
@@ -505,6 +608,12 @@ Status ValidateOptions(const ImproveOptions& o) {
   if (!(o.target_min_dihedral_deg > 0 && o.target_min_dihedral_deg < 70.5)) {
     return Status::InvalidArgument("target_min_dihedral_deg",
                                    "must lie in (0, 70.5): a regular tetrahedron's is 70.53");
+  }
+  if (!(o.target_aspect_ratio == 0 ||
+        (o.target_aspect_ratio >= 1.5 && std::isfinite(o.target_aspect_ratio)))) {
+    return Status::InvalidArgument("target_aspect_ratio",
+                                   "must be 0 (the dihedral angle alone) or at least 1.5: a "
+                                   "regular tetrahedron's is 1");
   }
   if (o.max_passes < 0) return Status::InvalidArgument("max_passes", "must be >= 0");
   if (o.max_ring_size < 3 || o.max_ring_size > kLargestRing) {
@@ -548,6 +657,7 @@ void AddLaterPass(const ImproveStats& later, ImproveStats* total) {
   total->smoothed_flips += later.smoothed_flips;
   total->passes += later.passes;
   total->min_dihedral_after_deg = later.min_dihedral_after_deg;
+  total->max_aspect_ratio_after = later.max_aspect_ratio_after;
   total->below_target_after = later.below_target_after;
 }
 

@@ -5,7 +5,10 @@
 // mesh, where sliver perturbation and exudation cannot move the vertices.
 //
 // The quality of a tetrahedron is its smallest dihedral angle (as in
-// TetDihedralRangeDegrees, mesh/quality.h). Only the tetrahedra below
+// TetDihedralRangeDegrees, mesh/quality.h), or with
+// ImproveOptions::target_aspect_ratio that angle together with its aspect
+// ratio (TetMeasure, mesh/tet_angles.h); "angle" below stands for the
+// quality. Only the tetrahedra below
 // ImproveOptions::target_min_dihedral_deg are worked on, worst first (a
 // worklist, so a mesh of a few hundred thousand tetrahedra with a few
 // hundred slivers takes a fraction of a second, most of it building the
@@ -38,17 +41,25 @@
 //      three best flips in turn, each followed by smoothing the free
 //      corners of its new tetrahedra (twice round), kept only if the
 //      result is better, else undone;
-//   4. after a pass that leaves as many tetrahedra below the target as it
-//      found, a pass over their neighbours (the tetrahedra sharing an edge
-//      with each, once for each): 1-3 for them towards twice the target,
-//      then 1-3 for the one below it again (a neighbour's flip or move can
-//      open one for it).
+//   4. after a pass that lifts fewer than 5 % of the tetrahedra below the
+//      target it found above it, a pass over the neighbours of those whose
+//      smallest dihedral angle is below target_min_dihedral_deg (the
+//      tetrahedra sharing an edge with each, once for each): 1-3 for them
+//      towards twice the target, then 1-3 for the one below it again (a
+//      neighbour's flip or move can open one for it).
 // An operation is taken only when it strictly raises the smallest dihedral
 // angle of the tetrahedra it replaces or reshapes (the worst new one better
 // than the worst old one) and every new tetrahedron is positively oriented
 // (6 V > 1e-12 l^3, l its longest edge): the mesh's smallest angle never
-// falls. Passes stop when none is left below the target, when a pass of
-// the fourth kind changes nothing, or after max_passes.
+// falls. With the aspect ratio in the quality an operation must also keep
+// the smallest dihedral angle of what it touches at or above the lower of
+// what it was and target_min_dihedral_deg (else it would trade a sliver
+// for a better aspect ratio nearby), so the mesh's smallest angle never
+// falls below the lower of its value and that target. Passes stop when
+// none is left below the target, when a pass of the fourth kind changes
+// nothing or lifts fewer than 5 % of those it found, or after max_passes.
+// A tetrahedron on which steps 1-3 changed nothing is not tried again
+// until something around its corners changes.
 //
 // What never changes, so that every region keeps its geometry and every
 // face set its triangles:
@@ -84,6 +95,13 @@ struct ImproveOptions {
   // A tetrahedron is worked on while its smallest dihedral angle is below
   // this [degrees], in (0, 70.5) (a regular tetrahedron's is 70.53).
   double target_min_dihedral_deg = 10;
+  // And, when not 0, while its aspect ratio (TetAspectRatio,
+  // mesh/quality.h) is above this, >= 1.5. The quality every operation
+  // must then raise is TetMeasure's min(1 / A, theta / (theta_t A_t)), so a
+  // needle or a cap with good dihedral angles but a large aspect ratio is
+  // worked on too, and a sliver still is; 0: the smallest dihedral angle
+  // alone, as described above.
+  double target_aspect_ratio = 0;
   // Passes over the tetrahedra below the target; >= 0 (0: only measure).
   int max_passes = 5;
   // Largest ring of tetrahedra around an edge that edge removal replaces,
@@ -112,6 +130,9 @@ struct ImproveStats {
   double min_dihedral_after_deg = 0;
   int below_target_before = 0;
   int below_target_after = 0;
+  // Largest aspect ratio over all tetrahedra, before and after.
+  double max_aspect_ratio_before = 0;
+  double max_aspect_ratio_after = 0;
 };
 
 // Adds a later pass's counts to `total`, whose "after" figures become the

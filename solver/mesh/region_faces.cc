@@ -58,6 +58,11 @@ std::vector<int> FaceNeighbours(const Mesh& mesh) {
   return neighbour;
 }
 
+double Volume(const Mesh& mesh, int e) {
+  const Eigen::Matrix<double, 4, 3> x = TetCorners(mesh, e);
+  return (x.row(1) - x.row(0)).cross(x.row(2) - x.row(0)).dot(x.row(3) - x.row(0)) / 6;
+}
+
 }  // namespace
 
 std::string RegionSurfaceSetName(const std::string& region) { return "surface:" + region; }
@@ -168,12 +173,109 @@ RelabelStats RelabelInterfaceSlivers(double target_deg, Mesh* mesh) {
     mesh->element_region[e] = to;
     moved[e] = true;
     ++stats.tetrahedra;
-    const Eigen::Matrix<double, 4, 3> x = TetCorners(*mesh, e);
-    stats.volume_m3 +=
-        (x.row(1) - x.row(0)).cross(x.row(2) - x.row(0)).dot(x.row(3) - x.row(0)) / 6;
+    stats.volume_m3 += Volume(*mesh, e);
   }
   if (stats.tetrahedra > 0) RebuildRegionFaceSets(mesh);
   return stats;
+}
+
+RemovedTetrahedra RemoveTetrahedra(const std::vector<char>& remove, Mesh* mesh) {
+  RemovedTetrahedra removed;
+  if (mesh->shape() != ElementShape::kTet4) return removed;
+  const bool regions = !mesh->element_region.empty();
+  std::vector<char> region_hit(mesh->region_names.size(), 0);
+  std::vector<std::array<int, 4>> tets;
+  std::vector<int> element_region;
+  std::vector<int> node_map(mesh->num_nodes(), -1);
+  for (int e = 0; e < static_cast<int>(mesh->tets.size()); ++e) {
+    if (remove[e] != 0) {
+      ++removed.tetrahedra;
+      removed.volume_m3 += Volume(*mesh, e);
+      if (regions) region_hit[mesh->element_region[e]] = 1;
+      continue;
+    }
+    tets.push_back(mesh->tets[e]);
+    if (regions) element_region.push_back(mesh->element_region[e]);
+    for (int n : mesh->tets[e]) node_map[n] = 0;
+  }
+  if (removed.tetrahedra == 0) return removed;
+  for (std::size_t r = 0; r < region_hit.size(); ++r) {
+    if (region_hit[r] != 0) removed.regions.push_back(mesh->region_names[r]);
+  }
+  std::sort(removed.regions.begin(), removed.regions.end());
+  int kept = 0;
+  for (int& n : node_map) n = n == 0 ? kept++ : -1;
+  Eigen::MatrixX3d nodes(kept, 3);
+  for (int n = 0; n < mesh->num_nodes(); ++n) {
+    if (node_map[n] >= 0) nodes.row(node_map[n]) = mesh->nodes.row(n);
+  }
+  for (auto& t : tets) {
+    for (int& n : t) n = node_map[n];
+  }
+  for (auto& [name, set] : mesh->face_sets) {
+    std::vector<std::array<int, 3>> triangles;
+    for (std::array<int, 3> t : set.triangles) {
+      for (int& n : t) n = node_map[n];
+      if (t[0] >= 0 && t[1] >= 0 && t[2] >= 0) triangles.push_back(t);
+    }
+    set.triangles = std::move(triangles);
+    CollectFaceSetNodes(&set);
+  }
+  mesh->nodes = std::move(nodes);
+  mesh->tets = std::move(tets);
+  mesh->element_region = std::move(element_region);
+  RebuildRegionFaceSets(mesh);
+  return removed;
+}
+
+RemovedTetrahedra PeelBoundarySlivers(double target_deg, Mesh* mesh) {
+  if (mesh->shape() != ElementShape::kTet4) return {};
+  const std::vector<int> neighbour = FaceNeighbours(*mesh);
+  std::vector<int> count(mesh->region_names.size(), 0);
+  for (int r : mesh->element_region) ++count[r];
+  std::vector<char> remove(mesh->tets.size(), 0);
+  for (int e = 0; e < static_cast<int>(mesh->tets.size()); ++e) {
+    int outer = 0;
+    for (int f = 0; f < 4; ++f) outer += neighbour[4 * e + f] < 0;
+    if (outer == 0 || TetDihedralRangeDegrees(TetCorners(*mesh, e))[0] >= target_deg) continue;
+    if (!mesh->element_region.empty()) {
+      int& own = count[mesh->element_region[e]];
+      if (own <= 1) continue;
+      --own;
+    }
+    remove[e] = 1;
+  }
+  return RemoveTetrahedra(remove, mesh);
+}
+
+RemovedTetrahedra DropMeshFragments(double share, Mesh* mesh, int* pieces) {
+  if (pieces != nullptr) *pieces = 0;
+  if (mesh->shape() != ElementShape::kTet4 || mesh->tets.empty()) return {};
+  int num_pieces = 0;
+  const std::vector<int> piece = MeshPieces(*mesh, &num_pieces);
+  if (num_pieces <= 1) return {};
+  std::vector<double> volume(num_pieces, 0);
+  for (int e = 0; e < static_cast<int>(mesh->tets.size()); ++e)
+    volume[piece[e]] += Volume(*mesh, e);
+  const double bound = share * *std::max_element(volume.begin(), volume.end());
+  std::vector<char> small(num_pieces, 0);
+  for (int p = 0; p < num_pieces; ++p) small[p] = volume[p] < bound;
+  // A fragment holding a region's last tetrahedra stays (and is reported
+  // as a piece of its own by the callers).
+  if (!mesh->element_region.empty()) {
+    std::vector<int> left(mesh->region_names.size(), 0);
+    for (int e = 0; e < static_cast<int>(mesh->tets.size()); ++e)
+      left[mesh->element_region[e]] += small[piece[e]] == 0;
+    for (int e = 0; e < static_cast<int>(mesh->tets.size()); ++e) {
+      if (left[mesh->element_region[e]] == 0) small[piece[e]] = 0;
+    }
+  }
+  for (int p = 0; p < num_pieces; ++p) {
+    if (pieces != nullptr) *pieces += small[p];
+  }
+  std::vector<char> remove(mesh->tets.size(), 0);
+  for (int e = 0; e < static_cast<int>(mesh->tets.size()); ++e) remove[e] = small[piece[e]];
+  return RemoveTetrahedra(remove, mesh);
 }
 
 }  // namespace pba

@@ -6,6 +6,7 @@
 
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "mesh/mesh.h"
 
@@ -52,5 +53,37 @@ struct RelabelStats {
 // anything moved. A linear tetrahedral mesh with regions; others are left
 // as they are.
 RelabelStats RelabelInterfaceSlivers(double target_deg, Mesh* mesh);
+
+// Tetrahedra taken out of a mesh: how many, their volume and the regions
+// they were in (Mesh::region_names, sorted, each once).
+struct RemovedTetrahedra {
+  int tetrahedra = 0;
+  double volume_m3 = 0;
+  std::vector<std::string> regions;
+};
+
+// Takes the tetrahedra with remove[e] out of a linear tetrahedral mesh, and
+// the nodes no other tetrahedron uses (the rest keep their order,
+// renumbered), and rebuilds the region-derived face sets; another face set
+// keeps the triangles whose nodes all remain. A region may be left with no
+// tetrahedron: the callers below never take a region's last one.
+RemovedTetrahedra RemoveTetrahedra(const std::vector<char>& remove, Mesh* mesh);
+
+// Every tetrahedron whose smallest dihedral angle is below `target_deg` and
+// that has a face on the outer boundary (a face of no other tetrahedron),
+// unless it is the last of its region, is taken out: after mesh
+// improvement (mesh/improve.h) such a sliver is one no flip or node move
+// could lift, lying in a fold of the body's surface or pinned between it
+// and an interface; the body loses only its volume (reported). A linear
+// tetrahedral mesh; others are left as they are.
+RemovedTetrahedra PeelBoundarySlivers(double target_deg, Mesh* mesh);
+
+// The mesh's pieces (MeshPieces) whose volume is under `share` of the
+// largest piece's are taken out: the fragments a mesher leaves where a few
+// voxels touch the rest by an edge or a corner, which nothing holds and
+// would leave the stiffness singular; a piece with the last tetrahedra of a
+// region stays. `pieces` (may be null) gets how many were taken. A linear
+// tetrahedral mesh; others are left as they are.
+RemovedTetrahedra DropMeshFragments(double share, Mesh* mesh, int* pieces);
 
 }  // namespace pba

@@ -16,13 +16,16 @@ constexpr int kEdges[6][4] = {{0, 1, 2, 3}, {0, 2, 1, 3}, {0, 3, 1, 2},
                               {1, 2, 0, 3}, {1, 3, 0, 2}, {2, 3, 0, 1}};
 
 constexpr double kMinRelativeVolume = 1e-12;
-// Angles this close to the smallest count as active [rad].
+// In the measure's units (radians for the angle alone; with the aspect
+// ratio, a measure of about the same size: 1 / A_t is theta_t in radians
+// near 15 degrees and A_t near 4):
+// terms this close to the smallest count as active;
 constexpr double kActive = 1e-3;
-// Tetrahedra whose smallest angle is further than this above the star's
-// [rad] (20 degrees) are left out of the step's prediction, for speed; the
-// line search still sees them.
+// tetrahedra whose measure is further than this above the star's (20
+// degrees) are left out of the step's prediction, for speed; the line
+// search still sees them;
 constexpr double kNear = 0.35;
-// A step that gains less than this ends the ascent [rad] (0.006 degrees).
+// a step that gains less than this ends the ascent (0.006 degrees).
 constexpr double kConverged = 1e-4;
 
 // The point of the convex hull of `g` nearest the origin, by Gilbert's
@@ -73,6 +76,35 @@ double TetQuality(const Vec3& p0, const Vec3& p1, const Vec3& p2, const Vec3& p3
   return std::atan2(sine, cosine);
 }
 
+double TetMeasure::operator()(const Vec3& p0, const Vec3& p1, const Vec3& p2,
+                              const Vec3& p3) const {
+  const double angle = TetQuality(p0, p1, p2, p3);
+  if (angle_scale == 0 || angle == kInvalidTet) return angle;
+  const Vec3 e1 = p1 - p0, e2 = p2 - p0, e3 = p3 - p0;
+  const double mean_squared =
+      (e1.squaredNorm() + e2.squaredNorm() + e3.squaredNorm() + (p2 - p1).squaredNorm() +
+       (p3 - p1).squaredNorm() + (p3 - p2).squaredNorm()) /
+      6;
+  const double inverse_aspect =
+      std::sqrt(2.0) * e1.dot(e2.cross(e3)) / (mean_squared * std::sqrt(mean_squared));
+  return std::min(inverse_aspect, angle / angle_scale);
+}
+
+void InverseAspectRatioAndGradient(const Vec3& x, const std::array<Vec3, 3>& p, double* value,
+                                   Vec3* gradient) {
+  const Vec3 n = (p[1] - p[0]).cross(p[2] - p[0]);
+  const double six_volume = (p[0] - x).dot(n);
+  const double mean_squared =
+      ((p[0] - x).squaredNorm() + (p[1] - x).squaredNorm() + (p[2] - x).squaredNorm() +
+       (p[1] - p[0]).squaredNorm() + (p[2] - p[0]).squaredNorm() + (p[2] - p[1]).squaredNorm()) /
+      6;
+  const double power = mean_squared * std::sqrt(mean_squared);  // L^(3/2)
+  const Vec3 d_mean_squared = (3 * x - p[0] - p[1] - p[2]) / 3;
+  *value = std::sqrt(2.0) * six_volume / power;
+  *gradient =
+      std::sqrt(2.0) * (-n / power - 1.5 * six_volume / (power * mean_squared) * d_mean_squared);
+}
+
 void DihedralAnglesAndGradients(const Vec3& x, const std::array<Vec3, 3>& p,
                                 std::array<double, 6>* angle, std::array<Vec3, 6>* gradient) {
   const Vec3* corner[4] = {&x, &p[0], &p[1], &p[2]};
@@ -108,7 +140,7 @@ void DihedralAnglesAndGradients(const Vec3& x, const std::array<Vec3, 3>& p,
 double StarObjective::Value(const Vec3& x, double bar) const {
   double smallest = kPi;
   for (const auto& p : star_) {
-    smallest = std::min(smallest, TetQuality(x, p[0], p[1], p[2]));
+    smallest = std::min(smallest, measure_(x, p[0], p[1], p[2]));
     if (smallest <= bar) break;
   }
   return smallest;
@@ -125,14 +157,22 @@ double StarObjective::Ascend(Vec3* x, double value, int max_steps) const {
   std::vector<Vec3> gradients, active;
   std::array<double, 6> a;
   std::array<Vec3, 6> g;
+  const double scale = measure_.angle_scale > 0 ? 1 / measure_.angle_scale : 1;
   for (int step = 0; step < max_steps; ++step) {
     angles.clear();
     gradients.clear();
     for (const auto& p : star_) {
-      if (TetQuality(*x, p[0], p[1], p[2]) > value + kNear) continue;
+      if (measure_(*x, p[0], p[1], p[2]) > value + kNear) continue;
       DihedralAnglesAndGradients(*x, p, &a, &g);
-      angles.insert(angles.end(), a.begin(), a.end());
-      gradients.insert(gradients.end(), g.begin(), g.end());
+      for (int i = 0; i < 6; ++i) {
+        angles.push_back(scale * a[i]);
+        gradients.push_back(scale * g[i]);
+      }
+      if (measure_.angle_scale > 0) {
+        angles.emplace_back();
+        gradients.emplace_back();
+        InverseAspectRatioAndGradient(*x, p, &angles.back(), &gradients.back());
+      }
     }
     const double smallest = *std::min_element(angles.begin(), angles.end());
     active.clear();

@@ -1,8 +1,9 @@
-// Dihedral angles of tetrahedra as the objective of mesh improvement
-// (mesh/improve.h): the smallest angle of a tetrahedron, the gradients of
-// its six angles with respect to a corner, and the non-smooth ascent of
-// the smallest angle over the tetrahedra around a node as that node moves.
-// Coordinates in any length unit (metres in the solver); angles in radians.
+// The shape of tetrahedra as the objective of mesh improvement
+// (mesh/improve.h): the smallest dihedral angle of a tetrahedron, alone or
+// with its aspect ratio (TetMeasure), their gradients with respect to a
+// corner, and the non-smooth ascent of the measure's smallest value over
+// the tetrahedra around a node as that node moves. Coordinates in any
+// length unit (metres in the solver); angles in radians.
 #pragma once
 
 #include <Eigen/Core>
@@ -23,6 +24,32 @@ inline constexpr double kPi = std::numbers::pi;
 double TetQuality(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1, const Eigen::Vector3d& p2,
                   const Eigen::Vector3d& p3);
 
+// What mesh improvement raises, higher being better:
+//   angle_scale == 0: the smallest dihedral angle theta [rad] (TetQuality);
+//   angle_scale > 0:  min(1 / A, theta / angle_scale), with A the aspect
+//                     ratio (TetAspectRatio in mesh/quality.h: 1 for a
+//                     regular tetrahedron, growing without bound as it
+//                     flattens into a sliver or a cap or stretches into a
+//                     needle, which keeps good dihedral angles).
+// With angle_scale = theta_t A_t (ImproveOptions), a tetrahedron reaches
+// 1 / A_t exactly when A <= A_t and theta >= theta_t. kInvalidTet where
+// TetQuality is.
+struct TetMeasure {
+  double angle_scale = 0;
+  double operator()(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1, const Eigen::Vector3d& p2,
+                    const Eigen::Vector3d& p3) const;
+};
+
+// The reciprocal aspect ratio 1 / A of the tetrahedron (x, p[0], p[1], p[2]),
+// positively oriented, and its gradient with respect to the corner x [per
+// length]: with S = 6 V and L the mean squared edge length,
+//   1 / A = sqrt(2) S / L^(3/2),
+//   d S / d x = -(p[1] - p[0]) x (p[2] - p[0]),
+//   d L / d x = (1/3) sum_i (x - p[i]).
+void InverseAspectRatioAndGradient(const Eigen::Vector3d& x,
+                                   const std::array<Eigen::Vector3d, 3>& p, double* value,
+                                   Eigen::Vector3d* gradient);
+
 // The six dihedral angles [rad] of the tetrahedron (x, p[0], p[1], p[2]),
 // along its edges (0,1), (0,2), (0,3), (1,2), (1,3), (2,3), and their
 // gradients with respect to the corner x [rad per length]. For the angle
@@ -41,34 +68,39 @@ void DihedralAnglesAndGradients(const Eigen::Vector3d& x, const std::array<Eigen
                                 std::array<double, 6>* angle,
                                 std::array<Eigen::Vector3d, 6>* gradient);
 
-// The smallest dihedral angle over the star of a node, the tetrahedra
+// The smallest TetMeasure over the star of a node, the tetrahedra
 // (x, p[0], p[1], p[2]) that share the corner x, each positively oriented
 // for the right x, as a function of x.
 class StarObjective {
  public:
   // `star` is borrowed and must outlive the objective.
-  explicit StarObjective(const std::vector<std::array<Eigen::Vector3d, 3>>& star) : star_(star) {}
+  explicit StarObjective(const std::vector<std::array<Eigen::Vector3d, 3>>& star,
+                         TetMeasure measure = {})
+      : star_(star), measure_(measure) {}
 
-  // The smallest TetQuality over the star with the node at x [rad]
-  // (kInvalidTet if a tetrahedron is inverted or flat). Gives up as soon
+  // The smallest measure over the star with the node at x (kInvalidTet if
+  // a tetrahedron is inverted or flat). Gives up as soon
   // as one tetrahedron is at or below `bar`, returning that one's quality:
   // the value then only tells that x is no better than `bar`.
   double Value(const Eigen::Vector3d& x, double bar = kInvalidTet) const;
 
   // Non-smooth steepest ascent from *x, where the value is `value` > 0
-  // (Freitag & Ollivier-Gooch, IJNME 40 (1997) 3979-4002): the direction is
-  // the shortest vector in the convex hull of the gradients of the active
-  // angles (those within 1e-3 rad of the smallest), along which all of them
-  // grow; the step goes to where the linearised growth of the active angles
-  // meets the first inactive one (of the tetrahedra within 20 degrees of
-  // the smallest), no further than half the shortest edge at x, and is
-  // halved, up to 8 times, until the value grows. At most `max_steps`
-  // steps; a step gaining less than 1e-4 rad ends the ascent. Returns the
-  // value at the new *x, at least `value`.
+  // (Freitag & Ollivier-Gooch, IJNME 40 (1997) 3979-4002) over the terms
+  // of the measure (the six angles of each tetrahedron, scaled by
+  // 1 / angle_scale when it is not 0, and then its 1 / A too): the
+  // direction is the shortest vector in the convex hull of the gradients of
+  // the active terms (those within 1e-3 of the smallest), along which all of
+  // them grow; the step goes to where the linearised growth of the active
+  // terms meets the first inactive one (of the tetrahedra within 0.35 of
+  // the smallest: 20 degrees), no further than half the shortest edge at x,
+  // and is halved, up to 8 times, until the value grows. At most
+  // `max_steps` steps; a step gaining less than 1e-4 ends the ascent.
+  // Returns the value at the new *x, at least `value`.
   double Ascend(Eigen::Vector3d* x, double value, int max_steps = 10) const;
 
  private:
   const std::vector<std::array<Eigen::Vector3d, 3>>& star_;
+  TetMeasure measure_;
 };
 
 }  // namespace pba

@@ -89,7 +89,7 @@ Status TetTopology::Build(std::vector<char>* on_boundary) {
 }
 
 double TetTopology::Quality(const Tet& t) const {
-  return TetQuality(node(t[0]), node(t[1]), node(t[2]), node(t[3]));
+  return measure_(node(t[0]), node(t[1]), node(t[2]), node(t[3]));
 }
 
 bool TetTopology::EdgeExists(int a, int b) const {
@@ -123,14 +123,14 @@ int TetTopology::Add(const Tet& t, int region, double quality, Journal* journal)
     quality_[e] = quality;
   }
   for (int n : t) node_tets_[n].push_back(e);
-  Touch(t);
+  Touch(t, journal);
   if (journal != nullptr) journal->added.push_back(e);
   return e;
 }
 
 void TetTopology::Remove(int e, Journal* journal) {
   if (journal != nullptr) journal->removed.push_back({e, tets_[e], region_[e], quality_[e]});
-  Touch(tets_[e]);
+  Touch(tets_[e], journal);
   for (int n : tets_[e]) {
     std::vector<int>& list = node_tets_[n];
     list.erase(std::find(list.begin(), list.end(), e));
@@ -144,7 +144,7 @@ void TetTopology::MoveNode(int n, const Eigen::Vector3d& x, Journal* journal) {
   mesh_.nodes.row(n) = x.transpose();
   for (int e : node_tets_[n]) {
     quality_[e] = Quality(tets_[e]);
-    Touch(tets_[e]);
+    Touch(tets_[e], journal);
   }
 }
 
@@ -161,14 +161,12 @@ void TetTopology::Undo(const Journal& journal) {
     quality_[it->slot] = it->quality;
     alive_[it->slot] = 1;
     for (int n : it->tet) node_tets_[n].push_back(it->slot);
-    Touch(it->tet);
   }
   for (const auto& [n, position] : journal.moved) {
-    for (int e : node_tets_[n]) {
-      quality_[e] = Quality(tets_[e]);
-      Touch(tets_[e]);
-    }
+    for (int e : node_tets_[n]) quality_[e] = Quality(tets_[e]);
   }
+  for (auto it = journal.touched.rbegin(); it != journal.touched.rend(); ++it)
+    changed_at_[it->first] = it->second;
 }
 
 void TetTopology::Compact() {

@@ -1,7 +1,7 @@
 // A linear tetrahedral mesh under local change, for mesh improvement
 // (mesh/improve.h): element slots that are freed and reused, the elements
-// around each node, each element's region and smallest dihedral angle
-// (TetQuality, kept up to date), and a journal that undoes a trial change.
+// around each node, each element's region and shape (TetMeasure, kept up to
+// date), and a journal that undoes a trial change.
 #pragma once
 
 #include <Eigen/Core>
@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "mesh/mesh.h"
+#include "mesh/tet_angles.h"
 #include "pba/status.h"
 
 namespace pba {
@@ -29,11 +30,14 @@ class TetTopology {
     std::vector<Removed> removed;
     std::vector<int> added;                              // slots
     std::vector<std::pair<int, Eigen::Vector3d>> moved;  // node, former position
+    std::vector<std::pair<int, long>> touched;           // node, former changed_at
   };
 
   // Edits mesh->tets and mesh->nodes in place (the mesh is borrowed and
-  // must outlive this); Compact writes the elements back.
-  explicit TetTopology(Mesh* mesh) : mesh_(*mesh), tets_(mesh->tets) {}
+  // must outlive this); Compact writes the elements back. `measure` is the
+  // elements' quality.
+  explicit TetTopology(Mesh* mesh, TetMeasure measure = {})
+      : mesh_(*mesh), measure_(measure), tets_(mesh->tets) {}
 
   // Checks the mesh and builds the adjacency: InvalidArgument
   // "mesh.element_region" when it is neither empty nor one entry per
@@ -65,7 +69,9 @@ class TetTopology {
   void Undo(const Journal& journal);
 
   // A clock that ticks at every change, and when the elements around each
-  // node last changed (an element with it added, removed or reshaped).
+  // node last changed (an element with it added, removed or reshaped). A
+  // change undone (Undo) leaves the nodes' times as they were: nothing
+  // around them has changed.
   long clock() const { return clock_; }
   long changed_at(int n) const { return changed_at_[n]; }
 
@@ -74,16 +80,20 @@ class TetTopology {
   void Compact();
 
  private:
-  void Touch(const Tet& t) {
+  void Touch(const Tet& t, Journal* journal) {
     ++clock_;
-    for (int n : t) changed_at_[n] = clock_;
+    for (int n : t) {
+      if (journal != nullptr) journal->touched.emplace_back(n, changed_at_[n]);
+      changed_at_[n] = clock_;
+    }
   }
 
   Mesh& mesh_;
+  TetMeasure measure_;
   std::vector<Tet>& tets_;
   std::vector<int> region_;
   std::vector<char> alive_;
-  std::vector<double> quality_;  // smallest dihedral angle [rad]
+  std::vector<double> quality_;  // measure_ of each slot
   std::vector<int> free_;        // freed slots, reused last freed first
   std::vector<std::vector<int>> node_tets_;
   long clock_ = 0;

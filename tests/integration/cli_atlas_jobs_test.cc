@@ -3,18 +3,21 @@
 // against the snapshot the import made, the project's watchers told of the
 // job, the snapshot exported and solved again locally to the same mesh; a
 // label volume imported, and a second import of the same structures failing
-// without writing anything.
+// without writing anything; AAL, a real atlas, imported, checked against at
+// the submit and exported whole.
 
 #include <gtest/gtest.h>
 
 #include <filesystem>
 #include <fstream>
 #include <future>
+#include <map>
 #include <regex>
 #include <sstream>
 #include <string>
 #include <thread>
 
+#include "atlas/structure_set.h"
 #include "common/subprocess.h"
 
 namespace pba::testing {
@@ -74,16 +77,18 @@ TEST_F(CliAtlasJobsTest, ImportRunAgainstTheSnapshotExportAndReproduce) {
   std::thread watcher([&] {
     watched.set_value(Pba({"atlas", "watch", "-p", "demo", "--count", "4"}, seconds(300)));
   });
-  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  // Joined however the test leaves (the watch ends at its own timeout).
+  struct Joiner {
+    std::thread& thread;
+    ~Joiner() {
+      if (thread.joinable()) thread.join();
+    }
+  } joiner{watcher};
+  std::this_thread::sleep_for(std::chrono::seconds(2));
   // A snapshot is named by the name it was given, its id or a tag.
   const RunResult job =
       Pba({"--json", "job", "submit", scene, "--snapshot", "demo/basal ganglia", "--wait"});
   ASSERT_EQ(job.exit_code, 0) << job.out << job.err;
-  watcher.join();
-  const RunResult watch = watched.get_future().get();
-  EXPECT_NE(watch.out.find("job queued"), std::string::npos) << watch.out;
-  EXPECT_NE(watch.out.find("job running"), std::string::npos) << watch.out;
-  EXPECT_NE(watch.out.find("job succeeded"), std::string::npos) << watch.out;
 
   // The job names the snapshot it ran against, by id.
   EXPECT_NE(job.out.find(R"("project": "demo")"), std::string::npos) << job.out;
@@ -102,6 +107,24 @@ TEST_F(CliAtlasJobsTest, ImportRunAgainstTheSnapshotExportAndReproduce) {
   ASSERT_EQ(again.exit_code, 0) << again.out << again.err;
   EXPECT_NE(again.out.find("atlas mesh from the cache"), std::string::npos) << again.out;
   EXPECT_EQ(Find(again.out, R"re("elements": "([0-9]+)")re"), elements);
+
+  // The watcher's four events: the first job's three states and the tag,
+  // in that order. (One that subscribed late on a loaded machine misses
+  // the first states; the second job's, after the tag, make up its count.)
+  watcher.join();
+  const RunResult watch = watched.get_future().get();
+  EXPECT_EQ(watch.exit_code, 0) << watch.out << watch.err;
+  const std::size_t queued = watch.out.find("job queued"), running = watch.out.find("job running"),
+                    succeeded = watch.out.find("job succeeded"),
+                    tagged = watch.out.find("snapshot tagged    snapshot 1: basal");
+  EXPECT_NE(tagged, std::string::npos) << watch.out;
+  EXPECT_LT(succeeded, tagged) << watch.out;
+  if (queued < tagged) {
+    EXPECT_LT(queued, running) << watch.out;
+  }
+  if (running < tagged) {
+    EXPECT_LT(running, succeeded) << watch.out;
+  }
 
   // Anyone can rebuild it from an export of the snapshot.
   const fs::path exported = dir_.path() / "exported";
@@ -148,6 +171,82 @@ TEST_F(CliAtlasJobsTest, ALabelVolumeImportAndARepeatThatFailsWritingNothing) {
   const RunResult bad =
       Pba({"atlas", "import", "-p", "demo", "--plates", plates.string(), "--structure", "Putamen"});
   EXPECT_NE(bad.exit_code, 0);
+}
+
+// structures.csv of pba-atlas labels: each structure's volume [mm^3].
+std::map<std::string, double> StructureVolumesMm3(const fs::path& file) {
+  std::ifstream in(file);
+  std::string line;
+  std::getline(in, line);
+  std::map<std::string, double> volumes;
+  while (std::getline(in, line)) {
+    const std::size_t first = line.find(','), last = line.rfind(',');
+    const std::size_t voxels = line.rfind(',', last - 1);
+    volumes[line.substr(first + 1, voxels - first - 1)] = 1000 * std::stod(line.substr(last + 1));
+  }
+  return volumes;
+}
+
+// AAL as Debian ships it, its white matter filled by pba-atlas, through the
+// server: imported with its table under a snapshot name, all 117 structures
+// in the project; a scene against the snapshot, named by that name, naming
+// a structure AAL lacks is refused at the submit with the nearest names;
+// the snapshot exported holds every structure with the volume it had.
+TEST_F(CliAtlasJobsTest, AalImportedIntoASnapshotAndExportedKeepsEveryStructure) {
+  const fs::path t = "/usr/share/mricron/templates";
+  const fs::path local = dir_.path() / "aal";
+  RunResult run =
+      RunProcess({PBA_ATLAS_BIN, "labels", "-o", local.string(), "--labels",
+                  (t / "aal.nii.gz").string(), "--colour-table", (t / "aal.nii.txt").string(),
+                  "--fill", "White matter", "--closing-mm", "7"});
+  ASSERT_EQ(run.exit_code, 0) << run.out << run.err;
+  const std::map<std::string, double> volumes = StructureVolumesMm3(local / "structures.csv");
+  ASSERT_EQ(volumes.size(), 117u);
+
+  run = Pba({"atlas", "import", "-p", "demo", "--labels", (local / "labels.nii.gz").string(),
+             "--colour-table", (local / "labels.csv").string(), "--snapshot-name", "AAL filled"});
+  ASSERT_EQ(run.exit_code, 0) << run.out << run.err;
+  EXPECT_NE(run.out.find("Imported into demo: snapshot 1"), std::string::npos) << run.out;
+  const RunResult listed = Pba({"atlas", "list", "-p", "demo", "--all"});
+  for (const auto& [name, volume] : volumes)
+    EXPECT_NE(listed.out.find(name), std::string::npos) << name << " is not in the project";
+
+  const fs::path scene = dir_.path() / "aal_scene.yaml";
+  std::ofstream(scene)
+      << "geometry:\n  atlas: {}\n"
+         "mesh: {element_size_mm: 8}\n"
+         "material: {neo_hookean: {shear_modulus_pa: 1000, bulk_modulus_pa: 1e6}}\n"
+         "boundary_conditions: [{set: 'surface:Precentral_R', fixed: {}}]\n"
+         "outputs: {structure_displacements: [Caudate_L, Caudate_Left]}\n"
+         "analysis: {type: NONLINEAR_STATIC}\n";
+  run = Pba({"job", "submit", scene.string(), "--snapshot", "demo/AAL filled"});
+  EXPECT_EQ(run.exit_code, 5) << run.out << run.err;
+  EXPECT_NE(run.err.find("has no structure \"Caudate_Left\"; nearest names: \"Caudate_L\""),
+            std::string::npos)
+      << run.err;
+  const RunResult jobs = Pba({"job", "list"});
+  EXPECT_EQ(jobs.out.find("aal_scene"), std::string::npos) << jobs.out;
+
+  const fs::path exported = dir_.path() / "exported";
+  run = Pba({"atlas", "export", "-p", "demo", "AAL filled", "-o", exported.string()});
+  ASSERT_EQ(run.exit_code, 0) << run.out << run.err;
+  // Composed again from the export at its masks' own voxels, each
+  // structure's volume is the local one, voxel for voxel, and no two
+  // structures overlap.
+  StructureSet set;
+  ASSERT_TRUE(ReadStructureSet(exported, &set).ok());
+  EXPECT_EQ(set.snapshot_name, "AAL filled");
+  ComposeOptions compose;
+  compose.voxel_size_mm = 0;
+  ComposedAtlas again;
+  const Status composed = ComposeStructureSet(exported, set, compose, &again);
+  ASSERT_TRUE(composed.ok()) << composed.ToString();
+  EXPECT_TRUE(again.overlaps.empty());
+  ASSERT_EQ(again.structure_mm3.size(), volumes.size());
+  for (const auto& [name, volume] : volumes) {
+    ASSERT_TRUE(again.structure_mm3.count(name)) << name;
+    EXPECT_NEAR(again.structure_mm3.at(name), volume, 1e-6 * volume) << name;
+  }
 }
 
 }  // namespace

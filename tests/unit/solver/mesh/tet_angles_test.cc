@@ -84,10 +84,9 @@ TEST(TetAnglesTest, GradientsMatchFiniteDifferences) {
   EXPECT_GT(checked, 100);
 }
 
-// The eight tetrahedra of an octahedron around its centre node: moved off
-// the centre, the ascent brings the node back towards it, where every
-// tetrahedron's smallest angle is arctan(sqrt 2) = 54.7 degrees.
-TEST(TetAnglesTest, AscentRecentresAnOctahedronsNode) {
+// The eight tetrahedra of an octahedron of unit half-diagonal around its
+// centre node, each positively oriented with the node at the centre.
+std::vector<std::array<Vec3, 3>> OctahedronStar() {
   std::vector<std::array<Vec3, 3>> star;
   for (const double sx : {-1.0, 1.0}) {
     for (const double sy : {-1.0, 1.0}) {
@@ -98,6 +97,14 @@ TEST(TetAnglesTest, AscentRecentresAnOctahedronsNode) {
       }
     }
   }
+  return star;
+}
+
+// The eight tetrahedra of an octahedron around its centre node: moved off
+// the centre, the ascent brings the node back towards it, where every
+// tetrahedron's smallest angle is arctan(sqrt 2) = 54.7 degrees.
+TEST(TetAnglesTest, AscentRecentresAnOctahedronsNode) {
+  const std::vector<std::array<Vec3, 3>> star = OctahedronStar();
   const StarObjective objective(star);
   const double best = std::atan(std::sqrt(2.0));
   EXPECT_NEAR(objective.Value(Vec3::Zero()), best, 1e-12);
@@ -114,6 +121,85 @@ TEST(TetAnglesTest, AscentRecentresAnOctahedronsNode) {
   Vec3 outside(2, 0, 0);
   EXPECT_EQ(objective.Ascend(&outside, kInvalidTet), kInvalidTet);
   EXPECT_EQ(outside, Vec3(2, 0, 0));
+}
+
+// TetMeasure: the angle alone without a scale; with one, the smaller of
+// 1 / A (TetAspectRatio, computed independently in quality.cc) and the
+// scaled angle; a needle with good angles is caught by its aspect ratio.
+TEST(TetAnglesTest, MeasureIsTheSmallerOfInverseAspectRatioAndScaledAngle) {
+  std::mt19937 random(13);
+  const TetMeasure angle_only;
+  const TetMeasure both{15 * kDegree * 4};
+  for (int trial = 0; trial < 200; ++trial) {
+    const Eigen::Matrix<double, 4, 3> x = RandomTet(&random);
+    const Vec3 p0 = Row(x, 0), p1 = Row(x, 1), p2 = Row(x, 2), p3 = Row(x, 3);
+    const double angle = TetQuality(p0, p1, p2, p3);
+    if (angle == kInvalidTet) continue;
+    EXPECT_EQ(angle_only(p0, p1, p2, p3), angle);
+    const double expected = std::min(1 / TetAspectRatio(x), angle / both.angle_scale);
+    EXPECT_NEAR(both(p0, p1, p2, p3), expected, 1e-12 * expected) << "trial " << trial;
+  }
+  // A needle: an equilateral base of side 0.05 under an apex 1 away. Its
+  // smallest dihedral angle is near 60 degrees, its aspect ratio far above 4.
+  const Vec3 a(0, 0, 0), b(0.05, 0, 0), c(0.025, 0.05 * std::sqrt(3.0) / 2, 0),
+      apex(0.025, 0.05 * std::sqrt(3.0) / 6, 1);
+  EXPECT_GT(TetQuality(a, b, c, apex), 55 * kDegree);
+  EXPECT_LT(both(a, b, c, apex), 1.0 / 20);
+  // Inverted: invalid either way.
+  EXPECT_EQ(both(a, c, b, apex), kInvalidTet);
+  // The regular tetrahedron reaches 1.
+  const Vec3 q0(1, 1, 1), q1(1, -1, -1), q2(-1, -1, 1), q3(-1, 1, -1);
+  EXPECT_NEAR(both(q0, q1, q2, q3), 1, 1e-14);
+}
+
+// The gradient of 1 / A against central differences, at each corner.
+TEST(TetAnglesTest, InverseAspectRatioGradientMatchesFiniteDifferences) {
+  std::mt19937 random(17);
+  static constexpr int kEven[4][4] = {{0, 1, 2, 3}, {1, 0, 3, 2}, {2, 3, 0, 1}, {3, 2, 1, 0}};
+  int checked = 0;
+  for (int trial = 0; trial < 100; ++trial) {
+    const Eigen::Matrix<double, 4, 3> tet = RandomTet(&random);
+    if (TetDihedralRangeDegrees(tet)[0] < 1) continue;
+    for (const auto& order : kEven) {
+      const Vec3 x = Row(tet, order[0]);
+      const std::array<Vec3, 3> p = {Row(tet, order[1]), Row(tet, order[2]), Row(tet, order[3])};
+      double value;
+      Vec3 gradient;
+      InverseAspectRatioAndGradient(x, p, &value, &gradient);
+      EXPECT_NEAR(value, 1 / TetAspectRatio(tet), 1e-12) << "trial " << trial;
+      const double h = 1e-6;
+      for (int c = 0; c < 3; ++c) {
+        double plus, minus;
+        Vec3 unused;
+        InverseAspectRatioAndGradient(x + h * Vec3::Unit(c), p, &plus, &unused);
+        InverseAspectRatioAndGradient(x - h * Vec3::Unit(c), p, &minus, &unused);
+        const double numeric = (plus - minus) / (2 * h);
+        EXPECT_NEAR(gradient[c], numeric, 1e-6 * (1 + std::abs(numeric)))
+            << "trial " << trial << " component " << c;
+      }
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 200);
+}
+
+// The octahedron's star under the measure with the aspect ratio: at the
+// centre each tetrahedron has edges 1, 1, 1, sqrt 2 (three times), so
+// 1 / A = sqrt 2 / 1.5^1.5 = 0.7698, below its scaled angle; off the centre
+// the ascent comes back to it.
+TEST(TetAnglesTest, AscentWithTheAspectRatioRecentresAnOctahedronsNode) {
+  const std::vector<std::array<Vec3, 3>> star = OctahedronStar();
+  const StarObjective objective(star, TetMeasure{15 * kDegree * 4});
+  const double best = std::sqrt(2.0) / std::pow(1.5, 1.5);
+  EXPECT_NEAR(objective.Value(Vec3::Zero()), best, 1e-12);
+  Vec3 x(0.3, -0.2, 0.1);
+  const double start = objective.Value(x);
+  ASSERT_GT(start, 0);
+  const double end = objective.Ascend(&x, start, 50);
+  EXPECT_GT(end, start + 0.1);
+  EXPECT_NEAR(end, objective.Value(x), 1e-15);
+  EXPECT_GT(end, best - 0.01);
+  EXPECT_LT(x.norm(), 0.02);
 }
 
 }  // namespace
