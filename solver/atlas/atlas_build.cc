@@ -295,7 +295,6 @@ Status ReadVolumeSource(const AtlasBuildOptions& options, bool composed_volume,
   return Status::Ok();
 }
 
-// A mesh in several pieces joined by no face: each, in a note.
 // Rounds of moving slivers across interfaces, each followed by an
 // improvement pass.
 constexpr int kRelabelRounds = 3;
@@ -390,6 +389,7 @@ void NoteQualityMisses(AtlasBuildResult* result) {
       misses.size(), regions.size(), kAspectRatioP99Bound, kMinDihedralBoundDeg, list.c_str()));
 }
 
+// A mesh in several pieces joined by no face: each, in a note.
 void NoteMeshPieces(AtlasBuildResult* result) {
   const std::vector<int> piece = MeshPieces(result->mesh, &result->pieces);
   if (result->pieces <= 1) return;
