@@ -43,13 +43,15 @@ bool ParseFormat(const std::string& format, const std::string& file, v1::Geometr
     if (ends(".stl")) name = "stl";
     if (ends(".obj")) name = "obj";
     if (ends(".vtk")) name = "vtk";
+    if (ends(".yaml") || ends(".yml")) name = "derived";
   }
   static const std::map<std::string, v1::GeometryFormat> kFormats = {
       {"contours_json", v1::CONTOURS_JSON},
       {"nifti", v1::NIFTI},
       {"stl", v1::STL},
       {"obj", v1::OBJ},
-      {"vtk", v1::VTK}};
+      {"vtk", v1::VTK},
+      {"derived", v1::DERIVED}};
   const auto it = kFormats.find(name);
   if (it == kFormats.end()) return false;
   *out = it->second;
@@ -268,7 +270,7 @@ int CreateStructure(Connection& connection, const CreateStructureArgs& args) {
   if (!ParseFormat(args.format, args.file, &format)) {
     std::fprintf(stderr,
                  "pba: cannot tell the geometry format of %s: name it with --format "
-                 "(contours_json, nifti, stl, obj or vtk)\n",
+                 "(contours_json, nifti, stl, obj, vtk or derived)\n",
                  args.file.c_str());
     return kExitUsage;
   }
@@ -806,11 +808,13 @@ void RegisterCreateCommand(CLI::App& atlas, CommandContext& context) {
   CLI::App* cmd =
       atlas.add_subcommand("create", "Add a structure from a geometry file (revision 1)");
   AddTarget(context, cmd, &create->target);
-  cmd->add_option("file", create->file, "Geometry: contours .json, .nii(.gz), .stl, .obj, .vtk")
+  cmd->add_option("file", create->file,
+                  "Geometry: contours .json, .nii(.gz), .stl, .obj, .vtk; or a derived "
+                  "structure's recipe, .yaml")
       ->required()
       ->check(CLI::ExistingFile);
   cmd->add_option("--format", create->format,
-                  "contours_json, nifti, stl, obj or vtk (default: from the extension)");
+                  "contours_json, nifti, stl, obj, vtk or derived (default: from the extension)");
   cmd->add_option("--colour", create->colour, "Display colour R,G,B (0..255)");
   cmd->add_option("--group", create->group, "Group path, e.g. cerebrum/basal ganglia");
   cmd->add_option("--material", create->material, "Material parameters: JSON or @FILE");

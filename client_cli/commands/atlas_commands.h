@@ -57,7 +57,7 @@ struct StructureArgs {
 struct CreateStructureArgs {
   StructureArgs target;
   std::string file;
-  std::string format;  // contours_json, nifti, stl, obj, vtk; default from the extension
+  std::string format;  // contours_json, nifti, stl, obj, vtk, derived; default from the extension
   std::string colour;  // "R,G,B"
   std::string group;
   std::string material;  // JSON, or @FILE

@@ -133,6 +133,8 @@ std::string FormatText(v1::GeometryFormat format) {
       return "obj";
     case v1::VTK:
       return "vtk";
+    case v1::DERIVED:
+      return "derived";
     default:
       return "-";
   }
@@ -150,6 +152,8 @@ std::string Extension(v1::GeometryFormat format) {
       return ".obj";
     case v1::VTK:
       return ".vtk";
+    case v1::DERIVED:
+      return ".yaml";
     default:
       return ".bin";
   }

@@ -144,7 +144,11 @@ Status CollectResult(const fs::path& dir, v1::Summary* summary,
 
 std::string FailureReason(const v1::SolveEvent* error, const ProcessExit& exit) {
   if (error != nullptr && !error->message().empty()) {
-    return error->field().empty() ? error->message() : error->field() + ": " + error->message();
+    // pba-solve's message is the whole status, its field first already.
+    const std::string prefix = error->field() + ": ";
+    return error->field().empty() || error->message().rfind(prefix, 0) == 0
+               ? error->message()
+               : prefix + error->message();
   }
   if (exit.signaled) {
     return "pba-solve was killed by signal " + std::to_string(exit.signal) + " (" +

@@ -8,6 +8,7 @@
 #include <set>
 #include <system_error>
 
+#include "atlas/derived_structure.h"
 #include "atlas/label_volume_io.h"
 #include "atlas/structure_set.h"
 #include "core/atomic_write.h"
@@ -271,6 +272,8 @@ Status AtlasJobs::Complete(const v1::Job& job, const fs::path& result_dir, RunOu
   StructureSet set;
   PBA_RETURN_IF_ERROR(ReadStructureSet(set_dir, &set));
   std::vector<ImportedStructure> structures;
+  std::vector<std::string> base;
+  std::vector<DerivedStructure> derived;
   for (size_t i = 0; i < set.structures.size(); ++i) {
     const StructureEntry& entry = set.structures[i];
     ImportedStructure s;
@@ -285,8 +288,16 @@ Status AtlasJobs::Complete(const v1::Job& job, const fs::path& result_dir, RunOu
     PBA_RETURN_IF_ERROR(MappedFile::Open(s.file, &bytes));
     PBA_RETURN_IF_ERROR(
         CheckGeometryContent("structure '" + entry.name + "'", s.format, bytes->bytes()));
+    if (s.format == StructureFormat::kDerived) {
+      PBA_RETURN_IF_ERROR(ParseDerivedStructure(
+          bytes->bytes(), entry.name, "structure '" + entry.name + "'", &derived.emplace_back()));
+    } else {
+      base.push_back(entry.name);
+    }
     structures.push_back(std::move(s));
   }
+  // What derived structures read is there, as for a commit (derived_check.h).
+  PBA_RETURN_IF_ERROR(OrderDerivedStructures(base, &derived));
   const std::string snapshot_name =
       request.snapshot_name().empty() ? "import " + job.id() : request.snapshot_name();
   const std::string message =

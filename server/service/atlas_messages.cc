@@ -53,6 +53,8 @@ v1::GeometryFormat FormatToProto(StructureFormat format) {
       return v1::OBJ;
     case StructureFormat::kVtk:
       return v1::VTK;
+    case StructureFormat::kDerived:
+      return v1::DERIVED;
   }
   return v1::GEOMETRY_FORMAT_UNSPECIFIED;
 }
@@ -74,8 +76,12 @@ Status FormatFromProto(v1::GeometryFormat format, StructureFormat* out) {
     case v1::VTK:
       *out = StructureFormat::kVtk;
       return Status::Ok();
+    case v1::DERIVED:
+      *out = StructureFormat::kDerived;
+      return Status::Ok();
     default:
-      return Status::InvalidArgument("format", "must be CONTOURS_JSON, NIFTI, STL, OBJ or VTK");
+      return Status::InvalidArgument("format",
+                                     "must be CONTOURS_JSON, NIFTI, STL, OBJ, VTK or DERIVED");
   }
 }
 

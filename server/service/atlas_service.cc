@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "service/atlas_messages.h"
+#include "service/derived_check.h"
 #include "service/geometry_check.h"
 #include "service/geometry_diff.h"
 #include "service/handler.h"
@@ -257,6 +258,8 @@ grpc::Status AtlasServiceImpl::CreateStructure(grpc::ServerContext* context,
     std::unique_ptr<MappedFile> content;
     if (!replayed) {
       PBA_RETURN_IF_ERROR(TakeUpload(user, request->upload_id(), format, &content));
+      PBA_RETURN_IF_ERROR(
+          CheckDerivedStructure(store_, user, ref, format, content->bytes(), "upload_id"));
       PBA_RETURN_IF_ERROR(CheckLockedNeighbours(store_, user, ref, format, content->path()));
       create.geometry = content->bytes();
       create.geometry_file = content.get();
@@ -401,6 +404,8 @@ grpc::Status AtlasServiceImpl::CommitStructure(grpc::ServerContext* context,
     std::unique_ptr<MappedFile> content;
     if (!replayed) {
       PBA_RETURN_IF_ERROR(TakeUpload(user, request->upload_id(), commit.format, &content));
+      PBA_RETURN_IF_ERROR(CheckDerivedStructure(store_, user, commit.structure, commit.format,
+                                                content->bytes(), "upload_id"));
       PBA_RETURN_IF_ERROR(
           CheckLockedNeighbours(store_, user, commit.structure, commit.format, content->path()));
       commit.geometry = content->bytes();
@@ -579,6 +584,10 @@ grpc::Status AtlasServiceImpl::DiffRevisions(grpc::ServerContext* context,
       for (double z : distance.only_in_b_z_mm) contours->add_only_in_to_z_mm(z);
     }
     if (a.content_sha256 == b.content_sha256) return Status::Ok();
+    // A derived revision has no shape of its own, only a recipe.
+    if (a.format == StructureFormat::kDerived || b.format == StructureFormat::kDerived) {
+      return Status::Ok();
+    }
     // The caller gone or the server stopping ends the wait for a slot and
     // the comparison between its phases.
     const auto cancelled = [&] { return context->IsCancelled() || stopping_.load(); };

@@ -13,6 +13,7 @@
 #include <string>
 
 #include "atlas/contours.h"
+#include "atlas/derived_structure.h"
 #include "atlas/label_volume_io.h"
 #include "atlas/surface_io.h"
 #include "core/atomic_write.h"
@@ -163,6 +164,10 @@ Status CheckContent(std::string_view field, StructureFormat format, std::string_
     case StructureFormat::kObj:
     case StructureFormat::kVtk:
       return CheckSurface(field, format, content);
+    case StructureFormat::kDerived: {
+      DerivedStructure derived;
+      return ParseDerivedStructure(content, "derived", std::string(field), &derived);
+    }
   }
   return Status::InvalidArgument(std::string(field), "unknown geometry format");
 }

@@ -15,6 +15,10 @@
 //                  legacy VTK POLYDATA; at least four triangles, every
 //                  edge shared by exactly two, a non-zero enclosed volume,
 //                  points within 500 mm of the origin
+//   derived        the recipe of a derived structure (atlas/derived_structure.h):
+//                  one merge, fill or cut as YAML, no mask file; the
+//                  structures it reads are checked against the project
+//                  apart (derived_check.h)
 // The same readers compose a structure set (atlas/structure_set.h), so what
 // passes here can be meshed.
 // Overlap with neighbours others hold locked is checked apart

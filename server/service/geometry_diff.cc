@@ -172,6 +172,8 @@ Status AddBox(StructureFormat format, std::string_view bytes, const char* field,
       for (const Eigen::Vector3d& p : surface.points) add(p);
       return Status::Ok();
     }
+    case StructureFormat::kDerived:
+      return Status::InvalidArgument(field, "a derived structure has no shape of its own");
   }
   return Status::Internal("unknown geometry format");
 }

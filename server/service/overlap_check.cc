@@ -13,8 +13,14 @@ namespace pba {
 Status CheckLockedNeighbours(AtlasStore& store, const std::string& user, const StructureRef& ref,
                              StructureFormat format, const std::filesystem::path& file,
                              const ChildLimits& limits) {
+  // A derived structure is made from the others when an atlas is composed:
+  // it has no geometry of its own to grow into anyone's.
+  if (format == StructureFormat::kDerived) return Status::Ok();
   std::vector<LockedNeighbour> neighbours;
   PBA_RETURN_IF_ERROR(store.LockedNeighbours(user, ref.project, ref.structure, &neighbours));
+  std::erase_if(neighbours, [](const LockedNeighbour& n) {
+    return n.head.format == StructureFormat::kDerived;
+  });
   if (neighbours.empty()) return Status::Ok();
   // The measuring reads the new geometry, which may be hostile: in a
   // bounded child, which sends back the neighbours it could not measure as

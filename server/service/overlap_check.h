@@ -5,6 +5,8 @@
 // measured on kOverlapVoxelMm voxels (structure_overlap.h), is refused.
 // Neighbours nobody holds, or the committer holds, are not checked: overlap
 // between them is the committer's to resolve, and a build reports it.
+// Derived structures (atlas/derived_structure.h) have no geometry of their
+// own and are neither checked nor checked against.
 #pragma once
 
 #include <filesystem>

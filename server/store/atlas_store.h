@@ -306,6 +306,12 @@ class AtlasStore {
   Status SnapshotFiles(const std::string& user, const std::string& project, int64_t snapshot_id,
                        std::vector<SnapshotFile>* files);
 
+  // Every structure of `project` with its head revision and the head's
+  // geometry file (read-only), by name; viewers may read. What a commit of
+  // a derived structure is checked against (derived_check.h).
+  Status Heads(const std::string& user, const std::string& project,
+               std::vector<SnapshotFile>* heads);
+
   // The structures of `project` other than `except` that someone other than
   // `user` holds locked with an unexpired lease, with their heads: what a
   // commit by `user` must not grow into. Viewers may ask.

@@ -75,6 +75,42 @@ Status AtlasStore::LockedNeighbours(const std::string& user, const std::string& 
   return Status::Ok();
 }
 
+Status AtlasStore::Heads(const std::string& user, const std::string& project,
+                         std::vector<SnapshotFile>* heads) {
+  heads->clear();
+  std::lock_guard lock(mutex_);
+  Caller caller;
+  PBA_RETURN_IF_ERROR(Enter(user, project, Role::kViewer, &caller));
+  Statement stmt;
+  PBA_RETURN_IF_ERROR(
+      db_->Prepare("SELECT s.id, s.name, h.number FROM structures s "
+                   "JOIN structure_revisions h ON h.id = s.head_revision "
+                   "WHERE s.project = ? ORDER BY s.name",
+                   &stmt));
+  stmt.Bind(1, caller.project);
+  struct Row {
+    int64_t id, number;
+    std::string name;
+  };
+  std::vector<Row> rows;
+  while (true) {
+    bool row = false;
+    PBA_RETURN_IF_ERROR(stmt.Step(&row));
+    if (!row) break;
+    rows.push_back({stmt.ColumnInt(0), stmt.ColumnInt(2), stmt.ColumnText(1)});
+  }
+  stmt = Statement();
+  for (const Row& r : rows) {
+    SnapshotFile head;
+    bool found = false;
+    PBA_RETURN_IF_ERROR(ReadRevision({project, r.name}, r.id, r.number, &head.revision, &found));
+    if (!found) return Status::Internal("the head of '" + r.name + "' is missing");
+    head.blob = blobs_->PathOf(head.revision.content_sha256);
+    heads->push_back(std::move(head));
+  }
+  return Status::Ok();
+}
+
 Status AtlasStore::Import(const std::string& user, const std::string& project,
                           const std::string& job_id,
                           const std::vector<ImportedStructure>& structures,

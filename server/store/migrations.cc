@@ -13,6 +13,10 @@ struct Migration {
   int version;
   const char* description;
   const char* sql;
+  // Rebuilds a table (SQLite cannot change a constraint in place): run as
+  // SQLite's "12-step" procedure prescribes, with foreign keys off and
+  // checked before the commit.
+  bool rebuilds_tables = false;
 };
 
 // Job states are stored by their pba.v1.Job.State names so that the file
@@ -286,12 +290,114 @@ CREATE INDEX jobs_by_project ON jobs (project, number);
     {8, "jobs: MPI ranks", R"sql(
 ALTER TABLE jobs ADD COLUMN ranks INTEGER NOT NULL DEFAULT 0;
 )sql"},
+    // Derived structures (atlas/derived_structure.h): a revision's geometry
+    // may be a recipe, format 'derived'. The CHECK on geometry_format is
+    // part of the table, so the table is rebuilt with every row, id and
+    // index as it was, and its triggers made again.
+    {9, "structure revisions: the derived format", R"sql(
+CREATE TABLE structure_revisions_v9 (
+  id INTEGER PRIMARY KEY,
+  structure INTEGER NOT NULL REFERENCES structures (id),
+  number INTEGER NOT NULL CHECK (number >= 1),
+  parent INTEGER,
+  author INTEGER NOT NULL REFERENCES users (id),
+  time_us INTEGER NOT NULL,
+  kind TEXT NOT NULL CHECK (kind IN ('create', 'commit', 'metadata', 'revert')),
+  message TEXT NOT NULL,
+  content_sha256 TEXT NOT NULL CHECK (length(content_sha256) = 64),
+  geometry_format TEXT NOT NULL
+    CHECK (geometry_format IN ('contours_json', 'nifti', 'stl', 'obj', 'vtk', 'derived')),
+  size_bytes INTEGER NOT NULL CHECK (size_bytes >= 0),
+  material_json TEXT NOT NULL,
+  colour_r INTEGER NOT NULL CHECK (colour_r BETWEEN 0 AND 255),
+  colour_g INTEGER NOT NULL CHECK (colour_g BETWEEN 0 AND 255),
+  colour_b INTEGER NOT NULL CHECK (colour_b BETWEEN 0 AND 255),
+  group_path TEXT NOT NULL,
+  request_id TEXT,
+  UNIQUE (structure, number),
+  UNIQUE (id, structure),
+  CHECK ((number = 1) = (parent IS NULL)),
+  FOREIGN KEY (parent, structure) REFERENCES structure_revisions (id, structure)
+);
+INSERT INTO structure_revisions_v9 (id, structure, number, parent, author, time_us, kind,
+    message, content_sha256, geometry_format, size_bytes, material_json, colour_r, colour_g,
+    colour_b, group_path, request_id)
+  SELECT id, structure, number, parent, author, time_us, kind, message, content_sha256,
+    geometry_format, size_bytes, material_json, colour_r, colour_g, colour_b, group_path,
+    request_id
+  FROM structure_revisions;
+DROP TABLE structure_revisions;
+ALTER TABLE structure_revisions_v9 RENAME TO structure_revisions;
+CREATE INDEX structure_revisions_by_hash ON structure_revisions (content_sha256);
+CREATE UNIQUE INDEX structure_revisions_by_request
+  ON structure_revisions (structure, request_id) WHERE request_id IS NOT NULL;
+CREATE TRIGGER structure_revisions_chain BEFORE INSERT ON structure_revisions
+WHEN NEW.parent IS NOT NULL AND
+     (SELECT number FROM structure_revisions WHERE id = NEW.parent) IS NOT NEW.number - 1
+BEGIN
+  SELECT RAISE(ABORT, 'a revision''s parent must be the previous revision of its structure');
+END;
+CREATE TRIGGER structure_revisions_no_update BEFORE UPDATE ON structure_revisions
+BEGIN
+  SELECT RAISE(ABORT, 'structure revisions are immutable');
+END;
+CREATE TRIGGER structure_revisions_no_delete BEFORE DELETE ON structure_revisions
+BEGIN
+  SELECT RAISE(ABORT, 'structure revisions are never deleted');
+END;
+)sql",
+     true},
 };
 
 int64_t NowMicros() {
   return std::chrono::duration_cast<std::chrono::microseconds>(
              std::chrono::system_clock::now().time_since_epoch())
       .count();
+}
+
+// The first row PRAGMA foreign_key_check finds, as text; "" for none.
+Status DanglingForeignKey(Database& db, std::string* dangling) {
+  Statement stmt;
+  PBA_RETURN_IF_ERROR(db.Prepare("PRAGMA foreign_key_check", &stmt));
+  bool row = false;
+  PBA_RETURN_IF_ERROR(stmt.Step(&row));
+  *dangling = row ? stmt.ColumnText(0) + " row " + std::to_string(stmt.ColumnInt(1)) + " -> " +
+                        stmt.ColumnText(2)
+                  : "";
+  return Status::Ok();
+}
+
+Status ApplyMigrationSql(Database& db, const Migration& migration) {
+  Transaction transaction(db);
+  PBA_RETURN_IF_ERROR(transaction.status());
+  PBA_RETURN_IF_ERROR(db.Exec(migration.sql));
+  if (migration.rebuilds_tables) {
+    std::string dangling;
+    PBA_RETURN_IF_ERROR(DanglingForeignKey(db, &dangling));
+    if (!dangling.empty()) {
+      return Status::Internal("schema version " + std::to_string(migration.version) +
+                              " would leave a foreign key dangling: " + dangling);
+    }
+  }
+  Statement stmt;
+  PBA_RETURN_IF_ERROR(db.Prepare(
+      "INSERT INTO schema_version (version, description, applied_time_us) VALUES (?, ?, ?)",
+      &stmt));
+  PBA_RETURN_IF_ERROR(stmt.Bind(1, int64_t{migration.version})
+                          .Bind(2, migration.description)
+                          .Bind(3, NowMicros())
+                          .Run());
+  return transaction.Commit();
+}
+
+// One migration in its own transaction; a rebuild with foreign keys off
+// (a no-op inside a transaction, so around it) and on again after.
+Status ApplyMigration(Database& db, const Migration& migration) {
+  if (!migration.rebuilds_tables) return ApplyMigrationSql(db, migration);
+  PBA_RETURN_IF_ERROR(db.Exec("PRAGMA foreign_keys=OFF"));
+  const Status applied = ApplyMigrationSql(db, migration);
+  PBA_RETURN_IF_ERROR(db.Exec("PRAGMA foreign_keys=ON"));
+  return applied;
 }
 
 }  // namespace
@@ -307,7 +413,7 @@ Status ReadSchemaVersion(Database& db, int* version) {
   return Status::Ok();
 }
 
-Status ApplyMigrations(Database& db) {
+Status ApplyMigrations(Database& db, int up_to) {
   PBA_RETURN_IF_ERROR(
       db.Exec("CREATE TABLE IF NOT EXISTS schema_version (version INTEGER PRIMARY KEY, "
               "description TEXT NOT NULL, applied_time_us INTEGER NOT NULL)"));
@@ -321,18 +427,8 @@ Status ApplyMigrations(Database& db) {
   }
   for (const Migration& migration : kMigrations) {
     if (migration.version <= current) continue;
-    Transaction transaction(db);
-    PBA_RETURN_IF_ERROR(transaction.status());
-    PBA_RETURN_IF_ERROR(db.Exec(migration.sql));
-    Statement stmt;
-    PBA_RETURN_IF_ERROR(db.Prepare(
-        "INSERT INTO schema_version (version, description, applied_time_us) VALUES (?, ?, ?)",
-        &stmt));
-    PBA_RETURN_IF_ERROR(stmt.Bind(1, int64_t{migration.version})
-                            .Bind(2, migration.description)
-                            .Bind(3, NowMicros())
-                            .Run());
-    PBA_RETURN_IF_ERROR(transaction.Commit());
+    if (up_to > 0 && migration.version > up_to) break;
+    PBA_RETURN_IF_ERROR(ApplyMigration(db, migration));
   }
   return Status::Ok();
 }

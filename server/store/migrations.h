@@ -14,7 +14,8 @@ int LatestSchemaVersion();
 
 // Brings `db` to LatestSchemaVersion(). Refuses a database written by a newer
 // server (a version above the latest known) rather than guess at its schema.
-Status ApplyMigrations(Database& db);
+// `up_to` > 0 stops at that version (for tests of an upgrade).
+Status ApplyMigrations(Database& db, int up_to = 0);
 
 // The highest applied version; 0 for a new database.
 Status ReadSchemaVersion(Database& db, int* version);

@@ -1,10 +1,13 @@
-// Label algebra steps as YAML (ParseLabelSteps) and as a cache key's
-// canonical text (DescribeLabelSteps, LabelStepFiles): label_algebra.h.
+// Label algebra steps as YAML (ParseLabelSteps, and one step as a derived
+// structure's recipe: ParseDerivedStructure) and as a cache key's canonical
+// text (DescribeLabelSteps, LabelStepFiles): label_algebra.h,
+// derived_structure.h.
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
 #include <cmath>
 
+#include "atlas/derived_structure.h"
 #include "atlas/label_algebra.h"
 #include "atlas/label_table.h"
 #include "core/format.h"
@@ -204,33 +207,96 @@ Status ParseStep(const YAML::Node& node, const std::string& at, const std::files
       "unknown step (known: keep, drop, merge, rename, fill, overlay, resample, cut, islands)");
 }
 
+// `yaml` loaded, once checked for what a YAML load must not meet
+// (core/yaml_guard.h).
+Status LoadYaml(std::string_view yaml, const std::string& field, YAML::Node* root) {
+  PBA_RETURN_IF_ERROR(CheckYamlText(yaml, field));
+  try {
+    *root = YAML::Load(std::string(yaml));
+  } catch (const YAML::Exception& e) {
+    return Status::InvalidArgument(field, std::string("is not valid YAML: ") + e.what());
+  }
+  return Status::Ok();
+}
+
 std::string Names(const std::vector<std::string>& names) {
   std::string out = Format("%zu", names.size());
   for (const std::string& n : names) out += Format(" %zu:", n.size()) + n;
   return out;
 }
 
+Status ParseDerivedStep(const YAML::Node& root, const std::string& name, const std::string& field,
+                        DerivedStructure* derived) {
+  const std::string kind = root.begin()->first.as<std::string>();
+  if (kind != "merge" && kind != "fill" && kind != "cut") {
+    return Status::InvalidArgument(field + "." + kind,
+                                   "a derived structure is made by merge, fill or cut");
+  }
+  const std::string in = field + "." + kind;
+  // The step as label algebra writes it, with the structure's name. (A
+  // node assigned to changes every node that shares it: each is made once.)
+  const YAML::Node given = root.begin()->second;
+  const bool short_merge = kind == "merge" && (given.IsSequence() || given.IsScalar());
+  if (!given.IsNull() && !given.IsMap() && !short_merge) {
+    return Status::InvalidArgument(in, "expected a map");
+  }
+  YAML::Node m = given.IsMap() ? YAML::Clone(given) : YAML::Node(YAML::NodeType::Map);
+  if (short_merge) m["structures"] = YAML::Clone(given);
+  if (m["name"]) {
+    return Status::InvalidArgument(in + ".name",
+                                   "a derived structure's step takes the structure's own name");
+  }
+  if (m["mask"]) {
+    return Status::InvalidArgument(
+        in + ".mask", "a derived structure is made from the set alone; it reads no mask file");
+  }
+  m["name"] = name;
+  YAML::Node step(YAML::NodeType::Map);
+  step[kind] = m;
+  DerivedStructure out;
+  out.name = name;
+  out.field = field;
+  PBA_RETURN_IF_ERROR(ParseStep(step, field, {}, &out.step));
+  *derived = std::move(out);
+  return Status::Ok();
+}
+
 }  // namespace
 
 Status ParseLabelSteps(std::string_view yaml, const std::string& field,
                        const std::filesystem::path& base_dir, std::vector<LabelStep>* steps) {
-  PBA_RETURN_IF_ERROR(CheckYamlText(yaml, field));
   YAML::Node root;
-  try {
-    root = YAML::Load(std::string(yaml));
-  } catch (const YAML::Exception& e) {
-    return Status::InvalidArgument(field, std::string("is not valid YAML: ") + e.what());
-  }
+  PBA_RETURN_IF_ERROR(LoadYaml(yaml, field, &root));
   if (!root.IsSequence()) {
     return Status::InvalidArgument(field,
                                    "expected a list of steps (- keep: [...], - fill: {...})");
   }
   std::vector<LabelStep> out(root.size());
-  for (std::size_t i = 0; i < root.size(); ++i) {
-    PBA_RETURN_IF_ERROR(ParseStep(root[i], Format("%s[%zu]", field.c_str(), i), base_dir, &out[i]));
+  try {  // a key that is not text (a list, a map) throws
+    for (std::size_t i = 0; i < root.size(); ++i) {
+      PBA_RETURN_IF_ERROR(
+          ParseStep(root[i], Format("%s[%zu]", field.c_str(), i), base_dir, &out[i]));
+    }
+  } catch (const YAML::Exception& e) {
+    return Status::InvalidArgument(field, std::string("malformed: ") + e.what());
   }
   *steps = std::move(out);
   return Status::Ok();
+}
+
+Status ParseDerivedStructure(std::string_view yaml, const std::string& name,
+                             const std::string& field, DerivedStructure* derived) {
+  YAML::Node root;
+  PBA_RETURN_IF_ERROR(LoadYaml(yaml, field, &root));
+  if (!root.IsMap() || root.size() != 1) {
+    return Status::InvalidArgument(
+        field, "expected one step a derived structure is made by: merge, fill or cut");
+  }
+  try {  // a key that is not text (a list, a map) throws
+    return ParseDerivedStep(root, name, field, derived);
+  } catch (const YAML::Exception& e) {
+    return Status::InvalidArgument(field, std::string("malformed: ") + e.what());
+  }
 }
 
 std::string DescribeLabelSteps(const std::vector<LabelStep>& steps) {

@@ -7,9 +7,11 @@
 
 namespace pba {
 
-enum class StructureFormat { kContours, kNifti, kStl, kObj, kVtk };
+// kDerived: no geometry of its own, a label step over the set's other
+// structures (derived_structure.h), as YAML.
+enum class StructureFormat { kContours, kNifti, kStl, kObj, kVtk, kDerived };
 
-// "contours_json", "nifti", "stl", "obj", "vtk": the words of a structure
+// "contours_json", "nifti", "stl", "obj", "vtk", "derived": the words of a structure
 // set's manifest and of the store's database.
 inline const char* StructureFormatName(StructureFormat format) {
   switch (format) {
@@ -23,12 +25,14 @@ inline const char* StructureFormatName(StructureFormat format) {
       return "obj";
     case StructureFormat::kVtk:
       return "vtk";
+    case StructureFormat::kDerived:
+      return "derived";
   }
   return "unknown";
 }
 
 // The file name extension the readers go by: ".json", ".nii.gz" (".nii"
-// for a NIfTI that is not gzip-compressed), ".stl", ".obj", ".vtk".
+// for a NIfTI that is not gzip-compressed), ".stl", ".obj", ".vtk", ".yaml".
 inline const char* StructureFormatExtension(StructureFormat format, bool gzipped) {
   switch (format) {
     case StructureFormat::kContours:
@@ -41,14 +45,17 @@ inline const char* StructureFormatExtension(StructureFormat format, bool gzipped
       return ".obj";
     case StructureFormat::kVtk:
       return ".vtk";
+    case StructureFormat::kDerived:
+      return ".yaml";
   }
   return "";
 }
 
 // False, leaving *format alone, for any other word.
 inline bool ParseStructureFormat(std::string_view name, StructureFormat* format) {
-  for (StructureFormat f : {StructureFormat::kContours, StructureFormat::kNifti,
-                            StructureFormat::kStl, StructureFormat::kObj, StructureFormat::kVtk}) {
+  for (StructureFormat f :
+       {StructureFormat::kContours, StructureFormat::kNifti, StructureFormat::kStl,
+        StructureFormat::kObj, StructureFormat::kVtk, StructureFormat::kDerived}) {
     if (name == StructureFormatName(f)) {
       *format = f;
       return true;

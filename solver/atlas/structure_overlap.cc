@@ -59,6 +59,14 @@ Status Place(const StructureGeometry& g, const fs::path& dir, const std::string&
 // `a_first` says which of the two wins them.
 Status ComposePair(const StructureGeometry& a, const StructureGeometry& b, double voxel_mm,
                    const fs::path& scratch, bool a_first, ComposedAtlas* atlas) {
+  for (const auto& [name, geometry] : {std::pair{"a", &a}, std::pair{"b", &b}}) {
+    if (geometry->format == StructureFormat::kDerived) {
+      return Status::InvalidArgument(
+          name,
+          "a derived structure has no shape of its own (it is made from the others when "
+          "an atlas is composed)");
+    }
+  }
   StructureSet set;
   int colour = 1;
   for (const auto& [name, geometry] :

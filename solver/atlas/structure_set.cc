@@ -15,6 +15,7 @@
 #include <tuple>
 
 #include "atlas/contours.h"
+#include "atlas/derived_structure.h"
 #include "atlas/label_volume_io.h"
 #include "atlas/loft.h"
 #include "atlas/surface_io.h"
@@ -593,7 +594,8 @@ Status ReadStructureSet(const fs::path& dir, StructureSet* set) {
       const std::string format = s["format"] ? s["format"].as<std::string>() : "";
       if (!ParseStructureFormat(format, &e.format)) {
         return bad(at + ".format",
-                   who + "'" + format + "' is not a format (contours_json, nifti, stl, obj, vtk)");
+                   who + "'" + format +
+                       "' is not a format (contours_json, nifti, stl, obj, vtk, derived)");
       }
       uint8_t rgb[3] = {0, 0, 0};
       const std::string colour = s["colour"] ? s["colour"].as<std::string>() : "";
@@ -680,15 +682,85 @@ Status WriteStructureSet(const StructureSet& set, const fs::path& dir) {
   return AtomicWriteText(dir / kStructureSetManifest, out);
 }
 
-Status ComposeStructureSet(const fs::path& dir, const StructureSet& set,
+namespace {
+
+// The derived structures of `set` (their recipes read and parsed), in the
+// order they are made; `base` gets the others.
+Status SplitDerived(const fs::path& dir, const StructureSet& set, StructureSet* base,
+                    std::vector<DerivedStructure>* derived) {
+  base->structures.clear();
+  std::vector<std::string> base_names;
+  for (size_t i = 0; i < set.structures.size(); ++i) {
+    const StructureEntry& e = set.structures[i];
+    if (e.format != StructureFormat::kDerived) {
+      base->structures.push_back(e);
+      base_names.push_back(e.name);
+      continue;
+    }
+    const std::string field = Format("structures[%zu]", i);
+    std::string content;
+    PBA_RETURN_IF_ERROR(ReadFile(dir / e.file, &content));
+    DerivedStructure d;
+    PBA_RETURN_IF_ERROR(ParseDerivedStructure(content, e.name, field, &d));
+    d.field = field;
+    derived->push_back(std::move(d));
+  }
+  if (base->structures.empty() && !derived->empty()) {
+    return Status::InvalidArgument("structures",
+                                   "every structure is derived: nothing to derive them from");
+  }
+  return OrderDerivedStructures(base_names, derived);
+}
+
+// Makes the derived structures on the composed volume, each in the colour
+// the set gives it.
+Status MakeDerived(const StructureSet& set, const std::vector<DerivedStructure>& derived,
+                   ComposedAtlas* atlas) {
+  LabelAtlas work{std::move(*atlas->volume), std::move(atlas->colours)};
+  for (const DerivedStructure& d : derived) {
+    std::vector<std::string> notes;
+    if (Status s = ApplyLabelSteps({d.step}, &work, &notes); !s.ok()) {
+      return Status::InvalidArgument(d.field, "derived structure '" + d.name + "': " + s.message());
+    }
+    for (const std::string& note : notes) {
+      atlas->notes.push_back("derived structure '" + d.name + "' (" + LabelStepName(d.step.kind) +
+                             "): " + note.substr(note.find(": ") + 2));
+    }
+    const StructureEntry& e =
+        *std::find_if(set.structures.begin(), set.structures.end(),
+                      [&](const StructureEntry& s) { return s.name == d.name; });
+    std::vector<ColourEntry> entries = work.table.entries();
+    int64_t voxels = 0;
+    for (ColourEntry& c : entries) {
+      if (c.name != d.name) continue;
+      c.r = e.r;
+      c.g = e.g;
+      c.b = e.b;
+      for (uint16_t l : work.volume.labels()) voxels += l == c.label;
+    }
+    PBA_RETURN_IF_ERROR(ColourTable::FromEntries(std::move(entries), &work.table));
+    atlas->structure_mm3[d.name] = voxels * work.volume.voxel_volume_mm3();
+  }
+  atlas->volume = std::move(work.volume);
+  atlas->colours = std::move(work.table);
+  return Status::Ok();
+}
+
+}  // namespace
+
+Status ComposeStructureSet(const fs::path& dir, const StructureSet& whole,
                            const ComposeOptions& options, ComposedAtlas* atlas) {
-  if (set.structures.empty()) return Status::InvalidArgument("structures", "no structures");
-  if (set.structures.size() > 65535) {
+  if (whole.structures.empty()) return Status::InvalidArgument("structures", "no structures");
+  if (whole.structures.size() > 65535) {
     return Status::InvalidArgument("structures", "more than 65535 structures");
   }
   if (options.pixel_size_mm < 0 || options.pixel_size_mm > 10) {
     return Status::InvalidArgument("pixel_size_mm", "must be 0 (default) or in (0, 10]");
   }
+  // Derived structures are made on the voxels of the others.
+  StructureSet set;
+  std::vector<DerivedStructure> derived;
+  PBA_RETURN_IF_ERROR(SplitDerived(dir, whole, &set, &derived));
   ComposedAtlas result;
   const std::vector<int> order = NameOrder(set);
   std::vector<ColourEntry> entries;
@@ -702,10 +774,11 @@ Status ComposeStructureSet(const fs::path& dir, const StructureSet& set,
   const bool all_contours =
       std::all_of(set.structures.begin(), set.structures.end(),
                   [](const StructureEntry& e) { return e.format == StructureFormat::kContours; });
-  if (all_contours && !options.force_volume) {
+  if (all_contours && !options.force_volume && derived.empty()) {
     PBA_RETURN_IF_ERROR(ComposePlates(set, loaded, order, options, &result));
   } else {
     PBA_RETURN_IF_ERROR(ComposeVolume(set, loaded, order, options, &result));
+    PBA_RETURN_IF_ERROR(MakeDerived(whole, derived, &result));
   }
   *atlas = std::move(result);
   return Status::Ok();

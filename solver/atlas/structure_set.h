@@ -11,13 +11,14 @@
 //    "project": "...", "snapshot": 3, "snapshot_name": "...",   (optional)
 //    "structures": [
 //      {"name": "Putamen", "file": "Putamen.json",
-//       "format": "contours_json" | "nifti" | "stl" | "obj" | "vtk",
+//       "format": "contours_json" | "nifti" | "stl" | "obj" | "vtk" | "derived",
 //       "colour": "r,g,b", "sha256": "<hex>",          (sha256 optional)
 //       "revision": 4, "group_path": "...", "material_json": "{...}"},
 //      ...]}
 // `file` is relative to the directory, a plain file name. A nifti mask is
 // every voxel with a non-zero value; a surface must be closed (its inside
-// is where a ray crosses it an odd number of times).
+// is where a ray crosses it an odd number of times). A derived structure's
+// file is its recipe, a label step over the others (derived_structure.h).
 #pragma once
 
 #include <cstdint>
@@ -121,6 +122,10 @@ struct ComposeOptions {
 // pixel for pixel. Contours drawn at a single height are refused when every
 // structure is (a loft needs two plates); in a volume such a structure is
 // lofted to nothing a voxel above and below its plate.
+// Derived structures make it a volume: they are made on it once the others
+// are in, in their order (OrderDerivedStructures), each under the lowest
+// label it takes (a merge) or a free one, in its manifest colour, with a
+// note saying what it made; they take part in no overlap.
 struct ComposedOverlap {
   std::string kept, lost;  // the structure that keeps the voxels, and the other
   double mm3 = 0;

@@ -11,9 +11,12 @@
 
 #include "atlas/atlas_build.h"
 #include "atlas/atlas_mesh_cache.h"
+#include "atlas/derived_structure.h"
 #include "atlas/label_table.h"
+#include "atlas/plates.h"
 #include "atlas/structure_set.h"
 #include "core/format.h"
+#include "core/yaml_guard.h"
 #include "mesh/primitive_mesher.h"
 #include "mesh/quadratic.h"
 #include "mesh/region_faces.h"
@@ -268,27 +271,55 @@ std::vector<std::string> KnownAtlasStructures(const AtlasSpec& a) {
   if (IsStructureSetDir(a.source)) {
     StructureSet set;
     if (!ReadStructureSet(a.source, &set).ok()) return {};
-    for (const StructureEntry& entry : set.structures) names.push_back(entry.name);
-  } else if (!std::filesystem::is_directory(a.source, ec) && !a.colour_table.empty()) {
+    // Derived structures are made from the others: a merge takes its
+    // structures away.
+    std::vector<DerivedStructure> derived;
+    for (const StructureEntry& entry : set.structures) {
+      if (entry.format != StructureFormat::kDerived) {
+        names.push_back(entry.name);
+        continue;
+      }
+      std::string text;
+      if (!ReadYamlFileText(std::filesystem::path(a.source) / entry.file, entry.name, &text).ok() ||
+          !ParseDerivedStructure(text, entry.name, entry.name, &derived.emplace_back()).ok()) {
+        return {};  // the build says what is wrong
+      }
+    }
+    if (!OrderDerivedStructures(names, &derived).ok()) return {};
+    for (const DerivedStructure& d : derived) names = NamesAfterStep(d.step, std::move(names));
+  } else if (std::filesystem::is_directory(a.source, ec)) {
+    PlateStack plates;  // a plate directory: its colour table
+    if (!ReadPlates(a.source, &plates).ok()) return {};
+    for (const ColourEntry& entry : plates.colours.entries()) names.push_back(entry.name);
+  } else if (!a.colour_table.empty()) {
     ColourTable table;
     LabelTableRead read;
     if (!ReadLabelTable(a.colour_table, &table, &read).ok()) return {};
     for (const ColourEntry& entry : table.entries()) names.push_back(entry.name);
   }
-  // The names label algebra adds (those it takes away are found missing
-  // when the atlas is built).
+  // The names label algebra leaves: those it adds, less those it takes
+  // (keep, drop, merge, rename).
   std::vector<LabelStep> steps;
   if (names.empty() || a.label_steps_json.empty() ||
       !ParseLabelSteps(a.label_steps_json, "labels", {}, &steps).ok()) {
     return names;
   }
   for (const LabelStep& step : steps) {
-    if (!step.name.empty()) names.push_back(step.name);
+    names = NamesAfterStep(step, std::move(names));
     if (step.kind != LabelStep::Kind::kOverlay) continue;
     ColourTable table;
     LabelTableRead read;
     if (!ReadLabelTable(step.table, &table, &read).ok()) return {};
-    for (const ColourEntry& entry : table.entries()) names.push_back(entry.name);
+    for (const ColourEntry& entry : table.entries()) {
+      const bool laid =
+          step.structures.empty() ||
+          std::any_of(step.structures.begin(), step.structures.end(), [&](const std::string& s) {
+            return s == entry.name || InStructureGroup(entry.name, s);
+          });
+      if (laid && std::find(names.begin(), names.end(), entry.name) == names.end()) {
+        names.push_back(entry.name);
+      }
+    }
   }
   return names;
 }

@@ -4,7 +4,7 @@
 // job, the snapshot exported and solved again locally to the same mesh; a
 // label volume imported, and a second import of the same structures failing
 // without writing anything; AAL, a real atlas, imported, checked against at
-// the submit and exported whole.
+// the submit and exported whole; a derived structure made in a job's atlas.
 
 #include <gtest/gtest.h>
 
@@ -142,6 +142,77 @@ TEST_F(CliAtlasJobsTest, ImportRunAgainstTheSnapshotExportAndReproduce) {
   const std::string summary = ReadFile(dir_.path() / "local" / "summary.json");
   EXPECT_EQ(Find(summary, R"re("elements": "([0-9]+)")re"), elements) << summary;
   EXPECT_NE(summary.find("atlas of snapshot 1 of project demo"), std::string::npos) << summary;
+}
+
+// A derived structure in the store: created with the real client from a
+// recipe, refused when it reads a structure the project lacks, pinned by a
+// snapshot and made when a job's atlas is composed; the structures its
+// merge takes are gone from that atlas, and a scene naming one fails
+// saying so.
+TEST_F(CliAtlasJobsTest, ADerivedStructureIsMadeWhenASnapshotIsMeshed) {
+  const RunResult imported =
+      Pba({"atlas", "import", "-p", "demo", "--synthetic", "--structure", "Putamen", "--structure",
+           "Globus pallidus lateralis", "--structure", "Nucleus caudatus"});
+  ASSERT_EQ(imported.exit_code, 0) << imported.out << imported.err;
+  const fs::path recipe = dir_.path() / "lentiform.yaml";
+  std::ofstream(recipe) << "merge: [Putamen, Globus pallidus lateralis]\n";
+  const fs::path bad = dir_.path() / "bad.yaml";
+  std::ofstream(bad) << "merge: [Putamen, Pallidum]\n";
+  const RunResult refused =
+      Pba({"atlas", "create", "-p", "demo", "Bad", bad.string(), "--colour", "1,2,3"});
+  EXPECT_NE(refused.exit_code, 0);
+  EXPECT_NE(refused.err.find("reads 'Pallidum', which is not among the structures"),
+            std::string::npos)
+      << refused.err;
+  const RunResult created = Pba({"atlas", "create", "-p", "demo", "Lentiform nucleus",
+                                 recipe.string(), "--colour", "200,120,40"});
+  ASSERT_EQ(created.exit_code, 0) << created.out << created.err;
+  const RunResult listed = Pba({"atlas", "list", "-p", "demo"});
+  EXPECT_NE(listed.out.find("Lentiform nucleus"), std::string::npos) << listed.out;
+  EXPECT_EQ(listed.out.find("Bad"), std::string::npos) << listed.out;
+  const RunResult snapshot = Pba({"atlas", "snapshot", "create", "-p", "demo", "--name", "lent"});
+  ASSERT_EQ(snapshot.exit_code, 0) << snapshot.out << snapshot.err;
+
+  // The lentiform nucleus pushed as one structure.
+  const fs::path scene = dir_.path() / "lentiform_push.yaml";
+  std::string text = ReadFile(std::string(PBA_EXAMPLES_DIR) + "/basal_ganglia_push.yaml");
+  text =
+      std::regex_replace(text, std::regex("structures: \\[Putamen, Globus pallidus lateralis\\]"),
+                         "structures: [Lentiform nucleus]");
+  text = std::regex_replace(text, std::regex("surface:Putamen"), "surface:Lentiform nucleus");
+  std::ofstream(scene) << text;
+  const RunResult job =
+      Pba({"--json", "job", "submit", scene.string(), "--snapshot", "demo/lent", "--wait"});
+  ASSERT_EQ(job.exit_code, 0) << job.out << job.err;
+  EXPECT_NE(job.out.find("(4 structures)"), std::string::npos) << job.out;
+  EXPECT_NE(job.out.find("derived structure 'Lentiform nucleus' (merge)"), std::string::npos)
+      << job.out;
+
+  // The putamen is part of it now: a scene naming it fails at the build,
+  // naming it.
+  const RunResult putamen =
+      Pba({"--json", "job", "submit", std::string(PBA_EXAMPLES_DIR) + "/basal_ganglia_push.yaml",
+           "--snapshot", "demo/lent", "--wait"});
+  EXPECT_EQ(putamen.exit_code, kJobFailed) << putamen.out << putamen.err;
+  EXPECT_TRUE(
+      std::regex_search(putamen.out + putamen.err,
+                        std::regex(R"(the atlas \(2 structures\) has no structure \\?"Putamen)")))
+      << putamen.out << putamen.err;
+  // The reason says where once.
+  EXPECT_EQ(putamen.out.find("structures[0]: geometry.atlas.structures[0]"), std::string::npos)
+      << putamen.out;
+
+  // Exported, the recipe travels as a file of the set.
+  const fs::path exported = dir_.path() / "exported";
+  ASSERT_EQ(Pba({"atlas", "export", "-p", "demo", "lent", "-o", exported.string()}).exit_code, 0);
+  StructureSet set;
+  ASSERT_TRUE(ReadStructureSet(exported, &set).ok());
+  const auto lentiform =
+      std::find_if(set.structures.begin(), set.structures.end(),
+                   [](const StructureEntry& e) { return e.name == "Lentiform nucleus"; });
+  ASSERT_NE(lentiform, set.structures.end());
+  EXPECT_EQ(lentiform->format, StructureFormat::kDerived);
+  EXPECT_EQ(ReadFile(exported / lentiform->file), ReadFile(recipe));
 }
 
 TEST_F(CliAtlasJobsTest, ALabelVolumeImportAndARepeatThatFailsWritingNothing) {

@@ -642,11 +642,14 @@ std::vector<std::string> FaceSetNames(const GeometrySpec& geometry);
 int PlaneNormalAxis(const GeometrySpec& geometry, const std::string& set);
 
 // The structure names of a scene atlas's source where they can be read
-// before meshing: a structure set's manifest, a label volume's table (in
-// any format label_table.h reads). None for the synthetic atlas (its names
-// are built in), a plate directory, a label volume without a table, or a
-// source that cannot be read (the build then says what is wrong): for
-// AtlasSpec::known_structures.
+// before meshing: a structure set's manifest (less what its derived merges
+// take, with the derived structures), a plate directory's colour table, a
+// label volume's table (in any format label_table.h reads); then as the
+// scene's label steps leave them (NamesAfterStep: keep, drop, merge and
+// rename take names away, fill, cut and overlay add them). None for the
+// synthetic atlas (its names are built in), a label volume without a
+// table, or a source that cannot be read (the build then says what is
+// wrong): for AtlasSpec::known_structures.
 std::vector<std::string> KnownAtlasStructures(const AtlasSpec& atlas);
 
 // Checks everything that can be checked without meshing: a geometry and a

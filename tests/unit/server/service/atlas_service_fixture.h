@@ -10,6 +10,7 @@
 #include <fstream>
 #include <map>
 #include <memory>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -43,6 +44,18 @@ inline std::string Contours(size_t bytes, int seed) {
   }
   json += "]]}]}";
   return json;
+}
+
+// A square [x0, x1] x [0, 10] mm drawn on plates at z = 0 and 4 mm.
+inline std::string Square(double x0, double x1) {
+  std::ostringstream out;
+  out << R"({"plates": [)";
+  for (double z : {0.0, 4.0}) {
+    out << (z > 0 ? ", " : "") << R"({"z_mm": )" << z << R"(, "polygons": [[[)" << x0 << ", 0], ["
+        << x1 << ", 0], [" << x1 << ", 10], [" << x0 << ", 10]]]}";
+  }
+  out << "]}";
+  return out.str();
 }
 
 #define EXPECT_CODE(expr, expected_code, fragment)                               \
@@ -158,11 +171,12 @@ class AtlasServiceTest : public ::testing::Test {
   }
 
   grpc::Status Create(const std::string& user, const std::string& name, const std::string& content,
-                      v1::Revision* revision = nullptr) {
+                      v1::Revision* revision = nullptr,
+                      v1::GeometryFormat format = v1::CONTOURS_JSON) {
     v1::CreateStructureRequest request;
     request.set_project("atlas");
     request.set_name(name);
-    request.set_format(v1::CONTOURS_JSON);
+    request.set_format(format);
     request.mutable_metadata()->set_group_path("thorax");
     request.mutable_metadata()->set_material_json("{\"model\": \"neo_hookean\"}");
     request.set_upload_id(Upload(user, content));
@@ -190,13 +204,14 @@ class AtlasServiceTest : public ::testing::Test {
 
   grpc::Status Commit(const std::string& user, const std::string& lock_id, int64_t base,
                       const std::string& content, v1::Revision* revision = nullptr,
-                      const std::string& structure = "lung") {
+                      const std::string& structure = "lung",
+                      v1::GeometryFormat format = v1::CONTOURS_JSON) {
     v1::CommitStructureRequest request;
     request.set_project("atlas");
     request.set_structure(structure);
     request.set_lock_id(lock_id);
     request.set_base_revision(base);
-    request.set_format(v1::CONTOURS_JSON);
+    request.set_format(format);
     request.set_upload_id(Upload(user, content));
     request.set_message("edit by " + user);
     v1::Revision ignored;

@@ -3,24 +3,10 @@
 // locked is refused naming it, the holder and the overlap; the same
 // geometry goes through once the lock is released, or when the committer
 // holds the neighbour.
-#include <sstream>
-
 #include "unit/server/service/atlas_service_fixture.h"
 
 namespace pba::service_test {
 namespace {
-
-// A square [x0, x1] x [0, 10] mm drawn on plates at z = 0 and 4 mm.
-std::string Square(double x0, double x1) {
-  std::ostringstream out;
-  out << R"({"plates": [)";
-  for (double z : {0.0, 4.0}) {
-    out << (z > 0 ? ", " : "") << R"({"z_mm": )" << z << R"(, "polygons": [[[)" << x0 << ", 0], ["
-        << x1 << ", 0], [" << x1 << ", 10], [" << x0 << ", 10]]]}";
-  }
-  out << "]}";
-  return out.str();
-}
 
 TEST_F(AtlasServiceTest, ACommitIntoANeighbourSomeoneElseHoldsIsRefused) {
   ASSERT_RPC(Create("bob", "left", Square(0, 10)));

@@ -330,5 +330,88 @@ TEST(AtlasStoreUpgrade, AVersionOneDatabaseIsMigratedInPlace) {
   EXPECT_EQ(stmt.ColumnInt(0), 1);
 }
 
+// A pba.db of schema version 8 with revisions, a snapshot and the audit
+// log is rebuilt for the derived format (version 9) with every row, id
+// and rule kept.
+TEST(AtlasStoreUpgrade, AVersionEightDatabaseTakesDerivedRevisionsAndKeepsItsHistory) {
+  TempDir dir;
+  const std::string hash_a(64, 'a'), hash_b(64, 'b');
+  {
+    std::unique_ptr<Database> db;
+    ASSERT_OK(Database::Open(dir.path() / "pba.db", &db));
+    ASSERT_OK(ApplyMigrations(*db, 8));
+    ASSERT_OK(db->Exec(
+        "INSERT INTO users (id, name, token_sha256, created_us) VALUES (1, 'alice', '" +
+        std::string(64, 'c') +
+        "', 0);"
+        "INSERT INTO projects (id, name, created_us, created_by) VALUES (1, 'atlas', 0, 1);"
+        "INSERT INTO members VALUES (1, 1, 'admin');"
+        "INSERT INTO structures (id, project, name, head_revision, metadata_etag, created_us, "
+        "created_by) VALUES (1, 1, 'lung', NULL, 'e1', 0, 1);"
+        "INSERT INTO structure_revisions (id, structure, number, parent, author, time_us, kind, "
+        "message, content_sha256, geometry_format, size_bytes, material_json, colour_r, "
+        "colour_g, colour_b, group_path, request_id) VALUES "
+        "(1, 1, 1, NULL, 1, 10, 'create', 'created', '" +
+        hash_a + "', 'contours_json', 2, '{}', 1, 2, 3, '', NULL), (2, 1, 2, 1, 1, 20, 'commit', " +
+        "'second', '" + hash_b +
+        "', 'nifti', 3, '{}', 1, 2, 3, 'g', 'r-2');"
+        "UPDATE structures SET head_revision = 2 WHERE id = 1;"
+        "INSERT INTO snapshots (id, project, name, created_us, author) VALUES (1, 1, 's', 0, 1);"
+        "INSERT INTO snapshot_members VALUES (1, 1, 1);"
+        "INSERT INTO audit_log (time_us, user, project, action, target, revision) VALUES "
+        "(0, 1, 1, 'create', 'projects/atlas/structures/lung', 1);"));
+  }
+  std::unique_ptr<AtlasStore> store;
+  ASSERT_OK(AtlasStore::Open(dir.path(), &store));
+  Revision head, first;
+  ASSERT_OK(store->GetRevision("alice", {"atlas", "lung"}, 2, &head, nullptr));
+  EXPECT_EQ(head.format, StructureFormat::kNifti);
+  EXPECT_EQ(head.content_sha256, hash_b);
+  EXPECT_EQ(head.parent, 1);
+  ASSERT_OK(store->GetRevision("alice", {"atlas", "lung"}, 1, &first, nullptr));
+  EXPECT_EQ(first.message, "created");
+  SnapshotInfo snapshot;
+  ASSERT_OK(store->ResolveSnapshot("alice", "atlas", "1", &snapshot));
+  EXPECT_EQ(snapshot.revisions.at("lung"), 1);
+  store.reset();
+
+  std::unique_ptr<Database> db;
+  ASSERT_OK(Database::Open(dir.path() / "pba.db", &db));
+  int version = 0;
+  ASSERT_OK(ReadSchemaVersion(*db, &version));
+  EXPECT_EQ(version, LatestSchemaVersion());
+  const auto first_text = [&](const std::string& sql) {
+    Statement stmt;
+    EXPECT_TRUE(db->Prepare(sql, &stmt).ok()) << sql;
+    bool row = false;
+    EXPECT_TRUE(stmt.Step(&row).ok()) << sql;
+    return row ? stmt.ColumnText(0) : std::string("(none)");
+  };
+  EXPECT_EQ(first_text("PRAGMA integrity_check"), "ok");
+  EXPECT_EQ(first_text("PRAGMA foreign_key_check"), "(none)");
+  EXPECT_EQ(first_text("SELECT name FROM sqlite_schema WHERE name LIKE '%_v9'"), "(none)");
+  EXPECT_EQ(first_text("SELECT COUNT(*) FROM sqlite_schema WHERE type IN ('index', 'trigger') "
+                       "AND tbl_name = 'structure_revisions' AND sql IS NOT NULL"),
+            "5");
+  // The rules hold on the rebuilt table: immutable, one chain, known formats.
+  EXPECT_FALSE(db->Exec("UPDATE structure_revisions SET message = 'rewritten'").ok());
+  EXPECT_FALSE(db->Exec("DELETE FROM structure_revisions").ok());
+  const std::string insert =
+      "INSERT INTO structure_revisions (structure, number, parent, author, time_us, kind, "
+      "message, content_sha256, geometry_format, size_bytes, material_json, colour_r, colour_g, "
+      "colour_b, group_path) VALUES (1, 3, %PARENT%, 1, 30, 'commit', '', '" +
+      hash_a + "', '%FORMAT%', 2, '{}', 0, 0, 0, '')";
+  const auto with = [&](const std::string& parent, const std::string& format) {
+    std::string sql = insert;
+    sql.replace(sql.find("%PARENT%"), 8, parent);
+    sql.replace(sql.find("%FORMAT%"), 8, format);
+    return sql;
+  };
+  EXPECT_FALSE(db->Exec(with("1", "derived")).ok());  // not the previous revision
+  EXPECT_FALSE(db->Exec(with("2", "bogus")).ok());
+  const Status derived = db->Exec(with("2", "derived"));
+  EXPECT_TRUE(derived.ok()) << derived.ToString();
+}
+
 }  // namespace
 }  // namespace pba::store_test

@@ -15,6 +15,7 @@
 #include <string>
 
 #include "atlas/contours.h"
+#include "atlas/plates.h"
 #include "atlas/structure_set.h"
 #include "common/scene_builders.h"
 #include "mesh/mesh.h"
@@ -301,6 +302,63 @@ TEST(ModelBuilderAtlas, AStructureSetIsAnAtlasSource) {
   const std::string& note = model.mesh_description;
   EXPECT_NE(note.find("user atlas, 2 structures"), std::string::npos) << note;
   EXPECT_NE(note.find("Left and Right overlap on"), std::string::npos) << note;
+  fs::remove_all(dir);
+}
+
+// The names a scene may use before its atlas is built are those the atlas
+// has after its label steps and derived structures: a merge takes its
+// parts, a drop its structures, an overlay adds what it lays.
+TEST(ModelBuilderAtlas, KnownStructuresAreThoseTheStepsLeave) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::path(::testing::TempDir()) / "model_builder_known_structures";
+  fs::remove_all(dir);
+  fs::create_directories(dir / "set");
+  std::ofstream(dir / "table.csv") << "label,name,r,g,b\n1,A,10,0,0\n2,B,20,0,0\n3,C,30,0,0\n"
+                                      "4,G: x,40,0,0\n5,G: y,50,0,0\n";
+  std::ofstream(dir / "over.csv") << "label,name,r,g,b\n1,T1,10,0,0\n2,T2,20,0,0\n";
+  AtlasSpec a;
+  a.source = (dir / "atlas.nii.gz").string();  // not read: the names come from the table
+  a.colour_table = (dir / "table.csv").string();
+  a.label_steps_json =
+      "[{\"drop\": [\"A\"]}, {\"merge\": {\"structures\": [\"G\", \"B\"], \"name\": \"M\"}}, "
+      "{\"rename\": {\"from\": \"C\", \"to\": \"Z\"}}, {\"fill\": {\"name\": \"W\"}}, "
+      "{\"overlay\": {\"volume\": \"" +
+      (dir / "over.nii.gz").string() + "\", \"table\": \"" + (dir / "over.csv").string() +
+      "\", \"structures\": [\"T2\"]}}]";
+  EXPECT_EQ(KnownAtlasStructures(a), (std::vector<std::string>{"Z", "M", "W", "T2"}));
+
+  // A structure set with a derived merge.
+  StructureSet set;
+  uint8_t colour = 0;
+  for (const char* name : {"Left", "Right", "Both"}) {
+    StructureEntry e;
+    e.name = name;
+    e.file = std::string(name) + (e.name == "Both" ? ".yaml" : ".nii.gz");
+    e.format = e.name == "Both" ? StructureFormat::kDerived : StructureFormat::kNifti;
+    e.r = colour += 40;
+    std::ofstream(dir / "set" / e.file) << (e.name == "Both" ? "merge: [Left]" : "mask");
+    set.structures.push_back(e);
+  }
+  ASSERT_TRUE(WriteStructureSet(set, dir / "set").ok());
+  AtlasSpec s;
+  s.source = (dir / "set").string();
+  EXPECT_EQ(KnownAtlasStructures(s), (std::vector<std::string>{"Right", "Both"}));
+  // A recipe reading what is not there: none known (the build says why).
+  std::ofstream(dir / "set" / "Both.yaml") << "merge: [Nowhere]";
+  EXPECT_TRUE(KnownAtlasStructures(s).empty());
+
+  // A plate directory: its colour table's names.
+  LabelVolume volume({6, 6, 6}, Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones());
+  volume.set(2, 2, 2, 1);
+  volume.set(3, 3, 3, 2);
+  ColourTable table;
+  ASSERT_TRUE(ColourTable::FromEntries({{1, "P", 10, 0, 0}, {2, "Q", 20, 0, 0}}, &table).ok());
+  PlateOptions plates;
+  plates.z_mm = {2, 3};
+  ASSERT_TRUE(WritePlates(volume, table, plates, dir / "plates").ok());
+  AtlasSpec p;
+  p.source = (dir / "plates").string();
+  EXPECT_EQ(KnownAtlasStructures(p), (std::vector<std::string>{"P", "Q"}));
   fs::remove_all(dir);
 }
 
