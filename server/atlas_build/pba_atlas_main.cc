@@ -576,6 +576,12 @@ void AddMeshOptions(CLI::App* build, AtlasBuildOptions& options) {
                    "(>= 1.5; 0: the angle alone)")
       ->capture_default_str();
   build
+      ->add_option("--quality-rounds", options.quality_rounds,
+                   "Mesh again, up to this many times (0-5), while structures miss the quality "
+                   "bounds, those structures' cells and facets 0.7 times smaller each time; a "
+                   "note gives the sizes each met the bounds at, or did not")
+      ->capture_default_str();
+  build
       ->add_option("--odt", options.odt_iterations,
                    "Passes of ODT smoothing before sliver removal; 0: none")
       ->capture_default_str();

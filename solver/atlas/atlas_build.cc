@@ -184,9 +184,15 @@ Status CheckExtent(const Eigen::Vector3d& extent_mm, const std::string& field,
 
 // `labels` are the regions kept; label 0 among them (merge_rest) stands for
 // every other label of the volume.
+// Per region: the quality rounds' bounds on its cells and facets [mm], 0
+// for none (AtlasBuildOptions::quality_rounds).
+struct RegionSizes {
+  std::vector<double> cell_mm, facet_mm;
+};
+
 Status MeshVolume(const AtlasBuildOptions& options, const LabelVolume& volume,
-                  const ColourTable& colours, const std::vector<uint16_t>& labels, Mesh* mesh,
-                  LabelMeshReport* report) {
+                  const ColourTable& colours, const std::vector<uint16_t>& labels,
+                  const RegionSizes& sizes, Mesh* mesh, LabelMeshReport* report) {
   // Region index + 1 of each label, 0 for the labels left out.
   std::vector<int> region_of(65536, 0);
   std::vector<std::string> names;
@@ -218,6 +224,16 @@ Status MeshVolume(const AtlasBuildOptions& options, const LabelVolume& volume,
   mesh_options.roi_radius_mm = options.roi_radius_mm;
   mesh_options.roi_size_mm = options.roi_size_mm;
   mesh_options.region_facet_size_mm = StructureFacetSizes(options, volume, labels);
+  if (!sizes.facet_mm.empty()) {
+    std::vector<double>& facet = mesh_options.region_facet_size_mm;
+    facet.resize(labels.size(), 0);
+    for (size_t r = 0; r < labels.size(); ++r) {
+      if (sizes.facet_mm[r] > 0) {
+        facet[r] = facet[r] > 0 ? std::min(facet[r], sizes.facet_mm[r]) : sizes.facet_mm[r];
+      }
+    }
+    mesh_options.region_cell_size_mm = sizes.cell_mm;
+  }
   mesh_options.odt_iterations = options.odt_iterations;
   mesh_options.optimisation_time_limit_s = options.optimisation_time_limit_s;
   mesh_options.interior_points_mm = PieceInteriorPoints(volume, region_of);
@@ -362,13 +378,19 @@ void NoteRemoved(const AtlasBuildResult& result, std::vector<std::string>* notes
   }
 }
 
+// Whether a structure's tetrahedra miss the quality bounds.
+bool MissesBounds(const QualityStats& q) {
+  return q.count > 0 &&
+         (q.p99_aspect_ratio >= kAspectRatioP99Bound || q.min_dihedral_deg <= kMinDihedralBoundDeg);
+}
+
 // The structures that miss the quality bounds, named with what they miss.
 void NoteQualityMisses(AtlasBuildResult* result) {
   std::vector<std::string> misses;
   const std::vector<QualityStats>& regions = result->quality.regions;
   for (std::size_t r = 0; r < regions.size(); ++r) {
     const QualityStats& q = regions[r];
-    if (q.count == 0) continue;
+    if (!MissesBounds(q)) continue;
     std::string what;
     if (q.p99_aspect_ratio >= kAspectRatioP99Bound)
       what = Format("aspect-ratio p99 %.2f", q.p99_aspect_ratio);
@@ -385,7 +407,8 @@ void NoteQualityMisses(AtlasBuildResult* result) {
   result->notes.push_back(Format(
       "%zu of %zu structures miss the quality bounds (aspect-ratio p99 under %g, every dihedral "
       "angle over %g deg): %s. The quality report has every structure's figures; smaller "
-      "elements there (a region of interest, or smaller cell and facet sizes) may reach them",
+      "elements there (a region of interest, smaller cell and facet sizes, or quality rounds: "
+      "pba-atlas build --quality-rounds) may reach them",
       misses.size(), regions.size(), kAspectRatioP99Bound, kMinDihedralBoundDeg, list.c_str()));
 }
 
@@ -405,6 +428,150 @@ void NoteMeshPieces(AtlasBuildResult* result) {
       "the mesh is in %d pieces joined by no face (%s tetrahedra): a scene must hold each of "
       "them, or its solve is refused naming those it does not",
       result->pieces, sizes.c_str()));
+}
+
+// One mesh of the chosen regions with `sizes`, improved, its fragments
+// dropped: everything of `result` a mesh decides, made anew; the times add
+// up over the rounds.
+Status MeshAndImprove(const AtlasBuildOptions& options, const RegionSizes& sizes,
+                      AtlasBuildResult* result) {
+  result->improvement = ImproveStats();
+  result->relabelled = RelabelStats();
+  result->peeled = result->dropped_fragments = RemovedTetrahedra();
+  result->fragments = 0;
+  Clock::time_point start = Clock::now();
+  PBA_RETURN_IF_ERROR(MeshVolume(options, result->volume, result->colours, result->region_labels,
+                                 sizes, &result->mesh, &result->mesher));
+  result->times.mesh_s += SecondsSince(start);
+  if (options.improve_target_deg > 0) {
+    start = Clock::now();
+    PBA_RETURN_IF_ERROR(ImproveAtlasMesh(options, result));
+    result->times.improve_s += SecondsSince(start);
+  }
+  if (options.island_share > 0) {
+    result->dropped_fragments =
+        DropMeshFragments(options.island_share, &result->mesh, &result->fragments);
+  }
+  return Status::Ok();
+}
+
+// Each structure's bounds of the round before, or the build's.
+constexpr double kRoundShrink = 0.7;
+
+// What a mesh of MeshAndImprove decides, kept aside while another is made.
+struct MeshRound {
+  Mesh mesh;
+  LabelMeshReport mesher;
+  ImproveStats improvement;
+  RelabelStats relabelled;
+  RemovedTetrahedra peeled, dropped_fragments;
+  int fragments = 0;
+  RegionSizes sizes;
+  std::vector<int> rounds;  // per region: the rounds it was refined in
+  int misses = 0;           // structures missing the bounds
+};
+
+// The fields of one mesh, from a result into a round or back.
+template <typename From, typename To>
+void MoveMeshFields(From& from, To* to) {
+  to->mesh = std::move(from.mesh);
+  to->mesher = std::move(from.mesher);
+  to->improvement = from.improvement;
+  to->relabelled = from.relabelled;
+  to->peeled = std::move(from.peeled);
+  to->dropped_fragments = std::move(from.dropped_fragments);
+  to->fragments = from.fragments;
+}
+
+// The first mesh, and up to options.quality_rounds more while structures
+// miss the bounds, theirs at kRoundShrink of their sizes each round but
+// never under the voxels' edge (finer, a mesh follows the voxels' steps).
+// The mesh with the fewest structures missing is kept, the earliest of
+// equals: a round remeshes the whole atlas, and can make a sliver where
+// there was none.
+Status MeshInRounds(const AtlasBuildOptions& options, AtlasBuildResult* result) {
+  if (options.quality_rounds == 0) return MeshAndImprove(options, {}, result);
+  const size_t n = result->region_labels.size();
+  const double voxel_mm = result->volume.spacing_mm().minCoeff();
+  // The facets small structures get anyway (facets_per_section).
+  const std::vector<double> small =
+      StructureFacetSizes(options, result->volume, result->region_labels);
+  MeshRound best;
+  RegionSizes sizes;
+  std::vector<int> rounds(n, 0);
+  for (int round = 0;; ++round) {
+    PBA_RETURN_IF_ERROR(MeshAndImprove(options, sizes, result));
+    result->meshes = round + 1;
+    const QualitySummary quality = Summarise(result->mesh);
+    std::vector<size_t> missing;
+    for (size_t r = 0; r < n && r < quality.regions.size(); ++r) {
+      if (MissesBounds(quality.regions[r])) missing.push_back(r);
+    }
+    const bool last = round == options.quality_rounds || missing.empty();
+    if (round == 0 || static_cast<int>(missing.size()) < best.misses) {
+      MoveMeshFields(*result, &best);
+      best.sizes = sizes;
+      best.rounds = rounds;
+      best.misses = static_cast<int>(missing.size());
+    }
+    if (last) break;
+    bool any = false;
+    for (size_t r : missing) {
+      if (sizes.cell_mm.empty()) {
+        sizes.cell_mm.assign(n, 0);
+        sizes.facet_mm.assign(n, 0);
+      }
+      const double cell = sizes.cell_mm[r] > 0 ? sizes.cell_mm[r] : options.cell_size_mm;
+      double facet = sizes.facet_mm[r] > 0 ? sizes.facet_mm[r] : options.facet_size_mm;
+      if (r < small.size() && small[r] > 0) facet = std::min(facet, small[r]);
+      // As fine as it goes: a round would mesh it as before.
+      if (cell <= voxel_mm && facet <= voxel_mm) continue;
+      sizes.cell_mm[r] = std::max(voxel_mm, kRoundShrink * cell);
+      sizes.facet_mm[r] = std::max(voxel_mm, kRoundShrink * facet);
+      ++rounds[r];
+      any = true;
+    }
+    if (!any) break;
+  }
+  if (best.rounds.empty() || best.rounds == std::vector<int>(n, 0)) {
+    // The first mesh kept: say what was tried.
+    std::string tried;
+    for (size_t r = 0; r < n && result->meshes > 1; ++r) {
+      if (rounds[r] == 0) continue;
+      tried += Format("%s%s (cells %.3g mm, facets %.3g mm)", tried.empty() ? "" : ", ",
+                      result->mesh.region_names[r].c_str(), sizes.cell_mm[r], sizes.facet_mm[r]);
+    }
+    if (!tried.empty()) {
+      result->notes.push_back(
+          Format("%d meshes: none with structures refined had fewer structures missing the quality "
+                 "bounds than the first, which is kept; refined down to: %s",
+                 result->meshes, tried.c_str()));
+    }
+  }
+  MoveMeshFields(best, result);
+  const QualitySummary quality = Summarise(result->mesh);
+  for (size_t r = 0; r < n; ++r) {
+    if (best.rounds.empty() || best.rounds[r] == 0) continue;
+    result->refined.push_back({result->mesh.region_names[r], best.rounds[r], best.sizes.cell_mm[r],
+                               best.sizes.facet_mm[r], !MissesBounds(quality.regions[r])});
+  }
+  return Status::Ok();
+}
+
+// The quality rounds' structures: the sizes that met the bounds, or did not.
+void NoteRefined(AtlasBuildResult* result) {
+  if (result->refined.empty()) return;  // MeshInRounds said why, if it tried
+  std::string met, missed;
+  for (const RefinedStructure& s : result->refined) {
+    (s.met ? met : missed) +=
+        Format("%s%s (cells %.3g mm, facets %.3g mm)", (s.met ? met : missed).empty() ? "" : ", ",
+               s.name.c_str(), s.cell_size_mm, s.facet_size_mm);
+  }
+  result->notes.push_back(
+      Format("%d meshes: the one kept has %zu structure%s refined where the quality bounds "
+             "were missed; met at: %s; still missed at: %s",
+             result->meshes, result->refined.size(), result->refined.size() == 1 ? "" : "s",
+             met.empty() ? "none" : met.c_str(), missed.empty() ? "none" : missed.c_str()));
 }
 
 }  // namespace
@@ -460,6 +627,9 @@ Status AtlasBuildOptions::Validate() const {
   if (!std::isfinite(facet_distance_mm) || facet_distance_mm < 0) {
     return Status::InvalidArgument("facet_distance_mm",
                                    "must be 0 (a quarter of the facet size) or positive");
+  }
+  if (quality_rounds < 0 || quality_rounds > 5) {
+    return Status::InvalidArgument("quality_rounds", "must be 0 (one mesh) to 5");
   }
   return Status::Ok();
 }
@@ -543,22 +713,7 @@ Status BuildAtlas(const AtlasBuildOptions& options, AtlasBuildResult* result) {
   } else {
     result->dropped = std::move(left_out);
   }
-  start = Clock::now();
-  if (Status s = MeshVolume(options, result->volume, result->colours, result->region_labels,
-                            &result->mesh, &result->mesher);
-      !s.ok()) {
-    return s;
-  }
-  result->times.mesh_s = SecondsSince(start);
-  if (options.improve_target_deg > 0) {
-    start = Clock::now();
-    PBA_RETURN_IF_ERROR(ImproveAtlasMesh(options, result));
-    result->times.improve_s = SecondsSince(start);
-  }
-  if (options.island_share > 0) {
-    result->dropped_fragments =
-        DropMeshFragments(options.island_share, &result->mesh, &result->fragments);
-  }
+  PBA_RETURN_IF_ERROR(MeshInRounds(options, result));
   NoteRemoved(*result, &result->notes);
   NoteMeshPieces(result);
   if (options.quadratic) {
@@ -569,6 +724,7 @@ Status BuildAtlas(const AtlasBuildOptions& options, AtlasBuildResult* result) {
   }
   start = Clock::now();
   result->quality = Summarise(result->mesh);
+  NoteRefined(result);
   NoteQualityMisses(result);
   result->times.quality_s = SecondsSince(start);
   if (result->plates) {

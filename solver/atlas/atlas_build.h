@@ -148,11 +148,28 @@ struct AtlasBuildOptions {
   // can leave a tetrahedron hanging by an edge where voxels meet at one).
   // 0: none.
   double island_share = 1e-3;
+  // Up to this many meshes again (0..5) after the first, while structures
+  // miss the quality bounds (aspect-ratio p99 under kAspectRatioP99Bound,
+  // every dihedral angle over kMinDihedralBoundDeg): each round bounds the
+  // cells and facets of every structure that misses them to 0.7 times its
+  // sizes of the round before, and meshes the whole atlas again. The last
+  // mesh is kept; `refined` says, per structure refined, the sizes of its
+  // last round and whether it met the bounds there. 0: one mesh, and a
+  // note names the structures that miss.
+  int quality_rounds = 0;
 
   Status Validate() const;
   // The threads the geometric validation runs on (the mesher runs on one):
   // pba-atlas --threads, the server's solver threads.
   ThreadContext threads;
+};
+
+// A structure the quality rounds refined (AtlasBuildOptions::quality_rounds).
+struct RefinedStructure {
+  std::string name;
+  int rounds = 0;                              // rounds it was refined in
+  double cell_size_mm = 0, facet_size_mm = 0;  // its bounds in the last of them
+  bool met = false;                            // the bounds met in the mesh kept
 };
 
 // The region the structures a build does not keep become with merge_rest.
@@ -203,6 +220,10 @@ struct AtlasBuildResult {
   // The mesh's pieces joined by faces (MeshPieces); more than one is in
   // `notes`.
   int pieces = 1;
+  // With quality_rounds: the structures refined, in region order; also in
+  // `notes`. `meshes` counts the meshes made (1 + the rounds run).
+  std::vector<RefinedStructure> refined;
+  int meshes = 1;
 };
 
 Status BuildAtlas(const AtlasBuildOptions& options, AtlasBuildResult* result);

@@ -320,7 +320,8 @@ Status AtlasMeshCacheKey(const AtlasBuildOptions& options, std::string* key) {
   text += Format("roi_centre_mm %.17g %.17g %.17g\nroi_radius_mm %.17g\nroi_size_mm %.17g\n",
                  options.roi_centre_mm.x(), options.roi_centre_mm.y(), options.roi_centre_mm.z(),
                  options.roi_radius_mm, options.roi_size_mm);
-  text += Format("island_share %.17g\n", options.island_share);
+  text += Format("island_share %.17g\nquality_rounds %d\n", options.island_share,
+                 options.quality_rounds);
   text += Format("quadratic %d\nmerge_rest %d\nstructures %zu\n", options.quadratic ? 1 : 0,
                  options.merge_rest ? 1 : 0, options.structures.size());
   for (const std::string& s : options.structures) text += "structure " + Quoted(s) + "\n";

@@ -698,8 +698,9 @@ Status SplitDerived(const fs::path& dir, const StructureSet& set, StructureSet* 
       continue;
     }
     const std::string field = Format("structures[%zu]", i);
+    // Read no further than a recipe may be: a set may come from anyone.
     std::string content;
-    PBA_RETURN_IF_ERROR(ReadFile(dir / e.file, &content));
+    PBA_RETURN_IF_ERROR(ReadYamlFileText(dir / e.file, field, &content));
     DerivedStructure d;
     PBA_RETURN_IF_ERROR(ParseDerivedStructure(content, e.name, field, &d));
     d.field = field;

@@ -8,10 +8,12 @@
 #include <gtest/gtest.h>
 #include <yaml-cpp/yaml.h>
 
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <regex>
 #include <set>
 #include <sstream>
 #include <string>
@@ -381,40 +383,58 @@ TEST_F(PbaAtlasTest, AalMeshesFromTheFilesItShipsWith) {
   EXPECT_FALSE(fs::exists(refused));
 }
 
-// AAL with its white matter filled, meshed at 3 mm with the defaults: the
-// quality bounds the synthetic atlas meets (docs/atlas.md), met by all but
-// a few structures, each of those named in a note; the mesh in one piece
-// (slivers on the surface and loose fragments taken out, each said); its
-// volume within 3 % of the voxels it was made from.
-TEST_F(PbaAtlasTest, AalAtThreeMillimetresMeetsTheQualityBoundsOrNamesWhatMisses) {
+// AAL with its white matter filled, meshed at 3 mm with two quality rounds:
+// the quality bounds the synthetic atlas meets (docs/atlas.md), met by
+// every structure (one may miss on a loaded machine, where the mesher's
+// time limits can cut a step short: then it is named); the structures the
+// rounds refined named with the sizes they met the bounds at; the mesh in
+// one piece (slivers on the surface and loose fragments taken out, each
+// said); its volume within 3 % of the voxels it was made from.
+TEST_F(PbaAtlasTest, AalAtThreeMillimetresMeetsTheQualityBoundsWithQualityRounds) {
   const fs::path t = "/usr/share/mricron/templates";
   const fs::path out = dir_.path() / "aal3";
   const RunResult run = RunProcess(
       {PBA_ATLAS_BIN, "build", "-o", out.string(), "--labels", (t / "aal.nii.gz").string(),
        "--colour-table", (t / "aal.nii.txt").string(), "--fill", "White matter", "--closing-mm",
-       "7", "--cell-mm", "3", "--facet-mm", "3", "--no-pictures"});
+       "7", "--cell-mm", "3", "--facet-mm", "3", "--no-pictures", "--quality-rounds", "2"},
+      std::chrono::seconds(280));  // two meshes: 124 s alone on two cores
   ASSERT_EQ(run.exit_code, 0) << run.err;
   std::printf("%s", run.out.c_str());
   ExpectQualityReport(out, 117);
   const YAML::Node report = YAML::LoadFile((out / "quality.json").string());
-  int aspect_misses = 0, angle_misses = 0, misses = 0;
+  int misses = 0;
   double mesh_mm3 = 0;
+  std::map<std::string, bool> met;  // by name
   for (const YAML::Node& row : report["rows"]) {
     const std::string name = row["structure"].as<std::string>();
     const double p99 = row["aspect_ratio_p99"].as<double>();
     const double angle = row["min_dihedral_deg"].as<double>();
     EXPECT_LT(p99, 6) << name;
     EXPECT_GT(angle, 1) << name;
-    aspect_misses += p99 >= 5;
-    angle_misses += angle <= 5;
-    if (p99 >= 5 || angle <= 5) {
+    met[name] = p99 < 5 && angle > 5;
+    if (!met[name]) {
       ++misses;
       EXPECT_NE(run.out.find(name + " ("), std::string::npos) << name << " is not named";
     }
     mesh_mm3 += row["volume_mm3"].as<double>();
   }
-  EXPECT_LE(aspect_misses, 2);
-  EXPECT_LE(angle_misses, 4);
+  EXPECT_LE(misses, 1);
+  // The refined structures, each with the cell size it met the bounds at
+  // (smaller than the 3 mm of the rest).
+  std::smatch found;
+  ASSERT_TRUE(std::regex_search(
+      run.out, found,
+      std::regex("meshes: the one kept has [0-9]+ structures? refined[^;]*; met at: ([^;]*);")))
+      << run.out;
+  const std::string rounds = found[1].str();
+  const std::regex refined(R"(([A-Za-z0-9_]+) \(cells ([0-9.]+) mm, facets [0-9.]+ mm\))");
+  int named = 0;
+  for (std::sregex_iterator it(rounds.begin(), rounds.end(), refined), end; it != end; ++it) {
+    ++named;
+    EXPECT_TRUE(met[(*it)[1].str()]) << (*it)[1].str();
+    EXPECT_LT(std::stod((*it)[2].str()), 3) << (*it)[1].str();
+  }
+  EXPECT_GE(named, 1) << rounds;
   if (misses > 0) {
     EXPECT_NE(run.out.find(std::to_string(misses) + " of 117 structures miss the quality bounds"),
               std::string::npos)

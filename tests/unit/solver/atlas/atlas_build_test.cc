@@ -136,6 +136,34 @@ TEST_F(AtlasBuildTest, SmallStructuresGetSmallerFacets) {
               static_cast<double>(global.surface_triangles), 0.1 * global.surface_triangles);
 }
 
+// Quality rounds cost nothing where every structure meets the bounds: one
+// mesh, no note. (That they refine the structures that miss the bounds,
+// and name the sizes those meet them at, is pba_atlas_test's AAL at 3 mm:
+// small volumes like this ball meet the bounds at any size.)
+TEST_F(AtlasBuildTest, QualityRoundsMeshOnceWhereTheBoundsAreMet) {
+  const LabelVolume volume = CubeWithASmallBall();
+  const fs::path file = dir_ / "ball.nii.gz";
+  ASSERT_TRUE(WriteNifti(volume, file).ok());
+  AtlasBuildOptions options;
+  options.source = AtlasBuildOptions::Source::kLabelVolume;
+  options.input = file;
+  options.colour_table = BuiltinTable();
+  options.cell_size_mm = options.facet_size_mm = 4;
+  options.quality_rounds = 3;
+  AtlasBuildResult result;
+  const Status s = BuildAtlas(options, &result);
+  ASSERT_TRUE(s.ok()) << s.ToString();
+  for (const QualityStats& q : result.quality.regions) {
+    EXPECT_LT(q.p99_aspect_ratio, kAspectRatioP99Bound);
+    EXPECT_GT(q.min_dihedral_deg, kMinDihedralBoundDeg);
+  }
+  EXPECT_EQ(result.meshes, 1);
+  EXPECT_TRUE(result.refined.empty());
+  for (const std::string& note : result.notes) {
+    EXPECT_EQ(note.find("meshes"), std::string::npos) << note;
+  }
+}
+
 // A colour table lists more structures than the volume has: reported as
 // absent, not an error.
 TEST_F(AtlasBuildTest, TableEntriesAbsentFromTheVolumeAreListed) {
@@ -453,6 +481,10 @@ TEST_F(AtlasBuildTest, BadSizingOptionsAreNamed) {
   options.odt_iterations = -1;
   s = BuildAtlas(options, &result);
   EXPECT_EQ(s.field(), "odt_iterations");
+  options.odt_iterations = 2;
+  options.quality_rounds = 6;
+  s = BuildAtlas(options, &result);
+  EXPECT_EQ(s.field(), "quality_rounds");
   EXPECT_FALSE(fs::exists(options.plates_dir)) << "nothing written for bad options";
 }
 

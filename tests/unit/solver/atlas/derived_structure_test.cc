@@ -280,6 +280,14 @@ TEST_F(DerivedComposeTest, ARecipeThatCannotBeMadeNamesItsEntry) {
   s = Compose(&atlas);
   EXPECT_EQ(s.field(), "structures[1].merge.colour") << s.ToString();
 
+  // A recipe file larger than any YAML PBA reads (64 MiB): refused naming
+  // the entry (and read no further than that).
+  set_.structures.pop_back();
+  AddDerived("B", "merge: [A]\n#" + std::string(64 << 20, 'x') + "\n", 20);
+  s = Compose(&atlas);
+  EXPECT_EQ(s.field(), "structures[1]") << s.ToString();
+  EXPECT_EQ(s.code(), Status::Code::kInvalidArgument) << s.ToString();
+
   // Nothing but derived structures.
   set_.structures.clear();
   AddDerived("W", "fill: {}", 20);
