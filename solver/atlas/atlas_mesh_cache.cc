@@ -27,8 +27,9 @@ namespace {
 // from the same input without a new solver version (the version is the
 // project's, not a commit's), so old entries stop matching.
 // 2: label volumes lose their islands (island_share); 3: improvement on the
-// aspect ratio too, boundary slivers peeled, mesh fragments dropped.
-constexpr int kKeyFormatVersion = 3;
+// aspect ratio too, boundary slivers peeled, mesh fragments dropped; 4:
+// node insertion in the improvement.
+constexpr int kKeyFormatVersion = 4;
 
 // The entry file: magic, format version, a byte-order mark (entries hold
 // the host's native integers and doubles: a cache directory shared with a

@@ -292,12 +292,6 @@ std::vector<uint8_t> Enclosed(const LabelVolume& v, double closing_mm, PaddedGri
 }
 
 Status Fill(const LabelStep& step, const std::string& field, LabelAtlas* atlas, std::string* note) {
-  if (!(std::isfinite(step.closing_mm) && step.closing_mm >= 0 && step.closing_mm <= 50)) {
-    return Status::InvalidArgument(field + ".closing_mm", "must lie in [0, 50] mm");
-  }
-  if (!(std::isfinite(step.min_piece_mm3) && step.min_piece_mm3 >= 0)) {
-    return Status::InvalidArgument(field + ".min_piece_mm3", "must be >= 0");
-  }
   ColourEntry entry;
   PBA_RETURN_IF_ERROR(NewEntry(atlas->table, step.name, field + ".name", &entry));
   LabelVolume& v = atlas->volume;
@@ -427,9 +421,6 @@ bool DropPiecesBelow(double min_voxels, LabelAtlas* atlas, std::string* note) {
 
 Status Islands(const LabelStep& step, const std::string& field, LabelAtlas* atlas,
                std::string* note) {
-  if (!(std::isfinite(step.min_piece_mm3) && step.min_piece_mm3 >= 0)) {
-    return Status::InvalidArgument(field + ".min_piece_mm3", "must be >= 0");
-  }
   if (!DropPiecesBelow(step.min_piece_mm3 / atlas->volume.voxel_volume_mm3(), atlas, note)) {
     *note = Format("no island under %g mm^3", step.min_piece_mm3);
   }
@@ -515,8 +506,6 @@ Status Resample(const LabelStep& step, const std::string& field, LabelAtlas* atl
                 std::string* note) {
   const LabelVolume& v = atlas->volume;
   const double h = step.voxel_mm;
-  if (!(std::isfinite(h) && h > 0))
-    return Status::InvalidArgument(field + ".voxel_mm", "must be positive");
   std::array<int, 3> dims;
   double voxels = 1;
   for (int a = 0; a < 3; ++a) {
@@ -598,23 +587,16 @@ Status RegionVoxels(const LabelRegion& region, const std::string& field, const L
       }
     }
   };
-  const auto positive = [](double x) { return std::isfinite(x) && x > 0; };
   switch (region.kind) {
     case LabelRegion::Kind::kSphere: {
-      if (!positive(region.radius_mm))
-        return Status::InvalidArgument(field + ".sphere.radius_mm", "must be positive");
       const double r2 = region.radius_mm * region.radius_mm;
       each([&](const Eigen::Vector3d& p) { return (p - region.centre_mm).squaredNorm() <= r2; });
       *what = Format("a sphere of %g mm", region.radius_mm);
       return Status::Ok();
     }
     case LabelRegion::Kind::kCylinder: {
-      if (!positive(region.radius_mm))
-        return Status::InvalidArgument(field + ".cylinder.radius_mm", "must be positive");
       const Eigen::Vector3d axis = region.end_mm - region.centre_mm;
       const double length2 = axis.squaredNorm();
-      if (!(length2 > 0))
-        return Status::InvalidArgument(field + ".cylinder", "its two ends are one point");
       const double r2 = region.radius_mm * region.radius_mm;
       each([&](const Eigen::Vector3d& p) {
         const double t = (p - region.centre_mm).dot(axis) / length2;
@@ -633,9 +615,6 @@ Status RegionVoxels(const LabelRegion& region, const std::string& field, const L
     }
     case LabelRegion::Kind::kStructures:
       break;
-  }
-  if (!(std::isfinite(region.margin_mm) && region.margin_mm >= 0 && region.margin_mm <= 50)) {
-    return Status::InvalidArgument(field + ".around.margin_mm", "must lie in [0, 50] mm");
   }
   PBA_RETURN_IF_ERROR(
       LabelsNamed(atlas.table, region.structures, field + ".around.structures", own));
@@ -709,6 +688,7 @@ Status Cut(const LabelStep& step, const std::string& field, LabelAtlas* atlas, s
 
 Status ApplyStep(const LabelStep& step, const std::string& field, LabelAtlas* atlas,
                  std::string* note) {
+  PBA_RETURN_IF_ERROR(CheckLabelStep(step, field));
   switch (step.kind) {
     case LabelStep::Kind::kKeep:
     case LabelStep::Kind::kDrop:
@@ -732,6 +712,51 @@ Status ApplyStep(const LabelStep& step, const std::string& field, LabelAtlas* at
 }
 
 }  // namespace
+
+Status CheckLabelStep(const LabelStep& step, const std::string& field) {
+  const auto finite_in = [](double x, double low, double high) {
+    return std::isfinite(x) && x >= low && x <= high;
+  };
+  const auto positive = [](double x) { return std::isfinite(x) && x > 0; };
+  switch (step.kind) {
+    case LabelStep::Kind::kFill:
+      if (!finite_in(step.closing_mm, 0, 50))
+        return Status::InvalidArgument(field + ".closing_mm", "must lie in [0, 50] mm");
+      [[fallthrough]];
+    case LabelStep::Kind::kIslands:
+      if (!finite_in(step.min_piece_mm3, 0, HUGE_VAL))
+        return Status::InvalidArgument(field + ".min_piece_mm3", "must be >= 0");
+      return Status::Ok();
+    case LabelStep::Kind::kResample:
+      if (!positive(step.voxel_mm))
+        return Status::InvalidArgument(field + ".voxel_mm", "must be positive");
+      return Status::Ok();
+    case LabelStep::Kind::kCut:
+      break;
+    default:
+      return Status::Ok();
+  }
+  const LabelRegion& region = step.region;
+  switch (region.kind) {
+    case LabelRegion::Kind::kSphere:
+      if (!positive(region.radius_mm))
+        return Status::InvalidArgument(field + ".sphere.radius_mm", "must be positive");
+      break;
+    case LabelRegion::Kind::kCylinder:
+      if (!positive(region.radius_mm))
+        return Status::InvalidArgument(field + ".cylinder.radius_mm", "must be positive");
+      if (!((region.end_mm - region.centre_mm).squaredNorm() > 0))
+        return Status::InvalidArgument(field + ".cylinder", "its two ends are one point");
+      break;
+    case LabelRegion::Kind::kStructures:
+      if (!finite_in(region.margin_mm, 0, 50))
+        return Status::InvalidArgument(field + ".around.margin_mm", "must lie in [0, 50] mm");
+      break;
+    case LabelRegion::Kind::kMask:
+      break;
+  }
+  return Status::Ok();
+}
 
 const char* LabelStepName(LabelStep::Kind kind) {
   switch (kind) {

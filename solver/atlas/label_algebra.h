@@ -107,6 +107,13 @@ Status ReadLabelAtlas(const std::filesystem::path& volume, const std::filesystem
                       const std::string& volume_field, const std::string& table_field,
                       LabelAtlas* atlas, std::vector<std::string>* notes);
 
+// The values of `step` that need no atlas to be checked: closing radius and
+// margin in [0, 50] mm, smallest piece >= 0, voxel edge and radii positive,
+// a cylinder's ends two points. kInvalidArgument on "<field>.<key>". Both
+// ParseLabelSteps (so a recipe is refused when it is written) and
+// ApplyLabelSteps call it.
+Status CheckLabelStep(const LabelStep& step, const std::string& field);
+
 // Applies `steps` in order to `atlas`; `notes` gets one line per step. On
 // an error nothing of `atlas` has changed; the message names the step
 // ("labels[2] (merge)") and what is wrong with it.

@@ -125,8 +125,8 @@ Status ParseRegion(const YAML::Node& m, const std::string& at, const std::filesy
   return Status::Ok();
 }
 
-Status ParseStep(const YAML::Node& node, const std::string& at, const std::filesystem::path& base,
-                 LabelStep* step) {
+Status ParseStepKeys(const YAML::Node& node, const std::string& at,
+                     const std::filesystem::path& base, LabelStep* step) {
   if (!node.IsMap() || node.size() != 1) {
     return Status::InvalidArgument(
         at,
@@ -205,6 +205,13 @@ Status ParseStep(const YAML::Node& node, const std::string& at, const std::files
   return Status::InvalidArgument(
       at + "." + kind,
       "unknown step (known: keep, drop, merge, rename, fill, overlay, resample, cut, islands)");
+}
+
+// A step read and its values checked (CheckLabelStep).
+Status ParseStep(const YAML::Node& node, const std::string& at, const std::filesystem::path& base,
+                 LabelStep* step) {
+  PBA_RETURN_IF_ERROR(ParseStepKeys(node, at, base, step));
+  return CheckLabelStep(*step, at + "." + LabelStepName(step->kind));
 }
 
 // `yaml` loaded, once checked for what a YAML load must not meet

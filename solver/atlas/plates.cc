@@ -234,6 +234,13 @@ Status WritePlates(const LabelVolume& volume, const ColourTable& colours,
   });
 }
 
+Status ReadPlateColours(const fs::path& dir, ColourTable* colours) {
+  PlateStack read;
+  std::string colour_file;
+  PBA_RETURN_IF_ERROR(ReadIndex(dir, &read, &colour_file));
+  return ReadColourTableCsv(dir / colour_file, colours);
+}
+
 Status ReadPlates(const fs::path& dir, PlateStack* stack) {
   PlateStack read;
   std::string colour_file;

@@ -86,4 +86,8 @@ Status WritePlates(const LabelVolume& volume, const ColourTable& colours,
 // pixel's column, row and RGB). Any positive spacing is accepted.
 Status ReadPlates(const std::filesystem::path& dir, PlateStack* stack);
 
+// A plate directory's colour table alone (its index and table file read,
+// no plate decoded), with ReadPlates's errors for those two files.
+Status ReadPlateColours(const std::filesystem::path& dir, ColourTable* colours);
+
 }  // namespace pba

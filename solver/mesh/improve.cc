@@ -26,6 +26,10 @@ using Triangle = std::array<int, 3>;
 constexpr double kRadiansPerDegree = std::numbers::pi / 180;
 constexpr int kLargestRing = 10;
 constexpr std::size_t kCompositeTrials = 3;
+// The most tetrahedra a node insertion's cavity grows to.
+constexpr std::size_t kLargestCavity = 16;
+// Even permutations putting corner i first (the orientation kept).
+constexpr int kEven[4][4] = {{0, 1, 2, 3}, {1, 0, 3, 2}, {2, 3, 0, 1}, {3, 2, 1, 0}};
 
 // The faces of a tetrahedron opposite its corners 0..3, each anticlockwise
 // seen from outside a positively oriented one (as label_mesher.cc).
@@ -95,10 +99,15 @@ class Improver {
   // Works on tetrahedron e while its smallest angle is below `target`
   // [rad]; true when something changed.
   bool ImproveTet(int e, double target);
+  // Steps 2 and 3 on tetrahedron e; true when a flip was taken.
+  bool Flip(int e);
   // For a tetrahedron that ImproveTet left below the target: improves the
   // tetrahedra sharing an edge with it towards twice the target, which can
   // open a flip or a move for it, then tries it again.
   bool ImproveAround(int e);
+  // Node insertion: a new node inside a cavity of tetrahedra of e's region
+  // around e, joined to the cavity's boundary faces; true when done.
+  bool InsertNode(int e);
   // Moves node v to raise the smallest angle of its tetrahedra; false when
   // it may not move or nothing helps.
   bool SmoothNode(int v, Journal* journal);
@@ -122,6 +131,12 @@ class Improver {
   double SmallestAngle(const std::vector<int>& tets) const {
     double smallest = kPi;
     for (int e : tets) smallest = std::min(smallest, Angle(topology_.tet(e)));
+    return smallest;
+  }
+  // The smallest quality (the measure) of tetrahedra `tets` (slots).
+  double SmallestQuality(const std::vector<int>& tets) const {
+    double smallest = kPi;
+    for (int e : tets) smallest = std::min(smallest, topology_.quality(e));
     return smallest;
   }
   double SmallestAngle(const std::vector<Tet>& tets) const {
@@ -426,7 +441,6 @@ bool Improver::SmoothNode(int v, Journal* journal) {
   double old_quality = kPi;
   Vec3 centroid = Vec3::Zero();
   for (std::size_t s = 0; s < around.size(); ++s) {
-    static constexpr int kEven[4][4] = {{0, 1, 2, 3}, {1, 0, 3, 2}, {2, 3, 0, 1}, {3, 2, 1, 0}};
     const Tet& t = topology_.tet(around[s]);
     const int p = static_cast<int>(std::find(t.begin(), t.end(), v) - t.begin());
     for (int c = 0; c < 3; ++c) star[s][c] = topology_.node(t[kEven[p][c + 1]]);
@@ -465,7 +479,15 @@ bool Improver::ImproveTet(int e, double target) {
       changed |= SmoothNode(v, nullptr);
     }
   }
-  if (!options_.flip || topology_.quality(e) >= target) return changed;
+  if (topology_.quality(e) >= target) return changed;
+  if (options_.flip && Flip(e)) return true;
+  // Last, for a sliver (not a tetrahedron only its aspect ratio holds
+  // back: there are many more of those, and flips and moves serve them).
+  if (options_.insert && Angle(topology_.tet(e)) < angle_target_ && InsertNode(e)) return true;
+  return changed;
+}
+
+bool Improver::Flip(int e) {
   // The best flip that improves on its own; failing that, flips that may
   // make things worse until the free corners of their new tetrahedra have
   // moved, best first.
@@ -500,7 +522,123 @@ bool Improver::ImproveTet(int e, double target) {
       if (ApplyAndSmooth(plans[i])) return true;
     }
   }
-  return changed;
+  return false;
+}
+
+bool Improver::InsertNode(int e) {
+  const int region = topology_.region(e);
+  struct Face {
+    int tet, corner;  // the face of `tet` opposite its corner
+  };
+  // The cavity's boundary: the faces of its tetrahedra not shared with
+  // another of them. Each joined to the new node x makes the tetrahedron
+  // with that face's opposite corner moved to x (the same orientation).
+  const auto boundary = [&](const std::vector<int>& cavity, std::vector<Face>* faces) {
+    faces->clear();
+    for (int c : cavity) {
+      const Tet& t = topology_.tet(c);
+      for (int i = 0; i < 4; ++i) {
+        const int across =
+            topology_.TetAcross(c, t[kTetFaces[i][0]], t[kTetFaces[i][1]], t[kTetFaces[i][2]]);
+        if (across < 0 || std::find(cavity.begin(), cavity.end(), across) == cavity.end())
+          faces->push_back({c, i});
+      }
+    }
+  };
+  std::vector<int> cavity = {e};
+  std::vector<Face> faces;
+  std::vector<std::array<Vec3, 3>> star;
+  double best = kInvalidTet;
+  Vec3 best_x;
+  std::vector<int> best_cavity;
+  for (;;) {
+    boundary(cavity, &faces);
+    star.clear();
+    for (const Face& f : faces) {
+      const Tet& t = topology_.tet(f.tet);
+      star.push_back({topology_.node(t[kEven[f.corner][1]]), topology_.node(t[kEven[f.corner][2]]),
+                      topology_.node(t[kEven[f.corner][3]])});
+    }
+    // Every corner must stay on the boundary: one inside would be lost.
+    std::vector<int> corners;
+    for (int c : cavity)
+      corners.insert(corners.end(), topology_.tet(c).begin(), topology_.tet(c).end());
+    std::sort(corners.begin(), corners.end());
+    corners.erase(std::unique(corners.begin(), corners.end()), corners.end());
+    const bool keeps_corners = std::all_of(corners.begin(), corners.end(), [&](int n) {
+      return std::any_of(faces.begin(), faces.end(), [&](const Face& f) {
+        const Tet& t = topology_.tet(f.tet);
+        return t[f.corner] != n && Contains(t, n);
+      });
+    });
+    // Where the node goes: the better of the sliver's centroid and the
+    // cavity corners', then the steepest ascent of the smallest measure
+    // over its tetrahedra (all positive: the cavity is star-shaped from
+    // it, and they fill it).
+    const StarObjective objective(star, measure_);
+    Vec3 x = Vec3::Zero();
+    for (int n : topology_.tet(e)) x += topology_.node(n) / 4;
+    Vec3 mean = Vec3::Zero();
+    for (int n : corners) mean += topology_.node(n) / static_cast<double>(corners.size());
+    double q = objective.Value(x);
+    if (const double other = objective.Value(mean); other > q) {
+      q = other;
+      x = mean;
+    }
+    if (q > 0) q = objective.Ascend(&x, q, 20);
+    if (keeps_corners && q > best) {
+      best = q;
+      best_x = x;
+      best_cavity = cavity;
+    }
+    if (cavity.size() == kLargestCavity) break;
+    // Grow across the face whose new tetrahedron is worst, where the
+    // tetrahedron behind it is of the region and the face on no face set.
+    int grow = -1;
+    double worst = kPi;
+    for (std::size_t k = 0; k < faces.size(); ++k) {
+      const Tet& t = topology_.tet(faces[k].tet);
+      const int* f = kTetFaces[faces[k].corner];
+      const int across = topology_.TetAcross(faces[k].tet, t[f[0]], t[f[1]], t[f[2]]);
+      if (across < 0 || topology_.region(across) != region || Protected(t[f[0]], t[f[1]], t[f[2]]))
+        continue;
+      const double w = measure_(x, star[k][0], star[k][1], star[k][2]);
+      if (w < worst) {
+        worst = w;
+        grow = across;
+      }
+    }
+    if (grow < 0) break;
+    cavity.push_back(grow);
+  }
+  if (best_cavity.empty() || !(best > SmallestQuality(best_cavity))) return false;
+  // The new tetrahedra; -1 stands for the new node until it is numbered.
+  boundary(best_cavity, &faces);
+  std::vector<Tet> news;
+  for (const Face& f : faces) {
+    Tet t = topology_.tet(f.tet);
+    t[f.corner] = -1;
+    news.push_back(t);
+  }
+  if (measure_.angle_scale > 0) {
+    double new_angle = kPi;
+    for (const Tet& t : news) {
+      Vec3 x[4];
+      for (int c = 0; c < 4; ++c) x[c] = t[c] < 0 ? best_x : topology_.node(t[c]);
+      new_angle = std::min(new_angle, TetQuality(x[0], x[1], x[2], x[3]));
+    }
+    if (!KeepsAngles(SmallestAngle(best_cavity), new_angle)) return false;
+  }
+  const int node = topology_.AddNode(best_x);
+  fixed_.push_back(0);
+  failed_at_.push_back(-1);
+  for (int c : best_cavity) topology_.Remove(c, nullptr);
+  for (Tet& t : news) {
+    std::replace(t.begin(), t.end(), -1, node);
+    topology_.Add(t, region, topology_.Quality(t), nullptr);
+  }
+  ++stats_.inserted_nodes;
+  return true;
 }
 
 bool Improver::ImproveAround(int e) {
@@ -655,6 +793,7 @@ void AddLaterPass(const ImproveStats& later, ImproveStats* total) {
   total->edge_removals += later.edge_removals;
   total->smoothed_nodes += later.smoothed_nodes;
   total->smoothed_flips += later.smoothed_flips;
+  total->inserted_nodes += later.inserted_nodes;
   total->passes += later.passes;
   total->min_dihedral_after_deg = later.min_dihedral_after_deg;
   total->max_aspect_ratio_after = later.max_aspect_ratio_after;

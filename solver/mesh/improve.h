@@ -14,7 +14,7 @@
 // hundred slivers takes a fraction of a second, most of it building the
 // adjacency). For each, the schedule of Klingner & Shewchuk ("Aggressive
 // tetrahedral mesh improvement", 16th International Meshing Roundtable,
-// 2007) without vertex insertion, which would add nodes:
+// 2007):
 //   1. smoothing: each node of the tetrahedron that may move tries the
 //      mean of the centroids of the faces opposite it in its tetrahedra,
 //      then a few steps of the non-smooth steepest ascent of the smallest
@@ -46,7 +46,20 @@
 //      smallest dihedral angle is below target_min_dihedral_deg (the
 //      tetrahedra sharing an edge with each, once for each): 1-3 for them
 //      towards twice the target, then 1-3 for the one below it again (a
-//      neighbour's flip or move can open one for it).
+//      neighbour's flip or move can open one for it);
+//   5. for a tetrahedron whose smallest dihedral angle is below
+//      target_min_dihedral_deg and that steps 1-3 left there, node
+//      insertion: a cavity grown from it, one tetrahedron at a time across
+//      the boundary face whose tetrahedron with the new node is worst,
+//      through faces of its region on no face set, up to 16 tetrahedra; for
+//      each cavity the node is placed at the better of the sliver's
+//      centroid and the mean of the cavity's corners and moved by the
+//      steepest ascent of step 1, and the best cavity whose corners all
+//      stay on its boundary is replaced by the new node joined to that
+//      boundary (every new tetrahedron positive: the cavity is star-shaped
+//      from the node, and they fill it exactly). This frees a sliver whose
+//      four corners are all held (on surfaces and interfaces), which no
+//      move and often no flip can lift.
 // An operation is taken only when it strictly raises the smallest dihedral
 // angle of the tetrahedra it replaces or reshapes (the worst new one better
 // than the worst old one) and every new tetrahedron is positively oriented
@@ -70,9 +83,9 @@
 //   - a node moves only when it touches no face set triangle and no
 //     boundary face and all its tetrahedra lie in one region (within the
 //     polyhedron they fill, which stays filled);
-//   - node indices and the node count (Mesh::nodes is only written at the
-//     moving nodes), face sets (triangles, orientation, nodes) and region
-//     names.
+//   - node indices (Mesh::nodes is only written at the moving nodes; an
+//     inserted node is appended, strictly inside one region and on no face
+//     set), face sets (triangles, orientation, nodes) and region names.
 // Element indices do change: tetrahedra are removed and added, new ones
 // taking the places of removed ones or following the survivors, which keep
 // their order.
@@ -82,8 +95,9 @@
 // another region) is the whole of its region's wedge at that edge, and no
 // conforming mesh of the same face sets does better there; a sliver with all
 // four corners held whose every flip would cross a face set or another
-// region, or make a flat tetrahedron no free node can lift, also stays (no
-// search over sequences of flips is made).
+// region, or make a flat tetrahedron no free node can lift (no search over
+// sequences of flips is made), and whose every cavity within its region
+// swallows a corner or leaves a tetrahedron no better than it, also stays.
 #pragma once
 
 #include "mesh/mesh.h"
@@ -112,6 +126,8 @@ struct ImproveOptions {
   bool smooth = true;
   // Try flips (steps 2 and 3).
   bool flip = true;
+  // Insert nodes (step 5).
+  bool insert = true;
 };
 
 struct ImproveStats {
@@ -123,7 +139,8 @@ struct ImproveStats {
   // Flips (counted above too) taken only together with moving the free
   // corners of their new tetrahedra, having made things worse on their own.
   int smoothed_flips = 0;
-  int passes = 0;  // passes made (each over the tetrahedra then below the target)
+  int inserted_nodes = 0;  // node insertions (one new node each)
+  int passes = 0;          // passes made (each over the tetrahedra then below the target)
   // Smallest dihedral angle over all tetrahedra [degrees], and how many
   // tetrahedra lie below the target, before and after.
   double min_dihedral_before_deg = 0;

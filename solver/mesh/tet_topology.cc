@@ -148,6 +148,15 @@ void TetTopology::MoveNode(int n, const Eigen::Vector3d& x, Journal* journal) {
   }
 }
 
+int TetTopology::AddNode(const Eigen::Vector3d& x) {
+  const int n = static_cast<int>(mesh_.nodes.rows());
+  mesh_.nodes.conservativeResize(n + 1, Eigen::NoChange);
+  mesh_.nodes.row(n) = x.transpose();
+  node_tets_.emplace_back();
+  changed_at_.push_back(++clock_);
+  return n;
+}
+
 void TetTopology::Undo(const Journal& journal) {
   for (auto it = journal.moved.rbegin(); it != journal.moved.rend(); ++it)
     mesh_.nodes.row(it->first) = it->second.transpose();

@@ -66,6 +66,10 @@ class TetTopology {
   int Add(const Tet& t, int region, double quality, Journal* journal);
   void Remove(int e, Journal* journal);
   void MoveNode(int n, const Eigen::Vector3d& x, Journal* journal);
+  // A new node at x, appended to the mesh's nodes, in no element yet (the
+  // caller adds its elements at once); its index. Not journalled: a node
+  // is added only for a change already decided.
+  int AddNode(const Eigen::Vector3d& x);
   void Undo(const Journal& journal);
 
   // A clock that ticks at every change, and when the elements around each

@@ -288,9 +288,9 @@ std::vector<std::string> KnownAtlasStructures(const AtlasSpec& a) {
     if (!OrderDerivedStructures(names, &derived).ok()) return {};
     for (const DerivedStructure& d : derived) names = NamesAfterStep(d.step, std::move(names));
   } else if (std::filesystem::is_directory(a.source, ec)) {
-    PlateStack plates;  // a plate directory: its colour table
-    if (!ReadPlates(a.source, &plates).ok()) return {};
-    for (const ColourEntry& entry : plates.colours.entries()) names.push_back(entry.name);
+    ColourTable colours;  // a plate directory: its colour table
+    if (!ReadPlateColours(a.source, &colours).ok()) return {};
+    for (const ColourEntry& entry : colours.entries()) names.push_back(entry.name);
   } else if (!a.colour_table.empty()) {
     ColourTable table;
     LabelTableRead read;

@@ -75,6 +75,16 @@ TEST(DerivedStructureTest, BadRecipesAreRefusedNamingTheKey) {
       {"fill: 3", "structures[4].fill", "expected a map"},
       {"{[a, b]: 1}", "structures[4]", "malformed"},
       {"merge: [A", "structures[4]", "not valid YAML"},
+      // Values are checked when the recipe is written, not when it is made.
+      {"cut: {sphere: {centre_mm: [0, 0, 0], radius_mm: 0}}", "structures[4].cut.sphere.radius_mm",
+       "must be positive"},
+      {"cut: {cylinder: {from_mm: [1, 2, 3], to_mm: [1, 2, 3], radius_mm: 2}}",
+       "structures[4].cut.cylinder", "one point"},
+      {"cut: {around: {structures: [A], margin_mm: -1}}", "structures[4].cut.around.margin_mm",
+       "[0, 50]"},
+      {"fill: {closing_mm: 60}", "structures[4].fill.closing_mm", "[0, 50]"},
+      {"fill: {min_piece_mm3: -5}", "structures[4].fill.min_piece_mm3", ">= 0"},
+      {"fill: {closing_mm: .nan}", "structures[4].fill.closing_mm", "a number"},
   };
   for (const auto& c : cases) {
     const Status s = ParseError(c.yaml);

@@ -460,6 +460,10 @@ TEST(LabelAlgebraTest, StepsReadFromYaml) {
   refused("- cut: {sphere: {centre_mm: [1, 2], radius_mm: 1}}", "steps[0].cut.sphere.centre_mm",
           "[x, y, z]");
   refused("- resample: {voxel_mm: \"2\"}", "steps[0].resample.voxel_mm", "a number");
+  refused("- resample: {voxel_mm: 0}", "steps[0].resample.voxel_mm", "must be positive");
+  refused("- islands: {min_piece_mm3: -1}", "steps[0].islands.min_piece_mm3", ">= 0");
+  refused("- cut: {cylinder: {from_mm: [0, 0, 0], to_mm: [0, 0, 9], radius_mm: -2}}",
+          "steps[0].cut.cylinder.radius_mm", "must be positive");
   refused("fill: {name: X}", "steps", "a list of steps");
   refused("- &a {keep: [A]}\n- *a", "steps", "alias");
 }

@@ -99,13 +99,15 @@ int RegionOf(const Mesh& mesh, int e) {
 }
 
 // What ImproveTetMesh promises, `after` against `before`: the same nodes
-// and node count, only free nodes moved (in no face set triangle, on no
+// and node count but for the inserted ones (appended, each in elements of
+// one region only, on no face set and no boundary face), only free nodes
+// moved (in no face set triangle, on no
 // boundary face, all their tetrahedra in one region); face sets and region
 // names identical; every tetrahedron positively oriented; each region's
 // volume kept to 1e-12; conforming, with the same boundary faces and the same
 // faces between regions; the smallest angle not lower.
 void ExpectInvariants(const Mesh& before, const Mesh& after, const ImproveStats& stats) {
-  ASSERT_EQ(after.num_nodes(), before.num_nodes());
+  ASSERT_EQ(after.num_nodes(), before.num_nodes() + stats.inserted_nodes);
   ASSERT_EQ(after.face_sets.size(), before.face_sets.size());
   for (const auto& [name, set] : before.face_sets) {
     const FaceSet& now = after.face_sets.at(name);
@@ -146,6 +148,21 @@ void ExpectInvariants(const Mesh& before, const Mesh& after, const ImproveStats&
   }
   EXPECT_LE(moved, stats.smoothed_nodes);
 
+  // Every node in an element; an inserted one inside one region.
+  std::vector<std::set<int>> regions_at(after.num_nodes());
+  for (int e = 0; e < after.num_elements(); ++e) {
+    for (int node : after.tets[e]) regions_at[node].insert(RegionOf(after, e));
+  }
+  for (int node = 0; node < after.num_nodes(); ++node) {
+    EXPECT_FALSE(regions_at[node].empty()) << "node " << node << " is in no element";
+    if (node >= n) {
+      EXPECT_EQ(regions_at[node].size(), 1u) << "inserted node " << node;
+    }
+  }
+  for (const auto& [name, set] : after.face_sets) {
+    for (int node : set.nodes) EXPECT_LT(node, n) << name;
+  }
+
   // Orientation and region volumes.
   std::map<int, double> volume_before, volume_after;
   for (int e = 0; e < before.num_elements(); ++e)
@@ -174,7 +191,7 @@ void ExpectInvariants(const Mesh& before, const Mesh& after, const ImproveStats&
   };
   const auto [boundary_before, interfaces_before] = boundary_and_interfaces(before, owners_before);
   const auto [boundary_after, interfaces_after] = boundary_and_interfaces(after, owners_after);
-  EXPECT_EQ(boundary_after, boundary_before);
+  EXPECT_EQ(boundary_after, boundary_before);  // so no inserted node is on the boundary
   EXPECT_EQ(interfaces_after, interfaces_before);
   // Every face set triangle is still a face of a tetrahedron.
   for (const auto& [name, set] : after.face_sets) {
@@ -357,6 +374,64 @@ TEST(ImproveTest, RefusesWhatItCannotImprove) {
   o = ImproveOptions();
   o.max_ring_size = 2;
   EXPECT_EQ(field_of(o, linear), "max_ring_size");
+}
+
+// An octahedron (poles N and S, equator e0..e3 alternately 0.05 mm above
+// and below z = 0) cut into a sliver on the equator, two tetrahedra from N
+// onto its upper faces and two from S onto its lower ones: every node on the
+// boundary, so no node can move. A node inserted at the centre, joined to
+// the eight faces, lifts the smallest angle from the sliver's 8.1 degrees
+// to over 50.
+Mesh HeldSliver() {
+  const double d = 0.05;
+  const std::vector<Vec3> points = {Vec3(1, 0, d),   Vec3(0, 1, -d), Vec3(-1, 0, d),
+                                    Vec3(0, -1, -d), Vec3(0, 0, 1),  Vec3(0, 0, -1)};
+  std::vector<Tet> tets = {{0, 1, 2, 3}, {4, 0, 2, 1}, {4, 0, 2, 3}, {5, 1, 3, 0}, {5, 1, 3, 2}};
+  for (Tet& t : tets) {
+    const Mesh one = MakeMesh(points, {t});
+    if (SignedVolume(one, 0) < 0) std::swap(t[0], t[1]);
+  }
+  return MakeMesh(points, tets);
+}
+
+TEST(ImproveTest, NodeInsertionFreesASliverWhoseCornersAreAllHeld) {
+  const Mesh before = HeldSliver();
+  const double sliver = MinDihedralDeg(before);
+  EXPECT_NEAR(sliver, 8.07, 0.01);
+  ImproveOptions options;
+  options.target_min_dihedral_deg = 30;
+  options.smooth = false;
+  options.flip = false;  // insertion alone
+  Mesh mesh = before;
+  ImproveStats stats;
+  ASSERT_TRUE(ImproveTetMesh(options, &mesh, &stats).ok());
+  EXPECT_EQ(stats.inserted_nodes, 1);
+  EXPECT_EQ(mesh.num_elements(), 8);
+  EXPECT_GT(stats.min_dihedral_after_deg, 50);
+  EXPECT_LT(mesh.nodes.row(6).norm(), 0.1e-3);  // near the centre [m]
+  ExpectInvariants(before, mesh, stats);
+
+  // Without it, nothing lifts the sliver here but flips; without either,
+  // nothing at all.
+  options.insert = false;
+  mesh = before;
+  ASSERT_TRUE(ImproveTetMesh(options, &mesh, &stats).ok());
+  EXPECT_EQ(stats.inserted_nodes, 0);
+  EXPECT_EQ(mesh.tets, before.tets);
+
+  // The sliver alone in its region: no cavity of it can grow, and a node
+  // inside it alone splits its angles: nothing is inserted.
+  Mesh apart = before;
+  apart.region_names = {"sliver", "rest"};
+  apart.element_region = {0, 1, 1, 1, 1};
+  options = ImproveOptions();
+  options.target_min_dihedral_deg = 30;
+  mesh = apart;
+  ASSERT_TRUE(ImproveTetMesh(options, &mesh, &stats).ok());
+  EXPECT_EQ(stats.inserted_nodes, 0);
+  EXPECT_EQ(mesh.num_nodes(), apart.num_nodes());
+  EXPECT_NEAR(stats.min_dihedral_after_deg, sliver, 1e-9);
+  ExpectInvariants(apart, mesh, stats);
 }
 
 // A structured box (10 mm, 1 mm cells, six tetrahedra each) whose interior
