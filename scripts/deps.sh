@@ -20,6 +20,7 @@ packages=(
   gnuplot-nox time
   openssl
   mricron-data
+  slurmctld slurmd slurm-client munge
 )
 
 missing=()

@@ -54,6 +54,15 @@ void PrintJobDetails(const v1::Job& job) {
   if (job.priority() != 0) rows.push_back({"Priority", std::to_string(job.priority())});
   if (job.timeout_s() > 0) rows.push_back({"Time limit", std::to_string(job.timeout_s()) + " s"});
   if (job.ranks() > 1) rows.push_back({"MPI ranks", std::to_string(job.ranks())});
+  if (job.has_scheduler()) {
+    // Where a cluster scheduler has it, in the scheduler's own words.
+    const v1::SchedulerJob& s = job.scheduler();
+    std::string said = s.state();
+    if (!s.reason().empty() && s.reason() != "None") said += ", reason " + s.reason();
+    if (!s.node().empty() && s.node() != "(null)") said += ", on " + s.node();
+    rows.push_back({s.system() == "slurm" ? "Slurm job" : s.system() + " job",
+                    s.job_id() + (said.empty() ? "" : " (" + said + ")")});
+  }
   if (job.has_atlas_import()) {
     rows.push_back({"Imports into", job.atlas_import().project()});
   }
@@ -407,8 +416,10 @@ void RegisterJobCommands(CLI::App& app, CommandContext& context) {
     CLI::App* cmd = job->add_subcommand(name, description);
     cmd->add_option("id", *id, "Job id")->required();
     context.Add(cmd, [id, run](Connection& c) { return run(c, *id); });
+    return cmd;
   };
-  add_by_id("status", "Show one job, with its summary when done", ShowJob);
+  add_by_id("status", "Show one job, with its summary when done (also: show)", ShowJob)
+      ->alias("show");
   add_by_id("watch", "Follow a job's progress until it ends", WatchJob);
   add_by_id("cancel", "Cancel a queued or running job", CancelJob);
 

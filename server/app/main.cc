@@ -132,6 +132,12 @@ struct ServeFlags {
   double keep_results_days = 30;
   int max_ranks = 0;        // 0: the machine's cores
   std::string mpirun = "";  // empty: mpirun from PATH; "none": no MPI
+  std::string executor = "local";
+  std::string job_dir;
+  std::string slurm_partition, slurm_account;
+  int slurm_cpus = 1;
+  int slurm_max_jobs = 1000;
+  double slurm_poll_s = 2;
 };
 
 void AddServeOptions(CLI::App& app, ServeFlags* flags) {
@@ -183,6 +189,29 @@ void AddServeOptions(CLI::App& app, ServeFlags* flags) {
   app.add_option("--mpirun", flags->mpirun,
                  "The mpirun that runs jobs on several ranks (default: mpirun from PATH); "
                  "\"none\": every job runs as one process");
+  app.add_option("--executor", flags->executor,
+                 "Where jobs run: local (children of this server) or slurm (Slurm jobs, "
+                 "submitted with sbatch; the server can run on a login node)")
+      ->check(CLI::IsMember({"local", "slurm"}))
+      ->capture_default_str();
+  app.add_option("--job-dir", flags->job_dir,
+                 "Job folders (default: <data>/jobs); with --executor slurm a directory every "
+                 "compute node sees at the same path");
+  app.add_option("--slurm-partition", flags->slurm_partition,
+                 "Slurm partition of the jobs (default: Slurm's default)");
+  app.add_option("--slurm-account", flags->slurm_account,
+                 "Slurm account the jobs are charged to (default: the user's)");
+  app.add_option("--slurm-cpus", flags->slurm_cpus,
+                 "CPUs of each job's rank (--cpus-per-task; pba-solve --threads)")
+      ->check(CLI::Range(1, 4096))
+      ->capture_default_str();
+  app.add_option("--slurm-max-jobs", flags->slurm_max_jobs,
+                 "Jobs in Slurm's hands at once; the rest wait in PBA's queue")
+      ->check(CLI::Range(1, 1000000))
+      ->capture_default_str();
+  app.add_option("--slurm-poll", flags->slurm_poll_s, "Seconds between two looks at squeue")
+      ->check(CLI::Range(0.1, 600.0))
+      ->capture_default_str();
 }
 
 // `pba-server admin ...`: the subcommands and what they were given.
@@ -246,9 +275,20 @@ pba::ServerOptions ServerOptionsFromFlags(const ServeFlags& flags) {
   options.insecure = flags.insecure;
   options.max_job_time = std::chrono::seconds(flags.max_job_time_s);
   options.max_attempts = flags.max_attempts;
+  const bool slurm = flags.executor == "slurm";
+  // This machine's memory says nothing of a compute node's: under Slurm
+  // the default is none (the partition's own), and a limit given is also
+  // the job's --mem.
   options.max_solver_memory_bytes =
-      flags.solver_memory_gib < 0 ? pba::DefaultSolverMemoryBytes(flags.max_running)
+      flags.solver_memory_gib < 0 ? (slurm ? 0 : pba::DefaultSolverMemoryBytes(flags.max_running))
                                   : static_cast<int64_t>(flags.solver_memory_gib * (1LL << 30));
+  if (slurm) options.executor = pba::ServerOptions::ExecutorKind::kSlurm;
+  options.jobs_dir = flags.job_dir;
+  options.slurm.partition = flags.slurm_partition;
+  options.slurm.account = flags.slurm_account;
+  options.slurm.cpus_per_task = flags.slurm_cpus;
+  options.slurm.max_submitted = flags.slurm_max_jobs;
+  options.slurm.poll = std::chrono::milliseconds(static_cast<int64_t>(flags.slurm_poll_s * 1000));
   options.upload_quota_bytes = static_cast<int64_t>(flags.upload_quota_gib * (1LL << 30));
   options.keep_results =
       std::chrono::seconds(static_cast<int64_t>(flags.keep_results_days * 86400));

@@ -132,6 +132,37 @@ Status OwnerMayRun(AtlasStore& users, const v1::Job& job) {
   return Status::Ok();
 }
 
+// Jobs a Slurm-backed server handed to Slurm run on there: a server with
+// the local executor would run them a second time, so it does not start.
+Status RefuseJobsInSlurm(JobStore& store) {
+  std::vector<v1::Job> scheduled;
+  PBA_RETURN_IF_ERROR(store.ListScheduled(&scheduled));
+  if (scheduled.empty()) return Status::Ok();
+  std::string named;
+  for (std::size_t i = 0; i < scheduled.size() && i < 5; ++i) {
+    named += (i > 0 ? ", " : "") + scheduled[i].id() + " (Slurm job " +
+             scheduled[i].scheduler().job_id() + ")";
+  }
+  return Status::FailedPrecondition(
+      std::to_string(scheduled.size()) + " job(s) are in Slurm's hands: " + named +
+      (scheduled.size() > 5 ? ", ..." : "") +
+      "; start with --executor slurm to follow them (or cancel them there first)");
+}
+
+// The executor `options` choose; a Slurm one checked against its cluster.
+Status MakeExecutor(const ServerOptions& options, JobStore& store, JobEventHub& hub,
+                    ExecutorOptions executor_options, std::unique_ptr<Executor>* executor) {
+  if (options.executor == ServerOptions::ExecutorKind::kLocal) {
+    *executor = std::make_unique<JobExecutor>(store, hub, std::move(executor_options));
+    return Status::Ok();
+  }
+  auto slurm =
+      std::make_unique<SlurmExecutor>(store, hub, std::move(executor_options), options.slurm);
+  PBA_RETURN_IF_ERROR(slurm->Check());
+  *executor = std::move(slurm);
+  return Status::Ok();
+}
+
 }  // namespace
 
 Status PbaServer::Start(const ServerOptions& options, std::unique_ptr<PbaServer>* out) {
@@ -151,8 +182,10 @@ Status PbaServer::Start(const ServerOptions& options, std::unique_ptr<PbaServer>
   std::error_code ec;
   server->options_.data_dir = fs::absolute(options.data_dir, ec);
   const fs::path& data_dir = server->options_.data_dir;
-  fs::create_directories(data_dir / "jobs", ec);
-  if (ec) return Status::Io("cannot create " + (data_dir / "jobs").string() + ": " + ec.message());
+  const fs::path jobs_dir =
+      options.jobs_dir.empty() ? data_dir / "jobs" : fs::absolute(options.jobs_dir, ec);
+  fs::create_directories(jobs_dir, ec);
+  if (ec) return Status::Io("cannot create " + jobs_dir.string() + ": " + ec.message());
   PBA_RETURN_IF_ERROR(RestrictDataDir(data_dir));
   PBA_RETURN_IF_ERROR(CheckSolver(options.solver));
   if (!options.mpirun.empty() && ::access(options.mpirun.c_str(), X_OK) != 0) {
@@ -179,6 +212,9 @@ Status PbaServer::Start(const ServerOptions& options, std::unique_ptr<PbaServer>
   PBA_RETURN_IF_ERROR(server->store_->RequeueInterrupted(kRequeueAtStart, &requeued));
   for (const v1::JobEvent& event : requeued) {
     spdlog::info("job {} QUEUED: {}", event.job_id(), event.message());
+  }
+  if (options.executor == ServerOptions::ExecutorKind::kLocal) {
+    PBA_RETURN_IF_ERROR(RefuseJobsInSlurm(*server->store_));
   }
 
   PBA_RETURN_IF_ERROR(AtlasStore::Open(data_dir, &server->atlas_store_));
@@ -213,7 +249,11 @@ Status PbaServer::Start(const ServerOptions& options, std::unique_ptr<PbaServer>
   executor_options.solver_threads = options.solver_threads;
   executor_options.mpirun = options.mpirun;
   executor_options.max_ranks = options.max_ranks;
-  executor_options.atlas_cache_dir = data_dir / "cache" / "atlas";
+  executor_options.jobs_dir = jobs_dir;
+  // Slurm's nodes read the cache where they read the job folders.
+  executor_options.atlas_cache_dir = options.executor == ServerOptions::ExecutorKind::kSlurm
+                                         ? jobs_dir / ".atlas-cache"
+                                         : data_dir / "cache" / "atlas";
   executor_options.atlas_cache_gib = options.atlas_cache_gib;
   executor_options.kill_grace = options.kill_grace;
   executor_options.max_job_time = options.max_job_time;
@@ -228,11 +268,11 @@ Status PbaServer::Start(const ServerOptions& options, std::unique_ptr<PbaServer>
   AtlasJobs* atlas_jobs = server->atlas_jobs_.get();
   server->hub_.SetStateListener(
       [atlas_jobs](const v1::JobEvent& event) { atlas_jobs->PublishJobEvent(event); });
-  server->executor_ =
-      std::make_unique<JobExecutor>(*server->store_, server->hub_, std::move(executor_options));
+  PBA_RETURN_IF_ERROR(MakeExecutor(options, *server->store_, server->hub_,
+                                   std::move(executor_options), &server->executor_));
   server->service_ =
       std::make_unique<JobServiceImpl>(*server->store_, *server->executor_, server->hub_,
-                                       *server->atlas_store_, *server->uploads_, data_dir);
+                                       *server->atlas_store_, *server->uploads_, jobs_dir);
   server->service_->set_max_ranks(options.mpirun.empty() ? 1 : options.max_ranks);
 
   grpc::EnableDefaultHealthCheckService(true);

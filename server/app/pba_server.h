@@ -28,6 +28,7 @@
 
 #include "jobs/job_event_hub.h"
 #include "jobs/job_executor.h"
+#include "jobs/slurm_executor.h"
 #include "pba/status.h"
 #include "service/atlas_event_hub.h"
 #include "service/atlas_jobs.h"
@@ -77,6 +78,15 @@ struct ServerOptions {
   // Bytes one user's open uploads may announce together
   // (UploadStore::set_quota_bytes); 0: no quota.
   int64_t upload_quota_bytes = 0;
+  // Where jobs run: children of this server (kLocal, jobs/job_executor.h)
+  // or Slurm jobs (kSlurm, jobs/slurm_executor.h) with `slurm`'s options.
+  enum class ExecutorKind { kLocal, kSlurm };
+  ExecutorKind executor = ExecutorKind::kLocal;
+  SlurmOptions slurm;
+  // The job folders (empty: data_dir/jobs); with Slurm a directory every
+  // compute node sees at the same path, which then also holds the atlas
+  // mesh cache (jobs_dir/.atlas-cache).
+  std::filesystem::path jobs_dir;
 };
 
 class PbaServer {
@@ -110,7 +120,7 @@ class PbaServer {
   ServerOptions options_;
   std::unique_ptr<JobStore> store_;
   JobEventHub hub_;
-  std::unique_ptr<JobExecutor> executor_;
+  std::unique_ptr<Executor> executor_;
   std::unique_ptr<JobServiceImpl> service_;
   std::unique_ptr<AtlasStore> atlas_store_;
   std::unique_ptr<UploadStore> uploads_;

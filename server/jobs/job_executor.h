@@ -89,8 +89,10 @@ inline constexpr std::chrono::seconds kDefaultMaxJobTime{24 * 3600};
 int64_t DefaultSolverMemoryBytes(int max_running);
 
 struct ExecutorOptions {
-  // Job folders are created in data_dir/jobs/<id>/.
+  // Job folders are created in jobs_dir/<id>/; an empty jobs_dir is
+  // data_dir/jobs (JobsDir).
   std::filesystem::path data_dir;
+  std::filesystem::path jobs_dir;
   // The pba-solve executable.
   std::filesystem::path solver;
   int max_running = 1;
@@ -135,11 +137,10 @@ struct ExecutorOptions {
   std::function<Status(const v1::Job& job)> may_run;
 };
 
+std::filesystem::path JobsDir(const ExecutorOptions& options);
+
 class JobExecutor : public Executor {
  public:
-  // Progress is stored when the phase changes or it grew by this much.
-  static constexpr double kStoredProgressStep = 0.05;
-
   JobExecutor(JobStore& store, JobEventHub& hub, ExecutorOptions options);
   JobExecutor(const JobExecutor&) = delete;
   JobExecutor& operator=(const JobExecutor&) = delete;

@@ -33,13 +33,13 @@ Status JobNotFound(const std::string& id) { return Status::NotFound("job " + id 
 }  // namespace
 
 JobServiceImpl::JobServiceImpl(JobStore& store, Executor& executor, JobEventHub& hub,
-                               AtlasStore& users, UploadStore& uploads, fs::path data_dir)
+                               AtlasStore& users, UploadStore& uploads, fs::path jobs_dir)
     : store_(store),
       executor_(executor),
       hub_(hub),
       users_(users),
       uploads_(uploads),
-      data_dir_(std::move(data_dir)) {}
+      jobs_dir_(std::move(jobs_dir)) {}
 
 Status JobServiceImpl::CheckSubmit(const std::string& user, const v1::SubmitJobRequest& request,
                                    NewJob* job) {
@@ -197,13 +197,13 @@ grpc::Status JobServiceImpl::SubmitJob(grpc::ServerContext* context,
     // queued always has its source.
     fs::path staged;
     if (job.atlas_import != nullptr) {
-      staged = data_dir_ / "jobs" / (".import-" + NewJobId());
+      staged = jobs_dir_ / (".import-" + NewJobId());
       PBA_RETURN_IF_ERROR(StageImportSource(uploads_, user, *job.atlas_import, staged));
     }
     if (!staged.empty()) {
       job.before_commit = [&](const std::string& id) {
         std::error_code ec;
-        const fs::path dir = data_dir_ / "jobs" / id;
+        const fs::path dir = jobs_dir_ / id;
         fs::create_directories(dir, ec);
         if (!ec) fs::rename(staged, dir / "source", ec);
         if (ec) return Status::Io("cannot move the import's files into place: " + ec.message());
@@ -388,7 +388,7 @@ grpc::Status JobServiceImpl::DownloadResult(grpc::ServerContext* context,
                                               " is past the end of " + name + " (" +
                                               std::to_string(size) + " bytes)");
     }
-    const fs::path path = data_dir_ / "jobs" / id / "result" / name;
+    const fs::path path = jobs_dir_ / id / "result" / name;
     std::error_code ec;
     const auto disk_size = fs::file_size(path, ec);
     if (ec || static_cast<int64_t>(disk_size) != size) {

@@ -57,7 +57,7 @@ class JobServiceImpl final : public v1::JobService::Service {
   static constexpr int kMaxPriority = 100;
 
   JobServiceImpl(JobStore& store, Executor& executor, JobEventHub& hub, AtlasStore& users,
-                 UploadStore& uploads, std::filesystem::path data_dir);
+                 UploadStore& uploads, std::filesystem::path jobs_dir);
 
   // The most MPI ranks a job may ask for (pba-server --max-ranks); 1, the
   // default, runs every job as one process.
@@ -97,7 +97,7 @@ class JobServiceImpl final : public v1::JobService::Service {
   JobEventHub& hub_;
   AtlasStore& users_;
   UploadStore& uploads_;
-  const std::filesystem::path data_dir_;
+  const std::filesystem::path jobs_dir_;  // the job folders, jobs_dir_/<id>/
   StreamSlots watch_slots_{kMaxWatchesPerUser};
 };
 

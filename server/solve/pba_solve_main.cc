@@ -37,6 +37,7 @@
 // process dying without a word.
 
 #include <signal.h>
+#include <sys/resource.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -525,6 +526,17 @@ int main(int argc, char** argv) {
         pba::Run(scene_path, out_dir, force, inp_path, mode, threads, cache, checkpoint, ranks);
     // A rank that failed ends the job: the others may wait for it.
     if (code != pba::kExitOk) pba::EndRanksWith(code);
+    return code;
+  } catch (const std::bad_alloc&) {
+    // Past its address-space limit (pba-server --solver-memory, ulimit -v)
+    // or the machine's memory: said so, for the server as an ERROR event.
+    struct rlimit limit {};
+    std::string what = "out of memory: the model needs more memory than this process may use";
+    if (::getrlimit(RLIMIT_AS, &limit) == 0 && limit.rlim_cur != RLIM_INFINITY) {
+      what += " (its address-space limit is " + std::to_string(limit.rlim_cur >> 20) + " MiB)";
+    }
+    const int code = pba::Reporter(mode).Error(pba::Status::Internal(what));
+    pba::EndRanksWith(code);
     return code;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "pba-solve: internal error: %s\n", e.what());

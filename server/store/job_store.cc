@@ -23,8 +23,11 @@ constexpr char kPageTokenPrefix[] = "jobs.v1:";
 constexpr char kJobColumns[] =
     "id, name, state, create_time_us, start_time_us, end_time_us, phase, progress, error, "
     "attempts, scene, summary, owner, priority, timeout_s, snapshot_project, snapshot, "
-    "atlas_import, ranks";
-constexpr int kJobColumnCount = 19;
+    "atlas_import, ranks, scheduler_job, scheduler_state, scheduler_reason, scheduler_node";
+constexpr int kJobColumnCount = 23;
+
+// scheduler_job while a job is being handed to the scheduler.
+constexpr char kSubmitting[] = "submitting";
 
 int64_t NowMicros() {
   return std::chrono::duration_cast<std::chrono::microseconds>(
@@ -126,6 +129,14 @@ void ReadJobRow(const Statement& stmt, JobView view, v1::Job* job) {
   }
   if (!stmt.ColumnIsNull(17)) job->mutable_atlas_import()->ParseFromString(stmt.ColumnBlob(17));
   job->set_ranks(static_cast<int32_t>(stmt.ColumnInt(18)));
+  if (!stmt.ColumnText(19).empty()) {
+    v1::SchedulerJob* scheduler = job->mutable_scheduler();
+    scheduler->set_system("slurm");
+    scheduler->set_job_id(stmt.ColumnText(19));
+    scheduler->set_state(stmt.ColumnText(20));
+    scheduler->set_reason(stmt.ColumnText(21));
+    scheduler->set_node(stmt.ColumnText(22));
+  }
 }
 
 }  // namespace
@@ -407,18 +418,28 @@ Status JobStore::Transition(const std::string& id, v1::Job::State from, v1::Job:
   return Status::Ok();
 }
 
+Status JobStore::NextQueued(std::string* id) {
+  id->clear();
+  Statement stmt;
+  PBA_RETURN_IF_ERROR(
+      db_->Prepare("SELECT id FROM jobs WHERE state = ? AND scheduler_job = '' "
+                   "ORDER BY priority DESC, number LIMIT 1",
+                   &stmt));
+  bool row = false;
+  PBA_RETURN_IF_ERROR(stmt.Bind(1, StateName(v1::Job::QUEUED)).Step(&row));
+  if (row) *id = stmt.ColumnText(0);
+  return Status::Ok();
+}
+
 Status JobStore::ClaimNextQueued(v1::Job* job, v1::JobEvent* event, bool* claimed) {
   std::lock_guard lock(mutex_);
   *claimed = false;
   Transaction transaction(*db_);
   PBA_RETURN_IF_ERROR(transaction.status());
+  std::string id;
+  PBA_RETURN_IF_ERROR(NextQueued(&id));
+  if (id.empty()) return Status::Ok();
   Statement stmt;
-  PBA_RETURN_IF_ERROR(db_->Prepare(
-      "SELECT id FROM jobs WHERE state = ? ORDER BY priority DESC, number LIMIT 1", &stmt));
-  bool row = false;
-  PBA_RETURN_IF_ERROR(stmt.Bind(1, StateName(v1::Job::QUEUED)).Step(&row));
-  if (!row) return Status::Ok();
-  const std::string id = stmt.ColumnText(0);
   PBA_RETURN_IF_ERROR(
       db_->Prepare("UPDATE jobs SET state = ?, attempts = attempts + 1, start_time_us = ?, "
                    "end_time_us = NULL, phase = '', progress = 0, error = '' WHERE id = ?",
@@ -440,18 +461,23 @@ Status JobStore::ClaimNextQueued(v1::Job* job, v1::JobEvent* event, bool* claime
 
 Status JobStore::CancelQueued(const std::string& id, const std::string& message,
                               v1::JobEvent* event, bool* cancelled) {
+  return EndQueued(id, v1::Job::CANCELLED, message, event, cancelled);
+}
+
+Status JobStore::EndQueued(const std::string& id, v1::Job::State state, const std::string& message,
+                           v1::JobEvent* event, bool* ended) {
   std::lock_guard lock(mutex_);
   Transaction transaction(*db_);
   PBA_RETURN_IF_ERROR(transaction.status());
-  PBA_RETURN_IF_ERROR(Transition(id, v1::Job::QUEUED, v1::Job::CANCELLED, cancelled));
-  if (!*cancelled) return Status::Ok();
+  PBA_RETURN_IF_ERROR(Transition(id, v1::Job::QUEUED, state, ended));
+  if (!*ended) return Status::Ok();
   Statement stmt;
   PBA_RETURN_IF_ERROR(
       db_->Prepare("UPDATE jobs SET end_time_us = ?, error = ? WHERE id = ?", &stmt));
   PBA_RETURN_IF_ERROR(stmt.Bind(1, NowMicros()).Bind(2, message).Bind(3, id).Run());
   int64_t sequence = 0;
   PBA_RETURN_IF_ERROR(NextSequence(id, 1, &sequence));
-  *event = MakeEvent(id, sequence, v1::Job::CANCELLED, "", 0, message);
+  *event = MakeEvent(id, sequence, state, "", 0, message);
   PBA_RETURN_IF_ERROR(InsertEvent(*event));
   return transaction.Commit();
 }
@@ -542,7 +568,12 @@ Status JobStore::RequeueRun(const std::string& id, int64_t sequence, const std::
   PBA_RETURN_IF_ERROR(Transition(id, v1::Job::RUNNING, v1::Job::QUEUED, &changed));
   if (!changed) return Status::FailedPrecondition("job " + id + " is not running");
   Statement stmt;
-  PBA_RETURN_IF_ERROR(db_->Prepare("UPDATE jobs SET phase = '', progress = 0 WHERE id = ?", &stmt));
+  // A scheduler's job is over when its PBA job goes back to the queue: the
+  // next run is a new one.
+  PBA_RETURN_IF_ERROR(db_->Prepare(
+      "UPDATE jobs SET phase = '', progress = 0, scheduler_job = '', scheduler_state = '', "
+      "scheduler_reason = '', scheduler_node = '' WHERE id = ?",
+      &stmt));
   PBA_RETURN_IF_ERROR(stmt.Bind(1, id).Run());
   stmt = Statement();
   int64_t next = 0;
@@ -587,6 +618,119 @@ Status JobStore::ExpireResults(int64_t ended_before_us, const std::string& note,
   return transaction.Commit();
 }
 
+Status JobStore::ClaimForScheduler(v1::Job* job, bool* claimed) {
+  std::lock_guard lock(mutex_);
+  *claimed = false;
+  Transaction transaction(*db_);
+  PBA_RETURN_IF_ERROR(transaction.status());
+  std::string id;
+  PBA_RETURN_IF_ERROR(NextQueued(&id));
+  if (id.empty()) return Status::Ok();
+  Statement stmt;
+  PBA_RETURN_IF_ERROR(db_->Prepare(
+      "UPDATE jobs SET scheduler_job = ?, scheduler_state = '', scheduler_reason = '', "
+      "scheduler_node = '' WHERE id = ?",
+      &stmt));
+  PBA_RETURN_IF_ERROR(stmt.Bind(1, kSubmitting).Bind(2, id).Run());
+  stmt = Statement();
+  bool found = false;
+  PBA_RETURN_IF_ERROR(LoadJob(id, JobView::kFull, job, &found));
+  PBA_RETURN_IF_ERROR(transaction.Commit());
+  *claimed = found;
+  return Status::Ok();
+}
+
+Status JobStore::RecordSchedulerJob(const std::string& id, const v1::SchedulerJob& scheduler,
+                                    const std::string& message, v1::JobEvent* event) {
+  std::lock_guard lock(mutex_);
+  Transaction transaction(*db_);
+  PBA_RETURN_IF_ERROR(transaction.status());
+  Statement stmt;
+  PBA_RETURN_IF_ERROR(
+      db_->Prepare("UPDATE jobs SET scheduler_job = ?, scheduler_state = ?, scheduler_reason = ?, "
+                   "scheduler_node = ? WHERE id = ? AND state IN (?, ?)",
+                   &stmt));
+  PBA_RETURN_IF_ERROR(stmt.Bind(1, scheduler.job_id())
+                          .Bind(2, scheduler.state())
+                          .Bind(3, scheduler.reason())
+                          .Bind(4, scheduler.node())
+                          .Bind(5, id)
+                          .Bind(6, StateName(v1::Job::QUEUED))
+                          .Bind(7, StateName(v1::Job::RUNNING))
+                          .Run());
+  if (db_->Changes() == 0) return Status::FailedPrecondition("job " + id + " has ended");
+  stmt = Statement();
+  event->Clear();
+  if (!message.empty()) {
+    PBA_RETURN_IF_ERROR(
+        db_->Prepare("SELECT state, phase, progress FROM jobs WHERE id = ?", &stmt));
+    bool row = false;
+    PBA_RETURN_IF_ERROR(stmt.Bind(1, id).Step(&row));
+    const v1::Job::State state = ParseState(stmt.ColumnText(0));
+    const std::string phase = stmt.ColumnText(1);
+    const double progress = stmt.ColumnDouble(2);
+    stmt = Statement();
+    int64_t sequence = 0;
+    PBA_RETURN_IF_ERROR(NextSequence(id, 1, &sequence));
+    *event = MakeEvent(id, sequence, state, phase, progress, message);
+    PBA_RETURN_IF_ERROR(InsertEvent(*event));
+  }
+  return transaction.Commit();
+}
+
+Status JobStore::StartScheduled(const std::string& id, const std::string& message, v1::Job* job,
+                                v1::JobEvent* event, bool* started) {
+  std::lock_guard lock(mutex_);
+  Transaction transaction(*db_);
+  PBA_RETURN_IF_ERROR(transaction.status());
+  PBA_RETURN_IF_ERROR(Transition(id, v1::Job::QUEUED, v1::Job::RUNNING, started));
+  if (!*started) return Status::Ok();
+  Statement stmt;
+  PBA_RETURN_IF_ERROR(
+      db_->Prepare("UPDATE jobs SET attempts = attempts + 1, start_time_us = ?, "
+                   "end_time_us = NULL, phase = '', progress = 0, error = '' WHERE id = ?",
+                   &stmt));
+  PBA_RETURN_IF_ERROR(stmt.Bind(1, NowMicros()).Bind(2, id).Run());
+  stmt = Statement();
+  bool found = false;
+  PBA_RETURN_IF_ERROR(LoadJob(id, JobView::kFull, job, &found));
+  int64_t sequence = 0;
+  PBA_RETURN_IF_ERROR(NextSequence(id, 1, &sequence));
+  *event = MakeEvent(id, sequence, v1::Job::RUNNING, "", 0,
+                     "started (attempt " + std::to_string(job->attempts()) + ")" +
+                         (message.empty() ? "" : ", " + message));
+  PBA_RETURN_IF_ERROR(InsertEvent(*event));
+  return transaction.Commit();
+}
+
+Status JobStore::ReleaseToQueue(const std::string& id) {
+  std::lock_guard lock(mutex_);
+  Statement stmt;
+  PBA_RETURN_IF_ERROR(db_->Prepare(
+      "UPDATE jobs SET scheduler_job = '', scheduler_state = '', scheduler_reason = '', "
+      "scheduler_node = '' WHERE id = ? AND state = ?",
+      &stmt));
+  return stmt.Bind(1, id).Bind(2, StateName(v1::Job::QUEUED)).Run();
+}
+
+Status JobStore::ListScheduled(std::vector<v1::Job>* jobs) {
+  std::lock_guard lock(mutex_);
+  jobs->clear();
+  Statement stmt;
+  PBA_RETURN_IF_ERROR(db_->Prepare(std::string("SELECT ") + kJobColumns +
+                                       " FROM jobs WHERE scheduler_job != '' AND state IN (?, ?) "
+                                       "ORDER BY number",
+                                   &stmt));
+  stmt.Bind(1, StateName(v1::Job::QUEUED)).Bind(2, StateName(v1::Job::RUNNING));
+  while (true) {
+    bool row = false;
+    PBA_RETURN_IF_ERROR(stmt.Step(&row));
+    if (!row) break;
+    ReadJobRow(stmt, JobView::kFull, &jobs->emplace_back());
+  }
+  return Status::Ok();
+}
+
 Status JobStore::RequeueInterrupted(const std::string& message, std::vector<v1::JobEvent>* events) {
   std::lock_guard lock(mutex_);
   events->clear();
@@ -594,7 +738,9 @@ Status JobStore::RequeueInterrupted(const std::string& message, std::vector<v1::
   PBA_RETURN_IF_ERROR(transaction.status());
   std::vector<std::string> ids;
   Statement stmt;
-  PBA_RETURN_IF_ERROR(db_->Prepare("SELECT id FROM jobs WHERE state = ? ORDER BY number", &stmt));
+  // A job in a scheduler's hands runs on without the server.
+  PBA_RETURN_IF_ERROR(db_->Prepare(
+      "SELECT id FROM jobs WHERE state = ? AND scheduler_job = '' ORDER BY number", &stmt));
   stmt.Bind(1, StateName(v1::Job::RUNNING));
   while (true) {
     bool row = false;

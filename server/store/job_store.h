@@ -119,6 +119,10 @@ class JobStore {
   // changes) when the job is not QUEUED.
   Status CancelQueued(const std::string& id, const std::string& message, v1::JobEvent* event,
                       bool* cancelled);
+  // QUEUED -> `state` (CANCELLED or FAILED) with `message` as the error and
+  // the event; *ended is false (and nothing changes) when it is not QUEUED.
+  Status EndQueued(const std::string& id, v1::Job::State state, const std::string& message,
+                   v1::JobEvent* event, bool* ended);
 
   // Stores a progress event of a RUNNING job and its phase/progress.
   // event->sequence may be raised to stay above the stored events.
@@ -140,13 +144,36 @@ class JobStore {
                        std::vector<std::string>* ids);
 
   // Every job left RUNNING by a server that stopped goes back to QUEUED with
-  // an event carrying `message`. Call once at start-up, before the executor.
+  // an event carrying `message`, but for those in a cluster scheduler's
+  // hands (Job.scheduler), which run on without the server. Call once at
+  // start-up, before the executor.
   Status RequeueInterrupted(const std::string& message, std::vector<v1::JobEvent>* events);
+
+  // Jobs handed to a cluster scheduler (jobs/slurm_executor.h). A QUEUED
+  // job is claimed for the scheduler by marking it "submitting" (no event;
+  // it stays QUEUED); RecordSchedulerJob then names its job there (or a new
+  // state or reason, with an event when `message` is not empty: state,
+  // phase and progress as they are); StartScheduled moves it to RUNNING
+  // when the scheduler starts it (attempts + 1, start time, an event "started
+  // (attempt N), <message>"); ReleaseToQueue gives a QUEUED job back
+  // (nothing was submitted). FinishRun, RequeueRun (which forgets the
+  // scheduler's job) and CancelQueued end them as any other.
+  Status ClaimForScheduler(v1::Job* job, bool* claimed);
+  Status RecordSchedulerJob(const std::string& id, const v1::SchedulerJob& scheduler,
+                            const std::string& message, v1::JobEvent* event);
+  Status StartScheduled(const std::string& id, const std::string& message, v1::Job* job,
+                        v1::JobEvent* event, bool* started);
+  Status ReleaseToQueue(const std::string& id);
+  // The QUEUED and RUNNING jobs with a scheduler's job, oldest first (kFull).
+  Status ListScheduled(std::vector<v1::Job>* jobs);
 
  private:
   explicit JobStore(std::unique_ptr<Database> db) : db_(std::move(db)) {}
 
   Status LoadJob(const std::string& id, JobView view, v1::Job* job, bool* found);
+  // The QUEUED job of highest priority, the oldest of those, not in a
+  // scheduler's hands; "" when there is none.
+  Status NextQueued(std::string* id);
   Status LoadResultFiles(const std::string& id, v1::Job* job);
   Status NextSequence(const std::string& id, int64_t at_least, int64_t* sequence);
   Status InsertEvent(const v1::JobEvent& event);

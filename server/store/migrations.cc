@@ -347,6 +347,16 @@ BEGIN
 END;
 )sql",
      true},
+    // A job handed to a cluster scheduler (jobs/slurm_executor.h): its id
+    // there ('submitting' between the claim and the scheduler's answer) and
+    // what the scheduler last said of it.
+    {10, "jobs: the cluster scheduler's job", R"sql(
+ALTER TABLE jobs ADD COLUMN scheduler_job TEXT NOT NULL DEFAULT '';
+ALTER TABLE jobs ADD COLUMN scheduler_state TEXT NOT NULL DEFAULT '';
+ALTER TABLE jobs ADD COLUMN scheduler_reason TEXT NOT NULL DEFAULT '';
+ALTER TABLE jobs ADD COLUMN scheduler_node TEXT NOT NULL DEFAULT '';
+CREATE INDEX jobs_scheduled ON jobs (scheduler_job) WHERE scheduler_job != '';
+)sql"},
 };
 
 int64_t NowMicros() {

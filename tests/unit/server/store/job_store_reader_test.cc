@@ -114,10 +114,15 @@ TEST(JobStoreUpgradeTest, VersionSixGainsServerAdminsAndJobProjects) {
     ASSERT_TRUE(JobStore::Open(path, &jobs).ok());
   }
   {
-    // Back to version 6: what migrations 7 and 8 added, undone.
+    // Back to version 6: what migrations 7, 8 and 10 added to these tables,
+    // undone (9 rebuilds structure_revisions as it is).
     std::unique_ptr<Database> db;
     ASSERT_TRUE(Database::Open(path, &db).ok());
     const Status undone = db->Exec(
+        "DROP INDEX jobs_scheduled; ALTER TABLE jobs DROP COLUMN scheduler_job; "
+        "ALTER TABLE jobs DROP COLUMN scheduler_state; "
+        "ALTER TABLE jobs DROP COLUMN scheduler_reason; "
+        "ALTER TABLE jobs DROP COLUMN scheduler_node; "
         "ALTER TABLE jobs DROP COLUMN ranks; "
         "DROP INDEX jobs_by_project; ALTER TABLE jobs DROP COLUMN project; "
         "ALTER TABLE users DROP COLUMN server_admin; DELETE FROM schema_version WHERE version >= 7;"

@@ -513,3 +513,90 @@ TEST_F(JobStoreTest, ExpiresTheFilesOfJobsThatEndedLongAgo) {
 
 }  // namespace
 }  // namespace pba
+
+namespace pba {
+namespace {
+
+// Jobs in a cluster scheduler's hands: claimed without leaving the queue,
+// named, started when the scheduler starts them, kept RUNNING across a
+// restart, and invisible to the local claim.
+TEST_F(JobStoreTest, JobsInASchedulersHands) {
+  const v1::Job first = Create("first");
+  const v1::Job second = Create("second");
+  v1::Job claimed;
+  bool got = false;
+  ASSERT_TRUE(store_->ClaimForScheduler(&claimed, &got).ok());
+  ASSERT_TRUE(got);
+  EXPECT_EQ(claimed.id(), first.id());
+  EXPECT_EQ(claimed.state(), v1::Job::QUEUED);
+  EXPECT_EQ(claimed.scheduler().job_id(), "submitting");
+  EXPECT_EQ(Events(first.id()).size(), 1u);  // no event for the claim
+  // The local claim and a second scheduler claim pass it by.
+  v1::Job other;
+  v1::JobEvent event;
+  ASSERT_TRUE(store_->ClaimForScheduler(&other, &got).ok());
+  EXPECT_EQ(other.id(), second.id());
+  ASSERT_TRUE(store_->ReleaseToQueue(second.id()).ok());
+  EXPECT_FALSE(Get(second.id()).has_scheduler());
+  ASSERT_TRUE(store_->ClaimNextQueued(&other, &event, &got).ok());
+  ASSERT_TRUE(got);
+  EXPECT_EQ(other.id(), second.id());
+
+  v1::SchedulerJob scheduler;
+  scheduler.set_system("slurm");
+  scheduler.set_job_id("41");
+  scheduler.set_state("PENDING");
+  scheduler.set_reason("Resources");
+  ASSERT_TRUE(store_->RecordSchedulerJob(first.id(), scheduler, "submitted", &event).ok());
+  EXPECT_EQ(event.state(), v1::Job::QUEUED);
+  EXPECT_EQ(event.message(), "submitted");
+  v1::Job now = Get(first.id());
+  EXPECT_EQ(now.scheduler().system(), "slurm");
+  EXPECT_EQ(now.scheduler().job_id(), "41");
+  EXPECT_EQ(now.scheduler().reason(), "Resources");
+  // Without a message: the state kept, no event.
+  scheduler.set_reason("Priority");
+  ASSERT_TRUE(store_->RecordSchedulerJob(first.id(), scheduler, "", &event).ok());
+  EXPECT_EQ(Get(first.id()).scheduler().reason(), "Priority");
+  EXPECT_EQ(Events(first.id()).size(), 2u);
+
+  bool started = false;
+  ASSERT_TRUE(
+      store_->StartScheduled(first.id(), "Slurm job 41 on n1", &now, &event, &started).ok());
+  ASSERT_TRUE(started);
+  EXPECT_EQ(now.state(), v1::Job::RUNNING);
+  EXPECT_EQ(now.attempts(), 1);
+  EXPECT_EQ(event.message(), "started (attempt 1), Slurm job 41 on n1");
+  ASSERT_TRUE(store_->StartScheduled(first.id(), "", &now, &event, &started).ok());
+  EXPECT_FALSE(started);  // once
+
+  std::vector<v1::Job> scheduled;
+  ASSERT_TRUE(store_->ListScheduled(&scheduled).ok());
+  ASSERT_EQ(scheduled.size(), 1u);
+  EXPECT_EQ(scheduled[0].id(), first.id());
+
+  // A restart re-queues the local run, not the scheduler's.
+  store_.reset();
+  ASSERT_TRUE(JobStore::Open(db_path(), &store_).ok());
+  std::vector<v1::JobEvent> requeued;
+  ASSERT_TRUE(store_->RequeueInterrupted("restart", &requeued).ok());
+  ASSERT_EQ(requeued.size(), 1u);
+  EXPECT_EQ(requeued[0].job_id(), second.id());
+  EXPECT_EQ(Get(first.id()).state(), v1::Job::RUNNING);
+
+  // Back in the queue, the scheduler's job is forgotten; a queued job fails
+  // with its reason.
+  ASSERT_TRUE(store_->RequeueRun(first.id(), 0, "re-queued: NODE_FAIL", &event).ok());
+  EXPECT_FALSE(Get(first.id()).has_scheduler());
+  bool ended = false;
+  ASSERT_TRUE(store_->EndQueued(first.id(), v1::Job::FAILED, "refused", &event, &ended).ok());
+  EXPECT_TRUE(ended);
+  EXPECT_EQ(Get(first.id()).state(), v1::Job::FAILED);
+  EXPECT_EQ(Get(first.id()).error(), "refused");
+  // Nothing is recorded of a job that has ended.
+  EXPECT_EQ(store_->RecordSchedulerJob(first.id(), scheduler, "late", &event).code(),
+            Status::Code::kFailedPrecondition);
+}
+
+}  // namespace
+}  // namespace pba

@@ -1,0 +1,760 @@
+#include "jobs/slurm_executor.h"
+
+#include <spdlog/fmt/fmt.h>
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cstdlib>
+#include <fstream>
+#include <optional>
+#include <system_error>
+
+#include "core/atomic_write.h"
+#include "jobs/job_run.h"
+
+namespace pba {
+namespace fs = std::filesystem;
+namespace {
+
+constexpr char kSystem[] = "slurm";
+constexpr char kSubmitting[] = "submitting";
+constexpr char kCancelledByRequest[] = "cancelled by request";
+// Files of the job's folder the batch script writes.
+constexpr char kScript[] = "job.sh";
+constexpr char kProgress[] = "progress.jsonl";
+constexpr char kExitCode[] = "exit_code";
+// The most of progress.jsonl read in one round.
+constexpr std::uintmax_t kMaxProgressRead = std::uintmax_t{4} << 20;
+// Rounds a job may be missing from squeue before it counts as gone (it is
+// listed from the moment sbatch answers; one missing round can be a
+// controller between states).
+constexpr int kMissingRounds = 2;
+// How long the start-up check waits for squeue.
+constexpr std::chrono::milliseconds kCheckTimeout{15000};
+
+std::string Trim(std::string s) {
+  const auto space = [](unsigned char c) { return std::isspace(c) != 0; };
+  s.erase(s.begin(), std::find_if_not(s.begin(), s.end(), space));
+  s.erase(std::find_if_not(s.rbegin(), s.rend(), space).base(), s.end());
+  return s;
+}
+
+bool SlurmJobId(const std::string& id) {
+  return !id.empty() && id.size() <= 32 &&
+         std::all_of(id.begin(), id.end(), [](char c) { return std::isdigit(c) || c == '_'; });
+}
+
+std::string ShellQuoted(const std::string& s) {
+  std::string out = "'";
+  for (char c : s) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return out + "'";
+}
+
+// Slurm's time limit in whole minutes, rounded up: Slurm counts no finer
+// (a limit of seconds becomes a minute there anyway).
+std::string SlurmTime(int64_t seconds) { return std::to_string((seconds + 59) / 60); }
+
+std::string JobName(const std::string& id) { return "pba-" + id; }
+
+// A job's wall-clock limit [s]: its own when smaller than the server's; 0:
+// none.
+int64_t TimeLimit(const ExecutorOptions& options, const v1::Job& job) {
+  int64_t limit = options.max_job_time.count();
+  if (job.timeout_s() > 0 && (limit == 0 || job.timeout_s() < limit)) limit = job.timeout_s();
+  return limit;
+}
+
+// The exit code the batch script wrote, if it got that far.
+std::optional<int> ReadExitCode(const fs::path& dir) {
+  std::ifstream in(dir / kExitCode);
+  int code = 0;
+  if (in >> code) return code;
+  return std::nullopt;
+}
+
+// "Slurm job 123" with what Slurm said of it: "(TIMEOUT, reason X, on n1)".
+std::string SlurmSaid(const std::string& slurm_id, const SlurmJobState* seen) {
+  std::string text = "Slurm job " + slurm_id;
+  if (seen == nullptr) return text;
+  text += " (" + seen->state;
+  if (!seen->reason.empty() && seen->reason != "None") text += ", reason " + seen->reason;
+  if (!seen->node.empty() && seen->node != "(null)") text += ", on " + seen->node;
+  return text + ")";
+}
+
+// Whether the file's last 64 KiB say `words`.
+bool LogSays(const fs::path& path, const std::string& words) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return false;
+  in.seekg(0, std::ios::end);
+  const std::streamoff size = in.tellg();
+  const std::streamoff from = std::max<std::streamoff>(0, size - (64 << 10));
+  in.seekg(from);
+  std::string tail(static_cast<std::size_t>(size - from), '\0');
+  in.read(tail.data(), static_cast<std::streamsize>(tail.size()));
+  return tail.find(words) != std::string::npos;
+}
+
+// The lines of `text`, each split at '|' into trimmed fields.
+std::vector<std::vector<std::string>> FieldLines(const std::string& text) {
+  std::vector<std::vector<std::string>> lines;
+  std::size_t start = 0;
+  while (start < text.size()) {
+    std::size_t end = text.find('\n', start);
+    if (end == std::string::npos) end = text.size();
+    const std::string line = text.substr(start, end - start);
+    start = end + 1;
+    std::vector<std::string>& fields = lines.emplace_back();
+    std::size_t from = 0;
+    for (std::size_t bar; (bar = line.find('|', from)) != std::string::npos; from = bar + 1)
+      fields.push_back(Trim(line.substr(from, bar - from)));
+    fields.push_back(Trim(line.substr(from)));
+  }
+  return lines;
+}
+
+}  // namespace
+
+std::vector<SlurmJobState> ParseSacct(const std::string& text, const std::string& slurm_id) {
+  std::vector<SlurmJobState> found;
+  for (const std::vector<std::string>& f : FieldLines(text)) {
+    if (f.size() >= 2 && f[0] == slurm_id && !f[1].empty())
+      found.push_back({slurm_id, "", f[1], "", ""});
+  }
+  return found;
+}
+
+std::vector<SlurmJobState> ParseSqueue(const std::string& text) {
+  std::vector<SlurmJobState> jobs;
+  for (const std::vector<std::string>& f : FieldLines(text)) {
+    if (f.size() == 5 && SlurmJobId(f[0]) && !f[2].empty())
+      jobs.push_back({f[0], f[1], f[2], f[3], f[4]});
+  }
+  return jobs;
+}
+
+SlurmEnd ClassifySlurmState(const std::string& state_text) {
+  // squeue may add a flag ("CANCELLED by 0"): the first word is the state.
+  const std::string state = state_text.substr(0, state_text.find(' '));
+  if (state == "COMPLETED") return SlurmEnd::kCompleted;
+  if (state == "TIMEOUT") return SlurmEnd::kTimeout;
+  if (state == "OUT_OF_MEMORY") return SlurmEnd::kOutOfMemory;
+  if (state == "CANCELLED") return SlurmEnd::kCancelled;
+  if (state == "NODE_FAIL" || state == "PREEMPTED" || state == "BOOT_FAIL")
+    return SlurmEnd::kRequeue;
+  if (state == "FAILED" || state == "DEADLINE" || state == "SPECIAL_EXIT" || state == "REVOKED")
+    return SlurmEnd::kFailed;
+  return SlurmEnd::kNotEnded;  // PENDING, RUNNING, CONFIGURING, COMPLETING, SUSPENDED, ...
+}
+
+bool SlurmRunning(const std::string& state) {
+  return state == "RUNNING" || state == "COMPLETING" || state == "CONFIGURING" ||
+         state == "SUSPENDED" || state == "STOPPED" || state == "SIGNALING" || state == "STAGE_OUT";
+}
+
+std::vector<std::string> SbatchArguments(const SlurmOptions& options, const SlurmSubmission& s) {
+  std::vector<std::string> args = {
+      "--parsable",
+      "--job-name=" + JobName(s.job_id),
+      "--chdir=" + s.dir.string(),
+      "--output=" + (s.dir / kProgress).string(),
+      "--error=" + (s.dir / "solve.log").string(),
+      "--open-mode=append",
+      // PBA runs a job again itself (max_attempts), as a new Slurm job.
+      "--no-requeue",
+      "--ntasks=" + std::to_string(std::max(1, s.ranks)),
+      "--cpus-per-task=" + std::to_string(std::max(1, s.cpus_per_task)),
+  };
+  if (s.time_limit_s > 0) args.push_back("--time=" + SlurmTime(s.time_limit_s));
+  if (s.memory_bytes > 0) {
+    const int64_t mib = (s.memory_bytes + (int64_t{1} << 20) - 1) >> 20;
+    args.push_back("--mem=" + std::to_string(mib) + "M");
+  }
+  if (!options.partition.empty()) args.push_back("--partition=" + options.partition);
+  if (!options.account.empty()) args.push_back("--account=" + options.account);
+  args.push_back(s.script.string());
+  return args;
+}
+
+std::string SlurmBatchScript(const std::vector<std::string>& command, int64_t memory_bytes) {
+  std::string script =
+      "#!/bin/sh\n"
+      "# A PBA job: pba-solve in this folder, its exit code to exit_code.\n"
+      "ulimit -c 0\n";
+  if (memory_bytes > 0) script += fmt::format("ulimit -v {}\n", memory_bytes / 1024);
+  for (std::size_t i = 0; i < command.size(); ++i)
+    script += (i == 0 ? "" : " ") + ShellQuoted(command[i]);
+  script += "\ncode=$?\n";
+  script += fmt::format(
+      "printf '%s\\n' \"$code\" > {0}.partial && mv -f {0}.partial {0}\nexit \"$code\"\n",
+      kExitCode);
+  return script;
+}
+
+// One job in Slurm's hands. Only the loop's thread touches it, but for
+// cancel_requested (under SlurmExecutor::mutex_).
+struct SlurmExecutor::Tracked {
+  v1::Job job;  // as claimed or re-attached (kFull)
+  std::string slurm_id;
+  fs::path dir;
+  std::unique_ptr<ProgressLines> progress;
+  std::uintmax_t offset = 0;  // of progress.jsonl read so far
+  std::string partial;        // its incomplete last line
+  SlurmJobState last;         // what Slurm said when last recorded
+  bool running = false;       // the PBA job is RUNNING
+  bool cancel_requested = false;
+  int missing = 0;      // rounds in a row it was not in squeue
+  int64_t limit_s = 0;  // the time limit it was submitted with
+};
+
+SlurmExecutor::SlurmExecutor(JobStore& store, JobEventHub& hub, ExecutorOptions options,
+                             SlurmOptions slurm)
+    : store_(store), hub_(hub), options_(std::move(options)), slurm_(std::move(slurm)) {}
+
+SlurmExecutor::~SlurmExecutor() { Stop(); }
+
+Status SlurmExecutor::Slurm(const std::string& program, const std::vector<std::string>& args,
+                            CommandResult* result) {
+  std::vector<std::string> argv = {slurm_.bin_dir.empty() ? program
+                                                          : (slurm_.bin_dir / program).string()};
+  argv.insert(argv.end(), args.begin(), args.end());
+  CommandOptions command;
+  command.timeout = slurm_.command_timeout;
+  command.env = slurm_.env;
+  return RunCommand(argv, command, result);
+}
+
+Status SlurmExecutor::Check() {
+  // Slurm's commands retry a configuration they cannot read for a minute:
+  // a SLURM_CONF naming nothing is said at once.
+  std::string conf;
+  if (const char* from_env = std::getenv("SLURM_CONF")) conf = from_env;
+  for (const std::string& e : slurm_.env) {
+    if (e.rfind("SLURM_CONF=", 0) == 0) conf = e.substr(11);
+  }
+  std::error_code ec;
+  if (!conf.empty() && !fs::is_regular_file(conf, ec)) {
+    return Status::FailedPrecondition("--executor slurm: SLURM_CONF names " + conf +
+                                      ", which is not a file");
+  }
+  CommandResult r;
+  std::vector<std::string> argv = {
+      slurm_.bin_dir.empty() ? "squeue" : (slurm_.bin_dir / "squeue").string(), "--noheader",
+      "--me", "--format=%i"};
+  CommandOptions command;
+  command.timeout = std::min(slurm_.command_timeout, kCheckTimeout);
+  command.env = slurm_.env;
+  const Status run = RunCommand(argv, command, &r);
+  if (!run.ok()) {
+    return Status::FailedPrecondition("--executor slurm: " + run.message() +
+                                      " (is Slurm's client installed, and on PATH?)");
+  }
+  if (!r.ok()) {
+    return Status::FailedPrecondition("--executor slurm: squeue failed, " + r.Describe() +
+                                      " (is slurmctld running, and SLURM_CONF right?)");
+  }
+  return Status::Ok();
+}
+
+void SlurmExecutor::Start() {
+  std::lock_guard lock(mutex_);
+  if (started_ || stopping_) return;
+  started_ = true;
+  loop_ = std::thread([this] { Loop(); });
+}
+
+void SlurmExecutor::Wake() {
+  std::lock_guard lock(mutex_);
+  woken_ = true;
+  wake_.notify_one();
+}
+
+void SlurmExecutor::Stop() {
+  {
+    std::lock_guard lock(mutex_);
+    stopping_ = true;
+  }
+  wake_.notify_all();
+  if (loop_.joinable()) loop_.join();
+}
+
+Status SlurmExecutor::Cancel(const std::string& id, v1::Job* job, bool* found) {
+  std::string slurm_id;
+  bool tracked = false;
+  {
+    std::lock_guard lock(mutex_);
+    if (auto it = tracked_.find(id); it != tracked_.end()) {
+      tracked = true;
+      it->second->cancel_requested = true;
+      slurm_id = it->second->slurm_id;
+    }
+  }
+  if (tracked) {
+    // Ended when Slurm says the job has ended (the loop records it).
+    CommandResult r;
+    const Status run = Slurm("scancel", {slurm_id}, &r);
+    if (!run.ok() || !r.ok()) {
+      spdlog::warn("job {}: scancel {} failed: {}", id, slurm_id,
+                   run.ok() ? r.Describe() : run.ToString());
+    } else {
+      spdlog::info("job {} cancel requested: scancel {}", id, slurm_id);
+    }
+    Wake();
+  } else {
+    // Not in Slurm's hands (yet): a QUEUED job ends here. One being
+    // submitted right now is cancelled in Slurm by Submit, which finds it
+    // ended when it records its Slurm job.
+    PBA_RETURN_IF_ERROR(
+        EndQueuedJob(store_, hub_, id, v1::Job::CANCELLED, "cancelled before it started"));
+  }
+  return store_.GetJob(id, JobView::kFull, job, found);
+}
+
+void SlurmExecutor::Loop() {
+  bool reattached = false;
+  std::chrono::steady_clock::time_point last_expiry{};
+  while (true) {
+    {
+      std::lock_guard lock(mutex_);
+      if (stopping_) return;
+    }
+    std::vector<SlurmJobState> queue;
+    if (Poll(&queue)) {
+      if (!reattached) {
+        Reattach(queue);
+        reattached = true;
+      }
+      std::map<std::string, const SlurmJobState*> by_id;
+      for (const SlurmJobState& s : queue) by_id[s.id] = &s;
+      std::vector<std::string> ids;
+      for (const auto& [id, t] : tracked_) ids.push_back(id);
+      for (const std::string& id : ids) {
+        Tracked& t = *tracked_.at(id);
+        const auto seen = by_id.find(t.slurm_id);
+        Follow(t, seen == by_id.end() ? nullptr : seen->second);
+      }
+    }
+    // Nothing is submitted before the jobs Slurm already has are known: a
+    // job claimed by a server that died before it named its Slurm job would
+    // run twice.
+    if (reattached) SubmitQueued();
+    const auto now = std::chrono::steady_clock::now();
+    if (now - last_expiry >= std::chrono::hours(1)) {
+      last_expiry = now;
+      ExpireResults(store_, JobsDir(options_), options_.keep_results);
+    }
+    std::unique_lock lock(mutex_);
+    wake_.wait_for(lock, slurm_.poll, [this] { return stopping_ || woken_; });
+    woken_ = false;
+  }
+}
+
+bool SlurmExecutor::Poll(std::vector<SlurmJobState>* queue) {
+  CommandResult r;
+  const Status run =
+      Slurm("squeue", {"--noheader", "--me", "--states=all", "--format=%i|%j|%T|%r|%N"}, &r);
+  if (!run.ok() || !r.ok()) {
+    // slurmctld down or restarting: nothing is concluded from silence.
+    spdlog::warn("squeue failed ({}); trying again in {} ms",
+                 run.ok() ? r.Describe() : run.ToString(), slurm_.poll.count());
+    return false;
+  }
+  *queue = ParseSqueue(r.out);
+  return true;
+}
+
+void SlurmExecutor::Reattach(const std::vector<SlurmJobState>& queue) {
+  std::vector<v1::Job> jobs;
+  if (const Status listed = store_.ListScheduled(&jobs); !listed.ok()) {
+    spdlog::error("cannot list the jobs in Slurm's hands: {}", listed.ToString());
+    return;
+  }
+  for (v1::Job& job : jobs) {
+    const std::string& id = job.id();
+    std::string slurm_id = job.scheduler().job_id();
+    if (slurm_id == kSubmitting) {
+      // Claimed by a server that stopped before it named the Slurm job: the
+      // job's name finds it, if sbatch took it.
+      const auto named = std::find_if(queue.begin(), queue.end(), [&](const SlurmJobState& s) {
+        return s.name == JobName(id) && ClassifySlurmState(s.state) == SlurmEnd::kNotEnded;
+      });
+      if (named == queue.end()) {
+        if (const Status released = store_.ReleaseToQueue(id); !released.ok())
+          spdlog::error("job {}: cannot put it back in the queue: {}", id, released.ToString());
+        continue;
+      }
+      slurm_id = named->id;
+      v1::SchedulerJob scheduler;
+      scheduler.set_system(kSystem);
+      scheduler.set_job_id(slurm_id);
+      scheduler.set_state(named->state);
+      v1::JobEvent event;
+      if (store_.RecordSchedulerJob(id, scheduler, "found as Slurm job " + slurm_id, &event).ok()) {
+        hub_.Publish(event);
+      }
+    }
+    auto t = std::make_unique<Tracked>();
+    t->slurm_id = slurm_id;
+    t->dir = JobsDir(options_) / id;
+    t->running = job.state() == v1::Job::RUNNING;
+    t->limit_s = TimeLimit(options_, job);
+    t->last.state = job.scheduler().state();
+    t->last.reason = job.scheduler().reason();
+    t->last.node = job.scheduler().node();
+    std::vector<v1::JobEvent> events;
+    int64_t sequence = 0;
+    if (store_.ListEvents(id, 0, &events).ok() && !events.empty())
+      sequence = events.back().sequence();
+    t->progress = std::make_unique<ProgressLines>(store_, hub_, id, sequence);
+    // What it wrote while nobody followed: only its error matters now.
+    SkimProgress(*t);
+    t->job = std::move(job);
+    spdlog::info("job {}: following Slurm job {} again ({})", id, slurm_id,
+                 v1::Job::State_Name(t->job.state()));
+    std::lock_guard lock(mutex_);
+    tracked_[id] = std::move(t);
+  }
+}
+
+void SlurmExecutor::SubmitQueued() {
+  while (true) {
+    {
+      std::lock_guard lock(mutex_);
+      if (stopping_ || static_cast<int>(tracked_.size()) >= slurm_.max_submitted) return;
+    }
+    v1::Job job;
+    bool claimed = false;
+    const Status status = store_.ClaimForScheduler(&job, &claimed);
+    if (!status.ok()) {
+      spdlog::error("cannot take a job from the queue: {}", status.ToString());
+      return;
+    }
+    if (!claimed || !Submit(job)) return;
+  }
+}
+
+void SlurmExecutor::FailQueued(const std::string& id, const std::string& error) {
+  if (const Status ended = EndQueuedJob(store_, hub_, id, v1::Job::FAILED, error); !ended.ok())
+    spdlog::error("job {}: cannot record its end: {}", id, ended.ToString());
+}
+
+bool SlurmExecutor::Submit(const v1::Job& job) {
+  const std::string& id = job.id();
+  if (job.attempts() >= options_.max_attempts) {
+    FailQueued(
+        id, fmt::format("started {} times without finishing; not started again", job.attempts()));
+    return true;
+  }
+  if (options_.may_run) {
+    if (const Status allowed = options_.may_run(job); !allowed.ok()) {
+      FailQueued(id, allowed.ToString());
+      return true;
+    }
+  }
+  if (job.ranks() > 1 && options_.mpirun.empty()) {
+    FailQueued(id, fmt::format("the job asks for {} MPI ranks, but this server runs no MPI (no "
+                               "mpirun)",
+                               job.ranks()));
+    return true;
+  }
+  if (job.ranks() > options_.max_ranks) {
+    FailQueued(id, fmt::format("the job asks for {} MPI ranks; this server allows {} (--max-ranks)",
+                               job.ranks(), options_.max_ranks));
+    return true;
+  }
+  const fs::path dir = JobsDir(options_) / id;
+  v1::Job attempt = job;
+  attempt.set_attempts(job.attempts() + 1);  // the run this prepares
+  std::vector<std::string> input;
+  Status prepared = PrepareFolder(attempt, dir, options_.preparation, &input);
+  // What an earlier run's script wrote.
+  for (const char* old : {kProgress, kExitCode}) {
+    std::error_code ec;
+    fs::remove(dir / old, ec);
+  }
+  const int ranks = std::max(1, job.ranks());
+  ExecutorOptions per_job = options_;
+  per_job.solver_threads = slurm_.cpus_per_task * ranks;
+  const std::vector<std::string> command = SolverCommandLine(per_job, job, input, dir / "result");
+  if (prepared.ok()) {
+    prepared = AtomicWriteText(dir / kScript,
+                               SlurmBatchScript(command, SolverMemoryPerRank(options_, job)));
+  }
+  if (!prepared.ok()) {
+    FailQueued(id,
+               prepared.code() == Status::Code::kIo || prepared.code() == Status::Code::kInternal
+                   ? "cannot prepare the job folder: " + prepared.ToString()
+                   : prepared.ToString());
+    return true;
+  }
+  SlurmSubmission submission;
+  submission.job_id = id;
+  submission.dir = dir;
+  submission.script = dir / kScript;
+  submission.ranks = ranks;
+  submission.cpus_per_task = slurm_.cpus_per_task;
+  const int64_t limit = TimeLimit(options_, job);
+  submission.time_limit_s = limit;
+  submission.memory_bytes = options_.max_solver_memory_bytes;
+  CommandResult r;
+  const Status run = Slurm("sbatch", SbatchArguments(slurm_, submission), &r);
+  const std::string slurm_id = Trim(r.out.substr(0, r.out.find(';')));
+  if (!run.ok() || !r.ok() || !SlurmJobId(slurm_id)) {
+    const std::string said = run.ok() ? r.Describe() : run.ToString();
+    // A controller that does not answer now may later: the job waits in
+    // PBA's queue. Anything else is the job's (a partition, an account,
+    // limits Slurm refuses) and fails it, saying what sbatch said.
+    if (!run.ok() || r.timed_out || said.find("Unable to contact") != std::string::npos ||
+        said.find("Socket timed out") != std::string::npos) {
+      spdlog::warn("job {}: sbatch failed ({}); it stays queued", id, said);
+      if (const Status released = store_.ReleaseToQueue(id); !released.ok())
+        spdlog::error("job {}: cannot put it back in the queue: {}", id, released.ToString());
+      return false;
+    }
+    FailQueued(id, "Slurm refused the job: sbatch " + said);
+    return true;
+  }
+  v1::SchedulerJob scheduler;
+  scheduler.set_system(kSystem);
+  scheduler.set_job_id(slurm_id);
+  scheduler.set_state("PENDING");
+  v1::JobEvent event;
+  const Status recorded =
+      store_.RecordSchedulerJob(id, scheduler, "submitted to Slurm as job " + slurm_id, &event);
+  if (!recorded.ok()) {
+    // Cancelled (or gone) while it was being submitted: Slurm must not run it.
+    spdlog::info("job {} ended while it was submitted: scancel {}", id, slurm_id);
+    CommandResult cancelled;
+    (void)Slurm("scancel", {slurm_id}, &cancelled);
+    return true;
+  }
+  hub_.Publish(event);
+  spdlog::info("job {}: submitted to Slurm as job {}", id, slurm_id);
+  auto t = std::make_unique<Tracked>();
+  t->job = job;
+  t->slurm_id = slurm_id;
+  t->dir = dir;
+  t->limit_s = limit;
+  t->last.state = "PENDING";
+  t->progress = std::make_unique<ProgressLines>(store_, hub_, id, event.sequence());
+  std::lock_guard lock(mutex_);
+  tracked_[id] = std::move(t);
+  return true;
+}
+
+void SlurmExecutor::Follow(Tracked& t, const SlurmJobState* seen) {
+  if (seen == nullptr) {
+    if (++t.missing >= kMissingRounds) Conclude(t, nullptr);
+    return;
+  }
+  t.missing = 0;
+  const SlurmEnd end = ClassifySlurmState(seen->state);
+  if (seen->state != t.last.state || seen->reason != t.last.reason || seen->node != t.last.node) {
+    v1::SchedulerJob scheduler;
+    scheduler.set_system(kSystem);
+    scheduler.set_job_id(t.slurm_id);
+    scheduler.set_state(seen->state);
+    scheduler.set_reason(seen->reason);
+    scheduler.set_node(seen->node);
+    // An event while it waits (a new reason shows why); a start and an end
+    // make their own.
+    const bool waiting = end == SlurmEnd::kNotEnded && !SlurmRunning(seen->state);
+    v1::JobEvent event;
+    const Status recorded = store_.RecordSchedulerJob(
+        t.job.id(), scheduler, waiting ? "Slurm: " + SlurmSaid(t.slurm_id, seen) : "", &event);
+    if (recorded.ok() && event.sequence() > 0) {
+      hub_.Publish(event);
+      t.progress->set_sequence(std::max(t.progress->sequence(), event.sequence()));
+    }
+    t.last = *seen;
+  }
+  if (SlurmRunning(seen->state) && !t.running) {
+    StartRun(t, "Slurm job " + t.slurm_id + (seen->node.empty() ? "" : " on " + seen->node));
+  }
+  if (t.running) ReadProgress(t);
+  if (end != SlurmEnd::kNotEnded) Conclude(t, seen);
+}
+
+bool SlurmExecutor::StartRun(Tracked& t, const std::string& message) {
+  v1::JobEvent event;
+  bool started = false;
+  v1::Job job;
+  const Status status = store_.StartScheduled(t.job.id(), message, &job, &event, &started);
+  if (!status.ok() || !started) {
+    if (!status.ok())
+      spdlog::error("job {}: cannot record its start: {}", t.job.id(), status.ToString());
+    return false;
+  }
+  t.job = std::move(job);
+  t.running = true;
+  t.progress->set_sequence(std::max(t.progress->sequence(), event.sequence()));
+  hub_.Publish(event);
+  LogStateChange(event);
+  return true;
+}
+
+void SlurmExecutor::SkimProgress(Tracked& t) {
+  std::ifstream in(t.dir / kProgress, std::ios::binary);
+  if (!in) return;
+  in.seekg(static_cast<std::streamoff>(t.offset));
+  std::string line;
+  while (std::getline(in, line)) t.progress->Skim(line);
+  std::error_code ec;
+  const std::uintmax_t size = fs::file_size(t.dir / kProgress, ec);
+  if (!ec) t.offset = size;
+  t.partial.clear();
+}
+
+void SlurmExecutor::ReadProgress(Tracked& t) {
+  std::ifstream in(t.dir / kProgress, std::ios::binary);
+  if (!in) return;
+  in.seekg(static_cast<std::streamoff>(t.offset));
+  std::string chunk(kMaxProgressRead, '\0');
+  in.read(chunk.data(), static_cast<std::streamsize>(chunk.size()));
+  chunk.resize(static_cast<std::size_t>(in.gcount()));
+  t.offset += chunk.size();
+  t.partial += chunk;
+  std::size_t start = 0;
+  for (std::size_t end; (end = t.partial.find('\n', start)) != std::string::npos; start = end + 1)
+    t.progress->Handle(t.partial.substr(start, end - start));
+  t.partial.erase(0, start);
+  // A line longer than anything pba-solve writes is not one of its events.
+  if (t.partial.size() > kMaxProgressRead) t.partial.clear();
+}
+
+bool SlurmExecutor::Accounting(const std::string& slurm_id, SlurmJobState* state) {
+  // With slurmdbd, sacct; without, the job completion file (sacct -c).
+  for (const bool completion : {false, true}) {
+    std::vector<std::string> args = {"--noheader", "--parsable2", "--allocations",
+                                     "--jobs=" + slurm_id, "--format=JobID,State,ExitCode"};
+    if (completion) args.insert(args.begin(), "--completion");
+    CommandResult r;
+    if (!Slurm("sacct", args, &r).ok() || !r.ok()) continue;
+    // A job run more than once has a line for each end: the last one.
+    const std::vector<SlurmJobState> lines = ParseSacct(r.out, slurm_id);
+    if (lines.empty()) continue;
+    *state = lines.back();
+    return true;
+  }
+  return false;
+}
+
+void SlurmExecutor::Conclude(Tracked& t, const SlurmJobState* seen) {
+  const std::string id = t.job.id();
+  bool cancel_requested = false;
+  {
+    std::lock_guard lock(mutex_);
+    cancel_requested = t.cancel_requested;
+  }
+  const std::optional<int> code = ReadExitCode(t.dir);
+  // Its last lines (pba-solve's error among them) before anything is
+  // decided: published when it is seen running, else only read.
+  if (t.running) {
+    ReadProgress(t);
+  } else {
+    SkimProgress(t);
+  }
+  // A job Slurm started and ended between two rounds is started here.
+  const auto run = [&] {
+    return t.running ||
+           StartRun(t, "Slurm job " + t.slurm_id + ", ended before it was seen running");
+  };
+  const auto end_run = [&](RunOutcome outcome) {
+    if (outcome.state != v1::Job::SUCCEEDED) {
+      std::error_code ec;
+      fs::remove_all(t.dir / "result", ec);
+    }
+    if (run()) {
+      ReadProgress(t);
+      RecordRunEnd(store_, hub_, t.dir, id, t.progress->sequence(), std::move(outcome));
+    }
+  };
+  const auto fail = [&](const std::string& error) {
+    RunOutcome outcome;
+    outcome.state = v1::Job::FAILED;
+    outcome.error = error;
+    end_run(std::move(outcome));
+  };
+  // Gone from squeue: the accounting, if the cluster keeps one, still
+  // knows how it ended (without Slurm's reason).
+  SlurmJobState recorded;
+  if (seen == nullptr && Accounting(t.slurm_id, &recorded)) seen = &recorded;
+  const std::string said = SlurmSaid(t.slurm_id, seen);
+  const SlurmEnd end = seen != nullptr ? ClassifySlurmState(seen->state) : SlurmEnd::kFailed;
+  // Slurm's own kill over the job's memory, told only in its stderr (a
+  // cluster without cgroups has it FAILED, not OUT_OF_MEMORY).
+  const bool over_memory =
+      end == SlurmEnd::kOutOfMemory ||
+      (code.value_or(1) != 0 && LogSays(t.dir / "solve.log", "Exceeded job memory limit"));
+  if (cancel_requested) {
+    if (t.running) {
+      RunOutcome outcome;
+      outcome.state = v1::Job::CANCELLED;
+      outcome.error = kCancelledByRequest;
+      end_run(std::move(outcome));
+    } else {
+      (void)EndQueuedJob(store_, hub_, id, v1::Job::CANCELLED, "cancelled before it started");
+    }
+  } else if (code == 0 && end != SlurmEnd::kRequeue) {
+    // pba-solve ran to its end and succeeded.
+    RunOutcome outcome;
+    const Status collected = CollectResult(t.dir / "result", &outcome.summary, &outcome.files);
+    Status completed = collected;
+    if (collected.ok() && options_.preparation != nullptr) {
+      completed = options_.preparation->Complete(t.job, t.dir / "result", &outcome);
+    }
+    if (!collected.ok()) {
+      fail("pba-solve succeeded but " + collected.ToString());
+    } else if (!completed.ok()) {
+      fail(completed.ToString());
+    } else {
+      outcome.state = v1::Job::SUCCEEDED;
+      end_run(std::move(outcome));
+    }
+  } else if (end == SlurmEnd::kTimeout) {
+    // (pba-solve, stopped by Slurm's SIGTERM, may have left an exit code.)
+    fail(said + ": stopped by Slurm at its time limit" +
+         (t.limit_s > 0 ? fmt::format(" of {} min", (t.limit_s + 59) / 60) : std::string()));
+  } else if (over_memory) {
+    fail(said + ": killed by Slurm over its memory limit" +
+         (options_.max_solver_memory_bytes > 0
+              ? fmt::format(" of {} MiB", (options_.max_solver_memory_bytes + (1 << 20) - 1) >> 20)
+              : std::string()));
+  } else if (end == SlurmEnd::kCancelled) {
+    RunOutcome outcome;
+    outcome.state = v1::Job::CANCELLED;
+    outcome.error = said + ": cancelled in Slurm, not through PBA";
+    if (t.running) {
+      end_run(std::move(outcome));
+    } else {
+      (void)EndQueuedJob(store_, hub_, id, v1::Job::CANCELLED, outcome.error);
+    }
+  } else if (end == SlurmEnd::kRequeue) {
+    const int attempts = t.job.attempts() + (t.running ? 0 : 1);
+    if (attempts >= options_.max_attempts) {
+      fail(said + fmt::format(": started {} times without finishing; not started again", attempts));
+    } else if (t.running) {
+      RecordRequeue(store_, hub_, id, t.progress->sequence(), "re-queued: " + said);
+    } else if (store_.ReleaseToQueue(id).ok()) {
+      spdlog::info("job {}: {} never started; queued again", id, said);
+    }
+  } else if (code.has_value()) {
+    // pba-solve failed: its own words, or its exit code.
+    ProcessExit exit;
+    exit.code = *code;
+    fail(FailureReason(t.progress->error(), exit));
+  } else if (seen == nullptr) {
+    fail("Slurm job " + t.slurm_id +
+         " ended while no server followed it, longer ago than Slurm keeps finished jobs, and "
+         "left no exit code: how it ended is not known");
+  } else {
+    fail(said + (end == SlurmEnd::kCompleted
+                     ? ": the batch script ended without pba-solve's exit code"
+                     : ": pba-solve did not finish"));
+  }
+  std::lock_guard lock(mutex_);
+  tracked_.erase(id);
+}
+
+}  // namespace pba

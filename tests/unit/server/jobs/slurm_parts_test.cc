@@ -1,0 +1,176 @@
+// The parts of the Slurm executor that need no Slurm: the command runner,
+// squeue's lines, Slurm's states as PBA takes them, the sbatch command
+// line and the batch script (run here with /bin/sh). The executor itself
+// runs against a real slurmctld and slurmd in tests/integration
+// (slurm_executor_test.cc, label slurm).
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <sstream>
+
+#include "jobs/command.h"
+#include "jobs/slurm_executor.h"
+#include "unit/server/server_test_support.h"
+
+namespace pba {
+namespace {
+
+using testing::TempDir;
+
+std::string ReadFile(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  std::stringstream content;
+  content << in.rdbuf();
+  return content.str();
+}
+
+TEST(CommandTest, CapturesOutputAndExitCode) {
+  CommandResult r;
+  ASSERT_TRUE(RunCommand({"sh", "-c", "echo out; echo err >&2; exit 3"}, {}, &r).ok());
+  EXPECT_EQ(r.out, "out\n");
+  EXPECT_EQ(r.err, "err\n");
+  EXPECT_EQ(r.code, 3);
+  EXPECT_FALSE(r.ok());
+  EXPECT_EQ(r.Describe(), "exit code 3: err");
+  CommandOptions with_env;
+  with_env.env = {"PBA_COMMAND_TEST=yes", "PATH=/usr/bin:/bin"};
+  ASSERT_TRUE(RunCommand({"sh", "-c", "printf %s \"$PBA_COMMAND_TEST\""}, with_env, &r).ok());
+  EXPECT_TRUE(r.ok());
+  EXPECT_EQ(r.out, "yes");
+}
+
+TEST(CommandTest, ArgumentsReachTheProgramAsTheyAre) {
+  CommandResult r;
+  ASSERT_TRUE(RunCommand({"printf", "%s|", "a b", "$HOME", "'q'", ";rm"}, {}, &r).ok());
+  EXPECT_EQ(r.out, "a b|$HOME|'q'|;rm|");
+}
+
+TEST(CommandTest, ATimeLimitKillsAndAMissingProgramIsRefused) {
+  CommandOptions quick;
+  quick.timeout = std::chrono::milliseconds(300);
+  CommandResult r;
+  const auto start = std::chrono::steady_clock::now();
+  ASSERT_TRUE(RunCommand({"sh", "-c", "sleep 30 & sleep 30"}, quick, &r).ok());
+  EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(5));
+  EXPECT_TRUE(r.timed_out);
+  EXPECT_FALSE(r.ok());
+  EXPECT_NE(r.Describe().find("time limit"), std::string::npos);
+  const Status missing = RunCommand({"pba-no-such-program"}, {}, &r);
+  EXPECT_EQ(missing.code(), Status::Code::kFailedPrecondition);
+  EXPECT_NE(missing.message().find("pba-no-such-program"), std::string::npos);
+}
+
+TEST(CommandTest, OutputPastTheBoundIsDropped) {
+  CommandOptions small;
+  small.max_output_bytes = 1000;
+  CommandResult r;
+  ASSERT_TRUE(RunCommand({"sh", "-c", "head -c 100000 /dev/zero"}, small, &r).ok());
+  EXPECT_EQ(r.out.size(), 1000u);
+  EXPECT_TRUE(r.truncated);
+  EXPECT_TRUE(r.ok());
+}
+
+TEST(SlurmPartsTest, SqueueLinesAreReadAndOthersSkipped) {
+  const std::vector<SlurmJobState> jobs = ParseSqueue(
+      "12|pba-0001|PENDING|ReqNodeNotAvail, UnavailableNodes:n1|\n"
+      "13_4|pba-0002|RUNNING|None|node1\n"
+      "garbage\n"
+      "x|pba-3|RUNNING|None|n\n"
+      "14|pba-0003|TIMEOUT|TimeLimit|node1");
+  ASSERT_EQ(jobs.size(), 3u);
+  EXPECT_EQ(jobs[0].id, "12");
+  EXPECT_EQ(jobs[0].reason, "ReqNodeNotAvail, UnavailableNodes:n1");
+  EXPECT_EQ(jobs[0].node, "");
+  EXPECT_EQ(jobs[1].id, "13_4");
+  EXPECT_EQ(jobs[1].node, "node1");
+  EXPECT_EQ(jobs[2].state, "TIMEOUT");
+}
+
+TEST(SlurmPartsTest, SacctLinesOfTheJobLastOneLast) {
+  const std::vector<SlurmJobState> lines =
+      ParseSacct("14|PENDING|0:0\n15|COMPLETED|0:0\n14|NODE_FAIL|0:0\n14|COMPLETED|0:0\n", "14");
+  ASSERT_EQ(lines.size(), 3u);
+  EXPECT_EQ(lines.back().state, "COMPLETED");
+  EXPECT_TRUE(ParseSacct("garbage\n", "14").empty());
+}
+
+TEST(SlurmPartsTest, SlurmStatesAsPbaTakesThem) {
+  EXPECT_EQ(ClassifySlurmState("PENDING"), SlurmEnd::kNotEnded);
+  EXPECT_EQ(ClassifySlurmState("RUNNING"), SlurmEnd::kNotEnded);
+  EXPECT_EQ(ClassifySlurmState("COMPLETING"), SlurmEnd::kNotEnded);
+  EXPECT_EQ(ClassifySlurmState("COMPLETED"), SlurmEnd::kCompleted);
+  EXPECT_EQ(ClassifySlurmState("FAILED"), SlurmEnd::kFailed);
+  EXPECT_EQ(ClassifySlurmState("TIMEOUT"), SlurmEnd::kTimeout);
+  EXPECT_EQ(ClassifySlurmState("OUT_OF_MEMORY"), SlurmEnd::kOutOfMemory);
+  EXPECT_EQ(ClassifySlurmState("CANCELLED"), SlurmEnd::kCancelled);
+  EXPECT_EQ(ClassifySlurmState("CANCELLED by 0"), SlurmEnd::kCancelled);
+  EXPECT_EQ(ClassifySlurmState("NODE_FAIL"), SlurmEnd::kRequeue);
+  EXPECT_EQ(ClassifySlurmState("PREEMPTED"), SlurmEnd::kRequeue);
+  EXPECT_EQ(ClassifySlurmState("BOOT_FAIL"), SlurmEnd::kRequeue);
+  EXPECT_EQ(ClassifySlurmState("DEADLINE"), SlurmEnd::kFailed);
+  EXPECT_TRUE(SlurmRunning("RUNNING"));
+  EXPECT_TRUE(SlurmRunning("COMPLETING"));
+  EXPECT_FALSE(SlurmRunning("PENDING"));
+}
+
+TEST(SlurmPartsTest, SbatchGetsTheFolderNameAndLimits) {
+  SlurmOptions options;
+  options.partition = "short";
+  options.account = "lab";
+  SlurmSubmission s;
+  s.job_id = "0123abcd";
+  s.dir = "/shared/jobs/0123abcd";
+  s.script = s.dir / "job.sh";
+  s.ranks = 4;
+  s.cpus_per_task = 2;
+  s.time_limit_s = 90;
+  s.memory_bytes = (int64_t{3} << 30) + 1;  // rounded up to whole MiB
+  const std::vector<std::string> args = SbatchArguments(options, s);
+  const auto has = [&](const std::string& a) {
+    return std::find(args.begin(), args.end(), a) != args.end();
+  };
+  EXPECT_TRUE(has("--parsable"));
+  EXPECT_TRUE(has("--job-name=pba-0123abcd"));
+  EXPECT_TRUE(has("--chdir=/shared/jobs/0123abcd"));
+  EXPECT_TRUE(has("--output=/shared/jobs/0123abcd/progress.jsonl"));
+  EXPECT_TRUE(has("--error=/shared/jobs/0123abcd/solve.log"));
+  EXPECT_TRUE(has("--no-requeue"));
+  EXPECT_TRUE(has("--ntasks=4"));
+  EXPECT_TRUE(has("--cpus-per-task=2"));
+  EXPECT_TRUE(has("--time=2"));  // whole minutes, rounded up
+  EXPECT_TRUE(has("--mem=3073M"));
+  EXPECT_TRUE(has("--partition=short"));
+  EXPECT_TRUE(has("--account=lab"));
+  EXPECT_EQ(args.back(), "/shared/jobs/0123abcd/job.sh");
+  s.time_limit_s = 0;
+  s.memory_bytes = 0;
+  const std::vector<std::string> plain = SbatchArguments(SlurmOptions(), s);
+  for (const std::string& a : plain) {
+    EXPECT_NE(a.rfind("--time", 0), 0u) << a;
+    EXPECT_NE(a.rfind("--mem", 0), 0u) << a;
+    EXPECT_NE(a.rfind("--partition", 0), 0u) << a;
+  }
+}
+
+// The script, run by /bin/sh as Slurm would: the arguments arrive as they
+// are, and the exit code lands in exit_code, whole.
+TEST(SlurmPartsTest, TheBatchScriptRunsTheCommandAndKeepsItsExitCode) {
+  TempDir dir;
+  const std::filesystem::path out = dir.path() / "args";
+  const std::string script =
+      SlurmBatchScript({"sh", "-c", "printf '%s|' \"$@\" > " + out.string() + "; exit 5", "zero",
+                        "it's", "$(touch " + (dir.path() / "pwned").string() + ")", "a b"},
+                       int64_t{2} << 30);
+  EXPECT_NE(script.find("ulimit -v 2097152"), std::string::npos) << script;
+  std::ofstream(dir.path() / "job.sh") << script;
+  CommandResult r;
+  ASSERT_TRUE(RunCommand({"sh", "-c", "cd \"$0\" && sh job.sh", dir.path().string()}, {}, &r).ok());
+  EXPECT_EQ(r.code, 5) << r.err;
+  EXPECT_EQ(ReadFile(out), "it's|$(touch " + (dir.path() / "pwned").string() + ")|a b|");
+  EXPECT_FALSE(std::filesystem::exists(dir.path() / "pwned"));
+  EXPECT_EQ(ReadFile(dir.path() / "exit_code"), "5\n");
+  EXPECT_FALSE(std::filesystem::exists(dir.path() / "exit_code.partial"));
+}
+
+}  // namespace
+}  // namespace pba
