@@ -1,16 +1,17 @@
 #!/usr/bin/env bash
 # What Slurm costs a job: a pba-server with the local executor and one with
 # --executor slurm on the one-node cluster of scripts/slurm-local.sh, each
-# given the same batch of tiny scenes (a 10 mm linear cube, a fraction of a
-# second of solving) through `pba batch run`. For each executor prints the
-# batch's wall time and jobs per minute, whether every member ran once and
-# only once, and per job (medians over the batch): submit to start
-# (created -> started, as the server records them), the solve itself
-# (pba-solve's own wall time) and the rest of the run (started -> ended,
-# less the solve: the process, the result collected with its digests, and
-# for Slurm the polls that see the end).
+# given the same tiny scene (a 10 mm linear cube, a fraction of a second of
+# solving). First `single` jobs one after another (`pba job submit --wait`),
+# each alone: per job (medians) the turnaround (submitted -> end recorded,
+# as the server stamps them), pba-solve's own wall time, and the overhead,
+# the one less the other (the process started; for Slurm the submission,
+# the scheduler's start and the polls; the result collected with its
+# digests). Then a batch of `jobs` members through `pba batch run`: its wall
+# time, jobs per minute, and whether every member succeeded and ran once
+# (one attempt each; for Slurm one line per job in its job completion file).
 #
-# Usage: scripts/bench_slurm.sh [jobs]        (default 200)
+# Usage: scripts/bench_slurm.sh [jobs [single]]    (default 200 10)
 #   PBA_BENCH_PARALLEL: members submitted at a time (default 50)
 #   PBA_BENCH_POLL: --slurm-poll in seconds (default 2, the server's)
 set -euo pipefail
@@ -18,6 +19,7 @@ set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 build=${PBA_BUILD_DIR:-$root/build/release}
 jobs=${1:-200}
+single=${2:-10}
 parallel=${PBA_BENCH_PARALLEL:-50}
 poll=${PBA_BENCH_POLL:-2}
 for b in pba pba-server pba-solve; do
@@ -30,26 +32,63 @@ chmod 755 "$work"  # munged wants every directory above its socket open to all
 export PBA_SLURM_DIR=$work/slurm SLURM_CONF=$work/slurm/slurm.conf
 server_pid=
 cleanup() {
-  [ -n "$server_pid" ] && kill "$server_pid" 2>/dev/null && wait "$server_pid" 2>/dev/null
+  if [ -n "$server_pid" ]; then
+    kill "$server_pid" 2>/dev/null || true
+    wait "$server_pid" 2>/dev/null || true
+  fi
   bash "$root/scripts/slurm-local.sh" stop --clean >/dev/null 2>&1 || true
   rm -rf "$work"
 }
 trap cleanup EXIT
 
-cat >"$work/cube.yaml" <<'EOF'
+cube() {  # cube DISPLACEMENT_MM
+  cat <<EOF
 name: tiny
 geometry: {box: {size_mm: [10, 10, 10]}}
 mesh: {element_size_mm: 2}
 material: {linear_elastic: {youngs_modulus_pa: 3000, poissons_ratio: 0.45}}
 boundary_conditions:
   - {set: bottom, fixed: {}}
-  - {set: top, displacement: {z_mm: -0.5}}
+  - {set: top, displacement: {z_mm: $1}}
 analysis: {type: LINEAR_STATIC, linear_solver: CHOLMOD}
 EOF
+}
+cube -0.5 >"$work/cube.yaml"
 # Members differ by their displacement, so each is its own job.
 values=$("$py" -c "print(', '.join(str(round(-0.5 - i * 1e-4, 6)) for i in range($jobs)))")
 
-# Starts a server with `$@`, runs the batch, prints the row.
+# The figures of one run, from the single jobs' status and the batch's list.
+report() {
+  "$py" - "$@" <<'PY'
+import json, statistics, sys
+from datetime import datetime
+work, name, start, end, n, runs, single = sys.argv[1:]
+def t(s):
+    return datetime.fromisoformat(s.replace("Z", "+00:00")).timestamp()
+def get(j, snake, camel):
+    return j.get(snake, j.get(camel))
+turn, solve = [], []
+for line in open(f"{work}/single-{name}.json"):
+    if not line.strip():
+        continue
+    j = json.loads(line)
+    perf = j.get("summary", {}).get("performance", {})
+    turn.append(t(get(j, "end_time", "endTime")) - t(get(j, "create_time", "createTime")))
+    solve.append(float(get(perf, "wall_time_s", "wallTimeS") or 0))
+over = [a - b for a, b in zip(turn, solve)]
+listed = json.load(open(f"{work}/jobs-{name}.json")).get("jobs", [])
+batch = [j for j in listed if j.get("name") != "one"]
+ok = sum(j.get("state") == "SUCCEEDED" for j in batch)
+attempts = {int(j.get("attempts", 0)) for j in batch}
+each_once = ok == int(n) and attempts == {1} and (runs == "-" or int(runs) == int(n) + int(single))
+wall = float(end) - float(start)
+print(f"| {name} | {statistics.median(turn):.2f} s | {statistics.median(solve):.2f} s | "
+      f"{statistics.median(over):.2f} s ({min(over):.2f} .. {max(over):.2f}) | {n} | {ok} | "
+      f"{'yes' if each_once else 'NO'} | {wall:.1f} s | {int(n) / wall * 60:.0f} |")
+PY
+}
+
+# run NAME SERVER_ARGS...: a server, the single jobs, the batch, the row.
 run() {
   local name=$1
   shift
@@ -66,6 +105,18 @@ run() {
   [ -n "$address" ] || { cat "$work/$name.log" >&2; exit 1; }
   export PBA_SERVER=$address PBA_TOKEN
   PBA_TOKEN=$(cat "$data/admin.token")
+
+  : >"$work/single-$name.json"
+  for i in $(seq "$single"); do
+    cube "-0.4$i" | sed 's/^name: tiny/name: one/' >"$work/one.yaml"
+    local id
+    id=$("$build/bin/pba" job submit "$work/one.yaml" --wait 2>&1 |
+      sed -n 's/.*Submitted job \([^ ]*\).*/\1/p' | head -n 1)
+    [ -n "$id" ] || { echo "bench_slurm: a single job failed" >&2; exit 1; }
+    "$build/bin/pba" --json job status "$id" | tr -d '\n' >>"$work/single-$name.json"
+    echo >>"$work/single-$name.json"
+  done
+
   cat >"$work/batch-$name.yaml" <<EOF
 name: bench-$name
 scene: cube.yaml
@@ -84,40 +135,14 @@ EOF
   "$build/bin/pba" --json job list --all >"$work/jobs-$name.json"
   local runs=-
   [ "$name" = slurm ] && runs=$(grep -c "Name=pba-" "$work/slurm/jobcomp.txt" || true)
-  "$py" - "$work/jobs-$name.json" "$name" "$start" "$end" "$jobs" "$runs" <<'EOF'
-import json, statistics, sys
-from datetime import datetime
-path, name, start, end, n, runs = sys.argv[1:]
-text = open(path).read()
-jobs = [json.loads(line) for line in text.splitlines() if line.strip().startswith("{")] \
-    if not text.lstrip().startswith("[") else json.loads(text)
-if isinstance(jobs, dict):
-    jobs = jobs.get("jobs", [])
-def t(s):
-    return datetime.fromisoformat(s.replace("Z", "+00:00")).timestamp()
-wait, rest, solve, attempts, ok = [], [], [], [], 0
-for j in jobs:
-    if j.get("state") == "SUCCEEDED":
-        ok += 1
-    attempts.append(int(j.get("attempts", 0)))
-    created, started, ended = t(j["create_time"]), t(j["start_time"]), t(j["end_time"])
-    wall = j.get("summary", {}).get("performance", {}).get("wall_time_s", 0)
-    wait.append(started - created)
-    solve.append(wall)
-    rest.append(ended - started - wall)
-wall = float(end) - float(start)
-once = "yes" if ok == int(n) and set(attempts) == {1} and runs in ("-", n) else "NO"
-print(f"| {name} | {n} | {ok} | {once} | {wall:.1f} s | {int(n) / wall * 60:.0f} | "
-      f"{statistics.median(wait):.2f} s | {statistics.median(solve):.2f} s | "
-      f"{statistics.median(rest):.2f} s |")
-EOF
+  report "$work" "$name" "$start" "$end" "$jobs" "$runs" "$single"
   kill "$server_pid"
   wait "$server_pid" 2>/dev/null || true
   server_pid=
 }
 
-echo "machine: $(nproc) cores, $(awk '/MemTotal/ {printf "%.0f GB", $2 / 1048576}' /proc/meminfo); commit $(git -C "$root" rev-parse --short HEAD); $jobs jobs, $parallel submitted at a time"
-echo "| executor | jobs | succeeded | each once | batch wall time | jobs per minute | submit to start (median) | solve (median) | start to recorded end, less the solve (median) |"
+echo "machine: $(nproc) cores, $(awk '/MemTotal/ {printf "%.0f GB", $2 / 1048576}' /proc/meminfo); commit $(git -C "$root" rev-parse --short HEAD); --slurm-poll $poll s; batch submitted $parallel at a time"
+echo "| executor | turnaround of one job (median of $single) | its solve | overhead (range) | batch jobs | succeeded | each ran once | batch wall time | jobs per minute |"
 echo "|---|---|---|---|---|---|---|---|---|"
 run local --max-running 2
 bash "$root/scripts/slurm-local.sh" start >/dev/null

@@ -83,6 +83,17 @@ std::string SlurmSaid(const std::string& slurm_id, const SlurmJobState* seen) {
   return text + ")";
 }
 
+// An sbatch refusal that may pass later: the controller out of reach or
+// busy, or a limit on the jobs a user may have submitted at once (the
+// site's MaxSubmitJobs: a job of PBA's queue waits for room there).
+bool SbatchMayAnswerLater(const std::string& said) {
+  for (const char* words : {"Unable to contact", "Socket timed out", "Resource temporarily",
+                            "MaxSubmitJob", "Slurm temporarily unable"}) {
+    if (said.find(words) != std::string::npos) return true;
+  }
+  return false;
+}
+
 // Whether the file's last 64 KiB say `words`.
 bool LogSays(const fs::path& path, const std::string& words) {
   std::ifstream in(path, std::ios::binary);
@@ -505,8 +516,7 @@ bool SlurmExecutor::Submit(const v1::Job& job) {
     // A controller that does not answer now may later: the job waits in
     // PBA's queue. Anything else is the job's (a partition, an account,
     // limits Slurm refuses) and fails it, saying what sbatch said.
-    if (!run.ok() || r.timed_out || said.find("Unable to contact") != std::string::npos ||
-        said.find("Socket timed out") != std::string::npos) {
+    if (!run.ok() || r.timed_out || SbatchMayAnswerLater(said)) {
       spdlog::warn("job {}: sbatch failed ({}); it stays queued", id, said);
       if (const Status released = store_.ReleaseToQueue(id); !released.ok())
         spdlog::error("job {}: cannot put it back in the queue: {}", id, released.ToString());

@@ -427,7 +427,8 @@ TEST_F(PbaAtlasTest, AalAtThreeMillimetresMeetsTheQualityBoundsWithQualityRounds
       std::regex("meshes: the one kept has [0-9]+ structures? refined[^;]*; met at: ([^;]*);")))
       << run.out;
   const std::string rounds = found[1].str();
-  const std::regex refined(R"(([A-Za-z0-9_]+) \(cells ([0-9.]+) mm, facets [0-9.]+ mm\))");
+  // (Names may hold spaces: "White matter".)
+  const std::regex refined(R"((?:^|, )([^,(]+) \(cells ([0-9.]+) mm, facets [0-9.]+ mm\))");
   int named = 0;
   for (std::sregex_iterator it(rounds.begin(), rounds.end(), refined), end; it != end; ++it) {
     ++named;
