@@ -20,10 +20,16 @@ namespace {
 constexpr char kSystem[] = "slurm";
 constexpr char kSubmitting[] = "submitting";
 constexpr char kCancelledByRequest[] = "cancelled by request";
-// Files of the job's folder the batch script writes.
+// The batch script, in the job's folder. What each run writes there is
+// named by its Slurm job id (a run Slurm lost track of on a failed node
+// may still be writing its own while the next one runs): its progress
+// lines, its exit code, and its result, renamed to result/ when it is the
+// one that succeeded.
 constexpr char kScript[] = "job.sh";
-constexpr char kProgress[] = "progress.jsonl";
-constexpr char kExitCode[] = "exit_code";
+constexpr char kRunResult[] = "@PBA_RUN_RESULT@";  // pba-solve's --out, in the script
+std::string ProgressFile(const std::string& slurm_id) { return "progress-" + slurm_id + ".jsonl"; }
+std::string ExitCodeFile(const std::string& slurm_id) { return "exit_code-" + slurm_id; }
+std::string ResultDir(const std::string& slurm_id) { return "result-" + slurm_id; }
 // The most of progress.jsonl read in one round.
 constexpr std::uintmax_t kMaxProgressRead = std::uintmax_t{4} << 20;
 // Rounds a job may be missing from squeue before it counts as gone (it is
@@ -66,8 +72,8 @@ int64_t TimeLimit(const ExecutorOptions& options, const v1::Job& job) {
 }
 
 // The exit code the batch script wrote, if it got that far.
-std::optional<int> ReadExitCode(const fs::path& dir) {
-  std::ifstream in(dir / kExitCode);
+std::optional<int> ReadExitCode(const fs::path& dir, const std::string& slurm_id) {
+  std::ifstream in(dir / ExitCodeFile(slurm_id));
   int code = 0;
   if (in >> code) return code;
   return std::nullopt;
@@ -94,13 +100,15 @@ bool SbatchMayAnswerLater(const std::string& said) {
   return false;
 }
 
-// Whether the file's last 64 KiB say `words`.
-bool LogSays(const fs::path& path, const std::string& words) {
+// Whether the file says `words` past `offset` (at most its last 64 KiB).
+bool LogSays(const fs::path& path, std::uintmax_t offset, const std::string& words) {
   std::ifstream in(path, std::ios::binary);
   if (!in) return false;
   in.seekg(0, std::ios::end);
   const std::streamoff size = in.tellg();
-  const std::streamoff from = std::max<std::streamoff>(0, size - (64 << 10));
+  const std::streamoff from = std::max<std::streamoff>(
+      static_cast<std::streamoff>(offset), std::max<std::streamoff>(0, size - (64 << 10)));
+  if (from >= size) return false;
   in.seekg(from);
   std::string tail(static_cast<std::size_t>(size - from), '\0');
   in.read(tail.data(), static_cast<std::streamsize>(tail.size()));
@@ -123,6 +131,22 @@ std::vector<std::vector<std::string>> FieldLines(const std::string& text) {
     fields.push_back(Trim(line.substr(from)));
   }
   return lines;
+}
+
+// What earlier runs wrote in the job's folder `dir` (their progress, exit
+// codes, results and pba-solve's staging siblings of those).
+void RemoveRunFiles(const fs::path& dir) {
+  std::error_code ec;
+  for (const fs::directory_entry& entry : fs::directory_iterator(dir, ec)) {
+    const std::string name = entry.path().filename().string();
+    for (const char* prefix : {"progress-", "exit_code-", "result-", ".result-"}) {
+      if (name.rfind(prefix, 0) == 0) {
+        std::error_code remove_ec;
+        fs::remove_all(entry.path(), remove_ec);
+        break;
+      }
+    }
+  }
 }
 
 }  // namespace
@@ -169,7 +193,7 @@ std::vector<std::string> SbatchArguments(const SlurmOptions& options, const Slur
       "--parsable",
       "--job-name=" + JobName(s.job_id),
       "--chdir=" + s.dir.string(),
-      "--output=" + (s.dir / kProgress).string(),
+      "--output=" + (s.dir / ProgressFile("%j")).string(),
       "--error=" + (s.dir / "solve.log").string(),
       "--open-mode=append",
       // PBA runs a job again itself (max_attempts), as a new Slurm job.
@@ -191,15 +215,19 @@ std::vector<std::string> SbatchArguments(const SlurmOptions& options, const Slur
 std::string SlurmBatchScript(const std::vector<std::string>& command, int64_t memory_bytes) {
   std::string script =
       "#!/bin/sh\n"
-      "# A PBA job: pba-solve in this folder, its exit code to exit_code.\n"
+      "# A PBA job: pba-solve in this folder, its result to result-<Slurm job id>,\n"
+      "# its exit code to exit_code-<Slurm job id>.\n"
       "ulimit -c 0\n";
   if (memory_bytes > 0) script += fmt::format("ulimit -v {}\n", memory_bytes / 1024);
-  for (std::size_t i = 0; i < command.size(); ++i)
-    script += (i == 0 ? "" : " ") + ShellQuoted(command[i]);
+  for (std::size_t i = 0; i < command.size(); ++i) {
+    script += i == 0 ? "" : " ";
+    script += command[i] == kRunResult ? "result-\"$SLURM_JOB_ID\"" : ShellQuoted(command[i]);
+  }
   script += "\ncode=$?\n";
-  script += fmt::format(
-      "printf '%s\\n' \"$code\" > {0}.partial && mv -f {0}.partial {0}\nexit \"$code\"\n",
-      kExitCode);
+  script +=
+      "printf '%s\\n' \"$code\" > exit_code-\"$SLURM_JOB_ID\".partial &&\n"
+      "  mv -f exit_code-\"$SLURM_JOB_ID\".partial exit_code-\"$SLURM_JOB_ID\"\n"
+      "exit \"$code\"\n";
   return script;
 }
 
@@ -215,8 +243,9 @@ struct SlurmExecutor::Tracked {
   SlurmJobState last;         // what Slurm said when last recorded
   bool running = false;       // the PBA job is RUNNING
   bool cancel_requested = false;
-  int missing = 0;      // rounds in a row it was not in squeue
-  int64_t limit_s = 0;  // the time limit it was submitted with
+  int missing = 0;                // rounds in a row it was not in squeue
+  int64_t limit_s = 0;            // the time limit it was submitted with
+  std::uintmax_t log_offset = 0;  // solve.log's size when it was submitted
 };
 
 SlurmExecutor::SlurmExecutor(JobStore& store, JobEventHub& hub, ExecutorOptions options,
@@ -479,15 +508,11 @@ bool SlurmExecutor::Submit(const v1::Job& job) {
   attempt.set_attempts(job.attempts() + 1);  // the run this prepares
   std::vector<std::string> input;
   Status prepared = PrepareFolder(attempt, dir, options_.preparation, &input);
-  // What an earlier run's script wrote.
-  for (const char* old : {kProgress, kExitCode}) {
-    std::error_code ec;
-    fs::remove(dir / old, ec);
-  }
+  RemoveRunFiles(dir);
   const int ranks = std::max(1, job.ranks());
   ExecutorOptions per_job = options_;
   per_job.solver_threads = slurm_.cpus_per_task * ranks;
-  const std::vector<std::string> command = SolverCommandLine(per_job, job, input, dir / "result");
+  const std::vector<std::string> command = SolverCommandLine(per_job, job, input, kRunResult);
   if (prepared.ok()) {
     prepared = AtomicWriteText(dir / kScript,
                                SlurmBatchScript(command, SolverMemoryPerRank(options_, job)));
@@ -499,6 +524,9 @@ bool SlurmExecutor::Submit(const v1::Job& job) {
                    : prepared.ToString());
     return true;
   }
+  std::error_code log_ec;
+  std::uintmax_t log_offset = fs::file_size(dir / "solve.log", log_ec);
+  if (log_ec) log_offset = 0;
   SlurmSubmission submission;
   submission.job_id = id;
   submission.dir = dir;
@@ -546,6 +574,7 @@ bool SlurmExecutor::Submit(const v1::Job& job) {
   t->slurm_id = slurm_id;
   t->dir = dir;
   t->limit_s = limit;
+  t->log_offset = log_offset;
   t->last.state = "PENDING";
   t->progress = std::make_unique<ProgressLines>(store_, hub_, id, event.sequence());
   std::lock_guard lock(mutex_);
@@ -605,19 +634,20 @@ bool SlurmExecutor::StartRun(Tracked& t, const std::string& message) {
 }
 
 void SlurmExecutor::SkimProgress(Tracked& t) {
-  std::ifstream in(t.dir / kProgress, std::ios::binary);
+  const fs::path file = t.dir / ProgressFile(t.slurm_id);
+  std::ifstream in(file, std::ios::binary);
   if (!in) return;
   in.seekg(static_cast<std::streamoff>(t.offset));
   std::string line;
   while (std::getline(in, line)) t.progress->Skim(line);
   std::error_code ec;
-  const std::uintmax_t size = fs::file_size(t.dir / kProgress, ec);
+  const std::uintmax_t size = fs::file_size(file, ec);
   if (!ec) t.offset = size;
   t.partial.clear();
 }
 
 void SlurmExecutor::ReadProgress(Tracked& t) {
-  std::ifstream in(t.dir / kProgress, std::ios::binary);
+  std::ifstream in(t.dir / ProgressFile(t.slurm_id), std::ios::binary);
   if (!in) return;
   in.seekg(static_cast<std::streamoff>(t.offset));
   std::string chunk(kMaxProgressRead, '\0');
@@ -657,7 +687,8 @@ void SlurmExecutor::Conclude(Tracked& t, const SlurmJobState* seen) {
     std::lock_guard lock(mutex_);
     cancel_requested = t.cancel_requested;
   }
-  const std::optional<int> code = ReadExitCode(t.dir);
+  const std::optional<int> code = ReadExitCode(t.dir, t.slurm_id);
+  const fs::path run_result = t.dir / ResultDir(t.slurm_id);
   // Its last lines (pba-solve's error among them) before anything is
   // decided: published when it is seen running, else only read.
   if (t.running) {
@@ -671,9 +702,11 @@ void SlurmExecutor::Conclude(Tracked& t, const SlurmJobState* seen) {
            StartRun(t, "Slurm job " + t.slurm_id + ", ended before it was seen running");
   };
   const auto end_run = [&](RunOutcome outcome) {
-    if (outcome.state != v1::Job::SUCCEEDED) {
-      std::error_code ec;
-      fs::remove_all(t.dir / "result", ec);
+    std::error_code ec;
+    fs::remove_all(run_result, ec);  // renamed to result/ when it succeeded
+    for (const fs::directory_entry& entry : fs::directory_iterator(t.dir, ec)) {
+      if (entry.path().filename().string().rfind("." + ResultDir(t.slurm_id) + ".", 0) == 0)
+        fs::remove_all(entry.path(), ec);
     }
     if (run()) {
       ReadProgress(t);
@@ -694,9 +727,9 @@ void SlurmExecutor::Conclude(Tracked& t, const SlurmJobState* seen) {
   const SlurmEnd end = seen != nullptr ? ClassifySlurmState(seen->state) : SlurmEnd::kFailed;
   // Slurm's own kill over the job's memory, told only in its stderr (a
   // cluster without cgroups has it FAILED, not OUT_OF_MEMORY).
-  const bool over_memory =
-      end == SlurmEnd::kOutOfMemory ||
-      (code.value_or(1) != 0 && LogSays(t.dir / "solve.log", "Exceeded job memory limit"));
+  const bool over_memory = end == SlurmEnd::kOutOfMemory ||
+                           (code.value_or(1) != 0 && LogSays(t.dir / "solve.log", t.log_offset,
+                                                             "Exceeded job memory limit"));
   if (cancel_requested) {
     if (t.running) {
       RunOutcome outcome;
@@ -708,8 +741,14 @@ void SlurmExecutor::Conclude(Tracked& t, const SlurmJobState* seen) {
     }
   } else if (code == 0 && end != SlurmEnd::kRequeue) {
     // pba-solve ran to its end and succeeded.
+    // This run's result becomes the job's.
     RunOutcome outcome;
-    const Status collected = CollectResult(t.dir / "result", &outcome.summary, &outcome.files);
+    std::error_code ec;
+    fs::remove_all(t.dir / "result", ec);
+    fs::rename(run_result, t.dir / "result", ec);
+    const Status collected = ec ? Status::Io("its result " + run_result.string() +
+                                             " cannot be moved into place: " + ec.message())
+                                : CollectResult(t.dir / "result", &outcome.summary, &outcome.files);
     Status completed = collected;
     if (collected.ok() && options_.preparation != nullptr) {
       completed = options_.preparation->Complete(t.job, t.dir / "result", &outcome);

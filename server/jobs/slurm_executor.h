@@ -7,15 +7,18 @@
 //      sees) is prepared as for a local run (job_run.h), and `sbatch`
 //      submits a script that runs pba-solve there (under mpirun for a job
 //      on several ranks), its stdout (the progress lines) to
-//      progress.jsonl, its stderr to solve.log, and its exit code, once it
-//      has one, to the file exit_code. The PBA job stays QUEUED, its
+//      progress-<Slurm id>.jsonl, its stderr to solve.log, its result to
+//      result-<Slurm id> and its exit code, once it has one, to
+//      exit_code-<Slurm id> (each run's own files: a run lost on a failed
+//      node cannot be taken for the next). The PBA job stays QUEUED, its
 //      Job.scheduler naming the Slurm job (PENDING, with Slurm's reason);
 //   2. reads every Slurm job of the server's user in one `squeue --states=all`
 //      and, for each of its own:
 //      - PENDING: keeps Slurm's reason (a drained node shows here);
 //      - RUNNING: the PBA job becomes RUNNING (an attempt; the node noted),
-//        and the new lines of progress.jsonl become its progress events;
-//      - ended: the result is collected and checked (SUCCEEDED), or the
+//        and the new lines of its progress file become its progress events;
+//      - ended: the run's result is renamed to result/, collected and
+//        checked (SUCCEEDED), or the
 //        job FAILED with Slurm's state and reason (TIMEOUT: its time limit;
 //        OUT_OF_MEMORY: its memory) or pba-solve's error; CANCELLED when
 //        PBA cancelled it, or when someone did with scancel (said so);
@@ -107,9 +110,10 @@ struct SlurmSubmission {
 };
 std::vector<std::string> SbatchArguments(const SlurmOptions& options, const SlurmSubmission& s);
 
-// The batch script: runs `command` (the program first) in the job's folder,
+// The batch script: runs `command` (the program first; an argument
+// "@PBA_RUN_RESULT@" becomes result-$SLURM_JOB_ID) in the job's folder,
 // under an address-space limit when `memory_bytes` > 0, and writes its exit
-// code to exit_code (through a temporary file: the file is there whole or
+// code to exit_code-$SLURM_JOB_ID (through a temporary file: the file is there whole or
 // not at all). Each argument single-quoted for the shell.
 std::string SlurmBatchScript(const std::vector<std::string>& command, int64_t memory_bytes);
 
@@ -143,7 +147,7 @@ class SlurmExecutor : public Executor {
   bool Poll(std::vector<SlurmJobState>* queue);
   void Follow(Tracked& t, const SlurmJobState* seen);
   void ReadProgress(Tracked& t);
-  // The unread rest of progress.jsonl, for pba-solve's error only.
+  // The unread rest of the run's progress file, for pba-solve's error only.
   void SkimProgress(Tracked& t);
   void Conclude(Tracked& t, const SlurmJobState* seen);
   // How a job gone from squeue ended, from Slurm's accounting; false when

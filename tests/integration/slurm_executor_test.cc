@@ -8,6 +8,7 @@
 // not have. Label slurm; each test brings up its own cluster, and ctest's
 // RESOURCE_LOCK keeps two from running at once (they share the ports).
 #include <gtest/gtest.h>
+#include <signal.h>
 
 #include <chrono>
 #include <cstdlib>
@@ -116,12 +117,12 @@ class SlurmTest : public ::testing::Test {
   std::string Show(const std::string& id) { return Pba({"job", "show", id}).out; }  // = status
 
   // The Slurm job id `pba job show` names ("" before it has one).
-  std::string SlurmJob(const std::string& id) {
+  static std::string SlurmJobIn(const std::string& shown) {
     std::smatch match;
     static const std::regex kSlurm("Slurm job\\s+(\\d+)");
-    const std::string shown = Show(id);
     return std::regex_search(shown, match, kSlurm) ? match[1].str() : "";
   }
+  std::string SlurmJob(const std::string& id) { return SlurmJobIn(Show(id)); }
 
   // Polls `pba job show` until `pred` holds of its text.
   template <typename Pred>
@@ -283,6 +284,47 @@ TEST_F(SlurmTest, AServerKilledAndStartedAgainLosesAndRerunsNothing) {
   EXPECT_TRUE(std::regex_search(Show(waiting), std::regex("Attempts\\s+1\\b"))) << Show(waiting);
   EXPECT_EQ(SlurmRuns(running), 1u);
   EXPECT_EQ(SlurmRuns(waiting), 1u);
+}
+
+// slurmd lost while a job runs: Slurm declares the node down and the job
+// NODE_FAIL, and PBA runs it again as a new Slurm job once the node is
+// back. The lost run's pba-solve may still be writing (its slurmstepd
+// outlives slurmd): its files are its own, never taken for the new run's.
+TEST_F(SlurmTest, ANodeLostMidJobRunsTheJobAgainAsANewSlurmJob) {
+  // A node silent for 10 s is down (60 s otherwise); Slurm notices within
+  // about 30 s, well inside the job's minute.
+  ASSERT_EQ(Cluster({"stop", "--clean"}).exit_code, 0);
+  ::setenv("PBA_SLURM_SLURMD_TIMEOUT", "10", 1);
+  const RunResult up = Cluster({"start"});
+  ::unsetenv("PBA_SLURM_SLURMD_TIMEOUT");
+  ASSERT_EQ(up.exit_code, 0) << up.out << up.err;
+  ASSERT_TRUE(StartServer());
+  const std::string id = Submit("lost", Hold("lost", 240));
+  ASSERT_TRUE(WaitForState(id, "RUNNING", seconds(60))) << Show(id);
+  const std::string first = SlurmJob(id);
+  ASSERT_FALSE(first.empty());
+  const std::string pid = ReadFile(slurm_dir_ / "run" / "slurmd.pid");
+  ASSERT_FALSE(pid.empty());
+  ASSERT_EQ(::kill(std::stoi(pid), SIGKILL), 0);
+  // Re-queued and handed to Slurm again, waiting for the node.
+  ASSERT_TRUE(WaitForShow(
+      id,
+      [&](const std::string& shown) {
+        const std::string now = SlurmJobIn(shown);
+        return !now.empty() && now != first;
+      },
+      seconds(120)))
+      << Show(id);
+  const RunResult back = Cluster({"start"});
+  ASSERT_EQ(back.exit_code, 0) << back.out << back.err;
+  ASSERT_TRUE(WaitForState(id, "SUCCEEDED", seconds(180))) << Show(id);
+  const std::string shown = Show(id);
+  EXPECT_TRUE(std::regex_search(shown, std::regex("Attempts\\s+2\\b"))) << shown;
+  EXPECT_NE(SlurmJob(id), first);
+  EXPECT_NE(ReadFile(server_->log_path()).find("re-queued: Slurm job " + first + " (NODE_FAIL"),
+            std::string::npos)
+      << ReadFile(server_->log_path());
+  EXPECT_TRUE(fs::exists(dir_.path() / "data" / "jobs" / id / "result" / "summary.json"));
 }
 
 TEST_F(SlurmTest, SlurmctldRestartedWhileAJobRuns) {

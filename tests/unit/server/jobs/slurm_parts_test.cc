@@ -132,7 +132,7 @@ TEST(SlurmPartsTest, SbatchGetsTheFolderNameAndLimits) {
   EXPECT_TRUE(has("--parsable"));
   EXPECT_TRUE(has("--job-name=pba-0123abcd"));
   EXPECT_TRUE(has("--chdir=/shared/jobs/0123abcd"));
-  EXPECT_TRUE(has("--output=/shared/jobs/0123abcd/progress.jsonl"));
+  EXPECT_TRUE(has("--output=/shared/jobs/0123abcd/progress-%j.jsonl"));  // Slurm's job id
   EXPECT_TRUE(has("--error=/shared/jobs/0123abcd/solve.log"));
   EXPECT_TRUE(has("--no-requeue"));
   EXPECT_TRUE(has("--ntasks=4"));
@@ -153,7 +153,7 @@ TEST(SlurmPartsTest, SbatchGetsTheFolderNameAndLimits) {
 }
 
 // The script, run by /bin/sh as Slurm would: the arguments arrive as they
-// are, and the exit code lands in exit_code, whole.
+// are, and the exit code lands in exit_code-<Slurm job id>, whole.
 TEST(SlurmPartsTest, TheBatchScriptRunsTheCommandAndKeepsItsExitCode) {
   TempDir dir;
   const std::filesystem::path out = dir.path() / "args";
@@ -164,12 +164,19 @@ TEST(SlurmPartsTest, TheBatchScriptRunsTheCommandAndKeepsItsExitCode) {
   EXPECT_NE(script.find("ulimit -v 2097152"), std::string::npos) << script;
   std::ofstream(dir.path() / "job.sh") << script;
   CommandResult r;
-  ASSERT_TRUE(RunCommand({"sh", "-c", "cd \"$0\" && sh job.sh", dir.path().string()}, {}, &r).ok());
+  CommandOptions as_slurm;
+  as_slurm.env = {"SLURM_JOB_ID=77"};
+  ASSERT_TRUE(
+      RunCommand({"sh", "-c", "cd \"$0\" && sh job.sh", dir.path().string()}, as_slurm, &r).ok());
   EXPECT_EQ(r.code, 5) << r.err;
   EXPECT_EQ(ReadFile(out), "it's|$(touch " + (dir.path() / "pwned").string() + ")|a b|");
   EXPECT_FALSE(std::filesystem::exists(dir.path() / "pwned"));
-  EXPECT_EQ(ReadFile(dir.path() / "exit_code"), "5\n");
-  EXPECT_FALSE(std::filesystem::exists(dir.path() / "exit_code.partial"));
+  EXPECT_EQ(ReadFile(dir.path() / "exit_code-77"), "5\n");
+  EXPECT_FALSE(std::filesystem::exists(dir.path() / "exit_code-77.partial"));
+  // pba-solve's --out: this run's own result folder.
+  EXPECT_NE(SlurmBatchScript({"pba-solve", "@PBA_RUN_RESULT@"}, 0)
+                .find("'pba-solve' result-\"$SLURM_JOB_ID\""),
+            std::string::npos);
 }
 
 }  // namespace
