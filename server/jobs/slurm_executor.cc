@@ -36,6 +36,8 @@ constexpr std::uintmax_t kMaxProgressRead = std::uintmax_t{4} << 20;
 // listed from the moment sbatch answers; one missing round can be a
 // controller between states).
 constexpr int kMissingRounds = 2;
+// The pause after an sbatch refusal that may pass later.
+constexpr std::chrono::seconds kSubmitPause{30};
 // How long the start-up check waits for squeue.
 constexpr std::chrono::milliseconds kCheckTimeout{15000};
 
@@ -458,6 +460,7 @@ void SlurmExecutor::Reattach(const std::vector<SlurmJobState>& queue) {
 }
 
 void SlurmExecutor::SubmitQueued() {
+  if (std::chrono::steady_clock::now() < submit_after_) return;
   while (true) {
     {
       std::lock_guard lock(mutex_);
@@ -545,7 +548,10 @@ bool SlurmExecutor::Submit(const v1::Job& job) {
     // PBA's queue. Anything else is the job's (a partition, an account,
     // limits Slurm refuses) and fails it, saying what sbatch said.
     if (!run.ok() || r.timed_out || SbatchMayAnswerLater(said)) {
-      spdlog::warn("job {}: sbatch failed ({}); it stays queued", id, said);
+      // Tried again after a pause, not at every poll.
+      submit_after_ = std::chrono::steady_clock::now() + kSubmitPause;
+      spdlog::warn("job {}: sbatch failed ({}); it stays queued, submitting again in {} s", id,
+                   said, kSubmitPause.count());
       if (const Status released = store_.ReleaseToQueue(id); !released.ok())
         spdlog::error("job {}: cannot put it back in the queue: {}", id, released.ToString());
       return false;

@@ -172,6 +172,9 @@ class SlurmExecutor : public Executor {
   // Cancel marks under mutex_.
   std::map<std::string, std::unique_ptr<Tracked>> tracked_;
   std::thread loop_;
+  // No submission before this (the loop's thread only): a pause after an
+  // sbatch refusal that may pass later.
+  std::chrono::steady_clock::time_point submit_after_{};
 };
 
 }  // namespace pba
