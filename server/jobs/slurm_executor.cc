@@ -478,6 +478,7 @@ void SlurmExecutor::SubmitQueued() {
 }
 
 void SlurmExecutor::FailQueued(const std::string& id, const std::string& error) {
+  (void)store_.ReleaseToQueue(id);  // it never reached Slurm
   if (const Status ended = EndQueuedJob(store_, hub_, id, v1::Job::FAILED, error); !ended.ok())
     spdlog::error("job {}: cannot record its end: {}", id, ended.ToString());
 }

@@ -129,7 +129,11 @@ void ReadJobRow(const Statement& stmt, JobView view, v1::Job* job) {
   }
   if (!stmt.ColumnIsNull(17)) job->mutable_atlas_import()->ParseFromString(stmt.ColumnBlob(17));
   job->set_ranks(static_cast<int32_t>(stmt.ColumnInt(18)));
-  if (!stmt.ColumnText(19).empty()) {
+  // A job that ended while it was being handed to a scheduler never had a
+  // job there.
+  const bool ended_unsubmitted =
+      stmt.ColumnText(19) == kSubmitting && job->state() != v1::Job::QUEUED;
+  if (!stmt.ColumnText(19).empty() && !ended_unsubmitted) {
     v1::SchedulerJob* scheduler = job->mutable_scheduler();
     scheduler->set_system("slurm");
     scheduler->set_job_id(stmt.ColumnText(19));

@@ -593,6 +593,12 @@ TEST_F(JobStoreTest, JobsInASchedulersHands) {
   EXPECT_TRUE(ended);
   EXPECT_EQ(Get(first.id()).state(), v1::Job::FAILED);
   EXPECT_EQ(Get(first.id()).error(), "refused");
+  // A job that ends while it is being handed over never had a Slurm job.
+  ASSERT_TRUE(store_->ClaimForScheduler(&other, &got).ok());
+  ASSERT_TRUE(got);
+  ASSERT_TRUE(store_->CancelQueued(other.id(), "cancelled", &event, &ended).ok());
+  EXPECT_TRUE(ended);
+  EXPECT_FALSE(Get(other.id()).has_scheduler());
   // Nothing is recorded of a job that has ended.
   EXPECT_EQ(store_->RecordSchedulerJob(first.id(), scheduler, "late", &event).code(),
             Status::Code::kFailedPrecondition);
