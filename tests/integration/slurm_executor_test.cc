@@ -3,12 +3,17 @@
 // server and the real client. Jobs are submitted with sbatch, followed with
 // squeue, cancelled with scancel and collected from their folders; and the
 // faults of the cluster path: Slurm's time limit, the memory limit, a
-// scancel from outside PBA, a drained node, slurmctld restarted, the server
-// killed and restarted while its jobs wait and run, a partition Slurm does
-// not have. Label slurm; each test brings up its own cluster, and ctest's
-// RESOURCE_LOCK keeps two from running at once (they share the ports).
+// scancel from outside PBA, a drained node, slurmctld restarted, a node
+// lost mid-job, the server killed and restarted while its jobs wait and
+// run, a partition Slurm does not have. Label slurm; each test brings up its own cluster on ports
+// of its own, and ctest's RESOURCE_LOCK runs them one at a time (each a node of the machine's cores
+// and memory).
+#include <arpa/inet.h>
 #include <gtest/gtest.h>
+#include <netinet/in.h>
 #include <signal.h>
+#include <sys/socket.h>
+#include <unistd.h>
 
 #include <chrono>
 #include <cstdlib>
@@ -41,6 +46,22 @@ std::string Hold(const std::string& name, double end_s) {
   return "name: " + name + yaml.substr(yaml.find('\n'));
 }
 
+// A TCP port on 127.0.0.1 nothing listens on now (the kernel's pick).
+int FreePort() {
+  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in address{};
+  address.sin_family = AF_INET;
+  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  socklen_t length = sizeof address;
+  int port = 0;
+  if (::bind(fd, reinterpret_cast<sockaddr*>(&address), sizeof address) == 0 &&
+      ::getsockname(fd, reinterpret_cast<sockaddr*>(&address), &length) == 0) {
+    port = ntohs(address.sin_port);
+  }
+  ::close(fd);
+  return port;
+}
+
 class SlurmTest : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -49,6 +70,10 @@ class SlurmTest : public ::testing::Test {
                     fs::perm_options::add);
     slurm_dir_ = dir_.path() / "slurm";
     ::setenv("PBA_SLURM_DIR", slurm_dir_.c_str(), 1);
+    // Ports of their own: a cluster some earlier run left behind cannot
+    // stand in the way.
+    ::setenv("PBA_SLURM_CTLD_PORT", std::to_string(FreePort()).c_str(), 1);
+    ::setenv("PBA_SLURM_SLURMD_PORT", std::to_string(FreePort()).c_str(), 1);
     ::setenv("SLURM_CONF", (slurm_dir_ / "slurm.conf").c_str(), 1);
     const RunResult up = Cluster({"start"});
     ASSERT_EQ(up.exit_code, 0) << up.out << up.err;
