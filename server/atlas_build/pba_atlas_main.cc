@@ -264,11 +264,14 @@ int RunBuild(AtlasBuildOptions options, const Pictures& pictures, const std::str
       std::printf(
           "improvement: smallest dihedral angle %.2f -> %.2f deg, largest aspect ratio %.3g -> "
           "%.3g, %d -> %d tetrahedra below the target; %d edge removals, %d 2-3 flips, %d node "
-          "moves, %d nodes inserted, %d slivers moved across an interface (%.3g mm^3)\n",
+          "moves, %d nodes inserted, %d slivers moved across an interface (%.3g mm^3), %d short "
+          "edges collapsed (%d tetrahedra; longest %.3g mm, on a surface %.3g mm)\n",
           i.min_dihedral_before_deg, i.min_dihedral_after_deg, i.max_aspect_ratio_before,
           i.max_aspect_ratio_after, i.below_target_before, i.below_target_after,
           i.flips_32 + i.flips_44 + i.edge_removals, i.flips_23, i.smoothed_nodes, i.inserted_nodes,
-          result.relabelled.tetrahedra, result.relabelled.volume_m3 * 1e9);
+          result.relabelled.tetrahedra, result.relabelled.volume_m3 * 1e9, result.collapsed.edges,
+          result.collapsed.removed_tetrahedra, result.collapsed.longest_m * 1e3,
+          result.collapsed.longest_surface_m * 1e3);
     }
     if (const std::optional<MidsideProjectionReport>& p = result.projection) {
       std::printf(

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <iterator>
 #include <memory>
 #include <numbers>
 #include <string>
@@ -315,9 +316,58 @@ Status ReadVolumeSource(const AtlasBuildOptions& options, bool composed_volume,
 // improvement pass.
 constexpr int kRelabelRounds = 3;
 
+// The longest edge collapsed that moves a surface or interface node, as a
+// share of the facet distance: the mesher leaves the surfaces up to that far
+// from the voxels' boundaries, and a collapse moves a node by at most half
+// of it, most often along a surface or along the line where three meet.
+constexpr double kCollapseShareOfFacetDistance = 0.5;
+
+// Rounds of collapsing short edges and peeling slivers off the outer
+// surface: peeling lays bare tetrahedra that were inside, some of them
+// slivers around a short edge now on the surface.
+constexpr int kCollapseRounds = 2;
+
+// Short edges of the slivers collapsed (mesh/collapse.h): the edges of a
+// few hundredths of a millimetre a mesher leaves where an interface meets
+// the outer surface, whose slivers no flip or node move inside a structure
+// can reach. A short improvement pass follows when any went.
+Status CollapseAtlasEdges(const AtlasBuildOptions& options, const ImproveOptions& improve,
+                          AtlasBuildResult* result) {
+  CollapseOptions collapse;
+  collapse.target_min_dihedral_deg = improve.target_min_dihedral_deg;
+  collapse.target_aspect_ratio = improve.target_aspect_ratio;
+  const double facet_distance_mm =
+      options.facet_distance_mm > 0 ? options.facet_distance_mm : options.facet_size_mm / 4;
+  collapse.max_edge_m = kCollapseShareOfFacetDistance * facet_distance_mm * 1e-3;
+  CollapseStats stats;
+  PBA_RETURN_IF_ERROR(CollapseShortEdges(collapse, &result->mesh, &stats));
+  CollapseStats& total = result->collapsed;
+  if (total.min_dihedral_before_deg == 0)
+    total.min_dihedral_before_deg = stats.min_dihedral_before_deg;
+  total.min_dihedral_after_deg = stats.min_dihedral_after_deg;
+  total.edges += stats.edges;
+  total.removed_tetrahedra += stats.removed_tetrahedra;
+  total.longest_m = std::max(total.longest_m, stats.longest_m);
+  total.longest_surface_m = std::max(total.longest_surface_m, stats.longest_surface_m);
+  if (stats.edges == 0) return Status::Ok();
+  ImproveStats later;
+  PBA_RETURN_IF_ERROR(ImproveTetMesh(improve, &result->mesh, &later));
+  AddLaterPass(later, &result->improvement);
+  return Status::Ok();
+}
+
+void AddRemoved(const RemovedTetrahedra& more, RemovedTetrahedra* total) {
+  total->tetrahedra += more.tetrahedra;
+  total->volume_m3 += more.volume_m3;
+  std::vector<std::string> regions;
+  std::set_union(total->regions.begin(), total->regions.end(), more.regions.begin(),
+                 more.regions.end(), std::back_inserter(regions));
+  total->regions = std::move(regions);
+}
+
 // The improvement pass (mesh/improve.h), the slivers moved across
-// interfaces with short passes after, and those still on the outer surface
-// peeled.
+// interfaces with short passes after, then rounds of short edges of the
+// slivers left collapsed and the slivers still on the outer surface peeled.
 Status ImproveAtlasMesh(const AtlasBuildOptions& options, AtlasBuildResult* result) {
   ImproveOptions improve;
   improve.target_min_dihedral_deg = options.improve_target_deg;
@@ -345,7 +395,14 @@ Status ImproveAtlasMesh(const AtlasBuildOptions& options, AtlasBuildResult* resu
     PBA_RETURN_IF_ERROR(ImproveTetMesh(improve, &result->mesh, &later));
     AddLaterPass(later, &result->improvement);
   }
-  result->peeled = PeelBoundarySlivers(improve.target_min_dihedral_deg, &result->mesh);
+  for (int round = 0; round < kCollapseRounds; ++round) {
+    const int collapsed = result->collapsed.edges;
+    PBA_RETURN_IF_ERROR(CollapseAtlasEdges(options, improve, result));
+    const RemovedTetrahedra peeled =
+        PeelBoundarySlivers(improve.target_min_dihedral_deg, &result->mesh);
+    AddRemoved(peeled, &result->peeled);
+    if (peeled.tetrahedra == 0 && result->collapsed.edges == collapsed) break;
+  }
   return Status::Ok();
 }
 
@@ -362,6 +419,13 @@ void NoteRemoved(const AtlasBuildResult& result, std::vector<std::string>* notes
     if (removed.regions.size() > 8) text += Format(" and %zu more", removed.regions.size() - 8);
     return text;
   };
+  if (const CollapseStats& c = result.collapsed; c.edges > 0) {
+    notes->push_back(Format(
+        "%s collapsed (%s around them taken out, surface and interface nodes moved by at most "
+        "%.3g mm): no flip or node move could lift the slivers around them",
+        Counted(c.edges, "short edge", "short edges").c_str(),
+        Counted(c.removed_tetrahedra, "sliver", "slivers").c_str(), c.longest_surface_m * 1e3));
+  }
   if (const RemovedTetrahedra& p = result.peeled; p.tetrahedra > 0) {
     notes->push_back(Format(
         "%s on the outer surface taken out (%.3g mm^3, in %s): no flip or node move could "
@@ -437,6 +501,7 @@ Status MeshAndImprove(const AtlasBuildOptions& options, const RegionSizes& sizes
                       AtlasBuildResult* result) {
   result->improvement = ImproveStats();
   result->relabelled = RelabelStats();
+  result->collapsed = CollapseStats();
   result->peeled = result->dropped_fragments = RemovedTetrahedra();
   result->fragments = 0;
   Clock::time_point start = Clock::now();
@@ -464,6 +529,7 @@ struct MeshRound {
   LabelMeshReport mesher;
   ImproveStats improvement;
   RelabelStats relabelled;
+  CollapseStats collapsed;
   RemovedTetrahedra peeled, dropped_fragments;
   int fragments = 0;
   RegionSizes sizes;
@@ -478,6 +544,7 @@ void MoveMeshFields(From& from, To* to) {
   to->mesher = std::move(from.mesher);
   to->improvement = from.improvement;
   to->relabelled = from.relabelled;
+  to->collapsed = from.collapsed;
   to->peeled = std::move(from.peeled);
   to->dropped_fragments = std::move(from.dropped_fragments);
   to->fragments = from.fragments;

@@ -48,6 +48,7 @@
 #include "atlas/plates.h"
 #include "atlas/report_format.h"
 #include "core/thread_context.h"
+#include "mesh/collapse.h"
 #include "mesh/improve.h"
 #include "mesh/mesh.h"
 #include "mesh/quality.h"
@@ -203,7 +204,10 @@ struct AtlasBuildResult {
   AtlasBuildTimes times;
   ImproveStats improvement;  // the improvement pass (all zero without it)
   RelabelStats relabelled;   // slivers moved across an interface by it
-  LabelMeshReport mesher;    // the mesher's steps: their times, and any cut short by its time limit
+  // Short edges of the slivers it left collapsed (CollapseShortEdges;
+  // `longest_m` the longest, so the largest node move).
+  CollapseStats collapsed;
+  LabelMeshReport mesher;  // the mesher's steps: their times, and any cut short by its time limit
   // 10-node from plates: the mid-edge nodes moved onto the loft's surfaces.
   std::optional<MidsideProjectionReport> projection;
   // kStructures: what composing the set found worth saying (overlaps of

@@ -28,8 +28,8 @@ namespace {
 // project's, not a commit's), so old entries stop matching.
 // 2: label volumes lose their islands (island_share); 3: improvement on the
 // aspect ratio too, boundary slivers peeled, mesh fragments dropped; 4:
-// node insertion in the improvement.
-constexpr int kKeyFormatVersion = 4;
+// node insertion in the improvement; 5: short edges collapsed.
+constexpr int kKeyFormatVersion = 5;
 
 // The entry file: magic, format version, a byte-order mark (entries hold
 // the host's native integers and doubles: a cache directory shared with a

@@ -98,6 +98,8 @@
 // region, or make a flat tetrahedron no free node can lift (no search over
 // sequences of flips is made), and whose every cavity within its region
 // swallows a corner or leaves a tetrahedron no better than it, also stays.
+// Those around a very short edge on a surface or an interface need the
+// surface itself changed: CollapseShortEdges (mesh/collapse.h).
 #pragma once
 
 #include "mesh/mesh.h"

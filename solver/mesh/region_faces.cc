@@ -179,37 +179,19 @@ RelabelStats RelabelInterfaceSlivers(double target_deg, Mesh* mesh) {
   return stats;
 }
 
-RemovedTetrahedra RemoveTetrahedra(const std::vector<char>& remove, Mesh* mesh) {
-  RemovedTetrahedra removed;
-  if (mesh->shape() != ElementShape::kTet4) return removed;
-  const bool regions = !mesh->element_region.empty();
-  std::vector<char> region_hit(mesh->region_names.size(), 0);
-  std::vector<std::array<int, 4>> tets;
-  std::vector<int> element_region;
+void DropUnusedNodes(Mesh* mesh) {
   std::vector<int> node_map(mesh->num_nodes(), -1);
-  for (int e = 0; e < static_cast<int>(mesh->tets.size()); ++e) {
-    if (remove[e] != 0) {
-      ++removed.tetrahedra;
-      removed.volume_m3 += Volume(*mesh, e);
-      if (regions) region_hit[mesh->element_region[e]] = 1;
-      continue;
-    }
-    tets.push_back(mesh->tets[e]);
-    if (regions) element_region.push_back(mesh->element_region[e]);
-    for (int n : mesh->tets[e]) node_map[n] = 0;
+  for (const auto& t : mesh->tets) {
+    for (int n : t) node_map[n] = 0;
   }
-  if (removed.tetrahedra == 0) return removed;
-  for (std::size_t r = 0; r < region_hit.size(); ++r) {
-    if (region_hit[r] != 0) removed.regions.push_back(mesh->region_names[r]);
-  }
-  std::sort(removed.regions.begin(), removed.regions.end());
   int kept = 0;
   for (int& n : node_map) n = n == 0 ? kept++ : -1;
+  if (kept == mesh->num_nodes()) return;
   Eigen::MatrixX3d nodes(kept, 3);
   for (int n = 0; n < mesh->num_nodes(); ++n) {
     if (node_map[n] >= 0) nodes.row(node_map[n]) = mesh->nodes.row(n);
   }
-  for (auto& t : tets) {
+  for (auto& t : mesh->tets) {
     for (int& n : t) n = node_map[n];
   }
   for (auto& [name, set] : mesh->face_sets) {
@@ -222,8 +204,33 @@ RemovedTetrahedra RemoveTetrahedra(const std::vector<char>& remove, Mesh* mesh) 
     CollectFaceSetNodes(&set);
   }
   mesh->nodes = std::move(nodes);
+}
+
+RemovedTetrahedra RemoveTetrahedra(const std::vector<char>& remove, Mesh* mesh) {
+  RemovedTetrahedra removed;
+  if (mesh->shape() != ElementShape::kTet4) return removed;
+  const bool regions = !mesh->element_region.empty();
+  std::vector<char> region_hit(mesh->region_names.size(), 0);
+  std::vector<std::array<int, 4>> tets;
+  std::vector<int> element_region;
+  for (int e = 0; e < static_cast<int>(mesh->tets.size()); ++e) {
+    if (remove[e] != 0) {
+      ++removed.tetrahedra;
+      removed.volume_m3 += Volume(*mesh, e);
+      if (regions) region_hit[mesh->element_region[e]] = 1;
+      continue;
+    }
+    tets.push_back(mesh->tets[e]);
+    if (regions) element_region.push_back(mesh->element_region[e]);
+  }
+  if (removed.tetrahedra == 0) return removed;
+  for (std::size_t r = 0; r < region_hit.size(); ++r) {
+    if (region_hit[r] != 0) removed.regions.push_back(mesh->region_names[r]);
+  }
+  std::sort(removed.regions.begin(), removed.regions.end());
   mesh->tets = std::move(tets);
   mesh->element_region = std::move(element_region);
+  DropUnusedNodes(mesh);
   RebuildRegionFaceSets(mesh);
   return removed;
 }

@@ -62,6 +62,11 @@ struct RemovedTetrahedra {
   std::vector<std::string> regions;
 };
 
+// Takes out the nodes of a mesh that no element uses (the rest keep their
+// order, renumbered in the elements and face sets; a face set triangle with
+// a node taken out goes too). Region-derived face sets are not rebuilt.
+void DropUnusedNodes(Mesh* mesh);
+
 // Takes the tetrahedra with remove[e] out of a linear tetrahedral mesh, and
 // the nodes no other tetrahedron uses (the rest keep their order,
 // renumbered), and rebuilds the region-derived face sets; another face set

@@ -383,64 +383,42 @@ TEST_F(PbaAtlasTest, AalMeshesFromTheFilesItShipsWith) {
   EXPECT_FALSE(fs::exists(refused));
 }
 
-// AAL with its white matter filled, meshed at 3 mm with two quality rounds:
-// the quality bounds the synthetic atlas meets (docs/atlas.md), met by
-// every structure (one may miss on a loaded machine, where the mesher's
-// time limits can cut a step short: then it is named); the structures the
-// rounds refined named with the sizes they met the bounds at; the mesh in
-// one piece (slivers on the surface and loose fragments taken out, each
-// said); its volume within 3 % of the voxels it was made from.
-TEST_F(PbaAtlasTest, AalAtThreeMillimetresMeetsTheQualityBoundsWithQualityRounds) {
+// AAL with its white matter filled, meshed at 3 mm: the quality bounds the
+// synthetic atlas meets (docs/atlas.md) met by every structure in the first
+// mesh, so the two quality rounds asked for are not run; the slivers around
+// short edges where interfaces meet the outer surface collapsed, no surface
+// node moved by more than half the facet distance (0.75 mm at 3 mm); the
+// mesh in one piece (slivers on the surface and loose fragments taken out,
+// each said); its volume within 3 % of the voxels it was made from.
+TEST_F(PbaAtlasTest, AalAtThreeMillimetresMeetsTheQualityBounds) {
   const fs::path t = "/usr/share/mricron/templates";
   const fs::path out = dir_.path() / "aal3";
   const RunResult run = RunProcess(
       {PBA_ATLAS_BIN, "build", "-o", out.string(), "--labels", (t / "aal.nii.gz").string(),
        "--colour-table", (t / "aal.nii.txt").string(), "--fill", "White matter", "--closing-mm",
        "7", "--cell-mm", "3", "--facet-mm", "3", "--no-pictures", "--quality-rounds", "2"},
-      std::chrono::seconds(280));  // two meshes: 124 s alone on two cores
+      std::chrono::seconds(240));  // 62 s alone on two cores
   ASSERT_EQ(run.exit_code, 0) << run.err;
   std::printf("%s", run.out.c_str());
   ExpectQualityReport(out, 117);
   const YAML::Node report = YAML::LoadFile((out / "quality.json").string());
-  int misses = 0;
   double mesh_mm3 = 0;
-  std::map<std::string, bool> met;  // by name
   for (const YAML::Node& row : report["rows"]) {
     const std::string name = row["structure"].as<std::string>();
-    const double p99 = row["aspect_ratio_p99"].as<double>();
-    const double angle = row["min_dihedral_deg"].as<double>();
-    EXPECT_LT(p99, 6) << name;
-    EXPECT_GT(angle, 1) << name;
-    met[name] = p99 < 5 && angle > 5;
-    if (!met[name]) {
-      ++misses;
-      EXPECT_NE(run.out.find(name + " ("), std::string::npos) << name << " is not named";
-    }
+    EXPECT_LT(row["aspect_ratio_p99"].as<double>(), 5) << name;
+    EXPECT_GT(row["min_dihedral_deg"].as<double>(), 5) << name;
     mesh_mm3 += row["volume_mm3"].as<double>();
   }
-  EXPECT_LE(misses, 1);
-  // The refined structures, each with the cell size it met the bounds at
-  // (smaller than the 3 mm of the rest).
+  EXPECT_EQ(run.out.find("miss the quality bounds"), std::string::npos) << run.out;
+  EXPECT_EQ(run.out.find("meshes:"), std::string::npos) << run.out;
   std::smatch found;
   ASSERT_TRUE(std::regex_search(
       run.out, found,
-      std::regex("meshes: the one kept has [0-9]+ structures? refined[^;]*; met at: ([^;]*);")))
+      std::regex("([0-9]+) short edges? collapsed \\([0-9]+ slivers? around them taken out, "
+                 "surface and interface nodes moved by at most ([0-9.]+) mm\\)")))
       << run.out;
-  const std::string rounds = found[1].str();
-  // (Names may hold spaces: "White matter".)
-  const std::regex refined(R"((?:^|, )([^,(]+) \(cells ([0-9.]+) mm, facets [0-9.]+ mm\))");
-  int named = 0;
-  for (std::sregex_iterator it(rounds.begin(), rounds.end(), refined), end; it != end; ++it) {
-    ++named;
-    EXPECT_TRUE(met[(*it)[1].str()]) << (*it)[1].str();
-    EXPECT_LT(std::stod((*it)[2].str()), 3) << (*it)[1].str();
-  }
-  EXPECT_GE(named, 1) << rounds;
-  if (misses > 0) {
-    EXPECT_NE(run.out.find(std::to_string(misses) + " of 117 structures miss the quality bounds"),
-              std::string::npos)
-        << run.out;
-  }
+  EXPECT_GE(std::stoi(found[1].str()), 1);
+  EXPECT_LE(std::stod(found[2].str()), 0.375);
   EXPECT_EQ(run.out.find("pieces joined by no face"), std::string::npos) << run.out;
   LabelVolume voxels;
   ASSERT_TRUE(ReadLabelVolume(out / "labels.nii.gz", "labels", &voxels).ok());
@@ -448,6 +426,48 @@ TEST_F(PbaAtlasTest, AalAtThreeMillimetresMeetsTheQualityBoundsWithQualityRounds
   for (uint16_t label : voxels.labels()) inside += label != 0;
   const double voxel_mm3 = static_cast<double>(inside) * voxels.voxel_volume_mm3();
   EXPECT_NEAR(mesh_mm3, voxel_mm3, 0.03 * voxel_mm3);
+}
+
+// Quality rounds where structures miss the bounds: JHU's white-matter
+// tracts at 6 mm with the improvement turned off (with it, every one meets
+// them at 6 mm). Each miss is named; the round remeshes with the structures
+// that missed refined to 0.7 times their sizes (cells 4.2 mm), and the note
+// names each refined structure with its sizes, and which mesh was kept.
+TEST_F(PbaAtlasTest, QualityRoundsRefineTheStructuresThatMissTheBounds) {
+  const fs::path t = "/usr/share/mricron/templates";
+  const fs::path out = dir_.path() / "jhu";
+  const RunResult run = RunProcess(
+      {PBA_ATLAS_BIN, "build", "-o", out.string(), "--labels",
+       (t / "JHU-WhiteMatter-labels-1mm.nii.gz").string(), "--colour-table",
+       (t / "JHU-WhiteMatter-labels-1mm.nii.txt").string(), "--cell-mm", "6", "--facet-mm", "6",
+       "--no-pictures", "--improve-deg", "0", "--quality-rounds", "1"},
+      std::chrono::seconds(240));  // about 40 s alone on two cores
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  ExpectQualityReport(out, 48);
+  const YAML::Node report = YAML::LoadFile((out / "quality.json").string());
+  int misses = 0;
+  for (const YAML::Node& row : report["rows"]) {
+    misses +=
+        row["aspect_ratio_p99"].as<double>() >= 5 || row["min_dihedral_deg"].as<double>() <= 5;
+  }
+  ASSERT_GT(misses, 0);
+  EXPECT_NE(run.out.find(std::to_string(misses) + " of 48 structures miss the quality bounds"),
+            std::string::npos)
+      << run.out;
+  std::smatch found;
+  ASSERT_TRUE(std::regex_search(run.out, found,
+                                std::regex("note: 2 meshes: ([^;]*); (met at|refined down to): "
+                                           "([^\\n]*)")))
+      << run.out;
+  const std::string sizes = found[3].str();
+  const std::regex refined(R"((?:^|, )([^,(]+) \(cells ([0-9.]+) mm, facets ([0-9.]+) mm\))");
+  int named = 0;
+  for (std::sregex_iterator it(sizes.begin(), sizes.end(), refined), end; it != end; ++it) {
+    ++named;
+    EXPECT_NEAR(std::stod((*it)[2].str()), 4.2, 0.01) << (*it)[1].str();
+    EXPECT_LE(std::stod((*it)[3].str()), 4.2) << (*it)[1].str();
+  }
+  EXPECT_GE(named, 1) << sizes;
 }
 
 // structures.csv of pba-atlas labels: volume [cm^3] by name.
