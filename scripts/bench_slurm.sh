@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # What Slurm costs a job: a pba-server with the local executor and one with
-# --executor slurm on the one-node cluster of scripts/slurm-local.sh, each
+# --executor slurm on the one-node cluster of scripts/slurm-local.sh (with
+# job arrays, the default, and with each job its own Slurm job), each
 # given the same tiny scene (a 10 mm linear cube, a fraction of a second of
 # solving). First `single` jobs one after another (`pba job submit --wait`),
 # each alone: per job (medians) the turnaround (submitted -> end recorded,
@@ -93,6 +94,9 @@ run() {
   local name=$1
   shift
   local data=$work/data-$name
+  # Slurm's job completion file so far: this run's lines are the ones after.
+  local before=0
+  [ -f "$work/slurm/jobcomp.txt" ] && before=$(wc -l <"$work/slurm/jobcomp.txt")
   "$build/bin/pba-server" --data "$data" --listen 127.0.0.1:0 --keep-results 0 "$@" \
     >"$work/$name.out" 2>"$work/$name.log" &
   server_pid=$!
@@ -134,7 +138,9 @@ EOF
   end=$(date +%s.%N)
   "$build/bin/pba" --json job list --all >"$work/jobs-$name.json"
   local runs=-
-  [ "$name" = slurm ] && runs=$(grep -c "Name=pba-" "$work/slurm/jobcomp.txt" || true)
+  case $name in
+    slurm*) runs=$(tail -n +"$((before + 1))" "$work/slurm/jobcomp.txt" | grep -c "Name=pba-" || true) ;;
+  esac
   report "$work" "$name" "$start" "$end" "$jobs" "$runs" "$single"
   kill "$server_pid"
   wait "$server_pid" 2>/dev/null || true
@@ -146,4 +152,5 @@ echo "| executor | turnaround of one job (median of $single) | its solve | overh
 echo "|---|---|---|---|---|---|---|---|---|"
 run local --max-running 2
 bash "$root/scripts/slurm-local.sh" start >/dev/null
-run slurm --executor slurm --slurm-poll "$poll"
+run slurm-arrays --executor slurm --slurm-poll "$poll"
+run slurm-single --executor slurm --slurm-poll "$poll" --slurm-array-min 0

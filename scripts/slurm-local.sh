@@ -1,14 +1,16 @@
 #!/usr/bin/env bash
 # Runs a one-node Slurm cluster on this machine, from Debian's slurmctld,
 # slurmd, slurm-client and munge packages, for integration tests.
-# Usage: scripts/slurm-local.sh start|stop [--clean]|status|restart-ctld
+# Usage: scripts/slurm-local.sh start|stop [--clean]|status|restart-ctld|stop-ctld
 #   start         writes the config, starts munged, slurmctld and slurmd and
 #                 waits until the node is idle; a no-op when already up
 #   stop          cancels the remaining jobs and stops the three daemons;
 #                 --clean also removes the cluster's directory
 #   status        says which daemons run, shows sinfo and squeue; exits 0
 #                 only when all three run
-#   restart-ctld  restarts slurmctld alone; jobs and node state survive
+#   restart-ctld  restarts slurmctld alone (or starts it after stop-ctld);
+#                 jobs and node state survive
+#   stop-ctld     stops slurmctld alone: the controller out of reach
 # Everything (config, munge key and socket, spool, state, logs, pid files,
 # job completion file) lives in one directory: $PBA_SLURM_DIR, default
 # ${TMPDIR:-/tmp}/pba-slurm-<uid>. Nothing is written to system directories.
@@ -32,7 +34,7 @@ munge_socket=$dir/munge/munge.socket
 export SLURM_CONF=$conf
 
 usage() {
-  echo "usage: $0 start|stop [--clean]|status|restart-ctld" >&2
+  echo "usage: $0 start|stop [--clean]|status|restart-ctld|stop-ctld" >&2
   exit 2
 }
 
@@ -354,5 +356,6 @@ case ${1:-} in
   stop) [ $# -le 2 ] || usage; cmd_stop "${2:-}" ;;
   status) [ $# -eq 1 ] || usage; cmd_status ;;
   restart-ctld) [ $# -eq 1 ] || usage; cmd_restart_ctld ;;
+  stop-ctld) [ $# -eq 1 ] || usage; stop_daemon slurmctld; echo "slurm-local: slurmctld stopped" ;;
   *) usage ;;
 esac

@@ -137,6 +137,7 @@ struct ServeFlags {
   std::string slurm_partition, slurm_account;
   int slurm_cpus = 1;
   int slurm_max_jobs = 1000;
+  int slurm_array_min = 10;
   double slurm_poll_s = 2;
 };
 
@@ -208,6 +209,11 @@ void AddServeOptions(CLI::App& app, ServeFlags* flags) {
   app.add_option("--slurm-max-jobs", flags->slurm_max_jobs,
                  "Jobs in Slurm's hands at once; the rest wait in PBA's queue")
       ->check(CLI::Range(1, 1000000))
+      ->capture_default_str();
+  app.add_option("--slurm-array-min", flags->slurm_array_min,
+                 "Jobs with the same limits handed to Slurm together go as one job array when "
+                 "there are at least this many (0: each its own Slurm job)")
+      ->check(CLI::Range(0, 1000000))
       ->capture_default_str();
   app.add_option("--slurm-poll", flags->slurm_poll_s, "Seconds between two looks at squeue")
       ->check(CLI::Range(0.1, 600.0))
@@ -288,6 +294,7 @@ pba::ServerOptions ServerOptionsFromFlags(const ServeFlags& flags) {
   options.slurm.account = flags.slurm_account;
   options.slurm.cpus_per_task = flags.slurm_cpus;
   options.slurm.max_submitted = flags.slurm_max_jobs;
+  options.slurm.array_min = flags.slurm_array_min;
   options.slurm.poll = std::chrono::milliseconds(static_cast<int64_t>(flags.slurm_poll_s * 1000));
   options.upload_quota_bytes = static_cast<int64_t>(flags.upload_quota_gib * (1LL << 30));
   options.keep_results =

@@ -26,6 +26,15 @@ constexpr char kCancelledByRequest[] = "cancelled by request";
 // lines, its exit code, and its result, renamed to result/ when it is the
 // one that succeeded.
 constexpr char kScript[] = "job.sh";
+// Job arrays: one folder each under the jobs folder's arrays/, holding the
+// array's script, the list of its jobs (task N the N-th line) and entry N,
+// a link to task N's job folder.
+constexpr char kArrays[] = "arrays";
+constexpr char kArrayScript[] = "array.sh";
+constexpr char kArrayJobs[] = "jobs";
+constexpr char kArrayPrefix[] = "pba-array-";
+// An array folder none of whose jobs is followed is removed after this.
+constexpr std::chrono::minutes kArrayKeep{10};
 constexpr char kRunResult[] = "@PBA_RUN_RESULT@";  // pba-solve's --out, in the script
 std::string ProgressFile(const std::string& slurm_id) { return "progress-" + slurm_id + ".jsonl"; }
 std::string ExitCodeFile(const std::string& slurm_id) { return "exit_code-" + slurm_id; }
@@ -191,12 +200,15 @@ bool SlurmRunning(const std::string& state) {
 }
 
 std::vector<std::string> SbatchArguments(const SlurmOptions& options, const SlurmSubmission& s) {
+  // A task of an array writes through its entry, into its job's folder.
+  const bool array = s.array_tasks > 0;
+  const fs::path run_dir = array ? s.dir / "%a" : s.dir;
   std::vector<std::string> args = {
       "--parsable",
-      "--job-name=" + JobName(s.job_id),
+      "--job-name=" + (array ? kArrayPrefix + s.job_id : JobName(s.job_id)),
       "--chdir=" + s.dir.string(),
-      "--output=" + (s.dir / ProgressFile("%j")).string(),
-      "--error=" + (s.dir / "solve.log").string(),
+      "--output=" + (run_dir / ProgressFile(array ? "%A_%a" : "%j")).string(),
+      "--error=" + (run_dir / "solve.log").string(),
       "--open-mode=append",
       // PBA runs a job again itself (max_attempts), as a new Slurm job.
       "--no-requeue",
@@ -208,6 +220,7 @@ std::vector<std::string> SbatchArguments(const SlurmOptions& options, const Slur
     const int64_t mib = (s.memory_bytes + (int64_t{1} << 20) - 1) >> 20;
     args.push_back("--mem=" + std::to_string(mib) + "M");
   }
+  if (array) args.push_back("--array=0-" + std::to_string(s.array_tasks - 1));
   if (!options.partition.empty()) args.push_back("--partition=" + options.partition);
   if (!options.account.empty()) args.push_back("--account=" + options.account);
   args.push_back(s.script.string());
@@ -217,20 +230,30 @@ std::vector<std::string> SbatchArguments(const SlurmOptions& options, const Slur
 std::string SlurmBatchScript(const std::vector<std::string>& command, int64_t memory_bytes) {
   std::string script =
       "#!/bin/sh\n"
-      "# A PBA job: pba-solve in this folder, its result to result-<Slurm job id>,\n"
-      "# its exit code to exit_code-<Slurm job id>.\n"
+      "# A PBA job: pba-solve in this folder, its result to result-<run>, its\n"
+      "# exit code to exit_code-<run>; <run> is the Slurm job id, or the array\n"
+      "# task's <array job id>_<task id>.\n"
+      "run=\"${PBA_RUN_ID:-$SLURM_JOB_ID}\"\n"
       "ulimit -c 0\n";
   if (memory_bytes > 0) script += fmt::format("ulimit -v {}\n", memory_bytes / 1024);
   for (std::size_t i = 0; i < command.size(); ++i) {
     script += i == 0 ? "" : " ";
-    script += command[i] == kRunResult ? "result-\"$SLURM_JOB_ID\"" : ShellQuoted(command[i]);
+    script += command[i] == kRunResult ? "result-\"$run\"" : ShellQuoted(command[i]);
   }
   script += "\ncode=$?\n";
   script +=
-      "printf '%s\\n' \"$code\" > exit_code-\"$SLURM_JOB_ID\".partial &&\n"
-      "  mv -f exit_code-\"$SLURM_JOB_ID\".partial exit_code-\"$SLURM_JOB_ID\"\n"
+      "printf '%s\\n' \"$code\" > exit_code-\"$run\".partial &&\n"
+      "  mv -f exit_code-\"$run\".partial exit_code-\"$run\"\n"
       "exit \"$code\"\n";
   return script;
+}
+
+std::string SlurmArrayScript(const std::string& job_script) {
+  return "#!/bin/sh\n"
+         "# A PBA job array: task N runs the job whose folder entry N links to.\n"
+         "cd \"$SLURM_ARRAY_TASK_ID\" || exit 1\n"
+         "PBA_RUN_ID=\"${SLURM_ARRAY_JOB_ID}_${SLURM_ARRAY_TASK_ID}\" exec /bin/sh " +
+         ShellQuoted("./" + job_script) + "\n";
 }
 
 // One job in Slurm's hands. Only the loop's thread touches it, but for
@@ -385,6 +408,9 @@ void SlurmExecutor::Loop() {
     if (now - last_expiry >= std::chrono::hours(1)) {
       last_expiry = now;
       ExpireResults(store_, JobsDir(options_), options_.keep_results);
+      // (Only once the jobs in Slurm's hands are known: an array's tasks
+      // still pending need its folder.)
+      if (reattached) ExpireArrays();
     }
     std::unique_lock lock(mutex_);
     wake_.wait_for(lock, slurm_.poll, [this] { return stopping_ || woken_; });
@@ -394,8 +420,8 @@ void SlurmExecutor::Loop() {
 
 bool SlurmExecutor::Poll(std::vector<SlurmJobState>* queue) {
   CommandResult r;
-  const Status run =
-      Slurm("squeue", {"--noheader", "--me", "--states=all", "--format=%i|%j|%T|%r|%N"}, &r);
+  const Status run = Slurm(
+      "squeue", {"--noheader", "--me", "--states=all", "--array", "--format=%i|%j|%T|%r|%N"}, &r);
   if (!run.ok() || !r.ok()) {
     // slurmctld down or restarting: nothing is concluded from silence.
     spdlog::warn("squeue failed ({}); trying again in {} ms",
@@ -418,12 +444,12 @@ void SlurmExecutor::Reattach(const std::vector<SlurmJobState>& queue) {
     if (slurm_id == kSubmitting) {
       // Claimed by a server that stopped before it named the Slurm job: the
       // job's name finds it, if sbatch took it.
-      const auto named = std::find_if(queue.begin(), queue.end(), [&](const SlurmJobState& s) {
+      const auto by_name = std::find_if(queue.begin(), queue.end(), [&](const SlurmJobState& s) {
         return s.name == JobName(id) && ClassifySlurmState(s.state) == SlurmEnd::kNotEnded;
       });
-      if (named == queue.end()) {
-        if (const Status released = store_.ReleaseToQueue(id); !released.ok())
-          spdlog::error("job {}: cannot put it back in the queue: {}", id, released.ToString());
+      const SlurmJobState* named = by_name != queue.end() ? &*by_name : FindInArrays(queue, id);
+      if (named == nullptr) {
+        Release(id);
         continue;
       }
       slurm_id = named->id;
@@ -459,21 +485,66 @@ void SlurmExecutor::Reattach(const std::vector<SlurmJobState>& queue) {
   }
 }
 
+struct SlurmExecutor::Prepared {
+  v1::Job job;
+  fs::path dir;
+  int ranks = 1;
+  int64_t limit_s = 0, memory_bytes = 0;
+  std::uintmax_t log_offset = 0;  // solve.log's size before the run
+};
+
 void SlurmExecutor::SubmitQueued() {
   if (std::chrono::steady_clock::now() < submit_after_) return;
+  // What the queue holds now, while there is room, prepared.
+  std::vector<Prepared> ready;
   while (true) {
     {
       std::lock_guard lock(mutex_);
-      if (stopping_ || static_cast<int>(tracked_.size()) >= slurm_.max_submitted) return;
+      if (stopping_ || static_cast<int>(tracked_.size() + ready.size()) >= slurm_.max_submitted)
+        break;
     }
     v1::Job job;
     bool claimed = false;
     const Status status = store_.ClaimForScheduler(&job, &claimed);
     if (!status.ok()) {
       spdlog::error("cannot take a job from the queue: {}", status.ToString());
-      return;
+      break;
     }
-    if (!claimed || !Submit(job)) return;
+    if (!claimed) break;
+    Prepared p;
+    if (Prepare(job, &p)) ready.push_back(std::move(p));
+  }
+  // Jobs with the same limits, in the order they were queued: one array
+  // when there are enough of them.
+  std::vector<std::vector<Prepared>> groups;
+  for (Prepared& p : ready) {
+    const auto same = std::find_if(groups.begin(), groups.end(), [&](const auto& g) {
+      return g[0].ranks == p.ranks && g[0].limit_s == p.limit_s &&
+             g[0].memory_bytes == p.memory_bytes;
+    });
+    if (same == groups.end()) {
+      groups.emplace_back().push_back(std::move(p));
+    } else {
+      same->push_back(std::move(p));
+    }
+  }
+  bool paused = false;
+  for (std::vector<Prepared>& group : groups) {
+    const bool array = slurm_.array_min > 0 && static_cast<int>(group.size()) >= slurm_.array_min;
+    for (std::size_t first = 0; first < group.size();) {
+      const std::size_t count =
+          array ? std::min<std::size_t>(kSlurmArrayMax, group.size() - first) : 1;
+      std::vector<Prepared> part(std::make_move_iterator(group.begin() + first),
+                                 std::make_move_iterator(group.begin() + first + count));
+      first += count;
+      if (paused) {
+        for (const Prepared& p : part) Release(p.job.id());
+      } else if (array && part.size() > 1) {
+        paused = !SubmitArray(part);
+      } else {
+        paused = !SubmitOne(part[0]);
+      }
+    }
   }
 }
 
@@ -483,29 +554,29 @@ void SlurmExecutor::FailQueued(const std::string& id, const std::string& error) 
     spdlog::error("job {}: cannot record its end: {}", id, ended.ToString());
 }
 
-bool SlurmExecutor::Submit(const v1::Job& job) {
+bool SlurmExecutor::Prepare(const v1::Job& job, Prepared* p) {
   const std::string& id = job.id();
   if (job.attempts() >= options_.max_attempts) {
     FailQueued(
         id, fmt::format("started {} times without finishing; not started again", job.attempts()));
-    return true;
+    return false;
   }
   if (options_.may_run) {
     if (const Status allowed = options_.may_run(job); !allowed.ok()) {
       FailQueued(id, allowed.ToString());
-      return true;
+      return false;
     }
   }
   if (job.ranks() > 1 && options_.mpirun.empty()) {
     FailQueued(id, fmt::format("the job asks for {} MPI ranks, but this server runs no MPI (no "
                                "mpirun)",
                                job.ranks()));
-    return true;
+    return false;
   }
   if (job.ranks() > options_.max_ranks) {
     FailQueued(id, fmt::format("the job asks for {} MPI ranks; this server allows {} (--max-ranks)",
                                job.ranks(), options_.max_ranks));
-    return true;
+    return false;
   }
   const fs::path dir = JobsDir(options_) / id;
   v1::Job attempt = job;
@@ -526,67 +597,191 @@ bool SlurmExecutor::Submit(const v1::Job& job) {
                prepared.code() == Status::Code::kIo || prepared.code() == Status::Code::kInternal
                    ? "cannot prepare the job folder: " + prepared.ToString()
                    : prepared.ToString());
-    return true;
+    return false;
   }
   std::error_code log_ec;
-  std::uintmax_t log_offset = fs::file_size(dir / "solve.log", log_ec);
-  if (log_ec) log_offset = 0;
-  SlurmSubmission submission;
-  submission.job_id = id;
-  submission.dir = dir;
-  submission.script = dir / kScript;
-  submission.ranks = ranks;
+  p->log_offset = fs::file_size(dir / "solve.log", log_ec);
+  if (log_ec) p->log_offset = 0;
+  p->job = job;
+  p->dir = dir;
+  p->ranks = ranks;
+  p->limit_s = TimeLimit(options_, job);
+  p->memory_bytes = options_.max_solver_memory_bytes;
+  return true;
+}
+
+SlurmExecutor::Sbatched SlurmExecutor::Sbatch(const Prepared& p, SlurmSubmission submission,
+                                              std::string* slurm_id, std::string* said) {
+  submission.ranks = p.ranks;
   submission.cpus_per_task = slurm_.cpus_per_task;
-  const int64_t limit = TimeLimit(options_, job);
-  submission.time_limit_s = limit;
-  submission.memory_bytes = options_.max_solver_memory_bytes;
+  submission.time_limit_s = p.limit_s;
+  submission.memory_bytes = p.memory_bytes;
   CommandResult r;
   const Status run = Slurm("sbatch", SbatchArguments(slurm_, submission), &r);
-  const std::string slurm_id = Trim(r.out.substr(0, r.out.find(';')));
-  if (!run.ok() || !r.ok() || !SlurmJobId(slurm_id)) {
-    const std::string said = run.ok() ? r.Describe() : run.ToString();
-    // A controller that does not answer now may later: the job waits in
-    // PBA's queue. Anything else is the job's (a partition, an account,
-    // limits Slurm refuses) and fails it, saying what sbatch said.
-    if (!run.ok() || r.timed_out || SbatchMayAnswerLater(said)) {
-      // Tried again after a pause, not at every poll.
-      submit_after_ = std::chrono::steady_clock::now() + kSubmitPause;
-      spdlog::warn("job {}: sbatch failed ({}); it stays queued, submitting again in {} s", id,
-                   said, kSubmitPause.count());
-      if (const Status released = store_.ReleaseToQueue(id); !released.ok())
-        spdlog::error("job {}: cannot put it back in the queue: {}", id, released.ToString());
+  *slurm_id = Trim(r.out.substr(0, r.out.find(';')));
+  if (run.ok() && r.ok() && SlurmJobId(*slurm_id)) return Sbatched::kSubmitted;
+  *said = run.ok() ? r.Describe() : run.ToString();
+  // A controller that does not answer now may later: the jobs wait in
+  // PBA's queue, and are tried again after a pause, not at every poll.
+  // Anything else is the jobs' (a partition, an account, limits Slurm
+  // refuses).
+  if (run.ok() && !r.timed_out && !SbatchMayAnswerLater(*said)) return Sbatched::kRefused;
+  submit_after_ = std::chrono::steady_clock::now() + kSubmitPause;
+  spdlog::warn("sbatch failed ({}); submitting again in {} s", *said, kSubmitPause.count());
+  return Sbatched::kLater;
+}
+
+void SlurmExecutor::Release(const std::string& id) {
+  if (const Status released = store_.ReleaseToQueue(id); !released.ok())
+    spdlog::error("job {}: cannot put it back in the queue: {}", id, released.ToString());
+}
+
+bool SlurmExecutor::SubmitOne(Prepared& p) {
+  const std::string& id = p.job.id();
+  SlurmSubmission submission;
+  submission.job_id = id;
+  submission.dir = p.dir;
+  submission.script = p.dir / kScript;
+  std::string slurm_id, said;
+  switch (Sbatch(p, submission, &slurm_id, &said)) {
+    case Sbatched::kLater:
+      Release(id);
       return false;
-    }
-    FailQueued(id, "Slurm refused the job: sbatch " + said);
-    return true;
+    case Sbatched::kRefused:
+      FailQueued(id, "Slurm refused the job: sbatch " + said);
+      return true;
+    case Sbatched::kSubmitted:
+      break;
   }
+  Track(p, slurm_id, "submitted to Slurm as job " + slurm_id);
+  return true;
+}
+
+bool SlurmExecutor::SubmitArray(std::vector<Prepared>& members) {
+  const Prepared& first = members.front();
+  // Named after its first job and that job's attempt: no two arrays share it.
+  const std::string token = first.job.id() + "-" + std::to_string(first.job.attempts() + 1);
+  const fs::path dir = JobsDir(options_) / kArrays / token;
+  std::error_code ec;
+  fs::remove_all(dir, ec);
+  fs::create_directories(dir, ec);
+  std::string list;
+  for (std::size_t i = 0; i < members.size() && !ec; ++i) {
+    fs::create_directory_symlink(fs::path("..") / ".." / members[i].job.id(),
+                                 dir / std::to_string(i), ec);
+    list += members[i].job.id() + "\n";
+  }
+  Status written = ec ? Status::Io(dir.string() + ": " + ec.message()) : Status::Ok();
+  if (written.ok()) written = AtomicWriteText(dir / kArrayJobs, list);
+  if (written.ok()) written = AtomicWriteText(dir / kArrayScript, SlurmArrayScript(kScript));
+  const auto one_by_one = [&](const std::string& why) {
+    spdlog::warn("a job array of {} jobs: {}; they go to Slurm one by one", members.size(), why);
+    fs::remove_all(dir, ec);
+    for (std::size_t i = 0; i < members.size(); ++i) {
+      if (!SubmitOne(members[i])) {
+        for (std::size_t j = i + 1; j < members.size(); ++j) Release(members[j].job.id());
+        return false;
+      }
+    }
+    return true;
+  };
+  if (!written.ok()) return one_by_one("cannot write its folder: " + written.ToString());
+  SlurmSubmission submission;
+  submission.job_id = token;
+  submission.dir = dir;
+  submission.script = dir / kArrayScript;
+  submission.array_tasks = static_cast<int>(members.size());
+  std::string array_id, said;
+  switch (Sbatch(first, submission, &array_id, &said)) {
+    case Sbatched::kLater:
+      fs::remove_all(dir, ec);
+      for (const Prepared& p : members) Release(p.job.id());
+      return false;
+    case Sbatched::kRefused:
+      // (A site's MaxArraySize, say: each job on its own may still pass.)
+      return one_by_one("Slurm refused it: sbatch " + said);
+    case Sbatched::kSubmitted:
+      break;
+  }
+  spdlog::info("{} jobs submitted to Slurm as job array {}", members.size(), array_id);
+  for (std::size_t i = 0; i < members.size(); ++i) {
+    Track(members[i], fmt::format("{}_{}", array_id, i),
+          fmt::format("submitted to Slurm as task {} of job array {}", i, array_id));
+  }
+  return true;
+}
+
+void SlurmExecutor::Track(Prepared& p, const std::string& slurm_id, const std::string& message) {
+  const std::string& id = p.job.id();
   v1::SchedulerJob scheduler;
   scheduler.set_system(kSystem);
   scheduler.set_job_id(slurm_id);
   scheduler.set_state("PENDING");
   v1::JobEvent event;
-  const Status recorded =
-      store_.RecordSchedulerJob(id, scheduler, "submitted to Slurm as job " + slurm_id, &event);
+  const Status recorded = store_.RecordSchedulerJob(id, scheduler, message, &event);
   if (!recorded.ok()) {
     // Cancelled (or gone) while it was being submitted: Slurm must not run it.
     spdlog::info("job {} ended while it was submitted: scancel {}", id, slurm_id);
     CommandResult cancelled;
     (void)Slurm("scancel", {slurm_id}, &cancelled);
-    return true;
+    return;
   }
   hub_.Publish(event);
-  spdlog::info("job {}: submitted to Slurm as job {}", id, slurm_id);
+  spdlog::info("job {}: {}", id, message);
   auto t = std::make_unique<Tracked>();
-  t->job = job;
+  t->job = std::move(p.job);
   t->slurm_id = slurm_id;
-  t->dir = dir;
-  t->limit_s = limit;
-  t->log_offset = log_offset;
+  t->dir = p.dir;
+  t->limit_s = p.limit_s;
+  t->log_offset = p.log_offset;
   t->last.state = "PENDING";
   t->progress = std::make_unique<ProgressLines>(store_, hub_, id, event.sequence());
   std::lock_guard lock(mutex_);
   tracked_[id] = std::move(t);
-  return true;
+}
+
+const SlurmJobState* SlurmExecutor::FindInArrays(const std::vector<SlurmJobState>& queue,
+                                                 const std::string& id) {
+  const std::string prefix = kArrayPrefix;
+  for (const SlurmJobState& s : queue) {
+    if (s.name.rfind(prefix, 0) != 0 || ClassifySlurmState(s.state) != SlurmEnd::kNotEnded)
+      continue;
+    const std::string token = s.name.substr(prefix.size());
+    const std::size_t underscore = s.id.find('_');
+    // Only a name PBA could have given (no path in it), and a task.
+    if (token.empty() || underscore == std::string::npos ||
+        !std::all_of(token.begin(), token.end(), [](char c) {
+          return std::isalnum(static_cast<unsigned char>(c)) || c == '-';
+        }))
+      continue;
+    std::ifstream in(JobsDir(options_) / kArrays / token / kArrayJobs);
+    std::string line;
+    for (int task = 0; task < kSlurmArrayMax && std::getline(in, line); ++task) {
+      if (line == id && s.id.substr(underscore + 1) == std::to_string(task)) return &s;
+    }
+  }
+  return nullptr;
+}
+
+void SlurmExecutor::ExpireArrays() {
+  const fs::path arrays = JobsDir(options_) / kArrays;
+  std::error_code ec;
+  if (!fs::is_directory(arrays, ec)) return;
+  const auto now = fs::file_time_type::clock::now();
+  for (const fs::directory_entry& entry : fs::directory_iterator(arrays, ec)) {
+    std::error_code time_ec;
+    const auto written = fs::last_write_time(entry.path() / kArrayJobs, time_ec);
+    if (!time_ec && now - written < kArrayKeep) continue;
+    bool followed = false;
+    std::ifstream in(entry.path() / kArrayJobs);
+    std::string line;
+    {
+      std::lock_guard lock(mutex_);
+      for (int task = 0; task < kSlurmArrayMax && std::getline(in, line) && !followed; ++task)
+        followed = tracked_.count(line) > 0;
+    }
+    if (!followed) fs::remove_all(entry.path(), time_ec);
+  }
 }
 
 void SlurmExecutor::Follow(Tracked& t, const SlurmJobState* seen) {

@@ -62,6 +62,10 @@ struct SlurmOptions {
   // The most jobs in Slurm's hands (pending or running) at once; the rest
   // wait in PBA's queue.
   int max_submitted = 1000;
+  // Jobs with the same limits handed to Slurm in one round go as one job
+  // array (up to kSlurmArrayMax tasks each) when there are at least this
+  // many, as Slurm users submit a sweep; 0: each its own Slurm job.
+  int array_min = 10;
   // How often squeue is asked.
   std::chrono::milliseconds poll{2000};
   // Where sbatch, squeue and scancel are (empty: on PATH), and the
@@ -72,7 +76,12 @@ struct SlurmOptions {
   std::chrono::milliseconds command_timeout{60000};
 };
 
-// A Slurm job as squeue shows it.
+// The most tasks in one job array (Slurm's default MaxArraySize allows
+// task ids up to 1000).
+inline constexpr int kSlurmArrayMax = 1000;
+
+// A Slurm job as squeue shows it (a task of a job array: id
+// "<array job id>_<task id>").
 struct SlurmJobState {
   std::string id, name, state, reason, node;
 };
@@ -99,10 +108,12 @@ SlurmEnd ClassifySlurmState(const std::string& state);
 bool SlurmRunning(const std::string& state);  // RUNNING or COMPLETING
 
 // The sbatch command line (without the program) of one job: its folder,
-// name, limits and script.
+// name, limits and script; or of a job array of `array_tasks` tasks, each
+// running in entry <task id> of `dir`, a link to its job's folder.
 struct SlurmSubmission {
-  std::string job_id;  // PBA's
+  std::string job_id;  // PBA's; of an array, its name in the jobs folder's arrays/
   std::filesystem::path dir, script;
+  int array_tasks = 0;  // 0: one job
   int ranks = 1;
   int cpus_per_task = 1;
   int64_t time_limit_s = 0;  // 0: the partition's
@@ -111,11 +122,17 @@ struct SlurmSubmission {
 std::vector<std::string> SbatchArguments(const SlurmOptions& options, const SlurmSubmission& s);
 
 // The batch script: runs `command` (the program first; an argument
-// "@PBA_RUN_RESULT@" becomes result-$SLURM_JOB_ID) in the job's folder,
-// under an address-space limit when `memory_bytes` > 0, and writes its exit
-// code to exit_code-$SLURM_JOB_ID (through a temporary file: the file is there whole or
-// not at all). Each argument single-quoted for the shell.
+// "@PBA_RUN_RESULT@" becomes result-<run>) in the job's folder, under an
+// address-space limit when `memory_bytes` > 0, and writes its exit code to
+// exit_code-<run> (through a temporary file: the file is there whole or not
+// at all), where <run> is $PBA_RUN_ID, or $SLURM_JOB_ID without it. Each
+// argument single-quoted for the shell.
 std::string SlurmBatchScript(const std::vector<std::string>& command, int64_t memory_bytes);
+
+// A job array's script: task N goes into the array folder's entry N (its
+// job's folder) and runs that job's batch script (`job_script`, its name)
+// with PBA_RUN_ID=<array job id>_<N>.
+std::string SlurmArrayScript(const std::string& job_script);
 
 class SlurmExecutor : public Executor {
  public:
@@ -140,9 +157,31 @@ class SlurmExecutor : public Executor {
   void Loop();
   // Takes over the jobs in Slurm's hands that the store names.
   void Reattach(const std::vector<SlurmJobState>& queue);
-  // Hands QUEUED jobs to Slurm while there is room.
+  struct Prepared;  // a job whose folder and script are ready, defined in the .cc
+
+  // Hands QUEUED jobs to Slurm while there is room: those with the same
+  // limits as one job array when there are array_min or more.
   void SubmitQueued();
-  bool Submit(const v1::Job& job);
+  // The job's folder and batch script; false when the job failed instead.
+  bool Prepare(const v1::Job& job, Prepared* prepared);
+  // sbatch for one job, or for an array of them; false (the jobs back in
+  // the queue, submissions paused) when Slurm may take them later.
+  bool SubmitOne(Prepared& p);
+  bool SubmitArray(std::vector<Prepared>& members);
+  // sbatch with p's limits; kLater also pauses submissions. `said`: what
+  // sbatch said when it did not take the job.
+  enum class Sbatched { kSubmitted, kLater, kRefused };
+  Sbatched Sbatch(const Prepared& p, SlurmSubmission submission, std::string* slurm_id,
+                  std::string* said);
+  // Puts a claimed job back in PBA's queue.
+  void Release(const std::string& id);
+  // Records the Slurm job of a submitted job and follows it.
+  void Track(Prepared& p, const std::string& slurm_id, const std::string& message);
+  // The task of a job array that a job claimed before a crash became, if
+  // the array's list names it (nullptr: none).
+  const SlurmJobState* FindInArrays(const std::vector<SlurmJobState>& queue, const std::string& id);
+  // Array folders none of whose jobs is followed any more.
+  void ExpireArrays();
   // One squeue: each tracked job's new state, progress, end.
   bool Poll(std::vector<SlurmJobState>* queue);
   void Follow(Tracked& t, const SlurmJobState* seen);

@@ -79,7 +79,10 @@ std::array<int, 3> SortedTriple(int a, int b, int c) {
 class Collapser {
  public:
   Collapser(const CollapseOptions& options, Mesh* mesh)
-      : options_(options), face_sets_(mesh->face_sets), topology_(mesh, MeasureOf(options)) {}
+      : options_(options),
+        face_sets_(mesh->face_sets),
+        topology_(mesh, TetMeasure::ForTargets(options.target_min_dihedral_deg,
+                                               options.target_aspect_ratio)) {}
 
   Status Prepare() {
     std::vector<char> on_boundary;
@@ -122,15 +125,6 @@ class Collapser {
   }
 
  private:
-  static TetMeasure MeasureOf(const CollapseOptions& options) {
-    TetMeasure measure;
-    if (options.target_aspect_ratio > 0) {
-      measure.angle_scale =
-          options.target_min_dihedral_deg * kRadiansPerDegree * options.target_aspect_ratio;
-    }
-    return measure;
-  }
-
   double Angle(const Tet& t) const {
     return TetQuality(topology_.node(t[0]), topology_.node(t[1]), topology_.node(t[2]),
                       topology_.node(t[3]));

@@ -72,21 +72,13 @@ class Improver {
   Improver(const ImproveOptions& options, Mesh* mesh)
       : options_(options),
         mesh_(*mesh),
-        measure_(MeasureOf(options)),
+        measure_(
+            TetMeasure::ForTargets(options.target_min_dihedral_deg, options.target_aspect_ratio)),
         topology_(mesh, measure_),
         target_(options.target_aspect_ratio > 0
                     ? 1 / options.target_aspect_ratio
                     : options.target_min_dihedral_deg * kRadiansPerDegree),
         angle_target_(options.target_min_dihedral_deg * kRadiansPerDegree) {}
-
-  static TetMeasure MeasureOf(const ImproveOptions& options) {
-    TetMeasure measure;
-    if (options.target_aspect_ratio > 0) {
-      measure.angle_scale =
-          options.target_min_dihedral_deg * kRadiansPerDegree * options.target_aspect_ratio;
-    }
-    return measure;
-  }
 
   // Checks the mesh, builds the adjacency and finds the nodes that stay;
   // on error the mesh is untouched.

@@ -38,6 +38,16 @@ struct TetMeasure {
   double angle_scale = 0;
   double operator()(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1, const Eigen::Vector3d& p2,
                     const Eigen::Vector3d& p3) const;
+
+  // The measure of targets theta_t [degrees] and A_t (0: the angle alone).
+  static TetMeasure ForTargets(double target_min_dihedral_deg, double target_aspect_ratio) {
+    TetMeasure measure;
+    if (target_aspect_ratio > 0) {
+      measure.angle_scale =
+          target_min_dihedral_deg * (3.14159265358979323846 / 180) * target_aspect_ratio;
+    }
+    return measure;
+  }
 };
 
 // The reciprocal aspect ratio 1 / A of the tetrahedron (x, p[0], p[1], p[2]),

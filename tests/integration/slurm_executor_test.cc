@@ -144,7 +144,7 @@ class SlurmTest : public ::testing::Test {
   // The Slurm job id `pba job show` names ("" before it has one).
   static std::string SlurmJobIn(const std::string& shown) {
     std::smatch match;
-    static const std::regex kSlurm("Slurm job\\s+(\\d+)");
+    static const std::regex kSlurm("Slurm job\\s+([0-9_]+)");  // a task: <array>_<task>
     return std::regex_search(shown, match, kSlurm) ? match[1].str() : "";
   }
   std::string SlurmJob(const std::string& id) { return SlurmJobIn(Show(id)); }
@@ -212,6 +212,62 @@ TEST_F(SlurmTest, AJobRunsAsASlurmJobWithItsProgressAndResult) {
       Pba({"batch", "run", (dir_.path() / "sweep.yaml").string(), "--no-plot"}, seconds(300));
   EXPECT_EQ(batched.exit_code, 0) << batched.out << batched.err;
   EXPECT_EQ(CountOf(ReadFile(slurm_dir_ / "jobcomp.txt"), "JobState=COMPLETED"), 5u);
+}
+
+// A sweep handed to Slurm together goes as one job array. The controller
+// is out of reach while the members are queued (squeue and sbatch wait or
+// fail: they wait in PBA's queue); once it is back, all of them go in one
+// sbatch, the fewest an array takes being 4 here. Each
+// member is a task of the array with a state of its own: one cancelled
+// through PBA while it waits ends CANCELLED, the others succeed, each run
+// once, though the server is killed and started again meanwhile.
+TEST_F(SlurmTest, ASweepGoesAsOneJobArrayWithAStateForEachMember) {
+  ASSERT_TRUE(StartServer({"--slurm-array-min", "4"}));
+  ASSERT_EQ(Cluster({"stop-ctld"}).exit_code, 0);
+  std::vector<std::string> ids;
+  for (int i = 0; i < 5; ++i) {
+    const std::string name = "member" + std::to_string(i);
+    ids.push_back(Submit(name, Hold(name, 30)));
+    ASSERT_FALSE(ids.back().empty());
+  }
+  const RunResult back = Cluster({"restart-ctld"});
+  ASSERT_EQ(back.exit_code, 0) << back.out << back.err;
+  // Two run at once on the two CPUs: the last waits for a while.
+  std::string array;
+  for (std::size_t i = 0; i < ids.size(); ++i) {
+    ASSERT_TRUE(WaitForShow(
+        ids[i], [](const std::string& shown) { return !SlurmJobIn(shown).empty(); }, seconds(120)))
+        << Show(ids[i]);
+    const std::string slurm_id = SlurmJob(ids[i]);
+    const std::size_t underscore = slurm_id.find('_');
+    ASSERT_NE(underscore, std::string::npos) << slurm_id;
+    if (array.empty()) array = slurm_id.substr(0, underscore);
+    EXPECT_EQ(slurm_id, array + "_" + std::to_string(i));
+  }
+  const RunResult cancelled = Pba({"job", "cancel", ids[4]});
+  EXPECT_EQ(cancelled.exit_code, 0) << cancelled.out << cancelled.err;
+  ASSERT_TRUE(WaitForState(ids[4], "CANCELLED", seconds(60))) << Show(ids[4]);
+  // The server killed while tasks run and wait, and started again: it
+  // follows each task by its id.
+  server_->Kill();
+  std::string log;
+  ASSERT_TRUE(StartServer({"--slurm-array-min", "4"}, &log)) << log;
+  for (int i = 0; i < 4; ++i) {
+    ASSERT_TRUE(WaitForState(ids[i], "SUCCEEDED", seconds(180))) << Show(ids[i]);
+    const std::string shown = Show(ids[i]);
+    EXPECT_TRUE(std::regex_search(shown, std::regex("Attempts\\s+1\\b"))) << shown;
+    // Its events, from the start: how it went to Slurm.
+    const std::string events = Pba({"job", "watch", ids[i]}).out;
+    EXPECT_NE(
+        events.find("submitted to Slurm as task " + std::to_string(i) + " of job array " + array),
+        std::string::npos)
+        << events;
+  }
+  // One line per task in Slurm's job completion file: four completed, and
+  // no member submitted on its own.
+  const std::string completions = ReadFile(slurm_dir_ / "jobcomp.txt");
+  EXPECT_EQ(CountOf(completions, "JobState=COMPLETED"), 4u) << completions;
+  EXPECT_EQ(CountOf(completions, "Name=pba-j"), 0u) << completions;
 }
 
 TEST_F(SlurmTest, CancelledThroughPbaOrWithScancelFromOutside) {

@@ -174,9 +174,63 @@ TEST(SlurmPartsTest, TheBatchScriptRunsTheCommandAndKeepsItsExitCode) {
   EXPECT_EQ(ReadFile(dir.path() / "exit_code-77"), "5\n");
   EXPECT_FALSE(std::filesystem::exists(dir.path() / "exit_code-77.partial"));
   // pba-solve's --out: this run's own result folder.
-  EXPECT_NE(SlurmBatchScript({"pba-solve", "@PBA_RUN_RESULT@"}, 0)
-                .find("'pba-solve' result-\"$SLURM_JOB_ID\""),
-            std::string::npos);
+  EXPECT_NE(
+      SlurmBatchScript({"pba-solve", "@PBA_RUN_RESULT@"}, 0).find("'pba-solve' result-\"$run\""),
+      std::string::npos);
+}
+
+// A job array: one sbatch whose task N writes through entry N of the
+// array's folder (a link to its job's folder), named after the array.
+TEST(SlurmPartsTest, AnArrayGoesInOneSbatch) {
+  SlurmSubmission s;
+  s.job_id = "j0123-1";
+  s.dir = "/shared/jobs/arrays/j0123-1";
+  s.script = s.dir / "array.sh";
+  s.array_tasks = 12;
+  const std::vector<std::string> args = SbatchArguments(SlurmOptions(), s);
+  const auto has = [&](const std::string& a) {
+    return std::find(args.begin(), args.end(), a) != args.end();
+  };
+  EXPECT_TRUE(has("--array=0-11"));
+  EXPECT_TRUE(has("--job-name=pba-array-j0123-1"));
+  EXPECT_TRUE(has("--chdir=/shared/jobs/arrays/j0123-1"));
+  EXPECT_TRUE(has("--output=/shared/jobs/arrays/j0123-1/%a/progress-%A_%a.jsonl"));
+  EXPECT_TRUE(has("--error=/shared/jobs/arrays/j0123-1/%a/solve.log"));
+  EXPECT_TRUE(has("--no-requeue"));
+  EXPECT_EQ(args.back(), "/shared/jobs/arrays/j0123-1/array.sh");
+}
+
+// The array's script, run by /bin/sh as Slurm runs task 1: it goes into
+// that task's job folder and runs its job's script there, whose files are
+// named <array job id>_<task id>.
+TEST(SlurmPartsTest, AnArrayTaskRunsItsJobInItsFolder) {
+  TempDir dir;
+  const std::filesystem::path jobs = dir.path() / "jobs";
+  for (const char* job : {"ja", "jb"}) {
+    std::filesystem::create_directories(jobs / job);
+    std::ofstream(jobs / job / "job.sh")
+        << SlurmBatchScript({"sh", "-c", std::string("pwd > where; exit 3"), "zero"}, 0);
+  }
+  const std::filesystem::path array = jobs / "arrays" / "ja-1";
+  std::filesystem::create_directories(array);
+  std::filesystem::create_directory_symlink("../../ja", array / "0");
+  std::filesystem::create_directory_symlink("../../jb", array / "1");
+  std::ofstream(array / "array.sh") << SlurmArrayScript("job.sh");
+  CommandResult r;
+  CommandOptions as_slurm;
+  as_slurm.env = {"SLURM_JOB_ID=91", "SLURM_ARRAY_JOB_ID=90", "SLURM_ARRAY_TASK_ID=1"};
+  ASSERT_TRUE(
+      RunCommand({"sh", "-c", "cd \"$0\" && sh array.sh", array.string()}, as_slurm, &r).ok());
+  EXPECT_EQ(r.code, 3) << r.err;
+  EXPECT_EQ(ReadFile(jobs / "jb" / "exit_code-90_1"), "3\n");
+  EXPECT_TRUE(std::filesystem::exists(jobs / "jb" / "where"));
+  EXPECT_FALSE(std::filesystem::exists(jobs / "ja" / "where"));
+  EXPECT_FALSE(std::filesystem::exists(jobs / "jb" / "exit_code-91"));
+  // A task whose entry is missing ends at once, having run nothing.
+  as_slurm.env = {"SLURM_JOB_ID=92", "SLURM_ARRAY_JOB_ID=90", "SLURM_ARRAY_TASK_ID=2"};
+  ASSERT_TRUE(
+      RunCommand({"sh", "-c", "cd \"$0\" && sh array.sh", array.string()}, as_slurm, &r).ok());
+  EXPECT_NE(r.code, 0);
 }
 
 }  // namespace
