@@ -10,7 +10,9 @@
 # the scheduler's start and the polls; the result collected with its
 # digests). Then a batch of `jobs` members through `pba batch run`: its wall
 # time, jobs per minute, and whether every member succeeded and ran once
-# (one attempt each; for Slurm one line per job in its job completion file).
+# (one attempt each; for Slurm one line per job in its job completion file),
+# and for Slurm the sbatch calls the single jobs and the batch took (one
+# per job, or per job array).
 #
 # Usage: scripts/bench_slurm.sh [jobs [single]]    (default 200 10)
 #   PBA_BENCH_PARALLEL: members submitted at a time (default 50)
@@ -63,7 +65,7 @@ report() {
   "$py" - "$@" <<'PY'
 import json, statistics, sys
 from datetime import datetime
-work, name, start, end, n, runs, single = sys.argv[1:]
+work, name, start, end, n, runs, single, submissions = sys.argv[1:]
 def t(s):
     return datetime.fromisoformat(s.replace("Z", "+00:00")).timestamp()
 def get(j, snake, camel):
@@ -85,7 +87,7 @@ each_once = ok == int(n) and attempts == {1} and (runs == "-" or int(runs) == in
 wall = float(end) - float(start)
 print(f"| {name} | {statistics.median(turn):.2f} s | {statistics.median(solve):.2f} s | "
       f"{statistics.median(over):.2f} s ({min(over):.2f} .. {max(over):.2f}) | {n} | {ok} | "
-      f"{'yes' if each_once else 'NO'} | {wall:.1f} s | {int(n) / wall * 60:.0f} |")
+      f"{'yes' if each_once else 'NO'} | {wall:.1f} s | {int(n) / wall * 60:.0f} | {submissions} |")
 PY
 }
 
@@ -137,19 +139,25 @@ EOF
   }
   end=$(date +%s.%N)
   "$build/bin/pba" --json job list --all >"$work/jobs-$name.json"
-  local runs=-
+  local runs=- submissions=-
   case $name in
-    slurm*) runs=$(tail -n +"$((before + 1))" "$work/slurm/jobcomp.txt" | grep -c "Name=pba-" || true) ;;
+    slurm*)
+      local lines
+      lines=$(tail -n +"$((before + 1))" "$work/slurm/jobcomp.txt")
+      runs=$(grep -c "Name=pba-" <<<"$lines" || true)
+      # One Slurm job name per sbatch: a job's, or a whole array's.
+      submissions=$(grep -o "Name=pba-[^ ]*" <<<"$lines" | sort -u | wc -l)
+      ;;
   esac
-  report "$work" "$name" "$start" "$end" "$jobs" "$runs" "$single"
+  report "$work" "$name" "$start" "$end" "$jobs" "$runs" "$single" "$submissions"
   kill "$server_pid"
   wait "$server_pid" 2>/dev/null || true
   server_pid=
 }
 
 echo "machine: $(nproc) cores, $(awk '/MemTotal/ {printf "%.0f GB", $2 / 1048576}' /proc/meminfo); commit $(git -C "$root" rev-parse --short HEAD); --slurm-poll $poll s; batch submitted $parallel at a time"
-echo "| executor | turnaround of one job (median of $single) | its solve | overhead (range) | batch jobs | succeeded | each ran once | batch wall time | jobs per minute |"
-echo "|---|---|---|---|---|---|---|---|---|"
+echo "| executor | turnaround of one job (median of $single) | its solve | overhead (range) | batch jobs | succeeded | each ran once | batch wall time | jobs per minute | sbatch calls |"
+echo "|---|---|---|---|---|---|---|---|---|---|"
 run local --max-running 2
 bash "$root/scripts/slurm-local.sh" start >/dev/null
 run slurm-arrays --executor slurm --slurm-poll "$poll"
