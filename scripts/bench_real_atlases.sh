@@ -78,8 +78,8 @@ text = open(log).read()
 def note(pattern, fmt, default="0"):
     m = re.search(pattern, text)
     return fmt(m) if m else default
-collapsed = note(r"note: (\d+) short edges? collapsed .*?by at most ([0-9.]+) mm",
-                 lambda m: f"{m[1]} ({m[2]} mm)")
+collapsed = note(r"note: (\d+) short edges? collapsed [^\n]*?(?:by at most ([0-9.]+) mm|only nodes inside)",
+                 lambda m: f"{m[1]} ({m[2]} mm)" if m[2] else f"{m[1]} (inside only)")
 peeled = note(r"note: (\d+) slivers? on the outer surface taken out \(([0-9.e+-]+) mm\^3",
               lambda m: f"{m[1]} ({float(m[2]):.3g} mm³)")
 fragments = note(r"note: (\d+) fragments? of the mesh .*?, ([0-9.e+-]+) mm\^3",

@@ -659,12 +659,25 @@ bool SlurmExecutor::SubmitOne(Prepared& p) {
 
 bool SlurmExecutor::SubmitArray(std::vector<Prepared>& members) {
   const Prepared& first = members.front();
-  // Named after its first job and that job's attempt: no two arrays share it.
-  const std::string token = first.job.id() + "-" + std::to_string(first.job.attempts() + 1);
+  // Named after its first job and the time: a job given back to the queue
+  // before it started may lead another array, while the tasks of the first
+  // one still wait in Slurm for their folder. An existing folder is never
+  // reused.
+  const std::string token = fmt::format("{}-{}", first.job.id(),
+                                        std::chrono::duration_cast<std::chrono::microseconds>(
+                                            std::chrono::system_clock::now().time_since_epoch())
+                                            .count());
   const fs::path dir = JobsDir(options_) / kArrays / token;
   std::error_code ec;
-  fs::remove_all(dir, ec);
-  fs::create_directories(dir, ec);
+  bool created = false;
+  fs::create_directories(dir.parent_path(), ec);
+  if (!ec) created = fs::create_directory(dir, ec);
+  if (!ec && !created) ec = std::make_error_code(std::errc::file_exists);
+  // Only a folder made here is removed when the array does not go.
+  const auto remove_folder = [&] {
+    std::error_code ignored;
+    if (created) fs::remove_all(dir, ignored);
+  };
   std::string list;
   for (std::size_t i = 0; i < members.size() && !ec; ++i) {
     fs::create_directory_symlink(fs::path("..") / ".." / members[i].job.id(),
@@ -676,7 +689,7 @@ bool SlurmExecutor::SubmitArray(std::vector<Prepared>& members) {
   if (written.ok()) written = AtomicWriteText(dir / kArrayScript, SlurmArrayScript(kScript));
   const auto one_by_one = [&](const std::string& why) {
     spdlog::warn("a job array of {} jobs: {}; they go to Slurm one by one", members.size(), why);
-    fs::remove_all(dir, ec);
+    remove_folder();
     for (std::size_t i = 0; i < members.size(); ++i) {
       if (!SubmitOne(members[i])) {
         for (std::size_t j = i + 1; j < members.size(); ++j) Release(members[j].job.id());
@@ -694,7 +707,7 @@ bool SlurmExecutor::SubmitArray(std::vector<Prepared>& members) {
   std::string array_id, said;
   switch (Sbatch(first, submission, &array_id, &said)) {
     case Sbatched::kLater:
-      fs::remove_all(dir, ec);
+      remove_folder();
       for (const Prepared& p : members) Release(p.job.id());
       return false;
     case Sbatched::kRefused:

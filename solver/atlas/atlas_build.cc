@@ -420,11 +420,15 @@ void NoteRemoved(const AtlasBuildResult& result, std::vector<std::string>* notes
     return text;
   };
   if (const CollapseStats& c = result.collapsed; c.edges > 0) {
-    notes->push_back(Format(
-        "%s collapsed (%s around them taken out, surface and interface nodes moved by at most "
-        "%.3g mm): no flip or node move could lift the slivers around them",
-        Counted(c.edges, "short edge", "short edges").c_str(),
-        Counted(c.removed_tetrahedra, "sliver", "slivers").c_str(), c.longest_surface_m * 1e3));
+    const std::string moved = c.longest_surface_m > 0
+                                  ? Format("surface and interface nodes moved by at most %.3g mm",
+                                           c.longest_surface_m * 1e3)
+                                  : std::string("only nodes inside structures moved");
+    notes->push_back(
+        Format("%s collapsed (%s around them taken out, %s): no flip or node move "
+               "could lift the slivers around them",
+               Counted(c.edges, "short edge", "short edges").c_str(),
+               Counted(c.removed_tetrahedra, "sliver", "slivers").c_str(), moved.c_str()));
   }
   if (const RemovedTetrahedra& p = result.peeled; p.tetrahedra > 0) {
     notes->push_back(Format(

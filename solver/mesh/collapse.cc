@@ -120,8 +120,9 @@ class Collapser {
       }
       if (done == 0) break;
     }
-    topology_.Compact();
+    // (Over the living slots: Compact renumbers them.)
     stats->min_dihedral_after_deg = SmallestAngleDeg();
+    topology_.Compact();
   }
 
  private:

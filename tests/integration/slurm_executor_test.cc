@@ -270,6 +270,30 @@ TEST_F(SlurmTest, ASweepGoesAsOneJobArrayWithAStateForEachMember) {
   EXPECT_EQ(CountOf(completions, "Name=pba-j"), 0u) << completions;
 }
 
+// A job on two MPI ranks: one Slurm job of two tasks, pba-solve started by
+// mpirun inside the allocation, the job saying it ran on both.
+TEST_F(SlurmTest, AJobOnTwoRanksRunsUnderMpirunInItsAllocation) {
+  // Open MPI refuses to run as root unless told (CI runs as root); the
+  // server's environment reaches the job through sbatch.
+  ::setenv("OMPI_ALLOW_RUN_AS_ROOT", "1", 1);
+  ::setenv("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1", 1);
+  ASSERT_TRUE(StartServer({"--max-ranks", "2"}));
+  const std::string id = Submit(
+      "ranks", BlockSceneYaml("ranks", 10) + "analysis: {type: LINEAR_STATIC}\n", {"--ranks", "2"});
+  ASSERT_FALSE(id.empty());
+  ASSERT_TRUE(WaitForState(id, "SUCCEEDED", seconds(180)))
+      << Show(id) << ReadFile(dir_.path() / "data" / "jobs" / id / "solve.log");
+  const std::string shown = Show(id);
+  EXPECT_NE(shown.find("on 2 MPI ranks"), std::string::npos) << shown;
+  // Slurm gave it two tasks.
+  const std::string completions = ReadFile(slurm_dir_ / "jobcomp.txt");
+  const std::size_t line = completions.find("Name=pba-" + id + " ");
+  ASSERT_NE(line, std::string::npos) << completions;
+  const std::string record = completions.substr(line, completions.find('\n', line) - line);
+  EXPECT_NE(record.find("ProcCnt=2"), std::string::npos) << record;
+  EXPECT_EQ(SlurmRuns(id), 1u);
+}
+
 TEST_F(SlurmTest, CancelledThroughPbaOrWithScancelFromOutside) {
   ASSERT_TRUE(StartServer());
   const std::string ours = Submit("ours", Hold("ours", 4000));
