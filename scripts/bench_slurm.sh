@@ -15,7 +15,9 @@
 # per job, or per job array).
 #
 # Usage: scripts/bench_slurm.sh [jobs [single]]    (default 200 10)
-#   PBA_BENCH_PARALLEL: members submitted at a time (default 50)
+#   PBA_BENCH_PARALLEL: the batch's `parallel`, members unfinished at once
+#     (default all: every member handed over at once, as a batch without
+#     `parallel` goes to a Slurm-backed server)
 #   PBA_BENCH_POLL: --slurm-poll in seconds (default 2, the server's)
 set -euo pipefail
 
@@ -23,7 +25,7 @@ root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 build=${PBA_BUILD_DIR:-$root/build/release}
 jobs=${1:-200}
 single=${2:-10}
-parallel=${PBA_BENCH_PARALLEL:-50}
+parallel=${PBA_BENCH_PARALLEL:-all}
 poll=${PBA_BENCH_POLL:-2}
 for b in pba pba-server pba-solve; do
   [ -x "$build/bin/$b" ] || { echo "bench_slurm: build $b first" >&2; exit 2; }

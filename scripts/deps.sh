@@ -21,6 +21,7 @@ packages=(
   openssl
   mricron-data
   slurmctld slurmd slurm-client munge
+  libcpp-httplib-dev libjs-three libjs-chart.js
 )
 
 missing=()

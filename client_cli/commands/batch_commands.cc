@@ -32,7 +32,9 @@ struct Batch {
   std::string name;
   fs::path scene_file;
   v1::SnapshotRef snapshot;  // every member's atlas from it, when set
-  int parallel = 2;
+  // Unfinished jobs at most; kParallelAll: every member at once;
+  // kParallelAuto: as the server suits (ParallelFor).
+  int parallel = kParallelAuto;
   std::vector<std::string> parameters;  // the paths the members set, in order
   std::vector<RunMember> members;       // keyed by name in the state file
   // What each member sets: path, value as written.
@@ -112,14 +114,18 @@ bool ReadSettings(const std::string& file, const YAML::Node& root, Batch* batch,
     }
   }
   if (root["parallel"]) {
-    try {
-      batch->parallel = root["parallel"].as<int>();
-    } catch (const YAML::Exception&) {
-      batch->parallel = 0;
-    }
-    if (batch->parallel < 1 || batch->parallel > 64) {
-      *error = file + ": parallel: expected a whole number from 1 to 64";
-      return false;
+    if (root["parallel"].IsScalar() && root["parallel"].Scalar() == "all") {
+      batch->parallel = kParallelAll;
+    } else {
+      try {
+        batch->parallel = root["parallel"].as<int>();
+      } catch (const YAML::Exception&) {
+        batch->parallel = 0;
+      }
+      if (batch->parallel < 1 || batch->parallel > 64) {
+        *error = file + ": parallel: expected a whole number from 1 to 64, or all";
+        return false;
+      }
     }
   }
   if (root["outputs"]) {
@@ -312,7 +318,7 @@ int RunBatch(Connection& connection, const BatchArgs& args) {
   RunOptions options;
   options.state = StatePath(args.file);
   options.snapshot = batch.snapshot;
-  options.parallel = batch.parallel;
+  options.parallel = ParallelFor(connection, batch.parallel);
   options.retry_failed = args.retry_failed;
   options.ranks = args.ranks;
   options.poll_s = args.poll_s;
@@ -320,8 +326,11 @@ int RunBatch(Connection& connection, const BatchArgs& args) {
   const std::vector<size_t> to_submit = ResumeMembers(connection, options, &batch.members);
   const size_t kept = batch.members.size() - to_submit.size();
   if (!json) {
-    std::printf("Batch %s: %zu members, %zu from an earlier run, %zu to submit, %d at a time\n",
-                batch.name.c_str(), batch.members.size(), kept, to_submit.size(), batch.parallel);
+    std::printf("Batch %s: %zu members, %zu from an earlier run, %zu to submit, %s\n",
+                batch.name.c_str(), batch.members.size(), kept, to_submit.size(),
+                options.parallel == kParallelAll
+                    ? "all at once (the server's queue bounds how many run)"
+                    : (std::to_string(options.parallel) + " at a time").c_str());
     std::fflush(stdout);
   }
   if (const int code = SubmitAndPoll(connection, options, to_submit, &batch.members);

@@ -157,6 +157,16 @@ YAML::Node SummaryTree(const v1::Summary& summary, bool zeros) {
   return YAML::Load(json);
 }
 
+int ParallelFor(Connection& connection, int parallel) {
+  if (parallel != kParallelAuto) return parallel;
+  v1::ServerInfo info;
+  auto context = connection.UnaryContext();
+  // A server without GetServerInfo runs its jobs locally.
+  const grpc::Status status =
+      connection.jobs().GetServerInfo(context.get(), v1::GetServerInfoRequest(), &info);
+  return status.ok() && info.executor() == "slurm" ? kParallelAll : kParallelDefault;
+}
+
 std::vector<size_t> ResumeMembers(Connection& connection, const RunOptions& options,
                                   std::vector<RunMember>* members) {
   const auto earlier = ReadState(options.state);
@@ -191,8 +201,13 @@ int SubmitAndPoll(Connection& connection, const RunOptions& options,
     for (const RunMember& m : *members) n += !m.job_id.empty() && !IsDone(m.job.state());
     return n;
   };
+  // The server refused a submit over its bound of open jobs per user: no
+  // more until one of ours has ended.
+  int full_at = -1;
   while (true) {
-    while (next < to_submit.size() && in_flight() < options.parallel) {
+    while (next < to_submit.size() &&
+           (options.parallel == kParallelAll || in_flight() < options.parallel) &&
+           (full_at < 0 || in_flight() < full_at)) {
       RunMember& m = (*members)[to_submit[next++]];
       v1::SubmitJobRequest request;
       *request.mutable_scene() = m.scene;
@@ -201,6 +216,18 @@ int SubmitAndPoll(Connection& connection, const RunOptions& options,
       request.set_ranks(options.ranks);
       auto context = connection.UnaryContext();
       grpc::Status status = connection.jobs().SubmitJob(context.get(), request, &m.job);
+      if (status.error_code() == grpc::StatusCode::RESOURCE_EXHAUSTED && in_flight() > 0) {
+        // Taken again once one of ours has ended.
+        --next;
+        if (!options.quiet && full_at < 0) {
+          std::printf(
+              "the server holds %d of this batch's jobs, its most for one user; "
+              "the next once one ends\n",
+              in_flight());
+        }
+        full_at = in_flight();
+        break;
+      }
       if (!status.ok()) {
         WriteState(options, *members);
         return connection.Fail("submitting member '" + m.name + "'", status);

@@ -44,13 +44,25 @@ struct RunMember {
   v1::Job job;
 };
 
+// RunOptions::parallel: every member handed to the server at once (its
+// queue, and Slurm behind it, bound how many run; a submit over the
+// server's bound of open jobs per user waits for one to end).
+inline constexpr int kParallelAll = 0;
+// A batch file without `parallel`: all at once to a server whose executor
+// is Slurm (a sweep goes as one job array), else kParallelDefault.
+inline constexpr int kParallelAuto = -1;
+inline constexpr int kParallelDefault = 2;
+
+// `parallel` as given, or for kParallelAuto what the server suits.
+int ParallelFor(Connection& connection, int parallel);
+
 struct RunOptions {
-  std::filesystem::path state;  // "job-id<TAB>key[<TAB>name]" per line
-  bool name_in_state = false;   // write the name as a third column (for reading)
-  v1::SnapshotRef snapshot;     // every member's atlas from it, when set
-  int parallel = 2;             // unfinished jobs at most
-  bool retry_failed = false;    // resubmit a failed or cancelled earlier job
-  int ranks = 0;                // MPI processes per job (SubmitJobRequest.ranks); 0: one
+  std::filesystem::path state;      // "job-id<TAB>key[<TAB>name]" per line
+  bool name_in_state = false;       // write the name as a third column (for reading)
+  v1::SnapshotRef snapshot;         // every member's atlas from it, when set
+  int parallel = kParallelDefault;  // unfinished jobs at most; kParallelAll
+  bool retry_failed = false;        // resubmit a failed or cancelled earlier job
+  int ranks = 0;                    // MPI processes per job (SubmitJobRequest.ranks); 0: one
   double poll_s = 0.5;
   bool quiet = false;  // no progress lines (--json)
 };

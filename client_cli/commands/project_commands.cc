@@ -90,6 +90,39 @@ int WhoAmI(Connection& connection) {
   return kExitOk;
 }
 
+int ServerInfo(Connection& connection) {
+  v1::ServerInfo info;
+  auto context = connection.UnaryContext();
+  grpc::Status status =
+      connection.jobs().GetServerInfo(context.get(), v1::GetServerInfoRequest(), &info);
+  if (!status.ok()) return connection.Fail("server info", status);
+  if (connection.options().json) {
+    PrintJson(info);
+    return kExitOk;
+  }
+  const bool slurm = info.executor() == "slurm";
+  std::printf("server %s\n", connection.options().server.c_str());
+  if (slurm) {
+    std::printf("executor: slurm (%s)\n",
+                info.array_min() > 0 ? ("jobs handed over together go as one job array from " +
+                                        std::to_string(info.array_min()))
+                                           .c_str()
+                                     : "each job its own Slurm job");
+    std::printf("jobs in Slurm's hands at once: %d\n", info.max_running());
+  } else {
+    std::printf("executor: local (child processes of the server)\n");
+    std::printf("jobs running at once: %d\n", info.max_running());
+  }
+  std::printf("jobs queued or running per user: %s\n",
+              info.max_open_jobs() > 0 ? std::to_string(info.max_open_jobs()).c_str() : "no bound");
+  std::printf("MPI ranks per job: at most %d\n", info.max_ranks());
+  std::printf("time per job: %s\n",
+              info.max_job_time_s() > 0
+                  ? ("at most " + std::to_string(info.max_job_time_s()) + " s").c_str()
+                  : "no limit");
+  return kExitOk;
+}
+
 int CreateProject(Connection& connection, const std::string& name, const std::string& request_id) {
   v1::CreateProjectRequest request;
   request.set_name(name);
@@ -186,6 +219,9 @@ void RegisterLoginCommands(CLI::App& app, CommandContext& context) {
   context.Add(login_cmd, [login](Connection& c) { return Login(c, *login); });
   context.Add(app.add_subcommand("logout", "Forget the token kept for the server"), Logout);
   context.Add(app.add_subcommand("whoami", "The user the kept token belongs to"), WhoAmI);
+  context.Add(
+      app.add_subcommand("server", "How the server runs jobs and the bounds a submit meets"),
+      ServerInfo);
 }
 
 void RegisterProjectCommands(CLI::App& app, CommandContext& context) {

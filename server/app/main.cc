@@ -93,11 +93,14 @@ int SetDisabled(const std::string& data_dir, const std::string& name, bool disab
   return 0;
 }
 
-fs::path DefaultSolver() {
+// The folder this executable is in (the current one if unknown).
+fs::path ExecutableDir() {
   std::error_code ec;
   const fs::path self = fs::read_symlink("/proc/self/exe", ec);
-  return (ec ? fs::current_path() : self.parent_path()) / "pba-solve";
+  return ec ? fs::current_path() : self.parent_path();
 }
+
+fs::path DefaultSolver() { return ExecutableDir() / "pba-solve"; }
 
 // The first `name` in a directory of PATH that is an executable file; empty
 // when there is none.
@@ -139,6 +142,10 @@ struct ServeFlags {
   int slurm_max_jobs = 1000;
   int slurm_array_min = 10;
   double slurm_poll_s = 2;
+  double slurm_gather_s = 1;
+  int max_open_jobs = pba::kDefaultMaxOpenJobs;
+  std::string http;
+  std::string web_root;
 };
 
 void AddServeOptions(CLI::App& app, ServeFlags* flags) {
@@ -218,6 +225,22 @@ void AddServeOptions(CLI::App& app, ServeFlags* flags) {
   app.add_option("--slurm-poll", flags->slurm_poll_s, "Seconds between two looks at squeue")
       ->check(CLI::Range(0.1, 600.0))
       ->capture_default_str();
+  app.add_option("--slurm-gather", flags->slurm_gather_s,
+                 "Seconds the queue must be quiet after a submit before its jobs go to Slurm, "
+                 "so that a sweep submitted job by job goes as one array (at most 10 times "
+                 "this after the first); 0: at once")
+      ->check(CLI::Range(0.0, 60.0))
+      ->capture_default_str();
+  app.add_option("--http", flags->http,
+                 "HOST:PORT of the web view (the atlas, its locks and history, the jobs and "
+                 "their results in a browser); port 0 picks a free one; TLS as --tls-cert");
+  app.add_option("--web-root", flags->web_root,
+                 "The web view's files (default: share/pba/web beside the binaries)");
+  app.add_option("--max-open-jobs", flags->max_open_jobs,
+                 "Jobs one user may have queued or running at once; a submit beyond is refused "
+                 "(RESOURCE_EXHAUSTED); 0: no bound")
+      ->check(CLI::Range(0, 100000000))
+      ->capture_default_str();
 }
 
 // `pba-server admin ...`: the subcommands and what they were given.
@@ -296,6 +319,12 @@ pba::ServerOptions ServerOptionsFromFlags(const ServeFlags& flags) {
   options.slurm.max_submitted = flags.slurm_max_jobs;
   options.slurm.array_min = flags.slurm_array_min;
   options.slurm.poll = std::chrono::milliseconds(static_cast<int64_t>(flags.slurm_poll_s * 1000));
+  options.slurm.gather =
+      std::chrono::milliseconds(static_cast<int64_t>(flags.slurm_gather_s * 1000));
+  options.max_open_jobs = flags.max_open_jobs;
+  options.http_listen = flags.http;
+  options.web_app_dir = flags.web_root.empty() ? ExecutableDir() / ".." / "share" / "pba" / "web"
+                                               : fs::path(flags.web_root);
   options.upload_quota_bytes = static_cast<int64_t>(flags.upload_quota_gib * (1LL << 30));
   options.keep_results =
       std::chrono::seconds(static_cast<int64_t>(flags.keep_results_days * 86400));
@@ -324,10 +353,15 @@ int Serve(const ServeFlags& flags, const sigset_t& shutdown_signals) {
   }
 
   const fs::path server_json = fs::absolute(flags.data_dir) / "server.json";
-  const std::string info =
-      "{\"address\":\"" + server->address() + "\",\"pid\":" + std::to_string(::getpid()) + "}\n";
+  const std::string info = "{\"address\":\"" + server->address() + "\",\"http\":\"" +
+                           server->http_address() + "\",\"pid\":" + std::to_string(::getpid()) +
+                           "}\n";
   const pba::Status written = pba::AtomicWriteText(server_json, info);
   if (!written.ok()) spdlog::warn("cannot write server.json: {}", written.ToString());
+  if (!server->http_address().empty()) {
+    std::cout << "web view on " << (flags.tls_cert.empty() ? "http://" : "https://")
+              << server->http_address() << "/" << std::endl;
+  }
   std::cout << "pba-server listening on " << server->address() << std::endl;
   if (!flags.tls_cert.empty()) spdlog::info("TLS with the certificate {}", flags.tls_cert);
   if (flags.tls_cert.empty() && !pba::IsLoopbackListen(flags.listen)) {

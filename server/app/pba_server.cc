@@ -163,7 +163,60 @@ Status MakeExecutor(const ServerOptions& options, JobStore& store, JobEventHub& 
   return Status::Ok();
 }
 
+// What GetServerInfo answers for `options`.
+v1::ServerInfo InfoOf(const ServerOptions& options) {
+  v1::ServerInfo info;
+  const bool slurm = options.executor == ServerOptions::ExecutorKind::kSlurm;
+  info.set_executor(slurm ? "slurm" : "local");
+  info.set_max_running(slurm ? options.slurm.max_submitted : options.max_running);
+  info.set_max_open_jobs(options.max_open_jobs);
+  info.set_array_min(slurm ? options.slurm.array_min : 0);
+  info.set_max_ranks(options.mpirun.empty() ? 1 : options.max_ranks);
+  info.set_max_job_time_s(options.max_job_time.count());
+  return info;
+}
+
+// The executor's options from the server's (what the store adds is set
+// by Start).
+ExecutorOptions ExecutorOptionsFor(const ServerOptions& options, const fs::path& data_dir,
+                                   const fs::path& jobs_dir) {
+  ExecutorOptions executor_options;
+  executor_options.data_dir = data_dir;
+  executor_options.solver = fs::absolute(options.solver);
+  executor_options.max_running = options.max_running;
+  executor_options.solver_threads = options.solver_threads;
+  executor_options.mpirun = options.mpirun;
+  executor_options.max_ranks = options.max_ranks;
+  executor_options.jobs_dir = jobs_dir;
+  // Slurm's nodes read the cache where they read the job folders.
+  executor_options.atlas_cache_dir = options.executor == ServerOptions::ExecutorKind::kSlurm
+                                         ? jobs_dir / ".atlas-cache"
+                                         : data_dir / "cache" / "atlas";
+  executor_options.atlas_cache_gib = options.atlas_cache_gib;
+  executor_options.kill_grace = options.kill_grace;
+  executor_options.max_job_time = options.max_job_time;
+  executor_options.max_attempts = options.max_attempts;
+  executor_options.max_solver_memory_bytes = options.max_solver_memory_bytes;
+  executor_options.keep_results = options.keep_results;
+  return executor_options;
+}
+
 }  // namespace
+
+Status PbaServer::StartWeb(const ServerOptions& options) {
+  WebOptions web;
+  web.listen = options.http_listen;
+  web.app_dir = options.web_app_dir;
+  web.tls_cert = options.tls_cert;
+  web.tls_key = options.tls_key;
+  const Status started =
+      WebServer::Start(web, server_->InProcessChannel(grpc::ChannelArguments()), &web_);
+  if (!started.ok()) {
+    server_->Shutdown();
+    server_.reset();
+  }
+  return started;
+}
 
 Status PbaServer::Start(const ServerOptions& options, std::unique_ptr<PbaServer>* out) {
   std::unique_ptr<PbaServer> server(new PbaServer());
@@ -178,6 +231,14 @@ Status PbaServer::Start(const ServerOptions& options, std::unique_ptr<PbaServer>
                       "network in the clear: give --tls-cert and --tls-key, listen on "
                       "127.0.0.1, [::1], localhost or a unix: socket, or pass --insecure to "
                       "accept that");
+  }
+  if (!options.http_listen.empty() && options.tls_cert.empty() && !options.insecure &&
+      (!IsLoopbackListen(options.http_listen) || options.http_listen.rfind("unix:", 0) == 0)) {
+    return Status::InvalidArgument(
+        "http", options.http_listen +
+                    " is not a loopback address, and without TLS the session cookie would "
+                    "cross the network in the clear: give --tls-cert and --tls-key, serve on "
+                    "127.0.0.1, [::1] or localhost, or pass --insecure to accept that");
   }
   std::error_code ec;
   server->options_.data_dir = fs::absolute(options.data_dir, ec);
@@ -194,6 +255,9 @@ Status PbaServer::Start(const ServerOptions& options, std::unique_ptr<PbaServer>
   }
   if (options.max_ranks < 1) {
     return Status::InvalidArgument("max_ranks", "must be at least 1");
+  }
+  if (options.max_open_jobs < 0) {
+    return Status::InvalidArgument("max_open_jobs", "must not be negative (0: no bound)");
   }
   // TLS material is read before anything is opened: a bad path is named at
   // once, not after the stores are up.
@@ -242,24 +306,7 @@ Status PbaServer::Start(const ServerOptions& options, std::unique_ptr<PbaServer>
                  token_file.string());
   }
 
-  ExecutorOptions executor_options;
-  executor_options.data_dir = data_dir;
-  executor_options.solver = fs::absolute(options.solver);
-  executor_options.max_running = options.max_running;
-  executor_options.solver_threads = options.solver_threads;
-  executor_options.mpirun = options.mpirun;
-  executor_options.max_ranks = options.max_ranks;
-  executor_options.jobs_dir = jobs_dir;
-  // Slurm's nodes read the cache where they read the job folders.
-  executor_options.atlas_cache_dir = options.executor == ServerOptions::ExecutorKind::kSlurm
-                                         ? jobs_dir / ".atlas-cache"
-                                         : data_dir / "cache" / "atlas";
-  executor_options.atlas_cache_gib = options.atlas_cache_gib;
-  executor_options.kill_grace = options.kill_grace;
-  executor_options.max_job_time = options.max_job_time;
-  executor_options.max_attempts = options.max_attempts;
-  executor_options.max_solver_memory_bytes = options.max_solver_memory_bytes;
-  executor_options.keep_results = options.keep_results;
+  ExecutorOptions executor_options = ExecutorOptionsFor(options, data_dir, jobs_dir);
   server->atlas_jobs_ =
       std::make_unique<AtlasJobs>(*server->atlas_store_, server->atlas_hub_, *server->store_);
   executor_options.preparation = server->atlas_jobs_.get();
@@ -273,7 +320,7 @@ Status PbaServer::Start(const ServerOptions& options, std::unique_ptr<PbaServer>
   server->service_ =
       std::make_unique<JobServiceImpl>(*server->store_, *server->executor_, server->hub_,
                                        *server->atlas_store_, *server->uploads_, jobs_dir);
-  server->service_->set_max_ranks(options.mpirun.empty() ? 1 : options.max_ranks);
+  server->service_->set_info(InfoOf(options));
 
   grpc::EnableDefaultHealthCheckService(true);
   grpc::reflection::InitProtoReflectionServerBuilderPlugin();
@@ -304,6 +351,7 @@ Status PbaServer::Start(const ServerOptions& options, std::unique_ptr<PbaServer>
   }
   const size_t colon = options.listen.rfind(':');
   server->address_ = options.listen.substr(0, colon) + ":" + std::to_string(port);
+  if (!options.http_listen.empty()) PBA_RETURN_IF_ERROR(server->StartWeb(options));
   server->executor_->Start();
   // Per service, so that a probe can ask for the one it needs (the default
   // service "" is SERVING already).
@@ -322,6 +370,7 @@ void PbaServer::Shutdown() {
   shut_down_ = true;
   // Watch streams end first (they would otherwise hold the drain to its
   // deadline), then unary calls get their drain time.
+  if (web_ != nullptr) web_->Stop();
   hub_.Shutdown();
   atlas_hub_.Shutdown();
   if (atlas_service_ != nullptr) atlas_service_->Stop();

@@ -37,8 +37,13 @@
 #include "store/atlas_store.h"
 #include "store/job_store.h"
 #include "store/upload_store.h"
+#include "web/web_server.h"
 
 namespace pba {
+
+// Enough for a sweep of several thousand members; far below what would
+// slow the queue's queries.
+inline constexpr int kDefaultMaxOpenJobs = 10000;
 
 struct ServerOptions {
   // Holds pba.db and jobs/; created if absent.
@@ -75,6 +80,9 @@ struct ServerOptions {
   // How long a finished job's folder is kept (ExecutorOptions::keep_results);
   // 0: forever.
   std::chrono::seconds keep_results{0};
+  // Jobs one user may have queued or running at once; a submit beyond is
+  // RESOURCE_EXHAUSTED (JobServiceImpl). 0: no bound.
+  int max_open_jobs = kDefaultMaxOpenJobs;
   // Bytes one user's open uploads may announce together
   // (UploadStore::set_quota_bytes); 0: no quota.
   int64_t upload_quota_bytes = 0;
@@ -87,6 +95,12 @@ struct ServerOptions {
   // compute node sees at the same path, which then also holds the atlas
   // mesh cache (jobs_dir/.atlas-cache).
   std::filesystem::path jobs_dir;
+  // pba-server --http: HOST:PORT of the web view (web/web_server.h; port 0
+  // picks a free one), empty for none; served with the same TLS
+  // certificate, and refused on an address that is not loopback without
+  // TLS unless `insecure`. `web_app_dir`: the application's files.
+  std::string http_listen;
+  std::filesystem::path web_app_dir;
 };
 
 class PbaServer {
@@ -106,6 +120,8 @@ class PbaServer {
 
   // HOST:PORT actually listened on (the real port when 0 was asked for).
   const std::string& address() const { return address_; }
+  // HOST:PORT of the web view ("" without --http).
+  std::string http_address() const { return web_ != nullptr ? web_->address() : ""; }
 
   // <data>/admin.token if this start created the first admin, else empty.
   const std::filesystem::path& admin_token_file() const { return admin_token_file_; }
@@ -116,6 +132,9 @@ class PbaServer {
 
  private:
   PbaServer() = default;
+  // The web view (options.http_listen) on the gRPC server's in-process
+  // channel; the gRPC server is stopped when it cannot start.
+  Status StartWeb(const ServerOptions& options);
 
   ServerOptions options_;
   std::unique_ptr<JobStore> store_;
@@ -129,6 +148,7 @@ class PbaServer {
   std::unique_ptr<AtlasJobs> atlas_jobs_;
   std::filesystem::path admin_token_file_;
   std::unique_ptr<grpc::Server> server_;
+  std::unique_ptr<WebServer> web_;
   std::string address_;
   bool shut_down_ = false;
 };

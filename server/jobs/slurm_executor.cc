@@ -32,11 +32,8 @@ constexpr char kScript[] = "job.sh";
 constexpr char kArrays[] = "arrays";
 constexpr char kArrayScript[] = "array.sh";
 constexpr char kArrayJobs[] = "jobs";
-constexpr char kArrayPrefix[] = "pba-array-";
 // An array folder none of whose jobs is followed is removed after this.
 constexpr std::chrono::minutes kArrayKeep{10};
-constexpr char kRunResult[] = "@PBA_RUN_RESULT@";  // pba-solve's --out, in the script
-std::string ProgressFile(const std::string& slurm_id) { return "progress-" + slurm_id + ".jsonl"; }
 std::string ExitCodeFile(const std::string& slurm_id) { return "exit_code-" + slurm_id; }
 std::string ResultDir(const std::string& slurm_id) { return "result-" + slurm_id; }
 // The most of progress.jsonl read in one round.
@@ -49,30 +46,6 @@ constexpr int kMissingRounds = 2;
 constexpr std::chrono::seconds kSubmitPause{30};
 // How long the start-up check waits for squeue.
 constexpr std::chrono::milliseconds kCheckTimeout{15000};
-
-std::string Trim(std::string s) {
-  const auto space = [](unsigned char c) { return std::isspace(c) != 0; };
-  s.erase(s.begin(), std::find_if_not(s.begin(), s.end(), space));
-  s.erase(std::find_if_not(s.rbegin(), s.rend(), space).base(), s.end());
-  return s;
-}
-
-bool SlurmJobId(const std::string& id) {
-  return !id.empty() && id.size() <= 32 &&
-         std::all_of(id.begin(), id.end(), [](char c) { return std::isdigit(c) || c == '_'; });
-}
-
-std::string ShellQuoted(const std::string& s) {
-  std::string out = "'";
-  for (char c : s) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return out + "'";
-}
-
-// Slurm's time limit in whole minutes, rounded up: Slurm counts no finer
-// (a limit of seconds becomes a minute there anyway).
-std::string SlurmTime(int64_t seconds) { return std::to_string((seconds + 59) / 60); }
-
-std::string JobName(const std::string& id) { return "pba-" + id; }
 
 // A job's wall-clock limit [s]: its own when smaller than the server's; 0:
 // none.
@@ -126,24 +99,6 @@ bool LogSays(const fs::path& path, std::uintmax_t offset, const std::string& wor
   return tail.find(words) != std::string::npos;
 }
 
-// The lines of `text`, each split at '|' into trimmed fields.
-std::vector<std::vector<std::string>> FieldLines(const std::string& text) {
-  std::vector<std::vector<std::string>> lines;
-  std::size_t start = 0;
-  while (start < text.size()) {
-    std::size_t end = text.find('\n', start);
-    if (end == std::string::npos) end = text.size();
-    const std::string line = text.substr(start, end - start);
-    start = end + 1;
-    std::vector<std::string>& fields = lines.emplace_back();
-    std::size_t from = 0;
-    for (std::size_t bar; (bar = line.find('|', from)) != std::string::npos; from = bar + 1)
-      fields.push_back(Trim(line.substr(from, bar - from)));
-    fields.push_back(Trim(line.substr(from)));
-  }
-  return lines;
-}
-
 // What earlier runs wrote in the job's folder `dir` (their progress, exit
 // codes, results and pba-solve's staging siblings of those).
 void RemoveRunFiles(const fs::path& dir) {
@@ -161,100 +116,6 @@ void RemoveRunFiles(const fs::path& dir) {
 }
 
 }  // namespace
-
-std::vector<SlurmJobState> ParseSacct(const std::string& text, const std::string& slurm_id) {
-  std::vector<SlurmJobState> found;
-  for (const std::vector<std::string>& f : FieldLines(text)) {
-    if (f.size() >= 2 && f[0] == slurm_id && !f[1].empty())
-      found.push_back({slurm_id, "", f[1], "", ""});
-  }
-  return found;
-}
-
-std::vector<SlurmJobState> ParseSqueue(const std::string& text) {
-  std::vector<SlurmJobState> jobs;
-  for (const std::vector<std::string>& f : FieldLines(text)) {
-    if (f.size() == 5 && SlurmJobId(f[0]) && !f[2].empty())
-      jobs.push_back({f[0], f[1], f[2], f[3], f[4]});
-  }
-  return jobs;
-}
-
-SlurmEnd ClassifySlurmState(const std::string& state_text) {
-  // squeue may add a flag ("CANCELLED by 0"): the first word is the state.
-  const std::string state = state_text.substr(0, state_text.find(' '));
-  if (state == "COMPLETED") return SlurmEnd::kCompleted;
-  if (state == "TIMEOUT") return SlurmEnd::kTimeout;
-  if (state == "OUT_OF_MEMORY") return SlurmEnd::kOutOfMemory;
-  if (state == "CANCELLED") return SlurmEnd::kCancelled;
-  if (state == "NODE_FAIL" || state == "PREEMPTED" || state == "BOOT_FAIL")
-    return SlurmEnd::kRequeue;
-  if (state == "FAILED" || state == "DEADLINE" || state == "SPECIAL_EXIT" || state == "REVOKED")
-    return SlurmEnd::kFailed;
-  return SlurmEnd::kNotEnded;  // PENDING, RUNNING, CONFIGURING, COMPLETING, SUSPENDED, ...
-}
-
-bool SlurmRunning(const std::string& state) {
-  return state == "RUNNING" || state == "COMPLETING" || state == "CONFIGURING" ||
-         state == "SUSPENDED" || state == "STOPPED" || state == "SIGNALING" || state == "STAGE_OUT";
-}
-
-std::vector<std::string> SbatchArguments(const SlurmOptions& options, const SlurmSubmission& s) {
-  // A task of an array writes through its entry, into its job's folder.
-  const bool array = s.array_tasks > 0;
-  const fs::path run_dir = array ? s.dir / "%a" : s.dir;
-  std::vector<std::string> args = {
-      "--parsable",
-      "--job-name=" + (array ? kArrayPrefix + s.job_id : JobName(s.job_id)),
-      "--chdir=" + s.dir.string(),
-      "--output=" + (run_dir / ProgressFile(array ? "%A_%a" : "%j")).string(),
-      "--error=" + (run_dir / "solve.log").string(),
-      "--open-mode=append",
-      // PBA runs a job again itself (max_attempts), as a new Slurm job.
-      "--no-requeue",
-      "--ntasks=" + std::to_string(std::max(1, s.ranks)),
-      "--cpus-per-task=" + std::to_string(std::max(1, s.cpus_per_task)),
-  };
-  if (s.time_limit_s > 0) args.push_back("--time=" + SlurmTime(s.time_limit_s));
-  if (s.memory_bytes > 0) {
-    const int64_t mib = (s.memory_bytes + (int64_t{1} << 20) - 1) >> 20;
-    args.push_back("--mem=" + std::to_string(mib) + "M");
-  }
-  if (array) args.push_back("--array=0-" + std::to_string(s.array_tasks - 1));
-  if (!options.partition.empty()) args.push_back("--partition=" + options.partition);
-  if (!options.account.empty()) args.push_back("--account=" + options.account);
-  args.push_back(s.script.string());
-  return args;
-}
-
-std::string SlurmBatchScript(const std::vector<std::string>& command, int64_t memory_bytes) {
-  std::string script =
-      "#!/bin/sh\n"
-      "# A PBA job: pba-solve in this folder, its result to result-<run>, its\n"
-      "# exit code to exit_code-<run>; <run> is the Slurm job id, or the array\n"
-      "# task's <array job id>_<task id>.\n"
-      "run=\"${PBA_RUN_ID:-$SLURM_JOB_ID}\"\n"
-      "ulimit -c 0\n";
-  if (memory_bytes > 0) script += fmt::format("ulimit -v {}\n", memory_bytes / 1024);
-  for (std::size_t i = 0; i < command.size(); ++i) {
-    script += i == 0 ? "" : " ";
-    script += command[i] == kRunResult ? "result-\"$run\"" : ShellQuoted(command[i]);
-  }
-  script += "\ncode=$?\n";
-  script +=
-      "printf '%s\\n' \"$code\" > exit_code-\"$run\".partial &&\n"
-      "  mv -f exit_code-\"$run\".partial exit_code-\"$run\"\n"
-      "exit \"$code\"\n";
-  return script;
-}
-
-std::string SlurmArrayScript(const std::string& job_script) {
-  return "#!/bin/sh\n"
-         "# A PBA job array: task N runs the job whose folder entry N links to.\n"
-         "cd \"$SLURM_ARRAY_TASK_ID\" || exit 1\n"
-         "PBA_RUN_ID=\"${SLURM_ARRAY_JOB_ID}_${SLURM_ARRAY_TASK_ID}\" exec /bin/sh " +
-         ShellQuoted("./" + job_script) + "\n";
-}
 
 // One job in Slurm's hands. Only the loop's thread touches it, but for
 // cancel_requested (under SlurmExecutor::mutex_).
@@ -331,8 +192,19 @@ void SlurmExecutor::Start() {
 
 void SlurmExecutor::Wake() {
   std::lock_guard lock(mutex_);
+  const auto now = std::chrono::steady_clock::now();
+  if (first_wake_ == std::chrono::steady_clock::time_point{}) first_wake_ = now;
+  last_wake_ = now;
   woken_ = true;
   wake_.notify_one();
+}
+
+bool SlurmExecutor::Gathering(std::chrono::steady_clock::time_point now,
+                              std::chrono::steady_clock::duration* left) {
+  *left = GatherLeft(first_wake_, last_wake_, now, slurm_.gather);
+  if (*left > std::chrono::steady_clock::duration::zero()) return true;
+  first_wake_ = last_wake_ = {};
+  return false;
 }
 
 void SlurmExecutor::Stop() {
@@ -365,7 +237,9 @@ Status SlurmExecutor::Cancel(const std::string& id, v1::Job* job, bool* found) {
     } else {
       spdlog::info("job {} cancel requested: scancel {}", id, slurm_id);
     }
-    Wake();
+    std::lock_guard lock(mutex_);
+    poll_now_ = woken_ = true;
+    wake_.notify_one();
   } else {
     // Not in Slurm's hands (yet): a QUEUED job ends here. One being
     // submitted right now is cancelled in Slurm by Submit, which finds it
@@ -377,15 +251,22 @@ Status SlurmExecutor::Cancel(const std::string& id, v1::Job* job, bool* found) {
 }
 
 void SlurmExecutor::Loop() {
+  using Clock = std::chrono::steady_clock;
   bool reattached = false;
-  std::chrono::steady_clock::time_point last_expiry{};
+  Clock::time_point last_expiry{}, last_poll{};
   while (true) {
+    bool poll_now = false;
     {
       std::lock_guard lock(mutex_);
       if (stopping_) return;
+      poll_now = poll_now_;
+      poll_now_ = false;
     }
+    // squeue every `poll` (sooner after a cancel), not at every submit.
     std::vector<SlurmJobState> queue;
-    if (Poll(&queue)) {
+    const bool due = poll_now || !reattached || Clock::now() - last_poll >= slurm_.poll;
+    if (due) last_poll = Clock::now();
+    if (due && Poll(&queue)) {
       if (!reattached) {
         Reattach(queue);
         reattached = true;
@@ -402,9 +283,15 @@ void SlurmExecutor::Loop() {
     }
     // Nothing is submitted before the jobs Slurm already has are known: a
     // job claimed by a server that died before it named its Slurm job would
-    // run twice.
-    if (reattached) SubmitQueued();
-    const auto now = std::chrono::steady_clock::now();
+    // run twice. Nor while submits are still coming (SlurmOptions::gather).
+    Clock::duration gather_left{};
+    bool gathering = false;
+    {
+      std::lock_guard lock(mutex_);
+      gathering = Gathering(Clock::now(), &gather_left);
+    }
+    if (reattached && !gathering) SubmitQueued();
+    const auto now = Clock::now();
     if (now - last_expiry >= std::chrono::hours(1)) {
       last_expiry = now;
       ExpireResults(store_, JobsDir(options_), options_.keep_results);
@@ -412,8 +299,10 @@ void SlurmExecutor::Loop() {
       // still pending need its folder.)
       if (reattached) ExpireArrays();
     }
+    Clock::time_point until = last_poll + slurm_.poll;
+    if (gathering) until = std::min(until, now + gather_left);
     std::unique_lock lock(mutex_);
-    wake_.wait_for(lock, slurm_.poll, [this] { return stopping_ || woken_; });
+    wake_.wait_until(lock, until, [this] { return stopping_ || woken_; });
     woken_ = false;
   }
 }
@@ -445,7 +334,7 @@ void SlurmExecutor::Reattach(const std::vector<SlurmJobState>& queue) {
       // Claimed by a server that stopped before it named the Slurm job: the
       // job's name finds it, if sbatch took it.
       const auto by_name = std::find_if(queue.begin(), queue.end(), [&](const SlurmJobState& s) {
-        return s.name == JobName(id) && ClassifySlurmState(s.state) == SlurmEnd::kNotEnded;
+        return s.name == SlurmJobName(id) && ClassifySlurmState(s.state) == SlurmEnd::kNotEnded;
       });
       const SlurmJobState* named = by_name != queue.end() ? &*by_name : FindInArrays(queue, id);
       if (named == nullptr) {
@@ -587,7 +476,7 @@ bool SlurmExecutor::Prepare(const v1::Job& job, Prepared* p) {
   const int ranks = std::max(1, job.ranks());
   ExecutorOptions per_job = options_;
   per_job.solver_threads = slurm_.cpus_per_task * ranks;
-  const std::vector<std::string> command = SolverCommandLine(per_job, job, input, kRunResult);
+  const std::vector<std::string> command = SolverCommandLine(per_job, job, input, kSlurmRunResult);
   if (prepared.ok()) {
     prepared = AtomicWriteText(dir / kScript,
                                SlurmBatchScript(command, SolverMemoryPerRank(options_, job)));
@@ -618,8 +507,8 @@ SlurmExecutor::Sbatched SlurmExecutor::Sbatch(const Prepared& p, SlurmSubmission
   submission.memory_bytes = p.memory_bytes;
   CommandResult r;
   const Status run = Slurm("sbatch", SbatchArguments(slurm_, submission), &r);
-  *slurm_id = Trim(r.out.substr(0, r.out.find(';')));
-  if (run.ok() && r.ok() && SlurmJobId(*slurm_id)) return Sbatched::kSubmitted;
+  *slurm_id = SlurmTrim(r.out.substr(0, r.out.find(';')));
+  if (run.ok() && r.ok() && IsSlurmJobId(*slurm_id)) return Sbatched::kSubmitted;
   *said = run.ok() ? r.Describe() : run.ToString();
   // A controller that does not answer now may later: the jobs wait in
   // PBA's queue, and are tried again after a pause, not at every poll.
@@ -755,7 +644,7 @@ void SlurmExecutor::Track(Prepared& p, const std::string& slurm_id, const std::s
 
 const SlurmJobState* SlurmExecutor::FindInArrays(const std::vector<SlurmJobState>& queue,
                                                  const std::string& id) {
-  const std::string prefix = kArrayPrefix;
+  const std::string prefix = kSlurmArrayPrefix;
   for (const SlurmJobState& s : queue) {
     if (s.name.rfind(prefix, 0) != 0 || ClassifySlurmState(s.state) != SlurmEnd::kNotEnded)
       continue;
@@ -849,7 +738,7 @@ bool SlurmExecutor::StartRun(Tracked& t, const std::string& message) {
 }
 
 void SlurmExecutor::SkimProgress(Tracked& t) {
-  const fs::path file = t.dir / ProgressFile(t.slurm_id);
+  const fs::path file = t.dir / SlurmProgressFile(t.slurm_id);
   std::ifstream in(file, std::ios::binary);
   if (!in) return;
   in.seekg(static_cast<std::streamoff>(t.offset));
@@ -862,7 +751,7 @@ void SlurmExecutor::SkimProgress(Tracked& t) {
 }
 
 void SlurmExecutor::ReadProgress(Tracked& t) {
-  std::ifstream in(t.dir / ProgressFile(t.slurm_id), std::ios::binary);
+  std::ifstream in(t.dir / SlurmProgressFile(t.slurm_id), std::ios::binary);
   if (!in) return;
   in.seekg(static_cast<std::streamoff>(t.offset));
   std::string chunk(kMaxProgressRead, '\0');

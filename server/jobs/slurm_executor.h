@@ -49,90 +49,9 @@
 
 #include "jobs/command.h"
 #include "jobs/job_executor.h"
+#include "jobs/slurm_commands.h"
 
 namespace pba {
-
-// With ExecutorOptions::jobs_dir a directory every compute node sees at
-// the same path (the job folders, and the atlas mesh cache).
-struct SlurmOptions {
-  std::string partition;  // empty: Slurm's default partition
-  std::string account;    // empty: the user's default account
-  // CPUs of each rank (--cpus-per-task), pba-solve's --threads.
-  int cpus_per_task = 1;
-  // The most jobs in Slurm's hands (pending or running) at once; the rest
-  // wait in PBA's queue.
-  int max_submitted = 1000;
-  // Jobs with the same limits handed to Slurm in one round go as one job
-  // array (up to kSlurmArrayMax tasks each) when there are at least this
-  // many, as Slurm users submit a sweep; 0: each its own Slurm job.
-  int array_min = 10;
-  // How often squeue is asked.
-  std::chrono::milliseconds poll{2000};
-  // Where sbatch, squeue and scancel are (empty: on PATH), and the
-  // environment they get (e.g. SLURM_CONF=...).
-  std::filesystem::path bin_dir;
-  std::vector<std::string> env;
-  // Time limit of each Slurm command.
-  std::chrono::milliseconds command_timeout{60000};
-};
-
-// The most tasks in one job array (Slurm's default MaxArraySize allows
-// task ids up to 1000).
-inline constexpr int kSlurmArrayMax = 1000;
-
-// A Slurm job as squeue shows it (a task of a job array: id
-// "<array job id>_<task id>").
-struct SlurmJobState {
-  std::string id, name, state, reason, node;
-};
-
-// squeue -h -o '%i|%j|%T|%r|%N' lines, as jobs (a line that does not
-// parse is skipped).
-std::vector<SlurmJobState> ParseSqueue(const std::string& text);
-
-// sacct --parsable2 lines "JobID|State|ExitCode" of `slurm_id`, in order
-// (a job run again has one for each end).
-std::vector<SlurmJobState> ParseSacct(const std::string& text, const std::string& slurm_id);
-
-// How PBA takes each Slurm state.
-enum class SlurmEnd {
-  kNotEnded,  // PENDING, RUNNING, CONFIGURING, COMPLETING, SUSPENDED, ...
-  kCompleted,
-  kFailed,       // FAILED, DEADLINE, SPECIAL_EXIT, and states PBA does not know
-  kTimeout,      // TIMEOUT
-  kOutOfMemory,  // OUT_OF_MEMORY
-  kCancelled,    // CANCELLED (by PBA or by someone with scancel)
-  kRequeue,      // NODE_FAIL, PREEMPTED, BOOT_FAIL: the job is run again
-};
-SlurmEnd ClassifySlurmState(const std::string& state);
-bool SlurmRunning(const std::string& state);  // RUNNING or COMPLETING
-
-// The sbatch command line (without the program) of one job: its folder,
-// name, limits and script; or of a job array of `array_tasks` tasks, each
-// running in entry <task id> of `dir`, a link to its job's folder.
-struct SlurmSubmission {
-  std::string job_id;  // PBA's; of an array, its name in the jobs folder's arrays/
-  std::filesystem::path dir, script;
-  int array_tasks = 0;  // 0: one job
-  int ranks = 1;
-  int cpus_per_task = 1;
-  int64_t time_limit_s = 0;  // 0: the partition's
-  int64_t memory_bytes = 0;  // 0: the partition's default
-};
-std::vector<std::string> SbatchArguments(const SlurmOptions& options, const SlurmSubmission& s);
-
-// The batch script: runs `command` (the program first; an argument
-// "@PBA_RUN_RESULT@" becomes result-<run>) in the job's folder, under an
-// address-space limit when `memory_bytes` > 0, and writes its exit code to
-// exit_code-<run> (through a temporary file: the file is there whole or not
-// at all), where <run> is $PBA_RUN_ID, or $SLURM_JOB_ID without it. Each
-// argument single-quoted for the shell.
-std::string SlurmBatchScript(const std::vector<std::string>& command, int64_t memory_bytes);
-
-// A job array's script: task N goes into the array folder's entry N (its
-// job's folder) and runs that job's batch script (`job_script`, its name)
-// with PBA_RUN_ID=<array job id>_<N>.
-std::string SlurmArrayScript(const std::string& job_script);
 
 class SlurmExecutor : public Executor {
  public:
@@ -155,6 +74,10 @@ class SlurmExecutor : public Executor {
   struct Tracked;  // one job in Slurm's hands, defined in the .cc
 
   void Loop();
+  // Whether submits are still coming (SlurmOptions::gather), and for how
+  // much longer; false ends the gathering. Under mutex_.
+  bool Gathering(std::chrono::steady_clock::time_point now,
+                 std::chrono::steady_clock::duration* left);
   // Takes over the jobs in Slurm's hands that the store names.
   void Reattach(const std::vector<SlurmJobState>& queue);
   struct Prepared;  // a job whose folder and script are ready, defined in the .cc
@@ -207,6 +130,11 @@ class SlurmExecutor : public Executor {
   bool stopping_ = false;
   bool started_ = false;
   bool woken_ = false;
+  // The first and the last Wake() since the last round (under mutex_;
+  // zero: none).
+  std::chrono::steady_clock::time_point first_wake_{}, last_wake_{};
+  // squeue at once (a job was cancelled), under mutex_.
+  bool poll_now_ = false;
   // PBA job id -> its Slurm job; only the loop's thread adds and removes,
   // Cancel marks under mutex_.
   std::map<std::string, std::unique_ptr<Tracked>> tracked_;

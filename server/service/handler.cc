@@ -5,7 +5,38 @@
 namespace pba {
 namespace {
 
-const char* CodeName(grpc::StatusCode code) {
+grpc::StatusCode CodeFor(const Status& status) {
+  switch (status.code()) {
+    case Status::Code::kOk:
+      return grpc::StatusCode::OK;
+    case Status::Code::kInvalidArgument:
+      return grpc::StatusCode::INVALID_ARGUMENT;
+    case Status::Code::kFailedPrecondition:
+      return grpc::StatusCode::FAILED_PRECONDITION;
+    case Status::Code::kOutOfRange:
+      return grpc::StatusCode::OUT_OF_RANGE;
+    case Status::Code::kResourceExhausted:
+      return grpc::StatusCode::RESOURCE_EXHAUSTED;
+    case Status::Code::kCancelled:
+      return grpc::StatusCode::CANCELLED;
+    case Status::Code::kNotFound:
+      return grpc::StatusCode::NOT_FOUND;
+    case Status::Code::kAlreadyExists:
+      return grpc::StatusCode::ALREADY_EXISTS;
+    case Status::Code::kAborted:
+      return grpc::StatusCode::ABORTED;
+    case Status::Code::kPermissionDenied:
+      return grpc::StatusCode::PERMISSION_DENIED;
+    case Status::Code::kUnauthenticated:
+      return grpc::StatusCode::UNAUTHENTICATED;
+    default:
+      return grpc::StatusCode::INTERNAL;
+  }
+}
+
+}  // namespace
+
+const char* GrpcCodeName(grpc::StatusCode code) {
   switch (code) {
     case grpc::StatusCode::OK:
       return "OK";
@@ -40,37 +71,6 @@ const char* CodeName(grpc::StatusCode code) {
   }
 }
 
-grpc::StatusCode CodeFor(const Status& status) {
-  switch (status.code()) {
-    case Status::Code::kOk:
-      return grpc::StatusCode::OK;
-    case Status::Code::kInvalidArgument:
-      return grpc::StatusCode::INVALID_ARGUMENT;
-    case Status::Code::kFailedPrecondition:
-      return grpc::StatusCode::FAILED_PRECONDITION;
-    case Status::Code::kOutOfRange:
-      return grpc::StatusCode::OUT_OF_RANGE;
-    case Status::Code::kResourceExhausted:
-      return grpc::StatusCode::RESOURCE_EXHAUSTED;
-    case Status::Code::kCancelled:
-      return grpc::StatusCode::CANCELLED;
-    case Status::Code::kNotFound:
-      return grpc::StatusCode::NOT_FOUND;
-    case Status::Code::kAlreadyExists:
-      return grpc::StatusCode::ALREADY_EXISTS;
-    case Status::Code::kAborted:
-      return grpc::StatusCode::ABORTED;
-    case Status::Code::kPermissionDenied:
-      return grpc::StatusCode::PERMISSION_DENIED;
-    case Status::Code::kUnauthenticated:
-      return grpc::StatusCode::UNAUTHENTICATED;
-    default:
-      return grpc::StatusCode::INTERNAL;
-  }
-}
-
-}  // namespace
-
 grpc::Status ToGrpcStatus(const Status& status) {
   if (status.ok()) return grpc::Status::OK;
   return grpc::Status(CodeFor(status), status.ToString());
@@ -78,7 +78,7 @@ grpc::Status ToGrpcStatus(const Status& status) {
 
 grpc::Status FinishCall(const char* rpc, const RpcStatus& status) {
   if (!status.ok() && status.logged()) {
-    spdlog::warn("{}: {} {}", rpc, CodeName(status.status().error_code()),
+    spdlog::warn("{}: {} {}", rpc, GrpcCodeName(status.status().error_code()),
                  status.status().error_message());
   }
   return status.status();

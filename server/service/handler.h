@@ -37,6 +37,10 @@ namespace pba {
 // kInternal, which are INTERNAL.
 grpc::Status ToGrpcStatus(const Status& status);
 
+// The code's name as gRPC spells it ("PERMISSION_DENIED"; "ERROR" for
+// codes PBA never answers).
+const char* GrpcCodeName(grpc::StatusCode code);
+
 // What a handler's body returns: a Status (sent as ToGrpcStatus makes it),
 // or, for a code Status lacks (DATA_LOSS, UNAVAILABLE) or a message that
 // must not name a field, a grpc::Status as it is. Both convert implicitly, so a body may `return

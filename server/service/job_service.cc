@@ -49,13 +49,14 @@ Status JobServiceImpl::CheckSubmit(const std::string& user, const v1::SubmitJobR
   if (request.timeout_s() < 0) {
     return Status::InvalidArgument("timeout_s", "must not be negative");
   }
-  if (request.ranks() < 0 || request.ranks() > std::max(1, max_ranks_)) {
-    return Status::InvalidArgument("ranks", "must be within 0.." +
-                                                std::to_string(std::max(1, max_ranks_)) +
+  const int max_ranks = std::max(1, info_.max_ranks());
+  if (request.ranks() < 0 || request.ranks() > max_ranks) {
+    return Status::InvalidArgument("ranks", "must be within 0.." + std::to_string(max_ranks) +
                                                 " on this server (pba-server --max-ranks), got " +
                                                 std::to_string(request.ranks()));
   }
   job->owner = user;
+  job->max_open = info_.max_open_jobs();
   job->request_id = request.request_id();
   job->priority = request.priority();
   job->timeout_s = request.timeout_s();
@@ -419,6 +420,15 @@ grpc::Status JobServiceImpl::DownloadResult(grpc::ServerContext* context,
       }
       offset += want;
     } while (offset < size);
+    return Status::Ok();
+  });
+}
+
+grpc::Status JobServiceImpl::GetServerInfo(grpc::ServerContext* context,
+                                           const v1::GetServerInfoRequest* /*request*/,
+                                           v1::ServerInfo* response) {
+  return Handle(users_, "GetServerInfo", *context, [&](const Caller&) -> RpcStatus {
+    *response = info_;
     return Status::Ok();
   });
 }

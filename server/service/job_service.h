@@ -59,9 +59,11 @@ class JobServiceImpl final : public v1::JobService::Service {
   JobServiceImpl(JobStore& store, Executor& executor, JobEventHub& hub, AtlasStore& users,
                  UploadStore& uploads, std::filesystem::path jobs_dir);
 
-  // The most MPI ranks a job may ask for (pba-server --max-ranks); 1, the
-  // default, runs every job as one process.
-  void set_max_ranks(int ranks) { max_ranks_ = ranks; }
+  // What GetServerInfo answers, and the bounds a submit meets: the most
+  // MPI ranks a job may ask for (max_ranks, pba-server --max-ranks; 1, the
+  // default, runs every job as one process) and the most jobs one user may
+  // have queued or running (max_open_jobs; 0: no bound).
+  void set_info(const v1::ServerInfo& info) { info_ = info; }
 
   grpc::Status SubmitJob(grpc::ServerContext* context, const v1::SubmitJobRequest* request,
                          v1::Job* response) override;
@@ -76,9 +78,16 @@ class JobServiceImpl final : public v1::JobService::Service {
   grpc::Status DownloadResult(grpc::ServerContext* context,
                               const v1::DownloadResultRequest* request,
                               grpc::ServerWriter<v1::DataChunk>* writer) override;
+  grpc::Status GetServerInfo(grpc::ServerContext* context, const v1::GetServerInfoRequest* request,
+                             v1::ServerInfo* response) override;
 
  private:
-  int max_ranks_ = 1;
+  v1::ServerInfo info_ = [] {
+    v1::ServerInfo info;
+    info.set_executor("local");
+    info.set_max_ranks(1);
+    return info;
+  }();
   // Replaces the stored phase/progress of a running job by the live one.
   void OverlayLive(v1::Job* job) const;
   // Whether `caller` may see `job` (loaded with at least JobView::kBasic).

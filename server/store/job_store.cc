@@ -184,6 +184,23 @@ Status JobStore::CreateJob(const NewJob& request, v1::Job* job, bool* created) {
       return LoadJob(id, JobView::kFull, job, &found);
     }
   }
+  if (request.max_open > 0) {
+    PBA_RETURN_IF_ERROR(
+        db_->Prepare("SELECT COUNT(*) FROM jobs WHERE state IN (?, ?) AND owner = ?", &stmt));
+    bool row = false;
+    PBA_RETURN_IF_ERROR(stmt.Bind(1, StateName(v1::Job::QUEUED))
+                            .Bind(2, StateName(v1::Job::RUNNING))
+                            .Bind(3, owner)
+                            .Step(&row));
+    const int64_t open = row ? stmt.ColumnInt(0) : 0;
+    stmt = Statement();
+    if (open >= request.max_open) {
+      return Status::ResourceExhausted(
+          "", "user '" + owner + "' already has " + std::to_string(open) +
+                  " jobs queued or running, the most this server takes from one user "
+                  "(pba-server --max-open-jobs); submit more once some have ended");
+    }
+  }
   std::string id;
   for (int attempt = 0; attempt < kIdAttempts && id.empty(); ++attempt) {
     std::string candidate = NewJobId();

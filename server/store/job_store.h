@@ -40,6 +40,10 @@ struct NewJob {
   int ranks = 0;                                  // MPI processes; 0 or 1: one
   v1::SnapshotRef snapshot;                       // resolved: the snapshot's id
   const v1::AtlasImport* atlas_import = nullptr;  // an import job
+  // The most jobs `owner` may have QUEUED or RUNNING; a new job beyond is
+  // kResourceExhausted (a repeated request_id still returns its job). 0:
+  // no bound.
+  int max_open = 0;
   // Runs inside the submit's transaction once the job has its id, before
   // it commits (an error rolls the submit back): what the job needs is in
   // place before any worker can see it.

@@ -271,6 +271,65 @@ outputs:
   EXPECT_EQ(JobCount(), 4u);
 }
 
+// A server that takes at most two open jobs from one user (pba-server
+// --max-open-jobs 2).
+class CliBoundedServerTest : public CliServerTest {
+ protected:
+  std::vector<std::string> ServerArgs() const override { return {"--max-open-jobs", "2"}; }
+};
+
+// `pba server` says how the server runs jobs; a batch handed over all at
+// once meets the server's bound of open jobs per user and waits for its
+// own jobs to end instead of failing; a batch that does not say how many
+// at a time goes two at a time to a server that runs jobs itself.
+TEST_F(CliBoundedServerTest, ABatchOverTheServersBoundWaitsForItsJobsToEnd) {
+  const RunResult info = Pba({"server"});
+  ASSERT_EQ(info.exit_code, 0) << info.out << info.err;
+  EXPECT_NE(info.out.find("executor: local"), std::string::npos) << info.out;
+  EXPECT_NE(info.out.find("jobs queued or running per user: 2\n"), std::string::npos) << info.out;
+  const RunResult json = Pba({"--json", "server"});
+  EXPECT_NE(json.out.find("\"max_open_jobs\": 2"), std::string::npos) << json.out;
+
+  // Each member runs about a second: the third submit finds two open.
+  WriteScene("hold.yaml", HoldSceneYaml(4));
+  const fs::path all = WriteScene("all.yaml", R"(
+name: all-at-once
+scene: hold.yaml
+parallel: all
+sweep:
+  material.neo_hookean.shear_modulus_pa: [1000, 2000, 3000, 4000, 5000]
+outputs:
+  - results.reactions[0].force_n[2]
+)");
+  const RunResult run = Pba({"batch", "run", all.string()});
+  ASSERT_EQ(run.exit_code, 0) << run.out << run.err;
+  EXPECT_NE(run.out.find("5 to submit, all at once"), std::string::npos) << run.out;
+  EXPECT_NE(run.out.find("the server holds 2 of this batch's jobs, its most for one user"),
+            std::string::npos)
+      << run.out;
+  const std::string csv = ReadFile(dir_.path() / "all.csv");
+  EXPECT_EQ(CountOf(csv, "SUCCEEDED"), 5u) << csv;
+  EXPECT_EQ(JobCount(), 5u);
+
+  const fs::path unsaid = WriteScene("unsaid.yaml", R"(
+scene: hold.yaml
+members:
+  - {name: soft, set: {material.neo_hookean.shear_modulus_pa: 1000}}
+)");
+  const RunResult local = Pba({"batch", "run", unsaid.string()});
+  ASSERT_EQ(local.exit_code, 0) << local.out << local.err;
+  EXPECT_NE(local.out.find("1 to submit, 2 at a time"), std::string::npos) << local.out;
+
+  const fs::path wrong = WriteScene("wrong.yaml",
+                                    "scene: hold.yaml\nparallel: most\n"
+                                    "members: [{name: a, set: {}}]\n");
+  const RunResult refused = Pba({"batch", "run", wrong.string()});
+  EXPECT_EQ(refused.exit_code, kInvalid) << refused.out << refused.err;
+  EXPECT_NE(refused.err.find("parallel: expected a whole number from 1 to 64, or all"),
+            std::string::npos)
+      << refused.err;
+}
+
 // The example batch runs as shipped (copied with its base scene, so that its
 // state file is written in the test's directory).
 TEST_F(CliServerTest, ExampleBatchRuns) {

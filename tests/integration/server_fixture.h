@@ -26,13 +26,16 @@ class ServerTest : public ::testing::Test {
   void SetUp() override {
     server_ = std::make_unique<ServerProcess>(PBA_SERVER_BIN, dir_.path() / "data");
     std::string log;
-    ASSERT_TRUE(server_->Start(&log)) << "pba-server did not start:\n" << log;
+    ASSERT_TRUE(server_->Start(&log, ServerArgs())) << "pba-server did not start:\n" << log;
     // Jobs need a user: the admin the first start created.
     std::ifstream token(dir_.path() / "data" / "admin.token");
     std::string admin;
     ASSERT_TRUE(token >> admin);
     ::setenv("PBA_TOKEN", admin.c_str(), 1);
   }
+
+  // pba-server's options beyond the fixture's own.
+  virtual std::vector<std::string> ServerArgs() const { return {}; }
 
   void TearDown() override {
     if (HasFailure()) std::cerr << "server log:\n" << ReadFile(server_->log_path());

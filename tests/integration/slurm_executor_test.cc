@@ -270,6 +270,48 @@ TEST_F(SlurmTest, ASweepGoesAsOneJobArrayWithAStateForEachMember) {
   EXPECT_EQ(CountOf(completions, "Name=pba-j"), 0u) << completions;
 }
 
+// `pba batch run` of a sweep that does not say how many at a time, as a
+// user writes it: against a Slurm-backed server the client hands every
+// member over at once, the server gathers the submits into one round, and
+// the ten members go to Slurm as one job array of ten tasks.
+TEST_F(SlurmTest, ABatchRunGoesToSlurmAsOneJobArray) {
+  ASSERT_TRUE(StartServer());
+  const RunResult info = Pba({"server"});
+  EXPECT_NE(
+      info.out.find("executor: slurm (jobs handed over together go as one job array from 10)"),
+      std::string::npos)
+      << info.out;
+  std::ofstream(dir_.path() / "base.yaml") << R"(name: block
+geometry: {box: {size_mm: [10, 10, 10]}}
+mesh: {element_size_mm: 5}
+material: {linear_elastic: {youngs_modulus_pa: 3000, poissons_ratio: 0.45}}
+boundary_conditions:
+  - {set: bottom, fixed: {}}
+  - {set: top, displacement: {z_mm: -1}}
+)";
+  std::ofstream(dir_.path() / "sweep.yaml") << R"(name: stiffness
+scene: base.yaml
+sweep:
+  material.linear_elastic.youngs_modulus_pa: [1000, 2000, 3000, 4000, 5000]
+  material.linear_elastic.poissons_ratio: [0.3, 0.45]
+outputs:
+  - results.reactions[1].force_n[2]
+)";
+  const RunResult run = Pba({"batch", "run", (dir_.path() / "sweep.yaml").string()});
+  ASSERT_EQ(run.exit_code, 0) << run.out << run.err;
+  EXPECT_NE(run.out.find("10 to submit, all at once"), std::string::npos) << run.out;
+  const std::string csv = ReadFile(dir_.path() / "sweep.csv");
+  EXPECT_EQ(CountOf(csv, "SUCCEEDED"), 10u) << csv;
+  // Ten tasks of one array in Slurm's job completion file, none on its own.
+  const std::string completions = ReadFile(slurm_dir_ / "jobcomp.txt");
+  EXPECT_EQ(CountOf(completions, "JobState=COMPLETED"), 10u) << completions;
+  EXPECT_EQ(CountOf(completions, "Name=pba-j"), 0u) << completions;
+  std::smatch match;
+  ASSERT_TRUE(std::regex_search(csv, match, std::regex(",(j[0-9a-f]+),SUCCEEDED"))) << csv;
+  const std::string slurm_id = SlurmJob(match[1].str());
+  EXPECT_TRUE(std::regex_match(slurm_id, std::regex("[0-9]+_[0-9]"))) << slurm_id;
+}
+
 // A job on two MPI ranks: one Slurm job of two tasks, pba-solve started by
 // mpirun inside the allocation, the job saying it ran on both.
 TEST_F(SlurmTest, AJobOnTwoRanksRunsUnderMpirunInItsAllocation) {

@@ -233,5 +233,24 @@ TEST(SlurmPartsTest, AnArrayTaskRunsItsJobInItsFolder) {
   EXPECT_NE(r.code, 0);
 }
 
+// A round of submits goes to Slurm once none has come for `gather`, or
+// kSlurmGatherCap gathers after the first (a steady stream of submits does
+// not hold the queue back for ever); none since the last round: at once.
+TEST(SlurmPartsTest, SubmitsAreGatheredUntilTheyPause) {
+  using Clock = std::chrono::steady_clock;
+  const std::chrono::milliseconds gather{1000};
+  const Clock::time_point t0 = Clock::now();
+  EXPECT_EQ(GatherLeft({}, {}, t0, gather), Clock::duration::zero());
+  EXPECT_EQ(GatherLeft(t0, t0, t0, gather), gather);
+  EXPECT_EQ(GatherLeft(t0, t0, t0 + std::chrono::milliseconds(400), gather),
+            std::chrono::milliseconds(600));
+  EXPECT_EQ(GatherLeft(t0, t0, t0 + gather, gather), Clock::duration::zero());
+  // A submit every half gather: each pushes the round back, up to the cap.
+  const Clock::time_point late = t0 + std::chrono::milliseconds(9500);
+  EXPECT_EQ(GatherLeft(t0, late, late, gather), std::chrono::milliseconds(500));
+  EXPECT_EQ(GatherLeft(t0, late, t0 + gather * kSlurmGatherCap, gather), Clock::duration::zero());
+  EXPECT_EQ(GatherLeft(t0, t0, t0, std::chrono::milliseconds(0)), Clock::duration::zero());
+}
+
 }  // namespace
 }  // namespace pba

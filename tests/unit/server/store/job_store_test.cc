@@ -464,6 +464,49 @@ TEST_F(JobStoreTest, AFailingBeforeCommitStoresNothing) {
   EXPECT_FALSE(found);
 }
 
+// A user's open jobs (queued or running) are bounded; a repeated request
+// id still finds its job, another user is not held back, and a job that
+// ends makes room.
+TEST_F(JobStoreTest, BoundsTheJobsOneUserHasOpen) {
+  const auto submit = [&](const std::string& name, const std::string& owner,
+                          const std::string& request_id, v1::Job* job) {
+    NewJob request;
+    request.scene = ValidScene(name);
+    request.owner = owner;
+    request.request_id = request_id;
+    request.max_open = 2;
+    bool created = false;
+    return store_->CreateJob(request, job, &created);
+  };
+  v1::Job first, second, third;
+  ASSERT_TRUE(submit("a", "alice", "key-a", &first).ok());
+  v1::Job claimed;
+  bool ok = false;
+  v1::JobEvent started;
+  ASSERT_TRUE(store_->ClaimNextQueued(&claimed, &started, &ok).ok());
+  ASSERT_TRUE(ok);                                           // one RUNNING
+  ASSERT_TRUE(submit("b", "alice", "key-b", &second).ok());  // and one QUEUED
+  const Status refused = submit("c", "alice", "key-c", &third);
+  EXPECT_EQ(refused.code(), Status::Code::kResourceExhausted) << refused.ToString();
+  EXPECT_NE(refused.ToString().find("already has 2 jobs queued or running"), std::string::npos)
+      << refused.ToString();
+  EXPECT_NE(refused.ToString().find("--max-open-jobs"), std::string::npos) << refused.ToString();
+  v1::Job again;
+  ASSERT_TRUE(submit("b", "alice", "key-b", &again).ok());
+  EXPECT_EQ(again.id(), second.id());
+  v1::Job bobs;
+  EXPECT_TRUE(submit("d", "bob", "", &bobs).ok());
+  v1::JobEvent cancelled;
+  bool was_queued = false;
+  ASSERT_TRUE(store_->CancelQueued(second.id(), "no", &cancelled, &was_queued).ok());
+  ASSERT_TRUE(was_queued);
+  EXPECT_TRUE(submit("c", "alice", "key-c", &third).ok());
+  std::vector<v1::Job> jobs;
+  std::string token;
+  ASSERT_TRUE(store_->ListJobs(0, "", &jobs, &token).ok());
+  EXPECT_EQ(jobs.size(), 4u);
+}
+
 TEST_F(JobStoreTest, FindsAJobByItsOwnersRequestId) {
   const v1::Job job = Create("cube", "key-1");
   v1::Job found_job;

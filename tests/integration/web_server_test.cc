@@ -1,0 +1,246 @@
+// pba-server --http: the web view's files and its JSON API, through a real
+// server on loopback and a plain HTTP client (cpp-httplib's), as a browser
+// would call it and as a hostile page would try to: no session sees
+// nothing, a request without the session's CSRF token or from another
+// site is refused, and roles are the gRPC services' own.
+#include <gtest/gtest.h>
+#include <httplib.h>
+
+#include <regex>
+#include <string>
+#include <vector>
+
+#include "common/subprocess.h"
+#include "integration/server_fixture.h"
+
+namespace pba::testing {
+namespace {
+namespace fs = std::filesystem;
+using std::chrono::seconds;
+
+class WebTest : public ServerTest {
+ protected:
+  std::vector<std::string> ServerArgs() const override { return {"--http", "127.0.0.1:0"}; }
+
+  void SetUp() override {
+    ServerTest::SetUp();
+    const std::string json = ReadFile(dir_.path() / "data" / "server.json");
+    std::smatch match;
+    ASSERT_TRUE(std::regex_search(json, match, std::regex("\"http\":\"127.0.0.1:([0-9]+)\"")))
+        << json;
+    port_ = std::stoi(match[1].str());
+    std::ifstream(dir_.path() / "data" / "admin.token") >> admin_;
+  }
+
+  httplib::Client Client() {
+    httplib::Client client("127.0.0.1", port_);
+    client.set_read_timeout(30, 0);
+    return client;
+  }
+  std::string Origin() const { return "http://127.0.0.1:" + std::to_string(port_); }
+
+  // Signs in with `token`: the session's cookie and CSRF token.
+  bool SignIn(const std::string& token, std::string* cookie, std::string* csrf) {
+    auto client = Client();
+    const auto response = client.Post("/api/session", {{"Origin", Origin()}},
+                                      "{\"token\":\"" + token + "\"}", "application/json");
+    if (!response || response->status != 200) return false;
+    std::smatch match;
+    const std::string set = response->get_header_value("Set-Cookie");
+    if (!std::regex_search(set, match, std::regex("^(pba_token=[^;]+)"))) return false;
+    *cookie = match[1].str();
+    if (!std::regex_search(response->body, match, std::regex("\"csrf\":\"([0-9a-f]{64})\"")))
+      return false;
+    *csrf = match[1].str();
+    return true;
+  }
+
+  // An API call with the session, from this site; the response.
+  httplib::Result Call(const std::string& name, const std::string& body, const std::string& cookie,
+                       const std::string& csrf) {
+    auto client = Client();
+    return client.Post("/api/v1/" + name,
+                       {{"Cookie", cookie}, {"X-PBA-CSRF", csrf}, {"Origin", Origin()}}, body,
+                       "application/json");
+  }
+
+  int port_ = 0;
+  std::string admin_;
+};
+
+// The page, its script and the Debian packages' three.js and Chart.js are
+// served from memory, with a content security policy; nothing else is.
+TEST_F(WebTest, ServesTheApplicationAndDebiansLibrariesAndNothingElse) {
+  auto client = Client();
+  const auto page = client.Get("/");
+  ASSERT_TRUE(page);
+  EXPECT_EQ(page->status, 200);
+  EXPECT_NE(page->body.find("/app/app.js"), std::string::npos);
+  EXPECT_NE(page->get_header_value("Content-Type").find("text/html"), std::string::npos);
+  EXPECT_NE(page->get_header_value("Content-Security-Policy").find("default-src 'self'"),
+            std::string::npos);
+  EXPECT_EQ(page->get_header_value("X-Frame-Options"), "DENY");
+  const auto script = client.Get("/app/app.js");
+  ASSERT_TRUE(script);
+  EXPECT_EQ(script->status, 200);
+  EXPECT_NE(script->get_header_value("Content-Type").find("text/javascript"), std::string::npos);
+  const auto three = client.Get("/vendor/three.module.js");
+  ASSERT_TRUE(three);
+  EXPECT_EQ(three->status, 200);
+  EXPECT_NE(three->body.find("REVISION"), std::string::npos);
+  for (const char* path :
+       {"/vendor/chart.min.js", "/vendor/OrbitControls.js", "/vendor/GLTFLoader.js"}) {
+    const auto file = client.Get(path);
+    ASSERT_TRUE(file) << path;
+    EXPECT_EQ(file->status, 200) << path;
+    // three.js's examples import it where this server serves it.
+    EXPECT_EQ(file->body.find("../build/three.module.js"), std::string::npos) << path;
+  }
+  const auto controls = client.Get("/vendor/OrbitControls.js");
+  ASSERT_TRUE(controls);
+  EXPECT_NE(controls->body.find("from \"/vendor/three.module.js\""), std::string::npos);
+  for (const char* path : {"/app/../pba.db", "/app/%2e%2e/pba.db", "/pba.db", "/vendor/three.js",
+                           "/app/missing.js", "/data/admin.token"}) {
+    const auto file = client.Get(path);
+    ASSERT_TRUE(file) << path;
+    EXPECT_EQ(file->status, 404) << path;
+    EXPECT_EQ(file->body.find(admin_), std::string::npos) << path;
+  }
+}
+
+// Without a session nothing is answered; a token that is no user's, or no
+// token at all, does not make one.
+TEST_F(WebTest, NoTokenSeesNothing) {
+  auto client = Client();
+  const auto listed = client.Post("/api/v1/AtlasService/ListProjects", "{}", "application/json");
+  ASSERT_TRUE(listed);
+  EXPECT_EQ(listed->status, 401);
+  EXPECT_NE(listed->body.find("\"code\":\"UNAUTHENTICATED\""), std::string::npos) << listed->body;
+  const auto session = client.Get("/api/session");
+  ASSERT_TRUE(session);
+  EXPECT_EQ(session->status, 401);
+  std::string cookie, csrf;
+  EXPECT_FALSE(SignIn(std::string(64, 'a'), &cookie, &csrf));
+  const auto wrong = client.Post("/api/session", "{\"token\":\"" + std::string(64, 'a') + "\"}",
+                                 "application/json");
+  ASSERT_TRUE(wrong);
+  EXPECT_EQ(wrong->status, 401) << wrong->body;
+  EXPECT_FALSE(wrong->has_header("Set-Cookie"));
+  const auto garbled = client.Post("/api/session", "{\"token\": 7}", "application/json");
+  ASSERT_TRUE(garbled);
+  EXPECT_EQ(garbled->status, 400) << garbled->body;
+  const auto forged_cookie = client.Post(
+      "/api/v1/AtlasService/ListProjects",
+      {{"Cookie", "pba_token=" + std::string(64, 'b')}, {"X-PBA-CSRF", std::string(64, '0')}}, "{}",
+      "application/json");
+  ASSERT_TRUE(forged_cookie);
+  EXPECT_EQ(forged_cookie->status, 403) << forged_cookie->body;  // no CSRF token of it
+}
+
+// A sign-in keeps the token in a cookie scripts cannot read and no other
+// site's request carries; the API then answers what gRPC answers.
+TEST_F(WebTest, SignInKeepsTheTokenInAStrictHttpOnlyCookie) {
+  auto client = Client();
+  const auto signed_in = client.Post("/api/session", {{"Origin", Origin()}},
+                                     "{\"token\":\"" + admin_ + "\"}", "application/json");
+  ASSERT_TRUE(signed_in);
+  ASSERT_EQ(signed_in->status, 200) << signed_in->body;
+  const std::string set = signed_in->get_header_value("Set-Cookie");
+  EXPECT_NE(set.find("HttpOnly"), std::string::npos) << set;
+  EXPECT_NE(set.find("SameSite=Strict"), std::string::npos) << set;
+  EXPECT_NE(signed_in->body.find("\"name\":\"admin\""), std::string::npos) << signed_in->body;
+  EXPECT_EQ(signed_in->body.find(admin_), std::string::npos) << "the token is not in the body";
+
+  std::string cookie, csrf;
+  ASSERT_TRUE(SignIn(admin_, &cookie, &csrf));
+  ASSERT_EQ(Pba({"project", "create", "demo"}).exit_code, 0);
+  const auto projects = Call("AtlasService/ListProjects", "{}", cookie, csrf);
+  ASSERT_TRUE(projects);
+  EXPECT_EQ(projects->status, 200) << projects->body;
+  EXPECT_NE(projects->body.find("\"name\":\"demo\""), std::string::npos) << projects->body;
+  const auto info = Call("JobService/GetServerInfo", "", cookie, csrf);
+  ASSERT_TRUE(info);
+  EXPECT_NE(info->body.find("\"executor\":\"local\""), std::string::npos) << info->body;
+  const auto bad = Call("AtlasService/ListStructures", "{\"projekt\":\"demo\"}", cookie, csrf);
+  ASSERT_TRUE(bad);
+  EXPECT_EQ(bad->status, 400) << bad->body;
+  EXPECT_NE(bad->body.find("projekt"), std::string::npos) << bad->body;
+
+  const auto out = client.Delete("/api/session", {{"Origin", Origin()}, {"Cookie", cookie}});
+  ASSERT_TRUE(out);
+  EXPECT_NE(out->get_header_value("Set-Cookie").find("Max-Age=0"), std::string::npos);
+}
+
+// A forged request: no CSRF token, another site's Origin, a browser's
+// cross-site mark, a sign-in from another site; and calls the web may not
+// make at all (geometry is changed with the CLI).
+TEST_F(WebTest, ForgedCrossSiteRequestsAreRefused) {
+  std::string cookie, csrf;
+  ASSERT_TRUE(SignIn(admin_, &cookie, &csrf));
+  auto client = Client();
+  const std::string body = "{\"name\":\"forged\"}";
+  const std::vector<httplib::Headers> forged = {
+      {{"Cookie", cookie}},
+      {{"Cookie", cookie}, {"X-PBA-CSRF", std::string(64, '0')}},
+      {{"Cookie", cookie}, {"X-PBA-CSRF", csrf}, {"Origin", "http://evil.example"}},
+      {{"Cookie", cookie}, {"X-PBA-CSRF", csrf}, {"Sec-Fetch-Site", "cross-site"}},
+  };
+  for (const httplib::Headers& headers : forged) {
+    const auto refused =
+        client.Post("/api/v1/AtlasService/ListProjects", headers, "{}", "application/json");
+    ASSERT_TRUE(refused);
+    EXPECT_EQ(refused->status, 403) << refused->body;
+    EXPECT_NE(refused->body.find("PERMISSION_DENIED"), std::string::npos) << refused->body;
+  }
+  const auto login_forged = client.Post("/api/session", {{"Origin", "http://evil.example"}},
+                                        "{\"token\":\"" + admin_ + "\"}", "application/json");
+  ASSERT_TRUE(login_forged);
+  EXPECT_EQ(login_forged->status, 403);
+  EXPECT_FALSE(login_forged->has_header("Set-Cookie"));
+  for (const char* hidden :
+       {"AtlasService/CommitStructure", "AtlasService/CreateProject", "AtlasService/BreakLock",
+        "JobService/SubmitJob", "AtlasService/Nothing"}) {
+    const auto refused = Call(hidden, body, cookie, csrf);
+    ASSERT_TRUE(refused) << hidden;
+    EXPECT_EQ(refused->status, 404) << hidden << ": " << refused->body;
+  }
+  EXPECT_EQ(Pba({"--json", "project", "list"}).out.find("forged"), std::string::npos);
+}
+
+// Roles are the gRPC services': a viewer of a project cannot take a lock
+// in it from the page (PERMISSION_DENIED before the structure is looked
+// for), its admin is told the structure does not exist.
+TEST_F(WebTest, AViewerCannotTakeALockFromThePage) {
+  ASSERT_EQ(Pba({"project", "create", "demo"}).exit_code, 0);
+  const RunResult created = RunProcess(
+      {PBA_SERVER_BIN, "admin", "create-user", "vera", "--data", (dir_.path() / "data").string()},
+      seconds(30));
+  ASSERT_EQ(created.exit_code, 0) << created.out << created.err;
+  std::smatch token;
+  ASSERT_TRUE(std::regex_search(created.out, token, std::regex("[0-9a-f]{64}"))) << created.out;
+  ASSERT_EQ(Pba({"project", "role", "demo", "vera", "viewer"}).exit_code, 0);
+
+  std::string cookie, csrf;
+  ASSERT_TRUE(SignIn(token.str(), &cookie, &csrf));
+  const std::string lock = "{\"project\":\"demo\",\"structure\":\"Putamen\"}";
+  const auto refused = Call("AtlasService/AcquireLock", lock, cookie, csrf);
+  ASSERT_TRUE(refused);
+  EXPECT_EQ(refused->status, 403) << refused->body;
+  const auto listed = Call("AtlasService/ListStructures", "{\"project\":\"demo\"}", cookie, csrf);
+  ASSERT_TRUE(listed);
+  EXPECT_EQ(listed->status, 200) << listed->body;
+
+  std::string admin_cookie, admin_csrf;
+  ASSERT_TRUE(SignIn(admin_, &admin_cookie, &admin_csrf));
+  EXPECT_NE(admin_csrf, csrf);
+  const auto missing = Call("AtlasService/AcquireLock", lock, admin_cookie, admin_csrf);
+  ASSERT_TRUE(missing);
+  EXPECT_EQ(missing->status, 404) << missing->body;
+  // One session's CSRF token is not another's.
+  const auto crossed = Call("AtlasService/ListProjects", "{}", cookie, admin_csrf);
+  ASSERT_TRUE(crossed);
+  EXPECT_EQ(crossed->status, 403);
+}
+
+}  // namespace
+}  // namespace pba::testing
