@@ -22,6 +22,7 @@ packages=(
   mricron-data
   slurmctld slurmd slurm-client munge
   libcpp-httplib-dev libjs-three libjs-chart.js
+  chromium chromium-driver python3-selenium
 )
 
 missing=()

@@ -224,8 +224,8 @@ bool WrittenByPbaSolve(const std::filesystem::directory_entry& entry) {
   const std::string name = entry.path().filename().string();
   if (entry.is_symlink(ec)) return false;
   if (entry.is_regular_file(ec)) {
-    for (const char* known : {"summary.json", "result.h5", "result.xdmf", "history.csv",
-                              "history.png", "sensors.csv"}) {
+    for (const char* known : {"summary.json", "result.h5", "result.xdmf", "surfaces.glb",
+                              "history.csv", "history.png", "sensors.csv"}) {
       if (name == known) return true;
     }
     return name.rfind("profile_", 0) == 0 && ends_with(name, ".csv");

@@ -32,6 +32,9 @@ class WebGateway {
   const GatewayCall* Find(const std::string& name) const;
   // Every name Find knows, sorted.
   std::vector<std::string> Names() const;
+  // The channel the calls are made on (for the streaming ones the routes
+  // make themselves).
+  const std::shared_ptr<grpc::Channel>& channel() const { return channel_; }
 
  private:
   std::shared_ptr<grpc::Channel> channel_;

@@ -10,11 +10,15 @@
 #include <cstring>
 #include <fstream>
 #include <map>
+#include <mutex>
 #include <regex>
+#include <set>
 #include <sstream>
 
 #include "core/format.h"
 #include "core/sha256.h"
+#include "pba/v1/atlas.grpc.pb.h"
+#include "pba/v1/job.grpc.pb.h"
 #include "service/handler.h"
 #include "store/random_hex.h"
 #include "web/web_gateway.h"
@@ -29,6 +33,11 @@ constexpr char kCsrfHeader[] = "X-PBA-CSRF";
 constexpr std::size_t kMaxToken = 256;
 // How long one API call may take on the gRPC side.
 constexpr std::chrono::seconds kCallDeadline{60};
+// Server-sent event streams open at once, and how long each lasts before
+// the browser opens it again (EventSource does that by itself): a page
+// that went away holds its thread at most that long.
+constexpr int kMaxEventStreams = 16;
+constexpr std::chrono::seconds kEventStreamLife{60};
 // The application's files at most (each, and in all): they are read once.
 constexpr std::uintmax_t kMaxAppFile = std::uintmax_t{8} << 20;
 
@@ -54,6 +63,8 @@ std::string ContentType(const fs::path& name) {
   if (ext == ".svg") return "image/svg+xml";
   if (ext == ".png") return "image/png";
   if (ext == ".json") return "application/json";
+  if (ext == ".glb") return "model/gltf-binary";
+  if (ext == ".csv") return "text/csv; charset=utf-8";
   return "application/octet-stream";
 }
 
@@ -143,6 +154,29 @@ struct WebServer::State {
 
   std::string Csrf(const std::string& token) const { return Sha256Hex(secret + ":" + token); }
 
+  // The calls of open event streams, cancelled by Stop.
+  std::mutex streams_mutex;
+  std::set<grpc::ClientContext*> streams;
+  bool stopping = false;
+
+  // Registers a stream's call; false when there are too many or the server
+  // is stopping.
+  bool OpenStream(grpc::ClientContext* context) {
+    std::lock_guard lock(streams_mutex);
+    if (stopping || static_cast<int>(streams.size()) >= kMaxEventStreams) return false;
+    streams.insert(context);
+    return true;
+  }
+  void CloseStream(grpc::ClientContext* context) {
+    std::lock_guard lock(streams_mutex);
+    streams.erase(context);
+  }
+  void CancelStreams() {
+    std::lock_guard lock(streams_mutex);
+    stopping = true;
+    for (grpc::ClientContext* context : streams) context->TryCancel();
+  }
+
   // A request from a page of another site: its Origin (sent with every
   // POST and DELETE by browsers) is not this server's own.
   static bool CrossSite(const httplib::Request& request, bool tls) {
@@ -152,10 +186,10 @@ struct WebServer::State {
     return request.get_header_value("Origin") != own;
   }
 
-  // Whether the request may change or read anything through the API: a
-  // session, from this site, with the session's CSRF token. Answers the
-  // error itself when not.
-  bool Admit(const httplib::Request& request, httplib::Response& response, std::string* token) {
+  // The session's token of a request from this site; false (the error
+  // answered) without a session or from another site.
+  bool SessionOf(const httplib::Request& request, httplib::Response& response,
+                 std::string* token) const {
     *token = CookieToken(request);
     if (token->empty()) {
       SendError(response, grpc::StatusCode::UNAUTHENTICATED, "not signed in");
@@ -165,6 +199,14 @@ struct WebServer::State {
       SendError(response, grpc::StatusCode::PERMISSION_DENIED, "a request from another site");
       return false;
     }
+    return true;
+  }
+
+  // Whether the request may change or read anything through the API: a
+  // session, from this site, with the session's CSRF token. Answers the
+  // error itself when not.
+  bool Admit(const httplib::Request& request, httplib::Response& response, std::string* token) {
+    if (!SessionOf(request, response, token)) return false;
     const std::string sent = request.get_header_value(kCsrfHeader);
     const std::string expected = Csrf(*token);
     if (sent.size() != expected.size() ||
@@ -201,6 +243,107 @@ struct WebServer::State {
     response.set_header("Cache-Control", "no-store");
     response.set_content("{\"user\":" + user_json + ",\"csrf\":" + JsonQuoted(Csrf(token)) + "}",
                          "application/json");
+  }
+
+  // A project's changes as server-sent events: each AtlasEvent of the
+  // gRPC Watch as `data: <its JSON>`, the first one READY.
+  void Events(const httplib::Request& request, httplib::Response& response) {
+    std::string token;
+    if (!SessionOf(request, response, &token)) return;
+    struct Stream {
+      State* state = nullptr;
+      grpc::ClientContext context;
+      std::unique_ptr<grpc::ClientReader<v1::AtlasEvent>> reader;
+      v1::AtlasEvent event;
+      bool pending = false;
+    };
+    auto stream = std::make_shared<Stream>();
+    stream->state = this;
+    stream->context.AddMetadata("authorization", "Bearer " + token);
+    stream->context.set_deadline(std::chrono::system_clock::now() + kEventStreamLife);
+    if (!OpenStream(&stream->context)) {
+      SendError(response, grpc::StatusCode::UNAVAILABLE,
+                "too many event streams open; the page polls instead");
+      return;
+    }
+    v1::WatchRequest watch;
+    watch.set_project(request.get_param_value("project"));
+    v1::AtlasService::Stub stub(gateway.channel());
+    stream->reader = stub.Watch(&stream->context, watch);
+    if (!stream->reader->Read(&stream->event)) {
+      const grpc::Status status = stream->reader->Finish();
+      CloseStream(&stream->context);
+      SendError(response, status.ok() ? grpc::StatusCode::INTERNAL : status.error_code(),
+                status.ok() ? "the watch ended at once" : status.error_message());
+      return;
+    }
+    stream->pending = true;
+    response.set_header("Cache-Control", "no-store");
+    response.set_chunked_content_provider(
+        "text/event-stream",
+        [stream](std::size_t offset, httplib::DataSink& sink) {
+          // Reconnect after a second when the stream ends.
+          if (offset == 0 && !sink.write("retry: 1000\n\n", 13)) return false;
+          if (!stream->pending && !stream->reader->Read(&stream->event)) {
+            sink.done();
+            return true;
+          }
+          stream->pending = false;
+          google::protobuf::util::JsonPrintOptions print;
+          print.preserve_proto_field_names = true;
+          std::string json;
+          (void)google::protobuf::util::MessageToJsonString(stream->event, &json, print);
+          const std::string line = "data: " + json + "\n\n";
+          return sink.write(line.data(), line.size());
+        },
+        [stream](bool /*success*/) {
+          stream->context.TryCancel();
+          (void)stream->reader->Finish();
+          stream->state->CloseStream(&stream->context);
+        });
+  }
+
+  void Download(const httplib::Request& request, httplib::Response& response) {
+    std::string token;
+    if (!SessionOf(request, response, &token)) return;
+    struct Stream {
+      grpc::ClientContext context;
+      std::unique_ptr<grpc::ClientReader<v1::DataChunk>> reader;
+      v1::DataChunk chunk;
+      bool pending = false;  // chunk read and not yet sent
+    };
+    auto stream = std::make_shared<Stream>();
+    stream->context.AddMetadata("authorization", "Bearer " + token);
+    v1::DownloadResultRequest download;
+    download.set_job_id(request.matches[1].str());
+    download.set_file(request.matches[2].str());
+    v1::JobService::Stub stub(gateway.channel());
+    stream->reader = stub.DownloadResult(&stream->context, download);
+    // The first chunk decides the answer: an error, or the file's size.
+    if (!stream->reader->Read(&stream->chunk)) {
+      const grpc::Status status = stream->reader->Finish();
+      SendError(response, status.ok() ? grpc::StatusCode::INTERNAL : status.error_code(),
+                status.ok() ? "the file came without data" : status.error_message());
+      return;
+    }
+    stream->pending = true;
+    const std::size_t total =
+        static_cast<std::size_t>(std::max<int64_t>(0, stream->chunk.total_size()));
+    const std::string name = request.matches[2].str();
+    response.set_header("Content-Disposition", "attachment; filename=\"" + name + "\"");
+    response.set_header("Cache-Control", "no-store");
+    response.set_content_provider(
+        total, ContentType(name).c_str(),
+        [stream](std::size_t /*offset*/, std::size_t /*length*/, httplib::DataSink& sink) {
+          if (!stream->pending && !stream->reader->Read(&stream->chunk)) return false;
+          stream->pending = false;
+          const std::string& data = stream->chunk.data();
+          return sink.write(data.data(), data.size());
+        },
+        [stream](bool /*success*/) {
+          stream->context.TryCancel();
+          (void)stream->reader->Finish();
+        });
   }
 
   Status LoadFiles(const WebOptions& options) {
@@ -261,7 +404,8 @@ Status WebServer::Start(const WebOptions& options, std::shared_ptr<grpc::Channel
     web->http_ = std::make_unique<httplib::Server>();
   }
   httplib::Server& http = *web->http_;
-  const int threads = std::max(1, options.threads);
+  // Every event stream holds a thread: room for the rest beside them.
+  const int threads = std::max(1, options.threads) + kMaxEventStreams;
   http.new_task_queue = [threads] { return new httplib::ThreadPool(threads); };
   http.set_payload_max_length(kWebMaxBody);
   http.set_read_timeout(30, 0);
@@ -288,12 +432,8 @@ Status WebServer::Start(const WebOptions& options, std::shared_ptr<grpc::Channel
            });
 
   http.Get("/api/session", [&state](const httplib::Request& request, httplib::Response& response) {
-    const std::string token = CookieToken(request);
-    if (token.empty()) {
-      SendError(response, grpc::StatusCode::UNAUTHENTICATED, "not signed in");
-      return;
-    }
-    std::string user;
+    std::string token, user;
+    if (!state.SessionOf(request, response, &token)) return;
     if (state.Call("AtlasService/WhoAmI", token, "{}", response, &user)) {
       state.SendSession(response, token, user);
     }
@@ -332,6 +472,18 @@ Status WebServer::Start(const WebOptions& options, std::shared_ptr<grpc::Channel
                                               (state.tls ? "; Secure" : ""));
         response.set_content("{}", "application/json");
       });
+
+  // A result file of a job the caller may see, streamed from DownloadResult
+  // (a plain GET, so that a link downloads it; the cookie is not sent by
+  // other sites' requests, and a browser's cross-site mark is refused).
+  http.Get(R"(/api/jobs/([A-Za-z0-9]+)/files/([A-Za-z0-9._-]+))",
+           [&state](const httplib::Request& request, httplib::Response& response) {
+             state.Download(request, response);
+           });
+
+  http.Get("/api/events", [&state](const httplib::Request& request, httplib::Response& response) {
+    state.Events(request, response);
+  });
 
   http.Post(R"(/api/v1/([A-Za-z]+)/([A-Za-z]+))",
             [&state](const httplib::Request& request, httplib::Response& response) {
@@ -375,6 +527,7 @@ Status WebServer::Start(const WebOptions& options, std::shared_ptr<grpc::Channel
 WebServer::~WebServer() { Stop(); }
 
 void WebServer::Stop() {
+  if (state_ != nullptr) state_->CancelStreams();
   if (http_ != nullptr) http_->stop();
   if (thread_.joinable()) thread_.join();
 }

@@ -23,6 +23,11 @@
 //   GET  /vendor/NAME              three.js, its OrbitControls and
 //                                  GLTFLoader, Chart.js (a fixed map)
 //   GET|POST|DELETE /api/session   who is signed in; sign in; sign out
+//   GET  /api/events?project=P     the project's changes as server-sent
+//                                  events (AtlasService.Watch), at most 16
+//                                  streams at once, each a minute (the
+//                                  browser reopens it)
+//   GET  /api/jobs/ID/files/NAME   a result file (JobService.DownloadResult)
 //   POST /api/v1/SERVICE/METHOD    the gRPC call (web_gateway.h lists which),
 //                                  its request and response as protobuf JSON;
 //                                  errors as {"code", "message"} with the

@@ -170,6 +170,8 @@ Status SolveProblem(const Problem& problem, PhaseClock* clock, Solution* solutio
     const NodeList nodes = mesh.ElementNodes(e);
     std::copy(nodes.begin(), nodes.end(), solution->tets.begin() + per_element * e);
   }
+  solution->region_names = mesh.region_names;
+  solution->element_region.assign(mesh.element_region.begin(), mesh.element_region.end());
   summary.max_displacement_mm = max_u / kMm;
   for (int c = 0; c < 3; ++c) summary.max_displacement_at_mm[c] = mesh.nodes(max_node, c) / kMm;
   summary.max_von_mises_pa =

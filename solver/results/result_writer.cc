@@ -16,6 +16,7 @@
 #include "io/line_plot.h"
 #include "mesh/element_shape.h"
 #include "pba/solve.h"
+#include "results/surface_gltf.h"
 
 namespace pba {
 namespace {
@@ -97,6 +98,12 @@ std::string FieldAttributes(const OutputOptions& outputs, const Solution& s) {
   return x;
 }
 
+// Whether the solution names its elements' regions (one index each).
+bool HasRegions(const Solution& s) {
+  return !s.region_names.empty() &&
+         s.element_region.size() == s.tets.size() / std::max(1, s.nodes_per_element);
+}
+
 std::string XdmfText(const std::string& scene_name, const OutputOptions& outputs,
                      const Solution& s) {
   const size_t nodes = s.nodes_mm.size() / 3, elements = s.tets.size() / s.nodes_per_element;
@@ -107,13 +114,17 @@ std::string XdmfText(const std::string& scene_name, const OutputOptions& outputs
   // 4-node files stay as they were.
   const std::string per_element =
       s.nodes_per_element == 10 ? "\" NodesPerElement=\"" + npe : std::string();
-  const std::string mesh = std::string("      <Topology TopologyType=\"") +
-                           ShapeOf(s.nodes_per_element).xdmf_topology + "\" NumberOfElements=\"" +
-                           ne + per_element + "\">\n        " +
-                           Item(ne + " " + npe, "/mesh/tets", "Int", 8) +
-                           "\n      </Topology>\n"
-                           "      <Geometry GeometryType=\"XYZ\">\n        " +
-                           Item(nn + " 3", "/mesh/nodes") + "\n      </Geometry>\n";
+  const std::string mesh =
+      std::string("      <Topology TopologyType=\"") + ShapeOf(s.nodes_per_element).xdmf_topology +
+      "\" NumberOfElements=\"" + ne + per_element + "\">\n        " +
+      Item(ne + " " + npe, "/mesh/tets", "Int", 8) +
+      "\n      </Topology>\n"
+      "      <Geometry GeometryType=\"XYZ\">\n        " +
+      Item(nn + " 3", "/mesh/nodes") + "\n      </Geometry>\n" +
+      (HasRegions(s) ? "      <Attribute Name=\"region\" AttributeType=\"Scalar\" "
+                       "Center=\"Cell\">\n        " +
+                           Item(ne, "/mesh/region", "Int", 8) + "\n      </Attribute>\n"
+                     : std::string());
   std::string x =
       "<?xml version=\"1.0\" ?>\n<!-- PBA result: lengths in mm, stresses in Pa. Open in ParaView. "
       "-->\n<Xdmf Version=\"3.0\">\n  <Domain>\n";
@@ -277,6 +288,13 @@ Status WriteResults(const std::string& scene_name, const OutputOptions& outputs,
                            "4 + i across from node i (VTK_HEXAHEDRON, Abaqus C3D8)"
                          : "node indices, 0-based");
     w.Attribute("/mesh/tets", "element_type", ShapeOf(npe).name);
+    if (HasRegions(*solution)) {
+      w.Dataset("/mesh/region", solution->element_region, 0, "1",
+                "each element's region: an index into the names attribute");
+      std::string names;
+      for (const std::string& name : solution->region_names) names += name + "\n";
+      w.Attribute("/mesh/region", "names", names);
+    }
     const std::string voigt = "xx yy zz yz xz xy";
     if (outputs.displacement)
       w.Dataset("/fields/displacement", solution->displacement_mm, 3, "mm", "x y z");
@@ -340,6 +358,15 @@ Status WriteResults(const std::string& scene_name, const OutputOptions& outputs,
 
   if (!solution->history.empty()) PBA_RETURN_IF_ERROR(WriteHistory(*solution, dir));
   PBA_RETURN_IF_ERROR(WriteProfiles(*solution, dir));
+  // The regions' surfaces, deformed by the final displacement, for a
+  // browser (the web view) or any glTF viewer.
+  PBA_RETURN_IF_ERROR(AtomicWriteText(
+      dir / "surfaces.glb",
+      SurfacesGlb(ExtractRegionSurfaces(
+                      solution->tets, npe,
+                      HasRegions(*solution) ? solution->element_region : std::vector<int64_t>(),
+                      solution->region_names),
+                  solution->nodes_mm, solution->displacement_mm)));
   if (!solution->sensor_columns.empty()) PBA_RETURN_IF_ERROR(WriteSensors(*solution, dir));
 
   const double seconds =

@@ -21,6 +21,16 @@ inline std::string BlockSceneYaml(const std::string& name, int size_mm) {
          "  - {set: top, displacement: {z_mm: -1}}\n";
 }
 
+// A 10 mm linear block on 5 mm elements, held at the bottom and pushed
+// 1 mm down at the top: a job of a fraction of a second.
+inline std::string SmallBlockSceneYaml(const std::string& name) {
+  return "name: " + name +
+         "\ngeometry: {box: {size_mm: [10, 10, 10]}}\nmesh: {element_size_mm: 5}\n"
+         "material: {linear_elastic: {youngs_modulus_pa: 3000, poissons_ratio: 0.45}}\n"
+         "boundary_conditions:\n  - {set: bottom, fixed: {}}\n"
+         "  - {set: top, displacement: {z_mm: -1}}\n";
+}
+
 // A small QUASI_STATIC hold of a viscoelastic cube, held until `end_s`,
 // meshed at `size_mm`.
 inline std::string HoldSceneYaml(double end_s, double size_mm = 5) {

@@ -281,14 +281,7 @@ TEST_F(SlurmTest, ABatchRunGoesToSlurmAsOneJobArray) {
       info.out.find("executor: slurm (jobs handed over together go as one job array from 10)"),
       std::string::npos)
       << info.out;
-  std::ofstream(dir_.path() / "base.yaml") << R"(name: block
-geometry: {box: {size_mm: [10, 10, 10]}}
-mesh: {element_size_mm: 5}
-material: {linear_elastic: {youngs_modulus_pa: 3000, poissons_ratio: 0.45}}
-boundary_conditions:
-  - {set: bottom, fixed: {}}
-  - {set: top, displacement: {z_mm: -1}}
-)";
+  std::ofstream(dir_.path() / "base.yaml") << SmallBlockSceneYaml("block");
   std::ofstream(dir_.path() / "sweep.yaml") << R"(name: stiffness
 scene: base.yaml
 sweep:

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "common/subprocess.h"
+#include "integration/block_scene.h"
 #include "integration/server_fixture.h"
 
 namespace pba::testing {
@@ -240,6 +241,59 @@ TEST_F(WebTest, AViewerCannotTakeALockFromThePage) {
   const auto crossed = Call("AtlasService/ListProjects", "{}", cookie, admin_csrf);
   ASSERT_TRUE(crossed);
   EXPECT_EQ(crossed->status, 403);
+}
+
+// A finished job's files through the page's links: surfaces.glb (glTF
+// binary of the mesh's surface), result.h5 byte for byte as the job lists
+// it; nothing without a session or for a file the job does not have.
+TEST_F(WebTest, AFinishedJobsFilesDownloadWithTheSession) {
+  const fs::path scene = WriteScene("block.yaml", SmallBlockSceneYaml("block"));
+  const RunResult submitted = Pba({"job", "submit", scene.string(), "--wait"});
+  ASSERT_EQ(submitted.exit_code, 0) << submitted.out << submitted.err;
+  const std::string id = JobId(submitted);
+  std::string cookie, csrf;
+  ASSERT_TRUE(SignIn(admin_, &cookie, &csrf));
+  const auto job = Call("JobService/GetJob", "{\"id\":\"" + id + "\"}", cookie, csrf);
+  ASSERT_TRUE(job);
+  ASSERT_EQ(job->status, 200) << job->body;
+  std::smatch listed;
+  ASSERT_TRUE(std::regex_search(
+      job->body, listed, std::regex("\"name\":\"surfaces.glb\",\"size_bytes\":\"([0-9]+)\"")))
+      << job->body;
+
+  auto client = Client();
+  const auto glb = client.Get("/api/jobs/" + id + "/files/surfaces.glb", {{"Cookie", cookie}});
+  ASSERT_TRUE(glb);
+  ASSERT_EQ(glb->status, 200) << glb->body;
+  EXPECT_EQ(glb->get_header_value("Content-Type"), "model/gltf-binary");
+  EXPECT_EQ(glb->body.substr(0, 4), "glTF");
+  EXPECT_EQ(std::to_string(glb->body.size()), listed[1].str());
+  EXPECT_NE(glb->body.find("\"_DISPLACEMENT\""), std::string::npos);
+  EXPECT_NE(glb->body.find("\"name\":\"body\""), std::string::npos);
+
+  const fs::path fetched = dir_.path() / "fetched";
+  const RunResult fetch = Pba({"job", "fetch", id, "-o", fetched.string()});
+  ASSERT_EQ(fetch.exit_code, 0) << fetch.out << fetch.err;
+  const auto h5 = client.Get("/api/jobs/" + id + "/files/result.h5", {{"Cookie", cookie}});
+  ASSERT_TRUE(h5);
+  ASSERT_EQ(h5->status, 200);
+  EXPECT_EQ(h5->body, ReadFile(fetched / "result.h5"));
+  EXPECT_NE(h5->get_header_value("Content-Disposition").find("result.h5"), std::string::npos);
+
+  const auto anonymous = client.Get("/api/jobs/" + id + "/files/result.h5");
+  ASSERT_TRUE(anonymous);
+  EXPECT_EQ(anonymous->status, 401);
+  const auto cross = client.Get("/api/jobs/" + id + "/files/result.h5",
+                                {{"Cookie", cookie}, {"Sec-Fetch-Site", "cross-site"}});
+  ASSERT_TRUE(cross);
+  EXPECT_EQ(cross->status, 403);
+  for (const std::string& path : std::vector<std::string>{
+           "/api/jobs/" + id + "/files/pba.db", "/api/jobs/jnosuchjob00/files/result.h5",
+           "/api/jobs/" + id + "/files/..%2Fscene.yaml"}) {
+    const auto missing = client.Get(path, {{"Cookie", cookie}});
+    ASSERT_TRUE(missing) << path;
+    EXPECT_EQ(missing->status, 404) << path << ": " << missing->body;
+  }
 }
 
 }  // namespace

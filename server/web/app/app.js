@@ -1,7 +1,12 @@
 // The PBA web view: every call goes to the server's JSON API, a gateway to
 // its gRPC services (POST /api/v1/SERVICE/METHOD with this session's CSRF
 // token); the session cookie itself is out of this script's reach.
+import {Viewer} from '/app/viewer.js';
+
 let csrf = '';
+let viewer = null;
+// The shown project's changes as they happen (server-sent events).
+let events = null;
 let project = '';
 // Lock ids of the locks this page took (only AcquireLock answers one).
 const locks = {};
@@ -42,12 +47,20 @@ async function refresh() {
     const item = document.createElement('li');
     const link = document.createElement('a');
     link.textContent = p.name;
-    link.onclick = () => { project = p.name; refresh(); };
+    link.onclick = () => { project = p.name; follow(); refresh(); };
     item.append(link);
     list.append(item);
   }
   if (project) await showProject();
   await showJobs();
+}
+
+// Locks and commits by others show as they happen: every event of the
+// project redraws its table.
+function follow() {
+  if (events) events.close();
+  events = new EventSource('/api/events?project=' + encodeURIComponent(project));
+  events.onmessage = () => showProject().catch(() => {});
 }
 
 async function showProject() {
@@ -95,7 +108,64 @@ async function showJobs() {
     cell(row, j.name);
     cell(row, j.state);
     cell(row, j.progress !== undefined ? Math.round(100 * j.progress) + ' %' : '');
+    const action = row.insertCell();
+    if (j.state === 'SUCCEEDED') {
+      const link = document.createElement('a');
+      link.textContent = 'view';
+      link.onclick = () => showJob(j.id).catch((e) => {
+        document.getElementById('job-error').textContent = e.message;
+      });
+      action.append(link);
+    }
   }
+}
+
+// A finished job: its summary, its files, and its surfaces in 3D.
+async function showJob(id) {
+  document.getElementById('job-error').textContent = '';
+  const job = await api('JobService/GetJob', {id});
+  document.getElementById('job-name').textContent = job.name + ' (' + id + ')';
+  const summary = job.summary || {};
+  const facts = document.getElementById('job-summary');
+  facts.replaceChildren();
+  const fact = (name, value) => {
+    if (value === undefined) return;
+    const item = document.createElement('li');
+    item.textContent = name ? name + ': ' + value : value;
+    facts.append(item);
+  };
+  const modelled = summary.modelled || {}, results = summary.results || {};
+  fact('analysis', modelled.analysis);
+  fact('', modelled.material);
+  fact('elements', modelled.elements);
+  fact('largest displacement [mm]', results.max_displacement_mm);
+  const estimate = summary.error_estimate || {};
+  fact('estimated error', estimate.estimated ? (100 * estimate.relative_error).toPrecision(3) + ' %'
+                                             : estimate.note);
+  const performance = summary.performance || {};
+  fact('wall time [s]', performance.wall_time_s);
+  for (const phase of performance.phases || []) fact('  ' + phase.phase + ' [s]', phase.seconds);
+  const files = document.getElementById('job-files');
+  files.replaceChildren();
+  for (const f of job.result_files || []) {
+    const item = document.createElement('li');
+    const link = document.createElement('a');
+    link.href = '/api/jobs/' + id + '/files/' + f.name;
+    link.textContent = f.name + ' (' + f.size_bytes + ' bytes)';
+    item.append(link);
+    files.append(item);
+  }
+  show('job', true);
+  const hasSurfaces = (job.result_files || []).some((f) => f.name === 'surfaces.glb');
+  if (!hasSurfaces) return;
+  if (!viewer) {
+    viewer = new Viewer(document.getElementById('view'), document.getElementById('picked'));
+  }
+  const drawn = await viewer.load('/api/jobs/' + id + '/files/surfaces.glb');
+  document.getElementById('view').dataset.regions = String(drawn.regions.length);
+  document.getElementById('legend').textContent =
+      'colour: displacement, 0 to ' + (1000 * drawn.largest_m).toPrecision(3) + ' mm (shown deformed)';
+  window.pbaView = drawn;
 }
 
 document.getElementById('sign-in-form').onsubmit = async (event) => {
@@ -126,5 +196,5 @@ if (session.ok) {
 } else {
   show('sign-in', true);
 }
-// Locks and commits by others show without reloading.
-setInterval(() => { if (csrf) refresh().catch(() => {}); }, 2000);
+// The jobs' progress, every two seconds.
+setInterval(() => { if (csrf) showJobs().catch(() => {}); }, 2000);

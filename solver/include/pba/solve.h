@@ -324,6 +324,10 @@ struct Solution {
   std::vector<double> nodes_mm;
   std::vector<int64_t> tets;
   int nodes_per_element = 4;
+  // Element regions (an atlas's structures): region_names[element_region[e]]
+  // is element e's region. Both empty for a one-region body.
+  std::vector<std::string> region_names;
+  std::vector<int64_t> element_region;
   // Nodal displacement [mm], nodes x 3.
   std::vector<double> displacement_mm;
   // Per element, Voigt order xx yy zz yz xz xy (engineering shear strain).

@@ -196,6 +196,44 @@ TEST_F(ResultWriterTest, NonlinearSolveWritesFiniteStrainFieldsAndIncrements) {
 
 // A 10-node solution keeps its ten columns in /mesh/tets (named TET10) and
 // becomes XDMF's Tetrahedron_10, whose node order is PBA's.
+// A model of several regions (an atlas's structures): each element's region
+// in /mesh/region with the names in its attribute, the XDMF's cell scalar
+// "region", and a surface per region in surfaces.glb; a model of one writes
+// no region.
+TEST_F(ResultWriterTest, RegionsAreWrittenAndDrawnApart) {
+  Solution solution = TwoQuadraticTets();
+  solution.region_names = {"Putamen", "Caudate nucleus"};
+  solution.element_region = {1, 0};
+  ASSERT_TRUE(WriteResultFiles(Scene(), &solution, dir_).ok());
+  const hid_t file = H5Fopen((dir_ / "result.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  ASSERT_GE(file, 0);
+  EXPECT_EQ(Dims(file, "/mesh/region"), (std::vector<hsize_t>{2}));
+  const hid_t region = H5Dopen2(file, "/mesh/region", H5P_DEFAULT);
+  std::vector<int64_t> values(2);
+  H5Dread(region, H5T_NATIVE_INT64, H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data());
+  EXPECT_EQ(values, solution.element_region);
+  EXPECT_EQ(ReadAttribute(region, "names"), "Putamen\nCaudate nucleus\n");
+  H5Dclose(region);
+  H5Fclose(file);
+  const std::string xdmf = ReadText(dir_ / "result.xdmf");
+  EXPECT_NE(xdmf.find("<Attribute Name=\"region\" AttributeType=\"Scalar\" Center=\"Cell\">"),
+            std::string::npos);
+  EXPECT_NE(xdmf.find("result.h5:/mesh/region"), std::string::npos);
+  const std::string glb = ReadText(dir_ / "surfaces.glb");
+  EXPECT_EQ(glb.substr(0, 4), "glTF");
+  EXPECT_NE(glb.find("\"name\":\"Putamen\""), std::string::npos);
+  EXPECT_NE(glb.find("\"name\":\"Caudate nucleus\""), std::string::npos);
+
+  Solution one = TwoQuadraticTets();
+  fs::create_directories(dir_ / "one");
+  ASSERT_TRUE(WriteResultFiles(Scene(), &one, dir_ / "one").ok());
+  const hid_t plain = H5Fopen((dir_ / "one" / "result.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  EXPECT_TRUE(Dims(plain, "/mesh/region").empty());
+  H5Fclose(plain);
+  EXPECT_EQ(ReadText(dir_ / "one" / "result.xdmf").find("region"), std::string::npos);
+  EXPECT_NE(ReadText(dir_ / "one" / "surfaces.glb").find("\"name\":\"body\""), std::string::npos);
+}
+
 TEST_F(ResultWriterTest, TenNodeSolutionWritesQuadraticCells) {
   const SceneSpec scene = Scene();
   Solution solution = TwoQuadraticTets();
