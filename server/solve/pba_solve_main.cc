@@ -225,7 +225,7 @@ bool WrittenByPbaSolve(const std::filesystem::directory_entry& entry) {
   if (entry.is_symlink(ec)) return false;
   if (entry.is_regular_file(ec)) {
     for (const char* known : {"summary.json", "result.h5", "result.xdmf", "surfaces.glb",
-                              "history.csv", "history.png", "sensors.csv"}) {
+                              "surface_steps.bin", "history.csv", "history.png", "sensors.csv"}) {
       if (name == known) return true;
     }
     return name.rfind("profile_", 0) == 0 && ends_with(name, ".csv");

@@ -261,6 +261,26 @@ Status WriteSensors(const Solution& solution, const std::filesystem::path& dir) 
   return AtomicWriteText(dir / "sensors.csv", csv);
 }
 
+// surfaces.glb: the regions' surfaces, deformed by the final displacement,
+// for a browser (the web view) or any glTF viewer; and with steps through
+// time or load, surface_steps.bin: each step's displacement of them.
+Status WriteSurfaces(const Solution& solution, int npe, const std::filesystem::path& dir) {
+  const std::vector<RegionSurface> surfaces = ExtractRegionSurfaces(
+      solution.tets, npe, HasRegions(solution) ? solution.element_region : std::vector<int64_t>(),
+      solution.region_names);
+  const std::size_t nodes = solution.nodes_mm.size() / 3, steps = solution.step_load_factor.size();
+  SurfaceSteps stepped;
+  if (steps > 1 && solution.step_displacement_mm.size() == 3 * steps * nodes) {
+    stepped.times =
+        solution.step_time_s.size() == steps ? solution.step_time_s : solution.step_load_factor;
+    PBA_RETURN_IF_ERROR(AtomicWriteText(
+        dir / kSurfaceStepsFile,
+        SurfaceStepsBin(surfaces, solution.nodes_mm, solution.step_displacement_mm)));
+  }
+  return AtomicWriteText(dir / "surfaces.glb", SurfacesGlb(surfaces, solution.nodes_mm,
+                                                           solution.displacement_mm, stepped));
+}
+
 }  // namespace
 
 Status WriteResults(const std::string& scene_name, const OutputOptions& outputs, Solution* solution,
@@ -358,15 +378,7 @@ Status WriteResults(const std::string& scene_name, const OutputOptions& outputs,
 
   if (!solution->history.empty()) PBA_RETURN_IF_ERROR(WriteHistory(*solution, dir));
   PBA_RETURN_IF_ERROR(WriteProfiles(*solution, dir));
-  // The regions' surfaces, deformed by the final displacement, for a
-  // browser (the web view) or any glTF viewer.
-  PBA_RETURN_IF_ERROR(AtomicWriteText(
-      dir / "surfaces.glb",
-      SurfacesGlb(ExtractRegionSurfaces(
-                      solution->tets, npe,
-                      HasRegions(*solution) ? solution->element_region : std::vector<int64_t>(),
-                      solution->region_names),
-                  solution->nodes_mm, solution->displacement_mm)));
+  PBA_RETURN_IF_ERROR(WriteSurfaces(*solution, npe, dir));
   if (!solution->sensor_columns.empty()) PBA_RETURN_IF_ERROR(WriteSensors(*solution, dir));
 
   const double seconds =

@@ -41,9 +41,9 @@ void Append(std::string* bytes, const void* data, std::size_t size) {
   bytes->append(static_cast<const char*>(data), size);
 }
 
-std::string Number(double value) {
+std::string Number(double value, int digits = 9) {
   char text[32];
-  std::snprintf(text, sizeof text, "%.9g", value);
+  std::snprintf(text, sizeof text, "%.*g", digits, value);
   return text;
 }
 
@@ -132,9 +132,44 @@ std::array<float, 3> RegionColour(int index) {
           static_cast<float>(rgb[2] + m)};
 }
 
+namespace {
+
+// Whether SurfacesGlb draws `s` (it has triangles, and every node has
+// coordinates).
+bool Drawn(const RegionSurface& s, std::size_t node_count) {
+  return !s.triangles.empty() && std::none_of(s.nodes.begin(), s.nodes.end(), [&](int64_t n) {
+    return n < 0 || static_cast<std::size_t>(n) >= node_count;
+  });
+}
+
+}  // namespace
+
+std::string SurfaceStepsBin(const std::vector<RegionSurface>& surfaces,
+                            const std::vector<double>& nodes_mm,
+                            const std::vector<double>& step_displacement_mm) {
+  const std::size_t nodes = nodes_mm.size() / 3;
+  if (nodes == 0 || step_displacement_mm.size() % (3 * nodes) != 0) return "";
+  const std::size_t steps = step_displacement_mm.size() / (3 * nodes);
+  std::string bin;
+  for (std::size_t k = 0; k < steps; ++k) {
+    const double* step = step_displacement_mm.data() + 3 * nodes * k;
+    for (const RegionSurface& s : surfaces) {
+      if (!Drawn(s, nodes)) continue;
+      std::vector<float> xyz(3 * s.nodes.size());
+      for (std::size_t v = 0; v < s.nodes.size(); ++v) {
+        for (int c = 0; c < 3; ++c) {
+          xyz[3 * v + c] = static_cast<float>(step[3 * s.nodes[v] + c] * 1e-3);
+        }
+      }
+      Append(&bin, xyz.data(), xyz.size() * sizeof(float));
+    }
+  }
+  return bin;
+}
+
 std::string SurfacesGlb(const std::vector<RegionSurface>& surfaces,
                         const std::vector<double>& nodes_mm,
-                        const std::vector<double>& displacement_mm) {
+                        const std::vector<double>& displacement_mm, const SurfaceSteps& steps) {
   const bool displaced = !displacement_mm.empty() && displacement_mm.size() == nodes_mm.size();
   std::string bin;
   std::string views, accessors, meshes, nodes, materials;
@@ -154,14 +189,11 @@ std::string SurfacesGlb(const std::vector<RegionSurface>& surfaces,
     return accessor++;
   };
   const std::size_t node_count = nodes_mm.size() / 3;
+  std::size_t vertices = 0;
   for (const RegionSurface& s : surfaces) {
-    if (s.triangles.empty()) continue;
     // (A surface naming a node the coordinates lack is not drawn.)
-    if (std::any_of(s.nodes.begin(), s.nodes.end(), [&](int64_t n) {
-          return n < 0 || static_cast<std::size_t>(n) >= node_count;
-        })) {
-      continue;
-    }
+    if (!Drawn(s, node_count)) continue;
+    vertices += s.nodes.size();
     // Positions [m], with their bounds (glTF requires them).
     std::vector<float> xyz(3 * s.nodes.size());
     float lo[3], hi[3];
@@ -219,11 +251,17 @@ std::string SurfacesGlb(const std::vector<RegionSurface>& surfaces,
   }
   std::string scene_nodes;
   for (int n = 0; n < drawn; ++n) scene_nodes += (n ? "," : "") + std::to_string(n);
-  std::string json =
-      "{\"asset\":{\"version\":\"2.0\",\"generator\":\"PBA\",\"extras\":{"
-      "\"pba_unit\":\"m\"}},\"scene\":0,\"scenes\":[{\"nodes\":[" +
-      scene_nodes + "]}],\"nodes\":[" + nodes + "],\"meshes\":[" + meshes + "],\"materials\":[" +
-      materials + "]";
+  std::string extras = "\"pba_unit\":\"m\",\"vertices\":" + std::to_string(vertices);
+  if (!steps.times.empty()) {
+    extras += ",\"step_file\":" + JsonQuoted(kSurfaceStepsFile) + ",\"step_times\":[";
+    for (std::size_t k = 0; k < steps.times.size(); ++k) {
+      extras += (k ? "," : "") + Number(steps.times[k], 17);
+    }
+    extras += "]";
+  }
+  std::string json = "{\"asset\":{\"version\":\"2.0\",\"generator\":\"PBA\",\"extras\":{" + extras +
+                     "}},\"scene\":0,\"scenes\":[{\"nodes\":[" + scene_nodes + "]}],\"nodes\":[" +
+                     nodes + "],\"meshes\":[" + meshes + "],\"materials\":[" + materials + "]";
   if (drawn > 0) {
     json += ",\"accessors\":[" + accessors + "],\"bufferViews\":[" + views +
             "],\"buffers\":[{\"byteLength\":" + std::to_string(bin.size()) + "}]";

@@ -44,10 +44,28 @@ std::vector<RegionSurface> ExtractRegionSurfaces(const std::vector<int64_t>& ele
 // by the golden angle, so that neighbours in the list differ.
 std::array<float, 3> RegionColour(int index);
 
+// The steps of a result through time (or load), for SurfacesGlb's
+// asset.extras: "step_times" and "step_file" (kSurfaceStepsFile), which
+// holds every step's displacement of the file's vertices.
+struct SurfaceSteps {
+  std::vector<double> times;  // of each step [s] (or the load factor)
+};
+inline constexpr char kSurfaceStepsFile[] = "surface_steps.bin";
+
 // surfaces.glb: `surfaces` over `nodes_mm` (nodes x 3), with the nodal
-// `displacement_mm` (nodes x 3) as _DISPLACEMENT when not empty.
+// `displacement_mm` (nodes x 3) as _DISPLACEMENT when not empty, and
+// naming `steps` when it has any.
 std::string SurfacesGlb(const std::vector<RegionSurface>& surfaces,
                         const std::vector<double>& nodes_mm,
-                        const std::vector<double>& displacement_mm);
+                        const std::vector<double>& displacement_mm, const SurfaceSteps& steps = {});
+
+// surface_steps.bin: for each step in order, the displacement of every
+// vertex SurfacesGlb writes (its meshes in order, each mesh's vertices in
+// order) as float32 x y z in metres, little-endian; `step_displacement_mm`
+// holds steps x nodes x 3 ([mm], step-major, as Solution keeps it). Empty
+// when the sizes do not agree.
+std::string SurfaceStepsBin(const std::vector<RegionSurface>& surfaces,
+                            const std::vector<double>& nodes_mm,
+                            const std::vector<double>& step_displacement_mm);
 
 }  // namespace pba

@@ -19,10 +19,13 @@ import tempfile
 import threading
 import time
 import unittest
-from http.server import BaseHTTPRequestHandler, HTTPServer
+from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
+
+import h5py
 
 from selenium import webdriver
 from selenium.webdriver.chrome.service import Service
+from selenium.common.exceptions import NoSuchElementException, StaleElementReferenceException
 from selenium.webdriver.common.by import By
 from selenium.webdriver.support.ui import WebDriverWait
 
@@ -38,7 +41,31 @@ boundary_conditions:
   - {set: top, displacement: {z_mm: -1}}
 """
 
-CONTOURS = '{"plates": [{"z_mm": 0, "polygons": [[[0, 0], [5, 0], [5, 5], [0, 5]]]}]}'
+
+def contours(half_width_mm):
+    return ('{"plates": [{"z_mm": 0, "polygons": [[[0, 0], [%g, 0], [%g, %g], [0, %g]]]}]}'
+            % ((half_width_mm,) * 4))
+
+
+# A viscoelastic cube held for 3 s: history.csv with the top's force.
+HOLD = """name: hold
+geometry: {box: {size_mm: [10, 10, 10]}}
+mesh: {element: TET4_ANP, element_size_mm: 5}
+material:
+  neo_hookean: {shear_modulus_pa: 2200, bulk_modulus_pa: 2.2e6}
+  viscoelastic: {prony: {g: [0.5], tau_s: [2]}}
+boundary_conditions:
+  - {set: bottom, symmetry: {}}
+  - {set: x_min, symmetry: {}}
+  - {set: y_min, symmetry: {}}
+  - {set: top, displacement: {z_mm: -1}}
+analysis:
+  type: QUASI_STATIC
+  time:
+    end_time_s: 3
+    curve: [{time_s: 0, amplitude: 0}, {time_s: 1, amplitude: 1}, {time_s: 3, amplitude: 1}]
+outputs: {reaction_sets: [top]}
+"""
 
 
 class Server:
@@ -107,7 +134,10 @@ class WebViewTest(unittest.TestCase):
         os.chmod(self.folder, 0o755)
         self.server = Server(self.folder)
         self.browser = chromium()
-        self.wait = WebDriverWait(self.browser, 20)
+        # The page redraws its tables at events: an element found may be
+        # replaced before it is read, and is then looked for again.
+        self.wait = WebDriverWait(self.browser, 20, ignored_exceptions=(
+            NoSuchElementException, StaleElementReferenceException))
 
     def tearDown(self):
         result = self._outcome.result
@@ -136,16 +166,55 @@ class WebViewTest(unittest.TestCase):
     def structure_row(self, name):
         return self.browser.find_element(By.CSS_SELECTOR, 'tr[data-structure="%s"]' % name)
 
+    def cell_text(self, row_selector, column):
+        """The text of a table cell, read at once (None without the row)."""
+        return self.browser.execute_script(
+            "const r = document.querySelector(arguments[0]);"
+            "return r ? r.cells[arguments[1]].textContent : null;", row_selector, column)
+
+    def within(self, seconds, predicate):
+        return WebDriverWait(self.browser, seconds, poll_frequency=0.1, ignored_exceptions=(
+            NoSuchElementException, StaleElementReferenceException)).until(predicate)
+
     def open_project(self, name):
-        self.wait.until(lambda b: b.find_element(By.LINK_TEXT, name)).click()
+        self.wait.until(lambda b: b.find_element(By.LINK_TEXT, name).click() or True)
         self.wait.until(lambda b: b.find_element(By.ID, "project").is_displayed())
+
+    def model_pixels(self):
+        """The share of the 3D view's pixels the model covers, and how many
+        colours they have."""
+        return self.browser.execute_script("""
+            const canvas = document.querySelector('#view canvas');
+            const gl = canvas.getContext('webgl2') || canvas.getContext('webgl');
+            const w = gl.drawingBufferWidth, h = gl.drawingBufferHeight;
+            const pixels = new Uint8Array(4 * w * h);
+            gl.readPixels(0, 0, w, h, gl.RGBA, gl.UNSIGNED_BYTE, pixels);
+            let model = 0; const seen = new Set();
+            for (let i = 0; i < pixels.length; i += 4) {
+              const key = pixels[i] + ',' + pixels[i + 1] + ',' + pixels[i + 2];
+              if (key !== '244,244,244') { ++model; seen.add(key); }
+            }
+            return {fraction: model / (w * h), distinct: seen.size};""")
+
+    def solve(self, yaml):
+        """Submits the scene `yaml` with the CLI and waits for it; its job id."""
+        scene = os.path.join(self.folder, "scene.yaml")
+        with open(scene, "w") as f:
+            f.write(yaml)
+        submitted = self.server.pba("job", "submit", scene, "--wait").stdout
+        return re.search(r"Submitted job (\S+)", submitted).group(1)
+
+    def open_job(self, job):
+        # The jobs table is redrawn every 2 s: found and clicked at once.
+        self.wait.until(lambda b: b.find_element(
+            By.XPATH, "//tr[@data-job='%s']//a[text()='view']" % job).click() or True)
 
     def make_project(self):
         self.server.pba("project", "create", "demo")
-        contours = os.path.join(self.folder, "putamen.json")
-        with open(contours, "w") as f:
-            f.write(CONTOURS)
-        self.server.pba("atlas", "create", "-p", "demo", "Putamen", contours,
+        path = os.path.join(self.folder, "putamen.json")
+        with open(path, "w") as f:
+            f.write(contours(5))
+        self.server.pba("atlas", "create", "-p", "demo", "Putamen", path,
                         "--colour", "233,189,125")
 
     def test_no_token_sees_nothing(self):
@@ -165,13 +234,13 @@ class WebViewTest(unittest.TestCase):
         self.make_project()
         self.sign_in(self.server.admin)
         self.open_project("demo")
-        row = self.wait.until(lambda b: self.structure_row("Putamen"))
-        self.assertEqual(row.find_elements(By.TAG_NAME, "td")[2].text, "")
+        putamen = 'tr[data-structure="Putamen"]'
+        self.wait.until(lambda b: self.cell_text(putamen, 2) is not None)
+        self.assertEqual(self.cell_text(putamen, 2), "")
         checkout = os.path.join(self.folder, "checkout.json")
         self.server.pba("atlas", "checkout", "-p", "demo", "Putamen", "-o", checkout)
         taken = time.time()
-        WebDriverWait(self.browser, 2, poll_frequency=0.1).until(
-            lambda b: self.structure_row("Putamen").find_elements(By.TAG_NAME, "td")[2].text == "admin")
+        self.within(2, lambda b: self.cell_text(putamen, 2) == "admin")
         self.assertLess(time.time() - taken, 2.0)
         self.screenshot("lock")
 
@@ -181,8 +250,8 @@ class WebViewTest(unittest.TestCase):
         self.server.pba("project", "role", "demo", "vera", "viewer")
         self.sign_in(vera)
         self.open_project("demo")
-        row = self.wait.until(lambda b: self.structure_row("Putamen"))
-        row.find_element(By.TAG_NAME, "button").click()
+        self.wait.until(lambda b: self.structure_row("Putamen").find_element(
+            By.TAG_NAME, "button").click() or True)
         error = self.wait.until(
             lambda b: b.find_element(By.ID, "action-error").text or False)
         self.assertRegex(error, "(?i)viewer|editor|permission|role")
@@ -190,15 +259,9 @@ class WebViewTest(unittest.TestCase):
         self.assertNotIn("vera", listed)
 
     def test_a_job_result_renders(self):
-        scene = os.path.join(self.folder, "block.yaml")
-        with open(scene, "w") as f:
-            f.write(BLOCK)
-        submitted = self.server.pba("job", "submit", scene, "--wait").stdout
-        job = re.search(r"Submitted job (\S+)", submitted).group(1)
+        job = self.solve(BLOCK)
         self.sign_in(self.server.admin)
-        link = self.wait.until(lambda b: b.find_element(
-            By.XPATH, "//table[@id='jobs']//tr[td[text()='%s']]//a[text()='view']" % job))
-        link.click()
+        self.open_job(job)
         drawn = self.wait.until(lambda b: b.execute_script("return window.pbaView || null;"))
         self.assertEqual(drawn["regions"], ["body"])
         # The largest displacement drawn is the summary's (float32 in metres).
@@ -208,24 +271,25 @@ class WebViewTest(unittest.TestCase):
         self.assertAlmostEqual(drawn["largest_m"] * 1000 / largest_mm, 1.0, places=5)
         # Pixels of the canvas: the model covers a good part of it, in more
         # than the background's colour.
-        colours = self.browser.execute_script("""
-            const canvas = document.querySelector('#view canvas');
-            const gl = canvas.getContext('webgl2') || canvas.getContext('webgl');
-            const w = gl.drawingBufferWidth, h = gl.drawingBufferHeight;
-            const pixels = new Uint8Array(4 * w * h);
-            gl.readPixels(0, 0, w, h, gl.RGBA, gl.UNSIGNED_BYTE, pixels);
-            let model = 0; const seen = new Set();
-            for (let i = 0; i < pixels.length; i += 4) {
-              const key = pixels[i] + ',' + pixels[i + 1] + ',' + pixels[i + 2];
-              if (key !== '244,244,244') { ++model; seen.add(key); }
-            }
-            return {fraction: model / (w * h), distinct: seen.size};""")
+        colours = self.model_pixels()
         self.screenshot("job")
         self.assertGreater(colours["fraction"], 0.02)
         self.assertGreater(colours["distinct"], 20)
         names = [a.text for a in self.browser.find_elements(By.CSS_SELECTOR, "#job-files a")]
         self.assertTrue(any(n.startswith("result.h5") for n in names), names)
         self.assertTrue(any(n.startswith("surfaces.glb") for n in names), names)
+        # A region hidden, then the model cut in half by the section plane.
+        self.browser.execute_script("document.querySelector('#job details').open = true;")
+        body = self.browser.find_element(By.CSS_SELECTOR, '#regions input[data-region="body"]')
+        body.click()
+        self.assertEqual(self.browser.execute_script("return window.pbaView.visible;"), [])
+        self.assertLess(self.model_pixels()["fraction"], 0.001)
+        body.click()
+        self.browser.find_element(By.ID, "cut").click()
+        cut = self.model_pixels()["fraction"]
+        self.assertGreater(cut, 0.01)
+        self.assertLess(cut, 0.9 * colours["fraction"])
+        self.browser.find_element(By.ID, "cut").click()
         # Picking the model names its region.
         canvas = self.browser.find_element(By.CSS_SELECTOR, "#view canvas")
         canvas.click()
@@ -254,7 +318,9 @@ class WebViewTest(unittest.TestCase):
             def log_message(self, *args):
                 pass
 
-        evil = HTTPServer(("127.0.0.2", 0), Evil)
+        # (Threads: Chromium may hold an idle connection open beside the
+        # one it loads the page on.)
+        evil = ThreadingHTTPServer(("127.0.0.2", 0), Evil)
         threading.Thread(target=evil.serve_forever, daemon=True).start()
         try:
             self.browser.get("http://127.0.0.2:%d/" % evil.server_port)
@@ -265,6 +331,101 @@ class WebViewTest(unittest.TestCase):
             evil.server_close()
         shown = self.server.pba("--json", "atlas", "show", "-p", "demo", "Putamen").stdout
         self.assertNotIn('"holder"', shown)
+
+    def test_a_commit_by_another_user_updates_the_history(self):
+        self.make_project()
+        alice = self.server.create_user("alice")
+        self.server.pba("project", "role", "demo", "alice", "editor")
+        self.sign_in(self.server.admin)
+        self.open_project("demo")
+        self.wait.until(lambda b: b.find_element(By.LINK_TEXT, "Putamen").click() or True)
+        self.wait.until(lambda b: b.find_element(By.CSS_SELECTOR, '#revisions tr[data-revision="1"]'))
+        # Alice widens it from the CLI; the open page shows revision 2.
+        path = os.path.join(self.folder, "alice.json")
+        self.server.pba("atlas", "checkout", "-p", "demo", "Putamen", "-o", path, token=alice)
+        with open(path, "w") as f:
+            f.write(contours(6))
+        self.server.pba("atlas", "commit", path, "-m", "wider by 1 mm", token=alice)
+        second = '#revisions tr[data-revision="2"]'
+        self.within(2, lambda b: self.cell_text(second, 1) is not None)
+        self.assertEqual([self.cell_text(second, c) for c in (1, 2, 3)],
+                         ["alice", "commit", "wider by 1 mm"])
+        self.wait.until(lambda b: b.find_element(By.CSS_SELECTOR, second + " button").click() or True)
+        diff = self.wait.until(lambda b: b.find_element(
+            By.CSS_SELECTOR, '#revisions tr[data-revision="2"] .diff').text or False)
+        # 5 x 5 mm to 6 x 6 mm on one plate: the server's own figures.
+        figures = json.loads(self.server.pba("--json", "atlas", "diff", "-p", "demo", "Putamen",
+                                             "--from", "1", "--to", "2").stdout)
+        shape = figures.get("shape") or figures.get("contours")
+        shown = float(re.search(r"Hausdorff ([0-9.e+-]+) mm", diff).group(1))
+        self.assertGreater(shown, 0)
+        self.assertAlmostEqual(shown, shape["hausdorff_mm"], delta=1e-3 * shape["hausdorff_mm"])
+
+    def test_the_page_recolours_and_tags_through_the_etag(self):
+        self.make_project()
+        self.server.pba("atlas", "snapshot", "create", "-p", "demo")
+        self.sign_in(self.server.admin)
+        self.open_project("demo")
+        self.wait.until(lambda b: self.structure_row("Putamen").find_element(
+            By.XPATH, ".//button[text()='Colour']").click() or True)
+        alert = self.wait.until(lambda b: b.switch_to.alert)
+        alert.send_keys("10,200,30")
+        alert.accept()
+        self.wait.until(lambda b: "10,200,30" in self.structure_row("Putamen").text)
+        shown = json.loads(self.server.pba("--json", "atlas", "show", "-p", "demo", "Putamen").stdout)
+        self.assertEqual(shown["metadata"]["colour"], {"r": 10, "g": 200, "b": 30})
+        self.wait.until(lambda b: b.find_element(
+            By.CSS_SELECTOR, "#snapshots tbody tr button").click() or True)
+        alert = self.wait.until(lambda b: b.switch_to.alert)
+        alert.send_keys("reviewed")
+        alert.accept()
+        self.wait.until(lambda b: "reviewed" in b.find_element(By.ID, "snapshots").text)
+        listed = self.server.pba("atlas", "snapshot", "show", "-p", "demo", "reviewed")
+        self.assertEqual(listed.returncode, 0)
+
+    def test_a_jobs_force_curve_has_the_points_of_its_history(self):
+        job = self.solve(HOLD)
+        fetched = os.path.join(self.folder, "fetched")
+        self.server.pba("job", "fetch", job, "-o", fetched)
+        with open(os.path.join(fetched, "history.csv")) as f:
+            lines = f.read().strip().split("\n")
+        names = [n.strip('"') for n in lines[0].split(",")]
+        rows = [[float(v) for v in line.split(",")] for line in lines[1:]]
+        top = names.index(next(n for n in names if n.endswith(" x [N]")))
+        expected = [(r[0], (r[top] ** 2 + r[top + 1] ** 2 + r[top + 2] ** 2) ** 0.5) for r in rows]
+        self.sign_in(self.server.admin)
+        self.open_job(job)
+        curves = self.wait.until(lambda b: b.execute_script("return window.pbaChart || null;"))
+        self.assertEqual(curves["file"], "history.csv")
+        self.assertEqual(len(curves["series"]), 1)
+        (name, values), = curves["series"].items()
+        self.assertEqual(len(values), len(expected))
+        for (t, force), x, y in zip(expected, curves["x"], values):
+            self.assertAlmostEqual(x, t, places=12)
+            self.assertAlmostEqual(y, force, delta=1e-9 * max(1.0, abs(force)))
+        self.assertTrue(self.browser.find_element(By.ID, "curve").is_displayed())
+        self.screenshot("curve")
+        # Stepping through time: each step drawn is result.h5's.
+        self.wait.until(lambda b: b.execute_script("return window.pbaView || null;"))
+        slider = self.browser.find_element(By.ID, "step")
+        self.assertTrue(slider.is_displayed())
+        with h5py.File(os.path.join(fetched, "result.h5"), "r") as f:
+            times = f["/steps/time"][()]
+            nodes = f["/mesh/nodes"].shape[0]
+            steps = f["/steps/displacement"][()]
+        self.assertEqual(int(slider.get_attribute("max")) + 1, len(times))
+        self.assertGreater(len(times), 3)
+        for k in (0, len(times) // 2, len(times) - 1):
+            self.browser.execute_script(
+                "const s = document.getElementById('step'); s.value = arguments[0];"
+                "s.dispatchEvent(new Event('input'));", k)
+            step = self.wait.until(lambda b: b.execute_script(
+                "const s = window.pbaView.step; return s && s.index === arguments[0] ? s : null;", k))
+            self.assertAlmostEqual(step["time"], times[k], places=12)
+            block = steps[k * nodes:(k + 1) * nodes]
+            largest_mm = max((x * x + y * y + z * z) ** 0.5 for x, y, z in block)
+            self.assertGreater(largest_mm, 0)
+            self.assertAlmostEqual(step["largest_m"] * 1000 / largest_mm, 1.0, places=5)
 
 
 if __name__ == "__main__":

@@ -8,6 +8,7 @@
 
 #include <regex>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "common/subprocess.h"
@@ -294,6 +295,61 @@ TEST_F(WebTest, AFinishedJobsFilesDownloadWithTheSession) {
     ASSERT_TRUE(missing) << path;
     EXPECT_EQ(missing->status, 404) << path << ": " << missing->body;
   }
+}
+
+// A project's changes as server-sent events: READY first, then a lock taken
+// with the CLI, as the gRPC Watch sends them; no session, no stream; a
+// project the caller is not a member of, the Watch's own refusal.
+TEST_F(WebTest, AProjectsChangesStreamAsServerSentEvents) {
+  ASSERT_EQ(Pba({"project", "create", "demo"}).exit_code, 0);
+  const fs::path contours =
+      WriteScene("putamen.json",
+                 R"({"plates": [{"z_mm": 0, "polygons": [[[0, 0], [5, 0], [5, 5], [0, 5]]]}]})");
+  const RunResult created =
+      Pba({"atlas", "create", "-p", "demo", "Putamen", contours.string(), "--colour", "1,2,3"});
+  ASSERT_EQ(created.exit_code, 0) << created.out << created.err;
+  std::string cookie, csrf;
+  ASSERT_TRUE(SignIn(admin_, &cookie, &csrf));
+
+  std::string received, type;
+  std::thread locker([&] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(500));
+    Pba({"atlas", "lock", "-p", "demo", "Putamen"});
+  });
+  auto client = Client();
+  const auto streamed = client.Get(
+      "/api/events?project=demo", {{"Cookie", cookie}},
+      [&](const httplib::Response& response) {
+        type = response.get_header_value("Content-Type");
+        return response.status == 200;
+      },
+      [&](const char* data, size_t size) {
+        received.append(data, size);
+        return received.find("LOCK_ACQUIRED") == std::string::npos;
+      });
+  locker.join();
+  EXPECT_EQ(type, "text/event-stream");
+  EXPECT_EQ(received.rfind("retry: 1000\n\n", 0), 0u) << received;
+  const std::size_t ready = received.find("data: {\"kind\":\"READY\"");
+  const std::size_t lock = received.find("\"kind\":\"LOCK_ACQUIRED\"");
+  EXPECT_NE(ready, std::string::npos) << received;
+  EXPECT_NE(lock, std::string::npos) << received;
+  EXPECT_LT(ready, lock);
+  EXPECT_NE(received.find("\"structure\":\"Putamen\""), std::string::npos) << received;
+
+  const auto anonymous = client.Get("/api/events?project=demo");
+  ASSERT_TRUE(anonymous);
+  EXPECT_EQ(anonymous->status, 401);
+  const RunResult vera = RunProcess(
+      {PBA_SERVER_BIN, "admin", "create-user", "vera", "--data", (dir_.path() / "data").string()},
+      seconds(30));
+  std::smatch token;
+  ASSERT_TRUE(std::regex_search(vera.out, token, std::regex("[0-9a-f]{64}"))) << vera.out;
+  std::string vera_cookie, vera_csrf;
+  ASSERT_TRUE(SignIn(token.str(), &vera_cookie, &vera_csrf));
+  const auto stranger = client.Get("/api/events?project=demo", {{"Cookie", vera_cookie}});
+  ASSERT_TRUE(stranger);
+  EXPECT_TRUE(stranger->status == 403 || stranger->status == 404) << stranger->status;
 }
 
 }  // namespace

@@ -21,6 +21,10 @@ export class Viewer {
     this.label = label;
     this.renderer = new THREE.WebGLRenderer({antialias: true, preserveDrawingBuffer: true});
     this.renderer.setPixelRatio(window.devicePixelRatio);
+    this.renderer.localClippingEnabled = true;
+    // The section plane: x = const, off until asked for.
+    this.section = new THREE.Plane(new THREE.Vector3(-1, 0, 0), 0);
+    this.sectioned = false;
     element.append(this.renderer.domElement);
     this.scene = new THREE.Scene();
     this.scene.background = new THREE.Color(0xf4f4f4);
@@ -69,24 +73,22 @@ export class Viewer {
         largest = Math.max(largest, Math.hypot(u.getX(i), u.getY(i), u.getZ(i)));
       }
     });
+    // The steps through time: their times, and the file of their
+    // displacements, fetched when first asked for.
+    const extras = (gltf.asset && gltf.asset.extras) || {};
+    this.stepTimes = extras.step_times || [];
+    this.stepsUrl = extras.step_file ? url.replace(/[^/]*$/, extras.step_file) : '';
+    this.steps = null;
+    this.vertices = extras.vertices || 0;
     for (const mesh of this.meshes) {
-      const geometry = mesh.geometry, u = geometry.getAttribute('_displacement');
+      const geometry = mesh.geometry;
+      mesh.userData.reference = geometry.getAttribute('position').array.slice();
+      const u = geometry.getAttribute('_displacement');
       if (!u) continue;
-      const position = geometry.getAttribute('position');
-      const colours = new Float32Array(3 * position.count);
-      for (let i = 0; i < position.count; ++i) {
-        position.setXYZ(i, position.getX(i) + u.getX(i), position.getY(i) + u.getY(i),
-                        position.getZ(i) + u.getZ(i));
-        const magnitude = Math.hypot(u.getX(i), u.getY(i), u.getZ(i));
-        colours.set(colourOf(largest > 0 ? magnitude / largest : 0), 3 * i);
-      }
-      position.needsUpdate = true;
-      geometry.setAttribute('color', new THREE.BufferAttribute(colours, 3));
-      geometry.computeVertexNormals();
       mesh.material = mesh.material.clone();
       mesh.material.vertexColors = THREE.VertexColors !== undefined ? THREE.VertexColors : true;
       mesh.material.color = new THREE.Color(1, 1, 1);
-      mesh.material.needsUpdate = true;
+      this.deform(mesh, u.array, 0, largest);
     }
     this.scene.add(this.model);
     const box = new THREE.Box3().setFromObject(this.model);
@@ -103,6 +105,85 @@ export class Viewer {
     return {regions: this.meshes.map((m) => m.name), largest_m: largest};
   }
 
+  // Moves `mesh` to its reference plus `u` (x y z per vertex from `from`)
+  // and colours it by |u| / `scale`.
+  deform(mesh, u, from, scale) {
+    const geometry = mesh.geometry, position = geometry.getAttribute('position');
+    const reference = mesh.userData.reference;
+    const colours = new Float32Array(3 * position.count);
+    for (let i = 0; i < position.count; ++i) {
+      const x = u[from + 3 * i], y = u[from + 3 * i + 1], z = u[from + 3 * i + 2];
+      position.setXYZ(i, reference[3 * i] + x, reference[3 * i + 1] + y, reference[3 * i + 2] + z);
+      colours.set(colourOf(scale > 0 ? Math.hypot(x, y, z) / scale : 0), 3 * i);
+    }
+    position.needsUpdate = true;
+    geometry.setAttribute('color', new THREE.BufferAttribute(colours, 3));
+    geometry.computeVertexNormals();
+    mesh.material.needsUpdate = true;
+  }
+
+  // Shows step `k` (of stepTimes): resolves to its index, time and largest
+  // displacement [m]; the colour scale is the largest over all steps.
+  async setStep(k) {
+    if (!this.steps) {
+      const response = await fetch(this.stepsUrl);
+      if (!response.ok) throw new Error('steps: ' + response.statusText);
+      this.steps = new Float32Array(await response.arrayBuffer());
+      this.stepsLargest = 0;
+      for (let i = 0; i < this.steps.length; i += 3) {
+        this.stepsLargest = Math.max(this.stepsLargest,
+                                     Math.hypot(this.steps[i], this.steps[i + 1], this.steps[i + 2]));
+      }
+    }
+    const per = 3 * this.vertices;
+    if (this.steps.length !== per * this.stepTimes.length) throw new Error('steps: wrong size');
+    let from = k * per, largest = 0;
+    for (const mesh of this.meshes) {
+      const count = mesh.geometry.getAttribute('position').count;
+      for (let i = 0; i < 3 * count; i += 3) {
+        largest = Math.max(largest, Math.hypot(this.steps[from + i], this.steps[from + i + 1],
+                                               this.steps[from + i + 2]));
+      }
+      this.deform(mesh, this.steps, from, this.stepsLargest);
+      from += 3 * count;
+    }
+    this.render();
+    return {index: k, time: this.stepTimes[k], largest_m: largest};
+  }
+
+  // Shows or hides region `name`.
+  setVisible(name, visible) {
+    for (const mesh of this.meshes) if (mesh.name === name) mesh.visible = visible;
+    this.render();
+  }
+
+  // Every region see-through (opacity below 1) or solid.
+  setOpacity(opacity) {
+    for (const mesh of this.meshes) {
+      mesh.material.transparent = opacity < 1;
+      mesh.material.opacity = opacity;
+      mesh.material.depthWrite = opacity >= 1;
+      mesh.material.needsUpdate = true;
+    }
+    this.render();
+  }
+
+  // Cuts the model at x = `fraction` of its extent (0..1) and keeps the
+  // low side; null: no cut.
+  setSection(fraction) {
+    const box = new THREE.Box3().setFromObject(this.model);
+    this.section.constant = box.min.x + fraction * (box.max.x - box.min.x);
+    this.sectioned = fraction !== null;
+    for (const mesh of this.meshes) {
+      mesh.material.clippingPlanes = this.sectioned ? [this.section] : [];
+      mesh.material.needsUpdate = true;
+    }
+    this.render();
+  }
+
+  // The regions drawn now.
+  visibleRegions() { return this.meshes.filter((m) => m.visible).map((m) => m.name); }
+
   // The region under the pointer, by its name.
   pick(event) {
     const rect = this.renderer.domElement.getBoundingClientRect();
@@ -110,7 +191,8 @@ export class Viewer {
                                       -((event.clientY - rect.top) / rect.height) * 2 + 1);
     const ray = new THREE.Raycaster();
     ray.setFromCamera(pointer, this.camera);
-    const hit = ray.intersectObjects(this.meshes, false)[0];
+    const hit = ray.intersectObjects(this.meshes.filter((m) => m.visible), false).find(
+        (h) => !this.sectioned || this.section.distanceToPoint(h.point) >= 0);
     this.label.textContent = hit ? hit.object.name : '';
     return hit ? hit.object.name : '';
   }

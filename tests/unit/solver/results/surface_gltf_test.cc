@@ -205,5 +205,42 @@ TEST(SurfaceGltfTest, TheGlbHasGltfsLayoutAndTheValuesWritten) {
   EXPECT_NE(RegionColour(0), RegionColour(1));
 }
 
+// Steps through time: the GLB names their times and file; the file holds
+// each step's displacement of the GLB's vertices, meshes in order.
+TEST(SurfaceGltfTest, StepsHoldEachStepsDisplacementOfTheDrawnVertices) {
+  const Block b = KuhnRow(2, 2);
+  const std::size_t nodes = b.nodes.size() / 3;
+  std::vector<double> steps;
+  for (int k = 0; k < 3; ++k) {
+    for (std::size_t i = 0; i < 3 * nodes; ++i) steps.push_back((k + 1) * 0.1 * b.nodes[i]);
+  }
+  const auto surfaces = ExtractRegionSurfaces(b.tets, 4, b.region, {"A", "B"});
+  SurfaceSteps stepped;
+  stepped.times = {0.5, 1.0, 1.0 / 3};
+  const std::string glb = SurfacesGlb(surfaces, b.nodes, {}, stepped);
+  EXPECT_NE(glb.find("\"step_file\":\"surface_steps.bin\""), std::string::npos);
+  EXPECT_NE(glb.find("\"step_times\":[0.5,1,0.33333333333333331]"), std::string::npos);
+  const std::size_t vertices = surfaces[0].nodes.size() + surfaces[1].nodes.size();
+  EXPECT_NE(glb.find("\"vertices\":" + std::to_string(vertices)), std::string::npos);
+
+  const std::string bin = SurfaceStepsBin(surfaces, b.nodes, steps);
+  ASSERT_EQ(bin.size(), 3 * vertices * 3 * sizeof(float));
+  std::size_t at = 0;
+  for (int k = 0; k < 3; ++k) {
+    for (const RegionSurface& s : surfaces) {
+      for (const int64_t node : s.nodes) {
+        for (int c = 0; c < 3; ++c, at += 4) {
+          float value = 0;
+          std::memcpy(&value, bin.data() + at, 4);
+          EXPECT_FLOAT_EQ(value, static_cast<float>((k + 1) * 0.1e-3 * b.nodes[3 * node + c]));
+        }
+      }
+    }
+  }
+  // Steps that do not fit the nodes: no file rather than a wrong one.
+  steps.pop_back();
+  EXPECT_TRUE(SurfaceStepsBin(surfaces, b.nodes, steps).empty());
+}
+
 }  // namespace
 }  // namespace pba

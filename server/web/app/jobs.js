@@ -1,0 +1,185 @@
+// The jobs: their list with live progress (a cancel for the unfinished),
+// and a finished job's summary, files, surfaces in 3D and curves.
+import {api, button, cell, link, show} from '/app/api.js';
+import {Viewer} from '/app/viewer.js';
+
+let viewer = null;
+let chart = null;
+
+export async function showJobs() {
+  const listed = await api('JobService/ListJobs', {page_size: 50});
+  const body = document.querySelector('#jobs tbody');
+  body.replaceChildren();
+  for (const j of listed.jobs || []) {
+    const row = body.insertRow();
+    row.dataset.job = j.id;
+    cell(row, j.id);
+    cell(row, j.name);
+    cell(row, j.state);
+    cell(row, j.progress !== undefined ? Math.round(100 * j.progress) + ' %' : '');
+    const action = row.insertCell();
+    if (j.state === 'SUCCEEDED') {
+      action.append(link('view', () => showJob(j.id).catch((e) => {
+        document.getElementById('job-error').textContent = e.message;
+      })));
+    } else if (j.state === 'QUEUED' || j.state === 'RUNNING') {
+      action.append(button('Cancel', async () => {
+        await api('JobService/CancelJob', {id: j.id});
+        await showJobs();
+      }, 'job-error'));
+    }
+  }
+}
+
+// A finished job: its summary, its files, its surfaces in 3D, and its
+// history.csv (or sensors.csv) plotted.
+export async function showJob(id) {
+  document.getElementById('job-error').textContent = '';
+  const job = await api('JobService/GetJob', {id});
+  history.replaceState(null, '', '#job=' + id);
+  document.getElementById('job-name').textContent = job.name + ' (' + id + ')';
+  showSummary(job.summary || {});
+  const files = document.getElementById('job-files');
+  files.replaceChildren();
+  const names = [];
+  for (const f of job.result_files || []) {
+    names.push(f.name);
+    const item = document.createElement('li');
+    const a = document.createElement('a');
+    a.href = '/api/jobs/' + id + '/files/' + f.name;
+    a.textContent = f.name + ' (' + f.size_bytes + ' bytes)';
+    item.append(a);
+    files.append(item);
+  }
+  show('job', true);
+  await plotCurves(id, names);
+  if (!names.includes('surfaces.glb')) return;
+  if (!viewer) viewer = new Viewer(document.getElementById('view'), document.getElementById('picked'));
+  const drawn = await viewer.load('/api/jobs/' + id + '/files/surfaces.glb');
+  drawn.drawn_at_ms = performance.now();  // the first frame is drawn (for timings)
+  document.getElementById('legend').textContent = 'colour: displacement, 0 to ' +
+      (1000 * drawn.largest_m).toPrecision(3) + ' mm (shown deformed, at the end)';
+  window.pbaView = drawn;
+  showRegions(drawn.regions);
+  // A slider through the steps, when the result has them.
+  const times = viewer.stepTimes;
+  show('stepping', times.length > 1 && names.includes('surface_steps.bin'));
+  const slider = document.getElementById('step');
+  slider.max = String(Math.max(0, times.length - 1));
+  slider.value = slider.max;
+  const label = document.getElementById('step-label');
+  label.textContent = times.length ? 'step ' + times.length + ' of ' + times.length : '';
+  slider.oninput = async () => {
+    const k = Number(slider.value);
+    const step = await viewer.setStep(k);
+    label.textContent = 'step ' + (k + 1) + ' of ' + times.length + ', t = ' +
+        Number(step.time).toPrecision(4) + ' s, largest ' + (1000 * step.largest_m).toPrecision(3) +
+        ' mm';
+    window.pbaView.step = step;
+  };
+}
+
+// The regions drawn, each with a box to show or hide it; a see-through
+// switch and a section plane for what lies inside.
+function showRegions(regions) {
+  const list = document.getElementById('regions');
+  list.replaceChildren();
+  for (const name of regions) {
+    const item = document.createElement('label');
+    const box = document.createElement('input');
+    box.type = 'checkbox';
+    box.checked = true;
+    box.dataset.region = name;
+    box.onchange = () => {
+      viewer.setVisible(name, box.checked);
+      window.pbaView.visible = viewer.visibleRegions();
+    };
+    item.append(box, ' ' + name);
+    list.append(item);
+  }
+  const through = document.getElementById('see-through');
+  through.checked = false;
+  through.onchange = () => viewer.setOpacity(through.checked ? 0.3 : 1);
+  const section = document.getElementById('section');
+  const cut = document.getElementById('cut');
+  cut.checked = false;
+  const apply = () => viewer.setSection(cut.checked ? Number(section.value) / 100 : null);
+  cut.onchange = apply;
+  section.oninput = apply;
+}
+
+function showSummary(summary) {
+  const facts = document.getElementById('job-summary');
+  facts.replaceChildren();
+  const fact = (name, value) => {
+    if (value === undefined) return;
+    const item = document.createElement('li');
+    item.textContent = name ? name + ': ' + value : value;
+    facts.append(item);
+  };
+  const modelled = summary.modelled || {}, results = summary.results || {};
+  fact('analysis', modelled.analysis);
+  fact('', modelled.material);
+  fact('elements', modelled.elements);
+  fact('largest displacement [mm]', results.max_displacement_mm);
+  const estimate = summary.error_estimate || {};
+  fact('estimated error', estimate.estimated ? (100 * estimate.relative_error).toPrecision(3) + ' %'
+                                             : estimate.note);
+  const performance = summary.performance || {};
+  fact('wall time [s]', performance.wall_time_s);
+  for (const phase of performance.phases || []) fact('  ' + phase.phase + ' [s]', phase.seconds);
+}
+
+// The CSV's columns: a header row of names, rows of numbers.
+function parseCsv(text) {
+  const lines = text.trim().split('\n');
+  const names = lines[0].split(',').map((n) => n.replace(/^"|"$/g, ''));
+  const rows = lines.slice(1).map((l) => l.split(',').map(Number));
+  return {names, rows};
+}
+
+// history.csv: the magnitude of each force (columns "... x [N]", y, z)
+// against time; sensors.csv: each sensor's pressure against time.
+export function curvesOf(file, table) {
+  const x = table.rows.map((r) => r[0]);
+  const series = {};
+  if (file === 'history.csv') {
+    for (let c = 0; c + 2 < table.names.length; ++c) {
+      const name = table.names[c];
+      if (!name.endsWith(' x [N]')) continue;
+      series[name.slice(0, -' x [N]'.length) + ' [N]'] =
+          table.rows.map((r) => Math.hypot(r[c], r[c + 1], r[c + 2]));
+    }
+  } else {
+    for (let c = 1; c < table.names.length; ++c) {
+      if (table.names[c].includes('[Pa]')) series[table.names[c]] = table.rows.map((r) => r[c]);
+    }
+  }
+  return {file, x_name: table.names[0], x, series};
+}
+
+async function plotCurves(id, names) {
+  const file = names.includes('history.csv') ? 'history.csv'
+                                             : names.includes('sensors.csv') ? 'sensors.csv' : '';
+  show('curves', file !== '');
+  if (chart) { chart.destroy(); chart = null; }
+  if (!file) return;
+  const response = await fetch('/api/jobs/' + id + '/files/' + file);
+  if (!response.ok) throw new Error(file + ': ' + response.statusText);
+  const curves = curvesOf(file, parseCsv(await response.text()));
+  const palette = ['#1a5fb4', '#c01c28', '#26a269', '#e66100', '#613583', '#865e3c'];
+  chart = new window.Chart(document.getElementById('curve'), {
+    type: 'line',
+    data: {
+      datasets: Object.entries(curves.series).map(([name, values], i) => ({
+        label: name, data: values.map((y, k) => ({x: curves.x[k], y})),
+        borderColor: palette[i % palette.length], pointRadius: 2,
+      })),
+    },
+    options: {
+      animation: false,
+      scales: {x: {type: 'linear', title: {display: true, text: curves.x_name}}},
+    },
+  });
+  window.pbaChart = curves;
+}
