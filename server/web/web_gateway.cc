@@ -70,10 +70,4 @@ const GatewayCall* WebGateway::Find(const std::string& name) const {
   return it == calls_.end() ? nullptr : &it->second;
 }
 
-std::vector<std::string> WebGateway::Names() const {
-  std::vector<std::string> names;
-  for (const auto& [name, call] : calls_) names.push_back(name);
-  return names;
-}
-
 }  // namespace pba

@@ -16,7 +16,6 @@
 #include <map>
 #include <memory>
 #include <string>
-#include <vector>
 
 namespace pba {
 
@@ -30,8 +29,6 @@ class WebGateway {
   // The call named "Service/Method" (e.g. "AtlasService/ListStructures");
   // nullptr when the web may not make it.
   const GatewayCall* Find(const std::string& name) const;
-  // Every name Find knows, sorted.
-  std::vector<std::string> Names() const;
   // The channel the calls are made on (for the streaming ones the routes
   // make themselves).
   const std::shared_ptr<grpc::Channel>& channel() const { return channel_; }

@@ -38,7 +38,7 @@ constexpr std::chrono::seconds kCallDeadline{60};
 // that went away holds its thread at most that long.
 constexpr int kMaxEventStreams = 16;
 constexpr std::chrono::seconds kEventStreamLife{60};
-// The application's files at most (each, and in all): they are read once.
+// The most of each of the application's files: they are read once, at start.
 constexpr std::uintmax_t kMaxAppFile = std::uintmax_t{8} << 20;
 
 constexpr char kThreeInPackage[] = "\"../../../build/three.module.js\"";

@@ -10,8 +10,6 @@ let historyOf = '';  // the structure whose history is shown
 // Lock ids of the locks this page took (only AcquireLock answers one).
 const locks = {};
 
-export function currentProject() { return project; }
-
 // Shows `name` and follows its events (server-sent, from the gRPC Watch).
 export async function openProject(name) {
   project = name;
