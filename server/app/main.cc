@@ -125,6 +125,7 @@ struct ServeFlags {
   std::string solver;
   int max_running = 1;
   double atlas_cache_gib = 2.0;
+  double surface_cache_mib = 512;
   std::string log_level = "info";
   std::string tls_cert, tls_key;
   bool insecure = false;
@@ -158,6 +159,11 @@ void AddServeOptions(CLI::App& app, ServeFlags* flags) {
       ->capture_default_str();
   app.add_option("--atlas-cache-size", flags->atlas_cache_gib,
                  "Bound of <data>/cache/atlas, the built atlas meshes solves share [GiB]")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  app.add_option("--surface-cache-size", flags->surface_cache_mib,
+                 "Bound of <data>/cache/surfaces, the structures' surfaces the web view draws "
+                 "[MiB]")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   app.add_option("--log-level", flags->log_level,
@@ -299,6 +305,7 @@ pba::ServerOptions ServerOptionsFromFlags(const ServeFlags& flags) {
   options.solver = flags.solver.empty() ? DefaultSolver() : fs::path(flags.solver);
   options.max_running = flags.max_running;
   options.atlas_cache_gib = flags.atlas_cache_gib;
+  options.surface_cache_mib = flags.surface_cache_mib;
   options.tls_cert = flags.tls_cert;
   options.tls_key = flags.tls_key;
   options.insecure = flags.insecure;

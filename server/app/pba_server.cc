@@ -201,6 +201,17 @@ ExecutorOptions ExecutorOptionsFor(const ServerOptions& options, const fs::path&
   return executor_options;
 }
 
+// Where and within what the structures' surfaces are built: the solve's
+// memory bound (or 4 GiB), five minutes.
+SurfaceViewOptions SurfaceViewOptionsFor(const ServerOptions& options, const fs::path& data_dir) {
+  SurfaceViewOptions views;
+  views.solver = fs::absolute(options.solver);
+  views.cache_dir = data_dir / "cache" / "surfaces";
+  views.cache_bytes = static_cast<std::uint64_t>(options.surface_cache_mib * (1 << 20));
+  if (options.max_solver_memory_bytes > 0) views.memory_bytes = options.max_solver_memory_bytes;
+  return views;
+}
+
 }  // namespace
 
 Status PbaServer::StartWeb(const ServerOptions& options) {
@@ -343,6 +354,8 @@ Status PbaServer::Start(const ServerOptions& options, std::unique_ptr<PbaServer>
   builder.RegisterService(server->service_.get());
   server->atlas_service_ = std::make_unique<AtlasServiceImpl>(
       *server->atlas_store_, *server->uploads_, server->atlas_hub_);
+  server->surface_views_ = std::make_unique<SurfaceViews>(SurfaceViewOptionsFor(options, data_dir));
+  server->atlas_service_->set_surface_views(server->surface_views_.get());
   builder.RegisterService(server->atlas_service_.get());
   server->server_ = builder.BuildAndStart();
   if (server->server_ == nullptr || port == 0) {

@@ -34,6 +34,7 @@
 #include "service/atlas_jobs.h"
 #include "service/atlas_service.h"
 #include "service/job_service.h"
+#include "service/surface_views.h"
 #include "store/atlas_store.h"
 #include "store/job_store.h"
 #include "store/upload_store.h"
@@ -61,6 +62,9 @@ struct ServerOptions {
   // Bound of data_dir/cache/atlas, the built atlas meshes every pba-solve
   // shares [GiB].
   double atlas_cache_gib = 2.0;
+  // Bound of data_dir/cache/surfaces, the structures' surfaces the web
+  // view draws (service/surface_views.h) [MiB].
+  double surface_cache_mib = 512;
   // SIGTERM-to-SIGKILL grace for solves being cancelled or stopped.
   std::chrono::milliseconds kill_grace{10000};
   // How long in-flight RPCs may take to finish at shutdown.
@@ -144,6 +148,7 @@ class PbaServer {
   std::unique_ptr<AtlasStore> atlas_store_;
   std::unique_ptr<UploadStore> uploads_;
   AtlasEventHub atlas_hub_;
+  std::unique_ptr<SurfaceViews> surface_views_;  // outlives atlas_service_
   std::unique_ptr<AtlasServiceImpl> atlas_service_;
   std::unique_ptr<AtlasJobs> atlas_jobs_;
   std::filesystem::path admin_token_file_;

@@ -164,22 +164,8 @@ Status AtlasJobs::Stage(const v1::Job& job, const fs::path& dir, v1::Scene* scen
   return Status::Ok();
 }
 
-Status AtlasJobs::StageSnapshot(const v1::Job& job, const fs::path& dir, v1::Scene* scene) {
-  const v1::SnapshotRef& ref = job.snapshot();
-  int64_t id = 0;
-  try {
-    id = std::stoll(ref.snapshot());
-  } catch (const std::exception&) {
-    return Status::Internal("job " + job.id() + " names snapshot '" + ref.snapshot() +
-                            "', not an id");
-  }
-  std::vector<SnapshotFile> files;
-  PBA_RETURN_IF_ERROR(store_.SnapshotFiles(job.owner(), ref.project(), id, &files));
-  if (files.empty()) {
-    return Status::FailedPrecondition("snapshot " + ref.snapshot() + " of project " +
-                                      ref.project() + " has no structures to build an atlas from");
-  }
-  const fs::path set_dir = dir / "snapshot";
+Status WriteStructureSetOf(const std::vector<SnapshotFile>& files, const std::string& project,
+                           int64_t snapshot, const fs::path& set_dir) {
   std::error_code ec;
   fs::remove_all(set_dir, ec);
   fs::create_directories(set_dir, ec);
@@ -188,8 +174,8 @@ Status AtlasJobs::StageSnapshot(const v1::Job& job, const fs::path& dir, v1::Sce
   // from); the mesh cache keys a set by its structures alone, so two
   // snapshots pinning the same revisions share one mesh.
   StructureSet set;
-  set.project = ref.project();
-  set.snapshot = id;
+  set.project = project;
+  set.snapshot = snapshot;
   // Two names that map to one file name ("a b" and "a_b", "Foo" and
   // "foo") get a number, and a structure named "manifest" does not take
   // the manifest's name.
@@ -221,7 +207,26 @@ Status AtlasJobs::StageSnapshot(const v1::Job& job, const fs::path& dir, v1::Sce
     entry.material_json = r.metadata.material_json;
     set.structures.push_back(std::move(entry));
   }
-  PBA_RETURN_IF_ERROR(WriteStructureSet(set, set_dir));
+  return WriteStructureSet(set, set_dir);
+}
+
+Status AtlasJobs::StageSnapshot(const v1::Job& job, const fs::path& dir, v1::Scene* scene) {
+  const v1::SnapshotRef& ref = job.snapshot();
+  int64_t id = 0;
+  try {
+    id = std::stoll(ref.snapshot());
+  } catch (const std::exception&) {
+    return Status::Internal("job " + job.id() + " names snapshot '" + ref.snapshot() +
+                            "', not an id");
+  }
+  std::vector<SnapshotFile> files;
+  PBA_RETURN_IF_ERROR(store_.SnapshotFiles(job.owner(), ref.project(), id, &files));
+  if (files.empty()) {
+    return Status::FailedPrecondition("snapshot " + ref.snapshot() + " of project " +
+                                      ref.project() + " has no structures to build an atlas from");
+  }
+  const fs::path set_dir = dir / "snapshot";
+  PBA_RETURN_IF_ERROR(WriteStructureSetOf(files, ref.project(), id, set_dir));
   scene->mutable_geometry()->mutable_atlas()->set_source(set_dir.string());
   return Status::Ok();
 }

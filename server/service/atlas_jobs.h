@@ -55,6 +55,13 @@ class AtlasJobs : public JobPreparation {
   JobStore& jobs_;
 };
 
+// Writes `files` (a snapshot's members, or the heads) into `set_dir` as a
+// structure set (solver/atlas/structure_set.h) whose manifest names
+// `project` and `snapshot` (0: none): what pba-solve builds an atlas from.
+// `set_dir` is emptied first.
+Status WriteStructureSetOf(const std::vector<SnapshotFile>& files, const std::string& project,
+                           int64_t snapshot, const std::filesystem::path& set_dir);
+
 // Checks an import request (names the field in its errors): a project, a
 // source kind, plain file names, the files the kind needs.
 Status CheckAtlasImport(const v1::AtlasImport& request);

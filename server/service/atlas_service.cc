@@ -16,6 +16,7 @@
 #include "service/geometry_diff.h"
 #include "service/handler.h"
 #include "service/overlap_check.h"
+#include "service/surface_views.h"
 #include "store/page_token.h"
 
 namespace pba {
@@ -505,6 +506,35 @@ grpc::Status AtlasServiceImpl::GetRevision(grpc::ServerContext* context,
 
 namespace {
 
+// `bytes` from `offset` as DataChunks of at most `chunk_bytes`, with the
+// total size in each; one chunk even at the end, so the client learns
+// total_size. `what` names the bytes in an offset past the end.
+RpcStatus StreamChunks(grpc::ServerContext& context, grpc::ServerWriter<v1::DataChunk>* writer,
+                       const std::string& bytes, int64_t offset, size_t chunk_bytes,
+                       const std::string& what) {
+  const int64_t size = static_cast<int64_t>(bytes.size());
+  if (offset < 0) return Status::InvalidArgument("offset", "must not be negative");
+  if (offset > size) {
+    return Status::OutOfRange("offset", std::to_string(offset) + " is past the end of " + what +
+                                            " (" + std::to_string(size) + " bytes)");
+  }
+  v1::DataChunk chunk;
+  chunk.set_total_size(size);
+  do {
+    if (context.IsCancelled()) {
+      return RpcStatus::StreamEnded(grpc::StatusCode::CANCELLED, "cancelled");
+    }
+    const int64_t want = std::min<int64_t>(static_cast<int64_t>(chunk_bytes), size - offset);
+    chunk.set_offset(offset);
+    chunk.set_data(bytes.data() + offset, static_cast<size_t>(want));
+    if (!writer->Write(chunk)) {
+      return RpcStatus::StreamEnded(grpc::StatusCode::CANCELLED, "the client went away");
+    }
+    offset += want;
+  } while (offset < size);
+  return Status::Ok();
+}
+
 // The top-level parameters of two material JSON objects that differ.
 void DiffMaterials(const std::string& from, const std::string& to, v1::RevisionDiff* diff) {
   google::protobuf::Struct a, b;
@@ -643,34 +673,79 @@ grpc::Status AtlasServiceImpl::DownloadGeometry(grpc::ServerContext* context,
       return grpc::Status(grpc::StatusCode::DATA_LOSS, status.ToString());
     }
     PBA_RETURN_IF_ERROR(status);
-    const int64_t size = static_cast<int64_t>(geometry.size());
-    int64_t offset = request->offset();
-    if (offset > size) {
-      return Status::OutOfRange("offset", std::to_string(offset) + " is past the end of revision " +
-                                              std::to_string(number) + " of structure '" +
-                                              ref.structure + "' (" + std::to_string(size) +
-                                              " bytes)");
-    }
-    v1::DataChunk chunk;
-    chunk.set_total_size(size);
-    // One chunk even at the end, so the client learns total_size.
-    do {
-      if (context->IsCancelled()) {
-        return RpcStatus::StreamEnded(grpc::StatusCode::CANCELLED, "cancelled");
-      }
-      const int64_t want = std::min<int64_t>(kChunkBytes, size - offset);
-      chunk.set_offset(offset);
-      chunk.set_data(geometry.data() + offset, static_cast<size_t>(want));
-      if (!writer->Write(chunk)) {
-        return RpcStatus::StreamEnded(grpc::StatusCode::CANCELLED, "the client went away");
-      }
-      offset += want;
-    } while (offset < size);
-    return Status::Ok();
+    return StreamChunks(
+        *context, writer, geometry, request->offset(), kChunkBytes,
+        "revision " + std::to_string(number) + " of structure '" + ref.structure + "'");
   });
 }
 
 // --- snapshots and audit ---------------------------------------------------
+
+grpc::Status AtlasServiceImpl::DownloadSurfaces(grpc::ServerContext* context,
+                                                const v1::DownloadSurfacesRequest* request,
+                                                grpc::ServerWriter<v1::DataChunk>* writer) {
+  return Handle(store_, "DownloadSurfaces", *context, [&](const Caller& caller) -> RpcStatus {
+    if (surface_views_ == nullptr) {
+      return grpc::Status(grpc::StatusCode::UNIMPLEMENTED, "this server draws no surfaces");
+    }
+    const std::string& project = request->project();
+    const std::string& structure = request->structure();
+    if (request->revision() < 0) {
+      return Status::InvalidArgument("revision", "must be 0 (the head) or more");
+    }
+    if (request->revision() > 0 && structure.empty()) {
+      return Status::InvalidArgument("revision", "names a revision of `structure`, which is empty");
+    }
+    if (!structure.empty() && !request->snapshot().empty()) {
+      return Status::InvalidArgument("structure",
+                                     "draws one structure's revision: give it "
+                                     "without a snapshot");
+    }
+    // Rights first (each store call checks the caller's role), then work.
+    std::vector<SnapshotFile> files;
+    int64_t snapshot = 0;
+    if (!structure.empty()) {
+      const StructureRef ref{project, structure};
+      int64_t number = request->revision();
+      if (number == 0) {
+        StructureInfo info;
+        PBA_RETURN_IF_ERROR(store_.GetStructure(caller.user, ref, &info));
+        number = info.head;
+      }
+      files.emplace_back();
+      PBA_RETURN_IF_ERROR(store_.RevisionFile(caller.user, ref, number, &files.back()));
+      if (files.back().revision.format == StructureFormat::kDerived) {
+        return Status::FailedPrecondition(
+            "structure", "'" + structure +
+                             "' is derived from other structures and has no shape "
+                             "of its own: draw the project's structures or a snapshot instead");
+      }
+    } else if (!request->snapshot().empty()) {
+      SnapshotInfo info;
+      PBA_RETURN_IF_ERROR(store_.ResolveSnapshot(caller.user, project, request->snapshot(), &info));
+      snapshot = info.id;
+      PBA_RETURN_IF_ERROR(store_.SnapshotFiles(caller.user, project, snapshot, &files));
+    } else {
+      PBA_RETURN_IF_ERROR(store_.Heads(caller.user, project, &files));
+    }
+    if (files.empty()) {
+      return Status::FailedPrecondition("project", "'" + project + "' has no structures to draw");
+    }
+    const auto cancelled = [&] { return context->IsCancelled() || stopping_.load(); };
+    SurfaceView view;
+    const Status status = surface_views_->Get(project, snapshot, files, cancelled, &view);
+    if (!status.ok() && stopping_.load()) {
+      return grpc::Status(grpc::StatusCode::UNAVAILABLE,
+                          "the server is shutting down; ask again once it is back");
+    }
+    PBA_RETURN_IF_ERROR(status);
+    spdlog::info("DownloadSurfaces {} ({} structures): {}", project, files.size(),
+                 view.cached ? std::string("from the cache")
+                             : "built in " + std::to_string(view.build_s) + " s");
+    return StreamChunks(*context, writer, view.bytes, request->offset(), kChunkBytes,
+                        "the surfaces");
+  });
+}
 
 grpc::Status AtlasServiceImpl::CreateSnapshot(grpc::ServerContext* context,
                                               const v1::CreateSnapshotRequest* request,

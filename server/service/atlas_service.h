@@ -44,6 +44,8 @@
 
 namespace pba {
 
+class SurfaceViews;
+
 class AtlasServiceImpl final : public v1::AtlasService::Service {
  public:
   static constexpr std::chrono::milliseconds kWatchPoll{250};
@@ -68,6 +70,11 @@ class AtlasServiceImpl final : public v1::AtlasService::Service {
   // already voxelising (seconds, by the voxel budget). Called before the
   // gRPC server's Shutdown().
   void Stop() { stopping_.store(true); }
+
+  // What DownloadSurfaces builds and caches the surfaces with (owned by
+  // the caller, outliving the service); without it, DownloadSurfaces is
+  // UNIMPLEMENTED.
+  void set_surface_views(SurfaceViews* views) { surface_views_ = views; }
 
   grpc::Status WhoAmI(grpc::ServerContext* context, const v1::WhoAmIRequest* request,
                       v1::User* response) override;
@@ -126,6 +133,9 @@ class AtlasServiceImpl final : public v1::AtlasService::Service {
                                 grpc::ServerWriter<v1::DataChunk>* writer) override;
   grpc::Status DiffRevisions(grpc::ServerContext* context, const v1::DiffRevisionsRequest* request,
                              v1::RevisionDiff* response) override;
+  grpc::Status DownloadSurfaces(grpc::ServerContext* context,
+                                const v1::DownloadSurfacesRequest* request,
+                                grpc::ServerWriter<v1::DataChunk>* writer) override;
 
   grpc::Status CreateSnapshot(grpc::ServerContext* context,
                               const v1::CreateSnapshotRequest* request,
@@ -164,6 +174,7 @@ class AtlasServiceImpl final : public v1::AtlasService::Service {
   std::mutex change_mutex_;
   std::atomic<bool> stopping_{false};
   DiffSlots diff_slots_{kMaxConcurrentDiffs};
+  SurfaceViews* surface_views_ = nullptr;
   StreamSlots watch_slots_{kMaxWatchesPerUser};
 };
 

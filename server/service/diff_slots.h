@@ -9,6 +9,8 @@
 #include <condition_variable>
 #include <functional>
 #include <mutex>
+#include <string>
+#include <utility>
 
 #include "pba/status.h"
 
@@ -16,22 +18,25 @@ namespace pba {
 
 class DiffSlots {
  public:
-  explicit DiffSlots(int slots) : free_(slots) {}
+  // `field` and `work` name the bound and the work in the messages (the
+  // surface views' builds share the class).
+  explicit DiffSlots(int slots, std::string field = "diff_slots",
+                     std::string work = "comparing other revisions' shapes")
+      : free_(slots), field_(std::move(field)), work_(std::move(work)) {}
 
   // Takes a slot, waiting up to `patience` and asking `cancelled` (may be
   // empty) every 50 ms while it waits: Status::Cancelled when it says so;
-  // kFailedPrecondition with field "diff_slots" (the service answers
-  // RESOURCE_EXHAUSTED) when no slot frees in time.
+  // ResourceExhausted naming the bound (`field`) when no slot frees in time.
   Status Acquire(const std::function<bool()>& cancelled, std::chrono::milliseconds patience) {
     const auto deadline = std::chrono::steady_clock::now() + patience;
     std::unique_lock lock(mutex_);
     while (free_ == 0) {
       if (cancelled && cancelled()) {
-        return Status::Cancelled("the comparison was cancelled while it waited for its turn");
+        return Status::Cancelled("cancelled while waiting for its turn");
       }
       if (std::chrono::steady_clock::now() >= deadline) {
-        return Status::ResourceExhausted(
-            "diff_slots", "the server is busy comparing other revisions' shapes; try again later");
+        return Status::ResourceExhausted(field_,
+                                         "the server is busy " + work_ + "; try again later");
       }
       freed_.wait_for(lock, std::chrono::milliseconds(50));
     }
@@ -51,6 +56,7 @@ class DiffSlots {
   std::mutex mutex_;
   std::condition_variable freed_;
   int free_;  // guarded by mutex_
+  const std::string field_, work_;
 };
 
 }  // namespace pba

@@ -57,6 +57,7 @@
 #include <utility>
 #include <vector>
 
+#include "atlas/atlas_build.h"
 #include "atlas/structure_split.h"
 #include "codec/summary_text.h"
 #include "codec/yaml_codec.h"
@@ -66,6 +67,7 @@
 #include "pba/solve.h"
 #include "pba/v1/scene.pb.h"
 #include "pba/v1/solve_event.pb.h"
+#include "results/surface_gltf.h"
 #include "solve/staging_dir.h"
 
 namespace pba {
@@ -410,6 +412,74 @@ int RunImport(const ImportArgs& args, const std::string& out_dir, bool force, Pr
   return kExitOk;
 }
 
+// The structures' surfaces a view draws (pba-server's DownloadSurfaces):
+// the structure set in `set_dir` meshed as a job's atlas is, at
+// `facet_mm`, without sliver removal, improvement or validation (no one
+// solves on these tetrahedra; their surface triangles are the same), and
+// each structure's outer and interface triangles written to
+// <out>/surfaces.glb (surface_gltf.h), with a summary.json.
+int RunAtlasSurfaces(const std::string& set_dir, double facet_mm, const std::string& out_dir,
+                     bool force, ProgressMode mode) {
+  Reporter reporter(mode);
+  if (Status s = CheckOutputDir(out_dir, force, "pba-solve", WrittenByPbaSolve); !s.ok()) {
+    return reporter.Error(s);
+  }
+  const auto start = std::chrono::steady_clock::now();
+  AtlasBuildOptions options;
+  options.source = AtlasBuildOptions::Source::kStructures;
+  options.input = set_dir;
+  options.facet_size_mm = facet_mm;
+  // Cells only fill the volume between the surfaces: large ones are fewer.
+  options.cell_size_mm = 4 * facet_mm;
+  options.odt_iterations = 0;
+  options.improve_target_deg = 0;
+  options.remove_slivers = false;
+  options.validate = false;
+  options.threads = ThreadContext(1);
+  if (Status s = options.Validate(); !s.ok()) return reporter.Error(s);
+  reporter.Progress({"mesh", 0.0, "meshing the structures' surfaces"});
+  AtlasBuildResult built;
+  if (Status s = BuildAtlas(options, &built); !s.ok()) return reporter.Error(s);
+  if (g_cancel.load()) return reporter.Error(Status::Cancelled("cancelled"));
+  const Mesh& mesh = built.mesh;
+  std::vector<int64_t> elements, region(mesh.element_region.begin(), mesh.element_region.end());
+  elements.reserve(4 * mesh.tets.size());
+  for (const auto& tet : mesh.tets) elements.insert(elements.end(), tet.begin(), tet.end());
+  std::vector<double> nodes_mm(mesh.nodes.data(), mesh.nodes.data() + mesh.nodes.size());
+  for (double& x : nodes_mm) x *= 1e3;
+  const std::vector<RegionSurface> surfaces =
+      ExtractRegionSurfaces(elements, 4, region, mesh.region_names);
+  StagingDir staging;
+  Status status = StagingDir::Create(out_dir, &staging);
+  if (status.ok())
+    status = WriteText(staging.path() / "surfaces.glb", SurfacesGlb(surfaces, nodes_mm, {}));
+
+  v1::Summary summary;
+  summary.set_scene_name("atlas surfaces");
+  summary.set_solver_version(SolverVersion());
+  size_t triangles = 0;
+  for (const RegionSurface& s : surfaces) triangles += s.triangles.size() / 3;
+  summary.mutable_modelled()->set_geometry(
+      Format("%zu structures' surfaces, %zu triangles, facets of at most %g mm",
+             mesh.region_names.size(), triangles, facet_mm));
+  // (The build's notes are about its tetrahedra's quality, which a view
+  // does not ask for.)
+  summary.mutable_performance()->set_wall_time_s(
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  if (status.ok()) status = WriteText(staging.path() / "summary.json", codec::ToJson(summary));
+  if (status.ok() && g_cancel.load()) status = Status::Cancelled("cancelled before writing");
+  if (status.ok()) status = staging.Commit();
+  if (!status.ok()) return reporter.Error(status);
+  const std::string written = std::filesystem::absolute(out_dir).lexically_normal().string();
+  if (mode == ProgressMode::kText) {
+    std::printf("wrote %s/surfaces.glb: %s, in %.2f s\n", written.c_str(),
+                summary.modelled().geometry().c_str(), summary.performance().wall_time_s());
+  } else {
+    reporter.Done(written, summary);
+  }
+  return kExitOk;
+}
+
 }  // namespace
 }  // namespace pba
 
@@ -434,6 +504,15 @@ int main(int argc, char** argv) {
                  "--import-atlas labels: the label table (CSV); default the built-in one");
   app.add_option("--structure", import.structures,
                  "--import-atlas: keep only this structure (repeatable; group prefixes allowed)");
+  std::string surfaces_of;
+  app.add_option("--atlas-surfaces", surfaces_of,
+                 "Instead of a scene: mesh this structure set's surfaces into OUT/surfaces.glb "
+                 "(what the web view draws of a project's structures)");
+  double surfaces_facet_mm = 3;
+  app.add_option("--facet-mm", surfaces_facet_mm,
+                 "--atlas-surfaces: triangle size on surfaces and interfaces [mm]")
+      ->check(CLI::Range(0.5, 50.0))
+      ->capture_default_str();
   std::string inp_path;
   app.add_option("-o,--out", out_dir,
                  "Result directory (created; must not exist or be empty, or with --force hold "
@@ -501,6 +580,16 @@ int main(int argc, char** argv) {
     mode = pba::ProgressMode::kNone;
   }
   try {
+    if (!surfaces_of.empty()) {
+      if (!scene_path.empty() || !import.kind.empty() || out_dir.empty() || ranks.size > 1) {
+        std::fprintf(stderr,
+                     "pba-solve: --atlas-surfaces takes --out DIR, no scene and no import, as "
+                     "one process\n");
+        pba::EndRanksWith(pba::kExitUsage);
+        return pba::kExitUsage;
+      }
+      return pba::RunAtlasSurfaces(surfaces_of, surfaces_facet_mm, out_dir, force, mode);
+    }
     if (!import.kind.empty()) {
       if (!scene_path.empty() || out_dir.empty()) {
         std::fprintf(stderr, "pba-solve: --import-atlas takes --out DIR and no scene\n");

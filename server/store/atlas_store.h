@@ -306,6 +306,12 @@ class AtlasStore {
   Status SnapshotFiles(const std::string& user, const std::string& project, int64_t snapshot_id,
                        std::vector<SnapshotFile>* files);
 
+  // Revision `number` (>= 1) of a structure with its geometry file
+  // (read-only); viewers may read. The file is what a snapshot's member
+  // would be: the surfaces of one revision alone (DownloadSurfaces).
+  Status RevisionFile(const std::string& user, const StructureRef& ref, int64_t number,
+                      SnapshotFile* file);
+
   // Every structure of `project` with its head revision and the head's
   // geometry file (read-only), by name; viewers may read. What a commit of
   // a derived structure is checked against (derived_check.h).

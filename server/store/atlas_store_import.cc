@@ -75,6 +75,13 @@ Status AtlasStore::LockedNeighbours(const std::string& user, const std::string& 
   return Status::Ok();
 }
 
+Status AtlasStore::RevisionFile(const std::string& user, const StructureRef& ref, int64_t number,
+                                SnapshotFile* file) {
+  PBA_RETURN_IF_ERROR(GetRevision(user, ref, number, &file->revision, nullptr));
+  file->blob = blobs_->PathOf(file->revision.content_sha256);
+  return Status::Ok();
+}
+
 Status AtlasStore::Heads(const std::string& user, const std::string& project,
                          std::vector<SnapshotFile>* heads) {
   heads->clear();

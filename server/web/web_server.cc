@@ -303,23 +303,20 @@ struct WebServer::State {
         });
   }
 
-  void Download(const httplib::Request& request, httplib::Response& response) {
-    std::string token;
-    if (!SessionOf(request, response, &token)) return;
-    struct Stream {
-      grpc::ClientContext context;
-      std::unique_ptr<grpc::ClientReader<v1::DataChunk>> reader;
-      v1::DataChunk chunk;
-      bool pending = false;  // chunk read and not yet sent
-    };
-    auto stream = std::make_shared<Stream>();
-    stream->context.AddMetadata("authorization", "Bearer " + token);
-    v1::DownloadResultRequest download;
-    download.set_job_id(request.matches[1].str());
-    download.set_file(request.matches[2].str());
-    v1::JobService::Stub stub(gateway.channel());
-    stream->reader = stub.DownloadResult(&stream->context, download);
-    // The first chunk decides the answer: an error, or the file's size.
+  // A DataChunk stream of a gRPC download (DownloadResult,
+  // DownloadSurfaces), sent on as it is read.
+  struct ChunkStream {
+    grpc::ClientContext context;
+    std::unique_ptr<grpc::ClientReader<v1::DataChunk>> reader;
+    v1::DataChunk chunk;
+    bool pending = false;  // chunk read and not yet sent
+  };
+
+  // Answers with what `stream` reads, as `type` (with a Content-Disposition
+  // unless `disposition` is empty). The first chunk decides the answer: an
+  // error, or the size.
+  void SendChunks(const std::shared_ptr<ChunkStream>& stream, const std::string& type,
+                  const std::string& disposition, httplib::Response& response) {
     if (!stream->reader->Read(&stream->chunk)) {
       const grpc::Status status = stream->reader->Finish();
       SendError(response, status.ok() ? grpc::StatusCode::INTERNAL : status.error_code(),
@@ -329,11 +326,10 @@ struct WebServer::State {
     stream->pending = true;
     const std::size_t total =
         static_cast<std::size_t>(std::max<int64_t>(0, stream->chunk.total_size()));
-    const std::string name = request.matches[2].str();
-    response.set_header("Content-Disposition", "attachment; filename=\"" + name + "\"");
+    if (!disposition.empty()) response.set_header("Content-Disposition", disposition);
     response.set_header("Cache-Control", "no-store");
     response.set_content_provider(
-        total, ContentType(name).c_str(),
+        total, type.c_str(),
         [stream](std::size_t /*offset*/, std::size_t /*length*/, httplib::DataSink& sink) {
           if (!stream->pending && !stream->reader->Read(&stream->chunk)) return false;
           stream->pending = false;
@@ -344,6 +340,46 @@ struct WebServer::State {
           stream->context.TryCancel();
           (void)stream->reader->Finish();
         });
+  }
+
+  void Download(const httplib::Request& request, httplib::Response& response) {
+    std::string token;
+    if (!SessionOf(request, response, &token)) return;
+    auto stream = std::make_shared<ChunkStream>();
+    stream->context.AddMetadata("authorization", "Bearer " + token);
+    v1::DownloadResultRequest download;
+    download.set_job_id(request.matches[1].str());
+    download.set_file(request.matches[2].str());
+    v1::JobService::Stub stub(gateway.channel());
+    stream->reader = stub.DownloadResult(&stream->context, download);
+    const std::string name = request.matches[2].str();
+    SendChunks(stream, ContentType(name), "attachment; filename=\"" + name + "\"", response);
+  }
+
+  // A project's structures' surfaces (glTF binary) from DownloadSurfaces:
+  // ?project=P and either &snapshot=ID_OR_TAG or &structure=S[&revision=N].
+  void Surfaces(const httplib::Request& request, httplib::Response& response) {
+    std::string token;
+    if (!SessionOf(request, response, &token)) return;
+    v1::DownloadSurfacesRequest surfaces;
+    surfaces.set_project(request.get_param_value("project"));
+    surfaces.set_snapshot(request.get_param_value("snapshot"));
+    surfaces.set_structure(request.get_param_value("structure"));
+    const std::string revision = request.get_param_value("revision");
+    if (!revision.empty()) {
+      static const std::regex kNumber("[0-9]{1,18}");
+      if (!std::regex_match(revision, kNumber)) {
+        SendError(response, grpc::StatusCode::INVALID_ARGUMENT,
+                  "revision: '" + revision.substr(0, 40) + "' is not a revision number");
+        return;
+      }
+      surfaces.set_revision(std::stoll(revision));
+    }
+    auto stream = std::make_shared<ChunkStream>();
+    stream->context.AddMetadata("authorization", "Bearer " + token);
+    v1::AtlasService::Stub stub(gateway.channel());
+    stream->reader = stub.DownloadSurfaces(&stream->context, surfaces);
+    SendChunks(stream, "model/gltf-binary", "", response);
   }
 
   Status LoadFiles(const WebOptions& options) {
@@ -480,6 +516,12 @@ Status WebServer::Start(const WebOptions& options, std::shared_ptr<grpc::Channel
            [&state](const httplib::Request& request, httplib::Response& response) {
              state.Download(request, response);
            });
+
+  // The structures' surfaces, built on the server (a GET, so that the 3D
+  // view's loader fetches it as a file).
+  http.Get("/api/surfaces", [&state](const httplib::Request& request, httplib::Response& response) {
+    state.Surfaces(request, response);
+  });
 
   http.Get("/api/events", [&state](const httplib::Request& request, httplib::Response& response) {
     state.Events(request, response);

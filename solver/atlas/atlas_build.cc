@@ -236,6 +236,8 @@ Status MeshVolume(const AtlasBuildOptions& options, const LabelVolume& volume,
     mesh_options.region_cell_size_mm = sizes.cell_mm;
   }
   mesh_options.odt_iterations = options.odt_iterations;
+  mesh_options.perturb = options.remove_slivers;
+  mesh_options.exude = options.remove_slivers;
   mesh_options.optimisation_time_limit_s = options.optimisation_time_limit_s;
   mesh_options.interior_points_mm = PieceInteriorPoints(volume, region_of);
   const LabelFunction label = [&](const Eigen::Vector3d& x_mm) {
@@ -798,7 +800,7 @@ Status BuildAtlas(const AtlasBuildOptions& options, AtlasBuildResult* result) {
   NoteRefined(result);
   NoteQualityMisses(result);
   result->times.quality_s = SecondsSince(start);
-  if (result->plates) {
+  if (result->plates && options.validate) {
     start = Clock::now();
     // Only the structures kept are judged: the plates without the others
     // (merged or dropped ones would otherwise count as missing).

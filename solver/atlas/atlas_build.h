@@ -158,6 +158,13 @@ struct AtlasBuildOptions {
   // last round and whether it met the bounds there. 0: one mesh, and a
   // note names the structures that miss.
   int quality_rounds = 0;
+  // The mesher's sliver removal (LabelMeshOptions::perturb and exude),
+  // seconds of a build. Off only for a mesh no one solves on: the
+  // structures' surfaces a view draws (pba-solve --atlas-surfaces), whose
+  // triangles it does not change.
+  bool remove_slivers = true;
+  // From plates: check the mesh against them (geometric_validation.h).
+  bool validate = true;
 
   Status Validate() const;
   // The threads the geometric validation runs on (the mesher runs on one):

@@ -323,6 +323,8 @@ Status AtlasMeshCacheKey(const AtlasBuildOptions& options, std::string* key) {
                  options.roi_radius_mm, options.roi_size_mm);
   text += Format("island_share %.17g\nquality_rounds %d\n", options.island_share,
                  options.quality_rounds);
+  // Said only when off, so the keys of meshes built before it existed hold.
+  if (!options.remove_slivers) text += "remove_slivers 0\n";
   text += Format("quadratic %d\nmerge_rest %d\nstructures %zu\n", options.quadratic ? 1 : 0,
                  options.merge_rest ? 1 : 0, options.structures.size());
   for (const std::string& s : options.structures) text += "structure " + Quoted(s) + "\n";

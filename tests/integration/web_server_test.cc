@@ -3,12 +3,19 @@
 // would call it and as a hostile page would try to: no session sees
 // nothing, a request without the session's CSRF token or from another
 // site is refused, and roles are the gRPC services' own.
+#include <google/protobuf/struct.pb.h>
+#include <google/protobuf/util/json_util.h>
 #include <gtest/gtest.h>
 #include <httplib.h>
 
+#include <algorithm>
+#include <array>
+#include <cstring>
+#include <map>
 #include <regex>
 #include <string>
 #include <thread>
+#include <tuple>
 #include <vector>
 
 #include "common/subprocess.h"
@@ -350,6 +357,254 @@ TEST_F(WebTest, AProjectsChangesStreamAsServerSentEvents) {
   const auto stranger = client.Get("/api/events?project=demo", {{"Cookie", vera_cookie}});
   ASSERT_TRUE(stranger);
   EXPECT_TRUE(stranger->status == 403 || stranger->status == 404) << stranger->status;
+}
+
+// A glTF binary's nodes by name, each with the volume its triangles
+// enclose [mm^3] and its box [mm] (positions are in metres).
+struct GlbNode {
+  double volume_mm3 = 0;
+  std::array<double, 3> min{1e30, 1e30, 1e30}, max{-1e30, -1e30, -1e30};
+};
+
+bool ReadGlb(const std::string& glb, std::map<std::string, GlbNode>* nodes, std::string* why) {
+  const auto u32 = [&](size_t at) {
+    uint32_t v = 0;
+    std::memcpy(&v, glb.data() + at, 4);
+    return v;
+  };
+  if (glb.size() < 20 || glb.compare(0, 4, "glTF") != 0) return *why = "not glTF binary", false;
+  const uint32_t json_size = u32(12);
+  const std::string json = glb.substr(20, json_size);
+  const size_t bin = 20 + json_size + 8;
+  if (bin > glb.size()) return *why = "no binary chunk", false;
+  google::protobuf::Struct root;
+  if (!google::protobuf::util::JsonStringToMessage(json, &root).ok()) {
+    return *why = "its JSON does not parse", false;
+  }
+  const auto& f = root.fields();
+  const auto list = [&](const char* key) -> const auto& { return f.at(key).list_value().values(); };
+  const auto number = [](const google::protobuf::Value& v, const char* key) {
+    const auto& fields = v.struct_value().fields();
+    const auto it = fields.find(key);
+    return it == fields.end() ? 0.0 : it->second.number_value();
+  };
+  // An accessor's data: its count, and where its bytes start in `glb`.
+  const auto data = [&](int accessor, size_t* count) {
+    const auto& a = list("accessors")[accessor];
+    const auto& view = list("bufferViews")[static_cast<int>(number(a, "bufferView"))];
+    *count = static_cast<size_t>(number(a, "count"));
+    return bin + static_cast<size_t>(number(view, "byteOffset") + number(a, "byteOffset"));
+  };
+  for (const auto& node : list("nodes")) {
+    const std::string name = node.struct_value().fields().at("name").string_value();
+    const auto& mesh = list("meshes")[static_cast<int>(number(node, "mesh"))];
+    const auto& primitive = mesh.struct_value().fields().at("primitives").list_value().values(0);
+    const auto& attributes = primitive.struct_value().fields().at("attributes");
+    size_t vertices = 0, indices = 0;
+    const size_t at = data(static_cast<int>(number(attributes, "POSITION")), &vertices);
+    const size_t index_at = data(static_cast<int>(number(primitive, "indices")), &indices);
+    if (index_at + 4 * indices > glb.size() || at + 12 * vertices > glb.size()) {
+      return *why = name + "'s data runs past the file", false;
+    }
+    std::vector<std::array<double, 3>> x(vertices);
+    GlbNode& out = (*nodes)[name];
+    for (size_t v = 0; v < vertices; ++v) {
+      float p[3];
+      std::memcpy(p, glb.data() + at + 12 * v, 12);
+      for (int k = 0; k < 3; ++k) {
+        x[v][k] = 1e3 * p[k];
+        out.min[k] = std::min(out.min[k], x[v][k]);
+        out.max[k] = std::max(out.max[k], x[v][k]);
+      }
+    }
+    for (size_t t = 0; t + 2 < indices; t += 3) {
+      const uint32_t i = u32(index_at + 4 * t), j = u32(index_at + 4 * t + 4),
+                     k = u32(index_at + 4 * t + 8);
+      if (i >= vertices || j >= vertices || k >= vertices) return *why = "index past", false;
+      const auto& a = x[i];
+      const auto& b = x[j];
+      const auto& c = x[k];
+      out.volume_mm3 += (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) +
+                         a[2] * (b[0] * c[1] - b[1] * c[0])) /
+                        6;
+    }
+  }
+  return true;
+}
+
+// Plate contours of a w x w mm square at x0, on plates from z = 0 to 20 mm
+// every 5 mm.
+std::string SquarePrism(double x0, double w) {
+  std::string plates;
+  for (int z = 0; z <= 20; z += 5) {
+    plates += std::string(plates.empty() ? "" : ",") + "{\"z_mm\": " + std::to_string(z) +
+              ", \"polygons\": [[[" + std::to_string(x0) + ", 0], [" + std::to_string(x0 + w) +
+              ", 0], [" + std::to_string(x0 + w) + ", " + std::to_string(w) + "], [" +
+              std::to_string(x0) + ", " + std::to_string(w) + "]]]}";
+  }
+  return "{\"plates\": [" + plates + "]}";
+}
+
+class WebSurfacesTest : public WebTest {
+ protected:
+  void SetUp() override {
+    WebTest::SetUp();
+    ASSERT_EQ(Pba({"project", "create", "demo"}).exit_code, 0);
+    for (const auto& [name, x0, w] :
+         {std::tuple<std::string, double, double>{"Block", 0, 20}, {"Slab", 30, 10}}) {
+      const fs::path file = WriteScene(name + ".json", SquarePrism(x0, w));
+      const RunResult made = Pba({"atlas", "create", "-p", "demo", name, file.string()});
+      ASSERT_EQ(made.exit_code, 0) << made.out << made.err;
+    }
+    ASSERT_TRUE(SignIn(admin_, &cookie_, &csrf_));
+  }
+
+  httplib::Result Surfaces(const std::string& query, const std::string& cookie) {
+    auto client = Client();
+    client.set_read_timeout(120, 0);
+    return client.Get("/api/surfaces?" + query, {{"Cookie", cookie}});
+  }
+  int LogCount(const std::string& text) {
+    const std::string log = ReadFile(server_->log_path());
+    int n = 0;
+    for (size_t at = log.find(text); at != std::string::npos; at = log.find(text, at + 1)) ++n;
+    return n;
+  }
+
+  std::string cookie_, csrf_;
+};
+
+// A project's structures drawn from the server: one surface per structure,
+// named as it, around its shape (the plates' prism: the square times the
+// plates' span, less what the loft rounds off a small square's corners,
+// as the server's own voxel measure of it says); the second view of the
+// same shapes comes from the cache, and so does one after a colour change
+// or of a snapshot of the same heads; one revision alone is drawn too.
+TEST_F(WebSurfacesTest, AProjectsStructuresAreDrawnAsTheirShapesAndCached) {
+  const auto first = Surfaces("project=demo", cookie_);
+  ASSERT_TRUE(first);
+  ASSERT_EQ(first->status, 200) << first->body;
+  EXPECT_EQ(first->get_header_value("Content-Type"), "model/gltf-binary");
+  std::map<std::string, GlbNode> nodes;
+  std::string why;
+  ASSERT_TRUE(ReadGlb(first->body, &nodes, &why)) << why;
+  ASSERT_EQ(nodes.size(), 2u);
+  for (const auto& [name, x0, w] :
+       {std::tuple<std::string, double, double>{"Block", 0, 20}, {"Slab", 30, 10}}) {
+    ASSERT_EQ(nodes.count(name), 1u) << name;
+    const GlbNode& node = nodes[name];
+    const double prism = w * w * 20;
+    EXPECT_NEAR(node.volume_mm3, prism, (w > 10 ? 0.03 : 0.15) * prism) << name;
+    EXPECT_NEAR(node.min[0], x0, 1.5) << name;
+    EXPECT_NEAR(node.max[0], x0 + w, 1.5) << name;
+    EXPECT_NEAR(node.max[1], w, 1.5) << name;
+  }
+  EXPECT_EQ(LogCount("from the cache"), 0);
+
+  const auto again = Surfaces("project=demo", cookie_);
+  ASSERT_TRUE(again);
+  EXPECT_EQ(again->body, first->body);
+  EXPECT_EQ(LogCount("from the cache"), 1);
+  ASSERT_EQ(Pba({"atlas", "set", "-p", "demo", "Slab", "--colour", "10,200,30"}).exit_code, 0);
+  ASSERT_EQ(Pba({"atlas", "snapshot", "create", "-p", "demo", "--name", "first"}).exit_code, 0);
+  const auto snapshot = Surfaces("project=demo&snapshot=first", cookie_);
+  ASSERT_TRUE(snapshot);
+  ASSERT_EQ(snapshot->status, 200) << snapshot->body;
+  EXPECT_EQ(snapshot->body, first->body);
+  EXPECT_EQ(LogCount("from the cache"), 2);
+  int entries = 0;
+  for (const auto& e : fs::directory_iterator(dir_.path() / "data" / "cache" / "surfaces")) {
+    entries += e.path().extension() == ".glb";
+  }
+  EXPECT_EQ(entries, 1);
+
+  // One revision alone, for an overlay; a new shape is a new entry.
+  const fs::path grown = WriteScene("grown.json", SquarePrism(30, 14));
+  ASSERT_EQ(
+      Pba({"atlas", "checkout", "-p", "demo", "Slab", "-o", (dir_.path() / "Slab.json").string()})
+          .exit_code,
+      0);
+  fs::copy_file(grown, dir_.path() / "Slab.json", fs::copy_options::overwrite_existing);
+  const RunResult committed =
+      Pba({"atlas", "commit", (dir_.path() / "Slab.json").string(), "-m", "wider"});
+  ASSERT_EQ(committed.exit_code, 0) << committed.out << committed.err;
+  // Revision 2 is the colour's; 3 the new shape. Their volumes as the
+  // server's own diff measures them on voxels.
+  const auto diff = Call("AtlasService/DiffRevisions",
+                         "{\"project\":\"demo\",\"structure\":\"Slab\",\"from_revision\":1,"
+                         "\"to_revision\":3}",
+                         cookie_, csrf_);
+  ASSERT_TRUE(diff);
+  std::smatch from, to;
+  ASSERT_TRUE(std::regex_search(diff->body, from,
+                                std::regex("\"shape\":\\{[^}]*\"from_volume_mm3\":([0-9.]+)")))
+      << diff->body;
+  ASSERT_TRUE(std::regex_search(diff->body, to,
+                                std::regex("\"shape\":\\{[^}]*\"to_volume_mm3\":([0-9.]+)")));
+  for (const auto& [revision, voxels] :
+       {std::pair<std::string, double>{"1", std::stod(from[1].str())},
+        {"0", std::stod(to[1].str())}}) {
+    const auto alone = Surfaces("project=demo&structure=Slab&revision=" + revision, cookie_);
+    ASSERT_TRUE(alone);
+    ASSERT_EQ(alone->status, 200) << alone->body;
+    std::map<std::string, GlbNode> one;
+    ASSERT_TRUE(ReadGlb(alone->body, &one, &why)) << why;
+    ASSERT_EQ(one.size(), 1u);
+    EXPECT_NEAR(one["Slab"].volume_mm3, voxels, 0.05 * voxels) << "revision " << revision;
+  }
+  EXPECT_GT(std::stod(to[1].str()), 1.5 * std::stod(from[1].str()));
+}
+
+// Who may draw what, and requests that name nothing drawable, each with a
+// clear refusal; a damaged cache entry is made again, never sent.
+TEST_F(WebSurfacesTest, RefusalsAndADamagedCacheEntry) {
+  auto client = Client();
+  const auto anonymous = client.Get("/api/surfaces?project=demo");
+  ASSERT_TRUE(anonymous);
+  EXPECT_EQ(anonymous->status, 401);
+  const RunResult created = RunProcess(
+      {PBA_SERVER_BIN, "admin", "create-user", "olga", "--data", (dir_.path() / "data").string()},
+      seconds(30));
+  ASSERT_EQ(created.exit_code, 0) << created.out << created.err;
+  std::smatch token;
+  ASSERT_TRUE(std::regex_search(created.out, token, std::regex("[0-9a-f]{64}"))) << created.out;
+  std::string outsider, outsider_csrf;
+  ASSERT_TRUE(SignIn(token.str(), &outsider, &outsider_csrf));
+  const auto foreign = Surfaces("project=demo", outsider);
+  ASSERT_TRUE(foreign);
+  EXPECT_EQ(foreign->status, 403) << foreign->body;
+  EXPECT_EQ(LogCount("DownloadSurfaces demo"), 0) << "nothing was built for an outsider";
+  ASSERT_EQ(Pba({"project", "role", "demo", "olga", "viewer"}).exit_code, 0);
+  const auto viewer = Surfaces("project=demo", outsider);
+  ASSERT_TRUE(viewer);
+  EXPECT_EQ(viewer->status, 200) << viewer->body;
+
+  for (const auto& [query, status, says] : std::vector<std::tuple<std::string, int, std::string>>{
+           {"project=demo&snapshot=nosuch", 404, "nosuch"},
+           {"project=demo&structure=Nothing", 404, "Nothing"},
+           {"project=demo&structure=Slab&revision=7", 404, "revision 7"},
+           {"project=demo&structure=Slab&revision=x1", 400, "revision"},
+           {"project=demo&revision=1", 400, "structure"},
+           {"project=demo&structure=Slab&snapshot=1", 400, "snapshot"},
+           {"project=nosuch", 404, "nosuch"}}) {
+    const auto refused = Surfaces(query, cookie_);
+    ASSERT_TRUE(refused) << query;
+    EXPECT_EQ(refused->status, status) << query << ": " << refused->body;
+    EXPECT_NE(refused->body.find(says), std::string::npos) << query << ": " << refused->body;
+  }
+
+  const fs::path cache = dir_.path() / "data" / "cache" / "surfaces";
+  for (const auto& e : fs::directory_iterator(cache)) {
+    std::ofstream(e.path(), std::ios::trunc) << "glTF but not really";
+  }
+  const auto remade = Surfaces("project=demo", cookie_);
+  ASSERT_TRUE(remade);
+  ASSERT_EQ(remade->status, 200) << remade->body;
+  std::map<std::string, GlbNode> nodes;
+  std::string why;
+  EXPECT_TRUE(ReadGlb(remade->body, &nodes, &why)) << why;
+  EXPECT_EQ(nodes.size(), 2u);
+  EXPECT_EQ(LogCount("built in"), 2);
 }
 
 }  // namespace
