@@ -180,21 +180,25 @@ class WebViewTest(unittest.TestCase):
         self.wait.until(lambda b: b.find_element(By.LINK_TEXT, name).click() or True)
         self.wait.until(lambda b: b.find_element(By.ID, "project").is_displayed())
 
-    def model_pixels(self):
+    def model_pixels(self, view="#view"):
         """The share of the 3D view's pixels the model covers, and how many
-        colours they have."""
+        colours they have; with `red`, the share that is the overlay's red."""
         return self.browser.execute_script("""
-            const canvas = document.querySelector('#view canvas');
+            const canvas = document.querySelector(arguments[0] + ' canvas');
             const gl = canvas.getContext('webgl2') || canvas.getContext('webgl');
             const w = gl.drawingBufferWidth, h = gl.drawingBufferHeight;
             const pixels = new Uint8Array(4 * w * h);
             gl.readPixels(0, 0, w, h, gl.RGBA, gl.UNSIGNED_BYTE, pixels);
-            let model = 0; const seen = new Set();
+            let model = 0, red = 0, blue = 0; const seen = new Set();
             for (let i = 0; i < pixels.length; i += 4) {
-              const key = pixels[i] + ',' + pixels[i + 1] + ',' + pixels[i + 2];
+              const r = pixels[i], g = pixels[i + 1], b = pixels[i + 2];
+              const key = r + ',' + g + ',' + b;
               if (key !== '244,244,244') { ++model; seen.add(key); }
+              if (r > 150 && g < 90 && b < 100) ++red;
+              if (b > 140 && r < 150 && b > r + 40) ++blue;
             }
-            return {fraction: model / (w * h), distinct: seen.size};""")
+            return {fraction: model / (w * h), distinct: seen.size, red: red / (w * h),
+                    blue: blue / (w * h)};""", view)
 
     def solve(self, yaml):
         """Submits the scene `yaml` with the CLI and waits for it; its job id."""
@@ -208,6 +212,12 @@ class WebViewTest(unittest.TestCase):
         # The jobs table is redrawn every 2 s: found and clicked at once.
         self.wait.until(lambda b: b.find_element(
             By.XPATH, "//tr[@data-job='%s']//a[text()='view']" % job).click() or True)
+
+    def atlas_drawn(self, seconds=120):
+        """Waits for the project's 3D view; what it drew."""
+        return WebDriverWait(self.browser, seconds, poll_frequency=0.2).until(
+            lambda b: b.execute_script(
+                "const a = window.pbaAtlas; return a && (a.ready || a.error) ? a : null;"))
 
     def make_project(self):
         self.server.pba("project", "create", "demo")
@@ -426,6 +436,97 @@ class WebViewTest(unittest.TestCase):
             largest_mm = max((x * x + y * y + z * z) ** 0.5 for x, y, z in block)
             self.assertGreater(largest_mm, 0)
             self.assertAlmostEqual(step["largest_m"] * 1000 / largest_mm, 1.0, places=5)
+
+    def test_the_built_in_atlas_draws_every_structure_and_a_pick_names_it(self):
+        self.server.pba("project", "create", "brain")
+        self.server.pba("atlas", "import", "-p", "brain", "--synthetic")
+        listed = json.loads(self.server.pba("--json", "atlas", "list", "-p", "brain",
+                                            "--all").stdout)
+        names = sorted(s["name"] for s in listed["structures"])
+        self.assertEqual(len(names), 44)
+        self.sign_in(self.server.admin)
+        self.open_project("brain")
+        atlas = self.atlas_drawn()
+        self.assertNotIn("error", atlas)
+        self.assertEqual(sorted(atlas["regions"]), names)
+        self.assertLess(atlas["bytes"], 10e6)
+        # Every structure is in the scene with triangles of its own colour.
+        meshes = self.browser.execute_script("""
+            return [...document.querySelectorAll('#atlas-regions input')].map(
+                (box) => box.dataset.region);""")
+        self.assertEqual(sorted(meshes), names)
+        colours = self.model_pixels("#atlas-view")
+        self.screenshot("atlas")
+        self.assertGreater(colours["fraction"], 0.05)
+        self.assertGreater(colours["distinct"], 20)
+        # The structures' colours are the store's: a colour set with the
+        # CLI redraws the structure in it.
+        self.browser.execute_script("document.querySelector('#atlas details').open = true;")
+        # Picking the middle of the view names a structure, with its facts.
+        self.browser.find_element(By.CSS_SELECTOR, "#atlas-view canvas").click()
+        name = self.wait.until(lambda b: b.find_element(By.CSS_SELECTOR, "#atlas-picked .picked-name").text or False)
+        self.assertIn(name, names)
+        try:
+            facts = self.wait.until(lambda b: "revision 1 by admin" in b.find_element(
+                By.ID, "atlas-picked").text and b.find_element(By.ID, "atlas-picked").text)
+        except Exception:
+            print("picked:", self.browser.find_element(By.ID, "atlas-picked").text,
+                  "error:", self.browser.find_element(By.ID, "atlas-error").text, file=sys.stderr)
+            raise
+        self.assertIn("not locked", facts)
+        # Its material, set from the page through the etag.
+        field = self.browser.find_element(By.ID, "atlas-material")
+        field.clear()
+        field.send_keys('{"neo_hookean": {"shear_modulus_pa": 1200}}')
+        self.browser.find_element(By.XPATH, "//div[@id='atlas-picked']//button").click()
+        self.wait.until(lambda b: b.execute_script("return window.pbaAtlas.saved;") == name)
+        shown = json.loads(self.server.pba("--json", "atlas", "show", "-p", "brain", name).stdout)
+        self.assertEqual(json.loads(shown["metadata"]["material_json"]),
+                         {"neo_hookean": {"shear_modulus_pa": 1200}})
+        # A material that is not JSON is refused with the server's reason.
+        field = self.wait.until(lambda b: b.find_element(By.ID, "atlas-material"))
+        field.clear()
+        field.send_keys("{shear: 1200")
+        self.browser.find_element(By.XPATH, "//div[@id='atlas-picked']//button").click()
+        error = self.wait.until(lambda b: b.find_element(By.ID, "atlas-error").text or False)
+        self.assertIn("material_json", error)
+
+    def test_two_revisions_of_a_structure_are_overlaid(self):
+        self.server.pba("project", "create", "demo")
+        path = os.path.join(self.folder, "caudate.json")
+        with open(path, "w") as f:
+            f.write(prism(12))
+        self.server.pba("atlas", "create", "-p", "demo", "Caudate", path, "--colour", "200,200,60")
+        self.server.pba("atlas", "checkout", "-p", "demo", "Caudate", "-o", path)
+        with open(path, "w") as f:
+            f.write(prism(16))
+        self.server.pba("atlas", "commit", path, "-m", "wider")
+        self.sign_in(self.server.admin)
+        self.open_project("demo")
+        self.atlas_drawn()
+        self.wait.until(lambda b: b.find_element(By.LINK_TEXT, "Caudate").click() or True)
+        self.wait.until(lambda b: b.find_element(
+            By.XPATH, "//tr[@data-revision='2']//button[text()='overlay on 1']").click() or True)
+        overlay = self.wait.until(lambda b: b.execute_script(
+            "const a = window.pbaAtlas; return a && a.ready && a.overlay ? a : null;"))
+        self.assertEqual((overlay["from"], overlay["to"], overlay["overlay"]), (1, 2, ["Caudate"]))
+        pixels = self.model_pixels("#atlas-view")
+        self.screenshot("overlay")
+        # Revision 1 solid blue inside revision 2's red lines, which reach
+        # past it on every side.
+        self.assertGreater(pixels["blue"], 0.01)
+        self.assertGreater(pixels["red"], 0.002)
+        self.browser.find_element(By.ID, "atlas-back").click()
+        back = self.atlas_drawn()
+        self.assertEqual(back["regions"], ["Caudate"])
+        self.assertNotIn("overlay", back)
+
+
+def prism(width_mm):
+    """Plate contours of a width_mm square on five plates 5 mm apart."""
+    plates = ['{"z_mm": %d, "polygons": [[[0, 0], [%g, 0], [%g, %g], [0, %g]]]}'
+              % (z, width_mm, width_mm, width_mm, width_mm) for z in range(0, 21, 5)]
+    return '{"plates": [' + ", ".join(plates) + "]}"
 
 
 if __name__ == "__main__":

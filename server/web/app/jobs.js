@@ -1,7 +1,7 @@
 // The jobs: their list with live progress (a cancel for the unfinished),
 // and a finished job's summary, files, surfaces in 3D and curves.
 import {api, button, cell, link, show} from '/app/api.js';
-import {Viewer} from '/app/viewer.js';
+import {Viewer, bindControls} from '/app/viewer.js';
 
 let viewer = null;
 let chart = null;
@@ -54,13 +54,18 @@ export async function showJob(id) {
   show('job', true);
   await plotCurves(id, names);
   if (!names.includes('surfaces.glb')) return;
-  if (!viewer) viewer = new Viewer(document.getElementById('view'), document.getElementById('picked'));
+  if (!viewer) {
+    const picked = document.getElementById('picked');
+    viewer = new Viewer(document.getElementById('view'), (name) => { picked.textContent = name; });
+  }
   const drawn = await viewer.load('/api/jobs/' + id + '/files/surfaces.glb');
   drawn.drawn_at_ms = performance.now();  // the first frame is drawn (for timings)
   document.getElementById('legend').textContent = 'colour: displacement, 0 to ' +
       (1000 * drawn.largest_m).toPrecision(3) + ' mm (shown deformed, at the end)';
   window.pbaView = drawn;
-  showRegions(drawn.regions);
+  bindControls(viewer, drawn.regions,
+               {regions: 'regions', through: 'see-through', cut: 'cut', section: 'section'},
+               () => { window.pbaView.visible = viewer.visibleRegions(); });
   // A slider through the steps, when the result has them.
   const times = viewer.stepTimes;
   show('stepping', times.length > 1 && names.includes('surface_steps.bin'));
@@ -77,35 +82,6 @@ export async function showJob(id) {
         ' mm';
     window.pbaView.step = step;
   };
-}
-
-// The regions drawn, each with a box to show or hide it; a see-through
-// switch and a section plane for what lies inside.
-function showRegions(regions) {
-  const list = document.getElementById('regions');
-  list.replaceChildren();
-  for (const name of regions) {
-    const item = document.createElement('label');
-    const box = document.createElement('input');
-    box.type = 'checkbox';
-    box.checked = true;
-    box.dataset.region = name;
-    box.onchange = () => {
-      viewer.setVisible(name, box.checked);
-      window.pbaView.visible = viewer.visibleRegions();
-    };
-    item.append(box, ' ' + name);
-    list.append(item);
-  }
-  const through = document.getElementById('see-through');
-  through.checked = false;
-  through.onchange = () => viewer.setOpacity(through.checked ? 0.3 : 1);
-  const section = document.getElementById('section');
-  const cut = document.getElementById('cut');
-  cut.checked = false;
-  const apply = () => viewer.setSection(cut.checked ? Number(section.value) / 100 : null);
-  cut.onchange = apply;
-  section.oninput = apply;
 }
 
 function showSummary(summary) {

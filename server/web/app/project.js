@@ -1,8 +1,9 @@
 // A project: its structures with their locks (redrawn at each of the
-// project's events), a structure's history with the diff figures the
-// server computes, its colour edited through the metadata etag, and the
-// snapshots with their tags.
+// project's events) and in 3D (atlas.js), a structure's history with the
+// diff figures the server computes and two revisions overlaid, its colour
+// edited through the metadata etag, and the snapshots with their tags.
 import {api, button, cell, link, show} from '/app/api.js';
+import {drawAtlas, onEvent, overlayRevisions, setStructures} from '/app/atlas.js';
 
 let project = '';
 let events = null;
@@ -15,21 +16,29 @@ export async function openProject(name) {
   project = name;
   if (events) events.close();
   events = new EventSource('/api/events?project=' + encodeURIComponent(project));
-  events.onmessage = () => {
+  events.onmessage = (message) => {
     showStructures().catch(() => {});
     showSnapshots().catch(() => {});
     if (historyOf) showHistory(historyOf).catch(() => {});
+    try { onEvent(JSON.parse(message.data).kind); } catch (e) { /* not an event */ }
   };
   historyOf = '';
   show('history', false);
   await showStructures();
   await showSnapshots();
+  const of = document.getElementById('atlas-of');
+  of.value = '';
+  of.onchange = () => drawAtlas(project, of.value).catch(() => {});
+  // Not awaited: the first view of new shapes takes the server seconds
+  // (it says so, and any error, beside the view).
+  drawAtlas(project).catch(() => {});
 }
 
 function colourText(c) { return c ? [c.r || 0, c.g || 0, c.b || 0].join(',') : ''; }
 
 export async function showStructures() {
   const listed = await api('AtlasService/ListStructures', {project});
+  setStructures(project, listed.structures || []);
   document.getElementById('project-name').textContent = project;
   const body = document.querySelector('#structures tbody');
   body.replaceChildren();
@@ -110,6 +119,10 @@ export async function showHistory(structure) {
           project, structure, from_revision: r.parent, to_revision: r.number});
         diff.replaceChildren(diffText(d));
       }, 'action-error'));
+      if (r.kind !== 'metadata') {
+        diff.append(' ', button('overlay on ' + r.parent, () => overlayRevisions(
+            project, structure, Number(r.parent), Number(r.number)), 'action-error'));
+      }
     }
   }
   show('history', true);
@@ -142,6 +155,14 @@ export async function showSnapshots() {
   const listed = await api('AtlasService/ListSnapshots', {project, page_size: 20});
   const body = document.querySelector('#snapshots tbody');
   body.replaceChildren();
+  // The 3D view's choice: the heads or a snapshot.
+  const of = document.getElementById('atlas-of');
+  const chosen = of.value;
+  of.replaceChildren(new Option('every structure at its head', ''));
+  for (const s of listed.snapshots || []) {
+    of.append(new Option('snapshot ' + s.id + (s.name ? ' (' + s.name + ')' : ''), String(s.id)));
+  }
+  of.value = [...of.options].some((o) => o.value === chosen) ? chosen : '';
   for (const s of listed.snapshots || []) {
     const row = body.insertRow();
     row.dataset.snapshot = s.id;

@@ -1,6 +1,8 @@
-// A 3D view of a glTF file of region surfaces (surfaces.glb, written by
-// pba-solve): orbit with the mouse, click a surface to see its region,
-// the final displacement shown as a deformation and as colour.
+// A 3D view of a glTF file of region surfaces (a job's surfaces.glb, or a
+// project's structures from /api/surfaces): orbit with the mouse, click a
+// surface to pick its region; a result's final displacement shown as a
+// deformation and as colour, a structure's own colour otherwise; a second
+// file drawn over the first (two revisions of a structure).
 import * as THREE from '/vendor/three.module.js';
 import {OrbitControls} from '/vendor/OrbitControls.js';
 import {GLTFLoader} from '/vendor/GLTFLoader.js';
@@ -15,10 +17,40 @@ function colourOf(t) {
   return kColours[i].map((c, k) => c + f * (kColours[i + 1][k] - c));
 }
 
+// Fetches `url` and parses it as glTF: the scene and the bytes fetched.
+// An error names the server's reason.
+async function fetchGltf(url) {
+  const response = await fetch(url);
+  if (!response.ok) {
+    let message = response.statusText;
+    try { message = (await response.json()).message || message; } catch (e) { /* not JSON */ }
+    throw new Error(message);
+  }
+  const buffer = await response.arrayBuffer();
+  // (three.js r111, Debian's: no parseAsync yet.)
+  const gltf = await new Promise((resolve, reject) => {
+    new GLTFLoader().parse(buffer, '', resolve, reject);
+  });
+  // three.js makes node names fit its animation paths ("Corpus callosum"
+  // becomes "Corpus_callosum"); each node's extras keep its region's
+  // index, by which the file's own name is found again.
+  const named = {};
+  for (const node of gltf.parser.json.nodes || []) {
+    if (node.extras && node.extras.region !== undefined) named[node.extras.region] = node.name;
+  }
+  gltf.scene.traverse((o) => {
+    if (o.isMesh && o.userData && named[o.userData.region] !== undefined) {
+      o.name = named[o.userData.region];
+    }
+  });
+  return {gltf, bytes: buffer.byteLength};
+}
+
 export class Viewer {
-  constructor(element, label) {
+  // `onPick(name)` is told the region clicked ('' for none).
+  constructor(element, onPick) {
     this.element = element;
-    this.label = label;
+    this.onPick = onPick;
     this.renderer = new THREE.WebGLRenderer({antialias: true, preserveDrawingBuffer: true});
     this.renderer.setPixelRatio(window.devicePixelRatio);
     this.renderer.localClippingEnabled = true;
@@ -39,6 +71,7 @@ export class Viewer {
     this.renderer.domElement.addEventListener('click', (e) => this.pick(e));
     this.model = null;
     this.meshes = [];
+    this.overlay = null;
     this.resize();
     window.addEventListener('resize', () => this.resize());
   }
@@ -53,14 +86,13 @@ export class Viewer {
 
   render() { this.renderer.render(this.scene, this.camera); }
 
-  // Loads `url`; resolves to what was drawn: region names and the largest
-  // displacement [m].
+  // Loads `url`; resolves to what was drawn: region names, the largest
+  // displacement [m] and the bytes fetched.
   async load(url) {
-    // (three.js r111, Debian's: no loadAsync yet.)
-    const gltf = await new Promise((resolve, reject) => {
-      new GLTFLoader().load(url, resolve, undefined, reject);
-    });
+    const {gltf, bytes} = await fetchGltf(url);
     if (this.model) this.scene.remove(this.model);
+    if (this.overlay) this.scene.remove(this.overlay);
+    this.overlay = null;
     this.model = gltf.scene;
     this.meshes = [];
     let largest = 0;
@@ -96,13 +128,41 @@ export class Viewer {
     const size = box.getSize(new THREE.Vector3()).length() || 1;
     this.camera.near = size / 1000;
     this.camera.far = size * 100;
-    this.camera.position.copy(centre).add(new THREE.Vector3(0.6, -1.2, 0.8).multiplyScalar(size));
+    this.camera.position.copy(centre).add(new THREE.Vector3(0.6, -1.2, 0.8).multiplyScalar(0.7 * size));
     this.camera.up.set(0, 0, 1);
     this.camera.updateProjectionMatrix();
     this.controls.target.copy(centre);
     this.controls.update();
     this.render();
-    return {regions: this.meshes.map((m) => m.name), largest_m: largest};
+    return {regions: this.meshes.map((m) => m.name), largest_m: largest, bytes};
+  }
+
+  // Draws `url` over what is loaded, every surface as a mesh of lines of
+  // `colour` (0xRRGGBB); the camera stays. Resolves to its region names.
+  async addOverlay(url, colour) {
+    const {gltf, bytes} = await fetchGltf(url);
+    if (this.overlay) this.scene.remove(this.overlay);
+    this.overlay = gltf.scene;
+    const names = [];
+    this.overlay.traverse((o) => {
+      if (!o.isMesh) return;
+      names.push(o.name);
+      o.material = new THREE.MeshBasicMaterial({color: colour, wireframe: true});
+      o.material.clippingPlanes = this.sectioned ? [this.section] : [];
+    });
+    this.scene.add(this.overlay);
+    this.render();
+    return {regions: names, bytes};
+  }
+
+  // Region `name` in `rgb` (0..255 each).
+  setColour(name, rgb) {
+    for (const mesh of this.meshes) {
+      if (mesh.name !== name || mesh.geometry.getAttribute('_displacement')) continue;
+      mesh.material = mesh.material.clone();
+      mesh.material.color = new THREE.Color(rgb[0] / 255, rgb[1] / 255, rgb[2] / 255);
+    }
+    this.render();
   }
 
   // Moves `mesh` to its reference plus `u` (x y z per vertex from `from`)
@@ -174,7 +234,9 @@ export class Viewer {
     const box = new THREE.Box3().setFromObject(this.model);
     this.section.constant = box.min.x + fraction * (box.max.x - box.min.x);
     this.sectioned = fraction !== null;
-    for (const mesh of this.meshes) {
+    const cut = [...this.meshes];
+    if (this.overlay) this.overlay.traverse((o) => { if (o.isMesh) cut.push(o); });
+    for (const mesh of cut) {
       mesh.material.clippingPlanes = this.sectioned ? [this.section] : [];
       mesh.material.needsUpdate = true;
     }
@@ -193,7 +255,38 @@ export class Viewer {
     ray.setFromCamera(pointer, this.camera);
     const hit = ray.intersectObjects(this.meshes.filter((m) => m.visible), false).find(
         (h) => !this.sectioned || this.section.distanceToPoint(h.point) >= 0);
-    this.label.textContent = hit ? hit.object.name : '';
-    return hit ? hit.object.name : '';
+    const name = hit ? hit.object.name : '';
+    if (this.onPick) this.onPick(name);
+    return name;
   }
+}
+
+// The controls of a view: a box per region to show or hide it (in the
+// element `ids.regions`), a see-through switch and a section plane at x.
+// `changed()` is called after each change.
+export function bindControls(viewer, regions, ids, changed = () => {}) {
+  const list = document.getElementById(ids.regions);
+  list.replaceChildren();
+  for (const name of regions) {
+    const item = document.createElement('label');
+    const box = document.createElement('input');
+    box.type = 'checkbox';
+    box.checked = true;
+    box.dataset.region = name;
+    box.onchange = () => {
+      viewer.setVisible(name, box.checked);
+      changed();
+    };
+    item.append(box, ' ' + name);
+    list.append(item);
+  }
+  const through = document.getElementById(ids.through);
+  through.checked = false;
+  through.onchange = () => viewer.setOpacity(through.checked ? 0.3 : 1);
+  const section = document.getElementById(ids.section);
+  const cut = document.getElementById(ids.cut);
+  cut.checked = false;
+  const apply = () => viewer.setSection(cut.checked ? Number(section.value) / 100 : null);
+  cut.onchange = apply;
+  section.oninput = apply;
 }
