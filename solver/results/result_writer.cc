@@ -1,6 +1,7 @@
 // result.h5 (HDF5 C API) and result.xdmf (XDMF 3, the ParaView view of it).
 #include "results/result_writer.h"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cctype>
 #include <chrono>
@@ -277,8 +278,41 @@ Status WriteSurfaces(const Solution& solution, int npe, const std::filesystem::p
         dir / kSurfaceStepsFile,
         SurfaceStepsBin(surfaces, solution.nodes_mm, solution.step_displacement_mm)));
   }
-  return AtomicWriteText(dir / "surfaces.glb", SurfacesGlb(surfaces, solution.nodes_mm,
-                                                           solution.displacement_mm, stepped));
+  // The final state's pressure (-trace(sigma) / 3) and largest principal
+  // strain, element by element, drawn on the surfaces.
+  const std::size_t elements = solution.tets.size() / npe;
+  std::vector<double> pressure, principal;
+  if (solution.stress_pa.size() == 6 * elements) {
+    pressure.resize(elements);
+    for (std::size_t e = 0; e < elements; ++e) {
+      const double* s = &solution.stress_pa[6 * e];
+      pressure[e] = -(s[0] + s[1] + s[2]) / 3;
+    }
+  }
+  if (solution.strain.size() == 6 * elements) {
+    principal.resize(elements);
+    for (std::size_t e = 0; e < elements; ++e) {
+      const double* v = &solution.strain[6 * e];  // xx yy zz yz xz xy, engineering shear
+      Eigen::Matrix3d strain;
+      strain << v[0], v[5] / 2, v[4] / 2, v[5] / 2, v[1], v[3] / 2, v[4] / 2, v[3] / 2, v[2];
+      principal[e] = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(strain, Eigen::EigenvaluesOnly)
+                         .eigenvalues()(2);
+    }
+  }
+  const std::vector<int64_t> region =
+      HasRegions(solution) ? solution.element_region : std::vector<int64_t>();
+  std::vector<VertexScalar> scalars;
+  if (!pressure.empty()) {
+    scalars.push_back({"_PRESSURE", "pressure", "Pa",
+                       VertexMeans(surfaces, solution.tets, npe, region, pressure)});
+  }
+  if (!principal.empty()) {
+    scalars.push_back({"_STRAIN", "largest principal strain", "",
+                       VertexMeans(surfaces, solution.tets, npe, region, principal)});
+  }
+  return AtomicWriteText(
+      dir / "surfaces.glb",
+      SurfacesGlb(surfaces, solution.nodes_mm, solution.displacement_mm, stepped, scalars));
 }
 
 }  // namespace

@@ -167,10 +167,74 @@ std::string SurfaceStepsBin(const std::vector<RegionSurface>& surfaces,
   return bin;
 }
 
+std::vector<std::vector<float>> VertexMeans(const std::vector<RegionSurface>& surfaces,
+                                            const std::vector<int64_t>& elements,
+                                            int nodes_per_element,
+                                            const std::vector<int64_t>& element_region,
+                                            const std::vector<double>& element_values) {
+  const int64_t ne = static_cast<int64_t>(elements.size()) / std::max(1, nodes_per_element);
+  if (element_values.size() != static_cast<std::size_t>(ne)) return {};
+  const bool regions = element_region.size() == static_cast<std::size_t>(ne);
+  // A quadratic tetrahedron's corners are its first four nodes.
+  const int corners = nodes_per_element == 10 ? 4 : nodes_per_element;
+  std::unordered_map<int64_t, std::size_t> surface_of;  // region -> its surface
+  for (std::size_t i = 0; i < surfaces.size(); ++i) surface_of[surfaces[i].region] = i;
+  std::vector<std::unordered_map<int64_t, uint32_t>> vertex(surfaces.size());
+  std::vector<std::vector<double>> sum(surfaces.size());
+  std::vector<std::vector<int>> count(surfaces.size());
+  for (std::size_t i = 0; i < surfaces.size(); ++i) {
+    for (std::size_t v = 0; v < surfaces[i].nodes.size(); ++v) {
+      vertex[i][surfaces[i].nodes[v]] = static_cast<uint32_t>(v);
+    }
+    sum[i].assign(surfaces[i].nodes.size(), 0.0);
+    count[i].assign(surfaces[i].nodes.size(), 0);
+  }
+  for (int64_t e = 0; e < ne; ++e) {
+    const auto found = surface_of.find(regions ? element_region[e] : 0);
+    if (found == surface_of.end()) continue;
+    const std::size_t i = found->second;
+    for (int c = 0; c < corners; ++c) {
+      const auto at = vertex[i].find(elements[nodes_per_element * e + c]);
+      if (at == vertex[i].end()) continue;
+      sum[i][at->second] += element_values[e];
+      ++count[i][at->second];
+    }
+  }
+  std::vector<std::vector<float>> means(surfaces.size());
+  for (std::size_t i = 0; i < surfaces.size(); ++i) {
+    means[i].resize(sum[i].size());
+    for (std::size_t v = 0; v < sum[i].size(); ++v) {
+      means[i][v] = count[i][v] > 0 ? static_cast<float>(sum[i][v] / count[i][v]) : 0.0f;
+    }
+  }
+  return means;
+}
+
 std::string SurfacesGlb(const std::vector<RegionSurface>& surfaces,
                         const std::vector<double>& nodes_mm,
-                        const std::vector<double>& displacement_mm, const SurfaceSteps& steps) {
+                        const std::vector<double>& displacement_mm, const SurfaceSteps& steps,
+                        const std::vector<VertexScalar>& scalars) {
   const bool displaced = !displacement_mm.empty() && displacement_mm.size() == nodes_mm.size();
+  // The scalars with a value for every vertex of every surface, and their ranges.
+  std::vector<const VertexScalar*> drawn_scalars;
+  std::vector<std::pair<float, float>> ranges;
+  for (const VertexScalar& scalar : scalars) {
+    bool fits = scalar.values.size() == surfaces.size();
+    std::pair<float, float> range{std::numeric_limits<float>::max(),
+                                  std::numeric_limits<float>::lowest()};
+    for (std::size_t i = 0; fits && i < surfaces.size(); ++i) {
+      fits = scalar.values[i].size() == surfaces[i].nodes.size();
+      if (!fits || !Drawn(surfaces[i], nodes_mm.size() / 3)) continue;
+      for (const float v : scalar.values[i]) {
+        range.first = std::min(range.first, v);
+        range.second = std::max(range.second, v);
+      }
+    }
+    if (fits && range.first <= range.second) {
+      drawn_scalars.push_back(&scalar);
+      ranges.push_back(range);
+    }
+  }
   std::string bin;
   std::string views, accessors, meshes, nodes, materials;
   int view = 0, accessor = 0, drawn = 0;
@@ -230,6 +294,15 @@ std::string SurfacesGlb(const std::vector<RegionSurface>& surfaces,
                                      s.nodes.size(), "VEC3", "");
       attributes += ",\"_DISPLACEMENT\":" + std::to_string(moved);
     }
+    const std::size_t surface = static_cast<std::size_t>(&s - surfaces.data());
+    for (const VertexScalar* scalar : drawn_scalars) {
+      const std::vector<float>& values = scalar->values[surface];
+      const std::size_t at = bin.size();
+      Append(&bin, values.data(), values.size() * sizeof(float));
+      const int added = add_accessor(add_view(at, values.size() * sizeof(float), kArrayBuffer),
+                                     kFloat, values.size(), "SCALAR", "");
+      attributes += "," + JsonQuoted(scalar->attribute) + ":" + std::to_string(added);
+    }
     const std::size_t index_at = bin.size();
     Append(&bin, s.triangles.data(), s.triangles.size() * sizeof(uint32_t));
     const int indices =
@@ -258,6 +331,17 @@ std::string SurfacesGlb(const std::vector<RegionSurface>& surfaces,
       extras += (k ? "," : "") + Number(steps.times[k], 17);
     }
     extras += "]";
+  }
+  if (!drawn_scalars.empty()) {
+    extras += ",\"scalars\":{";
+    for (std::size_t k = 0; k < drawn_scalars.size(); ++k) {
+      const VertexScalar& scalar = *drawn_scalars[k];
+      extras += std::string(k ? "," : "") + JsonQuoted(scalar.attribute) +
+                ":{\"label\":" + JsonQuoted(scalar.label) + ",\"unit\":" + JsonQuoted(scalar.unit) +
+                ",\"min\":" + Number(ranges[k].first) + ",\"max\":" + Number(ranges[k].second) +
+                "}";
+    }
+    extras += "}";
   }
   std::string json = "{\"asset\":{\"version\":\"2.0\",\"generator\":\"PBA\",\"extras\":{" + extras +
                      "}},\"scene\":0,\"scenes\":[{\"nodes\":[" + scene_nodes + "]}],\"nodes\":[" +

@@ -52,12 +52,35 @@ struct SurfaceSteps {
 };
 inline constexpr char kSurfaceStepsFile[] = "surface_steps.bin";
 
+// A value per vertex of every surface, drawn as a colour: a glTF custom
+// attribute (`attribute`, float32 SCALAR), named with its unit in
+// asset.extras.scalars with its range.
+struct VertexScalar {
+  std::string attribute;                   // "_PRESSURE"
+  std::string label;                       // "pressure"
+  std::string unit;                        // "Pa"
+  std::vector<std::vector<float>> values;  // per surface, per vertex
+};
+
+// `element_values` (one per element) on `surfaces` (as ExtractRegionSurfaces
+// made them from the same `elements`, `nodes_per_element` and
+// `element_region`): each vertex of region r's surface takes the mean over
+// r's elements at its node, so that a value does not bleed across an
+// interface. Empty when the sizes do not agree.
+std::vector<std::vector<float>> VertexMeans(const std::vector<RegionSurface>& surfaces,
+                                            const std::vector<int64_t>& elements,
+                                            int nodes_per_element,
+                                            const std::vector<int64_t>& element_region,
+                                            const std::vector<double>& element_values);
+
 // surfaces.glb: `surfaces` over `nodes_mm` (nodes x 3), with the nodal
-// `displacement_mm` (nodes x 3) as _DISPLACEMENT when not empty, and
-// naming `steps` when it has any.
+// `displacement_mm` (nodes x 3) as _DISPLACEMENT when not empty, naming
+// `steps` when it has any, and each of `scalars` whose values fit the
+// surfaces.
 std::string SurfacesGlb(const std::vector<RegionSurface>& surfaces,
                         const std::vector<double>& nodes_mm,
-                        const std::vector<double>& displacement_mm, const SurfaceSteps& steps = {});
+                        const std::vector<double>& displacement_mm, const SurfaceSteps& steps = {},
+                        const std::vector<VertexScalar>& scalars = {});
 
 // surface_steps.bin: for each step in order, the displacement of every
 // vertex SurfacesGlb writes (its meshes in order, each mesh's vertices in

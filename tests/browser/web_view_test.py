@@ -27,7 +27,7 @@ from selenium import webdriver
 from selenium.webdriver.chrome.service import Service
 from selenium.common.exceptions import NoSuchElementException, StaleElementReferenceException
 from selenium.webdriver.common.by import By
-from selenium.webdriver.support.ui import WebDriverWait
+from selenium.webdriver.support.ui import Select, WebDriverWait
 
 BIN = os.environ.get("PBA_BIN_DIR", os.path.join(os.path.dirname(__file__), "../../build/release/bin"))
 ARTIFACTS = os.environ.get("PBA_ARTIFACT_DIR", os.getcwd())
@@ -189,16 +189,17 @@ class WebViewTest(unittest.TestCase):
             const w = gl.drawingBufferWidth, h = gl.drawingBufferHeight;
             const pixels = new Uint8Array(4 * w * h);
             gl.readPixels(0, 0, w, h, gl.RGBA, gl.UNSIGNED_BYTE, pixels);
-            let model = 0, red = 0, blue = 0; const seen = new Set();
+            let model = 0, red = 0, blue = 0, checksum = 0; const seen = new Set();
             for (let i = 0; i < pixels.length; i += 4) {
               const r = pixels[i], g = pixels[i + 1], b = pixels[i + 2];
               const key = r + ',' + g + ',' + b;
               if (key !== '244,244,244') { ++model; seen.add(key); }
+              checksum = (checksum * 31 + r * 65536 + g * 256 + b) % 1000000007;
               if (r > 150 && g < 90 && b < 100) ++red;
               if (b > 140 && r < 150 && b > r + 40) ++blue;
             }
             return {fraction: model / (w * h), distinct: seen.size, red: red / (w * h),
-                    blue: blue / (w * h)};""", view)
+                    blue: blue / (w * h), checksum};""", view)
 
     def solve(self, yaml):
         """Submits the scene `yaml` with the CLI and waits for it; its job id."""
@@ -304,6 +305,29 @@ class WebViewTest(unittest.TestCase):
         canvas = self.browser.find_element(By.CSS_SELECTOR, "#view canvas")
         canvas.click()
         self.assertEqual(self.browser.find_element(By.ID, "picked").text, "body")
+        # Coloured by pressure, then strain: the legend's range lies within
+        # the elements' own values in result.h5 (a vertex shows the mean of
+        # its elements'), and the pixels change.
+        fetched = os.path.join(self.folder, "fetched")
+        self.server.pba("job", "fetch", job, "-o", fetched)
+        with h5py.File(os.path.join(fetched, "result.h5"), "r") as f:
+            stress = f["/fields/stress"][()]
+        pressures = [-(s[0] + s[1] + s[2]) / 3 for s in stress]
+        options = [o.get_attribute("value")
+                   for o in self.browser.find_elements(By.CSS_SELECTOR, "#colour-by option")]
+        self.assertEqual(options, ["_displacement", "_PRESSURE", "_STRAIN"])
+        shown = self.model_pixels()
+        Select(self.browser.find_element(By.ID, "colour-by")).select_by_value("_PRESSURE")
+        legend = self.browser.find_element(By.ID, "legend").text
+        low, high = (float(v) for v in re.search(
+            r"pressure, ([-0-9.e+]+) to ([-0-9.e+]+) Pa", legend).groups())
+        tolerance = 1e-2 * max(abs(p) for p in pressures)
+        self.assertGreaterEqual(low, min(pressures) - tolerance)
+        self.assertLessEqual(high, max(pressures) + tolerance)
+        self.assertLess(low, high)
+        self.assertNotEqual(self.model_pixels()["checksum"], shown["checksum"])
+        Select(self.browser.find_element(By.ID, "colour-by")).select_by_value("_STRAIN")
+        self.assertIn("largest principal strain", self.browser.find_element(By.ID, "legend").text)
 
     def test_a_forged_cross_site_request_is_refused(self):
         self.make_project()
@@ -520,6 +544,22 @@ class WebViewTest(unittest.TestCase):
         back = self.atlas_drawn()
         self.assertEqual(back["regions"], ["Caudate"])
         self.assertNotIn("overlay", back)
+        self.assertEqual(self.browser.execute_script(
+            "return window.pbaAtlas.colourOf('Caudate');"), [200, 200, 60])
+        # Someone recolours it with the CLI: the open view follows.
+        self.server.pba("atlas", "set", "-p", "demo", "Caudate", "--colour", "20,160,90")
+        self.within(5, lambda b: b.execute_script(
+            "return window.pbaAtlas.colourOf('Caudate');") == [20, 160, 90])
+        # Someone commits a new shape: the open view draws it.
+        self.server.pba("atlas", "checkout", "-p", "demo", "Caudate", "-o", path)
+        with open(path, "w") as f:
+            f.write(prism(8))
+        self.server.pba("atlas", "commit", path, "-m", "narrower")
+        redrawn = WebDriverWait(self.browser, 60, poll_frequency=0.2).until(
+            lambda b: b.execute_script(
+                "const a = window.pbaAtlas; return a && a.ready && a.drawn_at_ms > arguments[0]"
+                " ? a : null;", back["drawn_at_ms"]))
+        self.assertNotEqual(redrawn["bytes"], back["bytes"])
 
 
 def prism(width_mm):

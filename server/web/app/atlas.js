@@ -81,7 +81,8 @@ export async function drawAtlas(name, snapshot = '') {
     window.pbaAtlas.visible = viewer.visibleRegions();
   });
   window.pbaAtlas = {project, snapshot, ready: true, regions: drawn.regions, bytes: drawn.bytes,
-                     first_frame_ms: ms, drawn_at_ms: performance.now(), picked: ''};
+                     first_frame_ms: ms, drawn_at_ms: performance.now(), picked: '',
+                     colourOf: (region) => viewer.colourOf(region)};
 }
 
 // Revision `from` of `structure` drawn solid (blue) and revision `to`

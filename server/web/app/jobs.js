@@ -60,8 +60,27 @@ export async function showJob(id) {
   }
   const drawn = await viewer.load('/api/jobs/' + id + '/files/surfaces.glb');
   drawn.drawn_at_ms = performance.now();  // the first frame is drawn (for timings)
-  document.getElementById('legend').textContent = 'colour: displacement, 0 to ' +
+  const legend = document.getElementById('legend');
+  const displacementLegend = 'colour: displacement, 0 to ' +
       (1000 * drawn.largest_m).toPrecision(3) + ' mm (shown deformed, at the end)';
+  legend.textContent = displacementLegend;
+  // Colour by the displacement, or by a value of the final state.
+  const colourBy = document.getElementById('colour-by');
+  colourBy.replaceChildren(new Option('displacement', '_displacement'));
+  for (const [attribute, s] of Object.entries(drawn.scalars || {})) {
+    colourBy.append(new Option(s.label, attribute));
+  }
+  colourBy.value = '_displacement';
+  show('colouring', colourBy.options.length > 1);
+  colourBy.onchange = () => {
+    const range = viewer.setColouring(colourBy.value);
+    legend.textContent = range
+        ? 'colour: ' + range.label + ', ' + Number(range.min).toPrecision(3) + ' to ' +
+            Number(range.max).toPrecision(3) + (range.unit ? ' ' + range.unit : '') +
+            ' (of the last step)'
+        : displacementLegend;
+    window.pbaView.colouring = colourBy.value;
+  };
   window.pbaView = drawn;
   bindControls(viewer, drawn.regions,
                {regions: 'regions', through: 'see-through', cut: 'cut', section: 'section'},
@@ -76,6 +95,13 @@ export async function showJob(id) {
   label.textContent = times.length ? 'step ' + times.length + ' of ' + times.length : '';
   slider.oninput = async () => {
     const k = Number(slider.value);
+    // Pressure and strain are the last step's: another step shows its own
+    // displacement rather than colours of another time.
+    if (k !== times.length - 1 && colourBy.value !== '_displacement') {
+      colourBy.value = '_displacement';
+      colourBy.onchange();
+      legend.textContent += '; pressure and strain are of the last step only';
+    }
     const step = await viewer.setStep(k);
     label.textContent = 'step ' + (k + 1) + ' of ' + times.length + ', t = ' +
         Number(step.time).toPrecision(4) + ' s, largest ' + (1000 * step.largest_m).toPrecision(3) +

@@ -112,6 +112,10 @@ export class Viewer {
     this.stepsUrl = extras.step_file ? url.replace(/[^/]*$/, extras.step_file) : '';
     this.steps = null;
     this.vertices = extras.vertices || 0;
+    // Values per vertex the file has besides the displacement (pressure,
+    // strain: of the final state), by attribute, with their ranges.
+    this.scalars = extras.scalars || {};
+    this.colouring = '_displacement';
     for (const mesh of this.meshes) {
       const geometry = mesh.geometry;
       mesh.userData.reference = geometry.getAttribute('position').array.slice();
@@ -134,7 +138,8 @@ export class Viewer {
     this.controls.target.copy(centre);
     this.controls.update();
     this.render();
-    return {regions: this.meshes.map((m) => m.name), largest_m: largest, bytes};
+    return {regions: this.meshes.map((m) => m.name), largest_m: largest, bytes,
+            scalars: this.scalars};
   }
 
   // Draws `url` over what is loaded, every surface as a mesh of lines of
@@ -155,6 +160,12 @@ export class Viewer {
     return {regions: names, bytes};
   }
 
+  // The colour region `name` is drawn in (0..255 each), null without it.
+  colourOf(name) {
+    const mesh = this.meshes.find((m) => m.name === name);
+    return mesh ? mesh.material.color.toArray().map((c) => Math.round(255 * c)) : null;
+  }
+
   // Region `name` in `rgb` (0..255 each).
   setColour(name, rgb) {
     for (const mesh of this.meshes) {
@@ -166,20 +177,51 @@ export class Viewer {
   }
 
   // Moves `mesh` to its reference plus `u` (x y z per vertex from `from`)
-  // and colours it by |u| / `scale`.
+  // and paints it (by |u| / `scale`, or the chosen value).
   deform(mesh, u, from, scale) {
     const geometry = mesh.geometry, position = geometry.getAttribute('position');
     const reference = mesh.userData.reference;
-    const colours = new Float32Array(3 * position.count);
     for (let i = 0; i < position.count; ++i) {
       const x = u[from + 3 * i], y = u[from + 3 * i + 1], z = u[from + 3 * i + 2];
       position.setXYZ(i, reference[3 * i] + x, reference[3 * i + 1] + y, reference[3 * i + 2] + z);
-      colours.set(colourOf(scale > 0 ? Math.hypot(x, y, z) / scale : 0), 3 * i);
     }
     position.needsUpdate = true;
-    geometry.setAttribute('color', new THREE.BufferAttribute(colours, 3));
     geometry.computeVertexNormals();
+    mesh.userData.shown = {u, from, scale};
+    this.paint(mesh);
+  }
+
+  // Colours `mesh` by this.colouring: the displacement shown, or a value
+  // of the file (its vertex attribute) over that value's whole range.
+  paint(mesh) {
+    const geometry = mesh.geometry, count = geometry.getAttribute('position').count;
+    const shown = mesh.userData.shown;
+    if (!shown) return;
+    const colours = new Float32Array(3 * count);
+    const values = this.colouring !== '_displacement' && geometry.getAttribute(this.colouring);
+    const range = values && this.scalars[this.colouring.toUpperCase()];
+    for (let i = 0; i < count; ++i) {
+      let t = 0;
+      if (range) {
+        t = range.max > range.min ? (values.getX(i) - range.min) / (range.max - range.min) : 0;
+      } else if (shown.scale > 0) {
+        const at = shown.from + 3 * i;
+        t = Math.hypot(shown.u[at], shown.u[at + 1], shown.u[at + 2]) / shown.scale;
+      }
+      colours.set(colourOf(t), 3 * i);
+    }
+    geometry.setAttribute('color', new THREE.BufferAttribute(colours, 3));
     mesh.material.needsUpdate = true;
+  }
+
+  // Colours by `attribute`: '_displacement', or one of this.scalars
+  // ('_PRESSURE', '_STRAIN'); resolves to its range, or null for the
+  // displacement.
+  setColouring(attribute) {
+    this.colouring = attribute === '_displacement' ? attribute : attribute.toLowerCase();
+    for (const mesh of this.meshes) this.paint(mesh);
+    this.render();
+    return attribute === '_displacement' ? null : this.scalars[attribute] || null;
   }
 
   // Shows step `k` (of stepTimes): resolves to its index, time and largest

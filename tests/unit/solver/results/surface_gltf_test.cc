@@ -242,5 +242,63 @@ TEST(SurfaceGltfTest, StepsHoldEachStepsDisplacementOfTheDrawnVertices) {
   EXPECT_TRUE(SurfaceStepsBin(surfaces, b.nodes, steps).empty());
 }
 
+// Element values drawn on the surfaces: a vertex takes the mean over its
+// own region's elements at its node, never the neighbouring region's; the
+// file carries them as SCALAR attributes with their range; values that do
+// not fit the surfaces are left out, not drawn wrong.
+TEST(SurfaceGltfTest, ElementValuesAreMeansOverTheirOwnRegionAtEachVertex) {
+  const Block b = KuhnRow(2, 2);  // cube 0 region A, cube 1 region B
+  const auto surfaces = ExtractRegionSurfaces(b.tets, 4, b.region, {"A", "B"});
+  std::vector<double> value(b.region.size());
+  for (std::size_t e = 0; e < value.size(); ++e) {
+    value[e] = (b.region[e] == 0 ? 100.0 : -50.0) + static_cast<double>(e % 6);
+  }
+  const auto means = VertexMeans(surfaces, b.tets, 4, b.region, value);
+  ASSERT_EQ(means.size(), 2u);
+  for (std::size_t r = 0; r < 2; ++r) {
+    ASSERT_EQ(means[r].size(), surfaces[r].nodes.size());
+    for (std::size_t v = 0; v < means[r].size(); ++v) {
+      // The brute-force mean over region r's tetrahedra holding the node.
+      double sum = 0;
+      int count = 0;
+      for (std::size_t e = 0; e < value.size(); ++e) {
+        if (b.region[e] != static_cast<int64_t>(r)) continue;
+        for (int c = 0; c < 4; ++c) {
+          if (b.tets[4 * e + c] == surfaces[r].nodes[v]) {
+            sum += value[e];
+            ++count;
+          }
+        }
+      }
+      ASSERT_GT(count, 0);
+      EXPECT_FLOAT_EQ(means[r][v], static_cast<float>(sum / count));
+      EXPECT_EQ(means[r][v] > 0, r == 0) << "no value crosses the interface";
+    }
+  }
+  const std::string glb =
+      SurfacesGlb(surfaces, b.nodes, {}, {}, {{"_PRESSURE", "pressure", "Pa", means}});
+  EXPECT_NE(glb.find("\"_PRESSURE\":"), std::string::npos);
+  float lo = 1e30f, hi = -1e30f;
+  for (const auto& m : means) {
+    for (const float v : m) lo = std::min(lo, v), hi = std::max(hi, v);
+  }
+  std::smatch range;
+  ASSERT_TRUE(std::regex_search(
+      glb, range,
+      std::regex("\"scalars\":\\{\"_PRESSURE\":\\{\"label\":\"pressure\",\"unit\":\"Pa\","
+                 "\"min\":([-0-9.e]+),\"max\":([-0-9.e]+)\\}\\}")))
+      << glb.substr(20, 600);
+  EXPECT_FLOAT_EQ(std::stof(range[1].str()), lo);
+  EXPECT_FLOAT_EQ(std::stof(range[2].str()), hi);
+  // One value short: left out of the file.
+  value.pop_back();
+  EXPECT_TRUE(VertexMeans(surfaces, b.tets, 4, b.region, value).empty());
+  auto short_means = means;
+  short_means[1].pop_back();
+  EXPECT_EQ(SurfacesGlb(surfaces, b.nodes, {}, {}, {{"_STRAIN", "strain", "", short_means}})
+                .find("_STRAIN"),
+            std::string::npos);
+}
+
 }  // namespace
 }  // namespace pba
