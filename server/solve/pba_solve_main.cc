@@ -57,7 +57,6 @@
 #include <utility>
 #include <vector>
 
-#include "atlas/atlas_build.h"
 #include "atlas/structure_split.h"
 #include "codec/summary_text.h"
 #include "codec/yaml_codec.h"
@@ -67,7 +66,6 @@
 #include "pba/solve.h"
 #include "pba/v1/scene.pb.h"
 #include "pba/v1/solve_event.pb.h"
-#include "results/surface_gltf.h"
 #include "solve/staging_dir.h"
 
 namespace pba {
@@ -425,43 +423,22 @@ int RunAtlasSurfaces(const std::string& set_dir, double facet_mm, const std::str
     return reporter.Error(s);
   }
   const auto start = std::chrono::steady_clock::now();
-  AtlasBuildOptions options;
-  options.source = AtlasBuildOptions::Source::kStructures;
-  options.input = set_dir;
-  options.facet_size_mm = facet_mm;
-  // Cells only fill the volume between the surfaces: large ones are fewer.
-  options.cell_size_mm = 4 * facet_mm;
-  options.odt_iterations = 0;
-  options.improve_target_deg = 0;
-  options.remove_slivers = false;
-  options.validate = false;
-  options.threads = ThreadContext(1);
-  if (Status s = options.Validate(); !s.ok()) return reporter.Error(s);
   reporter.Progress({"mesh", 0.0, "meshing the structures' surfaces"});
-  AtlasBuildResult built;
-  if (Status s = BuildAtlas(options, &built); !s.ok()) return reporter.Error(s);
+  AtlasSurfaces surfaces;
+  if (Status s = MeshAtlasSurfaces(set_dir, facet_mm, &surfaces); !s.ok()) {
+    return reporter.Error(s);
+  }
   if (g_cancel.load()) return reporter.Error(Status::Cancelled("cancelled"));
-  const Mesh& mesh = built.mesh;
-  std::vector<int64_t> elements, region(mesh.element_region.begin(), mesh.element_region.end());
-  elements.reserve(4 * mesh.tets.size());
-  for (const auto& tet : mesh.tets) elements.insert(elements.end(), tet.begin(), tet.end());
-  std::vector<double> nodes_mm(mesh.nodes.data(), mesh.nodes.data() + mesh.nodes.size());
-  for (double& x : nodes_mm) x *= 1e3;
-  const std::vector<RegionSurface> surfaces =
-      ExtractRegionSurfaces(elements, 4, region, mesh.region_names);
   StagingDir staging;
   Status status = StagingDir::Create(out_dir, &staging);
-  if (status.ok())
-    status = WriteText(staging.path() / "surfaces.glb", SurfacesGlb(surfaces, nodes_mm, {}));
+  if (status.ok()) status = WriteText(staging.path() / "surfaces.glb", surfaces.glb);
 
   v1::Summary summary;
   summary.set_scene_name("atlas surfaces");
   summary.set_solver_version(SolverVersion());
-  size_t triangles = 0;
-  for (const RegionSurface& s : surfaces) triangles += s.triangles.size() / 3;
   summary.mutable_modelled()->set_geometry(
-      Format("%zu structures' surfaces, %zu triangles, facets of at most %g mm",
-             mesh.region_names.size(), triangles, facet_mm));
+      Format("%d structures' surfaces, %lld triangles, facets of at most %g mm",
+             surfaces.structures, static_cast<long long>(surfaces.triangles), facet_mm));
   // (The build's notes are about its tetrahedra's quality, which a view
   // does not ask for.)
   summary.mutable_performance()->set_wall_time_s(

@@ -142,6 +142,33 @@ bool Drawn(const RegionSurface& s, std::size_t node_count) {
   });
 }
 
+// The scalars with a value for every vertex of every surface, and the
+// range of each over the surfaces drawn.
+std::vector<const VertexScalar*> FittingScalars(const std::vector<RegionSurface>& surfaces,
+                                                std::size_t node_count,
+                                                const std::vector<VertexScalar>& scalars,
+                                                std::vector<std::pair<float, float>>* ranges) {
+  std::vector<const VertexScalar*> fitting;
+  for (const VertexScalar& scalar : scalars) {
+    bool fits = scalar.values.size() == surfaces.size();
+    std::pair<float, float> range{std::numeric_limits<float>::max(),
+                                  std::numeric_limits<float>::lowest()};
+    for (std::size_t i = 0; fits && i < surfaces.size(); ++i) {
+      fits = scalar.values[i].size() == surfaces[i].nodes.size();
+      if (!fits || !Drawn(surfaces[i], node_count)) continue;
+      for (const float v : scalar.values[i]) {
+        range.first = std::min(range.first, v);
+        range.second = std::max(range.second, v);
+      }
+    }
+    if (fits && range.first <= range.second) {
+      fitting.push_back(&scalar);
+      ranges->push_back(range);
+    }
+  }
+  return fitting;
+}
+
 }  // namespace
 
 std::string SurfaceStepsBin(const std::vector<RegionSurface>& surfaces,
@@ -215,26 +242,9 @@ std::string SurfacesGlb(const std::vector<RegionSurface>& surfaces,
                         const std::vector<double>& displacement_mm, const SurfaceSteps& steps,
                         const std::vector<VertexScalar>& scalars) {
   const bool displaced = !displacement_mm.empty() && displacement_mm.size() == nodes_mm.size();
-  // The scalars with a value for every vertex of every surface, and their ranges.
-  std::vector<const VertexScalar*> drawn_scalars;
   std::vector<std::pair<float, float>> ranges;
-  for (const VertexScalar& scalar : scalars) {
-    bool fits = scalar.values.size() == surfaces.size();
-    std::pair<float, float> range{std::numeric_limits<float>::max(),
-                                  std::numeric_limits<float>::lowest()};
-    for (std::size_t i = 0; fits && i < surfaces.size(); ++i) {
-      fits = scalar.values[i].size() == surfaces[i].nodes.size();
-      if (!fits || !Drawn(surfaces[i], nodes_mm.size() / 3)) continue;
-      for (const float v : scalar.values[i]) {
-        range.first = std::min(range.first, v);
-        range.second = std::max(range.second, v);
-      }
-    }
-    if (fits && range.first <= range.second) {
-      drawn_scalars.push_back(&scalar);
-      ranges.push_back(range);
-    }
-  }
+  const std::vector<const VertexScalar*> drawn_scalars =
+      FittingScalars(surfaces, nodes_mm.size() / 3, scalars, &ranges);
   std::string bin;
   std::string views, accessors, meshes, nodes, materials;
   int view = 0, accessor = 0, drawn = 0;

@@ -450,5 +450,49 @@ TEST(PbaSolveOutputTest, WhatPbaSolveDidNotWriteIsNeverReplaced) {
   EXPECT_FALSE(fs::exists(dir.path() / "elsewhere"));
 }
 
+// --atlas-surfaces: a structure set's surfaces as glTF binary, one node per
+// structure; a set that cannot be meshed exits 5 naming why and writes
+// nothing; with a scene it is a usage error.
+TEST(PbaSolveTest, AtlasSurfacesOfAStructureSet) {
+  TempDir dir;
+  const fs::path set = dir.path() / "set";
+  fs::create_directories(set);
+  std::string plates;
+  for (int z = 0; z <= 20; z += 5) {
+    plates += std::string(plates.empty() ? "" : ",") + "{\"z_mm\": " + std::to_string(z) +
+              ", \"polygons\": [[[0, 0], [12, 0], [12, 12], [0, 12]]]}";
+  }
+  std::ofstream(set / "Block.json") << "{\"plates\": [" << plates << "]}";
+  std::ofstream(set / "manifest.json")
+      << R"({"structures": [{"name": "Block", "file": "Block.json", "format": "contours_json",)"
+      << R"( "colour": "200,20,20"}]})";
+  const fs::path out = dir.path() / "out";
+  const RunResult made = RunProcess({PBA_SOLVE_BIN, "--atlas-surfaces", set.string(), "--out",
+                                     out.string(), "--progress", "text"});
+  ASSERT_EQ(made.exit_code, 0) << made.out << made.err;
+  EXPECT_NE(made.out.find("1 structures' surfaces"), std::string::npos) << made.out;
+  const std::string glb = ReadAll(out / "surfaces.glb");
+  ASSERT_GT(glb.size(), 20u);
+  EXPECT_EQ(glb.substr(0, 4), "glTF");
+  EXPECT_NE(glb.find("\"name\":\"Block\""), std::string::npos);
+  EXPECT_EQ(glb.find("_DISPLACEMENT"), std::string::npos);
+  EXPECT_TRUE(fs::exists(out / "summary.json"));
+
+  // One plate has no volume.
+  std::ofstream(set / "Block.json", std::ios::trunc)
+      << R"({"plates": [{"z_mm": 0, "polygons": [[[0, 0], [12, 0], [12, 12], [0, 12]]]}]})";
+  const fs::path flat = dir.path() / "flat";
+  const RunResult refused = RunProcess({PBA_SOLVE_BIN, "--atlas-surfaces", set.string(), "--out",
+                                        flat.string(), "--progress", "json"});
+  EXPECT_EQ(refused.exit_code, 5) << refused.out << refused.err;
+  EXPECT_NE(refused.out.find("two heights"), std::string::npos) << refused.out;
+  EXPECT_FALSE(fs::exists(flat));
+  const RunResult both =
+      RunProcess({PBA_SOLVE_BIN, std::string(PBA_EXAMPLES_DIR) + "/quickstart.yaml",
+                  "--atlas-surfaces", set.string(), "--out", flat.string()});
+  EXPECT_EQ(both.exit_code, 2) << both.out << both.err;
+  EXPECT_FALSE(fs::exists(flat));
+}
+
 }  // namespace
 }  // namespace pba::testing

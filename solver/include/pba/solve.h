@@ -387,4 +387,19 @@ Status ExportAbaqusInput(const SceneSpec& scene, const std::filesystem::path& fi
 // Version string of the solver library, e.g. "0.1.0".
 const char* SolverVersion();
 
+// The surfaces of the structures of the structure set in `set_dir`
+// (atlas/structure_set.h) as glTF binary, surfaces.glb's format (one node
+// per structure, no displacement; docs/results.md): the set meshed as an
+// atlas scene's would be, with facets of at most `facet_mm`, but without
+// ODT smoothing, sliver removal, improvement or validation, since no one
+// solves on these tetrahedra and their surface triangles are what a view
+// needs. kInvalidArgument for a set that cannot be meshed, naming why.
+struct AtlasSurfaces {
+  std::string glb;
+  int structures = 0;
+  int64_t triangles = 0;
+};
+Status MeshAtlasSurfaces(const std::filesystem::path& set_dir, double facet_mm,
+                         AtlasSurfaces* surfaces);
+
 }  // namespace pba
