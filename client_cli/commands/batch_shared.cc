@@ -221,8 +221,8 @@ int SubmitAndPoll(Connection& connection, const RunOptions& options,
         --next;
         if (!options.quiet && full_at < 0) {
           std::printf(
-              "the server holds %d of this batch's jobs, its most for one user; "
-              "the next once one ends\n",
+              "the server takes no more open jobs from you (its bound counts all of them; %d "
+              "are this batch's); the next once one of those ends\n",
               in_flight());
         }
         full_at = in_flight();

@@ -158,4 +158,20 @@ std::string SlurmArrayScript(const std::string& job_script) {
          ShellQuoted("./" + job_script) + "\n";
 }
 
+bool ReadBoundedLine(std::istream& in, std::size_t max, std::string* line) {
+  line->clear();
+  bool any = false, over = false;
+  for (int c = in.get(); c != std::char_traits<char>::eof(); c = in.get()) {
+    any = true;
+    if (c == '\n') break;
+    if (line->size() < max) {
+      line->push_back(static_cast<char>(c));
+    } else {
+      over = true;
+    }
+  }
+  if (over) line->clear();
+  return any;
+}
+
 }  // namespace pba

@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cstdint>
 #include <filesystem>
+#include <istream>
 #include <string>
 #include <vector>
 
@@ -130,5 +131,11 @@ std::chrono::steady_clock::duration GatherLeft(std::chrono::steady_clock::time_p
                                                std::chrono::steady_clock::time_point last,
                                                std::chrono::steady_clock::time_point now,
                                                std::chrono::milliseconds gather);
+
+// The next line of `in` without its newline, false at the end. A line of
+// more than `max` characters (a list file of the shared folder someone
+// wrote over) is read past whole and given as "", so that no file makes
+// the server hold an unbounded line.
+bool ReadBoundedLine(std::istream& in, std::size_t max, std::string* line);
 
 }  // namespace pba

@@ -34,6 +34,8 @@ constexpr char kArrayScript[] = "array.sh";
 constexpr char kArrayJobs[] = "jobs";
 // An array folder none of whose jobs is followed is removed after this.
 constexpr std::chrono::minutes kArrayKeep{10};
+// A line of an array's jobs file: a job id (PBA's are a dozen characters).
+constexpr std::size_t kMaxIdLine = 256;
 std::string ExitCodeFile(const std::string& slurm_id) { return "exit_code-" + slurm_id; }
 std::string ResultDir(const std::string& slurm_id) { return "result-" + slurm_id; }
 // The most of progress.jsonl read in one round.
@@ -658,7 +660,7 @@ const SlurmJobState* SlurmExecutor::FindInArrays(const std::vector<SlurmJobState
       continue;
     std::ifstream in(JobsDir(options_) / kArrays / token / kArrayJobs);
     std::string line;
-    for (int task = 0; task < kSlurmArrayMax && std::getline(in, line); ++task) {
+    for (int task = 0; task < kSlurmArrayMax && ReadBoundedLine(in, kMaxIdLine, &line); ++task) {
       if (line == id && s.id.substr(underscore + 1) == std::to_string(task)) return &s;
     }
   }
@@ -679,7 +681,8 @@ void SlurmExecutor::ExpireArrays() {
     std::string line;
     {
       std::lock_guard lock(mutex_);
-      for (int task = 0; task < kSlurmArrayMax && std::getline(in, line) && !followed; ++task)
+      for (int task = 0;
+           task < kSlurmArrayMax && ReadBoundedLine(in, kMaxIdLine, &line) && !followed; ++task)
         followed = tracked_.count(line) > 0;
     }
     if (!followed) fs::remove_all(entry.path(), time_ec);

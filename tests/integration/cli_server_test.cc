@@ -304,7 +304,8 @@ outputs:
   const RunResult run = Pba({"batch", "run", all.string()});
   ASSERT_EQ(run.exit_code, 0) << run.out << run.err;
   EXPECT_NE(run.out.find("5 to submit, all at once"), std::string::npos) << run.out;
-  EXPECT_NE(run.out.find("the server holds 2 of this batch's jobs, its most for one user"),
+  EXPECT_NE(run.out.find("the server takes no more open jobs from you (its bound counts all of "
+                         "them; 2 are this batch's)"),
             std::string::npos)
       << run.out;
   const std::string csv = ReadFile(dir_.path() / "all.csv");

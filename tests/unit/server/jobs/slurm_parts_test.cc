@@ -70,6 +70,21 @@ TEST(CommandTest, OutputPastTheBoundIsDropped) {
   EXPECT_TRUE(r.ok());
 }
 
+// An array's jobs file is the shared folder's: a line past the bound is
+// skipped whole, not held, and the lines after it are read as they are.
+TEST(SlurmPartsTest, ListLinesAreBounded) {
+  std::istringstream in("j1\n" + std::string(100000, 'x') + "\nj2\nj3");
+  std::string line;
+  std::vector<std::string> lines;
+  while (ReadBoundedLine(in, 16, &line)) {
+    lines.push_back(line);
+    EXPECT_LE(line.capacity(), 100000u);
+  }
+  EXPECT_EQ(lines, (std::vector<std::string>{"j1", "", "j2", "j3"}));
+  std::istringstream empty("");
+  EXPECT_FALSE(ReadBoundedLine(empty, 16, &line));
+}
+
 TEST(SlurmPartsTest, SqueueLinesAreReadAndOthersSkipped) {
   const std::vector<SlurmJobState> jobs = ParseSqueue(
       "12|pba-0001|PENDING|ReqNodeNotAvail, UnavailableNodes:n1|\n"
