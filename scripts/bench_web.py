@@ -12,7 +12,10 @@ elements, regions drawn, the bytes of surfaces.glb and of everything the
 page fetched from the click on, and the time from the click to the first
 frame of the 3D view (median of `runs` openings, each in a fresh page).
 
-Usage: scripts/bench_web.py [runs [SCENE.yaml ...]]   (default 5)
+Usage: scripts/bench_web.py [runs [SCENE.yaml ...]]   (default 5; the scenes: the atlas
+  indentation and bolt examples and tests/bench/scenes/atlas_fine_push.yaml, 400,000
+  tetrahedra)
+  PBA_BENCH_ATLAS=0: not the built-in atlas's project
   PBA_BUILD_DIR: the build (default build/release)
   PBA_SHOTS: a folder for a screenshot of each scene's page (web_view_<scene>.png)
 """
@@ -35,7 +38,8 @@ from selenium.webdriver.support.ui import WebDriverWait  # noqa: E402
 
 runs = int(sys.argv[1]) if len(sys.argv) > 1 else 5
 scenes = sys.argv[2:] or [os.path.join(root, "examples", "atlas_indentation.yaml"),
-                          os.path.join(root, "examples", "atlas_bolt.yaml")]
+                          os.path.join(root, "examples", "atlas_bolt.yaml"),
+                          os.path.join(root, "tests", "bench", "scenes", "atlas_fine_push.yaml")]
 
 folder = tempfile.mkdtemp(prefix="pba-bench-web-")
 os.chmod(folder, 0o755)
@@ -79,18 +83,19 @@ def open_atlas(project):
 
 
 try:
-    server.pba("project", "create", "brain")
-    server.pba("atlas", "import", "-p", "brain", "--synthetic")
-    cold, cold_bytes, drawn = open_atlas("brain")
-    warm = [open_atlas("brain") for _ in range(runs)]
-    print("| atlas | structures drawn | surfaces | fetched after the click | "
-          "click to first frame, first opening (meshed) | after (cached; median of %d) |" % runs)
-    print("|---|---|---|---|---|---|")
-    print("| built-in, as a project | %d | %.2f MB | %.2f MB | %.2f s | %.2f s |" % (
-        len(drawn["regions"]), drawn["bytes"] / 1e6, cold_bytes / 1e6, cold,
-        statistics.median(t for t, _, _ in warm)))
-    print()
-    sys.stdout.flush()
+    if os.environ.get("PBA_BENCH_ATLAS", "1") != "0":
+        server.pba("project", "create", "brain")
+        server.pba("atlas", "import", "-p", "brain", "--synthetic")
+        cold, cold_bytes, drawn = open_atlas("brain")
+        warm = [open_atlas("brain") for _ in range(runs)]
+        print("| atlas | structures drawn | surfaces | fetched after the click | "
+              "click to first frame, first opening (meshed) | after (cached; median of %d) |" % runs)
+        print("|---|---|---|---|---|---|")
+        print("| built-in, as a project | %d | %.2f MB | %.2f MB | %.2f s | %.2f s |" % (
+            len(drawn["regions"]), drawn["bytes"] / 1e6, cold_bytes / 1e6, cold,
+            statistics.median(t for t, _, _ in warm)))
+        print()
+        sys.stdout.flush()
 
     print("| scene | elements | regions drawn | surfaces.glb | fetched after the click | "
           "click to first frame (median of %d) |" % runs)

@@ -11,6 +11,7 @@
 #include <utility>
 
 #include "core/atomic_write.h"
+#include "core/cache_dir.h"
 #include "core/sha256.h"
 #include "jobs/solver_process.h"
 #include "pba/solve.h"
@@ -207,28 +208,8 @@ Status SurfaceViews::Build(const std::string& project, int64_t snapshot,
 }
 
 void SurfaceViews::Prune(const fs::path& keep) {
-  struct Entry {
-    fs::file_time_type time;
-    std::uintmax_t size;
-    fs::path path;
-  };
-  std::vector<Entry> entries;
-  std::uintmax_t total = 0;
-  std::error_code ec;
-  for (const auto& item : fs::directory_iterator(options_.cache_dir, ec)) {
-    if (!item.is_regular_file(ec) || item.path().extension() != ".glb") continue;
-    Entry e{item.last_write_time(ec), item.file_size(ec), item.path()};
-    if (ec) continue;
-    total += e.size;
-    entries.push_back(std::move(e));
-  }
-  std::sort(entries.begin(), entries.end(),
-            [](const Entry& a, const Entry& b) { return a.time < b.time; });
-  for (const Entry& e : entries) {
-    if (total <= options_.cache_bytes) break;
-    if (e.path == keep) continue;
-    if (fs::remove(e.path, ec)) total -= e.size;
-  }
+  EvictLeastRecentlyUsed(options_.cache_dir, ".glb", options_.cache_bytes,
+                         keep.filename().string());
 }
 
 }  // namespace pba

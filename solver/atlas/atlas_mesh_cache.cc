@@ -13,6 +13,7 @@
 #include "atlas/label_table.h"
 #include "atlas/structure_set.h"
 #include "core/atomic_write.h"
+#include "core/cache_dir.h"
 #include "core/format.h"
 #include "core/sha256.h"
 #include "pba/solve.h"
@@ -397,47 +398,7 @@ Status StoreCachedAtlasMesh(const fs::path& dir, const std::string& key,
 }
 
 void EvictAtlasMeshCache(const fs::path& dir, std::uint64_t max_bytes, const std::string& keep) {
-  struct Entry {
-    fs::file_time_type used;
-    std::uint64_t bytes;
-    fs::path path;
-  };
-  std::vector<Entry> entries;
-  std::uint64_t total = 0;
-  const auto stale = fs::file_time_type::clock::now() - std::chrono::hours(24);
-  std::error_code ec;
-  fs::directory_iterator it(dir, ec), end;
-  for (; !ec && it != end; it.increment(ec)) {
-    std::error_code entry_ec;
-    if (!it->is_regular_file(entry_ec)) continue;
-    const std::string name = it->path().filename().string();
-    const fs::file_time_type used = it->last_write_time(entry_ec);
-    if (entry_ec) continue;  // removed meanwhile
-    if (name.front() == '.') {
-      // A temporary file of AtomicWrite: in progress, or left by a writer
-      // that died (no write takes a day).
-      if (name.find(".partial-") != std::string::npos && used < stale) fs::remove(it->path(), ec);
-      continue;
-    }
-    if (name.size() <= sizeof(kEntrySuffix) - 1 ||
-        name.compare(name.size() - (sizeof(kEntrySuffix) - 1), std::string::npos, kEntrySuffix) !=
-            0) {
-      continue;  // not ours
-    }
-    const std::uint64_t bytes = it->file_size(entry_ec);
-    if (entry_ec) continue;
-    total += bytes;
-    if (!keep.empty() && name == keep + kEntrySuffix) continue;
-    entries.push_back({used, bytes, it->path()});
-  }
-  std::sort(entries.begin(), entries.end(),
-            [](const Entry& a, const Entry& b) { return a.used < b.used; });
-  for (const Entry& e : entries) {
-    if (total <= max_bytes) break;
-    std::error_code ignored;
-    fs::remove(e.path, ignored);
-    total -= e.bytes;  // removed here or by another job evicting too
-  }
+  EvictLeastRecentlyUsed(dir, kEntrySuffix, max_bytes, keep.empty() ? "" : keep + kEntrySuffix);
 }
 
 }  // namespace pba
