@@ -5,7 +5,9 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <system_error>
 #include <utility>
@@ -27,10 +29,14 @@ namespace {
 // died mid-build leaves one).
 constexpr char kScratchPrefix[] = ".build-";
 
-// Whether `bytes` start as a glTF binary does ("glTF", version 2).
+// Whether `bytes` are a whole glTF binary: its header ("glTF", version 2)
+// and the length the header gives.
 bool IsGlb(const std::string& bytes) {
-  return bytes.size() >= 12 && bytes.compare(0, 4, "glTF") == 0 && bytes[4] == 2 && bytes[5] == 0 &&
-         bytes[6] == 0 && bytes[7] == 0;
+  if (bytes.size() < 12 || bytes.compare(0, 4, "glTF") != 0) return false;
+  uint32_t version = 0, length = 0;
+  std::memcpy(&version, bytes.data() + 4, 4);
+  std::memcpy(&length, bytes.data() + 8, 4);
+  return version == 2 && length == bytes.size();
 }
 
 // The whole of `path` into *bytes, at most `limit` of them.

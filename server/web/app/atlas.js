@@ -11,6 +11,8 @@ let project = '';
 let structures = {};  // name -> the Structure of the last ListStructures
 let showing = null;   // what is drawn: {snapshot} or {structure, from, to}
 let picked = '';
+let drawing = 0;     // the latest draw's number: an older one's answer is dropped
+let redraw = null;   // a redraw waiting for the project's events to pause
 
 const kControls = {regions: 'atlas-regions', through: 'atlas-see-through', cut: 'atlas-cut',
                    section: 'atlas-section'};
@@ -50,6 +52,7 @@ function ensureViewer() {
 // Draws the project's structures: at their heads, or the members of
 // `snapshot` (an id or a tag). Resolves once the first frame is drawn.
 export async function drawAtlas(name, snapshot = '') {
+  const mine = ++drawing;
   project = name;
   showing = {snapshot};
   picked = '';
@@ -64,13 +67,16 @@ export async function drawAtlas(name, snapshot = '') {
       (snapshot ? '&snapshot=' + encodeURIComponent(snapshot) : '');
   let drawn;
   try {
-    drawn = await ensureViewer().load('/api/surfaces?' + query);
+    drawn = await ensureViewer().load('/api/surfaces?' + query, () => mine === drawing);
   } catch (e) {
+    if (mine !== drawing) return;
     status('');
     document.getElementById('atlas-error').textContent = e.message;
     window.pbaAtlas.error = e.message;
     throw e;
   }
+  // (Another draw began meanwhile: its answer is the one to show.)
+  if (!drawn) return;
   for (const region of drawn.regions) {
     if (structures[region]) viewer.setColour(region, rgbOf(structures[region]));
   }
@@ -88,6 +94,7 @@ export async function drawAtlas(name, snapshot = '') {
 // Revision `from` of `structure` drawn solid (blue) and revision `to`
 // over it as lines (red): where one reaches past the other.
 export async function overlayRevisions(name, structure, from, to) {
+  const mine = ++drawing;
   project = name;
   showing = {structure, from, to};
   picked = '';
@@ -100,10 +107,13 @@ export async function overlayRevisions(name, structure, from, to) {
   const url = (r) => '/api/surfaces?project=' + encodeURIComponent(project) + '&structure=' +
       encodeURIComponent(structure) + '&revision=' + r;
   const v = ensureViewer();
-  const base = await v.load(url(from));
+  const current = () => mine === drawing;
+  const base = await v.load(url(from), current);
+  if (!base) return;
   v.setColour(structure, [61, 123, 217]);
   v.setOpacity(0.55);
-  const over = await v.addOverlay(url(to), 0xd0303d);
+  const over = await v.addOverlay(url(to), 0xd0303d, current);
+  if (!over) return;
   status(structure + ': revision ' + from + ' solid blue, revision ' + to + ' red lines');
   bindControls(v, base.regions, kControls);
   window.pbaAtlas = {project, structure, from, to, ready: true,
@@ -152,12 +162,16 @@ async function describe(name) {
 }
 
 // After a project's event: a shape that changed is drawn again when the
-// heads are shown (a colour alone is only recoloured).
+// heads are shown (a colour alone is only recoloured), once the events
+// pause for a second (an import creates many structures at once).
 export function onEvent(kind) {
   if (!showing || showing.structure !== undefined || showing.snapshot) return;
-  if (['COMMITTED', 'REVERTED', 'STRUCTURE_CREATED'].includes(kind)) {
+  if (!['COMMITTED', 'REVERTED', 'STRUCTURE_CREATED'].includes(kind)) return;
+  clearTimeout(redraw);
+  redraw = setTimeout(() => {
+    redraw = null;
     drawAtlas(project).catch(() => {});
-  }
+  }, 1000);
 }
 
 document.getElementById('atlas-back').onclick = () => {

@@ -87,9 +87,12 @@ export class Viewer {
   render() { this.renderer.render(this.scene, this.camera); }
 
   // Loads `url`; resolves to what was drawn: region names, the largest
-  // displacement [m] and the bytes fetched.
-  async load(url) {
+  // displacement [m] and the bytes fetched. When `current()` says no once
+  // the file is in (another load was asked for meanwhile), nothing is
+  // drawn and it resolves to null.
+  async load(url, current = () => true) {
     const {gltf, bytes} = await fetchGltf(url);
+    if (!current()) return null;
     if (this.model) this.scene.remove(this.model);
     if (this.overlay) this.scene.remove(this.overlay);
     this.overlay = null;
@@ -143,9 +146,11 @@ export class Viewer {
   }
 
   // Draws `url` over what is loaded, every surface as a mesh of lines of
-  // `colour` (0xRRGGBB); the camera stays. Resolves to its region names.
-  async addOverlay(url, colour) {
+  // `colour` (0xRRGGBB); the camera stays. Resolves to its region names
+  // (null, drawing nothing, when `current()` says no once the file is in).
+  async addOverlay(url, colour, current = () => true) {
     const {gltf, bytes} = await fetchGltf(url);
+    if (!current()) return null;
     if (this.overlay) this.scene.remove(this.overlay);
     this.overlay = gltf.scene;
     const names = [];

@@ -112,6 +112,14 @@ TEST_F(SurfaceViewsTest, BuildsOnceAndFindsTheEntryAfter) {
   EXPECT_EQ(second.bytes, first.bytes);
   EXPECT_EQ(Calls(), 1);
   EXPECT_EQ(CacheContents(), std::make_pair(1, 0)) << "no scratch folder is left";
+  // An entry whose length is not its header's (cut short, or added to) is
+  // built again, not sent.
+  std::ofstream(first.glb, std::ios::app) << "more";
+  SurfaceView third;
+  ASSERT_TRUE(views.Get("demo", 3, files_, {}, &third).ok());
+  EXPECT_FALSE(third.cached);
+  EXPECT_EQ(third.bytes, first.bytes);
+  EXPECT_EQ(Calls(), 2);
   // The solver was given the structures as a set naming the project.
   std::ifstream manifest(dir_.path() / "manifest.json");
   const std::string text((std::istreambuf_iterator<char>(manifest)),
