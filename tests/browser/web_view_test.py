@@ -134,6 +134,9 @@ class WebViewTest(unittest.TestCase):
         os.chmod(self.folder, 0o755)
         self.server = Server(self.folder)
         self.browser = chromium()
+        # Scripts reading the canvas back wait for its frame: in software
+        # WebGL on a loaded machine (ctest -j2) that takes a while.
+        self.browser.set_script_timeout(90)
         # The page redraws its tables at events: an element found may be
         # replaced before it is read, and is then looked for again.
         self.wait = WebDriverWait(self.browser, 20, ignored_exceptions=(

@@ -13,6 +13,7 @@ let showing = null;   // what is drawn: {snapshot} or {structure, from, to}
 let picked = '';
 let drawing = 0;     // the latest draw's number: an older one's answer is dropped
 let redraw = null;   // a redraw waiting for the project's events to pause
+let describing = 0;  // the latest description's number, as `drawing`
 
 const kControls = {regions: 'atlas-regions', through: 'atlas-see-through', cut: 'atlas-cut',
                    section: 'atlas-section'};
@@ -30,12 +31,19 @@ export function setStructures(name, list) {
   project = name;
   structures = {};
   for (const s of list) structures[s.name] = s;
-  if (viewer && showing && showing.structure === undefined) {
-    for (const name of viewer.meshes.map((m) => m.name)) {
-      if (structures[name]) viewer.setColour(name, rgbOf(structures[name]));
-    }
-  }
-  if (picked) describe(picked).catch(() => {});
+  if (viewer && showing && showing.structure === undefined) recolour();
+  // Not while someone types a material: their text would be lost.
+  const field = document.getElementById('atlas-material');
+  const editing = field && (document.activeElement === field ||
+                            field.value !== field.dataset.original);
+  if (picked && !editing) describe(picked).catch(() => {});
+}
+
+// Every structure drawn in its colour of the store.
+function recolour() {
+  const colours = {};
+  for (const [name, s] of Object.entries(structures)) colours[name] = rgbOf(s);
+  viewer.setColours(colours);
 }
 
 function ensureViewer() {
@@ -77,9 +85,7 @@ export async function drawAtlas(name, snapshot = '') {
   }
   // (Another draw began meanwhile: its answer is the one to show.)
   if (!drawn) return;
-  for (const region of drawn.regions) {
-    if (structures[region]) viewer.setColour(region, rgbOf(structures[region]));
-  }
+  recolour();
   const ms = performance.now() - started;
   status(drawn.regions.length + ' structures, ' + (drawn.bytes / 1e6).toFixed(2) + ' MB in ' +
          (ms / 1000).toFixed(2) + ' s' + (snapshot ? ' (snapshot ' + snapshot + ')' : ''));
@@ -110,7 +116,7 @@ export async function overlayRevisions(name, structure, from, to) {
   const current = () => mine === drawing;
   const base = await v.load(url(from), current);
   if (!base) return;
-  v.setColour(structure, [61, 123, 217]);
+  v.setColours({[structure]: [61, 123, 217]});
   v.setOpacity(0.55);
   const over = await v.addOverlay(url(to), 0xd0303d, current);
   if (!over) return;
@@ -123,6 +129,7 @@ export async function overlayRevisions(name, structure, from, to) {
 // What is known of structure `name`: its head, author, lock holder and
 // material, and a field to change the material (through the etag).
 async function describe(name) {
+  const mine = ++describing;
   const box = document.getElementById('atlas-picked');
   box.replaceChildren();
   if (!name) return;
@@ -133,7 +140,7 @@ async function describe(name) {
   box.append(facts);
   if (!s || (showing && showing.structure !== undefined)) return;
   const head = await api('AtlasService/GetRevision', {project, structure: name, revision: s.head});
-  if (picked !== name) return;  // another pick came first
+  if (picked !== name || mine !== describing) return;  // another came first
   const line = (text) => {
     const p = document.createElement('p');
     p.textContent = text;
@@ -147,7 +154,8 @@ async function describe(name) {
   material.rows = 3;
   material.cols = 48;
   material.value = (s.metadata && s.metadata.material_json) || '';
-  material.placeholder = '{"model": "...", ...}  (JSON; empty: none)';
+  material.dataset.original = material.value;
+  material.placeholder = '{"neo_hookean": {"shear_modulus_pa": 1000}}  (a JSON object)';
   const label = document.createElement('label');
   label.append('material ', material);
   box.append(label);
@@ -156,6 +164,7 @@ async function describe(name) {
       project, structure: name, etag: s.metadata_etag, material_json: material.value.trim(),
       message: 'material set in the web view',
     });
+    material.dataset.original = material.value;
     status('material of ' + name + ' saved');
     window.pbaAtlas.saved = name;
   }, 'atlas-error'));

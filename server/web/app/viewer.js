@@ -171,12 +171,16 @@ export class Viewer {
     return mesh ? mesh.material.color.toArray().map((c) => Math.round(255 * c)) : null;
   }
 
-  // Region `name` in `rgb` (0..255 each).
-  setColour(name, rgb) {
+  // Each region named in `colours` ({name: [r, g, b]}, 0..255 each) in its
+  // colour, drawn once (software WebGL takes a while per frame).
+  setColours(colours) {
     for (const mesh of this.meshes) {
-      if (mesh.name !== name || mesh.geometry.getAttribute('_displacement')) continue;
+      const rgb = colours[mesh.name];
+      if (!rgb || mesh.geometry.getAttribute('_displacement')) continue;
+      const colour = new THREE.Color(rgb[0] / 255, rgb[1] / 255, rgb[2] / 255);
+      if (mesh.material.color.equals(colour)) continue;
       mesh.material = mesh.material.clone();
-      mesh.material.color = new THREE.Color(rgb[0] / 255, rgb[1] / 255, rgb[2] / 255);
+      mesh.material.color = colour;
     }
     this.render();
   }
