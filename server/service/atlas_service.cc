@@ -693,6 +693,7 @@ grpc::Status AtlasServiceImpl::DownloadSurfaces(grpc::ServerContext* context,
     if (request->revision() < 0) {
       return Status::InvalidArgument("revision", "must be 0 (the head) or more");
     }
+    if (request->offset() < 0) return Status::InvalidArgument("offset", "must not be negative");
     if (request->revision() > 0 && structure.empty()) {
       return Status::InvalidArgument("revision", "names a revision of `structure`, which is empty");
     }
