@@ -13,7 +13,8 @@
 // renamed into place whole; the directory is bounded in bytes, the least
 // recently used entries (by modification time, which a hit renews) going
 // first. A damaged or foreign file at a key's name costs a rebuild, never
-// a wrong view: an entry must start with the glTF binary magic.
+// a wrong view: an entry must be a whole glTF binary (its header's magic,
+// version and length).
 //
 // Bounds: builds run one at a time (others wait for their turn up to
 // `patience`, then RESOURCE_EXHAUSTED), each a child process with an
@@ -82,7 +83,7 @@ class SurfaceViews {
                std::string* bytes);
 
   SurfaceViewOptions options_;
-  DiffSlots turns_{1};
+  DiffSlots turns_{1, "surface_builds", "meshing other structures' surfaces"};
   std::atomic<uint64_t> builds_{0};  // names of the builds' scratch folders
 };
 

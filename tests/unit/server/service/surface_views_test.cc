@@ -191,6 +191,27 @@ TEST_F(SurfaceViewsTest, ABuildPastItsTimeOrWhoseCallerWentIsKilled) {
   EXPECT_EQ(CacheContents(), std::make_pair(0, 0));
 }
 
+// One build at a time: a caller that finds the turn taken past its
+// patience is told the server is busy meshing, naming the bound.
+TEST_F(SurfaceViewsTest, ACallerWaitingPastItsPatienceIsToldTheServerIsBusy) {
+  Mode("sleep");
+  options_.time_limit = std::chrono::seconds(2);
+  options_.patience = std::chrono::milliseconds(300);
+  SurfaceViews views(options_);
+  std::thread first([&] {
+    SurfaceView view;
+    (void)views.Get("demo", 0, files_, {}, &view);
+  });
+  while (Calls() == 0) std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  SurfaceView view;
+  const Status busy = views.Get("demo", 0, {File("Other", "other")}, {}, &view);
+  first.join();
+  EXPECT_EQ(busy.code(), Status::Code::kResourceExhausted) << busy.ToString();
+  EXPECT_EQ(busy.field(), "surface_builds");
+  EXPECT_NE(busy.message().find("meshing other structures' surfaces"), std::string::npos)
+      << busy.ToString();
+}
+
 TEST_F(SurfaceViewsTest, TheChildRunsUnderTheMemoryBound) {
   Mode("limit");
   options_.memory_bytes = int64_t{3} << 30;
