@@ -102,7 +102,7 @@ def strongly_connected(graph):
 # Which library target owns a solver file: by folder, with the exceptions
 # that split core/ and io/ between targets.
 BASE_FILES = ("core/sha256", "core/atomic_write", "core/number_format", "core/exit_codes",
-              "core/format", "core/cache_dir", "atlas/structure_format")
+              "core/format", "core/cache_dir", "core/checksum_file", "atlas/structure_format")
 PLOT_FILES = ("io/png_io", "io/bitmap_font", "io/line_plot")
 FOLDER_TARGETS = {
     "fem": "pba_fem", "material": "pba_fem", "mesh": "pba_fem", "assembly": "pba_fem",

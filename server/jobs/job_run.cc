@@ -12,6 +12,7 @@
 #include <system_error>
 
 #include "core/atomic_write.h"
+#include "core/checksum_file.h"
 #include "core/exit_codes.h"
 #include "core/sha256.h"
 #include "jobs/job_executor.h"
@@ -104,9 +105,14 @@ Status PrepareFolder(const v1::Job& job, const fs::path& dir, JobPreparation* pr
   return Status::Ok();
 }
 
-// summary.json and every file of a finished result folder.
+// summary.json and every file of a finished result folder, each checked
+// against the SHA256SUMS pba-solve wrote last: a file lost, cut short or
+// changed since (on the shared filesystem between a Slurm node and the
+// server, say) fails the collection naming it.
 Status CollectResult(const fs::path& dir, v1::Summary* summary,
                      std::vector<v1::ResultFile>* files) {
+  std::vector<ChecksummedFile> checked;
+  PBA_RETURN_IF_ERROR(VerifyChecksumFile(dir, &checked));
   std::ifstream in(dir / "summary.json");
   if (!in) return Status::Io("the result has no summary.json");
   std::stringstream json;
@@ -117,19 +123,20 @@ Status CollectResult(const fs::path& dir, v1::Summary* summary,
   if (!parsed.ok()) {
     return Status::Io("summary.json is not a pba.v1.Summary: " + std::string(parsed.message()));
   }
-  std::error_code ec;
-  for (const fs::directory_entry& entry : fs::directory_iterator(dir, ec)) {
-    if (!entry.is_regular_file()) continue;
-    v1::ResultFile file;
-    file.set_name(entry.path().filename().string());
-    std::string sha256;
-    int64_t size = 0;
-    PBA_RETURN_IF_ERROR(FileSha256Hex(entry.path(), &sha256, &size));
-    file.set_sha256(sha256);
-    file.set_size_bytes(size);
-    files->push_back(std::move(file));
+  // The folder's own files are the job's (an import's structures/ are
+  // the store's to take); the list goes with them, for `sha256sum -c`.
+  ChecksummedFile list;
+  list.path = kChecksumFileName;
+  PBA_RETURN_IF_ERROR(FileSha256Hex(dir / list.path, &list.sha256, &list.size));
+  checked.push_back(list);
+  for (const ChecksummedFile& file : checked) {
+    if (file.path.find('/') != std::string::npos) continue;
+    v1::ResultFile result;
+    result.set_name(file.path);
+    result.set_sha256(file.sha256);
+    result.set_size_bytes(file.size);
+    files->push_back(std::move(result));
   }
-  if (ec) return Status::Io("cannot list " + dir.string() + ": " + ec.message());
   std::sort(files->begin(), files->end(),
             [](const v1::ResultFile& a, const v1::ResultFile& b) { return a.name() < b.name(); });
   return Status::Ok();

@@ -43,7 +43,10 @@ Status PrepareFolder(const v1::Job& job, const std::filesystem::path& dir,
 // .result.old-PID) that a solve ended without its own cleanup leaves.
 void RemoveStagingLeftovers(const std::filesystem::path& dir);
 
-// summary.json and every file of a finished result folder, with digests.
+// summary.json and every file of a finished result folder, with digests,
+// once the folder is checked against the SHA256SUMS pba-solve wrote last
+// (core/checksum_file.h): kIo naming a file missing, damaged or not
+// listed, or the list missing (the result is incomplete).
 Status CollectResult(const std::filesystem::path& dir, v1::Summary* summary,
                      std::vector<v1::ResultFile>* files);
 

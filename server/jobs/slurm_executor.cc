@@ -861,7 +861,7 @@ void SlurmExecutor::Conclude(Tracked& t, const SlurmJobState* seen) {
       completed = options_.preparation->Complete(t.job, t.dir / "result", &outcome);
     }
     if (!collected.ok()) {
-      fail("pba-solve succeeded but " + collected.ToString());
+      fail(said + ": pba-solve succeeded but " + collected.ToString());
     } else if (!completed.ok()) {
       fail(completed.ToString());
     } else {

@@ -2,7 +2,9 @@
 // The server runs every job through it in a child process; scripted users
 // call it directly.
 //
-// The result directory appears whole or not at all (StagingDir). What is at
+// The result directory appears whole or not at all (StagingDir), with
+// SHA256SUMS, its files' digests, written last (core/checksum_file.h): the
+// server checks a result against it before taking it. What is at
 // --out is checked before the solve (CheckOutputDir): nothing, an empty
 // directory, or with --force an earlier result of pba-solve; never a file,
 // a link or a directory holding anything pba-solve does not write. The
@@ -61,6 +63,7 @@
 #include "codec/summary_text.h"
 #include "codec/yaml_codec.h"
 #include "convert/convert.h"
+#include "core/checksum_file.h"
 #include "core/exit_codes.h"
 #include "core/format.h"
 #include "pba/solve.h"
@@ -224,8 +227,9 @@ bool WrittenByPbaSolve(const std::filesystem::directory_entry& entry) {
   const std::string name = entry.path().filename().string();
   if (entry.is_symlink(ec)) return false;
   if (entry.is_regular_file(ec)) {
-    for (const char* known : {"summary.json", "result.h5", "result.xdmf", "surfaces.glb",
-                              "surface_steps.bin", "history.csv", "history.png", "sensors.csv"}) {
+    for (const char* known :
+         {"summary.json", "result.h5", "result.xdmf", "surfaces.glb", "surface_steps.bin",
+          "history.csv", "history.png", "sensors.csv", kChecksumFileName}) {
       if (name == known) return true;
     }
     return name.rfind("profile_", 0) == 0 && ends_with(name, ".csv");
@@ -340,6 +344,8 @@ int Run(const std::string& scene_path, const std::string& out_dir, bool force,
   const v1::Summary summary = SummaryToProto(solution.summary);
   status = WriteText(staging.path() / "summary.json", codec::ToJson(summary));
   if (!status.ok()) return reporter.Error(status);
+  status = WriteChecksumFile(staging.path());
+  if (!status.ok()) return reporter.Error(status);
   if (g_cancel.load())
     return reporter.Error(Status::Cancelled("cancelled before the result was saved"));
   status = staging.Commit();
@@ -403,6 +409,7 @@ int RunImport(const ImportArgs& args, const std::string& out_dir, bool force, Pr
   summary.mutable_performance()->set_wall_time_s(
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   status = WriteText(staging.path() / "summary.json", codec::ToJson(summary));
+  if (status.ok()) status = WriteChecksumFile(staging.path());
   if (!status.ok()) return reporter.Error(status);
   status = staging.Commit();
   if (!status.ok()) return reporter.Error(status);
@@ -444,6 +451,7 @@ int RunAtlasSurfaces(const std::string& set_dir, double facet_mm, const std::str
   summary.mutable_performance()->set_wall_time_s(
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   if (status.ok()) status = WriteText(staging.path() / "summary.json", codec::ToJson(summary));
+  if (status.ok()) status = WriteChecksumFile(staging.path());
   if (status.ok() && g_cancel.load()) status = Status::Cancelled("cancelled before writing");
   if (status.ok()) status = staging.Commit();
   if (!status.ok()) return reporter.Error(status);

@@ -5,7 +5,8 @@
 // faults of the cluster path: Slurm's time limit, the memory limit, a
 // scancel from outside PBA, a drained node, slurmctld restarted, a node
 // lost mid-job, the server killed and restarted while its jobs wait and
-// run, a partition Slurm does not have. Label slurm; each test brings up its own cluster on ports
+// run, a partition Slurm does not have, a result damaged after pba-solve
+// wrote it. Label slurm; each test brings up its own cluster on ports
 // of its own, and ctest's RESOURCE_LOCK runs them one at a time (each a node of the machine's cores
 // and memory).
 #include <arpa/inet.h>
@@ -180,7 +181,17 @@ class SlurmTest : public ::testing::Test {
 };
 
 TEST_F(SlurmTest, AJobRunsAsASlurmJobWithItsProgressAndResult) {
-  ASSERT_TRUE(StartServer());
+  // pba-solve as the server runs it, but a job named "damaged" has its
+  // result.h5 cut short once pba-solve has ended, as a shared filesystem
+  // between node and server might.
+  const fs::path solver = dir_.path() / "pba-solve-then-damage";
+  std::ofstream(solver) << "#!/bin/sh\n" PBA_SOLVE_BIN
+                           " \"$@\"\ncode=$?\nprev=\n"
+                           "for a in \"$@\"; do [ \"$prev\" = --out ] && out=$a; prev=$a; done\n"
+                           "if [ $code -eq 0 ] && grep -q '\"name\": *\"damaged\"' \"$1\"; then\n"
+                           "  truncate -s 100 \"$out/result.h5\"\nfi\nexit $code\n";
+  fs::permissions(solver, fs::perms::owner_all, fs::perm_options::add);
+  ASSERT_TRUE(StartServer({"--solver", solver.string()}));
   const fs::path scene = dir_.path() / "hold.yaml";
   std::ofstream(scene) << Hold("hold", 10);
   const RunResult run = Pba({"--json", "job", "submit", scene.string(), "--wait"});
@@ -202,6 +213,20 @@ TEST_F(SlurmTest, AJobRunsAsASlurmJobWithItsProgressAndResult) {
   EXPECT_TRUE(fs::exists(dir_.path() / "out" / "summary.json"));
   EXPECT_EQ(SlurmRuns(id), 1u);
 
+  // A result Slurm ran to its end but that is not as pba-solve listed it
+  // fails, naming the file; nothing of it is offered.
+  const std::string damaged = Submit("damaged", Hold("damaged", 2));
+  ASSERT_FALSE(damaged.empty());
+  ASSERT_TRUE(WaitForState(damaged, "FAILED", seconds(120))) << Show(damaged);
+  const std::string failed = Show(damaged);
+  EXPECT_TRUE(std::regex_search(
+      failed, std::regex("Slurm job \\d+ \\(COMPLETED[^)]*\\): pba-solve succeeded but .*"
+                         "result.h5 is damaged: its SHA-256 is [0-9a-f]{64}, SHA256SUMS says "
+                         "[0-9a-f]{64} \\(100 bytes now\\)")))
+      << failed;
+  EXPECT_NE(Pba({"job", "fetch", damaged, "-o", (dir_.path() / "damaged").string()}).exit_code, 0);
+  EXPECT_FALSE(fs::exists(dir_.path() / "damaged" / "result.h5"));
+
   // A batch, unchanged: each member a Slurm job, all of them through, once
   // each.
   std::ofstream(dir_.path() / "base.yaml") << Hold("member", 2);
@@ -211,7 +236,8 @@ TEST_F(SlurmTest, AJobRunsAsASlurmJobWithItsProgressAndResult) {
   const RunResult batched =
       Pba({"batch", "run", (dir_.path() / "sweep.yaml").string(), "--no-plot"}, seconds(300));
   EXPECT_EQ(batched.exit_code, 0) << batched.out << batched.err;
-  EXPECT_EQ(CountOf(ReadFile(slurm_dir_ / "jobcomp.txt"), "JobState=COMPLETED"), 5u);
+  // The first job, the damaged one (Slurm ran it to its end) and the four.
+  EXPECT_EQ(CountOf(ReadFile(slurm_dir_ / "jobcomp.txt"), "JobState=COMPLETED"), 6u);
 }
 
 // A sweep handed to Slurm together goes as one job array. The controller

@@ -62,12 +62,21 @@ succeed() {
   staged="$(dirname "$scene")/snapshot/manifest.json"
   if [ -f "$staged" ]; then cp "$staged" "$tmp/manifest.json"; fi
   echo "{\"scene_name\":\"$name\",\"modelled\":{\"nodes\":\"27\"},\"future_field\":1}" > "$tmp/summary.json"
+  (cd "$tmp" && sha256sum * > SHA256SUMS)
+  # A file lost or changed after pba-solve listed it (on the way to the
+  # server, say), or one it did not write.
+  case "$name" in
+    damaged) printf 'hel' > "$tmp/result.h5" ;;
+    lost) rm "$tmp/result.xdmf" ;;
+    stray) echo extra > "$tmp/stray.txt" ;;
+    unlisted) rm "$tmp/SHA256SUMS" ;;
+  esac
   mv "$tmp" "$out"
   echo "{\"kind\":\"DONE\",\"message\":\"$out\"}"
   exit 0
 }
 case "$name" in
-  ok|big)
+  ok|big|damaged|lost|stray|unlisted)
     progress mesh 0.1 "meshing"
     echo "not json at all"
     progress solve 0.5 "solving"

@@ -88,12 +88,13 @@ TEST_F(JobExecutorTest, SuccessRecordsSummaryFilesAndEvents) {
   EXPECT_EQ(job.summary().modelled().nodes(), 27);
   EXPECT_DOUBLE_EQ(job.progress(), 1.0);
   EXPECT_TRUE(job.error().empty());
-  ASSERT_EQ(job.result_files_size(), 3);
-  EXPECT_EQ(job.result_files(0).name(), "result.h5");
-  EXPECT_EQ(job.result_files(0).size_bytes(), 6);
-  EXPECT_EQ(job.result_files(0).sha256(), kHelloSha256);
-  EXPECT_EQ(job.result_files(1).name(), "result.xdmf");
-  EXPECT_EQ(job.result_files(2).name(), "summary.json");
+  ASSERT_EQ(job.result_files_size(), 4);
+  EXPECT_EQ(job.result_files(0).name(), "SHA256SUMS");  // the list pba-solve wrote last
+  EXPECT_EQ(job.result_files(1).name(), "result.h5");
+  EXPECT_EQ(job.result_files(1).size_bytes(), 6);
+  EXPECT_EQ(job.result_files(1).sha256(), kHelloSha256);
+  EXPECT_EQ(job.result_files(2).name(), "result.xdmf");
+  EXPECT_EQ(job.result_files(3).name(), "summary.json");
 
   const fs::path job_dir = dir_.path() / "jobs" / job.id();
   EXPECT_TRUE(fs::exists(job_dir / "scene.json"));
@@ -123,6 +124,26 @@ TEST_F(JobExecutorTest, SuccessRecordsSummaryFilesAndEvents) {
       phases.push_back(event.phase());
   }
   EXPECT_EQ(phases, (std::vector<std::string>{"mesh", "solve", "write"}));
+}
+
+// A result is taken only as pba-solve listed it in SHA256SUMS: a file cut
+// short, lost or added after it was listed, or the list itself missing,
+// fails the job naming the file, and no file of it is offered.
+TEST_F(JobExecutorTest, AResultNotAsPbaSolveListedItFailsTheJobNamingTheFile) {
+  const std::pair<const char*, const char*> cases[] = {
+      {"damaged", "result.h5 is damaged: its SHA-256 is"},
+      {"lost", "lacks result.xdmf, which SHA256SUMS names"},
+      {"stray", "holds stray.txt, which SHA256SUMS does not name"},
+      {"unlisted", "has no SHA256SUMS"},
+  };
+  for (const auto& [name, words] : cases) {
+    const v1::Job job = RunToEnd(name);
+    EXPECT_EQ(job.state(), v1::Job::FAILED) << name;
+    EXPECT_NE(job.error().find("pba-solve succeeded but"), std::string::npos) << job.error();
+    EXPECT_NE(job.error().find(words), std::string::npos) << job.error();
+    EXPECT_EQ(job.result_files_size(), 0) << name;
+    EXPECT_FALSE(job.has_summary()) << name;
+  }
 }
 
 // Every solve is told where the shared atlas mesh cache is, and its bound.
@@ -295,7 +316,7 @@ TEST_F(JobExecutorTest, RemovesLeftoversOfAnEarlierAttempt) {
   const v1::Job job = WaitForState(id, v1::Job::SUCCEEDED);
   EXPECT_FALSE(fs::exists(job_dir / ".result.partial-12345"));
   EXPECT_FALSE(fs::exists(job_dir / "result" / "stale.txt"));
-  EXPECT_EQ(job.result_files_size(), 3);
+  EXPECT_EQ(job.result_files_size(), 4);  // with SHA256SUMS
 }
 
 TEST_F(JobExecutorTest, PublishesLiveEventsToTheHub) {

@@ -151,7 +151,7 @@ TEST_F(JobServiceTest, SubmitGetAndWatchToTheEnd) {
   EXPECT_EQ(done.state(), v1::Job::SUCCEEDED);
   EXPECT_EQ(done.summary().scene_name(), "ok");
   EXPECT_EQ(done.scene().name(), "ok");
-  EXPECT_EQ(done.result_files_size(), 3);
+  EXPECT_EQ(done.result_files_size(), 4);  // with SHA256SUMS
 
   // Watching a finished job replays what is left and ends.
   std::vector<v1::JobEvent> replay;
