@@ -201,13 +201,13 @@ int SubmitAndPoll(Connection& connection, const RunOptions& options,
     for (const RunMember& m : *members) n += !m.job_id.empty() && !IsDone(m.job.state());
     return n;
   };
-  // The server refused a submit over its bound of open jobs per user: no
-  // more until one of ours has ended.
-  int full_at = -1;
+  // The server refused a submit over its bound of open jobs per user,
+  // which counts all of the user's queued and running jobs, this batch's
+  // or not: no more until the next look, then the same member again.
+  bool full = false, said_full = false;
   while (true) {
     while (next < to_submit.size() &&
-           (options.parallel == kParallelAll || in_flight() < options.parallel) &&
-           (full_at < 0 || in_flight() < full_at)) {
+           (options.parallel == kParallelAll || in_flight() < options.parallel) && !full) {
       RunMember& m = (*members)[to_submit[next++]];
       v1::SubmitJobRequest request;
       *request.mutable_scene() = m.scene;
@@ -216,16 +216,16 @@ int SubmitAndPoll(Connection& connection, const RunOptions& options,
       request.set_ranks(options.ranks);
       auto context = connection.UnaryContext();
       grpc::Status status = connection.jobs().SubmitJob(context.get(), request, &m.job);
-      if (status.error_code() == grpc::StatusCode::RESOURCE_EXHAUSTED && in_flight() > 0) {
-        // Taken again once one of ours has ended.
+      if (status.error_code() == grpc::StatusCode::RESOURCE_EXHAUSTED) {
         --next;
-        if (!options.quiet && full_at < 0) {
+        full = true;
+        if (!options.quiet && !said_full) {
           std::printf(
-              "the server takes no more open jobs from you (its bound counts all of them; %d "
-              "are this batch's); the next once one of those ends\n",
+              "the server takes no more open jobs from you now (its bound counts all your queued "
+              "and running jobs; %d are this batch's); waiting for room\n",
               in_flight());
         }
-        full_at = in_flight();
+        said_full = true;  // once: the member lines say how it goes on
         break;
       }
       if (!status.ok()) {
@@ -265,6 +265,7 @@ int SubmitAndPoll(Connection& connection, const RunOptions& options,
     }
     std::fflush(stdout);
     if (!any_open && next >= to_submit.size()) return kExitOk;
+    full = false;
     std::this_thread::sleep_for(std::chrono::milliseconds(static_cast<int>(options.poll_s * 1000)));
   }
 }

@@ -279,9 +279,9 @@ class CliBoundedServerTest : public CliServerTest {
 };
 
 // `pba server` says how the server runs jobs; a batch handed over all at
-// once meets the server's bound of open jobs per user and waits for its
-// own jobs to end instead of failing; a batch that does not say how many
-// at a time goes two at a time to a server that runs jobs itself.
+// once meets the server's bound of open jobs per user and waits for room
+// instead of failing, whether its own jobs or the user's others hold it; a batch that does not say
+// how many at a time goes two at a time to a server that runs jobs itself.
 TEST_F(CliBoundedServerTest, ABatchOverTheServersBoundWaitsForItsJobsToEnd) {
   const RunResult info = Pba({"server"});
   ASSERT_EQ(info.exit_code, 0) << info.out << info.err;
@@ -304,13 +304,33 @@ outputs:
   const RunResult run = Pba({"batch", "run", all.string()});
   ASSERT_EQ(run.exit_code, 0) << run.out << run.err;
   EXPECT_NE(run.out.find("5 to submit, all at once"), std::string::npos) << run.out;
-  EXPECT_NE(run.out.find("the server takes no more open jobs from you (its bound counts all of "
-                         "them; 2 are this batch's)"),
+  EXPECT_NE(run.out.find("the server takes no more open jobs from you now (its bound counts all "
+                         "your queued and running jobs; 2 are this batch's); waiting for room"),
             std::string::npos)
       << run.out;
   const std::string csv = ReadFile(dir_.path() / "all.csv");
   EXPECT_EQ(CountOf(csv, "SUCCEEDED"), 5u) << csv;
   EXPECT_EQ(JobCount(), 5u);
+
+  // The user's other jobs fill the bound: the batch waits for room, none
+  // of its own open, and goes on once they end.
+  for (int i = 0; i < 2; ++i) {
+    const RunResult other = Pba({"job", "submit", (dir_.path() / "hold.yaml").string()});
+    ASSERT_EQ(other.exit_code, 0) << other.out << other.err;
+  }
+  const fs::path after = WriteScene("after.yaml", R"(
+name: after-others
+scene: hold.yaml
+parallel: all
+members:
+  - {name: soft, set: {material.neo_hookean.shear_modulus_pa: 1000}}
+)");
+  const RunResult waited = Pba({"batch", "run", after.string()});
+  ASSERT_EQ(waited.exit_code, 0) << waited.out << waited.err;
+  EXPECT_NE(waited.out.find("0 are this batch's); waiting for room"), std::string::npos)
+      << waited.out;
+  EXPECT_EQ(CountOf(ReadFile(dir_.path() / "after.csv"), "SUCCEEDED"), 1u);
+  EXPECT_EQ(JobCount(), 8u);
 
   const fs::path unsaid = WriteScene("unsaid.yaml", R"(
 scene: hold.yaml
