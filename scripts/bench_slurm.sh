@@ -8,7 +8,11 @@
 # as the server stamps them), pba-solve's own wall time, and the overhead,
 # the one less the other (the process started; for Slurm the submission,
 # the scheduler's start and the polls; the result collected with its
-# digests). Then a batch of `jobs` members through `pba batch run`: its wall
+# digests), split in two: submitted -> started and ended -> end recorded
+# (for Slurm its own StartTime and EndTime from its job completion file,
+# whole seconds: the scheduler's latency, then the poll that finds the
+# end and the collection; locally the child's start, and its start plus
+# its solve). Then a batch of `jobs` members through `pba batch run`: its wall
 # time, jobs per minute, and whether every member succeeded and ran once
 # (one attempt each; for Slurm one line per job in its job completion file),
 # and for Slurm the sbatch calls the single jobs and the batch took (one
@@ -72,23 +76,50 @@ def t(s):
     return datetime.fromisoformat(s.replace("Z", "+00:00")).timestamp()
 def get(j, snake, camel):
     return j.get(snake, j.get(camel))
-turn, solve = [], []
+# Slurm's own start and end of each job (its job completion file, whole
+# seconds of the machine's local time), by PBA job id.
+slurm_times = {}
+try:
+    for line in open(f"{work}/slurm/jobcomp.txt"):
+        fields = dict(f.split("=", 1) for f in line.split() if "=" in f)
+        if fields.get("Name", "").startswith("pba-j"):
+            slurm_times[fields["Name"][4:]] = (datetime.fromisoformat(fields["StartTime"]).timestamp(),
+                                              datetime.fromisoformat(fields["EndTime"]).timestamp())
+except FileNotFoundError:
+    pass
+turn, solve, to_start, to_collected = [], [], [], []
 for line in open(f"{work}/single-{name}.json"):
     if not line.strip():
         continue
     j = json.loads(line)
     perf = j.get("summary", {}).get("performance", {})
-    turn.append(t(get(j, "end_time", "endTime")) - t(get(j, "create_time", "createTime")))
-    solve.append(float(get(perf, "wall_time_s", "wallTimeS") or 0))
+    created = t(get(j, "create_time", "createTime"))
+    ended = t(get(j, "end_time", "endTime"))
+    wall = float(get(perf, "wall_time_s", "wallTimeS") or 0)
+    turn.append(ended - created)
+    solve.append(wall)
+    if name.startswith("slurm"):
+        # Slurm's start and end: the scheduler's latency, then the poll
+        # that sees the end and the collection.
+        started, finished = slurm_times[j["id"]]
+        to_start.append(started - created)
+        to_collected.append(ended - finished)
+    else:
+        # The child process started, and its end: start plus its solve.
+        started = t(get(j, "start_time", "startTime"))
+        to_start.append(started - created)
+        to_collected.append(ended - started - wall)
 over = [a - b for a, b in zip(turn, solve)]
+med = statistics.median
 listed = json.load(open(f"{work}/jobs-{name}.json")).get("jobs", [])
 batch = [j for j in listed if j.get("name") != "one"]
 ok = sum(j.get("state") == "SUCCEEDED" for j in batch)
 attempts = {int(j.get("attempts", 0)) for j in batch}
 each_once = ok == int(n) and attempts == {1} and (runs == "-" or int(runs) == int(n) + int(single))
 wall = float(end) - float(start)
-print(f"| {name} | {statistics.median(turn):.2f} s | {statistics.median(solve):.2f} s | "
-      f"{statistics.median(over):.2f} s ({min(over):.2f} .. {max(over):.2f}) | {n} | {ok} | "
+print(f"| {name} | {med(turn):.2f} s | {med(solve):.2f} s | "
+      f"{med(over):.2f} s ({min(over):.2f} .. {max(over):.2f}) | {med(to_start):.2f} s | "
+      f"{med(to_collected):.2f} s | {n} | {ok} | "
       f"{'yes' if each_once else 'NO'} | {wall:.1f} s | {int(n) / wall * 60:.0f} | {submissions} |")
 PY
 }
@@ -158,8 +189,8 @@ EOF
 }
 
 echo "machine: $(nproc) cores, $(awk '/MemTotal/ {printf "%.0f GB", $2 / 1048576}' /proc/meminfo); commit $(git -C "$root" rev-parse --short HEAD); --slurm-poll $poll s; batch submitted $parallel at a time"
-echo "| executor | turnaround of one job (median of $single) | its solve | overhead (range) | batch jobs | succeeded | each ran once | batch wall time | jobs per minute | sbatch calls |"
-echo "|---|---|---|---|---|---|---|---|---|---|"
+echo "| executor | turnaround of one job (median of $single) | its solve | overhead (range) | submitted to started | ended to result collected | batch jobs | succeeded | each ran once | batch wall time | jobs per minute | sbatch calls |"
+echo "|---|---|---|---|---|---|---|---|---|---|---|---|"
 run local --max-running 2
 bash "$root/scripts/slurm-local.sh" start >/dev/null
 run slurm-arrays --executor slurm --slurm-poll "$poll"

@@ -144,6 +144,7 @@ struct ServeFlags {
   int slurm_array_min = 10;
   double slurm_poll_s = 2;
   double slurm_gather_s = 1;
+  double slurm_settle_s = 60;
   int max_open_jobs = pba::kDefaultMaxOpenJobs;
   std::string http;
   std::string web_root;
@@ -237,6 +238,12 @@ void AddServeOptions(CLI::App& app, ServeFlags* flags) {
                  "this after the first); 0: at once")
       ->check(CLI::Range(0.0, 60.0))
       ->capture_default_str();
+  app.add_option("--slurm-settle", flags->slurm_settle_s,
+                 "Seconds a job Slurm completed may take to show its exit code and every file "
+                 "of its result here (a shared filesystem may show a node's writes late) "
+                 "before it is judged on what is there")
+      ->check(CLI::Range(0.0, 3600.0))
+      ->capture_default_str();
   app.add_option("--http", flags->http,
                  "HOST:PORT of the web view (the atlas, its locks and history, the jobs and "
                  "their results in a browser); port 0 picks a free one; TLS as --tls-cert");
@@ -328,6 +335,8 @@ pba::ServerOptions ServerOptionsFromFlags(const ServeFlags& flags) {
   options.slurm.poll = std::chrono::milliseconds(static_cast<int64_t>(flags.slurm_poll_s * 1000));
   options.slurm.gather =
       std::chrono::milliseconds(static_cast<int64_t>(flags.slurm_gather_s * 1000));
+  options.slurm.settle =
+      std::chrono::milliseconds(static_cast<int64_t>(flags.slurm_settle_s * 1000));
   options.max_open_jobs = flags.max_open_jobs;
   options.http_listen = flags.http;
   options.web_app_dir = flags.web_root.empty() ? ExecutableDir() / ".." / "share" / "pba" / "web"

@@ -35,6 +35,11 @@ struct SlurmOptions {
   // first): a sweep a client submits job by job is one round, so one array.
   // 0: at once.
   std::chrono::milliseconds gather{1000};
+  // A job Slurm completed whose exit code or result is not whole here yet
+  // (a shared filesystem may show a node's last writes late: NFS caches
+  // directory entries up to a minute) is looked at again at each poll for
+  // up to `settle` before it is judged on what is there.
+  std::chrono::milliseconds settle{60000};
   // Where sbatch, squeue and scancel are (empty: on PATH), and the
   // environment they get (e.g. SLURM_CONF=...).
   std::filesystem::path bin_dir;

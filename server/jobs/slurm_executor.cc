@@ -11,6 +11,7 @@
 #include <system_error>
 
 #include "core/atomic_write.h"
+#include "core/checksum_file.h"
 #include "jobs/job_run.h"
 
 namespace pba {
@@ -134,6 +135,9 @@ struct SlurmExecutor::Tracked {
   int missing = 0;                // rounds in a row it was not in squeue
   int64_t limit_s = 0;            // the time limit it was submitted with
   std::uintmax_t log_offset = 0;  // solve.log's size when it was submitted
+  // When Slurm's completion was first seen while its exit code or result
+  // was not whole here (SlurmOptions::settle).
+  std::optional<std::chrono::steady_clock::time_point> settling_since;
 };
 
 SlurmExecutor::SlurmExecutor(JobStore& store, JobEventHub& hub, ExecutorOptions options,
@@ -787,6 +791,27 @@ bool SlurmExecutor::Accounting(const std::string& slurm_id, SlurmJobState* state
   return false;
 }
 
+bool SlurmExecutor::Settled(Tracked& t, const SlurmJobState* seen, std::optional<int> code,
+                            const fs::path& run_result) {
+  Status whole =
+      code.has_value()
+          ? Status::Ok()
+          : Status::Io("its exit code file " + ExitCodeFile(t.slurm_id) + " is not there");
+  if (whole.ok() && *code == 0) whole = ChecksumFileComplete(run_result);
+  if (whole.ok()) return true;
+  SlurmJobState recorded;
+  if (seen == nullptr && Accounting(t.slurm_id, &recorded)) seen = &recorded;
+  if (seen == nullptr || ClassifySlurmState(seen->state) != SlurmEnd::kCompleted) return true;
+  const auto now = std::chrono::steady_clock::now();
+  if (!t.settling_since) {
+    t.settling_since = now;
+    spdlog::info("job {}: Slurm job {} completed, but {}; looking again for up to {} s", t.job.id(),
+                 t.slurm_id, whole.ToString(),
+                 std::chrono::duration_cast<std::chrono::seconds>(slurm_.settle).count());
+  }
+  return now - *t.settling_since >= slurm_.settle;
+}
+
 void SlurmExecutor::Conclude(Tracked& t, const SlurmJobState* seen) {
   const std::string id = t.job.id();
   bool cancel_requested = false;
@@ -796,6 +821,7 @@ void SlurmExecutor::Conclude(Tracked& t, const SlurmJobState* seen) {
   }
   const std::optional<int> code = ReadExitCode(t.dir, t.slurm_id);
   const fs::path run_result = t.dir / ResultDir(t.slurm_id);
+  if (!cancel_requested && !Settled(t, seen, code, run_result)) return;
   // Its last lines (pba-solve's error among them) before anything is
   // decided: published when it is seen running, else only read.
   if (t.running) {

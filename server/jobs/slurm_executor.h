@@ -43,6 +43,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -112,6 +113,11 @@ class SlurmExecutor : public Executor {
   // The unread rest of the run's progress file, for pba-solve's error only.
   void SkimProgress(Tracked& t);
   void Conclude(Tracked& t, const SlurmJobState* seen);
+  // Whether a job that ended may be judged now: false while Slurm says it
+  // completed but its exit code or a file its SHA256SUMS names is not
+  // here yet, for up to SlurmOptions::settle.
+  bool Settled(Tracked& t, const SlurmJobState* seen, std::optional<int> code,
+               const std::filesystem::path& run_result);
   // How a job gone from squeue ended, from Slurm's accounting; false when
   // the cluster keeps none (or none of it).
   bool Accounting(const std::string& slurm_id, SlurmJobState* state);

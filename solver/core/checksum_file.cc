@@ -135,6 +135,19 @@ Status WriteChecksumFile(const fs::path& dir) {
   return AtomicWriteText(dir / kChecksumFileName, list.str(), options);
 }
 
+Status ChecksumFileComplete(const fs::path& dir) {
+  std::map<std::string, std::string> listed;
+  PBA_RETURN_IF_ERROR(ReadList(dir, &listed));
+  for (const auto& entry : listed) {
+    std::error_code ec;
+    if (fs::symlink_status(dir / entry.first, ec).type() != fs::file_type::regular) {
+      return Status::Io(dir.string() + " lacks " + entry.first + ", which " + kChecksumFileName +
+                        " names");
+    }
+  }
+  return Status::Ok();
+}
+
 Status VerifyChecksumFile(const fs::path& dir, std::vector<ChecksummedFile>* files) {
   files->clear();
   std::map<std::string, std::string> listed;

@@ -50,4 +50,9 @@ Status WriteChecksumFile(const std::filesystem::path& dir);
 // its digest and size, sorted by path; the list itself is not among them.
 Status VerifyChecksumFile(const std::filesystem::path& dir, std::vector<ChecksummedFile>* files);
 
+// The cheap part of that: SHA256SUMS is there and well formed, and every
+// file it names is there, no digest computed. What a shared filesystem
+// that shows another machine's writes late may not show yet.
+Status ChecksumFileComplete(const std::filesystem::path& dir);
+
 }  // namespace pba

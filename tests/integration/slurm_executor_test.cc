@@ -181,17 +181,20 @@ class SlurmTest : public ::testing::Test {
 };
 
 TEST_F(SlurmTest, AJobRunsAsASlurmJobWithItsProgressAndResult) {
-  // pba-solve as the server runs it, but a job named "damaged" has its
-  // result.h5 cut short once pba-solve has ended, as a shared filesystem
-  // between node and server might.
+  // pba-solve as the server runs it, but once it has ended a job named
+  // "damaged" has its result.h5 cut short, and one named "late" has it
+  // moved aside (the test puts it back), as a shared filesystem between
+  // node and server might show them.
   const fs::path solver = dir_.path() / "pba-solve-then-damage";
   std::ofstream(solver) << "#!/bin/sh\n" PBA_SOLVE_BIN
                            " \"$@\"\ncode=$?\nprev=\n"
                            "for a in \"$@\"; do [ \"$prev\" = --out ] && out=$a; prev=$a; done\n"
                            "if [ $code -eq 0 ] && grep -q '\"name\": *\"damaged\"' \"$1\"; then\n"
-                           "  truncate -s 100 \"$out/result.h5\"\nfi\nexit $code\n";
+                           "  truncate -s 100 \"$out/result.h5\"\nfi\n"
+                           "if [ $code -eq 0 ] && grep -q '\"name\": *\"late\"' \"$1\"; then\n"
+                           "  mv \"$out/result.h5\" \"$out/../late-result.h5\"\nfi\nexit $code\n";
   fs::permissions(solver, fs::perms::owner_all, fs::perm_options::add);
-  ASSERT_TRUE(StartServer({"--solver", solver.string()}));
+  ASSERT_TRUE(StartServer({"--solver", solver.string(), "--slurm-settle", "60"}));
   const fs::path scene = dir_.path() / "hold.yaml";
   std::ofstream(scene) << Hold("hold", 10);
   const RunResult run = Pba({"--json", "job", "submit", scene.string(), "--wait"});
@@ -227,6 +230,34 @@ TEST_F(SlurmTest, AJobRunsAsASlurmJobWithItsProgressAndResult) {
   EXPECT_NE(Pba({"job", "fetch", damaged, "-o", (dir_.path() / "damaged").string()}).exit_code, 0);
   EXPECT_FALSE(fs::exists(dir_.path() / "damaged" / "result.h5"));
 
+  // A result that shows its last file late is waited for (--slurm-settle),
+  // not failed: the file is put back only once the server has said it
+  // waits.
+  const std::string late = Submit("late", Hold("late", 2));
+  ASSERT_FALSE(late.empty());
+  const fs::path late_dir = dir_.path() / "data" / "jobs" / late;
+  const std::string waits = "job " + late + ": Slurm job ";
+  const std::string why = "lacks result.h5, which SHA256SUMS names; looking again for up to 60 s";
+  const auto said = [&] {
+    const std::string log = ReadFile(server_->log_path());
+    const std::size_t at = log.find(waits);
+    return at != std::string::npos && log.find(why, at) != std::string::npos;
+  };
+  const auto deadline = Clock::now() + seconds(120);
+  while (Clock::now() < deadline && !said()) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  ASSERT_TRUE(said()) << ReadFile(server_->log_path());
+  ASSERT_TRUE(fs::exists(late_dir / "late-result.h5"));
+  for (const fs::directory_entry& entry : fs::directory_iterator(late_dir)) {
+    if (entry.path().filename().string().rfind("result-", 0) == 0) {
+      fs::rename(late_dir / "late-result.h5", entry.path() / "result.h5");
+    }
+  }
+  ASSERT_TRUE(WaitForState(late, "SUCCEEDED", seconds(60))) << Show(late);
+  EXPECT_EQ(Pba({"job", "fetch", late, "-o", (dir_.path() / "late").string()}).exit_code, 0);
+  EXPECT_TRUE(fs::exists(dir_.path() / "late" / "result.h5"));
+
   // A batch, unchanged: each member a Slurm job, all of them through, once
   // each.
   std::ofstream(dir_.path() / "base.yaml") << Hold("member", 2);
@@ -236,8 +267,9 @@ TEST_F(SlurmTest, AJobRunsAsASlurmJobWithItsProgressAndResult) {
   const RunResult batched =
       Pba({"batch", "run", (dir_.path() / "sweep.yaml").string(), "--no-plot"}, seconds(300));
   EXPECT_EQ(batched.exit_code, 0) << batched.out << batched.err;
-  // The first job, the damaged one (Slurm ran it to its end) and the four.
-  EXPECT_EQ(CountOf(ReadFile(slurm_dir_ / "jobcomp.txt"), "JobState=COMPLETED"), 6u);
+  // The first job, the damaged and the late one (Slurm ran both to their
+  // end) and the four.
+  EXPECT_EQ(CountOf(ReadFile(slurm_dir_ / "jobcomp.txt"), "JobState=COMPLETED"), 7u);
 }
 
 // A sweep handed to Slurm together goes as one job array. The controller

@@ -2,7 +2,7 @@
 // coreutils' format (sha256sum -c agrees), and a folder that is not as
 // listed (a file cut short, lost, added, a symbolic link, a list that is
 // malformed, names a path outside, or is too large) refused naming what
-// is wrong.
+// is wrong; the cheap check sees what is missing, not what changed.
 #include "core/checksum_file.h"
 
 #include <gtest/gtest.h>
@@ -92,6 +92,7 @@ TEST_F(ChecksumFileTest, AFolderNotAsListedIsRefusedNamingTheFile) {
                            ", SHA256SUMS says " + Sha256Hex("hello\n") + " (4 bytes now)"),
             std::string::npos)
       << Refusal();
+  EXPECT_TRUE(ChecksumFileComplete(dir_).ok()) << "the cheap check computes no digest";
   Write("result.h5", "hello\n");
   EXPECT_EQ(Refusal(), "");
 
@@ -99,6 +100,9 @@ TEST_F(ChecksumFileTest, AFolderNotAsListedIsRefusedNamingTheFile) {
   EXPECT_NE(Refusal().find("lacks structures/Left caudate.nii.gz, which SHA256SUMS names"),
             std::string::npos)
       << Refusal();
+  EXPECT_NE(ChecksumFileComplete(dir_).message().find(
+                "lacks structures/Left caudate.nii.gz, which SHA256SUMS names"),
+            std::string::npos);
   Write("structures/Left caudate.nii.gz", "voxels");
 
   Write("stray.txt", "");
@@ -116,6 +120,7 @@ TEST_F(ChecksumFileTest, AFolderNotAsListedIsRefusedNamingTheFile) {
 
   fs::remove(dir_ / kChecksumFileName);
   EXPECT_NE(Refusal().find("has no SHA256SUMS"), std::string::npos) << Refusal();
+  EXPECT_NE(ChecksumFileComplete(dir_).message().find("has no SHA256SUMS"), std::string::npos);
 }
 
 TEST_F(ChecksumFileTest, AMalformedOrHostileListIsRefusedNamingTheLine) {
