@@ -9,7 +9,6 @@
 #include <sstream>
 #include <system_error>
 
-#include "core/atomic_write.h"
 #include "core/sha256.h"
 
 namespace pba {
@@ -26,7 +25,12 @@ Status FilesUnder(const fs::path& dir, std::vector<std::string>* paths) {
   std::error_code ec;
   fs::recursive_directory_iterator it(dir, fs::directory_options::none, ec);
   if (ec) return Status::Io("cannot list " + dir.string() + ": " + ec.message());
+  std::size_t entries = 0;  // folders count too: a folder of empty folders is bounded
   for (; it != fs::recursive_directory_iterator(); it.increment(ec)) {
+    if (++entries > kMaxChecksummedFiles) {
+      return Status::Io(dir.string() + " holds more than " + std::to_string(kMaxChecksummedFiles) +
+                        " entries");
+    }
     const fs::path relative = it->path().lexically_relative(dir);
     const std::string name = relative.generic_string();
     const fs::file_type type = it->symlink_status(ec).type();
@@ -43,10 +47,6 @@ Status FilesUnder(const fs::path& dir, std::vector<std::string>* paths) {
       return Status::Io(dir.string() + " holds a file whose name has a newline or a backslash");
     }
     if (name == kChecksumFileName) continue;
-    if (paths->size() >= kMaxChecksummedFiles) {
-      return Status::Io(dir.string() + " holds more than " + std::to_string(kMaxChecksummedFiles) +
-                        " files");
-    }
     paths->push_back(name);
   }
   if (ec) return Status::Io("cannot list " + dir.string() + ": " + ec.message());
@@ -130,9 +130,14 @@ Status WriteChecksumFile(const fs::path& dir) {
     PBA_RETURN_IF_ERROR(FileSha256Hex(dir / path, &hex));
     list << hex << "  " << path << '\n';
   }
-  AtomicWriteOptions options;
-  options.mode = 0644;
-  return AtomicWriteText(dir / kChecksumFileName, list.str(), options);
+  // Created as the folder's other files are (the umask applies: a
+  // server's results stay private); a write cut short leaves a list that
+  // does not end with a whole line, which no check takes.
+  std::ofstream out(dir / kChecksumFileName, std::ios::binary | std::ios::trunc);
+  out << list.str();
+  out.close();
+  if (!out) return Status::Io("cannot write " + (dir / kChecksumFileName).string());
+  return Status::Ok();
 }
 
 Status ChecksumFileComplete(const fs::path& dir) {

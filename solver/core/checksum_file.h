@@ -20,8 +20,9 @@ namespace pba {
 
 inline constexpr char kChecksumFileName[] = "SHA256SUMS";
 
-// Bounds on what a folder's list may hold (a hostile or broken folder
-// cannot make its reader hold more).
+// Bounds on what a folder's list may hold, and on the entries (files and
+// folders) a folder may have (a hostile or broken folder cannot make its
+// reader hold more).
 inline constexpr int64_t kMaxChecksumFileBytes = 16 << 20;
 inline constexpr std::size_t kMaxChecksummedFiles = 100000;
 
@@ -32,7 +33,8 @@ struct ChecksummedFile {
   int64_t size = 0;
 };
 
-// Writes <dir>/SHA256SUMS listing every regular file under `dir`
+// Writes <dir>/SHA256SUMS (created as any file, the umask applying; `dir`
+// is a staging folder that appears whole) listing every regular file under `dir`
 // (subfolders too, sorted by path), the list itself excepted. kIo naming
 // the entry when `dir` holds anything but regular files and folders (a
 // symbolic link, say) or a name sha256sum would have to escape (a
